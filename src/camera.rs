@@ -1,0 +1,139 @@
+//! Orbit camera and the matrices the passes use. Pure maths, no Vulkan.
+//!
+//! World space: the volume's box is centred on the origin with side lengths [`crate::volume::Volume::extent`]
+//! (dims × spacing, scaled so the longest side is 1). Texture space is the same box mapped to [0,1]³:
+//! `tex = world / extent + 0.5`. +z is "up" for orbiting, as in VTK and in scanner coordinates (slices stack along z).
+
+use glam::{Mat4, Vec3, Vec4};
+
+/// A perspective pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f32,
+    /// Distance of the near plane from the eye along the view direction (world units).
+    pub near: f32,
+    pub far: f32,
+}
+
+pub const DEFAULT_FOV_Y_DEG: f32 = 30.0;
+pub const DEFAULT_NEAR: f32 = 0.01;
+pub const DEFAULT_FAR: f32 = 100.0;
+
+impl Camera {
+    /// A camera on a sphere around `target`. Azimuth turns about +z starting on the +y axis (VTK's convention:
+    /// positive azimuth is counter-clockwise seen from above); elevation lifts towards +z.
+    pub fn orbit(azimuth_deg: f32, elevation_deg: f32, distance: f32, target: Vec3) -> Camera {
+        let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
+        let dir = Vec3::new(-az.sin() * el.cos(), az.cos() * el.cos(), el.sin());
+        Camera::looking_at(target + dir * distance, target)
+    }
+
+    /// A camera at `eye` looking at `target`, +z up unless the view is (nearly) along z, then +y.
+    pub fn looking_at(eye: Vec3, target: Vec3) -> Camera {
+        let forward = (target - eye).normalize_or_zero();
+        let up = if forward.cross(Vec3::Z).length() < 1e-3 { Vec3::Y } else { Vec3::Z };
+        Camera {
+            eye,
+            target,
+            up,
+            fov_y_deg: DEFAULT_FOV_Y_DEG,
+            near: DEFAULT_NEAR,
+            far: DEFAULT_FAR,
+        }
+    }
+
+    /// The distance at which a sphere of `radius` around the target just fits the vertical field of view.
+    pub fn fit_distance(radius: f32, fov_y_deg: f32) -> f32 {
+        radius / (fov_y_deg.to_radians() * 0.5).sin()
+    }
+
+    /// Unit vector from the eye towards the target.
+    pub fn forward(&self) -> Vec3 {
+        (self.target - self.eye).normalize()
+    }
+
+    /// Right-handed view matrix (camera looks down its -z).
+    pub fn view(&self) -> Mat4 {
+        let f = self.forward();
+        let s = f.cross(self.up).normalize();
+        let u = s.cross(f);
+        Mat4::from_cols(
+            Vec4::new(s.x, u.x, -f.x, 0.0),
+            Vec4::new(s.y, u.y, -f.y, 0.0),
+            Vec4::new(s.z, u.z, -f.z, 0.0),
+            Vec4::new(-s.dot(self.eye), -u.dot(self.eye), f.dot(self.eye), 1.0),
+        )
+    }
+
+    /// Perspective projection into Vulkan clip space: x right, **y down** (framebuffer row 0 is the top of the
+    /// image), depth 0 at the near plane and 1 at the far plane. Y is flipped here on purpose, not by naga
+    /// (build.rs turns naga's coordinate adjustment off).
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        let f = 1.0 / (self.fov_y_deg.to_radians() * 0.5).tan();
+        let (n, fa) = (self.near, self.far);
+        Mat4::from_cols(
+            Vec4::new(f / aspect, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, -f, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, fa / (n - fa), -1.0),
+            Vec4::new(0.0, 0.0, n * fa / (n - fa), 0.0),
+        )
+    }
+}
+
+/// Maps texture space [0,1]³ of a box with side lengths `extent` (centred on the origin) to world space.
+pub fn tex_to_world(extent: Vec3) -> Mat4 {
+    Mat4::from_scale(extent) * Mat4::from_translation(Vec3::splat(-0.5))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn project(m: Mat4, p: Vec3) -> Vec3 {
+        let c = m * p.extend(1.0);
+        c.truncate() / c.w
+    }
+
+    #[test]
+    fn orbit_starts_on_plus_y_and_turns_counter_clockwise() {
+        let c = Camera::orbit(0.0, 0.0, 2.0, Vec3::ZERO);
+        assert!((c.eye - Vec3::new(0.0, 2.0, 0.0)).length() < 1e-6);
+        let c = Camera::orbit(90.0, 0.0, 2.0, Vec3::ZERO);
+        assert!((c.eye - Vec3::new(-2.0, 0.0, 0.0)).length() < 1e-5);
+        let c = Camera::orbit(0.0, 90.0, 2.0, Vec3::ZERO);
+        assert!((c.eye - Vec3::new(0.0, 0.0, 2.0)).length() < 1e-5);
+        assert_eq!(c.up, Vec3::Y, "looking straight down falls back to +y up");
+    }
+
+    #[test]
+    fn projection_is_vulkan_y_down_depth_zero_to_one() {
+        let cam = Camera::orbit(0.0, 0.0, 3.0, Vec3::ZERO);
+        let vp = cam.projection(1.0) * cam.view();
+        // World +z is up on screen, so it lands at negative clip y (towards framebuffer row 0).
+        assert!(project(vp, Vec3::new(0.0, 0.0, 0.5)).y < 0.0);
+        // Looking from +y towards -y with +z up, world -x is screen right.
+        assert!(project(vp, Vec3::new(-0.5, 0.0, 0.0)).x > 0.0);
+        let near_point = cam.eye + cam.forward() * cam.near;
+        assert!(project(vp, near_point).z.abs() < 1e-4);
+        let far_point = cam.eye + cam.forward() * cam.far;
+        assert!((project(vp, far_point).z - 1.0).abs() < 1e-4);
+        assert!(project(vp, Vec3::ZERO).length() < 1.0);
+    }
+
+    #[test]
+    fn fit_distance_keeps_the_sphere_in_view() {
+        let d = Camera::fit_distance(0.5, 30.0);
+        assert!((d * (15f32).to_radians().sin() - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn tex_to_world_centres_the_box() {
+        let m = tex_to_world(Vec3::new(1.0, 0.5, 0.25));
+        assert!((m.transform_point3(Vec3::ZERO) - Vec3::new(-0.5, -0.25, -0.125)).length() < 1e-6);
+        assert!((m.transform_point3(Vec3::ONE) - Vec3::new(0.5, 0.25, 0.125)).length() < 1e-6);
+    }
+}

@@ -1,0 +1,55 @@
+//! The Vulkan layer: context, resources, barriers, pipelines. Everything here may touch Vulkan; nothing outside
+//! `gpu/` and `render/` does.
+
+pub mod context;
+pub mod pipeline;
+pub mod resources;
+pub mod sync;
+
+pub use context::{list_devices, DeviceInfo, Gpu, GpuOptions, ValidationLog, ValidationMessage};
+
+use ash::vk;
+
+/// What can go wrong on the GPU side, with messages a user can act on.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No loader or no driver: volcast can't run at all (exit code 2).
+    #[error("no Vulkan available: {0}. Install a Vulkan driver, e.g. `apt-get install mesa-vulkan-drivers` (lavapipe, a software Vulkan that needs no GPU)")]
+    NoVulkan(String),
+    #[error("no usable Vulkan device: {0}. Install a Vulkan 1.3 driver, e.g. `apt-get install mesa-vulkan-drivers`, or pick another with --device (see `volcast devices`)")]
+    NoDevice(String),
+    #[error("validation was requested but the Khronos validation layer is not installed: `apt-get install vulkan-validationlayers`")]
+    NoValidationLayer,
+    #[error("{what} failed: {result}")]
+    Vk { what: &'static str, result: vk::Result },
+    #[error("GPU memory allocation failed: {0}")]
+    Alloc(#[from] gpu_allocator::AllocationError),
+    #[error("{0}")]
+    TooLarge(String),
+    #[error("invalid render settings: {0}")]
+    InvalidSettings(String),
+    #[error("internal GPU state lost: {0}")]
+    Lost(&'static str),
+}
+
+impl GpuError {
+    pub fn vk(what: &'static str, result: vk::Result) -> GpuError {
+        GpuError::Vk { what, result }
+    }
+
+    /// True when there is no Vulkan to run on at all (exit code 2 in the CLI).
+    pub fn is_unavailable(&self) -> bool {
+        matches!(self, GpuError::NoVulkan(_) | GpuError::NoDevice(_) | GpuError::NoValidationLayer)
+    }
+}
+
+/// Adds a call name to a raw `VkResult`.
+pub trait VkContext<T> {
+    fn ctx(self, what: &'static str) -> Result<T, GpuError>;
+}
+
+impl<T> VkContext<T> for Result<T, vk::Result> {
+    fn ctx(self, what: &'static str) -> Result<T, GpuError> {
+        self.map_err(|e| GpuError::vk(what, e))
+    }
+}

@@ -1,0 +1,239 @@
+//! Buffers and images: `raw` handle + `desc` + `allocation`, destroyed explicitly with `destroy(self, gpu)`.
+
+use super::sync::{image_barrier, memory_barrier, Access, COLOR_RANGE};
+use super::{Gpu, GpuError, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+pub struct Buffer {
+    pub raw: vk::Buffer,
+    pub size: u64,
+    allocation: Option<Allocation>,
+}
+
+impl Buffer {
+    pub fn new(
+        gpu: &Gpu,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+        name: &str,
+    ) -> Result<Buffer, GpuError> {
+        let info = vk::BufferCreateInfo::default().size(size.max(4)).usage(usage);
+        // SAFETY: valid create info on a live device.
+        let raw = unsafe { gpu.device.create_buffer(&info, None) }.ctx("vkCreateBuffer")?;
+        // SAFETY: `raw` was just created on this device.
+        let requirements = unsafe { gpu.device.get_buffer_memory_requirements(raw) };
+        let allocation = gpu.allocator()?.allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the buffer is unused and unbound.
+                unsafe { gpu.device.destroy_buffer(raw, None) };
+                return Err(e.into());
+            }
+        };
+        // SAFETY: the allocation satisfies the buffer's requirements and is not bound elsewhere.
+        if let Err(e) = unsafe { gpu.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+            // SAFETY: as above, nothing uses the buffer yet.
+            unsafe { gpu.device.destroy_buffer(raw, None) };
+            let _ = gpu.allocator().map(|mut a| a.free(allocation));
+            return Err(GpuError::vk("vkBindBufferMemory", e));
+        }
+        Ok(Buffer { raw, size, allocation: Some(allocation) })
+    }
+
+    /// Host-visible contents (CpuToGpu / GpuToCpu buffers).
+    pub fn mapped(&self) -> Option<&[u8]> {
+        self.allocation.as_ref()?.mapped_slice().map(|s| &s[..self.size as usize])
+    }
+
+    pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
+        let size = self.size as usize;
+        self.allocation.as_mut()?.mapped_slice_mut().map(|s| &mut s[..size])
+    }
+
+    /// Copies `bytes` to the start of a host-visible buffer.
+    pub fn write(&mut self, bytes: &[u8]) -> Result<(), GpuError> {
+        let dst = self.mapped_mut().ok_or(GpuError::Lost("buffer is not host-visible"))?;
+        if bytes.len() > dst.len() {
+            return Err(GpuError::Lost("write larger than the buffer"));
+        }
+        dst[..bytes.len()].copy_from_slice(bytes);
+        Ok(())
+    }
+
+    pub fn destroy(mut self, gpu: &Gpu) {
+        // SAFETY: callers destroy a buffer only after the GPU finished using it.
+        unsafe { gpu.device.destroy_buffer(self.raw, None) };
+        if let (Some(a), Ok(mut alloc)) = (self.allocation.take(), gpu.allocator()) {
+            let _ = alloc.free(a);
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageDesc {
+    pub format: vk::Format,
+    pub extent: vk::Extent3D,
+    pub usage: vk::ImageUsageFlags,
+}
+
+impl ImageDesc {
+    pub fn d2(format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags) -> ImageDesc {
+        ImageDesc { format, extent: vk::Extent3D { width, height, depth: 1 }, usage }
+    }
+
+    pub fn is_3d(&self) -> bool {
+        self.extent.depth > 1
+    }
+}
+
+pub struct Image {
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub desc: ImageDesc,
+    allocation: Option<Allocation>,
+}
+
+impl Image {
+    pub fn new(gpu: &Gpu, desc: ImageDesc, name: &str) -> Result<Image, GpuError> {
+        let (image_type, view_type) =
+            if desc.is_3d() { (vk::ImageType::TYPE_3D, vk::ImageViewType::TYPE_3D) } else { (vk::ImageType::TYPE_2D, vk::ImageViewType::TYPE_2D) };
+        let info = vk::ImageCreateInfo::default()
+            .image_type(image_type)
+            .format(desc.format)
+            .extent(desc.extent)
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid create info on a live device.
+        let raw = unsafe { gpu.device.create_image(&info, None) }.ctx("vkCreateImage")?;
+        // SAFETY: `raw` was just created on this device.
+        let requirements = unsafe { gpu.device.get_image_memory_requirements(raw) };
+        let allocation = gpu.allocator().and_then(|mut a| {
+            a.allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(GpuError::from)
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the image is unused and unbound.
+                unsafe { gpu.device.destroy_image(raw, None) };
+                return Err(e);
+            }
+        };
+        let mut image = Image { raw, view: vk::ImageView::null(), desc, allocation: Some(allocation) };
+        let alloc = image.allocation.as_ref().ok_or(GpuError::Lost("image allocation"))?;
+        // SAFETY: the allocation satisfies the image's requirements and is not bound elsewhere.
+        if let Err(e) = unsafe { gpu.device.bind_image_memory(raw, alloc.memory(), alloc.offset()) } {
+            image.destroy(gpu);
+            return Err(GpuError::vk("vkBindImageMemory", e));
+        }
+        let view_info = vk::ImageViewCreateInfo::default()
+            .image(raw)
+            .view_type(view_type)
+            .format(desc.format)
+            .subresource_range(COLOR_RANGE);
+        // SAFETY: the image is bound and the view matches its type and format.
+        match unsafe { gpu.device.create_image_view(&view_info, None) } {
+            Ok(v) => image.view = v,
+            Err(e) => {
+                image.destroy(gpu);
+                return Err(GpuError::vk("vkCreateImageView", e));
+            }
+        }
+        Ok(image)
+    }
+
+    pub fn destroy(mut self, gpu: &Gpu) {
+        // SAFETY: callers destroy an image only after the GPU finished using it.
+        unsafe {
+            if self.view != vk::ImageView::null() {
+                gpu.device.destroy_image_view(self.view, None);
+            }
+            gpu.device.destroy_image(self.raw, None);
+        }
+        if let (Some(a), Ok(mut alloc)) = (self.allocation.take(), gpu.allocator()) {
+            let _ = alloc.free(a);
+        }
+    }
+
+    /// Bytes the allocation takes on the device.
+    pub fn allocated_bytes(&self) -> u64 {
+        self.allocation.as_ref().map(|a| a.size()).unwrap_or(0)
+    }
+}
+
+/// Fills `image` with `bytes` (tightly packed texels) through a staging buffer and leaves it ready for sampling
+/// in fragment shaders.
+pub fn upload_image(gpu: &Gpu, image: &Image, bytes: &[u8]) -> Result<(), GpuError> {
+    let mut staging = Buffer::new(
+        gpu,
+        bytes.len() as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::CpuToGpu,
+        "staging upload",
+    )?;
+    let result = staging.write(bytes).and_then(|_| {
+        gpu.submit_and_wait(|cb| {
+            image_barrier(&gpu.device, cb, image.raw, Access::Undefined, Access::TransferWrite);
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(vk::ImageSubresourceLayers {
+                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                    mip_level: 0,
+                    base_array_layer: 0,
+                    layer_count: 1,
+                })
+                .image_extent(image.desc.extent);
+            // SAFETY: the buffer holds exactly the image's texels; the image is in TRANSFER_DST layout.
+            unsafe {
+                gpu.device.cmd_copy_buffer_to_image(
+                    cb,
+                    staging.raw,
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                )
+            };
+            image_barrier(&gpu.device, cb, image.raw, Access::TransferWrite, Access::FragmentSampled);
+        })
+    });
+    staging.destroy(gpu);
+    result
+}
+
+/// Records a copy of a 2D colour image (in `from` state) into a host-visible buffer and makes it readable by
+/// the host. The image ends in `TransferRead`.
+pub fn record_readback(gpu: &Gpu, cb: vk::CommandBuffer, image: &Image, from: Access, buffer: &Buffer) {
+    image_barrier(&gpu.device, cb, image.raw, from, Access::TransferRead);
+    let region = vk::BufferImageCopy::default()
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_extent(image.desc.extent);
+    // SAFETY: the image is in TRANSFER_SRC layout and the buffer is large enough for its texels.
+    unsafe {
+        gpu.device.cmd_copy_image_to_buffer(cb, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer.raw, &[region])
+    };
+    memory_barrier(&gpu.device, cb, Access::TransferWrite, Access::HostRead);
+}

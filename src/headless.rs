@@ -1,0 +1,94 @@
+//! Rendering to an offscreen image and reading it back: what `render`, `compare` and the tests use.
+
+use crate::gpu::resources::{record_readback, Buffer, Image, ImageDesc};
+use crate::gpu::sync::Access;
+use crate::gpu::{Gpu, GpuError};
+use crate::render::{PassTimings, Renderer};
+use crate::settings::RenderSettings;
+use crate::volume::Volume;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// The format of offscreen images: 8-bit linear RGBA, written to PNG as is.
+pub const OUTPUT_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+
+struct Offscreen {
+    image: Image,
+    readback: Buffer,
+}
+
+/// One rendered frame.
+pub struct Frame {
+    pub image: image::RgbaImage,
+    pub timings: Option<PassTimings>,
+}
+
+/// A renderer with its offscreen target and readback buffer.
+pub struct Headless {
+    pub renderer: Renderer,
+    target: Option<Offscreen>,
+}
+
+impl Headless {
+    pub fn new(gpu: &Gpu) -> Result<Headless, GpuError> {
+        Ok(Headless { renderer: Renderer::new(gpu, OUTPUT_FORMAT)?, target: None })
+    }
+
+    pub fn set_volume(&mut self, gpu: &Gpu, volume: &Volume) -> Result<(), GpuError> {
+        self.renderer.set_volume(gpu, volume)
+    }
+
+    fn ensure_target(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<(), GpuError> {
+        if let Some(t) = &self.target {
+            if t.image.desc.extent.width == width && t.image.desc.extent.height == height {
+                return Ok(());
+            }
+        }
+        if let Some(old) = self.target.take() {
+            old.readback.destroy(gpu);
+            old.image.destroy(gpu);
+        }
+        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
+        let image = Image::new(gpu, ImageDesc::d2(OUTPUT_FORMAT, width, height, usage), "offscreen colour")?;
+        let bytes = width as u64 * height as u64 * 4;
+        match Buffer::new(gpu, bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu, "readback") {
+            Ok(readback) => {
+                self.target = Some(Offscreen { image, readback });
+                Ok(())
+            }
+            Err(e) => {
+                image.destroy(gpu);
+                Err(e)
+            }
+        }
+    }
+
+    /// Renders one frame with `s` and reads it back. Blocks until the GPU is done.
+    pub fn render(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<Frame, GpuError> {
+        s.validate().map_err(GpuError::InvalidSettings)?;
+        self.renderer.prepare(gpu, s)?;
+        self.ensure_target(gpu, s.width, s.height)?;
+        let target = self.target.as_ref().ok_or(GpuError::Lost("offscreen target"))?;
+        let renderer = &mut self.renderer;
+        let mut recorded = Ok(());
+        gpu.submit_and_wait(|cb| {
+            recorded = renderer.record(gpu, cb, (target.image.raw, target.image.view), Access::TransferRead, s);
+            if recorded.is_ok() {
+                record_readback(gpu, cb, &target.image, Access::ColorAttachmentWrite, &target.readback);
+            }
+        })?;
+        recorded?;
+        let pixels = target.readback.mapped().ok_or(GpuError::Lost("readback buffer is not mapped"))?.to_vec();
+        let image = image::RgbaImage::from_raw(s.width, s.height, pixels).ok_or(GpuError::Lost("readback size"))?;
+        Ok(Frame { image, timings: self.renderer.timings(gpu)? })
+    }
+
+    pub fn destroy(mut self, gpu: &Gpu) {
+        if let Some(t) = self.target.take() {
+            // SAFETY: render() waits for its submission, so nothing is in flight.
+            t.readback.destroy(gpu);
+            t.image.destroy(gpu);
+        }
+        self.renderer.destroy(gpu);
+    }
+}

@@ -1,0 +1,10 @@
+//! volcast: a volume ray caster on raw Vulkan. The binary (`src/main.rs`) and the tests drive this library, so
+//! both exercise one render path.
+
+pub mod camera;
+pub mod gpu;
+pub mod headless;
+pub mod render;
+pub mod settings;
+pub mod transfer;
+pub mod volume;

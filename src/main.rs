@@ -1,0 +1,366 @@
+//! The `volcast` command line: picks a subcommand, turns arguments into plain settings, reports errors.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Parser, Subcommand};
+use glam::Vec3;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+use volcast::camera::Camera;
+use volcast::gpu::{Gpu, GpuError, GpuOptions};
+use volcast::headless::Headless;
+use volcast::settings::{PositionFormat, RaySetup, RenderSettings};
+use volcast::transfer::Colormap;
+use volcast::volume::{self, RawOptions, Volume, VoxelType};
+
+#[derive(Parser)]
+#[command(name = "volcast", version, about = "Volume ray caster on raw Vulkan", propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a volume to a PNG file without a window.
+    Render(RenderArgs),
+    /// Print a volume's dimensions, type, spacing, value range and memory needs.
+    Info {
+        #[command(flatten)]
+        volume: VolumeArgs,
+    },
+    /// List the Vulkan devices and which one volcast would pick.
+    Devices,
+}
+
+#[derive(Args, Clone)]
+struct VolumeArgs {
+    /// A raw volume file (dims and type from --dims/--type or from a NAME_WxHxD_TYPE.raw name).
+    file: Option<PathBuf>,
+    /// A built-in volume: helix, box, colormap or marschner-lobb.
+    #[arg(long, conflicts_with = "file")]
+    builtin: Option<String>,
+    /// Edge length of the built-in volume (default 256; 41 for marschner-lobb).
+    #[arg(long, requires = "builtin")]
+    builtin_size: Option<u32>,
+    /// Dimensions of a raw file: W H D.
+    #[arg(long, num_args = 3, value_names = ["W", "H", "D"])]
+    dims: Option<Vec<u32>>,
+    /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
+    #[arg(long = "type")]
+    voxel_type: Option<String>,
+    /// Voxel spacing: SX SY SZ (default 1 1 1).
+    #[arg(long, num_args = 3, value_names = ["SX", "SY", "SZ"])]
+    spacing: Option<Vec<f32>>,
+}
+
+impl VolumeArgs {
+    fn load(&self) -> Result<Volume> {
+        if let Some(name) = &self.builtin {
+            return Ok(volume::builtin(name, self.builtin_size)?);
+        }
+        let Some(path) = &self.file else {
+            bail!("no volume given: pass a FILE or --builtin NAME ({})", volume::BUILTIN_NAMES.join(", "));
+        };
+        let voxel_type = match &self.voxel_type {
+            Some(t) => Some(t.parse::<VoxelType>()?),
+            None => None,
+        };
+        let opts = RawOptions {
+            dims: self.dims.as_ref().map(|d| [d[0], d[1], d[2]]),
+            voxel_type,
+            spacing: self.spacing.as_ref().map(|s| [s[0], s[1], s[2]]),
+        };
+        Ok(volume::load_raw(path, &opts)?)
+    }
+}
+
+#[derive(Args, Clone)]
+struct GpuArgs {
+    /// Run under the Khronos validation layer with synchronization validation (also VOLCAST_VALIDATION=1);
+    /// exits non-zero if it reports an error.
+    #[arg(long)]
+    validate: bool,
+    /// Device index or part of its name (see `volcast devices`).
+    #[arg(long)]
+    device: Option<String>,
+}
+
+impl GpuArgs {
+    fn options(&self) -> GpuOptions {
+        let env = std::env::var("VOLCAST_VALIDATION").is_ok_and(|v| !v.is_empty() && v != "0");
+        GpuOptions { validation: self.validate || env, device: self.device.clone(), ..Default::default() }
+    }
+}
+
+#[derive(Args, Clone)]
+struct RenderArgs {
+    #[command(flatten)]
+    volume: VolumeArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Output PNG.
+    #[arg(short, long, default_value = "volcast.png")]
+    output: PathBuf,
+    /// Image size WxH.
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Camera azimuth in degrees (about +z, from +y).
+    #[arg(long, default_value_t = 35.0, allow_negative_numbers = true)]
+    azimuth: f32,
+    /// Camera elevation in degrees.
+    #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
+    elevation: f32,
+    /// Camera distance from the volume centre (the box's longest side is 1); default fits the volume.
+    #[arg(long)]
+    distance: Option<f32>,
+    /// Camera position X,Y,Z (world units; the box is centred on the origin), looking at the centre.
+    #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "distance"], allow_hyphen_values = true)]
+    eye: Option<Vec3>,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = volcast::camera::DEFAULT_FOV_Y_DEG)]
+    fov: f32,
+    /// Colormap: cool-warm, plasma, viridis, rainbow, gnuplot, grayscale.
+    #[arg(long, default_value = "cool-warm")]
+    colormap: String,
+    /// Visible value range TMIN,TMAX in [0,1] of the data's range; values outside are transparent.
+    #[arg(long, value_parser = parse_pair, default_value = "0.1,1")]
+    window: (f32, f32),
+    /// Opacity of one voxel-length step.
+    #[arg(long, default_value_t = volcast::settings::DEFAULT_STEP_ALPHA)]
+    step_alpha: f32,
+    /// Step length in voxels (opacity is corrected for it).
+    #[arg(long, default_value_t = 1.0)]
+    step_length: f32,
+    /// Opacity = windowed value × step alpha.
+    #[arg(long)]
+    multiplied_alpha: bool,
+    /// Stop a ray once its opacity reaches this.
+    #[arg(long, default_value_t = volcast::settings::DEFAULT_EARLY_TERMINATION)]
+    early_termination: f32,
+    /// Background colour R,G,B in [0,1].
+    #[arg(long, value_parser = parse_vec3, default_value = "0,0,0")]
+    background: Vec3,
+    /// Slab slicing AXIS:POSITION:WIDTH in [0,1], e.g. x:0.5:0.2 (repeatable, one per axis).
+    #[arg(long = "slice", value_parser = parse_slice)]
+    slices: Vec<(usize, f32, f32)>,
+    /// Ray setup: faces (entry/exit textures) or analytic (ray/box intersection).
+    #[arg(long, default_value = "faces", value_parser = ["faces", "analytic"])]
+    method: String,
+    /// Entry/exit position target format: rgba32f or rgba16f.
+    #[arg(long, default_value = "rgba32f", value_parser = ["rgba32f", "rgba16f"])]
+    positions: String,
+    /// Print GPU time per pass (after a warm-up frame; lavapipe compiles shaders on first use).
+    #[arg(long)]
+    timings: bool,
+    /// Frames to time with --timings (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    frames: u32,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("size '{s}' must look like 512x512"))?;
+    let p = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("size '{s}' must look like 512x512"));
+    Ok((p(w)?, p(h)?))
+}
+
+fn parse_floats(s: &str, n: usize, what: &str) -> Result<Vec<f32>, String> {
+    let v: Result<Vec<f32>, _> = s.split(',').map(|x| x.trim().parse::<f32>()).collect();
+    match v {
+        Ok(v) if v.len() == n && v.iter().all(|x| x.is_finite()) => Ok(v),
+        _ => Err(format!("'{s}' must be {n} comma-separated numbers ({what})")),
+    }
+}
+
+fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    parse_floats(s, 3, "X,Y,Z").map(|v| Vec3::new(v[0], v[1], v[2]))
+}
+
+fn parse_pair(s: &str) -> Result<(f32, f32), String> {
+    parse_floats(s, 2, "TMIN,TMAX").map(|v| (v[0], v[1]))
+}
+
+fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {
+    let parts: Vec<&str> = s.split(':').collect();
+    let bad = || format!("slice '{s}' must look like x:0.5:0.2 (axis x|y|z, position, width in [0,1])");
+    if parts.len() != 3 {
+        return Err(bad());
+    }
+    let axis = match parts[0].trim() {
+        "x" | "X" => 0,
+        "y" | "Y" => 1,
+        "z" | "Z" => 2,
+        _ => return Err(bad()),
+    };
+    let pos: f32 = parts[1].trim().parse().map_err(|_| bad())?;
+    let width: f32 = parts[2].trim().parse().map_err(|_| bad())?;
+    if !(0.0..=1.0).contains(&pos) || !(width > 0.0 && width <= 1.0) {
+        return Err(bad());
+    }
+    Ok((axis, pos, width))
+}
+
+impl RenderArgs {
+    fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
+        let extent = volume.extent();
+        let mut s = RenderSettings::new(self.size.0, self.size.1, extent);
+        let distance = self.distance.unwrap_or_else(|| Camera::fit_distance(extent.length() * 0.5, self.fov));
+        s.camera = match self.eye {
+            Some(eye) => Camera::looking_at(eye, Vec3::ZERO),
+            None => Camera::orbit(self.azimuth, self.elevation, distance, Vec3::ZERO),
+        };
+        s.camera.fov_y_deg = self.fov;
+        s.colormap = Colormap::parse(&self.colormap).with_context(|| {
+            let names: Vec<&str> = Colormap::ALL.iter().map(|c| c.name()).collect();
+            format!("unknown colormap '{}'; choose one of {}", self.colormap, names.join(", "))
+        })?;
+        s.window = [self.window.0, self.window.1];
+        s.step_alpha = self.step_alpha;
+        s.step_length = self.step_length;
+        s.multiplied_alpha = self.multiplied_alpha;
+        s.early_termination = self.early_termination;
+        s.background = self.background;
+        for &(axis, pos, width) in &self.slices {
+            s.set_slab(axis, pos, width);
+        }
+        s.ray_setup = if self.method == "analytic" { RaySetup::Analytic } else { RaySetup::Faces };
+        s.position_format = if self.positions == "rgba16f" { PositionFormat::Rgba16f } else { PositionFormat::Rgba32f };
+        s.validate().map_err(anyhow::Error::msg)?;
+        Ok(s)
+    }
+}
+
+/// Runs `body` with a GPU and reports validation messages at the end; validation errors fail the command.
+fn with_gpu<T>(args: &GpuArgs, body: impl FnOnce(&Gpu) -> Result<T>) -> Result<T> {
+    let gpu = Gpu::new(&args.options())?;
+    let validating = gpu.validation_enabled();
+    let log = gpu.log.clone();
+    let result = body(&gpu);
+    drop(gpu);
+    if validating {
+        let (errors, warnings) = (log.error_count(), log.warning_count());
+        eprintln!("validation: {errors} errors, {warnings} warnings");
+        if errors > 0 && result.is_ok() {
+            bail!("the validation layer reported {errors} error(s)");
+        }
+    }
+    result
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+fn render(args: &RenderArgs) -> Result<()> {
+    let t_load = Instant::now();
+    let volume = args.volume.load()?;
+    let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
+    let s = args.settings(&volume)?;
+    with_gpu(&args.gpu, |gpu| {
+        let mut headless = Headless::new(gpu)?;
+        let result = (|| -> Result<()> {
+            headless.set_volume(gpu, &volume)?;
+            let t0 = Instant::now();
+            let mut frame = headless.render(gpu, &s)?;
+            let first_ms = t0.elapsed().as_secs_f64() * 1e3;
+            let mut timing_line = String::new();
+            if args.timings {
+                let (mut wall, mut march, mut entry, mut exit, mut total) = (vec![], vec![], vec![], vec![], vec![]);
+                for _ in 0..args.frames.max(1) {
+                    let t = Instant::now();
+                    frame = headless.render(gpu, &s)?;
+                    wall.push(t.elapsed().as_secs_f64() * 1e3);
+                    if let Some(tm) = frame.timings {
+                        march.push(tm.march_ms);
+                        total.push(tm.total_ms);
+                        entry.extend(tm.entry_ms);
+                        exit.extend(tm.exit_ms);
+                    }
+                }
+                timing_line = format!("median of {} frames: {:.2} ms wall", wall.len(), median(&mut wall));
+                if !total.is_empty() {
+                    timing_line += &format!("; GPU {:.2} ms total", median(&mut total));
+                    if !entry.is_empty() {
+                        timing_line +=
+                            &format!(" = entry {:.2} + exit {:.2}", median(&mut entry), median(&mut exit));
+                        timing_line += &format!(" + march {:.2}", median(&mut march));
+                    } else {
+                        timing_line += &format!(" (march {:.2})", median(&mut march));
+                    }
+                }
+            }
+            frame.image.save(&args.output).with_context(|| format!("writing {}", args.output.display()))?;
+            println!(
+                "rendered {} ({}x{}x{} {}, spacing {}x{}x{}) at {}x{} with {} ray setup on {} -> {}",
+                volume.name,
+                volume.dims[0],
+                volume.dims[1],
+                volume.dims[2],
+                volume.source_type,
+                volume.spacing[0],
+                volume.spacing[1],
+                volume.spacing[2],
+                s.width,
+                s.height,
+                if s.ray_setup == RaySetup::Faces { "entry/exit faces" } else { "analytic" },
+                gpu.device_name,
+                args.output.display()
+            );
+            println!("load {load_ms:.0} ms; first frame {first_ms:.0} ms (includes shader compilation on lavapipe)");
+            if !timing_line.is_empty() {
+                println!("{timing_line}");
+            }
+            Ok(())
+        })();
+        headless.destroy(gpu);
+        result
+    })
+}
+
+fn info(args: &VolumeArgs) -> Result<()> {
+    let v = args.load()?;
+    let e = v.extent();
+    let phys: Vec<f32> = (0..3).map(|i| v.dims[i] as f32 * v.spacing[i]).collect();
+    println!("name:      {}", v.name);
+    println!("dims:      {} x {} x {}", v.dims[0], v.dims[1], v.dims[2]);
+    println!("type:      {}", v.source_type);
+    println!("spacing:   {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
+    println!("size:      {:.1} x {:.1} x {:.1} (spacing units); box {:.3} x {:.3} x {:.3}", phys[0], phys[1], phys[2], e.x, e.y, e.z);
+    println!("range:     {} .. {}", v.range[0], v.range[1]);
+    let gpu_format = match v.gpu_texel_size() {
+        1 => "R8_UNORM",
+        2 => "R16_UNORM",
+        _ => "R32_SFLOAT",
+    };
+    println!("gpu:       {gpu_format}, {:.1} MiB", v.gpu_bytes().len() as f64 / (1 << 20) as f64);
+    Ok(())
+}
+
+fn devices() -> Result<()> {
+    let list = volcast::gpu::list_devices()?;
+    if list.is_empty() {
+        return Err(GpuError::NoDevice("the Vulkan loader found no physical device".into()).into());
+    }
+    for d in &list {
+        println!("{d}");
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Render(a) => render(a),
+        Command::Info { volume } => info(volume),
+        Command::Devices => devices(),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            let unavailable = e.downcast_ref::<GpuError>().is_some_and(|g| g.is_unavailable());
+            ExitCode::from(if unavailable { 2 } else { 1 })
+        }
+    }
+}

@@ -1,0 +1,680 @@
+//! The passes. `Renderer::record` writes one frame into a colour target: for the entry/exit method pass 1 (front
+//! faces → entry positions), pass 2 (back faces → exit positions) and pass 3 (march); for the analytic method
+//! the march alone. The same code serves headless rendering and (later) the window.
+
+use crate::camera::tex_to_world;
+use crate::gpu::pipeline::{graphics_pipeline, shader, GraphicsDesc};
+use crate::gpu::resources::{upload_image, Buffer, Image, ImageDesc};
+use crate::gpu::sync::{image_barriers, Access, ImageTransition};
+use crate::gpu::{Gpu, GpuError, VkContext};
+use crate::settings::{PositionFormat, RaySetup, RenderSettings};
+use crate::transfer::Colormap;
+use crate::volume::{VoxelData, Volume};
+use ash::vk;
+use glam::{DMat4, Vec3};
+use gpu_allocator::MemoryLocation;
+
+/// The uniform block `Frame` in shaders/frame.glsl (std140: only mat4 and vec4 members, so no padding rules bite).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FrameUniforms {
+    pub tex_to_clip: [f32; 16],
+    pub clip_to_tex: [f32; 16],
+    pub eye_tex: [f32; 4],
+    pub slab_lo: [f32; 4],
+    pub slab_hi: [f32; 4],
+    pub extent: [f32; 4],
+    pub value_map: [f32; 4],
+    pub alpha: [f32; 4],
+    pub background: [f32; 4],
+    pub viewport: [f32; 4],
+}
+
+/// GPU facts about the loaded volume that the uniforms need.
+#[derive(Clone, Copy, Debug)]
+pub struct VolumeInfo {
+    pub dims: [u32; 3],
+    pub extent: Vec3,
+    pub scale_bias: (f32, f32),
+}
+
+impl FrameUniforms {
+    /// Pure: computes the uniforms for `s` (unit-tested without a GPU).
+    pub fn new(s: &RenderSettings, v: &VolumeInfo) -> FrameUniforms {
+        let aspect = s.width as f32 / s.height as f32;
+        let cam = &s.camera;
+        // Inverting in f64 keeps the unprojected near-plane points as exact as the rasterised positions.
+        let tex_to_clip = cam.projection(aspect).as_dmat4() * cam.view().as_dmat4() * tex_to_world(v.extent).as_dmat4();
+        let clip_to_tex: DMat4 = tex_to_clip.inverse();
+        let eye_tex = cam.eye / v.extent + Vec3::splat(0.5);
+        let h = s.step_world(v.extent, v.dims);
+        let diagonal = v.extent.length();
+        let max_steps = (diagonal / h).ceil() + 2.0;
+        let v4 = |a: Vec3, w: f32| [a.x, a.y, a.z, w];
+        FrameUniforms {
+            tex_to_clip: tex_to_clip.as_mat4().to_cols_array(),
+            clip_to_tex: clip_to_tex.as_mat4().to_cols_array(),
+            eye_tex: v4(eye_tex, 1.0),
+            slab_lo: v4(s.slab_lo, 0.0),
+            slab_hi: v4(s.slab_hi, 0.0),
+            extent: v4(v.extent, h),
+            value_map: [v.scale_bias.0, v.scale_bias.1, s.window[0], s.window[1]],
+            alpha: [
+                s.step_alpha,
+                s.step_length,
+                s.early_termination,
+                if s.multiplied_alpha { 1.0 } else { 0.0 },
+            ],
+            background: v4(s.background, 1.0),
+            viewport: [s.width as f32, s.height as f32, max_steps, 0.0],
+        }
+    }
+}
+
+/// GPU time per pass of the last frame, from timestamp queries.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PassTimings {
+    /// Entry and exit passes (entry/exit method only).
+    pub entry_ms: Option<f64>,
+    pub exit_ms: Option<f64>,
+    pub march_ms: f64,
+    pub total_ms: f64,
+}
+
+struct GpuVolume {
+    image: Image,
+    info: VolumeInfo,
+}
+
+struct PositionTargets {
+    entry: Image,
+    exit: Image,
+    format: PositionFormat,
+}
+
+impl PositionTargets {
+    fn vk_format(format: PositionFormat) -> vk::Format {
+        match format {
+            PositionFormat::Rgba32f => vk::Format::R32G32B32A32_SFLOAT,
+            PositionFormat::Rgba16f => vk::Format::R16G16B16A16_SFLOAT,
+        }
+    }
+
+    fn destroy(self, gpu: &Gpu) {
+        self.exit.destroy(gpu);
+        self.entry.destroy(gpu);
+    }
+}
+
+/// Bytes per pixel that the entry/exit method needs beyond the output image (both position targets).
+pub fn position_bytes_per_pixel(format: PositionFormat) -> u64 {
+    match format {
+        PositionFormat::Rgba32f => 32,
+        PositionFormat::Rgba16f => 16,
+    }
+}
+
+const QUERIES: u32 = 4;
+
+pub struct Renderer {
+    output_format: vk::Format,
+    frame_set_layout: vk::DescriptorSetLayout,
+    volume_set_layout: vk::DescriptorSetLayout,
+    positions_set_layout: vk::DescriptorSetLayout,
+    faces_layout: vk::PipelineLayout,
+    march_faces_layout: vk::PipelineLayout,
+    march_analytic_layout: vk::PipelineLayout,
+    /// Entry and exit pipelines per position format: [Rgba32f, Rgba16f] × [entry, exit].
+    position_pipelines: [[vk::Pipeline; 2]; 2],
+    march_faces_pipeline: vk::Pipeline,
+    march_analytic_pipeline: vk::Pipeline,
+    descriptor_pool: vk::DescriptorPool,
+    frame_set: vk::DescriptorSet,
+    volume_set: vk::DescriptorSet,
+    positions_set: vk::DescriptorSet,
+    uniforms: Buffer,
+    linear_sampler: vk::Sampler,
+    point_sampler: vk::Sampler,
+    lut: Image,
+    colormap: Colormap,
+    volume: Option<GpuVolume>,
+    positions: Option<PositionTargets>,
+    query_pool: vk::QueryPool,
+    timestamp_period_ns: f64,
+    timestamps_valid: bool,
+    last_setup: RaySetup,
+}
+
+fn set_layout(gpu: &Gpu, bindings: &[(vk::DescriptorType, vk::ShaderStageFlags)]) -> Result<vk::DescriptorSetLayout, GpuError> {
+    let b: Vec<vk::DescriptorSetLayoutBinding> = bindings
+        .iter()
+        .enumerate()
+        .map(|(i, &(ty, stages))| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(i as u32)
+                .descriptor_type(ty)
+                .descriptor_count(1)
+                .stage_flags(stages)
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&b);
+    // SAFETY: valid create info on a live device.
+    unsafe { gpu.device.create_descriptor_set_layout(&info, None) }.ctx("vkCreateDescriptorSetLayout")
+}
+
+fn pipeline_layout(gpu: &Gpu, sets: &[vk::DescriptorSetLayout]) -> Result<vk::PipelineLayout, GpuError> {
+    let info = vk::PipelineLayoutCreateInfo::default().set_layouts(sets);
+    // SAFETY: the set layouts are live.
+    unsafe { gpu.device.create_pipeline_layout(&info, None) }.ctx("vkCreatePipelineLayout")
+}
+
+fn sampler(gpu: &Gpu, filter: vk::Filter) -> Result<vk::Sampler, GpuError> {
+    let info = vk::SamplerCreateInfo::default()
+        .mag_filter(filter)
+        .min_filter(filter)
+        .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+        .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+        .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+        .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+        .max_lod(0.0);
+    // SAFETY: valid create info on a live device.
+    unsafe { gpu.device.create_sampler(&info, None) }.ctx("vkCreateSampler")
+}
+
+impl Renderer {
+    /// Creates pipelines and fixed resources. `output_format` is the colour target's format (RGBA8 headless).
+    /// On error everything created so far is destroyed again.
+    pub fn new(gpu: &Gpu, output_format: vk::Format) -> Result<Renderer, GpuError> {
+        let all = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        let frag = vk::ShaderStageFlags::FRAGMENT;
+        let uniforms = Buffer::new(
+            gpu,
+            std::mem::size_of::<FrameUniforms>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+            "frame uniforms",
+        )?;
+        let lut_desc = ImageDesc::d2(
+            vk::Format::R8G8B8A8_UNORM,
+            256,
+            1,
+            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        );
+        let lut = match Image::new(gpu, lut_desc, "colormap lut") {
+            Ok(i) => i,
+            Err(e) => {
+                uniforms.destroy(gpu);
+                return Err(e);
+            }
+        };
+        let mut r = Renderer {
+            output_format,
+            frame_set_layout: vk::DescriptorSetLayout::null(),
+            volume_set_layout: vk::DescriptorSetLayout::null(),
+            positions_set_layout: vk::DescriptorSetLayout::null(),
+            faces_layout: vk::PipelineLayout::null(),
+            march_faces_layout: vk::PipelineLayout::null(),
+            march_analytic_layout: vk::PipelineLayout::null(),
+            position_pipelines: [[vk::Pipeline::null(); 2]; 2],
+            march_faces_pipeline: vk::Pipeline::null(),
+            march_analytic_pipeline: vk::Pipeline::null(),
+            descriptor_pool: vk::DescriptorPool::null(),
+            frame_set: vk::DescriptorSet::null(),
+            volume_set: vk::DescriptorSet::null(),
+            positions_set: vk::DescriptorSet::null(),
+            uniforms,
+            linear_sampler: vk::Sampler::null(),
+            point_sampler: vk::Sampler::null(),
+            lut,
+            colormap: Colormap::CoolWarm,
+            volume: None,
+            positions: None,
+            query_pool: vk::QueryPool::null(),
+            timestamp_period_ns: gpu.properties.limits.timestamp_period as f64,
+            timestamps_valid: false,
+            last_setup: RaySetup::Faces,
+        };
+        match r.init(gpu, all, frag) {
+            Ok(()) => Ok(r),
+            Err(e) => {
+                r.destroy(gpu);
+                Err(e)
+            }
+        }
+    }
+
+    fn init(&mut self, gpu: &Gpu, all: vk::ShaderStageFlags, frag: vk::ShaderStageFlags) -> Result<(), GpuError> {
+        use vk::DescriptorType as D;
+        self.frame_set_layout = set_layout(gpu, &[(D::UNIFORM_BUFFER, all)])?;
+        self.volume_set_layout = set_layout(gpu, &[(D::SAMPLED_IMAGE, frag), (D::SAMPLER, frag), (D::SAMPLED_IMAGE, frag)])?;
+        self.positions_set_layout =
+            set_layout(gpu, &[(D::SAMPLED_IMAGE, frag), (D::SAMPLED_IMAGE, frag), (D::SAMPLER, frag)])?;
+        self.faces_layout = pipeline_layout(gpu, &[self.frame_set_layout])?;
+        self.march_faces_layout =
+            pipeline_layout(gpu, &[self.frame_set_layout, self.volume_set_layout, self.positions_set_layout])?;
+        self.march_analytic_layout = pipeline_layout(gpu, &[self.frame_set_layout, self.volume_set_layout])?;
+        self.linear_sampler = sampler(gpu, vk::Filter::LINEAR)?;
+        self.point_sampler = sampler(gpu, vk::Filter::NEAREST)?;
+
+        let faces_vert = shader!("faces.vert");
+        let faces_frag = shader!("faces.frag");
+        let fullscreen = shader!("fullscreen.vert");
+        for (i, format) in [PositionFormat::Rgba32f, PositionFormat::Rgba16f].into_iter().enumerate() {
+            for (j, cull) in [vk::CullModeFlags::BACK, vk::CullModeFlags::FRONT].into_iter().enumerate() {
+                self.position_pipelines[i][j] = graphics_pipeline(
+                    gpu,
+                    &GraphicsDesc {
+                        vertex: &faces_vert,
+                        fragment: &faces_frag,
+                        layout: self.faces_layout,
+                        color_format: PositionTargets::vk_format(format),
+                        cull,
+                    },
+                )?;
+            }
+        }
+        self.march_faces_pipeline = graphics_pipeline(
+            gpu,
+            &GraphicsDesc {
+                vertex: &fullscreen,
+                fragment: &shader!("march_faces.frag"),
+                layout: self.march_faces_layout,
+                color_format: self.output_format,
+                cull: vk::CullModeFlags::NONE,
+            },
+        )?;
+        self.march_analytic_pipeline = graphics_pipeline(
+            gpu,
+            &GraphicsDesc {
+                vertex: &fullscreen,
+                fragment: &shader!("march_analytic.frag"),
+                layout: self.march_analytic_layout,
+                color_format: self.output_format,
+                cull: vk::CullModeFlags::NONE,
+            },
+        )?;
+
+        let sizes = [
+            vk::DescriptorPoolSize { ty: D::UNIFORM_BUFFER, descriptor_count: 1 },
+            vk::DescriptorPoolSize { ty: D::SAMPLED_IMAGE, descriptor_count: 4 },
+            vk::DescriptorPoolSize { ty: D::SAMPLER, descriptor_count: 2 },
+        ];
+        let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(3).pool_sizes(&sizes);
+        // SAFETY: valid create info on a live device.
+        self.descriptor_pool =
+            unsafe { gpu.device.create_descriptor_pool(&pool_info, None) }.ctx("vkCreateDescriptorPool")?;
+        let layouts = [self.frame_set_layout, self.volume_set_layout, self.positions_set_layout];
+        let alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.descriptor_pool).set_layouts(&layouts);
+        // SAFETY: the pool has room for exactly these sets.
+        let sets = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
+        (self.frame_set, self.volume_set, self.positions_set) = (sets[0], sets[1], sets[2]);
+        let buffer_info = [vk::DescriptorBufferInfo { buffer: self.uniforms.raw, offset: 0, range: vk::WHOLE_SIZE }];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.frame_set)
+            .dst_binding(0)
+            .descriptor_type(D::UNIFORM_BUFFER)
+            .buffer_info(&buffer_info);
+        // SAFETY: the set is not in use by any command buffer.
+        unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
+
+        let query_info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(QUERIES);
+        // SAFETY: valid create info on a live device.
+        self.query_pool = unsafe { gpu.device.create_query_pool(&query_info, None) }.ctx("vkCreateQueryPool")?;
+        self.upload_colormap(gpu, Colormap::CoolWarm)?;
+        Ok(())
+    }
+
+    fn upload_colormap(&mut self, gpu: &Gpu, colormap: Colormap) -> Result<(), GpuError> {
+        let lut = colormap.lut();
+        upload_image(gpu, &self.lut, bytemuck::cast_slice(&lut))?;
+        self.colormap = colormap;
+        self.write_volume_set(gpu);
+        Ok(())
+    }
+
+    fn write_volume_set(&self, gpu: &Gpu) {
+        let Some(vol) = &self.volume else { return };
+        let volume_info =
+            [vk::DescriptorImageInfo::default().image_view(vol.image.view).image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.linear_sampler)];
+        let lut_info =
+            [vk::DescriptorImageInfo::default().image_view(self.lut.view).image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let writes = [
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.volume_set)
+                .dst_binding(0)
+                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                .image_info(&volume_info),
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.volume_set)
+                .dst_binding(1)
+                .descriptor_type(vk::DescriptorType::SAMPLER)
+                .image_info(&sampler_info),
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.volume_set)
+                .dst_binding(2)
+                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                .image_info(&lut_info),
+        ];
+        // SAFETY: callers only update descriptors while no submitted work uses them (headless waits per frame).
+        unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
+    }
+
+    /// Uploads `volume` as a 3D texture in its native precision, replacing the current one.
+    /// The size is checked against the device's 3D image limit and memory before anything is allocated.
+    pub fn set_volume(&mut self, gpu: &Gpu, volume: &Volume) -> Result<(), GpuError> {
+        let limit = gpu.properties.limits.max_image_dimension3_d;
+        if volume.dims.iter().any(|&d| d > limit) {
+            return Err(GpuError::TooLarge(format!(
+                "volume {}x{}x{} exceeds this device's 3D texture limit of {limit} per side",
+                volume.dims[0], volume.dims[1], volume.dims[2]
+            )));
+        }
+        let bytes = volume.gpu_bytes();
+        // Half the heap: the upload needs a staging copy of the same size alongside.
+        if bytes.len() as u64 > gpu.device_local_bytes / 2 {
+            return Err(GpuError::TooLarge(format!(
+                "volume needs {} MiB on the GPU (plus as much again to upload) but the device has {} MiB",
+                bytes.len() >> 20,
+                gpu.device_local_bytes >> 20
+            )));
+        }
+        let format = match volume.data {
+            VoxelData::U8(_) => vk::Format::R8_UNORM,
+            VoxelData::U16(_) => vk::Format::R16_UNORM,
+            VoxelData::F32(_) => vk::Format::R32_SFLOAT,
+        };
+        // SAFETY: plain query on a live physical device.
+        let features = unsafe { gpu.instance.get_physical_device_format_properties(gpu.physical, format) };
+        let needed = vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
+        if !features.optimal_tiling_features.contains(needed) {
+            return Err(GpuError::TooLarge(format!("this device cannot filter {format:?} 3D textures linearly")));
+        }
+        let [w, h, d] = volume.dims;
+        let desc = ImageDesc {
+            format,
+            extent: vk::Extent3D { width: w, height: h, depth: d },
+            usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        };
+        // A depth-1 volume would be a 2D image; give it a second slice so the 3D view still works.
+        let image = Image::new(gpu, ImageDesc { extent: vk::Extent3D { depth: d.max(2), ..desc.extent }, ..desc }, "volume")?;
+        let upload = if d == 1 {
+            let mut twice = bytes.to_vec();
+            twice.extend_from_slice(bytes);
+            upload_image(gpu, &image, &twice)
+        } else {
+            upload_image(gpu, &image, bytes)
+        };
+        if let Err(e) = upload {
+            image.destroy(gpu);
+            return Err(e);
+        }
+        if let Some(old) = self.volume.take() {
+            old.image.destroy(gpu);
+        }
+        self.volume = Some(GpuVolume {
+            image,
+            info: VolumeInfo { dims: volume.dims, extent: volume.extent(), scale_bias: volume.gpu_scale_bias() },
+        });
+        self.write_volume_set(gpu);
+        Ok(())
+    }
+
+    pub fn volume_info(&self) -> Option<VolumeInfo> {
+        self.volume.as_ref().map(|v| v.info)
+    }
+
+    /// Bytes the volume texture takes on the device.
+    pub fn volume_bytes(&self) -> u64 {
+        self.volume.as_ref().map(|v| v.image.allocated_bytes()).unwrap_or(0)
+    }
+
+    /// Creates (or re-creates) what `settings` needs that depends on more than the frame: colormap, targets.
+    /// Must be called while no submitted frame is in flight.
+    pub fn prepare(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
+        if s.colormap != self.colormap {
+            self.upload_colormap(gpu, s.colormap)?;
+        }
+        if s.ray_setup == RaySetup::Faces {
+            let fits = self.positions.as_ref().is_some_and(|p| {
+                p.format == s.position_format && p.entry.desc.extent.width == s.width && p.entry.desc.extent.height == s.height
+            });
+            if !fits {
+                if let Some(old) = self.positions.take() {
+                    old.destroy(gpu);
+                }
+                let format = PositionTargets::vk_format(s.position_format);
+                let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
+                let entry = Image::new(gpu, ImageDesc::d2(format, s.width, s.height, usage), "entry positions")?;
+                let exit = match Image::new(gpu, ImageDesc::d2(format, s.width, s.height, usage), "exit positions") {
+                    Ok(i) => i,
+                    Err(e) => {
+                        entry.destroy(gpu);
+                        return Err(e);
+                    }
+                };
+                let targets = PositionTargets { entry, exit, format: s.position_format };
+                let infos = [targets.entry.view, targets.exit.view].map(|v| {
+                    [vk::DescriptorImageInfo::default().image_view(v).image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
+                });
+                let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.point_sampler)];
+                let writes = [
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(self.positions_set)
+                        .dst_binding(0)
+                        .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                        .image_info(&infos[0]),
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(self.positions_set)
+                        .dst_binding(1)
+                        .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                        .image_info(&infos[1]),
+                    vk::WriteDescriptorSet::default()
+                        .dst_set(self.positions_set)
+                        .dst_binding(2)
+                        .descriptor_type(vk::DescriptorType::SAMPLER)
+                        .image_info(&sampler_info),
+                ];
+                // SAFETY: no submitted work uses the set (prepare's contract).
+                unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
+                self.positions = Some(targets);
+            }
+        } else if let Some(old) = self.positions.take() {
+            // The analytic method needs no position targets: free their memory.
+            old.destroy(gpu);
+        }
+        Ok(())
+    }
+
+    /// Records one frame into `output` (a `width`×`height` colour image of `output_format`, last used as `from`;
+    /// its old contents are discarded). `output` ends in `Access::ColorAttachmentWrite`.
+    /// Call [`Renderer::prepare`] with the same settings first.
+    pub fn record(
+        &mut self,
+        gpu: &Gpu,
+        cb: vk::CommandBuffer,
+        output: (vk::Image, vk::ImageView),
+        from: Access,
+        s: &RenderSettings,
+    ) -> Result<(), GpuError> {
+        let vol = self.volume.as_ref().ok_or(GpuError::Lost("no volume loaded"))?;
+        let uniforms = FrameUniforms::new(s, &vol.info);
+        self.uniforms.write(bytemuck::bytes_of(&uniforms))?;
+        let dev = &gpu.device;
+        let extent = vk::Extent2D { width: s.width, height: s.height };
+        let viewport = vk::Viewport { x: 0.0, y: 0.0, width: s.width as f32, height: s.height as f32, min_depth: 0.0, max_depth: 1.0 };
+        let scissor = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+        let ts = |cb, i| {
+            // SAFETY: the query was reset at the start of this command buffer.
+            unsafe { dev.cmd_write_timestamp2(cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.query_pool, i) }
+        };
+        // SAFETY: `cb` is recording, outside any rendering scope.
+        unsafe { dev.cmd_reset_query_pool(cb, self.query_pool, 0, QUERIES) };
+        ts(cb, 0);
+        let begin = |view: vk::ImageView, load: vk::AttachmentLoadOp| {
+            let attachment = [vk::RenderingAttachmentInfo::default()
+                .image_view(view)
+                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .load_op(load)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })];
+            let info = vk::RenderingInfo::default()
+                .render_area(scissor)
+                .layer_count(1)
+                .color_attachments(&attachment);
+            // SAFETY: `view`'s image is in COLOR_ATTACHMENT_OPTIMAL (barriers above) and matches `extent`.
+            unsafe {
+                dev.cmd_begin_rendering(cb, &info);
+                dev.cmd_set_viewport(cb, 0, &[viewport]);
+                dev.cmd_set_scissor(cb, 0, &[scissor]);
+            }
+        };
+        let output_to_attachment =
+            ImageTransition { image: output.0, from, to: Access::ColorAttachmentWrite, discard: true };
+        match s.ray_setup {
+            RaySetup::Faces => {
+                let p = self.positions.as_ref().ok_or(GpuError::Lost("prepare() was not called"))?;
+                let pi = match p.format {
+                    PositionFormat::Rgba32f => 0,
+                    PositionFormat::Rgba16f => 1,
+                };
+                // Last frame's march read both targets; wait for that before overwriting them.
+                let discard = |image| ImageTransition {
+                    image,
+                    from: Access::FragmentSampled,
+                    to: Access::ColorAttachmentWrite,
+                    discard: true,
+                };
+                image_barriers(dev, cb, &[discard(p.entry.raw), discard(p.exit.raw), output_to_attachment]);
+                for (j, target) in [&p.entry, &p.exit].into_iter().enumerate() {
+                    begin(target.view, vk::AttachmentLoadOp::CLEAR);
+                    // SAFETY: rendering has begun; the pipeline and set match the faces layout.
+                    unsafe {
+                        dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.position_pipelines[pi][j]);
+                        dev.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::GRAPHICS, self.faces_layout, 0, &[self.frame_set], &[]);
+                        dev.cmd_draw(cb, 36, 1, 0, 0);
+                        dev.cmd_end_rendering(cb);
+                    }
+                    ts(cb, 1 + j as u32);
+                }
+                let to_sampled = |image| ImageTransition {
+                    image,
+                    from: Access::ColorAttachmentWrite,
+                    to: Access::FragmentSampled,
+                    discard: false,
+                };
+                image_barriers(dev, cb, &[to_sampled(p.entry.raw), to_sampled(p.exit.raw)]);
+                // The march writes every pixel, so the old contents need not be loaded.
+                begin(output.1, vk::AttachmentLoadOp::DONT_CARE);
+                // SAFETY: rendering has begun; the sets match the march-faces layout and hold live resources.
+                unsafe {
+                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.march_faces_pipeline);
+                    dev.cmd_bind_descriptor_sets(
+                        cb,
+                        vk::PipelineBindPoint::GRAPHICS,
+                        self.march_faces_layout,
+                        0,
+                        &[self.frame_set, self.volume_set, self.positions_set],
+                        &[],
+                    );
+                    dev.cmd_draw(cb, 3, 1, 0, 0);
+                    dev.cmd_end_rendering(cb);
+                }
+                ts(cb, 3);
+            }
+            RaySetup::Analytic => {
+                image_barriers(dev, cb, &[output_to_attachment]);
+                begin(output.1, vk::AttachmentLoadOp::DONT_CARE);
+                // SAFETY: rendering has begun; the sets match the march-analytic layout and hold live resources.
+                unsafe {
+                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.march_analytic_pipeline);
+                    dev.cmd_bind_descriptor_sets(
+                        cb,
+                        vk::PipelineBindPoint::GRAPHICS,
+                        self.march_analytic_layout,
+                        0,
+                        &[self.frame_set, self.volume_set],
+                        &[],
+                    );
+                    dev.cmd_draw(cb, 3, 1, 0, 0);
+                    dev.cmd_end_rendering(cb);
+                }
+                ts(cb, 1);
+            }
+        }
+        self.last_setup = s.ray_setup;
+        self.timestamps_valid = true;
+        Ok(())
+    }
+
+    /// GPU times of the last recorded frame; call after its submission has completed.
+    pub fn timings(&self, gpu: &Gpu) -> Result<Option<PassTimings>, GpuError> {
+        if !self.timestamps_valid {
+            return Ok(None);
+        }
+        let count = match self.last_setup {
+            RaySetup::Faces => 4,
+            RaySetup::Analytic => 2,
+        };
+        let mut ticks = [0u64; QUERIES as usize];
+        // SAFETY: the queries were written by a completed submission; WAIT is not needed but harmless.
+        unsafe {
+            gpu.device.get_query_pool_results(
+                self.query_pool,
+                0,
+                &mut ticks[..count],
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .ctx("vkGetQueryPoolResults")?;
+        let ms = |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * self.timestamp_period_ns * 1e-6;
+        Ok(Some(match self.last_setup {
+            RaySetup::Faces => PassTimings {
+                entry_ms: Some(ms(0, 1)),
+                exit_ms: Some(ms(1, 2)),
+                march_ms: ms(2, 3),
+                total_ms: ms(0, 3),
+            },
+            RaySetup::Analytic => PassTimings { entry_ms: None, exit_ms: None, march_ms: ms(0, 1), total_ms: ms(0, 1) },
+        }))
+    }
+
+    /// Bytes the current ray setup needs on the GPU for extra targets at `width`×`height`.
+    pub fn extra_target_bytes(s: &RenderSettings) -> u64 {
+        match s.ray_setup {
+            RaySetup::Faces => position_bytes_per_pixel(s.position_format) * s.width as u64 * s.height as u64,
+            RaySetup::Analytic => 0,
+        }
+    }
+
+    pub fn destroy(mut self, gpu: &Gpu) {
+        // SAFETY: callers destroy the renderer after its last frame completed; null handles are ignored by Vulkan.
+        unsafe {
+            let d = &gpu.device;
+            let _ = d.device_wait_idle();
+            d.destroy_query_pool(self.query_pool, None);
+            if let Some(p) = self.positions.take() {
+                p.destroy(gpu);
+            }
+            if let Some(v) = self.volume.take() {
+                v.image.destroy(gpu);
+            }
+            d.destroy_descriptor_pool(self.descriptor_pool, None);
+            for p in self.position_pipelines.iter().flatten() {
+                d.destroy_pipeline(*p, None);
+            }
+            d.destroy_pipeline(self.march_faces_pipeline, None);
+            d.destroy_pipeline(self.march_analytic_pipeline, None);
+            d.destroy_pipeline_layout(self.faces_layout, None);
+            d.destroy_pipeline_layout(self.march_faces_layout, None);
+            d.destroy_pipeline_layout(self.march_analytic_layout, None);
+            d.destroy_descriptor_set_layout(self.frame_set_layout, None);
+            d.destroy_descriptor_set_layout(self.volume_set_layout, None);
+            d.destroy_descriptor_set_layout(self.positions_set_layout, None);
+            d.destroy_sampler(self.linear_sampler, None);
+            d.destroy_sampler(self.point_sampler, None);
+        }
+        self.lut.destroy(gpu);
+        self.uniforms.destroy(gpu);
+    }
+}
