@@ -32,7 +32,10 @@ fn splice(path: &Path, depth: usize, out: &mut Spliced) -> Result<(), String> {
 }
 
 fn compile(path: &Path, stage: naga::ShaderStage) -> Result<Vec<u32>, String> {
-    let mut sp = Spliced { text: String::new(), origin: Vec::new() };
+    let mut sp = Spliced {
+        text: String::new(),
+        origin: Vec::new(),
+    };
     splice(path, 0, &mut sp)?;
     let locate = |span: naga::Span| -> String {
         let loc = span.location(&sp.text);
@@ -42,13 +45,15 @@ fn compile(path: &Path, stage: naga::ShaderStage) -> Result<Vec<u32>, String> {
         }
     };
     let mut frontend = naga::front::glsl::Frontend::default();
-    let module = frontend.parse(&naga::front::glsl::Options::from(stage), &sp.text).map_err(|errs| {
-        let mut msg = String::new();
-        for e in errs.errors.iter() {
-            let _ = writeln!(msg, "{}: {}", locate(e.meta), e.kind);
-        }
-        msg
-    })?;
+    let module = frontend
+        .parse(&naga::front::glsl::Options::from(stage), &sp.text)
+        .map_err(|errs| {
+            let mut msg = String::new();
+            for e in errs.errors.iter() {
+                let _ = writeln!(msg, "{}: {}", locate(e.meta), e.kind);
+            }
+            msg
+        })?;
     let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
         .validate(&module)
         .map_err(|e| {
@@ -65,7 +70,10 @@ fn compile(path: &Path, stage: naga::ShaderStage) -> Result<Vec<u32>, String> {
         lang_version: (1, 3),
         ..Default::default()
     };
-    let pipeline = naga::back::spv::PipelineOptions { shader_stage: stage, entry_point: "main".into() };
+    let pipeline = naga::back::spv::PipelineOptions {
+        shader_stage: stage,
+        entry_point: "main".into(),
+    };
     naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
         .map_err(|e| format!("{}: SPIR-V output failed: {e}", path.display()))
 }
@@ -102,6 +110,10 @@ fn main() {
         for f in &failures {
             eprintln!("shader error: {f}");
         }
-        panic!("{} shader(s) failed to compile:\n{}", failures.len(), failures.join("\n"));
+        panic!(
+            "{} shader(s) failed to compile:\n{}",
+            failures.len(),
+            failures.join("\n")
+        );
     }
 }

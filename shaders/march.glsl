@@ -4,6 +4,16 @@ layout(set = 1, binding = 0) uniform texture3D volume_tex;
 layout(set = 1, binding = 1) uniform sampler linear_smp;
 layout(set = 1, binding = 2) uniform texture2D lut_tex;
 
+// The colormap at c in [0,1]: linear interpolation between the table's 256 entries. Done by hand from two
+// fetches because lavapipe filters RGBA8 textures with 8-bit weights, which costs up to 1/255 per sample.
+vec3 colormap(float c) {
+    float u = c * 255.0;
+    int i0 = min(int(u), 254);
+    vec3 a = texelFetch(sampler2D(lut_tex, linear_smp), ivec2(i0, 0), 0).rgb;
+    vec3 b = texelFetch(sampler2D(lut_tex, linear_smp), ivec2(i0 + 1, 0), 0).rgb;
+    return mix(a, b, u - float(i0));
+}
+
 // The point where pixel `frag`'s ray crosses the near plane, in texture space.
 vec3 near_point(vec2 frag) {
     vec2 ndc = frag / frame.viewport.xy * 2.0 - 1.0;
@@ -34,7 +44,7 @@ vec4 march(vec3 a, vec3 b) {
             continue;
         }
         float c = (v - win_lo) / win_span;
-        vec3 rgb = textureLod(sampler2D(lut_tex, linear_smp), vec2((c * 255.0 + 0.5) / 256.0, 0.5), 0.0).rgb;
+        vec3 rgb = colormap(c);
         float alpha = const_alpha;
         if (multiplied) {
             alpha = 1.0 - pow(1.0 - c * frame.alpha.x, frame.alpha.y);

@@ -35,7 +35,11 @@ impl Camera {
     /// A camera at `eye` looking at `target`, +z up unless the view is (nearly) along z, then +y.
     pub fn looking_at(eye: Vec3, target: Vec3) -> Camera {
         let forward = (target - eye).normalize_or_zero();
-        let up = if forward.cross(Vec3::Z).length() < 1e-3 { Vec3::Y } else { Vec3::Z };
+        let up = if forward.cross(Vec3::Z).length() < 1e-3 {
+            Vec3::Y
+        } else {
+            Vec3::Z
+        };
         Camera {
             eye,
             target,

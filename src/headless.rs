@@ -31,7 +31,10 @@ pub struct Headless {
 
 impl Headless {
     pub fn new(gpu: &Gpu) -> Result<Headless, GpuError> {
-        Ok(Headless { renderer: Renderer::new(gpu, OUTPUT_FORMAT)?, target: None })
+        Ok(Headless {
+            renderer: Renderer::new(gpu, OUTPUT_FORMAT)?,
+            target: None,
+        })
     }
 
     pub fn set_volume(&mut self, gpu: &Gpu, volume: &Volume) -> Result<(), GpuError> {
@@ -49,9 +52,19 @@ impl Headless {
             old.image.destroy(gpu);
         }
         let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
-        let image = Image::new(gpu, ImageDesc::d2(OUTPUT_FORMAT, width, height, usage), "offscreen colour")?;
+        let image = Image::new(
+            gpu,
+            ImageDesc::d2(OUTPUT_FORMAT, width, height, usage),
+            "offscreen colour",
+        )?;
         let bytes = width as u64 * height as u64 * 4;
-        match Buffer::new(gpu, bytes, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu, "readback") {
+        match Buffer::new(
+            gpu,
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+            "readback",
+        ) {
             Ok(readback) => {
                 self.target = Some(Offscreen { image, readback });
                 Ok(())
@@ -78,9 +91,16 @@ impl Headless {
             }
         })?;
         recorded?;
-        let pixels = target.readback.mapped().ok_or(GpuError::Lost("readback buffer is not mapped"))?.to_vec();
+        let pixels = target
+            .readback
+            .mapped()
+            .ok_or(GpuError::Lost("readback buffer is not mapped"))?
+            .to_vec();
         let image = image::RgbaImage::from_raw(s.width, s.height, pixels).ok_or(GpuError::Lost("readback size"))?;
-        Ok(Frame { image, timings: self.renderer.timings(gpu)? })
+        Ok(Frame {
+            image,
+            timings: self.renderer.timings(gpu)?,
+        })
     }
 
     pub fn destroy(mut self, gpu: &Gpu) {

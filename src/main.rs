@@ -14,7 +14,12 @@ use volcast::transfer::Colormap;
 use volcast::volume::{self, RawOptions, Volume, VoxelType};
 
 #[derive(Parser)]
-#[command(name = "volcast", version, about = "Volume ray caster on raw Vulkan", propagate_version = true)]
+#[command(
+    name = "volcast",
+    version,
+    about = "Volume ray caster on raw Vulkan",
+    propagate_version = true
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -23,7 +28,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a volume to a PNG file without a window.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Print a volume's dimensions, type, spacing, value range and memory needs.
     Info {
         #[command(flatten)]
@@ -60,7 +65,10 @@ impl VolumeArgs {
             return Ok(volume::builtin(name, self.builtin_size)?);
         }
         let Some(path) = &self.file else {
-            bail!("no volume given: pass a FILE or --builtin NAME ({})", volume::BUILTIN_NAMES.join(", "));
+            bail!(
+                "no volume given: pass a FILE or --builtin NAME ({})",
+                volume::BUILTIN_NAMES.join(", ")
+            );
         };
         let voxel_type = match &self.voxel_type {
             Some(t) => Some(t.parse::<VoxelType>()?),
@@ -89,7 +97,11 @@ struct GpuArgs {
 impl GpuArgs {
     fn options(&self) -> GpuOptions {
         let env = std::env::var("VOLCAST_VALIDATION").is_ok_and(|v| !v.is_empty() && v != "0");
-        GpuOptions { validation: self.validate || env, device: self.device.clone(), ..Default::default() }
+        GpuOptions {
+            validation: self.validate || env,
+            device: self.device.clone(),
+            ..Default::default()
+        }
     }
 }
 
@@ -159,8 +171,14 @@ struct RenderArgs {
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("size '{s}' must look like 512x512"))?;
-    let p = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("size '{s}' must look like 512x512"));
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size '{s}' must look like 512x512"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("size '{s}' must look like 512x512"))
+    };
     Ok((p(w)?, p(h)?))
 }
 
@@ -194,7 +212,7 @@ fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {
     };
     let pos: f32 = parts[1].trim().parse().map_err(|_| bad())?;
     let width: f32 = parts[2].trim().parse().map_err(|_| bad())?;
-    if !(0.0..=1.0).contains(&pos) || !(width > 0.0 && width <= 1.0) {
+    if !((0.0..=1.0).contains(&pos) && width > 0.0 && width <= 1.0) {
         return Err(bad());
     }
     Ok((axis, pos, width))
@@ -204,7 +222,9 @@ impl RenderArgs {
     fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
         let extent = volume.extent();
         let mut s = RenderSettings::new(self.size.0, self.size.1, extent);
-        let distance = self.distance.unwrap_or_else(|| Camera::fit_distance(extent.length() * 0.5, self.fov));
+        let distance = self
+            .distance
+            .unwrap_or_else(|| Camera::fit_distance(extent.length() * 0.5, self.fov));
         s.camera = match self.eye {
             Some(eye) => Camera::looking_at(eye, Vec3::ZERO),
             None => Camera::orbit(self.azimuth, self.elevation, distance, Vec3::ZERO),
@@ -212,7 +232,11 @@ impl RenderArgs {
         s.camera.fov_y_deg = self.fov;
         s.colormap = Colormap::parse(&self.colormap).with_context(|| {
             let names: Vec<&str> = Colormap::ALL.iter().map(|c| c.name()).collect();
-            format!("unknown colormap '{}'; choose one of {}", self.colormap, names.join(", "))
+            format!(
+                "unknown colormap '{}'; choose one of {}",
+                self.colormap,
+                names.join(", ")
+            )
         })?;
         s.window = [self.window.0, self.window.1];
         s.step_alpha = self.step_alpha;
@@ -223,8 +247,16 @@ impl RenderArgs {
         for &(axis, pos, width) in &self.slices {
             s.set_slab(axis, pos, width);
         }
-        s.ray_setup = if self.method == "analytic" { RaySetup::Analytic } else { RaySetup::Faces };
-        s.position_format = if self.positions == "rgba16f" { PositionFormat::Rgba16f } else { PositionFormat::Rgba32f };
+        s.ray_setup = if self.method == "analytic" {
+            RaySetup::Analytic
+        } else {
+            RaySetup::Faces
+        };
+        s.position_format = if self.positions == "rgba16f" {
+            PositionFormat::Rgba16f
+        } else {
+            PositionFormat::Rgba32f
+        };
         s.validate().map_err(anyhow::Error::msg)?;
         Ok(s)
     }
@@ -282,15 +314,17 @@ fn render(args: &RenderArgs) -> Result<()> {
                 if !total.is_empty() {
                     timing_line += &format!("; GPU {:.2} ms total", median(&mut total));
                     if !entry.is_empty() {
-                        timing_line +=
-                            &format!(" = entry {:.2} + exit {:.2}", median(&mut entry), median(&mut exit));
+                        timing_line += &format!(" = entry {:.2} + exit {:.2}", median(&mut entry), median(&mut exit));
                         timing_line += &format!(" + march {:.2}", median(&mut march));
                     } else {
                         timing_line += &format!(" (march {:.2})", median(&mut march));
                     }
                 }
             }
-            frame.image.save(&args.output).with_context(|| format!("writing {}", args.output.display()))?;
+            frame
+                .image
+                .save(&args.output)
+                .with_context(|| format!("writing {}", args.output.display()))?;
             println!(
                 "rendered {} ({}x{}x{} {}, spacing {}x{}x{}) at {}x{} with {} ray setup on {} -> {}",
                 volume.name,
@@ -303,7 +337,11 @@ fn render(args: &RenderArgs) -> Result<()> {
                 volume.spacing[2],
                 s.width,
                 s.height,
-                if s.ray_setup == RaySetup::Faces { "entry/exit faces" } else { "analytic" },
+                if s.ray_setup == RaySetup::Faces {
+                    "entry/exit faces"
+                } else {
+                    "analytic"
+                },
                 gpu.device_name,
                 args.output.display()
             );
@@ -326,14 +364,20 @@ fn info(args: &VolumeArgs) -> Result<()> {
     println!("dims:      {} x {} x {}", v.dims[0], v.dims[1], v.dims[2]);
     println!("type:      {}", v.source_type);
     println!("spacing:   {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
-    println!("size:      {:.1} x {:.1} x {:.1} (spacing units); box {:.3} x {:.3} x {:.3}", phys[0], phys[1], phys[2], e.x, e.y, e.z);
+    println!(
+        "size:      {:.1} x {:.1} x {:.1} (spacing units); box {:.3} x {:.3} x {:.3}",
+        phys[0], phys[1], phys[2], e.x, e.y, e.z
+    );
     println!("range:     {} .. {}", v.range[0], v.range[1]);
     let gpu_format = match v.gpu_texel_size() {
         1 => "R8_UNORM",
         2 => "R16_UNORM",
         _ => "R32_SFLOAT",
     };
-    println!("gpu:       {gpu_format}, {:.1} MiB", v.gpu_bytes().len() as f64 / (1 << 20) as f64);
+    println!(
+        "gpu:       {gpu_format}, {:.1} MiB",
+        v.gpu_bytes().len() as f64 / (1 << 20) as f64
+    );
     Ok(())
 }
 

@@ -102,7 +102,10 @@ impl RenderSettings {
     /// Checks the values a user can set; the message names the offending setting.
     pub fn validate(&self) -> Result<(), String> {
         if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
-            return Err(format!("image size {}x{} must be between 1 and 16384 on each side", self.width, self.height));
+            return Err(format!(
+                "image size {}x{} must be between 1 and 16384 on each side",
+                self.width, self.height
+            ));
         }
         let [lo, hi] = self.window;
         if !(0.0..=1.0).contains(&lo) || !(0.0..=1.0).contains(&hi) || lo >= hi {
@@ -115,11 +118,19 @@ impl RenderSettings {
             return Err(format!("step length {} voxels must be in [0.05, 64]", self.step_length));
         }
         if !(0.0..=1.0).contains(&self.early_termination) {
-            return Err(format!("early termination opacity {} must be in [0,1]", self.early_termination));
+            return Err(format!(
+                "early termination opacity {} must be in [0,1]",
+                self.early_termination
+            ));
         }
         for a in 0..3 {
             if self.slab_lo[a] >= self.slab_hi[a] {
-                return Err(format!("slab along {} is empty ({}..{})", ["x", "y", "z"][a], self.slab_lo[a], self.slab_hi[a]));
+                return Err(format!(
+                    "slab along {} is empty ({}..{})",
+                    ["x", "y", "z"][a],
+                    self.slab_lo[a],
+                    self.slab_hi[a]
+                ));
             }
         }
         let c = &self.camera;

@@ -59,14 +59,22 @@ impl ValidationLog {
     pub fn error_count(&self) -> usize {
         self.messages
             .lock()
-            .map(|m| m.iter().filter(|x| x.severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)).count())
+            .map(|m| {
+                m.iter()
+                    .filter(|x| x.severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR))
+                    .count()
+            })
             .unwrap_or(0)
     }
 
     pub fn warning_count(&self) -> usize {
         self.messages
             .lock()
-            .map(|m| m.iter().filter(|x| x.severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING)).count())
+            .map(|m| {
+                m.iter()
+                    .filter(|x| x.severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING))
+                    .count()
+            })
             .unwrap_or(0)
     }
 }
@@ -180,7 +188,13 @@ fn create_instance(
     entry: &ash::Entry,
     opts: &GpuOptions,
     log: &Arc<ValidationLog>,
-) -> Result<(ash::Instance, Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>), GpuError> {
+) -> Result<
+    (
+        ash::Instance,
+        Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    ),
+    GpuError,
+> {
     // SAFETY: plain query on a loaded entry.
     let version = unsafe { entry.try_enumerate_instance_version() }
         .map_err(|e| GpuError::vk("vkEnumerateInstanceVersion", e))?
@@ -198,7 +212,9 @@ fn create_instance(
         // SAFETY: plain query on a loaded entry.
         let available = unsafe { entry.enumerate_instance_layer_properties() }
             .map_err(|e| GpuError::vk("vkEnumerateInstanceLayerProperties", e))?;
-        let found = available.iter().any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
+        let found = available
+            .iter()
+            .any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
         if !found {
             return Err(GpuError::NoValidationLayer);
         }
@@ -213,9 +229,7 @@ fn create_instance(
     let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
     let mut validation_features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
     let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-        .message_severity(
-            vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
-        )
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING)
         .message_type(
             vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
                 | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
@@ -263,7 +277,10 @@ fn describe_devices(instance: &ash::Instance, opts: &GpuOptions) -> Result<Vec<D
         .map(|(index, &pd)| {
             // SAFETY: `pd` comes from this instance.
             let props = unsafe { instance.get_physical_device_properties(pd) };
-            let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            let name = props
+                .device_name_as_c_str()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
             DeviceInfo {
                 index,
                 name,
@@ -297,7 +314,10 @@ fn unsuitable_reason(
     if opts.swapchain {
         // SAFETY: as above.
         let exts = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-        if !exts.iter().any(|e| e.extension_name_as_c_str().ok() == Some(ash::khr::swapchain::NAME)) {
+        if !exts
+            .iter()
+            .any(|e| e.extension_name_as_c_str().ok() == Some(ash::khr::swapchain::NAME))
+        {
             return Some("has no VK_KHR_swapchain".into());
         }
     }
@@ -307,7 +327,10 @@ fn unsuitable_reason(
 fn graphics_queue_family(instance: &ash::Instance, pd: vk::PhysicalDevice) -> Option<u32> {
     // SAFETY: `pd` comes from this instance.
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-    families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS)).map(|i| i as u32)
+    families
+        .iter()
+        .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS))
+        .map(|i| i as u32)
 }
 
 /// Picks by `--device` (index or name part), else discrete > integrated > virtual > CPU.
@@ -326,7 +349,10 @@ fn choose(devices: &[DeviceInfo], wanted: Option<&str>) -> Result<usize, GpuErro
             match hit {
                 Some(d) if d.unsuitable.is_none() => Ok(d.index),
                 Some(d) => Err(GpuError::NoDevice(format!("device {d}"))),
-                None => Err(GpuError::NoDevice(format!("no device matches --device {w}; devices:{}", list()))),
+                None => Err(GpuError::NoDevice(format!(
+                    "no device matches --device {w}; devices:{}",
+                    list()
+                ))),
             }
         }
         None => usable
@@ -352,7 +378,10 @@ pub fn list_devices() -> Result<Vec<DeviceInfo>, GpuError> {
 impl Gpu {
     pub fn new(opts: &GpuOptions) -> Result<Gpu, GpuError> {
         let entry = load_entry()?;
-        let log = Arc::new(ValidationLog { echo: true, ..Default::default() });
+        let log = Arc::new(ValidationLog {
+            echo: true,
+            ..Default::default()
+        });
         let (instance, debug) = create_instance(&entry, opts, &log)?;
         // From here on, a failure must tear down what exists: build the rest in a helper and clean up on error.
         match Self::create_device(&instance, opts) {
@@ -391,7 +420,17 @@ impl Gpu {
     fn create_device(
         instance: &ash::Instance,
         opts: &GpuOptions,
-    ) -> Result<(vk::PhysicalDevice, vk::PhysicalDeviceProperties, String, ash::Device, u32, u64), GpuError> {
+    ) -> Result<
+        (
+            vk::PhysicalDevice,
+            vk::PhysicalDeviceProperties,
+            String,
+            ash::Device,
+            u32,
+            u64,
+        ),
+        GpuError,
+    > {
         let devices = describe_devices(instance, opts)?;
         if devices.is_empty() {
             return Err(GpuError::NoDevice("the Vulkan loader found no physical device".into()));
@@ -410,14 +449,19 @@ impl Gpu {
             .map(|h| h.size)
             .max()
             .unwrap_or(0);
-        let queue_family = graphics_queue_family(instance, physical).ok_or_else(|| GpuError::NoDevice("no graphics queue".into()))?;
+        let queue_family =
+            graphics_queue_family(instance, physical).ok_or_else(|| GpuError::NoDevice("no graphics queue".into()))?;
         let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let queue_info = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)];
         let mut extensions: Vec<*const i8> = Vec::new();
         if opts.swapchain {
             extensions.push(ash::khr::swapchain::NAME.as_ptr());
         }
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true);
         let info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_extension_names(&extensions)
@@ -426,7 +470,14 @@ impl Gpu {
         let device =
             unsafe { instance.create_device(physical, &info, None) }.map_err(|e| GpuError::vk("vkCreateDevice", e))?;
         let device_name = devices[index].name.clone();
-        Ok((physical, properties, device_name, device, queue_family, device_local_bytes))
+        Ok((
+            physical,
+            properties,
+            device_name,
+            device,
+            queue_family,
+            device_local_bytes,
+        ))
     }
 
     fn finish(mut self) -> Result<Gpu, GpuError> {

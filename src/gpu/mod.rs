@@ -39,7 +39,10 @@ impl GpuError {
 
     /// True when there is no Vulkan to run on at all (exit code 2 in the CLI).
     pub fn is_unavailable(&self) -> bool {
-        matches!(self, GpuError::NoVulkan(_) | GpuError::NoDevice(_) | GpuError::NoValidationLayer)
+        matches!(
+            self,
+            GpuError::NoVulkan(_) | GpuError::NoDevice(_) | GpuError::NoValidationLayer
+        )
     }
 }
 

@@ -48,13 +48,21 @@ pub fn graphics_pipeline(gpu: &Gpu, desc: &GraphicsDesc) -> Result<vk::Pipeline,
         }
     };
     let stages = [
-        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
-        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vs)
+            .name(c"main"),
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::FRAGMENT)
+            .module(fs)
+            .name(c"main"),
     ];
     let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
     let input_assembly =
         vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-    let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+    let viewport = vk::PipelineViewportStateCreateInfo::default()
+        .viewport_count(1)
+        .scissor_count(1);
     // Outward faces are counter-clockwise on screen with camera.rs's y-down projection.
     let raster = vk::PipelineRasterizationStateCreateInfo::default()
         .polygon_mode(vk::PolygonMode::FILL)
@@ -63,7 +71,8 @@ pub fn graphics_pipeline(gpu: &Gpu, desc: &GraphicsDesc) -> Result<vk::Pipeline,
         .line_width(1.0);
     let multisample =
         vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-    let attachments = [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)];
+    let attachments =
+        [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)];
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
     let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
     let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
@@ -81,7 +90,10 @@ pub fn graphics_pipeline(gpu: &Gpu, desc: &GraphicsDesc) -> Result<vk::Pipeline,
         .layout(desc.layout)
         .push_next(&mut rendering);
     // SAFETY: all referenced state lives until the call returns; the modules are valid.
-    let result = unsafe { gpu.device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
+    let result = unsafe {
+        gpu.device
+            .create_graphics_pipelines(vk::PipelineCache::null(), &[info], None)
+    };
     // SAFETY: pipelines keep no reference to their shader modules once created.
     unsafe {
         gpu.device.destroy_shader_module(vs, None);

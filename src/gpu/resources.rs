@@ -41,18 +41,28 @@ impl Buffer {
             }
         };
         // SAFETY: the allocation satisfies the buffer's requirements and is not bound elsewhere.
-        if let Err(e) = unsafe { gpu.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+        if let Err(e) = unsafe {
+            gpu.device
+                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+        } {
             // SAFETY: as above, nothing uses the buffer yet.
             unsafe { gpu.device.destroy_buffer(raw, None) };
             let _ = gpu.allocator().map(|mut a| a.free(allocation));
             return Err(GpuError::vk("vkBindBufferMemory", e));
         }
-        Ok(Buffer { raw, size, allocation: Some(allocation) })
+        Ok(Buffer {
+            raw,
+            size,
+            allocation: Some(allocation),
+        })
     }
 
     /// Host-visible contents (CpuToGpu / GpuToCpu buffers).
     pub fn mapped(&self) -> Option<&[u8]> {
-        self.allocation.as_ref()?.mapped_slice().map(|s| &s[..self.size as usize])
+        self.allocation
+            .as_ref()?
+            .mapped_slice()
+            .map(|s| &s[..self.size as usize])
     }
 
     pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
@@ -88,7 +98,15 @@ pub struct ImageDesc {
 
 impl ImageDesc {
     pub fn d2(format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags) -> ImageDesc {
-        ImageDesc { format, extent: vk::Extent3D { width, height, depth: 1 }, usage }
+        ImageDesc {
+            format,
+            extent: vk::Extent3D {
+                width,
+                height,
+                depth: 1,
+            },
+            usage,
+        }
     }
 
     pub fn is_3d(&self) -> bool {
@@ -105,8 +123,11 @@ pub struct Image {
 
 impl Image {
     pub fn new(gpu: &Gpu, desc: ImageDesc, name: &str) -> Result<Image, GpuError> {
-        let (image_type, view_type) =
-            if desc.is_3d() { (vk::ImageType::TYPE_3D, vk::ImageViewType::TYPE_3D) } else { (vk::ImageType::TYPE_2D, vk::ImageViewType::TYPE_2D) };
+        let (image_type, view_type) = if desc.is_3d() {
+            (vk::ImageType::TYPE_3D, vk::ImageViewType::TYPE_3D)
+        } else {
+            (vk::ImageType::TYPE_2D, vk::ImageViewType::TYPE_2D)
+        };
         let info = vk::ImageCreateInfo::default()
             .image_type(image_type)
             .format(desc.format)
@@ -139,7 +160,12 @@ impl Image {
                 return Err(e);
             }
         };
-        let mut image = Image { raw, view: vk::ImageView::null(), desc, allocation: Some(allocation) };
+        let mut image = Image {
+            raw,
+            view: vk::ImageView::null(),
+            desc,
+            allocation: Some(allocation),
+        };
         let alloc = image.allocation.as_ref().ok_or(GpuError::Lost("image allocation"))?;
         // SAFETY: the allocation satisfies the image's requirements and is not bound elsewhere.
         if let Err(e) = unsafe { gpu.device.bind_image_memory(raw, alloc.memory(), alloc.offset()) } {
@@ -212,7 +238,13 @@ pub fn upload_image(gpu: &Gpu, image: &Image, bytes: &[u8]) -> Result<(), GpuErr
                     &[region],
                 )
             };
-            image_barrier(&gpu.device, cb, image.raw, Access::TransferWrite, Access::FragmentSampled);
+            image_barrier(
+                &gpu.device,
+                cb,
+                image.raw,
+                Access::TransferWrite,
+                Access::FragmentSampled,
+            );
         })
     });
     staging.destroy(gpu);
@@ -233,7 +265,13 @@ pub fn record_readback(gpu: &Gpu, cb: vk::CommandBuffer, image: &Image, from: Ac
         .image_extent(image.desc.extent);
     // SAFETY: the image is in TRANSFER_SRC layout and the buffer is large enough for its texels.
     unsafe {
-        gpu.device.cmd_copy_image_to_buffer(cb, image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buffer.raw, &[region])
+        gpu.device.cmd_copy_image_to_buffer(
+            cb,
+            image.raw,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            buffer.raw,
+            &[region],
+        )
     };
     memory_barrier(&gpu.device, cb, Access::TransferWrite, Access::HostRead);
 }

@@ -77,7 +77,11 @@ pub fn image_barriers(device: &ash::Device, cb: vk::CommandBuffer, transitions: 
                 .src_access_mask(t.from.access())
                 .dst_stage_mask(t.to.stage())
                 .dst_access_mask(t.to.access())
-                .old_layout(if t.discard { vk::ImageLayout::UNDEFINED } else { t.from.layout() })
+                .old_layout(if t.discard {
+                    vk::ImageLayout::UNDEFINED
+                } else {
+                    t.from.layout()
+                })
                 .new_layout(t.to.layout())
                 .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
@@ -91,7 +95,16 @@ pub fn image_barriers(device: &ash::Device, cb: vk::CommandBuffer, transitions: 
 }
 
 pub fn image_barrier(device: &ash::Device, cb: vk::CommandBuffer, image: vk::Image, from: Access, to: Access) {
-    image_barriers(device, cb, &[ImageTransition { image, from, to, discard: false }]);
+    image_barriers(
+        device,
+        cb,
+        &[ImageTransition {
+            image,
+            from,
+            to,
+            discard: false,
+        }],
+    );
 }
 
 /// A global memory barrier (buffers need no layout, and volcast never shares a buffer's ranges).

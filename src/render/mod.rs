@@ -9,7 +9,7 @@ use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::settings::{PositionFormat, RaySetup, RenderSettings};
 use crate::transfer::Colormap;
-use crate::volume::{VoxelData, Volume};
+use crate::volume::{Volume, VoxelData};
 use ash::vk;
 use glam::{DMat4, Vec3};
 use gpu_allocator::MemoryLocation;
@@ -145,7 +145,10 @@ pub struct Renderer {
     last_setup: RaySetup,
 }
 
-fn set_layout(gpu: &Gpu, bindings: &[(vk::DescriptorType, vk::ShaderStageFlags)]) -> Result<vk::DescriptorSetLayout, GpuError> {
+fn set_layout(
+    gpu: &Gpu,
+    bindings: &[(vk::DescriptorType, vk::ShaderStageFlags)],
+) -> Result<vk::DescriptorSetLayout, GpuError> {
     let b: Vec<vk::DescriptorSetLayoutBinding> = bindings
         .iter()
         .enumerate()
@@ -246,12 +249,19 @@ impl Renderer {
     fn init(&mut self, gpu: &Gpu, all: vk::ShaderStageFlags, frag: vk::ShaderStageFlags) -> Result<(), GpuError> {
         use vk::DescriptorType as D;
         self.frame_set_layout = set_layout(gpu, &[(D::UNIFORM_BUFFER, all)])?;
-        self.volume_set_layout = set_layout(gpu, &[(D::SAMPLED_IMAGE, frag), (D::SAMPLER, frag), (D::SAMPLED_IMAGE, frag)])?;
-        self.positions_set_layout =
-            set_layout(gpu, &[(D::SAMPLED_IMAGE, frag), (D::SAMPLED_IMAGE, frag), (D::SAMPLER, frag)])?;
+        self.volume_set_layout = set_layout(
+            gpu,
+            &[(D::SAMPLED_IMAGE, frag), (D::SAMPLER, frag), (D::SAMPLED_IMAGE, frag)],
+        )?;
+        self.positions_set_layout = set_layout(
+            gpu,
+            &[(D::SAMPLED_IMAGE, frag), (D::SAMPLED_IMAGE, frag), (D::SAMPLER, frag)],
+        )?;
         self.faces_layout = pipeline_layout(gpu, &[self.frame_set_layout])?;
-        self.march_faces_layout =
-            pipeline_layout(gpu, &[self.frame_set_layout, self.volume_set_layout, self.positions_set_layout])?;
+        self.march_faces_layout = pipeline_layout(
+            gpu,
+            &[self.frame_set_layout, self.volume_set_layout, self.positions_set_layout],
+        )?;
         self.march_analytic_layout = pipeline_layout(gpu, &[self.frame_set_layout, self.volume_set_layout])?;
         self.linear_sampler = sampler(gpu, vk::Filter::LINEAR)?;
         self.point_sampler = sampler(gpu, vk::Filter::NEAREST)?;
@@ -259,8 +269,14 @@ impl Renderer {
         let faces_vert = shader!("faces.vert");
         let faces_frag = shader!("faces.frag");
         let fullscreen = shader!("fullscreen.vert");
-        for (i, format) in [PositionFormat::Rgba32f, PositionFormat::Rgba16f].into_iter().enumerate() {
-            for (j, cull) in [vk::CullModeFlags::BACK, vk::CullModeFlags::FRONT].into_iter().enumerate() {
+        for (i, format) in [PositionFormat::Rgba32f, PositionFormat::Rgba16f]
+            .into_iter()
+            .enumerate()
+        {
+            for (j, cull) in [vk::CullModeFlags::BACK, vk::CullModeFlags::FRONT]
+                .into_iter()
+                .enumerate()
+            {
                 self.position_pipelines[i][j] = graphics_pipeline(
                     gpu,
                     &GraphicsDesc {
@@ -295,20 +311,35 @@ impl Renderer {
         )?;
 
         let sizes = [
-            vk::DescriptorPoolSize { ty: D::UNIFORM_BUFFER, descriptor_count: 1 },
-            vk::DescriptorPoolSize { ty: D::SAMPLED_IMAGE, descriptor_count: 4 },
-            vk::DescriptorPoolSize { ty: D::SAMPLER, descriptor_count: 2 },
+            vk::DescriptorPoolSize {
+                ty: D::UNIFORM_BUFFER,
+                descriptor_count: 1,
+            },
+            vk::DescriptorPoolSize {
+                ty: D::SAMPLED_IMAGE,
+                descriptor_count: 4,
+            },
+            vk::DescriptorPoolSize {
+                ty: D::SAMPLER,
+                descriptor_count: 2,
+            },
         ];
         let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(3).pool_sizes(&sizes);
         // SAFETY: valid create info on a live device.
         self.descriptor_pool =
             unsafe { gpu.device.create_descriptor_pool(&pool_info, None) }.ctx("vkCreateDescriptorPool")?;
         let layouts = [self.frame_set_layout, self.volume_set_layout, self.positions_set_layout];
-        let alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.descriptor_pool).set_layouts(&layouts);
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.descriptor_pool)
+            .set_layouts(&layouts);
         // SAFETY: the pool has room for exactly these sets.
         let sets = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
         (self.frame_set, self.volume_set, self.positions_set) = (sets[0], sets[1], sets[2]);
-        let buffer_info = [vk::DescriptorBufferInfo { buffer: self.uniforms.raw, offset: 0, range: vk::WHOLE_SIZE }];
+        let buffer_info = [vk::DescriptorBufferInfo {
+            buffer: self.uniforms.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }];
         let write = vk::WriteDescriptorSet::default()
             .dst_set(self.frame_set)
             .dst_binding(0)
@@ -317,7 +348,9 @@ impl Renderer {
         // SAFETY: the set is not in use by any command buffer.
         unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
 
-        let query_info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(QUERIES);
+        let query_info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(QUERIES);
         // SAFETY: valid create info on a live device.
         self.query_pool = unsafe { gpu.device.create_query_pool(&query_info, None) }.ctx("vkCreateQueryPool")?;
         self.upload_colormap(gpu, Colormap::CoolWarm)?;
@@ -334,11 +367,13 @@ impl Renderer {
 
     fn write_volume_set(&self, gpu: &Gpu) {
         let Some(vol) = &self.volume else { return };
-        let volume_info =
-            [vk::DescriptorImageInfo::default().image_view(vol.image.view).image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let volume_info = [vk::DescriptorImageInfo::default()
+            .image_view(vol.image.view)
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.linear_sampler)];
-        let lut_info =
-            [vk::DescriptorImageInfo::default().image_view(self.lut.view).image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let lut_info = [vk::DescriptorImageInfo::default()
+            .image_view(self.lut.view)
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let writes = [
             vk::WriteDescriptorSet::default()
                 .dst_set(self.volume_set)
@@ -388,16 +423,32 @@ impl Renderer {
         let features = unsafe { gpu.instance.get_physical_device_format_properties(gpu.physical, format) };
         let needed = vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
         if !features.optimal_tiling_features.contains(needed) {
-            return Err(GpuError::TooLarge(format!("this device cannot filter {format:?} 3D textures linearly")));
+            return Err(GpuError::TooLarge(format!(
+                "this device cannot filter {format:?} 3D textures linearly"
+            )));
         }
         let [w, h, d] = volume.dims;
         let desc = ImageDesc {
             format,
-            extent: vk::Extent3D { width: w, height: h, depth: d },
+            extent: vk::Extent3D {
+                width: w,
+                height: h,
+                depth: d,
+            },
             usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
         };
         // A depth-1 volume would be a 2D image; give it a second slice so the 3D view still works.
-        let image = Image::new(gpu, ImageDesc { extent: vk::Extent3D { depth: d.max(2), ..desc.extent }, ..desc }, "volume")?;
+        let image = Image::new(
+            gpu,
+            ImageDesc {
+                extent: vk::Extent3D {
+                    depth: d.max(2),
+                    ..desc.extent
+                },
+                ..desc
+            },
+            "volume",
+        )?;
         let upload = if d == 1 {
             let mut twice = bytes.to_vec();
             twice.extend_from_slice(bytes);
@@ -414,7 +465,11 @@ impl Renderer {
         }
         self.volume = Some(GpuVolume {
             image,
-            info: VolumeInfo { dims: volume.dims, extent: volume.extent(), scale_bias: volume.gpu_scale_bias() },
+            info: VolumeInfo {
+                dims: volume.dims,
+                extent: volume.extent(),
+                scale_bias: volume.gpu_scale_bias(),
+            },
         });
         self.write_volume_set(gpu);
         Ok(())
@@ -437,7 +492,9 @@ impl Renderer {
         }
         if s.ray_setup == RaySetup::Faces {
             let fits = self.positions.as_ref().is_some_and(|p| {
-                p.format == s.position_format && p.entry.desc.extent.width == s.width && p.entry.desc.extent.height == s.height
+                p.format == s.position_format
+                    && p.entry.desc.extent.width == s.width
+                    && p.entry.desc.extent.height == s.height
             });
             if !fits {
                 if let Some(old) = self.positions.take() {
@@ -453,9 +510,15 @@ impl Renderer {
                         return Err(e);
                     }
                 };
-                let targets = PositionTargets { entry, exit, format: s.position_format };
+                let targets = PositionTargets {
+                    entry,
+                    exit,
+                    format: s.position_format,
+                };
                 let infos = [targets.entry.view, targets.exit.view].map(|v| {
-                    [vk::DescriptorImageInfo::default().image_view(v).image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
+                    [vk::DescriptorImageInfo::default()
+                        .image_view(v)
+                        .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
                 });
                 let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.point_sampler)];
                 let writes = [
@@ -501,9 +564,22 @@ impl Renderer {
         let uniforms = FrameUniforms::new(s, &vol.info);
         self.uniforms.write(bytemuck::bytes_of(&uniforms))?;
         let dev = &gpu.device;
-        let extent = vk::Extent2D { width: s.width, height: s.height };
-        let viewport = vk::Viewport { x: 0.0, y: 0.0, width: s.width as f32, height: s.height as f32, min_depth: 0.0, max_depth: 1.0 };
-        let scissor = vk::Rect2D { offset: vk::Offset2D::default(), extent };
+        let extent = vk::Extent2D {
+            width: s.width,
+            height: s.height,
+        };
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: s.width as f32,
+            height: s.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let scissor = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent,
+        };
         let ts = |cb, i| {
             // SAFETY: the query was reset at the start of this command buffer.
             unsafe { dev.cmd_write_timestamp2(cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.query_pool, i) }
@@ -517,7 +593,9 @@ impl Renderer {
                 .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
                 .load_op(load)
                 .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })];
+                .clear_value(vk::ClearValue {
+                    color: vk::ClearColorValue { float32: [0.0; 4] },
+                })];
             let info = vk::RenderingInfo::default()
                 .render_area(scissor)
                 .layer_count(1)
@@ -529,11 +607,18 @@ impl Renderer {
                 dev.cmd_set_scissor(cb, 0, &[scissor]);
             }
         };
-        let output_to_attachment =
-            ImageTransition { image: output.0, from, to: Access::ColorAttachmentWrite, discard: true };
+        let output_to_attachment = ImageTransition {
+            image: output.0,
+            from,
+            to: Access::ColorAttachmentWrite,
+            discard: true,
+        };
         match s.ray_setup {
             RaySetup::Faces => {
-                let p = self.positions.as_ref().ok_or(GpuError::Lost("prepare() was not called"))?;
+                let p = self
+                    .positions
+                    .as_ref()
+                    .ok_or(GpuError::Lost("prepare() was not called"))?;
                 let pi = match p.format {
                     PositionFormat::Rgba32f => 0,
                     PositionFormat::Rgba16f => 1,
@@ -545,13 +630,24 @@ impl Renderer {
                     to: Access::ColorAttachmentWrite,
                     discard: true,
                 };
-                image_barriers(dev, cb, &[discard(p.entry.raw), discard(p.exit.raw), output_to_attachment]);
+                image_barriers(
+                    dev,
+                    cb,
+                    &[discard(p.entry.raw), discard(p.exit.raw), output_to_attachment],
+                );
                 for (j, target) in [&p.entry, &p.exit].into_iter().enumerate() {
                     begin(target.view, vk::AttachmentLoadOp::CLEAR);
                     // SAFETY: rendering has begun; the pipeline and set match the faces layout.
                     unsafe {
                         dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.position_pipelines[pi][j]);
-                        dev.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::GRAPHICS, self.faces_layout, 0, &[self.frame_set], &[]);
+                        dev.cmd_bind_descriptor_sets(
+                            cb,
+                            vk::PipelineBindPoint::GRAPHICS,
+                            self.faces_layout,
+                            0,
+                            &[self.frame_set],
+                            &[],
+                        );
                         dev.cmd_draw(cb, 36, 1, 0, 0);
                         dev.cmd_end_rendering(cb);
                     }
@@ -635,7 +731,12 @@ impl Renderer {
                 march_ms: ms(2, 3),
                 total_ms: ms(0, 3),
             },
-            RaySetup::Analytic => PassTimings { entry_ms: None, exit_ms: None, march_ms: ms(0, 1), total_ms: ms(0, 1) },
+            RaySetup::Analytic => PassTimings {
+                entry_ms: None,
+                exit_ms: None,
+                march_ms: ms(0, 1),
+                total_ms: ms(0, 1),
+            },
         }))
     }
 

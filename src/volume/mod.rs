@@ -1,0 +1,634 @@
+//! Volumes on the CPU: voxel types, the `Volume` the renderer uploads, and where volumes come from
+//! (headerless raw files in [`raw`], generated test volumes in [`builtin`]). Pure code, no Vulkan.
+//!
+//! Layout everywhere: x fastest, then y, then z; voxel (x, y, z) is at `x + W·(y + H·z)`.
+
+mod builtin;
+mod raw;
+
+pub use builtin::{builtin, BUILTIN_NAMES};
+pub use raw::{load_raw, parse_scivis_name, RawOptions};
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// Largest dimension accepted at load; the device's own limit is checked later at upload.
+pub const MAX_DIM: u32 = 16384;
+
+/// Most voxels accepted at load (2^31): beyond this, byte offsets of 4-byte voxels stop fitting the 32-bit
+/// sizes that drivers and `image` handling commonly assume, and the volume no longer fits typical GPU memory.
+pub const MAX_VOXELS: u64 = 1 << 31;
+
+/// Voxel type of the *source* (file or generator). See [`VoxelData`] for what reaches the GPU.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VoxelType {
+    U8,
+    U16,
+    I16,
+    F32,
+    F64,
+}
+
+impl VoxelType {
+    pub const ALL: [VoxelType; 5] = [
+        VoxelType::U8,
+        VoxelType::U16,
+        VoxelType::I16,
+        VoxelType::F32,
+        VoxelType::F64,
+    ];
+
+    /// Bytes per voxel in the file.
+    pub fn size(self) -> usize {
+        match self {
+            VoxelType::U8 => 1,
+            VoxelType::U16 | VoxelType::I16 => 2,
+            VoxelType::F32 => 4,
+            VoxelType::F64 => 8,
+        }
+    }
+
+    /// The open-scivis spelling, as used in file names.
+    pub fn name(self) -> &'static str {
+        match self {
+            VoxelType::U8 => "uint8",
+            VoxelType::U16 => "uint16",
+            VoxelType::I16 => "int16",
+            VoxelType::F32 => "float32",
+            VoxelType::F64 => "float64",
+        }
+    }
+
+    /// Case-insensitive; accepts the open-scivis names and the usual C/numpy aliases.
+    pub fn parse(s: &str) -> Option<VoxelType> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "uint8" | "u8" | "uchar" | "unsigned_char" => Some(VoxelType::U8),
+            "uint16" | "u16" | "ushort" => Some(VoxelType::U16),
+            "int16" | "i16" | "short" => Some(VoxelType::I16),
+            "float32" | "f32" | "float" => Some(VoxelType::F32),
+            "float64" | "f64" | "double" => Some(VoxelType::F64),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for VoxelType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for VoxelType {
+    type Err = VolumeError;
+
+    fn from_str(s: &str) -> Result<VoxelType, VolumeError> {
+        VoxelType::parse(s).ok_or_else(|| VolumeError::UnknownType { given: s.to_string() })
+    }
+}
+
+/// Voxel values as they go to the GPU: uint8 -> U8 (R8_UNORM), uint16 -> U16 (R16_UNORM),
+/// int16 -> U16 with +32768 bias (R16_UNORM keeps all 16 bits), float32 -> F32, float64 -> F32 (converted).
+#[derive(Clone, PartialEq)]
+pub enum VoxelData {
+    U8(Vec<u8>),
+    U16(Vec<u16>),
+    F32(Vec<f32>),
+}
+
+impl VoxelData {
+    pub fn len(&self) -> usize {
+        match self {
+            VoxelData::U8(v) => v.len(),
+            VoxelData::U16(v) => v.len(),
+            VoxelData::F32(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn kind(&self) -> &'static str {
+        match self {
+            VoxelData::U8(_) => "U8",
+            VoxelData::U16(_) => "U16",
+            VoxelData::F32(_) => "F32",
+        }
+    }
+
+    /// The representation `source_type` must be stored in.
+    fn matches(&self, source_type: VoxelType) -> bool {
+        matches!(
+            (self, source_type),
+            (VoxelData::U8(_), VoxelType::U8)
+                | (VoxelData::U16(_), VoxelType::U16 | VoxelType::I16)
+                | (VoxelData::F32(_), VoxelType::F32 | VoxelType::F64)
+        )
+    }
+}
+
+// Volumes run to gigabytes; a derived Debug would print every voxel.
+impl fmt::Debug for VoxelData {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "VoxelData::{}(len {})", self.kind(), self.len())
+    }
+}
+
+/// Offset that maps int16 onto u16 order-preservingly, so R16_UNORM keeps every bit.
+const INT16_BIAS: f64 = 32768.0;
+
+/// A volume ready for upload.
+#[derive(Clone, Debug)]
+pub struct Volume {
+    pub name: String,
+    /// x fastest, then y, then z.
+    pub dims: [u32; 3],
+    pub spacing: [f32; 3],
+    pub source_type: VoxelType,
+    pub data: VoxelData,
+    /// min/max of the source values (as the GPU sees them, i.e. after float64->f32), NaN/Inf ignored.
+    /// `[0, 0]` if no voxel is finite.
+    pub range: [f64; 2],
+}
+
+impl Volume {
+    /// Validates data length == product of dims, dims within [`MAX_DIM`] and [`MAX_VOXELS`], spacing positive and
+    /// finite, `data` in the representation `source_type` maps to; computes `range`.
+    pub fn new(
+        name: impl Into<String>,
+        dims: [u32; 3],
+        spacing: [f32; 3],
+        source_type: VoxelType,
+        data: VoxelData,
+    ) -> Result<Volume, VolumeError> {
+        let count = check_dims(dims)?;
+        check_spacing(dims, spacing)?;
+        if !data.matches(source_type) {
+            return Err(VolumeError::TypeMismatch {
+                source_type,
+                data: data.kind(),
+            });
+        }
+        if data.len() as u64 != count {
+            return Err(VolumeError::DataLength {
+                dims,
+                expected: count,
+                actual: data.len(),
+            });
+        }
+        let range = compute_range(source_type, &data);
+        Ok(Volume {
+            name: name.into(),
+            dims,
+            spacing,
+            source_type,
+            data,
+            range,
+        })
+    }
+
+    pub fn voxel_count(&self) -> usize {
+        self.data.len()
+    }
+
+    fn index(&self, x: u32, y: u32, z: u32) -> usize {
+        let [w, h, d] = self.dims;
+        assert!(x < w && y < h && z < d, "voxel ({x}, {y}, {z}) outside {w}x{h}x{d}");
+        x as usize + w as usize * (y as usize + h as usize * z as usize)
+    }
+
+    /// Value in source units (int16 un-biased); float64 sources give the stored f32.
+    /// Panics if (x, y, z) is outside `dims`, like slice indexing.
+    pub fn value(&self, x: u32, y: u32, z: u32) -> f64 {
+        let i = self.index(x, y, z);
+        stored_value(self.source_type, &self.data, i)
+    }
+
+    /// `(value - min) / (max - min)`; 0.0 if max == min; NaN stays NaN (the renderer treats it as transparent).
+    pub fn normalized(&self, x: u32, y: u32, z: u32) -> f64 {
+        let v = self.value(x, y, z);
+        let [min, max] = self.range;
+        if v.is_nan() {
+            f64::NAN
+        } else if max == min {
+            0.0
+        } else {
+            (v - min) / (max - min)
+        }
+    }
+
+    /// Physical box, dims × spacing, scaled so the largest side is 1.
+    pub fn extent(&self) -> glam::Vec3 {
+        let size = [0, 1, 2].map(|i| f64::from(self.dims[i]) * f64::from(self.spacing[i]));
+        let largest = size[0].max(size[1]).max(size[2]);
+        // `new` guarantees positive, finite sides, so `largest` > 0.
+        glam::Vec3::new(
+            (size[0] / largest) as f32,
+            (size[1] / largest) as f32,
+            (size[2] / largest) as f32,
+        )
+    }
+
+    /// The voxel data as bytes in native byte order (what a staging buffer copies).
+    pub fn gpu_bytes(&self) -> &[u8] {
+        match &self.data {
+            VoxelData::U8(v) => v,
+            VoxelData::U16(v) => bytemuck::cast_slice(v),
+            VoxelData::F32(v) => bytemuck::cast_slice(v),
+        }
+    }
+
+    /// Bytes per texel on the GPU: 1 (R8_UNORM), 2 (R16_UNORM) or 4 (R32_SFLOAT).
+    pub fn gpu_texel_size(&self) -> usize {
+        match &self.data {
+            VoxelData::U8(_) => 1,
+            VoxelData::U16(_) => 2,
+            VoxelData::F32(_) => 4,
+        }
+    }
+
+    /// The affine map from what a shader samples (UNORM -> stored/255 or stored/65535; float -> as stored) to the
+    /// normalised value: `v = sampled * scale + bias`. Agrees with [`Volume::normalized`] in real arithmetic.
+    /// `(0, 0)` if max == min.
+    pub fn gpu_scale_bias(&self) -> (f32, f32) {
+        let [min, max] = self.range;
+        if max == min {
+            return (0.0, 0.0);
+        }
+        // value = sampled * unorm_max + offset, then v = (value - min) / (max - min).
+        let (unorm_max, offset) = match self.source_type {
+            VoxelType::U8 => (255.0, 0.0),
+            VoxelType::U16 => (65535.0, 0.0),
+            VoxelType::I16 => (65535.0, -INT16_BIAS),
+            VoxelType::F32 | VoxelType::F64 => (1.0, 0.0),
+        };
+        let span = max - min;
+        ((unorm_max / span) as f32, ((offset - min) / span) as f32)
+    }
+}
+
+fn stored_value(source_type: VoxelType, data: &VoxelData, i: usize) -> f64 {
+    match data {
+        VoxelData::U8(v) => f64::from(v[i]),
+        VoxelData::U16(v) if source_type == VoxelType::I16 => f64::from(v[i]) - INT16_BIAS,
+        VoxelData::U16(v) => f64::from(v[i]),
+        VoxelData::F32(v) => f64::from(v[i]),
+    }
+}
+
+fn compute_range(source_type: VoxelType, data: &VoxelData) -> [f64; 2] {
+    fn min_max<T: Copy + PartialOrd>(values: &[T]) -> Option<(T, T)> {
+        let mut iter = values.iter().copied();
+        let first = iter.next()?;
+        Some(iter.fold((first, first), |(lo, hi), v| {
+            (if v < lo { v } else { lo }, if v > hi { v } else { hi })
+        }))
+    }
+    let found = match data {
+        VoxelData::U8(v) => min_max(v).map(|(lo, hi)| (f64::from(lo), f64::from(hi))),
+        VoxelData::U16(v) => {
+            let offset = if source_type == VoxelType::I16 { INT16_BIAS } else { 0.0 };
+            min_max(v).map(|(lo, hi)| (f64::from(lo) - offset, f64::from(hi) - offset))
+        }
+        VoxelData::F32(v) => {
+            let mut finite = v.iter().copied().filter(|x| x.is_finite());
+            finite.next().map(|first| {
+                let (lo, hi) = finite.fold((first, first), |(lo, hi), x| (lo.min(x), hi.max(x)));
+                (f64::from(lo), f64::from(hi))
+            })
+        }
+    };
+    let (lo, hi) = found.unwrap_or((0.0, 0.0));
+    [lo, hi]
+}
+
+/// Checks dims and returns the voxel count.
+fn check_dims(dims: [u32; 3]) -> Result<u64, VolumeError> {
+    if dims.contains(&0) {
+        return Err(VolumeError::ZeroDimension { dims });
+    }
+    if dims.iter().any(|&d| d > MAX_DIM) {
+        return Err(VolumeError::DimensionTooLarge { dims });
+    }
+    // Each factor is at most 2^14, so the product fits easily in u64.
+    let count = dims.iter().map(|&d| u64::from(d)).product::<u64>();
+    if count > MAX_VOXELS {
+        return Err(VolumeError::TooManyVoxels { dims, count });
+    }
+    Ok(count)
+}
+
+fn check_spacing(dims: [u32; 3], spacing: [f32; 3]) -> Result<(), VolumeError> {
+    let physical_ok = (0..3).all(|i| {
+        let s = spacing[i];
+        s.is_finite() && s > 0.0 && (f64::from(dims[i]) * f64::from(s)) < f64::from(f32::MAX)
+    });
+    if physical_ok {
+        Ok(())
+    } else {
+        Err(VolumeError::BadSpacing { spacing })
+    }
+}
+
+struct Dims([u32; 3]);
+
+impl fmt::Display for Dims {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}x{}x{}", self.0[0], self.0[1], self.0[2])
+    }
+}
+
+fn type_list() -> &'static str {
+    "uint8, uint16, int16, float32, float64"
+}
+
+/// Everything that can go wrong making a volume. Each message names the problem, the numbers, and what to do.
+#[derive(Debug, thiserror::Error)]
+pub enum VolumeError {
+    #[error("dimensions {} contain a zero; every dimension must be at least 1", Dims(*dims))]
+    ZeroDimension { dims: [u32; 3] },
+    #[error("dimensions {} exceed the limit of {MAX_DIM} per axis", Dims(*dims))]
+    DimensionTooLarge { dims: [u32; 3] },
+    #[error("dimensions {} make {count} voxels, more than the limit of {MAX_VOXELS} (2^31)", Dims(*dims))]
+    TooManyVoxels { dims: [u32; 3], count: u64 },
+    #[error(
+        "voxel spacing {} {} {} is invalid: each must be positive and finite (and dims × spacing finite)",
+        spacing[0], spacing[1], spacing[2]
+    )]
+    BadSpacing { spacing: [f32; 3] },
+    #[error("unknown voxel type '{given}': use one of {}", type_list())]
+    UnknownType { given: String },
+    #[error(
+        "unknown voxel type '{given}' in file name {file}: use one of {}, or pass --type T",
+        type_list()
+    )]
+    UnknownTypeInName { file: String, given: String },
+    #[error("voxel data for {} has {actual} values but needs {expected}", Dims(*dims))]
+    DataLength {
+        dims: [u32; 3],
+        expected: u64,
+        actual: usize,
+    },
+    #[error("voxel data of kind {data} cannot hold source type {source_type}")]
+    TypeMismatch { source_type: VoxelType, data: &'static str },
+    #[error("cannot tell the {missing} of {file}: pass --dims W H D --type T or name the file NAME_WxHxD_TYPE.raw")]
+    MissingLayout { file: String, missing: &'static str },
+    #[error("cannot read {}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{} is not a regular file", path.display())]
+    NotAFile { path: PathBuf },
+    #[error("file {file} is {actual} bytes but {} {voxel_type} needs {expected}", Dims(*dims))]
+    SizeMismatch {
+        file: String,
+        actual: u64,
+        dims: [u32; 3],
+        voxel_type: VoxelType,
+        expected: u64,
+    },
+    #[error("{} {voxel_type} does not fit in memory addressing ({bytes} bytes)", Dims(*dims))]
+    TooLarge {
+        dims: [u32; 3],
+        voxel_type: VoxelType,
+        bytes: u64,
+    },
+    #[error("cannot allocate {bytes} bytes for the voxels of {}", Dims(*dims))]
+    OutOfMemory { dims: [u32; 3], bytes: u64 },
+    #[error("unknown built-in volume '{given}': choose one of {}", BUILTIN_NAMES.join(", "))]
+    UnknownBuiltin { given: String },
+    #[error("built-in volume size {size} is out of range: use 2 to 1024")]
+    BuiltinSize { size: u32 },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn volume(source_type: VoxelType, data: VoxelData) -> Volume {
+        let n = data.len() as u32;
+        Volume::new("t", [n, 1, 1], [1.0; 3], source_type, data).expect("valid test volume")
+    }
+
+    #[test]
+    fn voxel_type_names_and_aliases() {
+        for t in VoxelType::ALL {
+            assert_eq!(VoxelType::parse(t.name()), Some(t));
+            assert_eq!(VoxelType::parse(&t.name().to_uppercase()), Some(t));
+            assert_eq!(t.to_string(), t.name());
+        }
+        let aliases = [
+            ("u8", VoxelType::U8),
+            ("UCHAR", VoxelType::U8),
+            ("unsigned_char", VoxelType::U8),
+            ("u16", VoxelType::U16),
+            ("ushort", VoxelType::U16),
+            ("i16", VoxelType::I16),
+            ("Short", VoxelType::I16),
+            ("f32", VoxelType::F32),
+            ("float", VoxelType::F32),
+            ("f64", VoxelType::F64),
+            ("DOUBLE", VoxelType::F64),
+        ];
+        for (s, t) in aliases {
+            assert_eq!(VoxelType::parse(s), Some(t), "{s}");
+        }
+        assert_eq!(VoxelType::parse("int32"), None);
+        assert_eq!(VoxelType::parse(""), None);
+        let sizes: Vec<usize> = VoxelType::ALL.iter().map(|t| t.size()).collect();
+        assert_eq!(sizes, [1, 2, 2, 4, 8]);
+        let err = "int32".parse::<VoxelType>().unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "unknown voxel type 'int32': use one of uint8, uint16, int16, float32, float64"
+        );
+    }
+
+    #[test]
+    fn new_validates() {
+        let err = Volume::new("t", [2, 2, 2], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![0; 7])).unwrap_err();
+        assert_eq!(err.to_string(), "voxel data for 2x2x2 has 7 values but needs 8");
+
+        let err = Volume::new("t", [2, 0, 2], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![])).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "dimensions 2x0x2 contain a zero; every dimension must be at least 1"
+        );
+
+        let err = Volume::new("t", [16385, 1, 1], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![])).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "dimensions 16385x1x1 exceed the limit of 16384 per axis"
+        );
+
+        let err = Volume::new("t", [16384, 16384, 9], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![])).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "dimensions 16384x16384x9 make 2415919104 voxels, more than the limit of 2147483648 (2^31)"
+        );
+
+        for spacing in [
+            [0.0, 1.0, 1.0],
+            [1.0, -1.0, 1.0],
+            [1.0, 1.0, f32::NAN],
+            [f32::INFINITY, 1.0, 1.0],
+        ] {
+            let err = Volume::new("t", [1, 1, 1], spacing, VoxelType::U8, VoxelData::U8(vec![0])).unwrap_err();
+            assert!(matches!(err, VolumeError::BadSpacing { .. }), "{spacing:?}");
+            assert!(err.to_string().starts_with("voxel spacing "), "{err}");
+        }
+        let err = Volume::new("t", [1, 1, 1], [0.0, 1.0, 1.0], VoxelType::U8, VoxelData::U8(vec![0])).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "voxel spacing 0 1 1 is invalid: each must be positive and finite (and dims × spacing finite)"
+        );
+        // Finite spacing whose box side overflows f32.
+        let err = Volume::new(
+            "t",
+            [4, 1, 1],
+            [1e38, 1.0, 1.0],
+            VoxelType::U8,
+            VoxelData::U8(vec![0; 4]),
+        )
+        .unwrap_err();
+        assert!(matches!(err, VolumeError::BadSpacing { .. }));
+
+        let err = Volume::new("t", [1, 1, 1], [1.0; 3], VoxelType::I16, VoxelData::F32(vec![0.0])).unwrap_err();
+        assert_eq!(err.to_string(), "voxel data of kind F32 cannot hold source type int16");
+    }
+
+    #[test]
+    fn value_and_index_order() {
+        let data: Vec<u8> = (0..24).collect();
+        let v = Volume::new("t", [4, 3, 2], [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap();
+        assert_eq!(v.voxel_count(), 24);
+        assert_eq!(v.value(0, 0, 0), 0.0);
+        assert_eq!(v.value(3, 0, 0), 3.0);
+        assert_eq!(v.value(0, 1, 0), 4.0);
+        assert_eq!(v.value(0, 0, 1), 12.0);
+        assert_eq!(v.value(3, 2, 1), 23.0);
+        assert_eq!(v.range, [0.0, 23.0]);
+        assert_eq!(v.normalized(3, 2, 1), 1.0);
+        assert_eq!(v.normalized(0, 0, 0), 0.0);
+        assert!((v.normalized(0, 0, 1) - 12.0 / 23.0).abs() < 1e-15);
+        assert_eq!(v.gpu_texel_size(), 1);
+        assert_eq!(v.gpu_bytes().len(), 24);
+    }
+
+    #[test]
+    fn int16_bias_and_range() {
+        let raw: [i16; 4] = [-1024, 0, 2986, i16::MIN];
+        let stored: Vec<u16> = raw.iter().map(|&v| (i32::from(v) + 32768) as u16).collect();
+        assert_eq!(stored, [31744, 32768, 35754, 0]);
+        let v = volume(VoxelType::I16, VoxelData::U16(stored));
+        assert_eq!(v.value(0, 0, 0), -1024.0);
+        assert_eq!(v.value(2, 0, 0), 2986.0);
+        assert_eq!(v.value(3, 0, 0), -32768.0);
+        assert_eq!(v.range, [-32768.0, 2986.0]);
+        assert_eq!(v.gpu_texel_size(), 2);
+    }
+
+    #[test]
+    fn range_ignores_nan_and_inf() {
+        let v = volume(
+            VoxelType::F32,
+            VoxelData::F32(vec![f32::NAN, -2.5, f32::INFINITY, 4.0, f32::NEG_INFINITY]),
+        );
+        assert_eq!(v.range, [-2.5, 4.0]);
+        assert!(v.normalized(0, 0, 0).is_nan());
+        assert_eq!(v.normalized(1, 0, 0), 0.0);
+        assert_eq!(v.normalized(3, 0, 0), 1.0);
+
+        let all_nan = volume(VoxelType::F32, VoxelData::F32(vec![f32::NAN; 3]));
+        assert_eq!(all_nan.range, [0.0, 0.0]);
+        assert!(all_nan.normalized(0, 0, 0).is_nan());
+        assert_eq!(all_nan.gpu_scale_bias(), (0.0, 0.0));
+    }
+
+    #[test]
+    fn constant_volume_normalizes_to_zero() {
+        let v = volume(VoxelType::U16, VoxelData::U16(vec![7; 5]));
+        assert_eq!(v.range, [7.0, 7.0]);
+        assert_eq!(v.normalized(2, 0, 0), 0.0);
+        assert_eq!(v.gpu_scale_bias(), (0.0, 0.0));
+    }
+
+    /// What a shader reads from the texture for voxel i.
+    fn sampled(v: &Volume, i: usize) -> f64 {
+        match &v.data {
+            VoxelData::U8(d) => f64::from(d[i]) / 255.0,
+            VoxelData::U16(d) => f64::from(d[i]) / 65535.0,
+            VoxelData::F32(d) => f64::from(d[i]),
+        }
+    }
+
+    #[test]
+    fn gpu_scale_bias_agrees_with_normalized() {
+        let volumes = [
+            volume(VoxelType::U8, VoxelData::U8(vec![3, 0, 255, 17, 200])),
+            volume(VoxelType::U8, VoxelData::U8(vec![40, 41, 90])),
+            volume(VoxelType::U16, VoxelData::U16(vec![100, 4095, 0, 65535, 1234])),
+            volume(VoxelType::U16, VoxelData::U16(vec![1000, 1001, 1500])),
+            volume(
+                VoxelType::I16,
+                VoxelData::U16([-1024i16, 2986, 0, 40].map(|x| (i32::from(x) + 32768) as u16).to_vec()),
+            ),
+            volume(
+                VoxelType::I16,
+                VoxelData::U16([i16::MIN, i16::MAX, -1].map(|x| (i32::from(x) + 32768) as u16).to_vec()),
+            ),
+            volume(VoxelType::F32, VoxelData::F32(vec![-7.94, 7.94, 0.0, 1.5])),
+            volume(VoxelType::F64, VoxelData::F32(vec![-117.843, 2121.07, 3.0, f32::NAN])),
+        ];
+        for v in &volumes {
+            let (scale, bias) = v.gpu_scale_bias();
+            for i in 0..v.voxel_count() {
+                let expected = v.normalized(i as u32, 0, 0);
+                // The shader evaluates in f32.
+                let got = f64::from(sampled(v, i) as f32 * scale + bias);
+                if expected.is_nan() {
+                    assert!(got.is_nan());
+                } else {
+                    // f32 arithmetic on a value in [0, 1] after cancelling a bias: a few ulps of the bias.
+                    let tolerance = 1e-6 * (1.0 + f64::from(bias.abs()));
+                    assert!(
+                        (got - expected).abs() < tolerance,
+                        "{:?} voxel {i}: {got} vs {expected}",
+                        v.source_type
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn extent_follows_physical_size() {
+        let v = Volume::new(
+            "ct",
+            [256, 256, 108],
+            [0.957, 0.957, 1.5],
+            VoxelType::U8,
+            VoxelData::U8(vec![0; 256 * 256 * 108]),
+        )
+        .unwrap();
+        let e = v.extent();
+        assert!((e.x - 1.0).abs() < 1e-6 && (e.y - 1.0).abs() < 1e-6, "{e}");
+        assert!((e.z - 0.661).abs() < 1e-3, "{e}");
+
+        let v = Volume::new(
+            "t",
+            [10, 20, 5],
+            [2.0, 1.0, 1.0],
+            VoxelType::U8,
+            VoxelData::U8(vec![0; 1000]),
+        )
+        .unwrap();
+        assert_eq!(v.extent(), glam::Vec3::new(1.0, 1.0, 0.25));
+    }
+
+    #[test]
+    fn debug_does_not_dump_voxels() {
+        let v = volume(VoxelType::U8, VoxelData::U8(vec![1; 1000]));
+        let text = format!("{v:?}");
+        assert!(text.contains("VoxelData::U8(len 1000)"), "{text}");
+        assert!(text.len() < 300, "{text}");
+    }
+}

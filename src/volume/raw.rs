@@ -1,0 +1,588 @@
+//! Headerless little-endian raw files, named in the open-scivis convention `NAME_WxHxD_TYPE.raw`.
+
+use super::{check_dims, check_spacing, Volume, VolumeError, VoxelData, VoxelType};
+use std::fs::File;
+use std::io::Read;
+use std::path::Path;
+
+/// float64 files are converted to f32 through a buffer of this size rather than read whole, so loading never
+/// holds the file's bytes and the converted copy at once.
+const CHUNK_BYTES: usize = 4 << 20;
+
+/// Layout a user gives explicitly; anything left `None` comes from the file name.
+#[derive(Clone, Debug, Default)]
+pub struct RawOptions {
+    pub dims: Option<[u32; 3]>,
+    pub voxel_type: Option<VoxelType>,
+    /// Defaults to 1 on every axis.
+    pub spacing: Option<[f32; 3]>,
+}
+
+/// The parts of `NAME_WxHxD_TYPE[.ext]` with TYPE still unparsed, so a caller can tell "not this pattern" from
+/// "this pattern with a type we don't support".
+fn split_scivis_name(file_name: &str) -> Option<(String, [u32; 3], &str)> {
+    // Accept a path too: only the last component names the volume.
+    let base = file_name.rsplit(['/', '\\']).next().unwrap_or(file_name);
+    let (rest, type_and_ext) = base.rsplit_once('_')?;
+    let (name, dims_text) = rest.rsplit_once('_')?;
+    // The type ends at the first dot: "uint8.raw" and a bare "uint8" both work.
+    let type_text = type_and_ext.split('.').next().unwrap_or(type_and_ext);
+    if name.is_empty() || type_text.is_empty() {
+        return None;
+    }
+    let mut parts = dims_text.split(['x', 'X']);
+    let mut dims = [0u32; 3];
+    for d in &mut dims {
+        let text = parts.next()?;
+        // `u32::from_str` accepts a leading '+'; a file name with one is not this pattern.
+        if text.is_empty() || !text.bytes().all(|b| b.is_ascii_digit()) {
+            return None;
+        }
+        *d = text.parse().ok()?;
+    }
+    if parts.next().is_some() {
+        return None;
+    }
+    Some((name.to_string(), dims, type_text))
+}
+
+/// Parses the open-scivis naming NAME_WxHxD_TYPE.raw, e.g. "skull_256x256x256_uint8.raw" -> ("skull",[256,256,256],U8).
+/// Takes a file name or path (uses the file name part). None if it doesn't match or TYPE is unknown.
+/// Dimensions are returned as written (even 0); [`Volume::new`] judges them.
+pub fn parse_scivis_name(file_name: &str) -> Option<(String, [u32; 3], VoxelType)> {
+    let (name, dims, type_text) = split_scivis_name(file_name)?;
+    Some((name, dims, VoxelType::parse(type_text)?))
+}
+
+/// Headerless little-endian raw file; dims/type from `opts`, else from the file name; spacing default 1.
+///
+/// The file's size is checked against dims × type before anything is allocated or read.
+pub fn load_raw(path: &Path, opts: &RawOptions) -> Result<Volume, VolumeError> {
+    let file_name = match path.file_name() {
+        Some(n) => n.to_string_lossy().into_owned(),
+        None => path.display().to_string(),
+    };
+    let from_name = split_scivis_name(&file_name);
+
+    let dims = opts.dims.or(from_name.as_ref().map(|(_, dims, _)| *dims));
+    let voxel_type = match (opts.voxel_type, &from_name) {
+        (Some(t), _) => Some(t),
+        (None, Some((_, _, type_text))) => {
+            Some(
+                VoxelType::parse(type_text).ok_or_else(|| VolumeError::UnknownTypeInName {
+                    file: file_name.clone(),
+                    given: type_text.to_string(),
+                })?,
+            )
+        }
+        (None, None) => None,
+    };
+    let (dims, voxel_type) = match (dims, voxel_type) {
+        (Some(d), Some(t)) => (d, t),
+        (d, t) => {
+            let missing = match (d, t) {
+                (None, None) => "dimensions and voxel type",
+                (None, _) => "dimensions",
+                _ => "voxel type",
+            };
+            return Err(VolumeError::MissingLayout {
+                file: file_name,
+                missing,
+            });
+        }
+    };
+    let spacing = opts.spacing.unwrap_or([1.0; 3]);
+    let name = match &from_name {
+        Some((name, _, _)) => name.clone(),
+        None => path
+            .file_stem()
+            .map_or_else(|| file_name.clone(), |s| s.to_string_lossy().into_owned()),
+    };
+
+    let count = check_dims(dims)?;
+    check_spacing(dims, spacing)?;
+    let too_large = || VolumeError::TooLarge {
+        dims,
+        voxel_type,
+        bytes: count.saturating_mul(voxel_type.size() as u64),
+    };
+    let expected = count.checked_mul(voxel_type.size() as u64).ok_or_else(too_large)?;
+    // On a 32-bit host a legal volume can still be unaddressable.
+    let count_usize = usize::try_from(count).map_err(|_| too_large())?;
+    usize::try_from(expected).map_err(|_| too_large())?;
+
+    let io_error = |source| VolumeError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let metadata = std::fs::metadata(path).map_err(io_error)?;
+    if !metadata.is_file() {
+        return Err(VolumeError::NotAFile {
+            path: path.to_path_buf(),
+        });
+    }
+    if metadata.len() != expected {
+        return Err(VolumeError::SizeMismatch {
+            file: file_name,
+            actual: metadata.len(),
+            dims,
+            voxel_type,
+            expected,
+        });
+    }
+
+    let file = File::open(path).map_err(io_error)?;
+    let data = read_voxels(file, voxel_type, count_usize, CHUNK_BYTES).map_err(|e| match e {
+        ReadFailure::Io(source) => io_error(source),
+        ReadFailure::OutOfMemory => VolumeError::OutOfMemory { dims, bytes: expected },
+    })?;
+    Volume::new(name, dims, spacing, voxel_type, data)
+}
+
+#[derive(Debug)]
+enum ReadFailure {
+    Io(std::io::Error),
+    OutOfMemory,
+}
+
+impl From<std::io::Error> for ReadFailure {
+    fn from(e: std::io::Error) -> ReadFailure {
+        ReadFailure::Io(e)
+    }
+}
+
+/// A zeroed vector of `count` elements, or an error instead of the allocator's abort when memory runs out.
+fn try_zeroed<T: Clone + Default>(count: usize) -> Result<Vec<T>, ReadFailure> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(count).map_err(|_| ReadFailure::OutOfMemory)?;
+    v.resize(count, T::default());
+    Ok(v)
+}
+
+/// Reads `count` little-endian voxels in one pass. Types whose GPU form has the file's width are read straight
+/// into the final buffer and fixed up in place; float64 goes through a `chunk_bytes` buffer.
+fn read_voxels(
+    mut reader: impl Read,
+    voxel_type: VoxelType,
+    count: usize,
+    chunk_bytes: usize,
+) -> Result<VoxelData, ReadFailure> {
+    Ok(match voxel_type {
+        VoxelType::U8 => {
+            let mut v = try_zeroed::<u8>(count)?;
+            reader.read_exact(&mut v)?;
+            VoxelData::U8(v)
+        }
+        VoxelType::U16 => {
+            let mut v = try_zeroed::<u16>(count)?;
+            reader.read_exact(bytemuck::cast_slice_mut(&mut v))?;
+            for x in &mut v {
+                *x = u16::from_le(*x);
+            }
+            VoxelData::U16(v)
+        }
+        VoxelType::I16 => {
+            let mut v = try_zeroed::<u16>(count)?;
+            reader.read_exact(bytemuck::cast_slice_mut(&mut v))?;
+            for x in &mut v {
+                let signed = u16::from_le(*x) as i16;
+                *x = (i32::from(signed) + 32768) as u16;
+            }
+            VoxelData::U16(v)
+        }
+        VoxelType::F32 => {
+            let mut v = try_zeroed::<f32>(count)?;
+            reader.read_exact(bytemuck::cast_slice_mut(&mut v))?;
+            for x in &mut v {
+                *x = f32::from_bits(u32::from_le(x.to_bits()));
+            }
+            VoxelData::F32(v)
+        }
+        VoxelType::F64 => {
+            let mut out = Vec::new();
+            out.try_reserve_exact(count).map_err(|_| ReadFailure::OutOfMemory)?;
+            let per_chunk = (chunk_bytes / 8).clamp(1, count.max(1));
+            let mut buffer = vec![0u8; per_chunk * 8];
+            let mut remaining = count;
+            while remaining > 0 {
+                let n = remaining.min(per_chunk);
+                let bytes = &mut buffer[..n * 8];
+                reader.read_exact(bytes)?;
+                out.extend(bytes.chunks_exact(8).map(|b| {
+                    let mut le = [0u8; 8];
+                    le.copy_from_slice(b);
+                    f64::from_le_bytes(le) as f32
+                }));
+                remaining -= n;
+            }
+            VoxelData::F32(out)
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// A fresh directory under the system temp dir, removed on drop. Unique per process and per test so
+    /// parallel tests (and parallel `cargo test` runs) never share files.
+    struct TempDir(PathBuf);
+
+    impl TempDir {
+        fn new() -> TempDir {
+            static NEXT: AtomicUsize = AtomicUsize::new(0);
+            let n = NEXT.fetch_add(1, Ordering::Relaxed);
+            let path = std::env::temp_dir().join(format!("volcast-raw-test-{}-{n}", std::process::id()));
+            std::fs::create_dir_all(&path).expect("create temp dir");
+            TempDir(path)
+        }
+
+        fn write(&self, name: &str, bytes: &[u8]) -> PathBuf {
+            let path = self.0.join(name);
+            std::fs::write(&path, bytes).expect("write temp file");
+            path
+        }
+    }
+
+    impl Drop for TempDir {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn load(dir: &TempDir, name: &str, bytes: &[u8]) -> Result<Volume, VolumeError> {
+        load_raw(&dir.write(name, bytes), &RawOptions::default())
+    }
+
+    #[test]
+    fn scivis_names() {
+        assert_eq!(
+            parse_scivis_name("skull_256x256x256_uint8.raw"),
+            Some(("skull".to_string(), [256, 256, 256], VoxelType::U8))
+        );
+        assert_eq!(
+            parse_scivis_name("/work/shared/data/raw/cranium_ct_256x256x108_int16.raw"),
+            Some(("cranium_ct".to_string(), [256, 256, 108], VoxelType::I16))
+        );
+        assert_eq!(
+            parse_scivis_name("dwi_s0_10slices_128x128x10_uint16.raw"),
+            Some(("dwi_s0_10slices".to_string(), [128, 128, 10], VoxelType::U16))
+        );
+        assert_eq!(
+            parse_scivis_name(r"C:\data\motor_zmap_53x63x46_float32.raw"),
+            Some(("motor_zmap".to_string(), [53, 63, 46], VoxelType::F32))
+        );
+        assert_eq!(
+            parse_scivis_name("a_1X2x3_DOUBLE.RAW"),
+            Some(("a".to_string(), [1, 2, 3], VoxelType::F64))
+        );
+        assert_eq!(
+            parse_scivis_name("a_1x2x3_float"),
+            Some(("a".to_string(), [1, 2, 3], VoxelType::F32))
+        );
+        // Zero is a match; Volume::new rejects it with its own message.
+        assert_eq!(
+            parse_scivis_name("a_0x2x3_u8.raw"),
+            Some(("a".to_string(), [0, 2, 3], VoxelType::U8))
+        );
+
+        for bad in [
+            "skull.raw",
+            "skull_256x256_uint8.raw",
+            "skull_256x256x256x2_uint8.raw",
+            "skull_256x256x256.raw",
+            "_256x256x256_uint8.raw",
+            "skull_256x256x256_.raw",
+            "skull_axbxc_uint8.raw",
+            "skull_256x+256x256_uint8.raw",
+            "skull_256x256x_uint8.raw",
+            "skull_256x256x256_int32.raw",
+            "skull_99999999999x1x1_uint8.raw",
+            "",
+        ] {
+            assert_eq!(parse_scivis_name(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn loads_uint8() {
+        let dir = TempDir::new();
+        let bytes: Vec<u8> = (0..24).map(|i| i * 10).collect();
+        let v = load(&dir, "ramp_4x3x2_uint8.raw", &bytes).unwrap();
+        assert_eq!(v.name, "ramp");
+        assert_eq!(v.dims, [4, 3, 2]);
+        assert_eq!(v.spacing, [1.0; 3]);
+        assert_eq!(v.source_type, VoxelType::U8);
+        assert!(matches!(v.data, VoxelData::U8(_)));
+        assert_eq!(v.value(1, 2, 1), f64::from((1 + 4 * (2 + 3)) * 10));
+        assert_eq!(v.range, [0.0, 230.0]);
+        assert_eq!(v.gpu_bytes(), &bytes[..]);
+    }
+
+    #[test]
+    fn loads_uint16() {
+        let dir = TempDir::new();
+        let values: [u16; 8] = [0, 1, 256, 4095, 65535, 7, 300, 1000];
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let v = load(&dir, "u_2x2x2_uint16.raw", &bytes).unwrap();
+        assert_eq!(v.source_type, VoxelType::U16);
+        assert!(matches!(v.data, VoxelData::U16(_)));
+        assert_eq!(v.value(0, 1, 0), 256.0);
+        assert_eq!(v.value(0, 0, 1), 65535.0);
+        assert_eq!(v.value(1, 1, 1), 1000.0);
+        assert_eq!(v.range, [0.0, 65535.0]);
+        assert_eq!(v.gpu_texel_size(), 2);
+    }
+
+    #[test]
+    fn loads_int16_with_bias() {
+        let dir = TempDir::new();
+        let values: [i16; 6] = [-1024, 0, 2986, -32768, 32767, -1];
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let v = load(&dir, "ct_3x2x1_int16.raw", &bytes).unwrap();
+        assert_eq!(v.source_type, VoxelType::I16);
+        let VoxelData::U16(stored) = &v.data else {
+            panic!("int16 must be stored as U16")
+        };
+        assert_eq!(stored, &[31744, 32768, 35754, 0, 65535, 32767]);
+        assert_eq!(v.value(0, 0, 0), -1024.0);
+        assert_eq!(v.value(2, 0, 0), 2986.0);
+        assert_eq!(v.value(0, 1, 0), -32768.0);
+        assert_eq!(v.value(1, 1, 0), 32767.0);
+        assert_eq!(v.value(2, 1, 0), -1.0);
+        assert_eq!(v.range, [-32768.0, 32767.0]);
+    }
+
+    #[test]
+    fn loads_float32() {
+        let dir = TempDir::new();
+        let values: [f32; 4] = [-7.5, 0.25, f32::NAN, 3.0e6];
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let v = load(&dir, "z_1x4x1_float32.raw", &bytes).unwrap();
+        assert_eq!(v.source_type, VoxelType::F32);
+        assert_eq!(v.value(0, 0, 0), -7.5);
+        assert_eq!(v.value(0, 1, 0), 0.25);
+        assert!(v.value(0, 2, 0).is_nan());
+        assert_eq!(v.value(0, 3, 0), 3.0e6);
+        assert_eq!(v.range, [-7.5, 3.0e6]);
+    }
+
+    #[test]
+    fn loads_float64_as_f32() {
+        let dir = TempDir::new();
+        let values: [f64; 5] = [-117.843, 2121.07, 0.1, f64::INFINITY, 1e300];
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let v = load(&dir, "dwi_5x1x1_float64.raw", &bytes).unwrap();
+        assert_eq!(v.source_type, VoxelType::F64);
+        let VoxelData::F32(stored) = &v.data else {
+            panic!("float64 must be stored as F32")
+        };
+        assert_eq!(stored.len(), 5);
+        assert_eq!(v.value(0, 0, 0), f64::from(-117.843f32));
+        assert_eq!(v.value(2, 0, 0), f64::from(0.1f32));
+        // 1e300 is beyond f32 and becomes +inf, which the range ignores like any other inf.
+        assert_eq!(v.value(4, 0, 0), f64::INFINITY);
+        assert_eq!(v.range, [f64::from(-117.843f32), f64::from(2121.07f32)]);
+        assert_eq!(v.gpu_texel_size(), 4);
+    }
+
+    #[test]
+    fn float64_chunks_cover_every_voxel() {
+        let values: Vec<f64> = (0..10).map(|i| f64::from(i) * 1.5 - 3.0).collect();
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        // 3 voxels a chunk: three full chunks and a partial one.
+        for chunk_bytes in [24, 8, 1, 80, 1 << 20] {
+            let data = read_voxels(&bytes[..], VoxelType::F64, 10, chunk_bytes).unwrap();
+            let VoxelData::F32(got) = data else {
+                panic!("F32 expected")
+            };
+            let expected: Vec<f32> = values.iter().map(|&v| v as f32).collect();
+            assert_eq!(got, expected, "chunk {chunk_bytes}");
+        }
+        // A short reader is an error, not a panic or a half-filled volume.
+        assert!(matches!(
+            read_voxels(&bytes[..72], VoxelType::F64, 10, 24),
+            Err(ReadFailure::Io(_))
+        ));
+    }
+
+    #[test]
+    fn options_override_the_name() {
+        let dir = TempDir::new();
+        let bytes: Vec<u8> = [1u16, 2, 3, 4].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let path = dir.write("thing_8x1x1_uint8.raw", &bytes);
+        let opts = RawOptions {
+            dims: Some([2, 2, 1]),
+            voxel_type: Some(VoxelType::U16),
+            spacing: Some([0.5, 0.5, 2.0]),
+        };
+        let v = load_raw(&path, &opts).unwrap();
+        assert_eq!(v.name, "thing");
+        assert_eq!(v.dims, [2, 2, 1]);
+        assert_eq!(v.source_type, VoxelType::U16);
+        assert_eq!(v.spacing, [0.5, 0.5, 2.0]);
+        assert_eq!(v.value(1, 1, 0), 4.0);
+
+        // A name that says nothing: everything from the options, name from the file stem.
+        let path = dir.write("scan.bin", &[9, 8, 7]);
+        let opts = RawOptions {
+            dims: Some([3, 1, 1]),
+            voxel_type: Some(VoxelType::U8),
+            spacing: None,
+        };
+        let v = load_raw(&path, &opts).unwrap();
+        assert_eq!(v.name, "scan");
+        assert_eq!(v.value(2, 0, 0), 7.0);
+        // The type from the options wins over an unknown type in the name.
+        let path = dir.write("x_3x1x1_int32.raw", &[1, 2, 3]);
+        let opts = RawOptions {
+            voxel_type: Some(VoxelType::U8),
+            ..RawOptions::default()
+        };
+        assert_eq!(load_raw(&path, &opts).unwrap().dims, [3, 1, 1]);
+    }
+
+    #[test]
+    fn size_mismatch_is_reported_before_reading() {
+        let dir = TempDir::new();
+        let err = load(&dir, "skull_4x4x4_uint16.raw", &[0; 100]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "file skull_4x4x4_uint16.raw is 100 bytes but 4x4x4 uint16 needs 128"
+        );
+
+        // 2^31 float64 voxels would be 16 GiB: the size check must refuse before any allocation.
+        let err = load(&dir, "big_16384x16384x8_float64.raw", &[0; 10]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "file big_16384x16384x8_float64.raw is 10 bytes but 16384x16384x8 float64 needs 17179869184"
+        );
+    }
+
+    #[test]
+    fn layout_errors() {
+        let dir = TempDir::new();
+        let err = load(&dir, "volume.raw", &[0; 8]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "cannot tell the dimensions and voxel type of volume.raw: pass --dims W H D --type T or name the file \
+             NAME_WxHxD_TYPE.raw"
+        );
+        let path = dir.write("volume2.raw", &[0; 8]);
+        let opts = RawOptions {
+            dims: Some([2, 2, 2]),
+            ..RawOptions::default()
+        };
+        let err = load_raw(&path, &opts).unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("cannot tell the voxel type of volume2.raw: pass --dims"),
+            "{err}"
+        );
+        let opts = RawOptions {
+            voxel_type: Some(VoxelType::U8),
+            ..RawOptions::default()
+        };
+        let err = load_raw(&path, &opts).unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("cannot tell the dimensions of volume2.raw: pass --dims"),
+            "{err}"
+        );
+
+        let err = load(&dir, "seg_2x2x2_int32.raw", &[0; 32]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "unknown voxel type 'int32' in file name seg_2x2x2_int32.raw: use one of uint8, uint16, int16, float32, \
+             float64, or pass --type T"
+        );
+    }
+
+    #[test]
+    fn dimension_and_spacing_errors() {
+        let dir = TempDir::new();
+        let err = load(&dir, "flat_4x0x4_uint8.raw", &[]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "dimensions 4x0x4 contain a zero; every dimension must be at least 1"
+        );
+
+        let err = load(&dir, "wide_20000x1x1_uint8.raw", &[0; 4]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "dimensions 20000x1x1 exceed the limit of 16384 per axis"
+        );
+
+        let err = load(&dir, "huge_16384x16384x16_uint8.raw", &[0; 4]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "dimensions 16384x16384x16 make 4294967296 voxels, more than the limit of 2147483648 (2^31)"
+        );
+
+        let path = dir.write("s_1x1x1_uint8.raw", &[5]);
+        for spacing in [
+            [1.0, 0.0, 1.0],
+            [-0.5, 1.0, 1.0],
+            [1.0, 1.0, f32::NAN],
+            [1.0, f32::INFINITY, 1.0],
+        ] {
+            let opts = RawOptions {
+                spacing: Some(spacing),
+                ..RawOptions::default()
+            };
+            let err = load_raw(&path, &opts).unwrap_err();
+            assert!(matches!(err, VolumeError::BadSpacing { .. }), "{spacing:?}: {err}");
+        }
+    }
+
+    #[test]
+    fn file_errors() {
+        let dir = TempDir::new();
+        let missing = dir.0.join("gone_2x2x2_uint8.raw");
+        let err = load_raw(&missing, &RawOptions::default()).unwrap_err();
+        let VolumeError::Io { source, .. } = &err else {
+            panic!("expected an I/O error, got {err}")
+        };
+        assert_eq!(source.kind(), std::io::ErrorKind::NotFound);
+        let text = err.to_string();
+        assert!(
+            text.starts_with(&format!("cannot read {}: ", missing.display())),
+            "{text}"
+        );
+        assert!(text.ends_with(&source.to_string()), "{text}");
+
+        let sub = dir.0.join("dir_1x1x1_uint8.raw");
+        std::fs::create_dir(&sub).unwrap();
+        let err = load_raw(&sub, &RawOptions::default()).unwrap_err();
+        assert_eq!(err.to_string(), format!("{} is not a regular file", sub.display()));
+    }
+
+    #[test]
+    fn real_ct_head() {
+        let path = Path::new("/work/shared/data/raw/cranium_ct_256x256x108_int16.raw");
+        if !path.exists() {
+            let ci = std::env::var("CI").is_ok_and(|v| v == "true");
+            assert!(!ci, "{} is missing and CI=true", path.display());
+            println!("skipping real_ct_head: {} not found", path.display());
+            return;
+        }
+        let opts = RawOptions {
+            spacing: Some([0.957031, 0.957031, 1.5]),
+            ..RawOptions::default()
+        };
+        let v = load_raw(path, &opts).unwrap();
+        assert_eq!(v.name, "cranium_ct");
+        assert_eq!(v.dims, [256, 256, 108]);
+        assert_eq!(v.source_type, VoxelType::I16);
+        assert_eq!(v.range, [-1024.0, 2986.0]);
+        let e = v.extent();
+        assert!((e.z - 108.0 * 1.5 / (256.0 * 0.957031)).abs() < 1e-5, "{e}");
+        let (scale, bias) = v.gpu_scale_bias();
+        // Air (-1024) maps to 0 and the densest bone to 1 through the shader's affine map.
+        let air = f64::from((31744.0f32 / 65535.0) * scale + bias);
+        let bone = f64::from((35754.0f32 / 65535.0) * scale + bias);
+        assert!(air.abs() < 1e-4 && (bone - 1.0).abs() < 1e-4, "{air} {bone}");
+    }
+}

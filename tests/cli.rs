@@ -1,0 +1,254 @@
+//! The `volcast` binary end to end: a render under validation, and every bad input a user can give ending in a
+//! clear message and a non-zero exit, never a panic.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn volcast(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_volcast"))
+        .args(args)
+        .output()
+        .expect("run volcast")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli");
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir.join(name)
+}
+
+fn assert_fails_with(args: &[&str], needle: &str) {
+    let o = volcast(args);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{args:?} succeeded");
+    assert_eq!(o.status.code(), Some(1), "{args:?}: exit code; stderr: {err}");
+    assert!(err.contains(needle), "{args:?}: expected '{needle}' in stderr:\n{err}");
+    assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
+}
+
+#[test]
+fn renders_the_helix_under_validation() {
+    let out = scratch("helix.png");
+    let o = volcast(&[
+        "render",
+        "--builtin",
+        "helix",
+        "--size",
+        "96x80",
+        "--validate",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "render failed:\n{err}");
+    assert!(err.contains("validation: 0 errors, 0 warnings"), "{err}");
+    let img = image::open(&out).expect("a PNG").to_rgba8();
+    assert_eq!(img.dimensions(), (96, 80));
+    let lit = img
+        .pixels()
+        .filter(|p| p[0] as u32 + p[1] as u32 + p[2] as u32 > 30)
+        .count();
+    assert!(
+        lit > 96 * 80 / 20,
+        "the helix should cover a good part of the image, {lit} pixels lit"
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("rendered helix (256x256x256 uint8"), "{stdout}");
+}
+
+#[test]
+fn analytic_method_and_timings_run() {
+    let out = scratch("ml.png");
+    let o = volcast(&[
+        "render",
+        "--builtin",
+        "marschner-lobb",
+        "--size",
+        "64x64",
+        "--method",
+        "analytic",
+        "--timings",
+        "--frames",
+        "2",
+        "--validate",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(text.contains("analytic ray setup"), "{text}");
+    assert!(
+        text.contains("median of 2 frames") && text.contains("(march "),
+        "{text}"
+    );
+}
+
+#[test]
+fn bad_volumes_give_clear_errors() {
+    let short = scratch("short_8x8x8_uint16.raw");
+    std::fs::write(&short, vec![0u8; 100]).unwrap();
+    assert_fails_with(
+        &["info", short.to_str().unwrap()],
+        "is 100 bytes but 8x8x8 uint16 needs 1024",
+    );
+
+    let unnamed = scratch("scan.raw");
+    std::fs::write(&unnamed, vec![0u8; 64]).unwrap();
+    assert_fails_with(&["info", unnamed.to_str().unwrap()], "--dims W H D --type T");
+    assert_fails_with(
+        &[
+            "info",
+            unnamed.to_str().unwrap(),
+            "--dims",
+            "4",
+            "4",
+            "4",
+            "--type",
+            "uint12",
+        ],
+        "uint12",
+    );
+    assert_fails_with(
+        &[
+            "info",
+            unnamed.to_str().unwrap(),
+            "--dims",
+            "0",
+            "4",
+            "4",
+            "--type",
+            "uint8",
+        ],
+        "0",
+    );
+    assert_fails_with(
+        &[
+            "info",
+            unnamed.to_str().unwrap(),
+            "--dims",
+            "100000",
+            "100000",
+            "100000",
+            "--type",
+            "uint8",
+        ],
+        "100000",
+    );
+    assert_fails_with(
+        &["info", "/nonexistent/vol_8x8x8_uint8.raw"],
+        "/nonexistent/vol_8x8x8_uint8.raw",
+    );
+    assert_fails_with(&["info", "--builtin", "teapot"], "helix");
+    assert_fails_with(&["render"], "no volume given");
+}
+
+#[test]
+fn bad_settings_give_clear_errors() {
+    assert_fails_with(
+        &[
+            "render",
+            "--builtin",
+            "colormap",
+            "--builtin-size",
+            "8",
+            "--window",
+            "0.8,0.2",
+        ],
+        "window",
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--builtin",
+            "colormap",
+            "--builtin-size",
+            "8",
+            "--colormap",
+            "jet",
+        ],
+        "viridis",
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--builtin",
+            "colormap",
+            "--builtin-size",
+            "8",
+            "--step-length",
+            "0",
+        ],
+        "step length",
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--builtin",
+            "colormap",
+            "--builtin-size",
+            "8",
+            "--size",
+            "0x10",
+        ],
+        "image size",
+    );
+}
+
+#[test]
+fn clap_rejects_malformed_arguments() {
+    for args in [
+        &["render", "--builtin", "helix", "--size", "big"][..],
+        &["render", "--builtin", "helix", "--slice", "w:0.5:0.1"],
+        &["render", "--builtin", "helix", "--eye", "1,2"],
+        &["render", "--builtin", "helix", "--method", "magic"],
+    ] {
+        let o = volcast(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: clap usage errors exit 2");
+        assert!(!stderr(&o).contains("panicked"));
+    }
+}
+
+#[test]
+fn no_vulkan_driver_is_a_clear_error_with_exit_2() {
+    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
+        .args([
+            "render",
+            "--builtin",
+            "colormap",
+            "--builtin-size",
+            "8",
+            "-o",
+            "/dev/null",
+        ])
+        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+        .output()
+        .expect("run volcast");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("apt-get install mesa-vulkan-drivers"), "{err}");
+}
+
+#[test]
+fn info_reports_the_ct_head() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/raw/cranium_ct_256x256x108_int16.raw");
+    if !path.exists() {
+        assert_ne!(
+            std::env::var("CI").as_deref(),
+            Ok("true"),
+            "../shared is required in CI"
+        );
+        eprintln!("skipped: {} not found", path.display());
+        return;
+    }
+    let o = volcast(&["info", path.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(text.contains("256 x 256 x 108") && text.contains("int16"), "{text}");
+    assert!(text.contains("-1024 .. 2986"), "{text}");
+    assert!(text.contains("R16_UNORM"), "{text}");
+}
