@@ -14,11 +14,15 @@ vec3 colormap(float c) {
     return mix(a, b, u - float(i0));
 }
 
+// Pixel `frag`'s ray direction in texture space (see ray_forward in frame.glsl).
+vec3 ray_direction(vec2 frag) {
+    vec2 ndc = frag / frame.viewport.xy * 2.0 - 1.0;
+    return frame.ray_forward.xyz + ndc.x * frame.ray_right.xyz + ndc.y * frame.ray_down.xyz;
+}
+
 // The point where pixel `frag`'s ray crosses the near plane, in texture space.
 vec3 near_point(vec2 frag) {
-    vec2 ndc = frag / frame.viewport.xy * 2.0 - 1.0;
-    vec4 p = frame.clip_to_tex * vec4(ndc, 0.0, 1.0);
-    return p.xyz / p.w;
+    return frame.eye_tex.xyz + ray_direction(frag) * frame.ray_forward.w;
 }
 
 vec4 march(vec3 a, vec3 b) {

@@ -7,14 +7,15 @@ layout(location = 0) out vec4 out_color;
 
 void main() {
     vec3 origin = frame.eye_tex.xyz;
-    // Parameterised so that t = 1 is the near plane: clamping t0 to 1 starts rays there, as rasterisation does.
-    vec3 dir = near_point(gl_FragCoord.xy) - origin;
+    // t is distance along the view axis, so the near plane is t = near: clamping t0 to it starts rays where
+    // rasterisation would clip them.
+    vec3 dir = ray_direction(gl_FragCoord.xy);
     vec3 inv = 1.0 / dir;
     vec3 t_lo = (frame.slab_lo.xyz - origin) * inv;
     vec3 t_hi = (frame.slab_hi.xyz - origin) * inv;
     vec3 t_min = min(t_lo, t_hi);
     vec3 t_max = max(t_lo, t_hi);
-    float t0 = max(max(max(t_min.x, t_min.y), t_min.z), 1.0);
+    float t0 = max(max(max(t_min.x, t_min.y), t_min.z), frame.ray_forward.w);
     float t1 = min(min(t_max.x, t_max.y), t_max.z);
     if (!(t1 > t0)) {
         out_color = vec4(frame.background.rgb, 1.0);

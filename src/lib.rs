@@ -2,6 +2,7 @@
 //! both exercise one render path.
 
 pub mod camera;
+pub mod compare;
 pub mod gpu;
 pub mod headless;
 pub mod render;

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 use volcast::camera::Camera;
+use volcast::compare;
 use volcast::gpu::{Gpu, GpuError, GpuOptions};
 use volcast::headless::Headless;
 use volcast::settings::{PositionFormat, RaySetup, RenderSettings};
@@ -34,6 +35,8 @@ enum Command {
         #[command(flatten)]
         volume: VolumeArgs,
     },
+    /// Render built-in viewpoints with both ray setups and measure how they differ and what each costs.
+    Compare(Box<CompareArgs>),
     /// List the Vulkan devices and which one volcast would pick.
     Devices,
 }
@@ -111,9 +114,41 @@ struct RenderArgs {
     volume: VolumeArgs,
     #[command(flatten)]
     gpu: GpuArgs,
+    #[command(flatten)]
+    frame: FrameArgs,
     /// Output PNG.
     #[arg(short, long, default_value = "volcast.png")]
     output: PathBuf,
+    /// Ray setup: faces (entry/exit textures) or analytic (ray/box intersection).
+    #[arg(long, default_value = "faces", value_parser = ["faces", "analytic"])]
+    method: String,
+    /// Print GPU time per pass (after a warm-up frame; lavapipe compiles shaders on first use).
+    #[arg(long)]
+    timings: bool,
+    /// Frames to time with --timings (the median is reported).
+    #[arg(long, default_value_t = 5)]
+    frames: u32,
+}
+
+#[derive(Args, Clone)]
+struct CompareArgs {
+    #[command(flatten)]
+    volume: VolumeArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[command(flatten)]
+    frame: FrameArgs,
+    /// Folder for the images and the tables (created if missing).
+    #[arg(long, default_value = "cmp")]
+    out: PathBuf,
+    /// Timed frames per method and view after a warm-up frame (medians are reported).
+    #[arg(long, default_value_t = 3)]
+    frames: u32,
+}
+
+/// What a frame shows: camera, transfer function, slicing. Shared by `render` and `compare`.
+#[derive(Args, Clone)]
+struct FrameArgs {
     /// Image size WxH.
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     size: (u32, u32),
@@ -156,18 +191,9 @@ struct RenderArgs {
     /// Slab slicing AXIS:POSITION:WIDTH in [0,1], e.g. x:0.5:0.2 (repeatable, one per axis).
     #[arg(long = "slice", value_parser = parse_slice)]
     slices: Vec<(usize, f32, f32)>,
-    /// Ray setup: faces (entry/exit textures) or analytic (ray/box intersection).
-    #[arg(long, default_value = "faces", value_parser = ["faces", "analytic"])]
-    method: String,
     /// Entry/exit position target format: rgba32f or rgba16f.
     #[arg(long, default_value = "rgba32f", value_parser = ["rgba32f", "rgba16f"])]
     positions: String,
-    /// Print GPU time per pass (after a warm-up frame; lavapipe compiles shaders on first use).
-    #[arg(long)]
-    timings: bool,
-    /// Frames to time with --timings (the median is reported).
-    #[arg(long, default_value_t = 5)]
-    frames: u32,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -218,7 +244,7 @@ fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {
     Ok((axis, pos, width))
 }
 
-impl RenderArgs {
+impl FrameArgs {
     fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
         let extent = volume.extent();
         let mut s = RenderSettings::new(self.size.0, self.size.1, extent);
@@ -247,11 +273,6 @@ impl RenderArgs {
         for &(axis, pos, width) in &self.slices {
             s.set_slab(axis, pos, width);
         }
-        s.ray_setup = if self.method == "analytic" {
-            RaySetup::Analytic
-        } else {
-            RaySetup::Faces
-        };
         s.position_format = if self.positions == "rgba16f" {
             PositionFormat::Rgba16f
         } else {
@@ -288,7 +309,12 @@ fn render(args: &RenderArgs) -> Result<()> {
     let t_load = Instant::now();
     let volume = args.volume.load()?;
     let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
-    let s = args.settings(&volume)?;
+    let mut s = args.frame.settings(&volume)?;
+    s.ray_setup = if args.method == "analytic" {
+        RaySetup::Analytic
+    } else {
+        RaySetup::Faces
+    };
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
         let result = (|| -> Result<()> {
@@ -356,6 +382,69 @@ fn render(args: &RenderArgs) -> Result<()> {
     })
 }
 
+fn compare(args: &CompareArgs) -> Result<()> {
+    let volume = args.volume.load()?;
+    let base = args.frame.settings(&volume)?;
+    let mut views = compare::builtin_views(&base, volume.extent());
+    if args.frame.eye.is_some() {
+        views.push(compare::View {
+            name: "eye".into(),
+            settings: base.clone(),
+        });
+    }
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    with_gpu(&args.gpu, |gpu| {
+        let mut headless = Headless::new(gpu)?;
+        let result = (|| -> Result<Vec<compare::Row>> {
+            headless.set_volume(gpu, &volume)?;
+            let mut rows = Vec::new();
+            for view in &views {
+                let c = compare::compare_view(gpu, &mut headless, view, args.frames)?;
+                let diff = compare::amplified_diff(&c.faces.image, &c.analytic.image, 10);
+                let save = |suffix: &str, img: &image::RgbaImage| -> Result<()> {
+                    let path = args.out.join(format!("{}-{suffix}.png", view.name));
+                    img.save(&path).with_context(|| format!("writing {}", path.display()))
+                };
+                save("faces", &c.faces.image)?;
+                save("analytic", &c.analytic.image)?;
+                save("diff", &diff)?;
+                save(
+                    "side-by-side",
+                    &compare::side_by_side(&[&c.faces.image, &c.analytic.image, &diff]),
+                )?;
+                println!("{:>15}: {}", view.name, c.verdict());
+                rows.push(compare::Row::from(&c));
+            }
+            Ok(rows)
+        })();
+        headless.destroy(gpu);
+        let rows = result?;
+        let table = compare::markdown_table(&rows);
+        println!(
+            "\n{} ({}x{}x{} {}) at {}x{} on {}; images are faces | analytic | difference x10\n\n{table}",
+            volume.name,
+            volume.dims[0],
+            volume.dims[1],
+            volume.dims[2],
+            volume.source_type,
+            base.width,
+            base.height,
+            gpu.device_name
+        );
+        std::fs::write(args.out.join("compare.md"), &table)?;
+        std::fs::write(args.out.join("compare.json"), serde_json::to_string_pretty(&rows)?)?;
+        println!(
+            "wrote {}/compare.md, compare.json and 4 images per view",
+            args.out.display()
+        );
+        let differing = rows.iter().filter(|r| !r.agree).count();
+        if differing > 0 {
+            println!("{differing} view(s) differ beyond the bound");
+        }
+        Ok(())
+    })
+}
+
 fn info(args: &VolumeArgs) -> Result<()> {
     let v = args.load()?;
     let e = v.extent();
@@ -396,6 +485,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(a) => render(a),
+        Command::Compare(a) => compare(a),
         Command::Info { volume } => info(volume),
         Command::Devices => devices(),
     };

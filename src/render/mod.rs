@@ -11,7 +11,7 @@ use crate::settings::{PositionFormat, RaySetup, RenderSettings};
 use crate::transfer::Colormap;
 use crate::volume::{Volume, VoxelData};
 use ash::vk;
-use glam::{DMat4, Vec3};
+use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 
 /// The uniform block `Frame` in shaders/frame.glsl (std140: only mat4 and vec4 members, so no padding rules bite).
@@ -19,8 +19,10 @@ use gpu_allocator::MemoryLocation;
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FrameUniforms {
     pub tex_to_clip: [f32; 16],
-    pub clip_to_tex: [f32; 16],
     pub eye_tex: [f32; 4],
+    pub ray_forward: [f32; 4],
+    pub ray_right: [f32; 4],
+    pub ray_down: [f32; 4],
     pub slab_lo: [f32; 4],
     pub slab_hi: [f32; 4],
     pub extent: [f32; 4],
@@ -43,9 +45,11 @@ impl FrameUniforms {
     pub fn new(s: &RenderSettings, v: &VolumeInfo) -> FrameUniforms {
         let aspect = s.width as f32 / s.height as f32;
         let cam = &s.camera;
-        // Inverting in f64 keeps the unprojected near-plane points as exact as the rasterised positions.
         let tex_to_clip = cam.projection(aspect).as_dmat4() * cam.view().as_dmat4() * tex_to_world(v.extent).as_dmat4();
-        let clip_to_tex: DMat4 = tex_to_clip.inverse();
+        let forward = cam.forward();
+        let right = forward.cross(cam.up).normalize();
+        let up = right.cross(forward);
+        let tan = (cam.fov_y_deg.to_radians() * 0.5).tan();
         let eye_tex = cam.eye / v.extent + Vec3::splat(0.5);
         let h = s.step_world(v.extent, v.dims);
         let diagonal = v.extent.length();
@@ -53,8 +57,11 @@ impl FrameUniforms {
         let v4 = |a: Vec3, w: f32| [a.x, a.y, a.z, w];
         FrameUniforms {
             tex_to_clip: tex_to_clip.as_mat4().to_cols_array(),
-            clip_to_tex: clip_to_tex.as_mat4().to_cols_array(),
             eye_tex: v4(eye_tex, 1.0),
+            ray_forward: v4(forward / v.extent, cam.near),
+            ray_right: v4(right * (tan * aspect) / v.extent, 0.0),
+            // NDC y grows downwards (row 0 is the top of the image).
+            ray_down: v4(-up * tan / v.extent, 0.0),
             slab_lo: v4(s.slab_lo, 0.0),
             slab_hi: v4(s.slab_hi, 0.0),
             extent: v4(v.extent, h),
@@ -72,7 +79,7 @@ impl FrameUniforms {
 }
 
 /// GPU time per pass of the last frame, from timestamp queries.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct PassTimings {
     /// Entry and exit passes (entry/exit method only).
     pub entry_ms: Option<f64>,
