@@ -32,7 +32,7 @@ pub struct Headless {
 impl Headless {
     pub fn new(gpu: &Gpu) -> Result<Headless, GpuError> {
         Ok(Headless {
-            renderer: Renderer::new(gpu, OUTPUT_FORMAT)?,
+            renderer: Renderer::new(gpu, OUTPUT_FORMAT, 1)?,
             target: None,
         })
     }
@@ -85,7 +85,7 @@ impl Headless {
         let renderer = &mut self.renderer;
         let mut recorded = Ok(());
         gpu.submit_and_wait(|cb| {
-            recorded = renderer.record(gpu, cb, (target.image.raw, target.image.view), Access::TransferRead, s);
+            recorded = renderer.record(gpu, cb, 0, (target.image.raw, target.image.view), Access::TransferRead, s);
             if recorded.is_ok() {
                 record_readback(gpu, cb, &target.image, Access::ColorAttachmentWrite, &target.readback);
             }
@@ -99,7 +99,7 @@ impl Headless {
         let image = image::RgbaImage::from_raw(s.width, s.height, pixels).ok_or(GpuError::Lost("readback size"))?;
         Ok(Frame {
             image,
-            timings: self.renderer.timings(gpu)?,
+            timings: self.renderer.timings(gpu, 0)?,
         })
     }
 

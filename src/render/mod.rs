@@ -136,20 +136,26 @@ pub struct Renderer {
     march_faces_pipeline: vk::Pipeline,
     march_analytic_pipeline: vk::Pipeline,
     descriptor_pool: vk::DescriptorPool,
-    frame_set: vk::DescriptorSet,
     volume_set: vk::DescriptorSet,
     positions_set: vk::DescriptorSet,
-    uniforms: Buffer,
+    slots: Vec<FrameSlot>,
     linear_sampler: vk::Sampler,
     point_sampler: vk::Sampler,
     lut: Image,
     colormap: Colormap,
     volume: Option<GpuVolume>,
     positions: Option<PositionTargets>,
-    query_pool: vk::QueryPool,
     timestamp_period_ns: f64,
-    timestamps_valid: bool,
-    last_setup: RaySetup,
+}
+
+/// What each frame in flight needs of its own: the host writes its uniforms and reads its timestamps while
+/// other frames may still run on the GPU.
+struct FrameSlot {
+    uniforms: Buffer,
+    set: vk::DescriptorSet,
+    query_pool: vk::QueryPool,
+    /// The ray setup of the last frame recorded in this slot (None: nothing recorded yet).
+    recorded: Option<RaySetup>,
 }
 
 fn set_layout(
@@ -192,31 +198,19 @@ fn sampler(gpu: &Gpu, filter: vk::Filter) -> Result<vk::Sampler, GpuError> {
 }
 
 impl Renderer {
-    /// Creates pipelines and fixed resources. `output_format` is the colour target's format (RGBA8 headless).
+    /// Creates pipelines and fixed resources. `output_format` is the colour target's format (RGBA8 headless);
+    /// `frames_in_flight` slots let that many recorded frames be pending at once (see [`Renderer::record`]).
     /// On error everything created so far is destroyed again.
-    pub fn new(gpu: &Gpu, output_format: vk::Format) -> Result<Renderer, GpuError> {
+    pub fn new(gpu: &Gpu, output_format: vk::Format, frames_in_flight: usize) -> Result<Renderer, GpuError> {
         let all = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         let frag = vk::ShaderStageFlags::FRAGMENT;
-        let uniforms = Buffer::new(
-            gpu,
-            std::mem::size_of::<FrameUniforms>() as u64,
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            MemoryLocation::CpuToGpu,
-            "frame uniforms",
-        )?;
         let lut_desc = ImageDesc::d2(
             vk::Format::R8G8B8A8_UNORM,
             256,
             1,
             vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
         );
-        let lut = match Image::new(gpu, lut_desc, "colormap lut") {
-            Ok(i) => i,
-            Err(e) => {
-                uniforms.destroy(gpu);
-                return Err(e);
-            }
-        };
+        let lut = Image::new(gpu, lut_desc, "colormap lut")?;
         let mut r = Renderer {
             output_format,
             frame_set_layout: vk::DescriptorSetLayout::null(),
@@ -229,22 +223,18 @@ impl Renderer {
             march_faces_pipeline: vk::Pipeline::null(),
             march_analytic_pipeline: vk::Pipeline::null(),
             descriptor_pool: vk::DescriptorPool::null(),
-            frame_set: vk::DescriptorSet::null(),
             volume_set: vk::DescriptorSet::null(),
             positions_set: vk::DescriptorSet::null(),
-            uniforms,
+            slots: Vec::new(),
             linear_sampler: vk::Sampler::null(),
             point_sampler: vk::Sampler::null(),
             lut,
             colormap: Colormap::CoolWarm,
             volume: None,
             positions: None,
-            query_pool: vk::QueryPool::null(),
             timestamp_period_ns: gpu.properties.limits.timestamp_period as f64,
-            timestamps_valid: false,
-            last_setup: RaySetup::Faces,
         };
-        match r.init(gpu, all, frag) {
+        match r.init(gpu, all, frag, frames_in_flight.max(1)) {
             Ok(()) => Ok(r),
             Err(e) => {
                 r.destroy(gpu);
@@ -253,7 +243,13 @@ impl Renderer {
         }
     }
 
-    fn init(&mut self, gpu: &Gpu, all: vk::ShaderStageFlags, frag: vk::ShaderStageFlags) -> Result<(), GpuError> {
+    fn init(
+        &mut self,
+        gpu: &Gpu,
+        all: vk::ShaderStageFlags,
+        frag: vk::ShaderStageFlags,
+        slots: usize,
+    ) -> Result<(), GpuError> {
         use vk::DescriptorType as D;
         self.frame_set_layout = set_layout(gpu, &[(D::UNIFORM_BUFFER, all)])?;
         self.volume_set_layout = set_layout(
@@ -317,49 +313,49 @@ impl Renderer {
             },
         )?;
 
+        let n = slots as u32;
         let sizes = [
-            vk::DescriptorPoolSize {
-                ty: D::UNIFORM_BUFFER,
-                descriptor_count: 1,
-            },
-            vk::DescriptorPoolSize {
-                ty: D::SAMPLED_IMAGE,
-                descriptor_count: 4,
-            },
-            vk::DescriptorPoolSize {
-                ty: D::SAMPLER,
-                descriptor_count: 2,
-            },
+            vk::DescriptorPoolSize { ty: D::UNIFORM_BUFFER, descriptor_count: n },
+            vk::DescriptorPoolSize { ty: D::SAMPLED_IMAGE, descriptor_count: 4 },
+            vk::DescriptorPoolSize { ty: D::SAMPLER, descriptor_count: 2 },
         ];
-        let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(3).pool_sizes(&sizes);
+        let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(2 + n).pool_sizes(&sizes);
         // SAFETY: valid create info on a live device.
         self.descriptor_pool =
             unsafe { gpu.device.create_descriptor_pool(&pool_info, None) }.ctx("vkCreateDescriptorPool")?;
-        let layouts = [self.frame_set_layout, self.volume_set_layout, self.positions_set_layout];
-        let alloc = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(self.descriptor_pool)
-            .set_layouts(&layouts);
+        let mut layouts = vec![self.volume_set_layout, self.positions_set_layout];
+        layouts.extend(std::iter::repeat_n(self.frame_set_layout, slots));
+        let alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.descriptor_pool).set_layouts(&layouts);
         // SAFETY: the pool has room for exactly these sets.
         let sets = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
-        (self.frame_set, self.volume_set, self.positions_set) = (sets[0], sets[1], sets[2]);
-        let buffer_info = [vk::DescriptorBufferInfo {
-            buffer: self.uniforms.raw,
-            offset: 0,
-            range: vk::WHOLE_SIZE,
-        }];
-        let write = vk::WriteDescriptorSet::default()
-            .dst_set(self.frame_set)
-            .dst_binding(0)
-            .descriptor_type(D::UNIFORM_BUFFER)
-            .buffer_info(&buffer_info);
-        // SAFETY: the set is not in use by any command buffer.
-        unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
-
-        let query_info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(QUERIES);
-        // SAFETY: valid create info on a live device.
-        self.query_pool = unsafe { gpu.device.create_query_pool(&query_info, None) }.ctx("vkCreateQueryPool")?;
+        (self.volume_set, self.positions_set) = (sets[0], sets[1]);
+        for &set in &sets[2..] {
+            let uniforms = Buffer::new(
+                gpu,
+                std::mem::size_of::<FrameUniforms>() as u64,
+                vk::BufferUsageFlags::UNIFORM_BUFFER,
+                MemoryLocation::CpuToGpu,
+                "frame uniforms",
+            )?;
+            let query_info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(QUERIES);
+            // SAFETY: valid create info on a live device.
+            let query_pool = match unsafe { gpu.device.create_query_pool(&query_info, None) } {
+                Ok(q) => q,
+                Err(e) => {
+                    uniforms.destroy(gpu);
+                    return Err(GpuError::vk("vkCreateQueryPool", e));
+                }
+            };
+            let buffer_info = [vk::DescriptorBufferInfo { buffer: uniforms.raw, offset: 0, range: vk::WHOLE_SIZE }];
+            let write = vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(0)
+                .descriptor_type(D::UNIFORM_BUFFER)
+                .buffer_info(&buffer_info);
+            // SAFETY: the set is not in use by any command buffer.
+            unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
+            self.slots.push(FrameSlot { uniforms, set, query_pool, recorded: None });
+        }
         self.upload_colormap(gpu, Colormap::CoolWarm)?;
         Ok(())
     }
@@ -558,18 +554,23 @@ impl Renderer {
 
     /// Records one frame into `output` (a `width`×`height` colour image of `output_format`, last used as `from`;
     /// its old contents are discarded). `output` ends in `Access::ColorAttachmentWrite`.
-    /// Call [`Renderer::prepare`] with the same settings first.
+    /// Call [`Renderer::prepare`] with the same settings first. `slot` (< frames in flight) must not be used by a
+    /// frame that is still pending on the GPU: its uniforms are written now, by the host.
     pub fn record(
         &mut self,
         gpu: &Gpu,
         cb: vk::CommandBuffer,
+        slot: usize,
         output: (vk::Image, vk::ImageView),
         from: Access,
         s: &RenderSettings,
     ) -> Result<(), GpuError> {
         let vol = self.volume.as_ref().ok_or(GpuError::Lost("no volume loaded"))?;
         let uniforms = FrameUniforms::new(s, &vol.info);
-        self.uniforms.write(bytemuck::bytes_of(&uniforms))?;
+        let slot = self.slots.get_mut(slot).ok_or(GpuError::Lost("frame slot out of range"))?;
+        slot.uniforms.write(bytemuck::bytes_of(&uniforms))?;
+        slot.recorded = Some(s.ray_setup);
+        let (frame_set, query_pool) = (slot.set, slot.query_pool);
         let dev = &gpu.device;
         let extent = vk::Extent2D {
             width: s.width,
@@ -589,10 +590,10 @@ impl Renderer {
         };
         let ts = |cb, i| {
             // SAFETY: the query was reset at the start of this command buffer.
-            unsafe { dev.cmd_write_timestamp2(cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.query_pool, i) }
+            unsafe { dev.cmd_write_timestamp2(cb, vk::PipelineStageFlags2::ALL_COMMANDS, query_pool, i) }
         };
         // SAFETY: `cb` is recording, outside any rendering scope.
-        unsafe { dev.cmd_reset_query_pool(cb, self.query_pool, 0, QUERIES) };
+        unsafe { dev.cmd_reset_query_pool(cb, query_pool, 0, QUERIES) };
         ts(cb, 0);
         let begin = |view: vk::ImageView, load: vk::AttachmentLoadOp| {
             let attachment = [vk::RenderingAttachmentInfo::default()
@@ -652,7 +653,7 @@ impl Renderer {
                             vk::PipelineBindPoint::GRAPHICS,
                             self.faces_layout,
                             0,
-                            &[self.frame_set],
+                            &[frame_set],
                             &[],
                         );
                         dev.cmd_draw(cb, 36, 1, 0, 0);
@@ -677,7 +678,7 @@ impl Renderer {
                         vk::PipelineBindPoint::GRAPHICS,
                         self.march_faces_layout,
                         0,
-                        &[self.frame_set, self.volume_set, self.positions_set],
+                        &[frame_set, self.volume_set, self.positions_set],
                         &[],
                     );
                     dev.cmd_draw(cb, 3, 1, 0, 0);
@@ -696,7 +697,7 @@ impl Renderer {
                         vk::PipelineBindPoint::GRAPHICS,
                         self.march_analytic_layout,
                         0,
-                        &[self.frame_set, self.volume_set],
+                        &[frame_set, self.volume_set],
                         &[],
                     );
                     dev.cmd_draw(cb, 3, 1, 0, 0);
@@ -705,17 +706,14 @@ impl Renderer {
                 ts(cb, 1);
             }
         }
-        self.last_setup = s.ray_setup;
-        self.timestamps_valid = true;
         Ok(())
     }
 
-    /// GPU times of the last recorded frame; call after its submission has completed.
-    pub fn timings(&self, gpu: &Gpu) -> Result<Option<PassTimings>, GpuError> {
-        if !self.timestamps_valid {
-            return Ok(None);
-        }
-        let count = match self.last_setup {
+    /// GPU times of the last frame recorded in `slot`; call after its submission has completed.
+    pub fn timings(&self, gpu: &Gpu, slot: usize) -> Result<Option<PassTimings>, GpuError> {
+        let Some(slot) = self.slots.get(slot) else { return Ok(None) };
+        let Some(setup) = slot.recorded else { return Ok(None) };
+        let count = match setup {
             RaySetup::Faces => 4,
             RaySetup::Analytic => 2,
         };
@@ -723,7 +721,7 @@ impl Renderer {
         // SAFETY: the queries were written by a completed submission; WAIT is not needed but harmless.
         unsafe {
             gpu.device.get_query_pool_results(
-                self.query_pool,
+                slot.query_pool,
                 0,
                 &mut ticks[..count],
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
@@ -731,7 +729,7 @@ impl Renderer {
         }
         .ctx("vkGetQueryPoolResults")?;
         let ms = |a: usize, b: usize| ticks[b].saturating_sub(ticks[a]) as f64 * self.timestamp_period_ns * 1e-6;
-        Ok(Some(match self.last_setup {
+        Ok(Some(match setup {
             RaySetup::Faces => PassTimings {
                 entry_ms: Some(ms(0, 1)),
                 exit_ms: Some(ms(1, 2)),
@@ -760,7 +758,10 @@ impl Renderer {
         unsafe {
             let d = &gpu.device;
             let _ = d.device_wait_idle();
-            d.destroy_query_pool(self.query_pool, None);
+            for slot in self.slots.drain(..) {
+                d.destroy_query_pool(slot.query_pool, None);
+                slot.uniforms.destroy(gpu);
+            }
             if let Some(p) = self.positions.take() {
                 p.destroy(gpu);
             }
@@ -783,6 +784,5 @@ impl Renderer {
             d.destroy_sampler(self.point_sampler, None);
         }
         self.lut.destroy(gpu);
-        self.uniforms.destroy(gpu);
     }
 }
