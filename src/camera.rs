@@ -7,7 +7,7 @@
 use glam::{Mat4, Vec3, Vec4};
 
 /// A perspective pinhole camera.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
     pub eye: Vec3,
     pub target: Vec3,

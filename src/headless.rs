@@ -85,7 +85,14 @@ impl Headless {
         let renderer = &mut self.renderer;
         let mut recorded = Ok(());
         gpu.submit_and_wait(|cb| {
-            recorded = renderer.record(gpu, cb, 0, (target.image.raw, target.image.view), Access::TransferRead, s);
+            recorded = renderer.record(
+                gpu,
+                cb,
+                0,
+                (target.image.raw, target.image.view),
+                Access::TransferRead,
+                s,
+            );
             if recorded.is_ok() {
                 record_readback(gpu, cb, &target.image, Access::ColorAttachmentWrite, &target.readback);
             }

@@ -8,4 +8,5 @@ pub mod headless;
 pub mod render;
 pub mod settings;
 pub mod transfer;
+pub mod viewer;
 pub mod volume;

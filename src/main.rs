@@ -12,6 +12,7 @@ use volcast::gpu::{Gpu, GpuError, GpuOptions};
 use volcast::headless::Headless;
 use volcast::settings::{PositionFormat, RaySetup, RenderSettings};
 use volcast::transfer::Colormap;
+use volcast::viewer::{self, ViewerError, ViewerOptions, VolumeSource};
 use volcast::volume::{self, RawOptions, Volume, VoxelType};
 
 #[derive(Parser)]
@@ -22,12 +23,15 @@ use volcast::volume::{self, RawOptions, Volume, VoxelType};
     propagate_version = true
 )]
 struct Cli {
+    /// Without a subcommand: `volcast view --builtin helix`.
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
 }
 
 #[derive(Subcommand)]
 enum Command {
+    /// Open the desktop viewer (the default without a subcommand).
+    View(Box<ViewArgs>),
     /// Render a volume to a PNG file without a window.
     Render(Box<RenderArgs>),
     /// Print a volume's dimensions, type, spacing, value range and memory needs.
@@ -73,16 +77,19 @@ impl VolumeArgs {
                 volume::BUILTIN_NAMES.join(", ")
             );
         };
+        Ok(volume::load_raw(path, &self.raw_options()?)?)
+    }
+
+    fn raw_options(&self) -> Result<RawOptions> {
         let voxel_type = match &self.voxel_type {
             Some(t) => Some(t.parse::<VoxelType>()?),
             None => None,
         };
-        let opts = RawOptions {
+        Ok(RawOptions {
             dims: self.dims.as_ref().map(|d| [d[0], d[1], d[2]]),
             voxel_type,
             spacing: self.spacing.as_ref().map(|s| [s[0], s[1], s[2]]),
-        };
-        Ok(volume::load_raw(path, &opts)?)
+        })
     }
 }
 
@@ -128,6 +135,20 @@ struct RenderArgs {
     /// Frames to time with --timings (the median is reported).
     #[arg(long, default_value_t = 5)]
     frames: u32,
+}
+
+#[derive(Args, Clone)]
+struct ViewArgs {
+    #[command(flatten)]
+    volume: VolumeArgs,
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Initial window size WxH.
+    #[arg(long, default_value = "1280x800", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Drive the window with a script (for tests), e.g. "frames:3;resize:320x240;screenshot:a.png;exit".
+    #[arg(long, hide = true)]
+    script: Option<String>,
 }
 
 #[derive(Args, Clone)]
@@ -382,6 +403,33 @@ fn render(args: &RenderArgs) -> Result<()> {
     })
 }
 
+fn view(args: &ViewArgs) -> Result<()> {
+    let source = match (&args.volume.builtin, &args.volume.file) {
+        (Some(name), _) => VolumeSource::Builtin(name.clone(), args.volume.builtin_size),
+        (None, Some(path)) => VolumeSource::File(path.clone(), args.volume.raw_options()?),
+        (None, None) => VolumeSource::Builtin("helix".into(), None),
+    };
+    let script = match &args.script {
+        Some(s) => viewer::parse_script(s).map_err(anyhow::Error::msg)?,
+        None => Vec::new(),
+    };
+    let opts = ViewerOptions {
+        source,
+        gpu: args.gpu.options(),
+        size: args.size,
+        script,
+    };
+    let log = viewer::run(opts)?;
+    if args.gpu.options().validation {
+        let (errors, warnings) = (log.error_count(), log.warning_count());
+        eprintln!("validation: {errors} errors, {warnings} warnings");
+        if errors > 0 {
+            bail!("the validation layer reported {errors} error(s)");
+        }
+    }
+    Ok(())
+}
+
 fn compare(args: &CompareArgs) -> Result<()> {
     let volume = args.volume.load()?;
     let base = args.frame.settings(&volume)?;
@@ -484,16 +532,38 @@ fn devices() -> Result<()> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
-        Command::Render(a) => render(a),
-        Command::Compare(a) => compare(a),
-        Command::Info { volume } => info(volume),
-        Command::Devices => devices(),
+        None => view(&ViewArgs {
+            volume: VolumeArgs {
+                file: None,
+                builtin: Some("helix".into()),
+                builtin_size: None,
+                dims: None,
+                voxel_type: None,
+                spacing: None,
+            },
+            gpu: GpuArgs {
+                validate: false,
+                device: None,
+            },
+            size: (1280, 800),
+            script: None,
+        }),
+        Some(Command::View(a)) => view(a),
+        Some(Command::Render(a)) => render(a),
+        Some(Command::Compare(a)) => compare(a),
+        Some(Command::Info { volume }) => info(volume),
+        Some(Command::Devices) => devices(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            let unavailable = e.downcast_ref::<GpuError>().is_some_and(|g| g.is_unavailable());
+            let unavailable = e.downcast_ref::<GpuError>().is_some_and(|g| g.is_unavailable())
+                || e.downcast_ref::<ViewerError>().is_some_and(|v| match v {
+                    ViewerError::NoDisplay(_) => true,
+                    ViewerError::Gpu(g) => g.is_unavailable(),
+                    ViewerError::Other(_) => false,
+                });
             ExitCode::from(if unavailable { 2 } else { 1 })
         }
     }

@@ -7,7 +7,8 @@ use crate::transfer::Colormap;
 use glam::Vec3;
 
 /// How each pixel's ray segment through the box is found.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum RaySetup {
     /// The XNA article's method: front faces into an entry-position target, back faces into an exit-position
     /// target, then a march pass reads both.
@@ -18,7 +19,8 @@ pub enum RaySetup {
 }
 
 /// Format of the entry/exit position targets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum PositionFormat {
     /// 16 bytes/pixel/target. Exact to float precision: the default, so the image matches the reference.
     #[default]
@@ -44,7 +46,7 @@ pub enum PositionFormat {
 ///    voxel-length step; opacity correction for the actual step: `α' = 1 - (1 - α)^step_length`.
 /// 7. **Compositing**, front to back: `C += (1 - A)·α'·rgb`, `A += (1 - A)·α'`; stop once `A ≥ early_termination`.
 /// 8. **Output**: `C + (1 - A)·background`, opaque, stored as 8-bit unsigned normalised (rounded).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RenderSettings {
     pub width: u32,
     pub height: u32,

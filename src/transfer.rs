@@ -5,7 +5,8 @@ use std::fmt;
 use std::str::FromStr;
 
 /// The colormaps the renderer offers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Colormap {
     /// Kenneth Moreland's diverging blue–grey–red map: the default because it keeps both ends of a range
     /// distinguishable without the false edges of a rainbow.

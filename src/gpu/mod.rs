@@ -4,6 +4,7 @@
 pub mod context;
 pub mod pipeline;
 pub mod resources;
+pub mod swapchain;
 pub mod sync;
 
 pub use context::{list_devices, DeviceInfo, Gpu, GpuOptions, ValidationLog, ValidationMessage};

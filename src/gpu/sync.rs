@@ -8,6 +8,9 @@ use ash::vk;
 pub enum Access {
     /// Contents are discarded.
     Undefined,
+    /// A swapchain image just acquired: contents discarded, and the barrier must wait at the stage where the
+    /// submission waits for the acquire semaphore (TRANSFER), so the layout transition happens after it.
+    SwapchainAcquired,
     TransferWrite,
     TransferRead,
     ColorAttachmentWrite,
@@ -21,6 +24,7 @@ impl Access {
     fn stage(self) -> vk::PipelineStageFlags2 {
         match self {
             Access::Undefined => vk::PipelineStageFlags2::NONE,
+            Access::SwapchainAcquired => vk::PipelineStageFlags2::TRANSFER,
             Access::TransferWrite | Access::TransferRead => vk::PipelineStageFlags2::TRANSFER,
             Access::ColorAttachmentWrite => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
             Access::FragmentSampled => vk::PipelineStageFlags2::FRAGMENT_SHADER,
@@ -32,7 +36,7 @@ impl Access {
 
     fn access(self) -> vk::AccessFlags2 {
         match self {
-            Access::Undefined | Access::Present => vk::AccessFlags2::NONE,
+            Access::Undefined | Access::SwapchainAcquired | Access::Present => vk::AccessFlags2::NONE,
             Access::TransferWrite => vk::AccessFlags2::TRANSFER_WRITE,
             Access::TransferRead => vk::AccessFlags2::TRANSFER_READ,
             Access::ColorAttachmentWrite => vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
@@ -45,7 +49,7 @@ impl Access {
 
     fn layout(self) -> vk::ImageLayout {
         match self {
-            Access::Undefined => vk::ImageLayout::UNDEFINED,
+            Access::Undefined | Access::SwapchainAcquired => vk::ImageLayout::UNDEFINED,
             Access::TransferWrite => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
             Access::TransferRead => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
             Access::ColorAttachmentWrite => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,

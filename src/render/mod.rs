@@ -315,17 +315,30 @@ impl Renderer {
 
         let n = slots as u32;
         let sizes = [
-            vk::DescriptorPoolSize { ty: D::UNIFORM_BUFFER, descriptor_count: n },
-            vk::DescriptorPoolSize { ty: D::SAMPLED_IMAGE, descriptor_count: 4 },
-            vk::DescriptorPoolSize { ty: D::SAMPLER, descriptor_count: 2 },
+            vk::DescriptorPoolSize {
+                ty: D::UNIFORM_BUFFER,
+                descriptor_count: n,
+            },
+            vk::DescriptorPoolSize {
+                ty: D::SAMPLED_IMAGE,
+                descriptor_count: 4,
+            },
+            vk::DescriptorPoolSize {
+                ty: D::SAMPLER,
+                descriptor_count: 2,
+            },
         ];
-        let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(2 + n).pool_sizes(&sizes);
+        let pool_info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(2 + n)
+            .pool_sizes(&sizes);
         // SAFETY: valid create info on a live device.
         self.descriptor_pool =
             unsafe { gpu.device.create_descriptor_pool(&pool_info, None) }.ctx("vkCreateDescriptorPool")?;
         let mut layouts = vec![self.volume_set_layout, self.positions_set_layout];
         layouts.extend(std::iter::repeat_n(self.frame_set_layout, slots));
-        let alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(self.descriptor_pool).set_layouts(&layouts);
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.descriptor_pool)
+            .set_layouts(&layouts);
         // SAFETY: the pool has room for exactly these sets.
         let sets = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
         (self.volume_set, self.positions_set) = (sets[0], sets[1]);
@@ -337,7 +350,9 @@ impl Renderer {
                 MemoryLocation::CpuToGpu,
                 "frame uniforms",
             )?;
-            let query_info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(QUERIES);
+            let query_info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::TIMESTAMP)
+                .query_count(QUERIES);
             // SAFETY: valid create info on a live device.
             let query_pool = match unsafe { gpu.device.create_query_pool(&query_info, None) } {
                 Ok(q) => q,
@@ -346,7 +361,11 @@ impl Renderer {
                     return Err(GpuError::vk("vkCreateQueryPool", e));
                 }
             };
-            let buffer_info = [vk::DescriptorBufferInfo { buffer: uniforms.raw, offset: 0, range: vk::WHOLE_SIZE }];
+            let buffer_info = [vk::DescriptorBufferInfo {
+                buffer: uniforms.raw,
+                offset: 0,
+                range: vk::WHOLE_SIZE,
+            }];
             let write = vk::WriteDescriptorSet::default()
                 .dst_set(set)
                 .dst_binding(0)
@@ -354,7 +373,12 @@ impl Renderer {
                 .buffer_info(&buffer_info);
             // SAFETY: the set is not in use by any command buffer.
             unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
-            self.slots.push(FrameSlot { uniforms, set, query_pool, recorded: None });
+            self.slots.push(FrameSlot {
+                uniforms,
+                set,
+                query_pool,
+                recorded: None,
+            });
         }
         self.upload_colormap(gpu, Colormap::CoolWarm)?;
         Ok(())
@@ -487,6 +511,19 @@ impl Renderer {
         self.volume.as_ref().map(|v| v.image.allocated_bytes()).unwrap_or(0)
     }
 
+    /// Whether [`Renderer::prepare`] has work to do for `s` (callers wait for in-flight frames only then).
+    pub fn needs_prepare(&self, s: &RenderSettings) -> bool {
+        let targets_fit = match s.ray_setup {
+            RaySetup::Faces => self.positions.as_ref().is_some_and(|p| {
+                p.format == s.position_format
+                    && p.entry.desc.extent.width == s.width
+                    && p.entry.desc.extent.height == s.height
+            }),
+            RaySetup::Analytic => self.positions.is_none(),
+        };
+        s.colormap != self.colormap || !targets_fit
+    }
+
     /// Creates (or re-creates) what `settings` needs that depends on more than the frame: colormap, targets.
     /// Must be called while no submitted frame is in flight.
     pub fn prepare(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
@@ -567,7 +604,10 @@ impl Renderer {
     ) -> Result<(), GpuError> {
         let vol = self.volume.as_ref().ok_or(GpuError::Lost("no volume loaded"))?;
         let uniforms = FrameUniforms::new(s, &vol.info);
-        let slot = self.slots.get_mut(slot).ok_or(GpuError::Lost("frame slot out of range"))?;
+        let slot = self
+            .slots
+            .get_mut(slot)
+            .ok_or(GpuError::Lost("frame slot out of range"))?;
         slot.uniforms.write(bytemuck::bytes_of(&uniforms))?;
         slot.recorded = Some(s.ray_setup);
         let (frame_set, query_pool) = (slot.set, slot.query_pool);
@@ -711,7 +751,9 @@ impl Renderer {
 
     /// GPU times of the last frame recorded in `slot`; call after its submission has completed.
     pub fn timings(&self, gpu: &Gpu, slot: usize) -> Result<Option<PassTimings>, GpuError> {
-        let Some(slot) = self.slots.get(slot) else { return Ok(None) };
+        let Some(slot) = self.slots.get(slot) else {
+            return Ok(None);
+        };
         let Some(setup) = slot.recorded else { return Ok(None) };
         let count = match setup {
             RaySetup::Faces => 4,

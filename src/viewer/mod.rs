@@ -1,0 +1,1000 @@
+//! The desktop viewer: a winit window, a swapchain, the same `Renderer` as `volcast render` drawing into an
+//! offscreen view image that is blitted to the swapchain, and an egui panel on top (egui-ash-renderer records
+//! into our command buffer; we own submission and lifetimes).
+//!
+//! Frame: wait for the slot's fence → egui → (re)create what changed → acquire → record [march into the view
+//! image → blit to the swapchain image → egui over it] → submit → present. Redraws happen only when something
+//! changed, so an idle viewer sleeps in the event loop.
+
+pub mod controls;
+pub mod ui;
+
+use crate::gpu::resources::{record_readback, Buffer, Image, ImageDesc};
+use crate::gpu::swapchain::{Surface, Swapchain, SwapchainDesc};
+use crate::gpu::sync::{image_barrier, Access};
+use crate::gpu::{Gpu, GpuError, GpuOptions, ValidationLog, VkContext};
+use crate::headless::OUTPUT_FORMAT;
+use crate::render::Renderer;
+use crate::settings::RenderSettings;
+use crate::volume::{self, RawOptions, Volume};
+use ash::vk;
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::mpsc::{Receiver, TryRecvError};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use ui::{UiAction, ViewerState};
+use winit::application::ApplicationHandler;
+use winit::event::WindowEvent;
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::window::{Window, WindowId};
+
+/// Frames the CPU may record ahead of the GPU.
+const FRAMES_IN_FLIGHT: usize = 2;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ViewerError {
+    #[error("no display to open a window on ({0}); use `volcast render` to render to a PNG without one")]
+    NoDisplay(String),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error("{0}")]
+    Other(String),
+}
+
+/// Where the first volume comes from.
+#[derive(Clone, Debug)]
+pub enum VolumeSource {
+    Builtin(String, Option<u32>),
+    File(PathBuf, RawOptions),
+}
+
+/// One step of a scripted session (`--script`, used by the tests to drive a real window under Xvfb).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ScriptStep {
+    /// Render this many frames.
+    Frames(u32),
+    /// Ask the window system for a new size and wait (a bounded number of frames) until it arrives.
+    Resize(u32, u32),
+    Minimize,
+    Restore,
+    /// Behave as if the window system reported a 0×0 size (what minimising does on most platforms).
+    ZeroSize,
+    /// Press a key (through the same path as the keyboard): r, space, tab or f12.
+    Key(String),
+    /// Save the current view through the screenshot path (PNG, plus the settings as JSON beside it).
+    Screenshot(PathBuf),
+    Exit,
+}
+
+/// Parses `frames:3;resize:320x240;minimize;restore;zero-size;key:tab;screenshot:PATH;exit`.
+pub fn parse_script(s: &str) -> Result<Vec<ScriptStep>, String> {
+    s.split(';')
+        .filter(|p| !p.trim().is_empty())
+        .map(|part| {
+            let part = part.trim();
+            let (cmd, arg) = part.split_once(':').unwrap_or((part, ""));
+            let bad = || format!("bad script step '{part}'");
+            Ok(match cmd {
+                "frames" => ScriptStep::Frames(arg.parse().map_err(|_| bad())?),
+                "resize" => {
+                    let (w, h) = arg.split_once('x').ok_or_else(bad)?;
+                    ScriptStep::Resize(w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?)
+                }
+                "minimize" => ScriptStep::Minimize,
+                "restore" => ScriptStep::Restore,
+                "zero-size" => ScriptStep::ZeroSize,
+                "key" => ScriptStep::Key(arg.to_lowercase()),
+                "screenshot" if !arg.is_empty() => ScriptStep::Screenshot(PathBuf::from(arg)),
+                "exit" => ScriptStep::Exit,
+                _ => return Err(bad()),
+            })
+        })
+        .collect()
+}
+
+pub struct ViewerOptions {
+    pub source: VolumeSource,
+    pub gpu: GpuOptions,
+    pub size: (u32, u32),
+    pub script: Vec<ScriptStep>,
+}
+
+/// Opens the viewer and runs until the window closes. Returns the validation log for the caller to report.
+pub fn run(opts: ViewerOptions) -> Result<Arc<ValidationLog>, ViewerError> {
+    let unset = |v: &str| std::env::var_os(v).is_none_or(|x| x.is_empty());
+    if cfg!(all(unix, not(target_os = "macos")))
+        && unset("DISPLAY")
+        && unset("WAYLAND_DISPLAY")
+        && unset("WAYLAND_SOCKET")
+    {
+        return Err(ViewerError::NoDisplay(
+            "neither DISPLAY nor WAYLAND_DISPLAY is set".into(),
+        ));
+    }
+    let event_loop = EventLoop::new().map_err(|e| ViewerError::NoDisplay(e.to_string()))?;
+    let mut app = App {
+        opts,
+        running: None,
+        error: None,
+        log: None,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|e| ViewerError::Other(format!("event loop: {e}")))?;
+    if let Some(r) = app.running.take() {
+        r.destroy();
+    }
+    match app.error {
+        Some(e) => Err(e),
+        None => app
+            .log
+            .ok_or_else(|| ViewerError::Other("the window never opened".into())),
+    }
+}
+
+struct App {
+    opts: ViewerOptions,
+    running: Option<Running>,
+    error: Option<ViewerError>,
+    log: Option<Arc<ValidationLog>>,
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.running.is_some() {
+            return;
+        }
+        match Running::new(event_loop, &self.opts) {
+            Ok(r) => {
+                self.log = Some(r.gpu.log.clone());
+                r.window.request_redraw();
+                self.running = Some(r);
+            }
+            Err(e) => {
+                self.error = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let Some(r) = &mut self.running else { return };
+        let response = r.egui_state.on_window_event(&r.window, &event);
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(_) => r.window.request_redraw(),
+            WindowEvent::DroppedFile(path) => {
+                let action = r.state.load_action(path);
+                r.apply(vec![action]);
+                r.window.request_redraw();
+            }
+            WindowEvent::RedrawRequested => match r.redraw() {
+                Ok(Flow::Continue) => {}
+                Ok(Flow::Exit) => event_loop.exit(),
+                Err(e) => {
+                    self.error = Some(e);
+                    event_loop.exit();
+                }
+            },
+            _ => {}
+        }
+        if response.repaint {
+            r.window.request_redraw();
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(r) = &mut self.running else { return };
+        if r.wants_continuous_redraw() {
+            r.window.request_redraw();
+            event_loop.set_control_flow(ControlFlow::Poll);
+        } else if let Some(at) = r.repaint_at {
+            event_loop.set_control_flow(ControlFlow::WaitUntil(at));
+            if Instant::now() >= at {
+                r.repaint_at = None;
+                r.window.request_redraw();
+            }
+        } else {
+            event_loop.set_control_flow(ControlFlow::Wait);
+        }
+    }
+}
+
+enum Flow {
+    Continue,
+    Exit,
+}
+
+struct FrameSync {
+    cb: vk::CommandBuffer,
+    fence: vk::Fence,
+    image_available: vk::Semaphore,
+}
+
+struct Loading {
+    label: String,
+    progress: Arc<AtomicU32>,
+    rx: Receiver<Result<Volume, String>>,
+}
+
+struct Script {
+    steps: VecDeque<ScriptStep>,
+    frames_left: u32,
+    waiting_for_size: Option<(u32, u32, u32)>,
+    started: Instant,
+}
+
+/// The live viewer. Field order is irrelevant: `destroy` tears down explicitly, the Gpu last.
+struct Running {
+    window: Arc<Window>,
+    gpu: Gpu,
+    surface: Option<Surface>,
+    swapchain: Option<Swapchain>,
+    render_finished: Vec<vk::Semaphore>,
+    frames: Vec<FrameSync>,
+    frame_index: usize,
+    renderer: Option<Renderer>,
+    view_image: Option<Image>,
+    egui_ctx: egui::Context,
+    egui_state: egui_winit::State,
+    egui_renderer: Option<egui_ash_renderer::Renderer<egui_ash_renderer::allocator::GpuAllocator>>,
+    state: ViewerState,
+    loading: Option<Loading>,
+    pending_screenshot: Option<PathBuf>,
+    zero_size: bool,
+    recreate_swapchain: bool,
+    last_frame: Instant,
+    repaint_at: Option<Instant>,
+    script: Option<Script>,
+    /// Gpu time per frame slot is read back before the slot is reused.
+    has_volume: bool,
+}
+
+fn load_in_background(source: VolumeSource) -> Loading {
+    let label = match &source {
+        VolumeSource::Builtin(name, _) => name.clone(),
+        VolumeSource::File(path, _) => path.display().to_string(),
+    };
+    let progress = Arc::new(AtomicU32::new(0));
+    let (tx, rx) = std::sync::mpsc::channel();
+    let p = progress.clone();
+    std::thread::spawn(move || {
+        let result = match source {
+            VolumeSource::Builtin(name, size) => volume::builtin(&name, size),
+            VolumeSource::File(path, opts) => volume::load_raw(&path, &opts),
+        };
+        p.store(1.0f32.to_bits(), Ordering::Relaxed);
+        let _ = tx.send(result.map_err(|e| e.to_string()));
+    });
+    Loading { label, progress, rx }
+}
+
+impl Running {
+    fn new(event_loop: &ActiveEventLoop, opts: &ViewerOptions) -> Result<Running, ViewerError> {
+        let attributes = Window::default_attributes()
+            .with_title("volcast")
+            .with_inner_size(winit::dpi::PhysicalSize::new(opts.size.0, opts.size.1));
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|e| ViewerError::NoDisplay(format!("creating a window: {e}")))?,
+        );
+        let display = window
+            .display_handle()
+            .map_err(|e| ViewerError::NoDisplay(e.to_string()))?
+            .as_raw();
+        let handle = window
+            .window_handle()
+            .map_err(|e| ViewerError::NoDisplay(e.to_string()))?
+            .as_raw();
+        let required = ash_window::enumerate_required_extensions(display).ctx("surface extensions")?;
+        let mut gpu_opts = opts.gpu.clone();
+        // SAFETY: ash-window returns pointers to static, NUL-terminated extension names.
+        gpu_opts.instance_extensions = required
+            .iter()
+            .map(|&p| unsafe { std::ffi::CStr::from_ptr(p) })
+            .collect();
+        gpu_opts.swapchain = true;
+        let gpu = Gpu::new(&gpu_opts)?;
+        // SAFETY: the window outlives the surface: Running::destroy drops the surface before the window.
+        let surface = unsafe { Surface::new(&gpu, display, handle) }?;
+        let egui_ctx = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu.properties.limits.max_image_dimension2_d as usize),
+        );
+        let mut r = Running {
+            window: window.clone(),
+            gpu,
+            surface: Some(surface),
+            swapchain: None,
+            render_finished: Vec::new(),
+            frames: Vec::new(),
+            frame_index: 0,
+            renderer: None,
+            view_image: None,
+            egui_ctx,
+            egui_state,
+            egui_renderer: None,
+            state: ViewerState::new(glam::Vec3::ONE, "loading…".into()),
+            loading: None,
+            pending_screenshot: None,
+            zero_size: false,
+            recreate_swapchain: true,
+            last_frame: Instant::now(),
+            repaint_at: None,
+            script: (!opts.script.is_empty()).then(|| Script {
+                steps: opts.script.iter().cloned().collect(),
+                frames_left: 0,
+                waiting_for_size: None,
+                started: Instant::now(),
+            }),
+            has_volume: false,
+        };
+        // On error `r` is torn down properly before the error is returned.
+        match r.init(opts) {
+            Ok(()) => Ok(r),
+            Err(e) => {
+                r.destroy();
+                Err(e)
+            }
+        }
+    }
+
+    fn init(&mut self, opts: &ViewerOptions) -> Result<(), ViewerError> {
+        let gpu = &self.gpu;
+        self.renderer = Some(Renderer::new(gpu, OUTPUT_FORMAT, FRAMES_IN_FLIGHT)?);
+        for _ in 0..FRAMES_IN_FLIGHT {
+            let alloc = vk::CommandBufferAllocateInfo::default()
+                .command_pool(gpu.command_pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            // SAFETY: valid allocate/create infos on a live device; each object is destroyed in `destroy`.
+            let sync = unsafe {
+                FrameSync {
+                    cb: gpu
+                        .device
+                        .allocate_command_buffers(&alloc)
+                        .ctx("vkAllocateCommandBuffers")?[0],
+                    fence: gpu
+                        .device
+                        .create_fence(
+                            &vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED),
+                            None,
+                        )
+                        .ctx("vkCreateFence")?,
+                    image_available: gpu
+                        .device
+                        .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
+                        .ctx("vkCreateSemaphore")?,
+                }
+            };
+            self.frames.push(sync);
+        }
+        self.recreate_swapchain()?;
+        let allocator = self.gpu.allocator.clone().ok_or(GpuError::Lost("allocator"))?;
+        let format = self
+            .swapchain
+            .as_ref()
+            .map(|s| s.format)
+            .ok_or(GpuError::Lost("swapchain"))?;
+        let egui_renderer = egui_ash_renderer::Renderer::with_gpu_allocator(
+            allocator,
+            self.gpu.device.clone(),
+            egui_ash_renderer::RenderMode::DynamicRendering(egui_ash_renderer::DynamicRendering {
+                color_attachment_format: format,
+                depth_attachment_format: None,
+                stencil_attachment_format: None,
+            }),
+            egui_ash_renderer::Options {
+                in_flight_frames: FRAMES_IN_FLIGHT,
+                enable_depth_test: false,
+                enable_depth_write: false,
+                srgb_framebuffer: false,
+            },
+        )
+        .map_err(|e| ViewerError::Other(format!("egui renderer: {e}")))?;
+        self.egui_renderer = Some(egui_renderer);
+        // The first volume loads synchronously: there is nothing to show until it is there.
+        let first = match &opts.source {
+            VolumeSource::Builtin(name, size) => volume::builtin(name, *size),
+            VolumeSource::File(path, o) => volume::load_raw(path, o),
+        }
+        .map_err(|e| ViewerError::Other(e.to_string()))?;
+        self.install_volume(first)?;
+        Ok(())
+    }
+
+    fn install_volume(&mut self, v: Volume) -> Result<(), GpuError> {
+        // SAFETY: plain wait on a live device; set_volume rewrites descriptors that in-flight frames use.
+        unsafe { self.gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")?;
+        let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
+        renderer.set_volume(&self.gpu, &v)?;
+        let label = format!(
+            "{} — {}×{}×{} {}, spacing {}×{}×{}",
+            v.name, v.dims[0], v.dims[1], v.dims[2], v.source_type, v.spacing[0], v.spacing[1], v.spacing[2]
+        );
+        self.state.set_volume(v.extent(), label);
+        self.state.raw_spacing = v.spacing;
+        self.has_volume = true;
+        Ok(())
+    }
+
+    fn wait_idle(&self) -> Result<(), GpuError> {
+        // SAFETY: plain wait on a live device.
+        unsafe { self.gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")
+    }
+
+    fn recreate_swapchain(&mut self) -> Result<(), ViewerError> {
+        self.wait_idle()?;
+        let size = self.window.inner_size();
+        let desc = SwapchainDesc {
+            width: size.width.max(1),
+            height: size.height.max(1),
+            vsync: self.state.vsync,
+        };
+        let surface = self.surface.as_ref().ok_or(GpuError::Lost("surface"))?;
+        let new = Swapchain::new(&self.gpu, surface, desc, self.swapchain.as_ref())?;
+        if let Some(old) = self.swapchain.replace(new) {
+            old.destroy(&self.gpu);
+        }
+        for s in self.render_finished.drain(..) {
+            // SAFETY: the device is idle, so no submission waits on or signals these semaphores.
+            unsafe { self.gpu.device.destroy_semaphore(s, None) };
+        }
+        let count = self.swapchain.as_ref().map(|s| s.images.len()).unwrap_or(0);
+        for _ in 0..count {
+            // SAFETY: valid create info on a live device.
+            let s = unsafe {
+                self.gpu
+                    .device
+                    .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
+            }
+            .ctx("vkCreateSemaphore")?;
+            self.render_finished.push(s);
+        }
+        self.recreate_swapchain = false;
+        Ok(())
+    }
+
+    fn wants_continuous_redraw(&self) -> bool {
+        self.loading.is_some() || self.state.auto_rotate || self.state.animation.is_some() || self.script.is_some()
+    }
+
+    fn apply(&mut self, actions: Vec<UiAction>) {
+        for action in actions {
+            match action {
+                UiAction::LoadFile(path, opts) => self.start_load(VolumeSource::File(path, opts)),
+                UiAction::LoadBuiltin(name) => self.start_load(VolumeSource::Builtin(name, None)),
+                UiAction::Screenshot => {
+                    let stamp = std::time::SystemTime::now()
+                        .duration_since(std::time::UNIX_EPOCH)
+                        .map(|d| d.as_secs())
+                        .unwrap_or(0);
+                    self.pending_screenshot = Some(PathBuf::from(format!("volcast-{stamp}.png")));
+                }
+                UiAction::VsyncChanged => self.recreate_swapchain = true,
+            }
+        }
+    }
+
+    fn start_load(&mut self, source: VolumeSource) {
+        if self.loading.is_some() {
+            self.state.status = Some("a volume is already loading".into());
+            return;
+        }
+        self.state.error = None;
+        self.loading = Some(load_in_background(source));
+    }
+
+    /// Takes a finished background load, keeping the old volume on error.
+    fn poll_loading(&mut self) -> Result<(), GpuError> {
+        let Some(loading) = &self.loading else { return Ok(()) };
+        match loading.rx.try_recv() {
+            Ok(Ok(volume)) => {
+                let label = loading.label.clone();
+                self.loading = None;
+                self.state.loading = None;
+                if let Err(e) = self.install_volume(volume) {
+                    self.state.error = Some(format!("{label}: {e}"));
+                } else {
+                    self.state.status = Some(format!("loaded {label}"));
+                }
+            }
+            Ok(Err(e)) => {
+                self.state.error = Some(format!("{}: {e}", loading.label));
+                self.loading = None;
+                self.state.loading = None;
+            }
+            Err(TryRecvError::Empty) => {
+                let p = f32::from_bits(loading.progress.load(Ordering::Relaxed));
+                self.state.loading = Some((loading.label.clone(), p));
+            }
+            Err(TryRecvError::Disconnected) => {
+                self.state.error = Some(format!("{}: the loader stopped unexpectedly", loading.label));
+                self.loading = None;
+                self.state.loading = None;
+            }
+        }
+        Ok(())
+    }
+
+    /// Advances the script after a frame; returns Exit when it ends the session.
+    fn step_script(&mut self) -> Result<Flow, ViewerError> {
+        let Some(script) = &mut self.script else {
+            return Ok(Flow::Continue);
+        };
+        if script.started.elapsed() > Duration::from_secs(120) {
+            return Err(ViewerError::Other(format!(
+                "script timed out with steps left: {:?}",
+                script.steps
+            )));
+        }
+        if script.frames_left > 0 {
+            script.frames_left -= 1;
+            return Ok(Flow::Continue);
+        }
+        if let Some((w, h, tries)) = script.waiting_for_size {
+            let size = self.window.inner_size();
+            if (size.width, size.height) == (w, h) {
+                script.waiting_for_size = None;
+            } else if tries == 0 {
+                return Err(ViewerError::Other(format!(
+                    "window did not resize to {w}x{h} (it is {size:?})"
+                )));
+            } else {
+                script.waiting_for_size = Some((w, h, tries - 1));
+                return Ok(Flow::Continue);
+            }
+        }
+        let Some(step) = script.steps.pop_front() else {
+            return Ok(Flow::Exit);
+        };
+        eprintln!("script: {step:?}");
+        match step {
+            ScriptStep::Frames(n) => script.frames_left = n,
+            ScriptStep::Resize(w, h) => {
+                let _ = self.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
+                script.waiting_for_size = Some((w, h, 200));
+            }
+            ScriptStep::Minimize => self.window.set_minimized(true),
+            ScriptStep::Restore => {
+                self.window.set_minimized(false);
+                self.zero_size = false;
+            }
+            ScriptStep::ZeroSize => self.zero_size = true,
+            ScriptStep::Key(k) => {
+                let key = match k.as_str() {
+                    "r" => egui::Key::R,
+                    "space" => egui::Key::Space,
+                    "tab" => egui::Key::Tab,
+                    "f12" => egui::Key::F12,
+                    _ => return Err(ViewerError::Other(format!("script: unknown key {k}"))),
+                };
+                self.egui_ctx.input_mut(|i| {
+                    i.events.push(egui::Event::Key {
+                        key,
+                        physical_key: None,
+                        pressed: true,
+                        repeat: false,
+                        modifiers: Default::default(),
+                    });
+                    i.keys_down.insert(key);
+                });
+                let actions = ui::shortcuts(&self.egui_ctx, &mut self.state);
+                self.egui_ctx.input_mut(|i| {
+                    i.keys_down.remove(&key);
+                    i.events.clear();
+                });
+                self.apply(actions);
+            }
+            ScriptStep::Screenshot(path) => self.pending_screenshot = Some(path),
+            ScriptStep::Exit => return Ok(Flow::Exit),
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn redraw(&mut self) -> Result<Flow, ViewerError> {
+        let now = Instant::now();
+        let dt = now.duration_since(self.last_frame).as_secs_f32().min(0.1);
+        self.last_frame = now;
+        self.poll_loading()?;
+        self.state.animate(dt);
+
+        let size = self.window.inner_size();
+        if self.zero_size || size.width == 0 || size.height == 0 || self.window.is_minimized() == Some(true) {
+            // Minimised: nothing to draw into. Keep the event loop (and a running script) going.
+            return self.step_script();
+        }
+
+        // The UI runs first: it may change what this frame shows.
+        let raw_input = self.egui_state.take_egui_input(&self.window);
+        let state = &mut self.state;
+        let mut actions = Vec::new();
+        let full = self.egui_ctx.run_ui(raw_input, |ui| {
+            actions.extend(ui::shortcuts(ui.ctx(), state));
+            if state.panel_visible {
+                egui::Panel::left("settings")
+                    .resizable(false)
+                    .default_size(270.0)
+                    .show(ui, |ui| {
+                        egui::ScrollArea::vertical().show(ui, |ui| actions.extend(ui::settings_panel(ui, state)));
+                    });
+            }
+            egui::CentralPanel::no_frame().show(ui, |ui| ui::view_overlay(ui, state));
+        });
+        self.apply(actions);
+        // FullOutput implements Drop, so its parts are taken rather than moved out.
+        let mut full = full;
+        let platform_output = std::mem::take(&mut full.platform_output);
+        let textures_delta = std::mem::take(&mut full.textures_delta);
+        let shapes = std::mem::take(&mut full.shapes);
+        let pixels_per_point = full.pixels_per_point;
+        let viewport_output = std::mem::take(&mut full.viewport_output);
+        self.egui_state.handle_platform_output(&self.window, platform_output);
+        self.repaint_at = viewport_output
+            .get(&egui::ViewportId::ROOT)
+            .filter(|v| v.repaint_delay < Duration::from_secs(3600))
+            .map(|v| now + v.repaint_delay);
+        let primitives = self.egui_ctx.tessellate(shapes, pixels_per_point);
+
+        if self.recreate_swapchain
+            || self
+                .swapchain
+                .as_ref()
+                .is_some_and(|s| (s.extent.width, s.extent.height) != (size.width, size.height))
+        {
+            self.recreate_swapchain()?;
+        }
+        let extent = self.swapchain.as_ref().ok_or(GpuError::Lost("swapchain"))?.extent;
+        let (view_offset, view_size) = view_pixels(self.state.view_rect, pixels_per_point, extent);
+        let settings = self.state.render_settings(view_size.width, view_size.height);
+        self.prepare(&settings)?;
+
+        let slot = self.frame_index % FRAMES_IN_FLIGHT;
+        let sync = &self.frames[slot];
+        // SAFETY: the fence belongs to this device; waiting makes the slot's resources reusable.
+        unsafe { self.gpu.device.wait_for_fences(&[sync.fence], true, u64::MAX) }.ctx("vkWaitForFences")?;
+        let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
+        if self.frame_index >= FRAMES_IN_FLIGHT {
+            self.state.gpu = renderer.timings(&self.gpu, slot)?;
+        }
+        self.state.frame_ms = dt as f64 * 1e3;
+
+        let swapchain = self.swapchain.as_ref().ok_or(GpuError::Lost("swapchain"))?;
+        // SAFETY: the semaphore is unsignalled (its last wait completed with the slot's fence).
+        let acquired = unsafe {
+            swapchain
+                .loader
+                .acquire_next_image(swapchain.raw, u64::MAX, sync.image_available, vk::Fence::null())
+        };
+        let image_index = match acquired {
+            Ok((i, suboptimal)) => {
+                self.recreate_swapchain |= suboptimal;
+                i as usize
+            }
+            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => {
+                self.recreate_swapchain = true;
+                self.window.request_redraw();
+                return Ok(Flow::Continue);
+            }
+            Err(e) => return Err(GpuError::vk("vkAcquireNextImageKHR", e).into()),
+        };
+
+        let egui_renderer = self.egui_renderer.as_mut().ok_or(GpuError::Lost("egui renderer"))?;
+        for (id, deltas) in &textures_delta.set {
+            for delta in deltas {
+                egui_renderer
+                    .set_texture(self.gpu.queue, self.gpu.command_pool, *id, delta)
+                    .map_err(|e| ViewerError::Other(format!("egui texture: {e}")))?;
+            }
+        }
+
+        let view = self.view_image.as_ref().ok_or(GpuError::Lost("view image"))?;
+        let dev = &self.gpu.device;
+        let cb = sync.cb;
+        // SAFETY: the slot's previous submission finished (fence waited), so its command buffer can be reset.
+        unsafe {
+            dev.reset_fences(&[sync.fence]).ctx("vkResetFences")?;
+            dev.reset_command_buffer(cb, vk::CommandBufferResetFlags::empty())
+                .ctx("vkResetCommandBuffer")?;
+            dev.begin_command_buffer(
+                cb,
+                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )
+            .ctx("vkBeginCommandBuffer")?;
+        }
+        renderer.record(
+            &self.gpu,
+            cb,
+            slot,
+            (view.raw, view.view),
+            Access::TransferRead,
+            &settings,
+        )?;
+        image_barrier(dev, cb, view.raw, Access::ColorAttachmentWrite, Access::TransferRead);
+        let target = swapchain.images[image_index];
+        image_barrier(dev, cb, target, Access::SwapchainAcquired, Access::TransferWrite);
+        // Cleared first: the panel covers the rest, but not while it is hidden or being laid out.
+        let black = vk::ClearColorValue {
+            float32: [0.0, 0.0, 0.0, 1.0],
+        };
+        // SAFETY: the image is in TRANSFER_DST layout.
+        unsafe {
+            dev.cmd_clear_color_image(
+                cb,
+                target,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &black,
+                &[crate::gpu::sync::COLOR_RANGE],
+            )
+        };
+        crate::gpu::sync::memory_barrier(dev, cb, Access::TransferWrite, Access::TransferWrite);
+        let corner = vk::Offset3D {
+            x: view_size.width as i32,
+            y: view_size.height as i32,
+            z: 1,
+        };
+        let dst_corner = vk::Offset3D {
+            x: view_offset.x + corner.x,
+            y: view_offset.y + corner.y,
+            z: 1,
+        };
+        let dst_origin = vk::Offset3D {
+            x: view_offset.x,
+            y: view_offset.y,
+            z: 0,
+        };
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let blit = vk::ImageBlit::default()
+            .src_subresource(layers)
+            .src_offsets([vk::Offset3D::default(), corner])
+            .dst_subresource(layers)
+            .dst_offsets([dst_origin, dst_corner]);
+        // SAFETY: both images are in the layouts named and the regions lie inside them; same size, so the blit
+        // only swizzles RGBA to BGRA.
+        unsafe {
+            dev.cmd_blit_image(
+                cb,
+                view.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                target,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[blit],
+                vk::Filter::NEAREST,
+            )
+        };
+        image_barrier(dev, cb, target, Access::TransferWrite, Access::ColorAttachmentWrite);
+        let attachment = [vk::RenderingAttachmentInfo::default()
+            .image_view(swapchain.views[image_index])
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::LOAD)
+            .store_op(vk::AttachmentStoreOp::STORE)];
+        let rendering = vk::RenderingInfo::default()
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent,
+            })
+            .layer_count(1)
+            .color_attachments(&attachment);
+        // SAFETY: the swapchain image is a colour attachment now.
+        unsafe { dev.cmd_begin_rendering(cb, &rendering) };
+        egui_renderer
+            .cmd_draw(cb, extent, pixels_per_point, &primitives)
+            .map_err(|e| ViewerError::Other(format!("egui draw: {e}")))?;
+        // SAFETY: rendering was begun above.
+        unsafe { dev.cmd_end_rendering(cb) };
+        image_barrier(dev, cb, target, Access::ColorAttachmentWrite, Access::Present);
+        let screenshot = match self.pending_screenshot.take() {
+            Some(path) => {
+                let buffer = Buffer::new(
+                    &self.gpu,
+                    view_size.width as u64 * view_size.height as u64 * 4,
+                    vk::BufferUsageFlags::TRANSFER_DST,
+                    gpu_allocator::MemoryLocation::GpuToCpu,
+                    "screenshot",
+                )?;
+                record_readback(&self.gpu, cb, view, Access::TransferRead, &buffer);
+                Some((path, buffer))
+            }
+            None => None,
+        };
+        // SAFETY: `cb` is recording.
+        unsafe { dev.end_command_buffer(cb) }.ctx("vkEndCommandBuffer")?;
+
+        let waits = [vk::SemaphoreSubmitInfo::default()
+            .semaphore(sync.image_available)
+            .stage_mask(vk::PipelineStageFlags2::TRANSFER)];
+        let signals = [vk::SemaphoreSubmitInfo::default()
+            .semaphore(self.render_finished[image_index])
+            .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+        let cbs = [vk::CommandBufferSubmitInfo::default().command_buffer(cb)];
+        let submit = [vk::SubmitInfo2::default()
+            .wait_semaphore_infos(&waits)
+            .command_buffer_infos(&cbs)
+            .signal_semaphore_infos(&signals)];
+        // SAFETY: every resource the command buffer uses is alive until its fence signals.
+        unsafe { dev.queue_submit2(self.gpu.queue, &submit, sync.fence) }.ctx("vkQueueSubmit2")?;
+        let wait = [self.render_finished[image_index]];
+        let chains = [swapchain.raw];
+        let indices = [image_index as u32];
+        let present = vk::PresentInfoKHR::default()
+            .wait_semaphores(&wait)
+            .swapchains(&chains)
+            .image_indices(&indices);
+        // SAFETY: the image was acquired and its rendering is submitted with this semaphore signalled.
+        match unsafe { swapchain.loader.queue_present(self.gpu.queue, &present) } {
+            Ok(suboptimal) => self.recreate_swapchain |= suboptimal,
+            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => self.recreate_swapchain = true,
+            Err(e) => return Err(GpuError::vk("vkQueuePresentKHR", e).into()),
+        }
+        self.frame_index += 1;
+
+        if let Some((path, buffer)) = screenshot {
+            let saved = self
+                .wait_idle()
+                .map_err(ViewerError::from)
+                .and_then(|_| save_screenshot(&path, &buffer, &settings));
+            buffer.destroy(&self.gpu);
+            match saved {
+                Ok(()) => self.state.status = Some(format!("saved {}", path.display())),
+                Err(e) => self.state.error = Some(format!("screenshot: {e}")),
+            }
+        }
+        if !textures_delta.free.is_empty() {
+            self.wait_idle()?;
+            let egui_renderer = self.egui_renderer.as_mut().ok_or(GpuError::Lost("egui renderer"))?;
+            for id in &textures_delta.free {
+                egui_renderer
+                    .free_texture(*id)
+                    .map_err(|e| ViewerError::Other(format!("egui: {e}")))?;
+            }
+        }
+        self.step_script()
+    }
+
+    /// Creates what `settings` needs beyond the frame (position targets, colormap, the view image) after
+    /// waiting for in-flight frames, only when something changed.
+    fn prepare(&mut self, settings: &RenderSettings) -> Result<(), ViewerError> {
+        let view_fits = self
+            .view_image
+            .as_ref()
+            .is_some_and(|v| (v.desc.extent.width, v.desc.extent.height) == (settings.width, settings.height));
+        let renderer = self.renderer.as_ref().ok_or(GpuError::Lost("renderer"))?;
+        if view_fits && !renderer.needs_prepare(settings) {
+            return Ok(());
+        }
+        self.wait_idle()?;
+        if !view_fits {
+            if let Some(old) = self.view_image.take() {
+                old.destroy(&self.gpu);
+            }
+            let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
+            self.view_image = Some(Image::new(
+                &self.gpu,
+                ImageDesc::d2(OUTPUT_FORMAT, settings.width, settings.height, usage),
+                "view",
+            )?);
+        }
+        let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
+        renderer.prepare(&self.gpu, settings)?;
+        Ok(())
+    }
+
+    fn destroy(mut self) {
+        let _ = self.wait_idle();
+        // egui's renderer holds a clone of the allocator: drop it before the Gpu drops the allocator.
+        drop(self.egui_renderer.take());
+        if let Some(r) = self.renderer.take() {
+            r.destroy(&self.gpu);
+        }
+        if let Some(v) = self.view_image.take() {
+            v.destroy(&self.gpu);
+        }
+        // SAFETY: the device is idle; these objects are no longer used.
+        unsafe {
+            for f in self.frames.drain(..) {
+                self.gpu.device.destroy_fence(f.fence, None);
+                self.gpu.device.destroy_semaphore(f.image_available, None);
+                self.gpu.device.free_command_buffers(self.gpu.command_pool, &[f.cb]);
+            }
+            for s in self.render_finished.drain(..) {
+                self.gpu.device.destroy_semaphore(s, None);
+            }
+        }
+        if let Some(s) = self.swapchain.take() {
+            s.destroy(&self.gpu);
+        }
+        if let Some(s) = self.surface.take() {
+            s.destroy();
+        }
+        // The Gpu drops here, after everything made from it.
+    }
+}
+
+/// The volume view's place in the swapchain image, in pixels: the central area egui left free (the whole
+/// window before the first layout), clamped to the image.
+fn view_pixels(rect: Option<egui::Rect>, pixels_per_point: f32, extent: vk::Extent2D) -> (vk::Offset2D, vk::Extent2D) {
+    let (w, h) = (extent.width as f32, extent.height as f32);
+    let r = rect
+        .map(|r| {
+            let ppp = pixels_per_point.max(0.1);
+            egui::Rect::from_min_max(
+                egui::pos2(
+                    (r.min.x * ppp).round().clamp(0.0, w - 1.0),
+                    (r.min.y * ppp).round().clamp(0.0, h - 1.0),
+                ),
+                egui::pos2(
+                    (r.max.x * ppp).round().clamp(1.0, w),
+                    (r.max.y * ppp).round().clamp(1.0, h),
+                ),
+            )
+        })
+        .unwrap_or(egui::Rect::from_min_max(egui::Pos2::ZERO, egui::pos2(w, h)));
+    let width = (r.width() as u32).max(1);
+    let height = (r.height() as u32).max(1);
+    (
+        vk::Offset2D {
+            x: r.min.x as i32,
+            y: r.min.y as i32,
+        },
+        vk::Extent2D { width, height },
+    )
+}
+
+/// Writes the view image's pixels (RGBA8, exactly what the view shows without the panel) and the settings.
+fn save_screenshot(path: &std::path::Path, buffer: &Buffer, settings: &RenderSettings) -> Result<(), ViewerError> {
+    let pixels = buffer
+        .mapped()
+        .ok_or(GpuError::Lost("screenshot buffer is not mapped"))?
+        .to_vec();
+    let img = image::RgbaImage::from_raw(settings.width, settings.height, pixels)
+        .ok_or_else(|| ViewerError::Other("screenshot size mismatch".into()))?;
+    img.save(path)
+        .map_err(|e| ViewerError::Other(format!("writing {}: {e}", path.display())))?;
+    let json = serde_json::to_string_pretty(settings).map_err(|e| ViewerError::Other(e.to_string()))?;
+    std::fs::write(path.with_extension("json"), json)
+        .map_err(|e| ViewerError::Other(format!("writing {}: {e}", path.with_extension("json").display())))?;
+    eprintln!("saved screenshot {}", path.display());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scripts_parse_and_reject_nonsense() {
+        let steps =
+            parse_script("frames:3; resize:320x240;minimize;restore;zero-size;key:Tab;screenshot:/tmp/a.png;exit")
+                .expect("valid");
+        assert_eq!(
+            steps,
+            vec![
+                ScriptStep::Frames(3),
+                ScriptStep::Resize(320, 240),
+                ScriptStep::Minimize,
+                ScriptStep::Restore,
+                ScriptStep::ZeroSize,
+                ScriptStep::Key("tab".into()),
+                ScriptStep::Screenshot(PathBuf::from("/tmp/a.png")),
+                ScriptStep::Exit
+            ]
+        );
+        for bad in ["frames:x", "resize:10", "dance", "screenshot:"] {
+            assert!(parse_script(bad).is_err(), "{bad}");
+        }
+    }
+}

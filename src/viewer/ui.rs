@@ -1,0 +1,569 @@
+//! The viewer's state and its egui panel. `ViewerState` is plain data; [`ViewerState::render_settings`] is the one
+//! place it turns into renderer parameters (unit-tested). The panel edits the state and returns [`UiAction`]s
+//! for what needs the GPU or a thread (loading, screenshots).
+
+use super::controls::{gizmo_axes, look_along, pick_axis, OrbitView, RotationAnimation};
+use crate::camera::Camera;
+use crate::render::PassTimings;
+use crate::settings::{PositionFormat, RaySetup, RenderSettings};
+use crate::transfer::Colormap;
+use crate::volume::{parse_scivis_name, RawOptions, VoxelType, BUILTIN_NAMES};
+use egui::{Color32, Pos2, Stroke};
+use glam::{Mat4, Vec2, Vec3};
+use std::path::PathBuf;
+
+/// Everything the user can change, and what the panel shows.
+#[derive(Clone, Debug)]
+pub struct ViewerState {
+    /// Transfer function, slicing, ray setup...: a RenderSettings whose camera and size are filled per frame.
+    pub look: RenderSettings,
+    pub orbit: OrbitView,
+    pub show_boxes: bool,
+    pub auto_rotate: bool,
+    pub panel_visible: bool,
+    pub vsync: bool,
+    /// Slab (position, width) per axis, as the sliders show them.
+    pub slabs: [(f32, f32); 3],
+    /// Box side lengths of the volume on screen.
+    pub extent: Vec3,
+    pub volume_label: String,
+    pub load_path: String,
+    pub raw_dims: [u32; 3],
+    pub raw_type: VoxelType,
+    pub raw_spacing: [f32; 3],
+    /// Last load error, shown in the panel until the next load.
+    pub error: Option<String>,
+    pub status: Option<String>,
+    pub loading: Option<(String, f32)>,
+    pub frame_ms: f64,
+    pub gpu: Option<PassTimings>,
+    pub animation: Option<RotationAnimation>,
+    /// Where the volume view is in the window (points), as laid out by the last UI pass.
+    pub view_rect: Option<egui::Rect>,
+}
+
+/// What the panel asks the viewer to do.
+#[derive(Clone, Debug)]
+pub enum UiAction {
+    LoadFile(PathBuf, RawOptions),
+    LoadBuiltin(String),
+    Screenshot,
+    VsyncChanged,
+}
+
+/// Degrees per second of auto-rotation.
+pub const AUTO_ROTATE_DEG_PER_S: f32 = 30.0;
+
+impl ViewerState {
+    pub fn new(extent: Vec3, volume_label: String) -> ViewerState {
+        let look = RenderSettings::new(1, 1, extent);
+        ViewerState {
+            orbit: OrbitView::from_camera(&look.camera),
+            look,
+            show_boxes: true,
+            auto_rotate: false,
+            panel_visible: true,
+            vsync: true,
+            slabs: [(0.5, 1.0); 3],
+            extent,
+            volume_label,
+            load_path: String::new(),
+            raw_dims: [256, 256, 256],
+            raw_type: VoxelType::U8,
+            raw_spacing: [1.0; 3],
+            error: None,
+            status: None,
+            loading: None,
+            frame_ms: 0.0,
+            gpu: None,
+            animation: None,
+            view_rect: None,
+        }
+    }
+
+    /// The default view of a box of `extent`: what `volcast render` shows without camera options.
+    pub fn reset_view(&mut self) {
+        let defaults = RenderSettings::new(1, 1, self.extent);
+        self.orbit = OrbitView::from_camera(&defaults.camera);
+        self.animation = None;
+    }
+
+    /// A new volume: its box and a default view; transfer function and slicing stay.
+    pub fn set_volume(&mut self, extent: Vec3, label: String) {
+        self.extent = extent;
+        self.volume_label = label;
+        self.reset_view();
+    }
+
+    /// The renderer's parameters for a `width`×`height` frame.
+    pub fn render_settings(&self, width: u32, height: u32) -> RenderSettings {
+        let mut s = self.look.clone();
+        s.width = width.max(1);
+        s.height = height.max(1);
+        s.camera = self.orbit.camera();
+        for (axis, &(pos, width)) in self.slabs.iter().enumerate() {
+            s.set_slab(axis, pos, width);
+            // A slab thinner than the slider's resolution would be empty: keep a sliver.
+            if s.slab_hi[axis] <= s.slab_lo[axis] {
+                s.slab_hi[axis] = (s.slab_lo[axis] + 1e-3).min(1.0);
+                s.slab_lo[axis] = s.slab_hi[axis] - 1e-3;
+            }
+        }
+        if s.window[0] >= s.window[1] {
+            s.window[1] = (s.window[0] + 1e-3).min(1.0);
+            s.window[0] = s.window[1] - 1e-3;
+        }
+        s
+    }
+
+    /// Advances animations by `dt` seconds; true while something is still moving.
+    pub fn animate(&mut self, dt: f32) -> bool {
+        let mut moving = false;
+        if let Some(anim) = &mut self.animation {
+            let (q, done) = anim.step(dt);
+            self.orbit.rotation = q;
+            if done {
+                self.animation = None;
+            }
+            moving = true;
+        }
+        if self.auto_rotate && self.animation.is_none() {
+            self.orbit.turn(AUTO_ROTATE_DEG_PER_S.to_radians() * dt);
+            moving = true;
+        }
+        moving
+    }
+
+    /// Fills dims and type from an open-scivis file name, if it matches.
+    pub fn take_dims_from_name(&mut self) {
+        if let Some((_, dims, ty)) = parse_scivis_name(&self.load_path) {
+            self.raw_dims = dims;
+            self.raw_type = ty;
+        }
+    }
+
+    fn raw_options(&self) -> RawOptions {
+        RawOptions {
+            dims: Some(self.raw_dims),
+            voxel_type: Some(self.raw_type),
+            spacing: Some(self.raw_spacing),
+        }
+    }
+
+    /// A load of `path` with dims/type from its name when it matches, else from the panel's fields.
+    pub fn load_action(&mut self, path: PathBuf) -> UiAction {
+        self.load_path = path.display().to_string();
+        let named = parse_scivis_name(&self.load_path).is_some();
+        self.take_dims_from_name();
+        let mut opts = self.raw_options();
+        if named {
+            opts.dims = None;
+            opts.voxel_type = None;
+        }
+        UiAction::LoadFile(path, opts)
+    }
+}
+
+fn color_of(rgba: [u8; 4]) -> Color32 {
+    Color32::from_rgb(rgba[0], rgba[1], rgba[2])
+}
+
+/// The colormap as a strip, with the value window marked.
+fn colormap_strip(ui: &mut egui::Ui, colormap: Colormap, window: [f32; 2]) {
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(ui.available_width(), 16.0), egui::Sense::hover());
+    let lut = colormap.lut();
+    let painter = ui.painter();
+    let n = 64;
+    for i in 0..n {
+        let t0 = i as f32 / n as f32;
+        let t1 = (i + 1) as f32 / n as f32;
+        // The strip spans the value range; inside the window the colormap is stretched over it.
+        let c = ((t0 - window[0]) / (window[1] - window[0]).max(1e-6)).clamp(0.0, 1.0);
+        let inside = t0 >= window[0] && t0 <= window[1];
+        let color = if inside {
+            color_of(lut[(c * 255.0) as usize])
+        } else {
+            Color32::from_gray(30)
+        };
+        let r = egui::Rect::from_min_max(
+            Pos2::new(egui::lerp(rect.left()..=rect.right(), t0), rect.top()),
+            Pos2::new(egui::lerp(rect.left()..=rect.right(), t1), rect.bottom()),
+        );
+        painter.rect_filled(r, 0.0, color);
+    }
+}
+
+/// The settings panel. Returns what the viewer must do beyond editing `state`.
+pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiAction> {
+    let mut actions = Vec::new();
+    ui.heading("volcast");
+    ui.label(&state.volume_label);
+    if let Some((label, progress)) = &state.loading {
+        ui.horizontal(|ui| {
+            ui.spinner();
+            ui.label(format!("loading {label}"));
+        });
+        ui.add(egui::ProgressBar::new(*progress).show_percentage());
+    }
+    if let Some(err) = &state.error {
+        ui.colored_label(Color32::from_rgb(255, 110, 110), err);
+    }
+    if let Some(status) = &state.status {
+        ui.label(status);
+    }
+    ui.separator();
+
+    egui::CollapsingHeader::new("Transfer function")
+        .default_open(true)
+        .show(ui, |ui| {
+            let look = &mut state.look;
+            ui.label("Visible value range");
+            ui.add(egui::Slider::new(&mut look.window[0], 0.0..=1.0).text("min"));
+            ui.add(egui::Slider::new(&mut look.window[1], 0.0..=1.0).text("max"));
+            if look.window[0] > look.window[1] {
+                look.window.swap(0, 1);
+            }
+            colormap_strip(ui, look.colormap, look.window);
+            egui::ComboBox::from_label("Colormap")
+                .selected_text(look.colormap.name())
+                .show_ui(ui, |ui| {
+                    for c in Colormap::ALL {
+                        ui.selectable_value(&mut look.colormap, c, c.name());
+                    }
+                });
+            ui.add(egui::Slider::new(&mut look.step_alpha, 0.0..=1.0).text("step alpha"));
+            ui.add(
+                egui::Slider::new(&mut look.step_length, 0.1..=4.0)
+                    .logarithmic(true)
+                    .text("step length (voxels)"),
+            );
+            ui.checkbox(&mut look.multiplied_alpha, "multiplied alpha");
+        });
+
+    egui::CollapsingHeader::new("Slicing")
+        .default_open(true)
+        .show(ui, |ui| {
+            for (axis, name) in ["X", "Y", "Z"].iter().enumerate() {
+                let (pos, width) = &mut state.slabs[axis];
+                ui.add(egui::Slider::new(pos, 0.0..=1.0).text(format!("{name} position")));
+                ui.add(egui::Slider::new(width, 0.0..=1.0).text(format!("{name} width")));
+            }
+            if ui.button("Reset slices").clicked() {
+                state.slabs = [(0.5, 1.0); 3];
+            }
+        });
+
+    egui::CollapsingHeader::new("View").default_open(true).show(ui, |ui| {
+        ui.checkbox(&mut state.show_boxes, "draw bounding box");
+        ui.checkbox(&mut state.auto_rotate, "auto-rotate (Space)");
+        if ui.checkbox(&mut state.vsync, "vsync").changed() {
+            actions.push(UiAction::VsyncChanged);
+        }
+        ui.horizontal(|ui| {
+            ui.label("ray setup");
+            ui.selectable_value(&mut state.look.ray_setup, RaySetup::Faces, "faces");
+            ui.selectable_value(&mut state.look.ray_setup, RaySetup::Analytic, "analytic");
+        });
+        if state.look.ray_setup == RaySetup::Faces {
+            ui.horizontal(|ui| {
+                ui.label("positions");
+                ui.selectable_value(&mut state.look.position_format, PositionFormat::Rgba32f, "rgba32f");
+                ui.selectable_value(&mut state.look.position_format, PositionFormat::Rgba16f, "rgba16f");
+            });
+        }
+        ui.horizontal(|ui| {
+            if ui.button("Reset view (R)").clicked() {
+                state.reset_view();
+            }
+            if ui.button("Screenshot (F12)").clicked() {
+                actions.push(UiAction::Screenshot);
+            }
+        });
+        ui.label("Hide this panel: Tab");
+    });
+
+    egui::CollapsingHeader::new("Volume").default_open(true).show(ui, |ui| {
+        ui.horizontal_wrapped(|ui| {
+            for name in BUILTIN_NAMES {
+                if ui.button(*name).clicked() {
+                    actions.push(UiAction::LoadBuiltin(name.to_string()));
+                }
+            }
+        });
+        ui.label("File (or drop one on the window):");
+        if ui.text_edit_singleline(&mut state.load_path).changed() {
+            state.take_dims_from_name();
+        }
+        egui::Grid::new("raw").num_columns(2).show(ui, |ui| {
+            ui.label("dims");
+            ui.horizontal(|ui| {
+                for d in &mut state.raw_dims {
+                    ui.add(egui::DragValue::new(d).range(1..=crate::volume::MAX_DIM));
+                }
+            });
+            ui.end_row();
+            ui.label("type");
+            egui::ComboBox::from_id_salt("raw type")
+                .selected_text(state.raw_type.name())
+                .show_ui(ui, |ui| {
+                    for t in VoxelType::ALL {
+                        ui.selectable_value(&mut state.raw_type, t, t.name());
+                    }
+                });
+            ui.end_row();
+            ui.label("scale");
+            ui.horizontal(|ui| {
+                for s in &mut state.raw_spacing {
+                    ui.add(egui::DragValue::new(s).speed(0.01).range(0.001..=1000.0));
+                }
+            });
+            ui.end_row();
+        });
+        let can_load = !state.load_path.trim().is_empty() && state.loading.is_none();
+        if ui.add_enabled(can_load, egui::Button::new("Load volume")).clicked() {
+            let path = PathBuf::from(state.load_path.trim());
+            let mut opts = state.raw_options();
+            if parse_scivis_name(&state.load_path).is_some() {
+                // The name carries dims and type; the fields were filled from it but may have been edited.
+                opts.dims = Some(state.raw_dims);
+                opts.voxel_type = Some(state.raw_type);
+            }
+            actions.push(UiAction::LoadFile(path, opts));
+        }
+    });
+
+    egui::CollapsingHeader::new("Performance")
+        .default_open(true)
+        .show(ui, |ui| {
+            ui.label(format!("frame {:.1} ms", state.frame_ms));
+            if let Some(t) = state.gpu {
+                match (t.entry_ms, t.exit_ms) {
+                    (Some(a), Some(b)) => {
+                        ui.label(format!("GPU entry {a:.2} + exit {b:.2} + march {:.2} ms", t.march_ms));
+                    }
+                    _ => {
+                        ui.label(format!("GPU march {:.2} ms", t.march_ms));
+                    }
+                }
+            }
+        });
+    actions
+}
+
+/// World-space corners of the texture-space box [lo, hi] of a volume with `extent`.
+fn box_corners(extent: Vec3, lo: Vec3, hi: Vec3) -> [Vec3; 8] {
+    std::array::from_fn(|i| {
+        let t = Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
+        (lo + (hi - lo) * t - Vec3::splat(0.5)) * extent
+    })
+}
+
+const BOX_EDGES: [(usize, usize); 12] = [
+    (0, 1),
+    (2, 3),
+    (4, 5),
+    (6, 7),
+    (0, 2),
+    (1, 3),
+    (4, 6),
+    (5, 7),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+];
+
+/// Screen position (points) of a world point, or None behind the near plane.
+pub fn project(view_proj: Mat4, p: Vec3, rect: egui::Rect) -> Option<Pos2> {
+    let c = view_proj * p.extend(1.0);
+    if c.w <= 1e-6 || c.z < 0.0 {
+        return None;
+    }
+    let ndc = c.truncate() / c.w;
+    Some(Pos2::new(
+        rect.left() + (ndc.x * 0.5 + 0.5) * rect.width(),
+        rect.top() + (ndc.y * 0.5 + 0.5) * rect.height(),
+    ))
+}
+
+/// Bounding box, slab box and origin gizmo over the volume view; handles camera input on it.
+pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
+    let rect = ui.max_rect();
+    state.view_rect = Some(rect);
+    let response = ui.interact(rect, ui.id().with("volume view"), egui::Sense::click_and_drag());
+    let viewport = Vec2::new(rect.width(), rect.height());
+    let gizmo_center = Vec2::new(rect.right() - 60.0, rect.bottom() - 60.0);
+    let gizmo_radius = 40.0;
+
+    if let Some(pos) = response.interact_pointer_pos() {
+        let p = Vec2::new(pos.x - rect.left(), pos.y - rect.top());
+        let d = response.drag_delta();
+        if response.dragged_by(egui::PointerButton::Primary) && d != egui::Vec2::ZERO {
+            state.animation = None;
+            state.orbit.arcball(p - Vec2::new(d.x, d.y), p, viewport);
+        }
+        if response.dragged_by(egui::PointerButton::Secondary) || response.dragged_by(egui::PointerButton::Middle) {
+            state.orbit.pan(Vec2::new(d.x, d.y), viewport);
+        }
+    }
+    if response.clicked() {
+        if let Some(pos) = response.interact_pointer_pos() {
+            let axes = gizmo_axes(state.orbit.rotation);
+            if let Some(a) = pick_axis(Vec2::new(pos.x, pos.y), gizmo_center, gizmo_radius, 10.0, &axes) {
+                state.animation = Some(RotationAnimation::new(
+                    state.orbit.rotation,
+                    look_along(a.axis, a.positive),
+                ));
+            }
+        }
+    }
+    if response.hovered() {
+        let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+        if scroll != 0.0 {
+            state.orbit.zoom(scroll / 50.0);
+        }
+    }
+
+    let painter = ui.painter_at(rect);
+    if state.show_boxes {
+        let s = state.render_settings(rect.width() as u32, rect.height() as u32);
+        let cam: Camera = s.camera;
+        let vp = cam.projection(rect.width() / rect.height().max(1.0)) * cam.view();
+        let draw_box = |lo: Vec3, hi: Vec3, color: Color32| {
+            let corners = box_corners(state.extent, lo, hi).map(|c| project(vp, c, rect));
+            for (a, b) in BOX_EDGES {
+                if let (Some(pa), Some(pb)) = (corners[a], corners[b]) {
+                    painter.line_segment([pa, pb], Stroke::new(1.0, color));
+                }
+            }
+        };
+        draw_box(Vec3::ZERO, Vec3::ONE, Color32::from_gray(160));
+        if s.slab_lo != Vec3::ZERO || s.slab_hi != Vec3::ONE {
+            draw_box(s.slab_lo, s.slab_hi, Color32::from_rgb(255, 200, 60));
+        }
+    }
+
+    let colors = [
+        Color32::from_rgb(230, 70, 70),
+        Color32::from_rgb(90, 200, 90),
+        Color32::from_rgb(80, 130, 240),
+    ];
+    let c = Pos2::new(gizmo_center.x, gizmo_center.y);
+    painter.circle_filled(c, gizmo_radius + 12.0, Color32::from_black_alpha(90));
+    for a in gizmo_axes(state.orbit.rotation) {
+        let end = Pos2::new(c.x + a.screen.x * gizmo_radius, c.y + a.screen.y * gizmo_radius);
+        let color = if a.positive {
+            colors[a.axis]
+        } else {
+            colors[a.axis].gamma_multiply(0.45)
+        };
+        if a.positive {
+            painter.line_segment([c, end], Stroke::new(2.0, color));
+        }
+        painter.circle_filled(end, 8.0, color);
+        if a.positive {
+            let label = ["X", "Y", "Z"][a.axis];
+            painter.text(
+                end,
+                egui::Align2::CENTER_CENTER,
+                label,
+                egui::FontId::proportional(11.0),
+                Color32::BLACK,
+            );
+        }
+    }
+}
+
+/// Keyboard shortcuts: R reset, Space auto-rotate, Tab panel, F12 screenshot.
+pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> {
+    let mut actions = Vec::new();
+    if ctx.egui_wants_keyboard_input() {
+        return actions;
+    }
+    ctx.input(|i| {
+        if i.key_pressed(egui::Key::R) {
+            state.reset_view();
+        }
+        if i.key_pressed(egui::Key::Space) {
+            state.auto_rotate = !state.auto_rotate;
+        }
+        if i.key_pressed(egui::Key::Tab) {
+            state.panel_visible = !state.panel_visible;
+        }
+        if i.key_pressed(egui::Key::F12) {
+            actions.push(UiAction::Screenshot);
+        }
+    });
+    actions
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn initial_state_renders_what_render_renders() {
+        let extent = Vec3::new(1.0, 1.0, 0.5);
+        let state = ViewerState::new(extent, "x".into());
+        let viewer = state.render_settings(320, 200);
+        let mut cli = RenderSettings::new(320, 200, extent);
+        assert!((viewer.camera.eye - cli.camera.eye).length() < 1e-5);
+        assert!(
+            viewer.camera.view().abs_diff_eq(cli.camera.view(), 1e-5),
+            "same view matrix"
+        );
+        cli.camera = viewer.camera;
+        assert_eq!(viewer, cli);
+    }
+
+    #[test]
+    fn sliders_map_to_slabs_and_degenerate_values_stay_valid() {
+        let mut state = ViewerState::new(Vec3::ONE, "x".into());
+        state.slabs[0] = (0.25, 0.3);
+        state.slabs[2] = (0.9, 0.0);
+        state.look.window = [0.6, 0.6];
+        let s = state.render_settings(10, 10);
+        assert!((s.slab_lo.x - 0.1).abs() < 1e-6 && (s.slab_hi.x - 0.4).abs() < 1e-6);
+        assert!(s.slab_hi.z > s.slab_lo.z, "zero width keeps a sliver");
+        s.validate().expect("always valid");
+    }
+
+    #[test]
+    fn auto_rotate_and_animation_advance() {
+        let mut state = ViewerState::new(Vec3::ONE, "x".into());
+        assert!(!state.animate(0.1));
+        state.auto_rotate = true;
+        let before = state.orbit.camera().eye;
+        assert!(state.animate(1.0));
+        let after = state.orbit.camera().eye;
+        let turned = before.truncate().angle_to(after.truncate()).to_degrees();
+        assert!((turned - AUTO_ROTATE_DEG_PER_S).abs() < 0.1, "{turned}");
+    }
+
+    #[test]
+    fn dropped_scivis_file_fills_dims_and_type() {
+        let mut state = ViewerState::new(Vec3::ONE, "x".into());
+        let action = state.load_action(PathBuf::from("/data/skull_64x32x16_int16.raw"));
+        assert_eq!(state.raw_dims, [64, 32, 16]);
+        assert_eq!(state.raw_type, VoxelType::I16);
+        match action {
+            UiAction::LoadFile(p, opts) => {
+                assert_eq!(p, PathBuf::from("/data/skull_64x32x16_int16.raw"));
+                assert_eq!(opts.dims, None, "the loader reads them from the name");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn projected_box_corners_land_in_the_view() {
+        let state = ViewerState::new(Vec3::ONE, "x".into());
+        let s = state.render_settings(100, 100);
+        let vp = s.camera.projection(1.0) * s.camera.view();
+        let rect = egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(100.0, 100.0));
+        for c in box_corners(Vec3::ONE, Vec3::ZERO, Vec3::ONE) {
+            let p = project(vp, c, rect).expect("in front of the camera");
+            assert!(rect.contains(p), "{p:?}");
+        }
+    }
+}
