@@ -1,13 +1,43 @@
 //! Volumes on the CPU: voxel types, the `Volume` the renderer uploads, and where volumes come from
-//! (headerless raw files in [`raw`], generated test volumes in [`builtin`]). Pure code, no Vulkan.
+//! (files through [`open`], generated test volumes in [`builtin`]). Pure code, no Vulkan.
 //!
 //! Layout everywhere: x fastest, then y, then z; voxel (x, y, z) is at `x + W·(y + H·z)`.
+//!
+//! Source types and what reaches the GPU: uint8 -> U8; int8 -> U8 biased by +128; uint16 -> U16; int16 -> U16
+//! biased by +32768; uint32, int32, float32 and float64 -> F32. 32-bit integers become f32 because no 16-bit
+//! texture holds them and imaging data rarely exceeds 2^24 (beyond that, values round to f32's 24-bit mantissa).
+//! A linear rescale from the file (NIfTI `scl_slope`/`scl_inter`, DICOM rescale slope/intercept) is *not*
+//! applied to the stored voxels: it is kept in [`Volume::scaling`] and folded into [`Volume::value`],
+//! [`Volume::range`] and [`Volume::gpu_scale_bias`], so a 12-bit CT with an intercept of -1024 still takes two
+//! bytes per voxel on the GPU and no precision is lost.
 
 mod builtin;
+mod decode;
+mod dicom;
+mod downsample;
+mod format;
+mod metaimage;
+mod nifti;
+mod nrrd;
+mod open;
 mod raw;
+mod vtk;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
+pub use decode::Endian;
+pub use downsample::downsample_to;
+pub use open::{detect_format, open, open_with_progress, Format, OpenOptions};
 pub use raw::{load_raw, parse_scivis_name, RawOptions};
+
+/// Parsers that read from memory and never touch the file system: the fuzz targets drive these.
+pub mod from_bytes {
+    pub use super::dicom::from_bytes as dicom;
+    pub use super::format::{DataLocation, Encoding, Header};
+    pub use super::metaimage::{from_bytes as metaimage, parse_header as metaimage_header};
+    pub use super::nifti::{from_bytes as nifti, parse_header as nifti_header};
+    pub use super::nrrd::{from_bytes as nrrd, parse_header as nrrd_header};
+    pub use super::vtk::{from_bytes as vtk, parse_header as vtk_header};
+}
 
 use std::fmt;
 use std::path::PathBuf;
@@ -27,23 +57,29 @@ pub enum VoxelType {
     I16,
     F32,
     F64,
+    I8,
+    U32,
+    I32,
 }
 
 impl VoxelType {
-    pub const ALL: [VoxelType; 5] = [
+    pub const ALL: [VoxelType; 8] = [
         VoxelType::U8,
         VoxelType::U16,
         VoxelType::I16,
         VoxelType::F32,
         VoxelType::F64,
+        VoxelType::I8,
+        VoxelType::U32,
+        VoxelType::I32,
     ];
 
     /// Bytes per voxel in the file.
     pub fn size(self) -> usize {
         match self {
-            VoxelType::U8 => 1,
+            VoxelType::U8 | VoxelType::I8 => 1,
             VoxelType::U16 | VoxelType::I16 => 2,
-            VoxelType::F32 => 4,
+            VoxelType::F32 | VoxelType::U32 | VoxelType::I32 => 4,
             VoxelType::F64 => 8,
         }
     }
@@ -56,6 +92,9 @@ impl VoxelType {
             VoxelType::I16 => "int16",
             VoxelType::F32 => "float32",
             VoxelType::F64 => "float64",
+            VoxelType::I8 => "int8",
+            VoxelType::U32 => "uint32",
+            VoxelType::I32 => "int32",
         }
     }
 
@@ -67,6 +106,9 @@ impl VoxelType {
             "int16" | "i16" | "short" => Some(VoxelType::I16),
             "float32" | "f32" | "float" => Some(VoxelType::F32),
             "float64" | "f64" | "double" => Some(VoxelType::F64),
+            "int8" | "i8" | "char" | "signed_char" => Some(VoxelType::I8),
+            "uint32" | "u32" | "uint" | "unsigned_int" => Some(VoxelType::U32),
+            "int32" | "i32" | "int" => Some(VoxelType::I32),
             _ => None,
         }
     }
@@ -86,8 +128,9 @@ impl std::str::FromStr for VoxelType {
     }
 }
 
-/// Voxel values as they go to the GPU: uint8 -> U8 (R8_UNORM), uint16 -> U16 (R16_UNORM),
-/// int16 -> U16 with +32768 bias (R16_UNORM keeps all 16 bits), float32 -> F32, float64 -> F32 (converted).
+/// Voxel values as they go to the GPU: uint8 -> U8 (R8_UNORM), int8 -> U8 with +128 bias, uint16 -> U16
+/// (R16_UNORM), int16 -> U16 with +32768 bias (R16_UNORM keeps all 16 bits), float32 -> F32; float64, uint32
+/// and int32 -> F32 (converted).
 #[derive(Clone, PartialEq)]
 pub enum VoxelData {
     U8(Vec<u8>),
@@ -120,9 +163,12 @@ impl VoxelData {
     fn matches(&self, source_type: VoxelType) -> bool {
         matches!(
             (self, source_type),
-            (VoxelData::U8(_), VoxelType::U8)
+            (VoxelData::U8(_), VoxelType::U8 | VoxelType::I8)
                 | (VoxelData::U16(_), VoxelType::U16 | VoxelType::I16)
-                | (VoxelData::F32(_), VoxelType::F32 | VoxelType::F64)
+                | (
+                    VoxelData::F32(_),
+                    VoxelType::F32 | VoxelType::F64 | VoxelType::U32 | VoxelType::I32
+                )
         )
     }
 }
@@ -136,6 +182,43 @@ impl fmt::Debug for VoxelData {
 
 /// Offset that maps int16 onto u16 order-preservingly, so R16_UNORM keeps every bit.
 const INT16_BIAS: f64 = 32768.0;
+/// The same for int8 onto u8.
+const INT8_BIAS: f64 = 128.0;
+
+/// Offset between a stored (biased) integer and the source value.
+fn stored_offset(source_type: VoxelType) -> f64 {
+    match source_type {
+        VoxelType::I16 => INT16_BIAS,
+        VoxelType::I8 => INT8_BIAS,
+        _ => 0.0,
+    }
+}
+
+/// Physical value = slope × source value + intercept (NIfTI `scl_slope`/`scl_inter`, DICOM rescale).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scaling {
+    pub slope: f64,
+    pub intercept: f64,
+}
+
+impl Scaling {
+    pub const IDENTITY: Scaling = Scaling {
+        slope: 1.0,
+        intercept: 0.0,
+    };
+
+    pub fn is_identity(&self) -> bool {
+        *self == Scaling::IDENTITY
+    }
+
+    fn apply(&self, v: f64) -> f64 {
+        if self.is_identity() {
+            v
+        } else {
+            v * self.slope + self.intercept
+        }
+    }
+}
 
 /// A volume ready for upload.
 #[derive(Clone, Debug)]
@@ -146,9 +229,19 @@ pub struct Volume {
     pub spacing: [f32; 3],
     pub source_type: VoxelType,
     pub data: VoxelData,
-    /// min/max of the source values (as the GPU sees them, i.e. after float64->f32), NaN/Inf ignored.
-    /// `[0, 0]` if no voxel is finite.
+    /// min/max of the values after [`Volume::scaling`] (as the GPU sees them, i.e. after float64->f32),
+    /// NaN/Inf ignored. `[0, 0]` if no voxel is finite.
     pub range: [f64; 2],
+    /// min/max of the source values before scaling.
+    pub stored_range: [f64; 2],
+    /// Applied to every source value by [`Volume::value`]; identity unless the file asked for a rescale.
+    pub scaling: Scaling,
+    /// Where the volume came from: "raw", "VTK legacy", "NRRD", "NIfTI-1", "MetaImage", "DICOM", "built-in".
+    pub format: String,
+    /// Position of voxel (0, 0, 0) in the file's physical space, if it says.
+    pub origin: Option<[f64; 3]>,
+    /// Things the user should know that are not errors: orientation ignored, 4-D reduced, downsampled, ...
+    pub notes: Vec<String>,
 }
 
 impl Volume {
@@ -184,7 +277,31 @@ impl Volume {
             source_type,
             data,
             range,
+            stored_range: range,
+            scaling: Scaling::IDENTITY,
+            format: "memory".into(),
+            origin: None,
+            notes: Vec::new(),
         })
+    }
+
+    /// Sets the rescale and the scaled range. A slope of 0 or a non-finite slope or intercept is refused.
+    pub fn with_scaling(mut self, scaling: Scaling) -> Result<Volume, VolumeError> {
+        if !(scaling.slope.is_finite() && scaling.slope != 0.0 && scaling.intercept.is_finite()) {
+            return Err(VolumeError::BadScaling {
+                slope: scaling.slope,
+                intercept: scaling.intercept,
+            });
+        }
+        self.scaling = scaling;
+        let [a, b] = self.stored_range.map(|v| scaling.apply(v));
+        self.range = [a.min(b), a.max(b)];
+        Ok(self)
+    }
+
+    /// Bytes the voxels take on the GPU.
+    pub fn gpu_memory_bytes(&self) -> u64 {
+        self.voxel_count() as u64 * self.gpu_texel_size() as u64
     }
 
     pub fn voxel_count(&self) -> usize {
@@ -197,9 +314,14 @@ impl Volume {
         x as usize + w as usize * (y as usize + h as usize * z as usize)
     }
 
-    /// Value in source units (int16 un-biased); float64 sources give the stored f32.
+    /// Value after [`Volume::scaling`] (int16/int8 un-biased); float64 sources give the stored f32.
     /// Panics if (x, y, z) is outside `dims`, like slice indexing.
     pub fn value(&self, x: u32, y: u32, z: u32) -> f64 {
+        self.scaling.apply(self.stored(x, y, z))
+    }
+
+    /// Value in source units before scaling (int16/int8 un-biased).
+    pub fn stored(&self, x: u32, y: u32, z: u32) -> f64 {
         let i = self.index(x, y, z);
         stored_value(self.source_type, &self.data, i)
     }
@@ -255,23 +377,27 @@ impl Volume {
         if max == min {
             return (0.0, 0.0);
         }
-        // value = sampled * unorm_max + offset, then v = (value - min) / (max - min).
-        let (unorm_max, offset) = match self.source_type {
-            VoxelType::U8 => (255.0, 0.0),
-            VoxelType::U16 => (65535.0, 0.0),
-            VoxelType::I16 => (65535.0, -INT16_BIAS),
-            VoxelType::F32 | VoxelType::F64 => (1.0, 0.0),
+        // stored = sampled * unorm_max - offset, value = slope * stored + intercept,
+        // then v = (value - min) / (max - min).
+        let unorm_max = match self.data {
+            VoxelData::U8(_) => 255.0,
+            VoxelData::U16(_) => 65535.0,
+            VoxelData::F32(_) => 1.0,
         };
+        let offset = stored_offset(self.source_type);
+        let Scaling { slope, intercept } = self.scaling;
         let span = max - min;
-        ((unorm_max / span) as f32, ((offset - min) / span) as f32)
+        (
+            (slope * unorm_max / span) as f32,
+            ((intercept - slope * offset - min) / span) as f32,
+        )
     }
 }
 
 fn stored_value(source_type: VoxelType, data: &VoxelData, i: usize) -> f64 {
     match data {
-        VoxelData::U8(v) => f64::from(v[i]),
-        VoxelData::U16(v) if source_type == VoxelType::I16 => f64::from(v[i]) - INT16_BIAS,
-        VoxelData::U16(v) => f64::from(v[i]),
+        VoxelData::U8(v) => f64::from(v[i]) - stored_offset(source_type),
+        VoxelData::U16(v) => f64::from(v[i]) - stored_offset(source_type),
         VoxelData::F32(v) => f64::from(v[i]),
     }
 }
@@ -285,9 +411,12 @@ fn compute_range(source_type: VoxelType, data: &VoxelData) -> [f64; 2] {
         }))
     }
     let found = match data {
-        VoxelData::U8(v) => min_max(v).map(|(lo, hi)| (f64::from(lo), f64::from(hi))),
+        VoxelData::U8(v) => {
+            let offset = stored_offset(source_type);
+            min_max(v).map(|(lo, hi)| (f64::from(lo) - offset, f64::from(hi) - offset))
+        }
         VoxelData::U16(v) => {
-            let offset = if source_type == VoxelType::I16 { INT16_BIAS } else { 0.0 };
+            let offset = stored_offset(source_type);
             min_max(v).map(|(lo, hi)| (f64::from(lo) - offset, f64::from(hi) - offset))
         }
         VoxelData::F32(v) => {
@@ -339,7 +468,7 @@ impl fmt::Display for Dims {
 }
 
 fn type_list() -> &'static str {
-    "uint8, uint16, int16, float32, float64"
+    "uint8, int8, uint16, int16, uint32, int32, float32, float64"
 }
 
 /// Everything that can go wrong making a volume. Each message names the problem, the numbers, and what to do.
@@ -397,6 +526,54 @@ pub enum VolumeError {
     UnknownBuiltin { given: String },
     #[error("built-in volume size {size} is out of range: use 2 to 1024")]
     BuiltinSize { size: u32 },
+    #[error("rescale slope {slope} / intercept {intercept} is invalid: the slope must be finite and non-zero")]
+    BadScaling { slope: f64, intercept: f64 },
+    #[error("{file}: {problem}")]
+    Header { file: String, problem: String },
+    #[error("{file}: unsupported {format} voxel type '{given}': volcast reads {}", type_list())]
+    UnsupportedType {
+        file: String,
+        format: &'static str,
+        given: String,
+    },
+    #[error("{file}: the voxel data end after {actual} of the {expected} bytes that {} {voxel_type} needs (truncated file?)", Dims(*dims))]
+    Truncated {
+        file: String,
+        actual: u64,
+        expected: u64,
+        dims: [u32; 3],
+        voxel_type: VoxelType,
+    },
+    #[error("{file}: the {what} data is corrupt: {source}")]
+    Corrupt {
+        file: String,
+        what: &'static str,
+        source: std::io::Error,
+    },
+    #[error(
+        "{file}: {compressed} bytes of {what} data cannot hold the {expected} bytes that {} {voxel_type} needs \
+         (deflate expands at most ~1032:1); the header's sizes are wrong or the file is truncated",
+        Dims(*dims)
+    )]
+    CompressionRatio {
+        file: String,
+        what: &'static str,
+        compressed: u64,
+        expected: u64,
+        dims: [u32; 3],
+        voxel_type: VoxelType,
+    },
+    #[error(
+        "{file}: data file '{data_file}' is outside the header's folder; volcast only reads data files in the \
+         header's folder or below it"
+    )]
+    PathEscape { file: String, data_file: String },
+    #[error(
+        "{} exceeds the maximum dimension {max_dim} and downsampling is off (--no-downsample); \
+         raise --max-dim or allow downsampling",
+        Dims(*dims)
+    )]
+    DownsampleRefused { dims: [u32; 3], max_dim: u32 },
 }
 
 #[cfg(test)]
@@ -431,14 +608,17 @@ mod tests {
         for (s, t) in aliases {
             assert_eq!(VoxelType::parse(s), Some(t), "{s}");
         }
-        assert_eq!(VoxelType::parse("int32"), None);
+        assert_eq!(VoxelType::parse("int32"), Some(VoxelType::I32));
+        assert_eq!(VoxelType::parse("unsigned_int"), Some(VoxelType::U32));
+        assert_eq!(VoxelType::parse("char"), Some(VoxelType::I8));
+        assert_eq!(VoxelType::parse("int64"), None);
         assert_eq!(VoxelType::parse(""), None);
         let sizes: Vec<usize> = VoxelType::ALL.iter().map(|t| t.size()).collect();
-        assert_eq!(sizes, [1, 2, 2, 4, 8]);
-        let err = "int32".parse::<VoxelType>().unwrap_err();
+        assert_eq!(sizes, [1, 2, 2, 4, 8, 1, 4, 4]);
+        let err = "int64".parse::<VoxelType>().unwrap_err();
         assert_eq!(
             err.to_string(),
-            "unknown voxel type 'int32': use one of uint8, uint16, int16, float32, float64"
+            "unknown voxel type 'int64': use one of uint8, int8, uint16, int16, uint32, int32, float32, float64"
         );
     }
 
@@ -544,6 +724,31 @@ mod tests {
     }
 
     #[test]
+    fn scaling_and_int8() {
+        let v = volume(VoxelType::I8, VoxelData::U8(vec![0, 255, 128]));
+        assert_eq!(
+            [v.value(0, 0, 0), v.value(1, 0, 0), v.value(2, 0, 0)],
+            [-128.0, 127.0, 0.0]
+        );
+        assert_eq!(v.range, [-128.0, 127.0]);
+        let v = v
+            .with_scaling(Scaling {
+                slope: -2.0,
+                intercept: 1.0,
+            })
+            .unwrap();
+        assert_eq!(v.value(0, 0, 0), 257.0);
+        assert_eq!(v.stored(0, 0, 0), -128.0);
+        assert_eq!(v.stored_range, [-128.0, 127.0]);
+        assert_eq!(v.range, [-253.0, 257.0]);
+        for (slope, intercept) in [(0.0, 1.0), (f64::NAN, 0.0), (1.0, f64::INFINITY)] {
+            let err = v.clone().with_scaling(Scaling { slope, intercept }).unwrap_err();
+            assert!(err.to_string().contains("must be finite and non-zero"), "{err}");
+        }
+        assert_eq!(v.gpu_memory_bytes(), 3);
+    }
+
+    #[test]
     fn constant_volume_normalizes_to_zero() {
         let v = volume(VoxelType::U16, VoxelData::U16(vec![7; 5]));
         assert_eq!(v.range, [7.0, 7.0]);
@@ -577,6 +782,23 @@ mod tests {
             ),
             volume(VoxelType::F32, VoxelData::F32(vec![-7.94, 7.94, 0.0, 1.5])),
             volume(VoxelType::F64, VoxelData::F32(vec![-117.843, 2121.07, 3.0, f32::NAN])),
+            volume(VoxelType::I8, VoxelData::U8(vec![0, 255, 128, 100])),
+            volume(VoxelType::I32, VoxelData::F32(vec![-70000.0, 1.0e6, 3.0])),
+            volume(VoxelType::U16, VoxelData::U16(vec![0, 4095, 1024, 7]))
+                .with_scaling(Scaling {
+                    slope: 1.0,
+                    intercept: -1024.0,
+                })
+                .unwrap(),
+            volume(
+                VoxelType::I16,
+                VoxelData::U16([-5i16, 300, 0].map(|x| (i32::from(x) + 32768) as u16).to_vec()),
+            )
+            .with_scaling(Scaling {
+                slope: -0.5,
+                intercept: 10.0,
+            })
+            .unwrap(),
         ];
         for v in &volumes {
             let (scale, bias) = v.gpu_scale_bias();

@@ -1,13 +1,11 @@
-//! Headerless little-endian raw files, named in the open-scivis convention `NAME_WxHxD_TYPE.raw`.
+//! Headerless raw files (little-endian unless told otherwise), named in the open-scivis convention
+//! `NAME_WxHxD_TYPE.raw`.
 
-use super::{check_dims, check_spacing, Volume, VolumeError, VoxelData, VoxelType};
+use super::decode::{self, DecodeError, Endian, Progress};
+use super::{check_dims, check_spacing, Volume, VolumeError, VoxelType};
 use std::fs::File;
-use std::io::Read;
+use std::io::{Seek, SeekFrom};
 use std::path::Path;
-
-/// float64 files are converted to f32 through a buffer of this size rather than read whole, so loading never
-/// holds the file's bytes and the converted copy at once.
-const CHUNK_BYTES: usize = 4 << 20;
 
 /// Layout a user gives explicitly; anything left `None` comes from the file name.
 #[derive(Clone, Debug, Default)]
@@ -16,6 +14,14 @@ pub struct RawOptions {
     pub voxel_type: Option<VoxelType>,
     /// Defaults to 1 on every axis.
     pub spacing: Option<[f32; 3]>,
+}
+
+/// What else a raw file may need ([`super::OpenOptions`] carries these; kept out of [`RawOptions`] so code that
+/// builds one by its three fields keeps compiling).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct RawExtras {
+    pub endian: Endian,
+    pub header_bytes: u64,
 }
 
 /// The parts of `NAME_WxHxD_TYPE[.ext]` with TYPE still unparsed, so a caller can tell "not this pattern" from
@@ -58,6 +64,15 @@ pub fn parse_scivis_name(file_name: &str) -> Option<(String, [u32; 3], VoxelType
 ///
 /// The file's size is checked against dims × type before anything is allocated or read.
 pub fn load_raw(path: &Path, opts: &RawOptions) -> Result<Volume, VolumeError> {
+    load_raw_with_progress(path, opts, RawExtras::default(), &mut Progress::none())
+}
+
+pub(crate) fn load_raw_with_progress(
+    path: &Path,
+    opts: &RawOptions,
+    extras: RawExtras,
+    progress: &mut Progress,
+) -> Result<Volume, VolumeError> {
     let file_name = match path.file_name() {
         Some(n) => n.to_string_lossy().into_owned(),
         None => path.display().to_string(),
@@ -121,7 +136,21 @@ pub fn load_raw(path: &Path, opts: &RawOptions) -> Result<Volume, VolumeError> {
             path: path.to_path_buf(),
         });
     }
-    if metadata.len() != expected {
+    if metadata.len().checked_sub(extras.header_bytes) != Some(expected) {
+        if extras.header_bytes > 0 {
+            return Err(VolumeError::Header {
+                file: file_name,
+                problem: format!(
+                    "the file is {} bytes but a {}-byte header plus {}x{}x{} {voxel_type} needs {}",
+                    metadata.len(),
+                    extras.header_bytes,
+                    dims[0],
+                    dims[1],
+                    dims[2],
+                    u128::from(extras.header_bytes) + u128::from(expected)
+                ),
+            });
+        }
         return Err(VolumeError::SizeMismatch {
             file: file_name,
             actual: metadata.len(),
@@ -131,98 +160,40 @@ pub fn load_raw(path: &Path, opts: &RawOptions) -> Result<Volume, VolumeError> {
         });
     }
 
-    let file = File::open(path).map_err(io_error)?;
-    let data = read_voxels(file, voxel_type, count_usize, CHUNK_BYTES).map_err(|e| match e {
-        ReadFailure::Io(source) => io_error(source),
-        ReadFailure::OutOfMemory => VolumeError::OutOfMemory { dims, bytes: expected },
+    let mut file = File::open(path).map_err(io_error)?;
+    file.seek(SeekFrom::Start(extras.header_bytes)).map_err(io_error)?;
+    let data = decode::read_binary(
+        &mut file,
+        voxel_type,
+        extras.endian,
+        count_usize,
+        decode::CHUNK_BYTES,
+        progress,
+    )
+    .map_err(|e| match e {
+        DecodeError::Io(source) => io_error(source),
+        DecodeError::OutOfMemory => VolumeError::OutOfMemory { dims, bytes: expected },
+        // The size was checked, so only a file that shrank while being read gets here.
+        DecodeError::Truncated { got } => VolumeError::Truncated {
+            file: file_name.clone(),
+            actual: got,
+            expected,
+            dims,
+            voxel_type,
+        },
+        DecodeError::BadValue { .. } => VolumeError::NotAFile {
+            path: path.to_path_buf(),
+        },
     })?;
-    Volume::new(name, dims, spacing, voxel_type, data)
-}
-
-#[derive(Debug)]
-enum ReadFailure {
-    Io(std::io::Error),
-    OutOfMemory,
-}
-
-impl From<std::io::Error> for ReadFailure {
-    fn from(e: std::io::Error) -> ReadFailure {
-        ReadFailure::Io(e)
-    }
-}
-
-/// A zeroed vector of `count` elements, or an error instead of the allocator's abort when memory runs out.
-fn try_zeroed<T: Clone + Default>(count: usize) -> Result<Vec<T>, ReadFailure> {
-    let mut v = Vec::new();
-    v.try_reserve_exact(count).map_err(|_| ReadFailure::OutOfMemory)?;
-    v.resize(count, T::default());
-    Ok(v)
-}
-
-/// Reads `count` little-endian voxels in one pass. Types whose GPU form has the file's width are read straight
-/// into the final buffer and fixed up in place; float64 goes through a `chunk_bytes` buffer.
-fn read_voxels(
-    mut reader: impl Read,
-    voxel_type: VoxelType,
-    count: usize,
-    chunk_bytes: usize,
-) -> Result<VoxelData, ReadFailure> {
-    Ok(match voxel_type {
-        VoxelType::U8 => {
-            let mut v = try_zeroed::<u8>(count)?;
-            reader.read_exact(&mut v)?;
-            VoxelData::U8(v)
-        }
-        VoxelType::U16 => {
-            let mut v = try_zeroed::<u16>(count)?;
-            reader.read_exact(bytemuck::cast_slice_mut(&mut v))?;
-            for x in &mut v {
-                *x = u16::from_le(*x);
-            }
-            VoxelData::U16(v)
-        }
-        VoxelType::I16 => {
-            let mut v = try_zeroed::<u16>(count)?;
-            reader.read_exact(bytemuck::cast_slice_mut(&mut v))?;
-            for x in &mut v {
-                let signed = u16::from_le(*x) as i16;
-                *x = (i32::from(signed) + 32768) as u16;
-            }
-            VoxelData::U16(v)
-        }
-        VoxelType::F32 => {
-            let mut v = try_zeroed::<f32>(count)?;
-            reader.read_exact(bytemuck::cast_slice_mut(&mut v))?;
-            for x in &mut v {
-                *x = f32::from_bits(u32::from_le(x.to_bits()));
-            }
-            VoxelData::F32(v)
-        }
-        VoxelType::F64 => {
-            let mut out = Vec::new();
-            out.try_reserve_exact(count).map_err(|_| ReadFailure::OutOfMemory)?;
-            let per_chunk = (chunk_bytes / 8).clamp(1, count.max(1));
-            let mut buffer = vec![0u8; per_chunk * 8];
-            let mut remaining = count;
-            while remaining > 0 {
-                let n = remaining.min(per_chunk);
-                let bytes = &mut buffer[..n * 8];
-                reader.read_exact(bytes)?;
-                out.extend(bytes.chunks_exact(8).map(|b| {
-                    let mut le = [0u8; 8];
-                    le.copy_from_slice(b);
-                    f64::from_le_bytes(le) as f32
-                }));
-                remaining -= n;
-            }
-            VoxelData::F32(out)
-        }
-    })
+    let mut volume = Volume::new(name, dims, spacing, voxel_type, data)?;
+    volume.format = "raw".into();
+    Ok(volume)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::volume::VoxelData;
     use std::path::PathBuf;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -298,7 +269,7 @@ mod tests {
             "skull_axbxc_uint8.raw",
             "skull_256x+256x256_uint8.raw",
             "skull_256x256x_uint8.raw",
-            "skull_256x256x256_int32.raw",
+            "skull_256x256x256_int64.raw",
             "skull_99999999999x1x1_uint8.raw",
             "",
         ] {
@@ -389,26 +360,6 @@ mod tests {
     }
 
     #[test]
-    fn float64_chunks_cover_every_voxel() {
-        let values: Vec<f64> = (0..10).map(|i| f64::from(i) * 1.5 - 3.0).collect();
-        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        // 3 voxels a chunk: three full chunks and a partial one.
-        for chunk_bytes in [24, 8, 1, 80, 1 << 20] {
-            let data = read_voxels(&bytes[..], VoxelType::F64, 10, chunk_bytes).unwrap();
-            let VoxelData::F32(got) = data else {
-                panic!("F32 expected")
-            };
-            let expected: Vec<f32> = values.iter().map(|&v| v as f32).collect();
-            assert_eq!(got, expected, "chunk {chunk_bytes}");
-        }
-        // A short reader is an error, not a panic or a half-filled volume.
-        assert!(matches!(
-            read_voxels(&bytes[..72], VoxelType::F64, 10, 24),
-            Err(ReadFailure::Io(_))
-        ));
-    }
-
-    #[test]
     fn options_override_the_name() {
         let dir = TempDir::new();
         let bytes: Vec<u8> = [1u16, 2, 3, 4].iter().flat_map(|v| v.to_le_bytes()).collect();
@@ -436,7 +387,7 @@ mod tests {
         assert_eq!(v.name, "scan");
         assert_eq!(v.value(2, 0, 0), 7.0);
         // The type from the options wins over an unknown type in the name.
-        let path = dir.write("x_3x1x1_int32.raw", &[1, 2, 3]);
+        let path = dir.write("x_3x1x1_int64.raw", &[1, 2, 3]);
         let opts = RawOptions {
             voxel_type: Some(VoxelType::U8),
             ..RawOptions::default()
@@ -492,11 +443,11 @@ mod tests {
             "{err}"
         );
 
-        let err = load(&dir, "seg_2x2x2_int32.raw", &[0; 32]).unwrap_err();
+        let err = load(&dir, "seg_2x2x2_int64.raw", &[0; 64]).unwrap_err();
         assert_eq!(
             err.to_string(),
-            "unknown voxel type 'int32' in file name seg_2x2x2_int32.raw: use one of uint8, uint16, int16, float32, \
-             float64, or pass --type T"
+            "unknown voxel type 'int64' in file name seg_2x2x2_int64.raw: use one of uint8, int8, uint16, int16, \
+             uint32, int32, float32, float64, or pass --type T"
         );
     }
 

@@ -1,0 +1,589 @@
+//! DICOM: a folder of single-frame slices (one series), or one multi-frame file, through `dicom-object`.
+//!
+//! Only uncompressed (native) pixel data is read, straight from the parsed element: `dicom-pixeldata` would add
+//! image codecs (JPEG, JPEG 2000, RLE) with their build cost for data volcast's users rarely have, and its decoded
+//! output is an extra full copy. Compressed transfer syntaxes are refused with a message saying so.
+//!
+//! Slices are ordered by their position along the slice normal (ImageOrientationPatient row × column), so file
+//! names and InstanceNumber do not matter; the z spacing is the mean step between sorted positions. Rescale
+//! slope/intercept becomes [`Volume::scaling`](super::Volume::scaling); the stored integers reach the GPU as is.
+
+use super::decode::{try_vec, Progress};
+use super::format::{self, clip, header_error};
+use super::{check_dims, Scaling, Volume, VolumeError, VoxelData, VoxelType};
+use dicom_core::value::PrimitiveValue as P;
+use dicom_object::file::ReadPreamble;
+use dicom_object::{DefaultDicomObject, OpenFileOptions, Tag};
+use std::path::{Path, PathBuf};
+
+const FORMAT: &str = "DICOM";
+const ROWS: Tag = Tag(0x0028, 0x0010);
+const COLUMNS: Tag = Tag(0x0028, 0x0011);
+const SAMPLES_PER_PIXEL: Tag = Tag(0x0028, 0x0002);
+const NUMBER_OF_FRAMES: Tag = Tag(0x0028, 0x0008);
+const BITS_ALLOCATED: Tag = Tag(0x0028, 0x0100);
+const BITS_STORED: Tag = Tag(0x0028, 0x0101);
+const PIXEL_REPRESENTATION: Tag = Tag(0x0028, 0x0103);
+const PIXEL_SPACING: Tag = Tag(0x0028, 0x0030);
+const RESCALE_INTERCEPT: Tag = Tag(0x0028, 0x1052);
+const RESCALE_SLOPE: Tag = Tag(0x0028, 0x1053);
+const IMAGE_POSITION: Tag = Tag(0x0020, 0x0032);
+const IMAGE_ORIENTATION: Tag = Tag(0x0020, 0x0037);
+const SERIES_UID: Tag = Tag(0x0020, 0x000E);
+const INSTANCE_NUMBER: Tag = Tag(0x0020, 0x0013);
+const SLICE_THICKNESS: Tag = Tag(0x0018, 0x0050);
+const SPACING_BETWEEN_SLICES: Tag = Tag(0x0018, 0x0088);
+const PIXEL_DATA: Tag = Tag(0x7FE0, 0x0010);
+
+/// Most files looked at in a folder: more slices than [`super::MAX_DIM`] cannot make a volume anyway.
+const MAX_FILES: usize = 20_000;
+
+pub(crate) fn is_dicom(prefix: &[u8]) -> bool {
+    prefix.len() >= 132 && &prefix[128..132] == b"DICM"
+}
+
+/// What one file says about its slice.
+#[derive(Clone, Debug)]
+struct Slice {
+    source: usize,
+    rows: u32,
+    columns: u32,
+    frames: u32,
+    bits_allocated: u16,
+    bits_stored: u16,
+    signed: bool,
+    scaling: Scaling,
+    pixel_spacing: Option<[f64; 2]>,
+    position: Option<[f64; 3]>,
+    orientation: Option<[f64; 6]>,
+    series: String,
+    instance: i64,
+    slice_step: Option<f64>,
+}
+
+fn floats(obj: &DefaultDicomObject, tag: Tag) -> Option<Vec<f64>> {
+    let v = obj.element_opt(tag).ok().flatten()?.to_multi_float64().ok()?;
+    v.iter().all(|x| x.is_finite()).then_some(v)
+}
+
+fn int(obj: &DefaultDicomObject, tag: Tag) -> Option<i64> {
+    obj.element_opt(tag).ok().flatten()?.to_int::<i64>().ok()
+}
+
+fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Slice, VolumeError> {
+    let err = |problem: String| header_error(label, problem);
+    let required = |tag: Tag, name: &str| int(obj, tag).ok_or_else(|| err(format!("no {name} element")));
+    let samples = int(obj, SAMPLES_PER_PIXEL).unwrap_or(1);
+    if samples != 1 {
+        return Err(err(format!(
+            "SamplesPerPixel = {samples}: colour DICOM is not supported, only one value per voxel"
+        )));
+    }
+    let rows = required(ROWS, "Rows")?;
+    let columns = required(COLUMNS, "Columns")?;
+    let frames = int(obj, NUMBER_OF_FRAMES).unwrap_or(1);
+    let dims = format::dims_from(label, "Columns/Rows/NumberOfFrames", &[columns, rows, frames])?;
+    let bits_allocated = required(BITS_ALLOCATED, "BitsAllocated")?;
+    if bits_allocated != 8 && bits_allocated != 16 {
+        return Err(err(format!(
+            "BitsAllocated = {bits_allocated}: volcast reads 8- and 16-bit DICOM"
+        )));
+    }
+    let bits_stored = int(obj, BITS_STORED).unwrap_or(bits_allocated);
+    if !(1..=bits_allocated).contains(&bits_stored) {
+        return Err(err(format!(
+            "BitsStored = {bits_stored} does not fit BitsAllocated = {bits_allocated}"
+        )));
+    }
+    let slope = floats(obj, RESCALE_SLOPE)
+        .and_then(|v| v.first().copied())
+        .unwrap_or(1.0);
+    let intercept = floats(obj, RESCALE_INTERCEPT)
+        .and_then(|v| v.first().copied())
+        .unwrap_or(0.0);
+    let three = |v: Vec<f64>| (v.len() == 3).then(|| [v[0], v[1], v[2]]);
+    let six = |v: Vec<f64>| (v.len() == 6).then(|| [v[0], v[1], v[2], v[3], v[4], v[5]]);
+    let two = |v: Vec<f64>| (v.len() == 2 && v.iter().all(|&s| s > 0.0)).then(|| [v[0], v[1]]);
+    let series = obj
+        .element_opt(SERIES_UID)
+        .ok()
+        .flatten()
+        .and_then(|e| e.to_str().ok().map(|s| s.trim().to_string()))
+        .unwrap_or_default();
+    Ok(Slice {
+        source,
+        rows: dims[1],
+        columns: dims[0],
+        frames: dims[2],
+        bits_allocated: bits_allocated as u16,
+        bits_stored: bits_stored as u16,
+        signed: int(obj, PIXEL_REPRESENTATION).unwrap_or(0) == 1,
+        scaling: Scaling { slope, intercept },
+        pixel_spacing: floats(obj, PIXEL_SPACING).and_then(two),
+        position: floats(obj, IMAGE_POSITION).and_then(three),
+        orientation: floats(obj, IMAGE_ORIENTATION).and_then(six),
+        series,
+        instance: int(obj, INSTANCE_NUMBER).unwrap_or(0),
+        slice_step: floats(obj, SPACING_BETWEEN_SLICES)
+            .or_else(|| floats(obj, SLICE_THICKNESS))
+            .and_then(|v| v.first().copied())
+            .filter(|&s| s > 0.0),
+    })
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[derive(Debug)]
+struct Plan {
+    slices: Vec<Slice>,
+    dims: [u32; 3],
+    spacing: [f64; 3],
+    voxel_type: VoxelType,
+    scaling: Scaling,
+    notes: Vec<String>,
+}
+
+/// Sorts slices along the normal and works out dims, spacing, type and notes.
+fn plan(mut slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
+    let err = |problem: String| header_error(label, problem);
+    let mut notes = Vec::new();
+    let first = slices
+        .first()
+        .cloned()
+        .ok_or_else(|| err("no DICOM image files found".into()))?;
+    if slices.len() > 1 && slices.iter().any(|s| s.frames > 1) {
+        return Err(err(
+            "a folder of several multi-frame files is not supported: open one file".into(),
+        ));
+    }
+    for s in &slices {
+        let same = (s.rows, s.columns, s.bits_allocated, s.signed)
+            == (first.rows, first.columns, first.bits_allocated, first.signed);
+        if !same {
+            return Err(err(format!(
+                "slices differ: {}x{} {}-bit{} against {}x{} {}-bit{} in the first; one series must share one layout",
+                s.columns,
+                s.rows,
+                s.bits_allocated,
+                if s.signed { " signed" } else { "" },
+                first.columns,
+                first.rows,
+                first.bits_allocated,
+                if first.signed { " signed" } else { "" },
+            )));
+        }
+        if s.scaling != first.scaling {
+            return Err(err(format!(
+                "slices have different rescale slope/intercept ({} {} and {} {}); volcast needs one per series",
+                s.scaling.slope, s.scaling.intercept, first.scaling.slope, first.scaling.intercept
+            )));
+        }
+    }
+    let depth = if first.frames > 1 {
+        first.frames
+    } else {
+        slices.len() as u32
+    };
+    let dims = [first.columns, first.rows, depth];
+    check_dims(dims)?;
+    let [row_spacing, column_spacing] = first.pixel_spacing.unwrap_or_else(|| {
+        notes.push("no PixelSpacing: in-plane spacing 1 is used".into());
+        [1.0, 1.0]
+    });
+    let mut z = first.slice_step.unwrap_or(1.0);
+    let normal = first.orientation.map(|o| cross([o[0], o[1], o[2]], [o[3], o[4], o[5]]));
+    match (normal, slices.iter().all(|s| s.position.is_some())) {
+        (Some(n), true) if slices.len() > 1 => {
+            let along = |s: &Slice| s.position.map_or(0.0, |p| dot(p, n));
+            slices.sort_by(|a, b| along(a).total_cmp(&along(b)));
+            let d: Vec<f64> = slices.iter().map(along).collect();
+            let steps: Vec<f64> = d.windows(2).map(|w| w[1] - w[0]).collect();
+            let mean = (d[d.len() - 1] - d[0]) / (d.len() - 1) as f64;
+            if mean.is_nan() || mean <= 1e-6 {
+                return Err(err(
+                    "the slices all lie at the same position along the slice normal".into()
+                ));
+            }
+            if steps.iter().any(|&s| s < 1e-6 * mean) {
+                return Err(err(
+                    "two slices share a position: the folder holds more than one acquisition".into(),
+                ));
+            }
+            if steps.iter().any(|&s| (s - mean).abs() > 0.01 * mean) {
+                let lo = steps.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = steps.iter().copied().fold(0.0, f64::max);
+                notes.push(format!(
+                    "uneven slice spacing ({lo:.4} to {hi:.4}): the mean {mean:.4} is used"
+                ));
+            }
+            z = mean;
+        }
+        _ if depth > 1 => {
+            slices.sort_by_key(|s| s.instance);
+            notes.push(format!(
+                "no slice positions: slices ordered by InstanceNumber, z spacing {z} from SpacingBetweenSlices/SliceThickness"
+            ));
+        }
+        _ => {}
+    }
+    if let Some(o) = first.orientation {
+        let axis_aligned = [&o[..3], &o[3..]]
+            .iter()
+            .all(|v| v.iter().filter(|c| c.abs() > 1e-3).count() == 1);
+        if !axis_aligned {
+            notes.push(format!(
+                "oblique slices (ImageOrientationPatient {}): the tilt is not applied",
+                o.map(|c| format!("{c:.3}")).join("\\")
+            ));
+        }
+    }
+    let voxel_type = match (first.bits_allocated, first.signed) {
+        (8, false) => VoxelType::U8,
+        (8, true) => VoxelType::I8,
+        (_, false) => VoxelType::U16,
+        (_, true) => VoxelType::I16,
+    };
+    Ok(Plan {
+        slices,
+        dims,
+        spacing: [column_spacing, row_spacing, z],
+        voxel_type,
+        scaling: first.scaling,
+        notes,
+    })
+}
+
+/// Appends one slice's (or one multi-frame file's) pixels in the stored representation, keeping only
+/// `bits_stored` bits and sign-extending signed values.
+fn append_pixels(obj: &DefaultDicomObject, s: &Slice, out: &mut VoxelData, label: &str) -> Result<(), VolumeError> {
+    let err = |problem: String| header_error(label, problem);
+    let element = obj
+        .element_opt(PIXEL_DATA)
+        .ok()
+        .flatten()
+        .ok_or_else(|| err("no PixelData element".into()))?;
+    let Some(value) = element.value().primitive() else {
+        return Err(err(format!(
+            "compressed (encapsulated) pixel data in transfer syntax {} is not supported: convert the series to an \
+             uncompressed transfer syntax (e.g. `gdcmconv --raw` or `dcmdjpeg`)",
+            obj.meta().transfer_syntax().trim_end_matches('\0')
+        )));
+    };
+    let count = s.rows as usize * s.columns as usize * s.frames as usize;
+    let bits = u32::from(s.bits_stored);
+    let mask = if bits >= 32 { u32::MAX } else { (1u32 << bits) - 1 };
+    let to_signed = |v: u32| -> i32 {
+        let v = v & mask;
+        if v & (1 << (bits - 1)) != 0 {
+            v as i32 - (1i32 << bits)
+        } else {
+            v as i32
+        }
+    };
+    let words: Vec<u16> = match (value, s.bits_allocated) {
+        (P::U8(bytes), 8) => {
+            let bytes = bytes
+                .get(..count)
+                .ok_or_else(|| short(label, bytes.len() as u64, count as u64))?;
+            let VoxelData::U8(v) = out else {
+                unreachable_layout(label)?
+            };
+            if s.signed {
+                v.extend(bytes.iter().map(|&b| (to_signed(u32::from(b)) + 128) as u8));
+            } else {
+                v.extend(bytes.iter().map(|&b| (u32::from(b) & mask) as u8));
+            }
+            return Ok(());
+        }
+        (P::U8(bytes), _) => {
+            let need = count as u64 * 2;
+            let bytes = bytes
+                .get(..count * 2)
+                .ok_or_else(|| short(label, bytes.len() as u64, need))?;
+            bytes
+                .chunks_exact(2)
+                .map(|b| u16::from_le_bytes([b[0], b[1]]))
+                .collect()
+        }
+        (P::U16(w), 16) => w
+            .get(..count)
+            .ok_or_else(|| short(label, w.len() as u64 * 2, count as u64 * 2))?
+            .to_vec(),
+        (P::I16(w), 16) => w
+            .get(..count)
+            .ok_or_else(|| short(label, w.len() as u64 * 2, count as u64 * 2))?
+            .iter()
+            .map(|&x| x as u16)
+            .collect(),
+        _ => return Err(err("PixelData has a value representation volcast cannot read".into())),
+    };
+    let VoxelData::U16(v) = out else {
+        unreachable_layout(label)?
+    };
+    if s.signed {
+        v.extend(words.iter().map(|&w| (to_signed(u32::from(w)) + 32768) as u16));
+    } else {
+        v.extend(words.iter().map(|&w| (u32::from(w) & mask) as u16));
+    }
+    Ok(())
+}
+
+fn short(label: &str, actual: u64, needed: u64) -> VolumeError {
+    header_error(
+        label,
+        format!("PixelData has {actual} bytes but the image needs {needed} (truncated file?)"),
+    )
+}
+
+fn unreachable_layout<T>(label: &str) -> Result<T, VolumeError> {
+    Err(header_error(label, "slices differ in bit depth".into()))
+}
+
+fn empty_data(voxel_type: VoxelType, count: usize, dims: [u32; 3], bytes: u64) -> Result<VoxelData, VolumeError> {
+    let oom = |_| VolumeError::OutOfMemory { dims, bytes };
+    Ok(match voxel_type {
+        VoxelType::U8 | VoxelType::I8 => VoxelData::U8(try_vec(count).map_err(oom)?),
+        _ => VoxelData::U16(try_vec(count).map_err(oom)?),
+    })
+}
+
+fn finish(
+    name: String,
+    dims: [u32; 3],
+    spacing: [f64; 3],
+    voxel_type: VoxelType,
+    scaling: Scaling,
+    notes: Vec<String>,
+    data: VoxelData,
+) -> Result<Volume, VolumeError> {
+    let mut v = Volume::new(name, dims, spacing.map(|s| s as f32), voxel_type, data)?.with_scaling(scaling)?;
+    v.format = FORMAT.into();
+    v.notes = notes;
+    Ok(v)
+}
+
+fn parse_bytes(bytes: &[u8], label: &str) -> Result<DefaultDicomObject, VolumeError> {
+    OpenFileOptions::new()
+        .read_preamble(ReadPreamble::Auto)
+        .from_reader(bytes)
+        .map_err(|e| header_error(label, format!("not a readable DICOM file: {e}")))
+}
+
+/// Loads one DICOM file (single- or multi-frame) held in memory.
+pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
+    let label = "DICOM data";
+    let obj = parse_bytes(bytes, label)?;
+    let slice = slice_info(&obj, 0, label)?;
+    let Plan {
+        slices,
+        dims,
+        spacing,
+        voxel_type,
+        scaling,
+        notes,
+    } = plan(vec![slice], label)?;
+    let count = check_dims(dims)? as usize;
+    let bytes_needed = count as u64 * voxel_type.size() as u64;
+    if bytes_needed > bytes.len() as u64 {
+        return Err(short(label, bytes.len() as u64, bytes_needed));
+    }
+    let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
+    append_pixels(&obj, &slices[0], &mut data, label)?;
+    finish("dicom".into(), dims, spacing, voxel_type, scaling, notes, data)
+}
+
+fn open_dicom(path: &Path, header_only: bool) -> Result<DefaultDicomObject, VolumeError> {
+    let label = format::file_label(path);
+    let mut options = OpenFileOptions::new().read_preamble(ReadPreamble::Auto);
+    if header_only {
+        options = options.read_until(PIXEL_DATA);
+    }
+    options
+        .open_file(path)
+        .map_err(|e| header_error(&label, format!("not a readable DICOM file: {e}")))
+}
+
+/// Loads a folder of slices (or one file). Pass 1 reads every header (stopping before the pixels) to sort the
+/// slices; pass 2 reads the pixels slice by slice into the final buffer, so the peak is one volume plus one slice.
+pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, VolumeError> {
+    let label = format::file_label(path);
+    let io = |source| VolumeError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let files: Vec<PathBuf> = if path.is_dir() {
+        let mut files = Vec::new();
+        for entry in std::fs::read_dir(path).map_err(io)? {
+            let entry = entry.map_err(io)?;
+            let p = entry.path();
+            let hidden = p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
+            if p.is_file() && !hidden {
+                files.push(p);
+                if files.len() > MAX_FILES {
+                    return Err(header_error(
+                        &label,
+                        format!("more than {MAX_FILES} files in the folder"),
+                    ));
+                }
+            }
+        }
+        files.sort();
+        files
+    } else {
+        vec![path.to_path_buf()]
+    };
+    let mut slices = Vec::new();
+    let mut skipped = 0;
+    for (i, f) in files.iter().enumerate() {
+        let f_label = format::file_label(f);
+        match open_dicom(f, true).and_then(|obj| slice_info(&obj, i, &f_label)) {
+            Ok(s) => slices.push(s),
+            // One file: say why. In a folder, DICOMDIR, notes and other files are skipped.
+            Err(e) if files.len() == 1 => return Err(e),
+            Err(VolumeError::Header { problem, .. }) if problem.starts_with("not a readable") => skipped += 1,
+            Err(e) => return Err(e),
+        }
+    }
+    let mut notes = Vec::new();
+    if skipped > 0 {
+        notes.push(format!(
+            "{skipped} file(s) in the folder are not DICOM images and were skipped"
+        ));
+    }
+    // More than one series: the largest is loaded.
+    let mut series: Vec<(String, usize)> = Vec::new();
+    for s in &slices {
+        match series.iter_mut().find(|(uid, _)| *uid == s.series) {
+            Some((_, n)) => *n += 1,
+            None => series.push((s.series.clone(), 1)),
+        }
+    }
+    if series.len() > 1 {
+        series.sort_by_key(|s| std::cmp::Reverse(s.1));
+        let chosen = series[0].0.clone();
+        notes.push(format!(
+            "the folder holds {} series; the largest ({} slices, SeriesInstanceUID {}) is loaded",
+            series.len(),
+            series[0].1,
+            clip(&chosen)
+        ));
+        slices.retain(|s| s.series == chosen);
+    }
+    let Plan {
+        slices,
+        dims,
+        spacing,
+        voxel_type,
+        scaling,
+        notes: plan_notes,
+    } = plan(slices, &label)?;
+    notes.extend(plan_notes);
+    let count = check_dims(dims)? as usize;
+    let bytes_needed = count as u64 * voxel_type.size() as u64;
+    // The files must at least hold the pixels they claim before the volume is allocated.
+    let total_file_bytes: u64 = slices
+        .iter()
+        .map(|s| std::fs::metadata(&files[s.source]).map_or(0, |m| m.len()))
+        .sum();
+    if bytes_needed > total_file_bytes {
+        return Err(short(&label, total_file_bytes, bytes_needed));
+    }
+    let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
+    for (i, s) in slices.iter().enumerate() {
+        let f = &files[s.source];
+        let obj = open_dicom(f, false)?;
+        append_pixels(&obj, s, &mut data, &format::file_label(f))?;
+        progress.report((i + 1) as f64 / slices.len() as f64);
+    }
+    finish(
+        format::volume_name(path),
+        dims,
+        spacing,
+        voxel_type,
+        scaling,
+        notes,
+        data,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn slice(pos: f64, instance: i64) -> Slice {
+        Slice {
+            source: instance as usize,
+            rows: 2,
+            columns: 3,
+            frames: 1,
+            bits_allocated: 16,
+            bits_stored: 12,
+            signed: true,
+            scaling: Scaling::IDENTITY,
+            pixel_spacing: Some([0.5, 0.25]),
+            position: Some([0.0, 0.0, pos]),
+            orientation: Some([1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+            series: "1".into(),
+            instance,
+            slice_step: Some(9.0),
+        }
+    }
+
+    #[test]
+    fn slices_sort_by_position_not_instance() {
+        let Plan {
+            slices: sorted,
+            dims,
+            spacing,
+            voxel_type: t,
+            notes,
+            ..
+        } = plan(vec![slice(5.0, 1), slice(-5.0, 2), slice(0.0, 3)], "x").unwrap();
+        assert_eq!(sorted.iter().map(|s| s.instance).collect::<Vec<_>>(), [2, 3, 1]);
+        assert_eq!(dims, [3, 2, 3]);
+        assert_eq!(spacing, [0.25, 0.5, 5.0]);
+        assert_eq!(t, VoxelType::I16);
+        assert!(notes.is_empty(), "{notes:?}");
+    }
+
+    #[test]
+    fn bad_series() {
+        let e = plan(vec![slice(1.0, 1), slice(1.0, 2)], "x").unwrap_err().to_string();
+        assert!(e.contains("same position"), "{e}");
+        let e = plan(vec![slice(0.0, 1), slice(1.0, 2), slice(1.0, 3)], "x")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("share a position"), "{e}");
+        let mut other = slice(2.0, 2);
+        other.rows = 4;
+        let e = plan(vec![slice(0.0, 1), other], "x").unwrap_err().to_string();
+        assert!(e.contains("slices differ: 3x4 16-bit signed against 3x2"), "{e}");
+        let Plan { spacing, notes, .. } = plan(vec![slice(0.0, 1), slice(1.0, 2), slice(3.0, 3)], "x").unwrap();
+        assert_eq!(spacing[2], 1.5);
+        assert!(notes[0].contains("uneven slice spacing"), "{notes:?}");
+        let e = plan(vec![], "x").unwrap_err().to_string();
+        assert!(e.contains("no DICOM image files"), "{e}");
+    }
+
+    #[test]
+    fn garbage_is_an_error() {
+        for bytes in [
+            &b""[..],
+            b"DICM",
+            &[0u8; 200],
+            b"not dicom at all, not even close......",
+        ] {
+            assert!(from_bytes(bytes).is_err());
+        }
+    }
+}

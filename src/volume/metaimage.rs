@@ -1,0 +1,328 @@
+//! MetaImage (ITK): `.mha` with the data after the header (`ElementDataFile = LOCAL`) and `.mhd` naming a data file
+//! beside it. `CompressedData = True` is a zlib stream.
+
+use super::decode::{Endian, Progress};
+use super::format::{
+    self, absolute_spacing, clip, header_error, number, numbers, DataLocation, Encoding, Header, Source,
+};
+use super::{Volume, VolumeError, VoxelType};
+use std::path::Path;
+
+const FORMAT: &str = "MetaImage";
+
+/// A MetaImage header starts with one of these keys (ITK writes `ObjectType` first; hand-written ones vary).
+pub(crate) fn is_metaimage(prefix: &[u8]) -> bool {
+    let start = String::from_utf8_lossy(&prefix[..prefix.len().min(64)]).to_ascii_lowercase();
+    ["objecttype", "ndims", "dimsize", "comment"]
+        .iter()
+        .any(|k| start.trim_start().starts_with(k) && start.contains('='))
+}
+
+fn voxel_type(name: &str) -> Option<VoxelType> {
+    Some(match name.trim().to_ascii_uppercase().as_str() {
+        "MET_UCHAR" => VoxelType::U8,
+        "MET_CHAR" => VoxelType::I8,
+        "MET_SHORT" => VoxelType::I16,
+        "MET_USHORT" => VoxelType::U16,
+        "MET_INT" => VoxelType::I32,
+        "MET_UINT" => VoxelType::U32,
+        "MET_FLOAT" => VoxelType::F32,
+        "MET_DOUBLE" => VoxelType::F64,
+        _ => return None,
+    })
+}
+
+fn truth(file: &str, key: &str, value: &str) -> Result<bool, VolumeError> {
+    match value.trim().to_ascii_lowercase().as_str() {
+        "true" | "1" => Ok(true),
+        "false" | "0" => Ok(false),
+        _ => Err(header_error(
+            file,
+            format!("{key} = '{}' must be True or False", clip(value)),
+        )),
+    }
+}
+
+/// Parses a MetaImage header; `ElementDataFile` must be its last line.
+pub fn parse_header(bytes: &[u8]) -> Result<Header, VolumeError> {
+    parse(bytes, "MetaImage data")
+}
+
+fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
+    let err = |problem: String| header_error(file, problem);
+    let (lines, complete) = format::header_lines(bytes, |line| {
+        line.split('=')
+            .next()
+            .is_some_and(|k| k.trim().eq_ignore_ascii_case("ElementDataFile"))
+    });
+    if !complete {
+        return Err(err(
+            "no 'ElementDataFile' line ends the header (truncated file or not MetaImage)".into(),
+        ));
+    }
+    let mut h = Header::new(FORMAT);
+    let mut ndims = None;
+    let mut dim_size: Option<Vec<i64>> = None;
+    let mut element_type = None;
+    let mut spacing = None;
+    let mut element_size = None;
+    let mut compressed = false;
+    let mut compressed_size: Option<u64> = None;
+    let mut binary = true;
+    let mut header_size: Option<Option<u64>> = None;
+    let mut channels = 1u32;
+    let mut data_file = None;
+    for &(line, end) in &lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let Some((key, value)) = line.split_once('=') else {
+            return Err(err(format!("line '{}' is not 'Key = Value'", clip(line))));
+        };
+        let value = value.trim();
+        let key = key.trim();
+        match key.to_ascii_lowercase().as_str() {
+            "objecttype" if !value.eq_ignore_ascii_case("image") => {
+                return Err(err(format!("ObjectType = {}: volcast reads images", clip(value))))
+            }
+            "ndims" => ndims = Some(number::<u32>(file, "NDims", value)?),
+            "dimsize" => {
+                let d: Result<Vec<i64>, _> = value.split_whitespace().map(|v| number(file, "DimSize", v)).collect();
+                dim_size = Some(d?);
+            }
+            "elementtype" => {
+                element_type = Some(voxel_type(value).ok_or_else(|| VolumeError::UnsupportedType {
+                    file: file.to_string(),
+                    format: FORMAT,
+                    given: clip(value),
+                })?)
+            }
+            "elementspacing" => spacing = Some(value.to_string()),
+            "elementsize" => element_size = Some(value.to_string()),
+            "offset" | "origin" | "position" => {
+                let parts: Vec<f64> = value.split_whitespace().filter_map(|p| p.parse().ok()).collect();
+                if parts.len() >= 3 {
+                    h.origin = Some([parts[0], parts[1], parts[2]]);
+                }
+            }
+            "binarydatabyteordermsb" | "elementbyteordermsb" => {
+                h.endian = if truth(file, key, value)? {
+                    Endian::Big
+                } else {
+                    Endian::Little
+                }
+            }
+            "binarydata" => binary = truth(file, key, value)?,
+            "compresseddata" => compressed = truth(file, key, value)?,
+            "compresseddatasize" => compressed_size = Some(number(file, "CompressedDataSize", value)?),
+            "headersize" => {
+                header_size = Some(match number::<i64>(file, "HeaderSize", value)? {
+                    -1 => None,
+                    n => Some(u64::try_from(n).map_err(|_| err(format!("HeaderSize {n} must be -1 or at least 0")))?),
+                })
+            }
+            "elementnumberofchannels" => channels = number(file, "ElementNumberOfChannels", value)?,
+            "transformmatrix" | "rotation" | "orientation" => {
+                let m: Vec<f64> = value.split_whitespace().filter_map(|p| p.parse().ok()).collect();
+                let identity = m.len() == 9
+                    && m.iter()
+                        .enumerate()
+                        .all(|(i, &v)| v == if i % 4 == 0 { 1.0 } else { 0.0 });
+                if !identity {
+                    h.notes
+                        .push("TransformMatrix is not identity: the rotation is not applied".into());
+                }
+            }
+            "anatomicalorientation" => h
+                .notes
+                .push(format!("anatomical orientation {} (not applied)", clip(value))),
+            "elementdatafile" => data_file = Some((value.to_string(), end)),
+            _ => {}
+        }
+    }
+    let ndims = ndims.ok_or_else(|| err("no NDims line".into()))?;
+    if !(1..=4).contains(&ndims) {
+        return Err(err(format!("NDims = {ndims} is not supported: volcast reads 1 to 4")));
+    }
+    let dim_size = dim_size.ok_or_else(|| err("no DimSize line".into()))?;
+    if dim_size.len() != ndims as usize {
+        return Err(err(format!(
+            "DimSize has {} values but NDims is {ndims}",
+            dim_size.len()
+        )));
+    }
+    h.dims = format::dims_from(file, "DimSize", &dim_size)?;
+    if ndims == 4 && dim_size[3] > 1 {
+        h.notes.push(format!(
+            "4-D MetaImage: only the first of {} volumes is loaded",
+            dim_size[3]
+        ));
+    }
+    if channels != 1 {
+        return Err(err(format!(
+            "ElementNumberOfChannels = {channels}: volcast reads one value per voxel"
+        )));
+    }
+    h.voxel_type = element_type.ok_or_else(|| err("no ElementType line".into()))?;
+    if let Some(text) = spacing.or(element_size) {
+        let s: Vec<f64> = numbers(file, "ElementSpacing", &text, ndims as usize)?;
+        let mut sp = [1.0; 3];
+        for (i, v) in s.iter().take(3).enumerate() {
+            sp[i] = *v;
+        }
+        absolute_spacing(&mut h, sp);
+    }
+    h.encoding = match (binary, compressed) {
+        (true, false) => Encoding::Raw,
+        (true, true) => Encoding::Zlib,
+        (false, false) => Encoding::Ascii,
+        (false, true) => return Err(err("CompressedData = True needs BinaryData = True".into())),
+    };
+    if compressed_size.is_some_and(|c| c == 0) {
+        return Err(err("CompressedDataSize = 0".into()));
+    }
+    let (name, end) = data_file.ok_or_else(|| err("no ElementDataFile line".into()))?;
+    let skip = header_size.unwrap_or(Some(0));
+    if skip.is_none() && h.encoding != Encoding::Raw {
+        return Err(err("HeaderSize = -1 only works with uncompressed binary data".into()));
+    }
+    h.location = if name.eq_ignore_ascii_case("LOCAL") {
+        DataLocation::Inline(Some(end as u64))
+    } else if name.eq_ignore_ascii_case("LIST") || name.contains('%') || name.split_whitespace().count() > 1 {
+        return Err(err(format!(
+            "ElementDataFile = {}: lists and numbered file patterns are not supported, only LOCAL or one file",
+            clip(&name)
+        )));
+    } else {
+        DataLocation::Detached { name, skip }
+    };
+    Ok(h)
+}
+
+/// Loads a MetaImage with `ElementDataFile = LOCAL` held in memory.
+pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
+    let header = parse_header(bytes)?;
+    format::load(
+        header,
+        "metaimage".into(),
+        "MetaImage data",
+        Source::Bytes(bytes),
+        &mut Progress::none(),
+    )
+}
+
+pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, VolumeError> {
+    let file = format::file_label(path);
+    let prefix = format::read_prefix(path, format::HEADER_LIMIT)?;
+    let header = parse(&prefix, &file)?;
+    format::load(header, format::volume_name(path), &file, Source::File(path), progress)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    const HEADER: &str = "ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = False\n\
+                          CompressedData = False\nElementSpacing = 0.5 1 1.5\nOffset = 10 20 30\nDimSize = 3 2 2\n\
+                          ElementType = MET_FLOAT\nElementDataFile = LOCAL\n";
+
+    fn values() -> Vec<f32> {
+        (0..12).map(|i| i as f32 * 0.5 - 1.0).collect()
+    }
+
+    fn mha(header: &str, data: &[u8]) -> Vec<u8> {
+        let mut v = header.as_bytes().to_vec();
+        v.extend_from_slice(data);
+        v
+    }
+
+    fn zlib(data: &[u8]) -> Vec<u8> {
+        let mut e = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+        e.write_all(data).unwrap();
+        e.finish().unwrap()
+    }
+
+    #[test]
+    fn plain_big_endian_compressed_ascii() {
+        let le: Vec<u8> = values().iter().flat_map(|v| v.to_le_bytes()).collect();
+        let be: Vec<u8> = values().iter().flat_map(|v| v.to_be_bytes()).collect();
+        let text: String = values().iter().map(|v| format!("{v} ")).collect();
+        for bytes in [
+            mha(HEADER, &le),
+            mha(&HEADER.replace("MSB = False", "MSB = True"), &be),
+            mha(
+                &HEADER.replace("CompressedData = False", "CompressedData = True"),
+                &zlib(&le),
+            ),
+            mha(
+                &HEADER.replace("BinaryData = True", "BinaryData = False"),
+                text.as_bytes(),
+            ),
+        ] {
+            let v = from_bytes(&bytes).unwrap();
+            assert_eq!(v.dims, [3, 2, 2]);
+            assert_eq!(v.spacing, [0.5, 1.0, 1.5]);
+            assert_eq!(v.origin, Some([10.0, 20.0, 30.0]));
+            assert_eq!(v.source_type, VoxelType::F32);
+            assert_eq!(v.value(2, 1, 1), 4.5);
+            assert_eq!(v.range, [-1.0, 4.5]);
+            assert_eq!(v.format, "MetaImage");
+        }
+        let chars = HEADER.replace("MET_FLOAT", "MET_CHAR");
+        let v = from_bytes(&mha(&chars, &[0x80, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 0x7f])).unwrap();
+        assert_eq!(v.range, [-128.0, 127.0]);
+        assert!(is_metaimage(HEADER.as_bytes()));
+        assert!(!is_metaimage(b"NRRD0004\n"));
+    }
+
+    #[test]
+    fn hostile_headers() {
+        let le: Vec<u8> = values().iter().flat_map(|v| v.to_le_bytes()).collect();
+        let cases = [
+            (HEADER.replace("3 2 2", "3 0 2"), "zero or negative size"),
+            (HEADER.replace("3 2 2", "3 -2 2"), "zero or negative size"),
+            (HEADER.replace("3 2 2", "100000 100000 100000"), "exceed the limit"),
+            (HEADER.replace("3 2 2", "3 2"), "DimSize has 2 values but NDims is 3"),
+            (
+                HEADER.replace("MET_FLOAT", "MET_LONG_LONG"),
+                "unsupported MetaImage voxel type 'MET_LONG_LONG'",
+            ),
+            (HEADER.replace("LOCAL", "../secret.raw"), "cannot be read from memory"),
+            (
+                HEADER.replace("LOCAL", "slice%03d.raw 1 10 1"),
+                "numbered file patterns",
+            ),
+            (
+                HEADER.replace("CompressedData = False", "CompressedData = True"),
+                "zlib data is corrupt",
+            ),
+            (
+                HEADER.replace("CompressedData = False", "CompressedData = Maybe"),
+                "must be True or False",
+            ),
+            (
+                HEADER.replace("ElementDataFile = LOCAL\n", ""),
+                "no 'ElementDataFile' line",
+            ),
+            (HEADER.replace("NDims = 3", "NDims = 9"), "NDims = 9 is not supported"),
+        ];
+        for (header, expected) in cases {
+            let e = from_bytes(&mha(&header, &le)).unwrap_err().to_string();
+            assert!(e.contains(expected), "{e} should contain {expected}");
+        }
+        let e = from_bytes(&mha(HEADER, &le[..47])).unwrap_err().to_string();
+        assert!(
+            e.contains("end after 47 of the 48 bytes that 3x2x2 float32 needs"),
+            "{e}"
+        );
+        let z = zlib(&le);
+        let e = from_bytes(&mha(
+            &HEADER.replace("CompressedData = False", "CompressedData = True"),
+            &z[..z.len() - 6],
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("zlib data is corrupt") || e.contains("end after"), "{e}");
+    }
+}

@@ -1,0 +1,393 @@
+//! NRRD: `.nrrd` with attached data and `.nhdr` headers with a detached data file. Encodings raw, gzip and
+//! ascii; `sizes`, `spacings` or `space directions`, `space origin`, `endian`, `byte skip`, `line skip`.
+
+use super::decode::{Endian, Progress};
+use super::format::{self, absolute_spacing, clip, header_error, number, DataLocation, Encoding, Header, Source};
+use super::{Volume, VolumeError, VoxelType};
+use std::path::Path;
+
+const FORMAT: &str = "NRRD";
+
+pub(crate) fn is_nrrd(prefix: &[u8]) -> bool {
+    prefix.starts_with(b"NRRD000")
+}
+
+fn voxel_type(name: &str) -> Option<VoxelType> {
+    let n = name.trim().to_ascii_lowercase();
+    Some(match n.as_str() {
+        "uchar" | "unsigned char" | "uint8" | "uint8_t" => VoxelType::U8,
+        "signed char" | "int8" | "int8_t" => VoxelType::I8,
+        "short" | "short int" | "signed short" | "signed short int" | "int16" | "int16_t" => VoxelType::I16,
+        "ushort" | "unsigned short" | "unsigned short int" | "uint16" | "uint16_t" => VoxelType::U16,
+        "int" | "signed int" | "int32" | "int32_t" => VoxelType::I32,
+        "uint" | "unsigned int" | "uint32" | "uint32_t" => VoxelType::U32,
+        "float" => VoxelType::F32,
+        "double" => VoxelType::F64,
+        _ => return None,
+    })
+}
+
+/// Parses a NRRD header (`.nrrd` or `.nhdr`) from the file's first bytes. Attached data start after the blank
+/// line that ends the header (plus `line skip` lines and `byte skip` bytes).
+pub fn parse_header(bytes: &[u8]) -> Result<Header, VolumeError> {
+    parse(bytes, "NRRD data")
+}
+
+fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
+    let err = |problem: String| header_error(file, problem);
+    if !is_nrrd(bytes) {
+        return Err(err("not a NRRD file: it must start with 'NRRD000'".into()));
+    }
+    let (lines, blank_found) = format::header_lines(bytes, |line| line.is_empty());
+    let header_end = lines.last().map_or(0, |&(_, end)| end);
+    let mut h = Header::new(FORMAT);
+    let mut dimension = None;
+    let mut sizes: Option<Vec<i64>> = None;
+    let mut voxel_type = None;
+    let mut spacings: Option<Vec<f64>> = None;
+    let mut directions: Option<Vec<Option<[f64; 3]>>> = None;
+    let mut encoding = None;
+    let mut data_file = None;
+    let mut line_skip = 0u64;
+    let mut byte_skip = Some(0u64);
+    for &(line, _) in lines.iter().skip(1) {
+        if line.is_empty() || line.starts_with('#') || line.contains(":=") {
+            continue;
+        }
+        let Some((field, value)) = line.split_once(':') else {
+            return Err(err(format!("line '{}' is not 'field: value'", clip(line))));
+        };
+        let value = value.trim();
+        match field.trim().to_ascii_lowercase().as_str() {
+            "dimension" => dimension = Some(number::<u32>(file, "dimension", value)?),
+            "type" => {
+                voxel_type = Some(voxel_type_of(value).ok_or_else(|| VolumeError::UnsupportedType {
+                    file: file.to_string(),
+                    format: FORMAT,
+                    given: clip(value),
+                })?)
+            }
+            "sizes" => {
+                let s: Result<Vec<i64>, _> = value.split_whitespace().map(|v| number(file, "sizes", v)).collect();
+                sizes = Some(s?);
+            }
+            "spacings" => spacings = Some(value.split_whitespace().map(nrrd_float).collect()),
+            "space directions" => directions = Some(parse_directions(file, value)?),
+            "space origin" => {
+                let v =
+                    parse_vector(value).ok_or_else(|| err(format!("space origin '{}' is not (x,y,z)", clip(value))))?;
+                h.origin = Some(v);
+            }
+            "encoding" => {
+                encoding = Some(match value.to_ascii_lowercase().as_str() {
+                    "raw" => Encoding::Raw,
+                    "gzip" | "gz" => Encoding::Gzip,
+                    "ascii" | "text" | "txt" => Encoding::Ascii,
+                    other => {
+                        return Err(err(format!(
+                            "encoding '{}' is not supported: use raw, gzip or ascii",
+                            clip(other)
+                        )))
+                    }
+                })
+            }
+            "endian" => {
+                h.endian = Endian::parse(value)
+                    .ok_or_else(|| err(format!("endian '{}' must be little or big", clip(value))))?
+            }
+            "data file" | "datafile" => {
+                if value.starts_with("LIST") || value.split_whitespace().count() > 1 {
+                    return Err(err(format!(
+                        "data file '{}': lists and numbered file patterns are not supported, only one file",
+                        clip(value)
+                    )));
+                }
+                data_file = Some(value.to_string());
+            }
+            "line skip" | "lineskip" => line_skip = number(file, "line skip", value)?,
+            "byte skip" | "byteskip" => {
+                byte_skip = match number::<i64>(file, "byte skip", value)? {
+                    -1 => None,
+                    n => Some(u64::try_from(n).map_err(|_| err(format!("byte skip {n} must be -1 or at least 0")))?),
+                }
+            }
+            "space" | "space dimension" | "kinds" | "centerings" | "labels" | "units" | "space units" | "content"
+            | "min" | "max" | "old min" | "oldmin" | "old max" | "oldmax" | "block size" | "blocksize"
+            | "measurement frame" | "sample units" | "axis mins" | "axismins" | "axis maxs" | "axismaxs"
+            | "thicknesses" | "number" => {}
+            other => h.notes.push(format!("NRRD field '{}' ignored", clip(other))),
+        }
+    }
+    let dimension = dimension.ok_or_else(|| err("no 'dimension' field".into()))?;
+    let sizes = sizes.ok_or_else(|| err("no 'sizes' field".into()))?;
+    if !(1..=4).contains(&dimension) {
+        return Err(err(format!(
+            "dimension {dimension} is not supported: volcast reads 1 to 4"
+        )));
+    }
+    if sizes.len() != dimension as usize {
+        return Err(err(format!(
+            "'sizes' has {} values but dimension is {dimension}",
+            sizes.len()
+        )));
+    }
+    h.dims = format::dims_from(file, "sizes", &sizes)?;
+    if dimension == 4 && sizes[3] > 1 {
+        h.notes
+            .push(format!("4-D NRRD: only the first of {} volumes is loaded", sizes[3]));
+    }
+    h.voxel_type = voxel_type.ok_or_else(|| err("no 'type' field".into()))?;
+    h.encoding = encoding.ok_or_else(|| err("no 'encoding' field".into()))?;
+    let mut spacing = [1.0; 3];
+    if let Some(dirs) = &directions {
+        if dirs.len() != dimension as usize {
+            return Err(err(format!(
+                "'space directions' has {} entries but dimension is {dimension}",
+                dirs.len()
+            )));
+        }
+        for (i, d) in dirs.iter().take(3).enumerate() {
+            if let Some(v) = d {
+                spacing[i] = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            }
+        }
+        let axis_aligned = dirs.iter().flatten().all(|v| {
+            v.iter()
+                .filter(|c| c.abs() > 1e-6 * (v[0].abs() + v[1].abs() + v[2].abs()))
+                .count()
+                == 1
+        });
+        if !axis_aligned {
+            h.notes
+                .push("oblique 'space directions': spacing is their lengths; the rotation is not applied".into());
+        }
+    } else if let Some(s) = &spacings {
+        if s.len() != dimension as usize {
+            return Err(err(format!(
+                "'spacings' has {} values but dimension is {dimension}",
+                s.len()
+            )));
+        }
+        for (i, v) in s.iter().take(3).enumerate() {
+            // NaN marks a non-spatial axis in NRRD.
+            if !v.is_nan() {
+                spacing[i] = *v;
+            }
+        }
+    }
+    absolute_spacing(&mut h, spacing);
+    if h.voxel_type.size() == 1 {
+        h.endian = Endian::Little;
+    }
+    let skip = |base: u64| byte_skip.map(|b| base.saturating_add(b));
+    if line_skip > 0 {
+        return Err(err("'line skip' is not supported; use 'byte skip'".into()));
+    }
+    h.location = match data_file {
+        Some(name) => DataLocation::Detached { name, skip: skip(0) },
+        None => {
+            if !blank_found {
+                return Err(err(
+                    "no blank line ends the header and no 'data file' is named: where are the voxels?".into(),
+                ));
+            }
+            DataLocation::Inline(skip(header_end as u64))
+        }
+    };
+    if byte_skip.is_none() && h.encoding != Encoding::Raw {
+        return Err(err("'byte skip: -1' only works with raw encoding".into()));
+    }
+    Ok(h)
+}
+
+fn voxel_type_of(value: &str) -> Option<VoxelType> {
+    voxel_type(value)
+}
+
+/// NRRD writes NaN for "no value" (`nan`, `NaN`).
+fn nrrd_float(s: &str) -> f64 {
+    s.parse::<f64>().unwrap_or(f64::NAN)
+}
+
+/// `(x,y,z)`.
+fn parse_vector(s: &str) -> Option<[f64; 3]> {
+    let inner = s.trim().strip_prefix('(')?.strip_suffix(')')?;
+    let v: Vec<f64> = inner
+        .split(',')
+        .map(|c| c.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .ok()?;
+    (v.len() == 3 && v.iter().all(|c| c.is_finite())).then(|| [v[0], v[1], v[2]])
+}
+
+/// `(a,b,c) (d,e,f) none ...`.
+fn parse_directions(file: &str, s: &str) -> Result<Vec<Option<[f64; 3]>>, VolumeError> {
+    s.split_whitespace()
+        .map(|part| {
+            if part.eq_ignore_ascii_case("none") {
+                Ok(None)
+            } else {
+                parse_vector(part)
+                    .map(Some)
+                    .ok_or_else(|| header_error(file, format!("space direction '{}' is not (x,y,z)", clip(part))))
+            }
+        })
+        .collect()
+}
+
+/// Loads a NRRD file with attached data held in memory.
+pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
+    let header = parse_header(bytes)?;
+    format::load(
+        header,
+        "nrrd".into(),
+        "NRRD data",
+        Source::Bytes(bytes),
+        &mut Progress::none(),
+    )
+}
+
+pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, VolumeError> {
+    let file = format::file_label(path);
+    let prefix = format::read_prefix(path, format::HEADER_LIMIT)?;
+    let header = parse(&prefix, &file)?;
+    format::load(header, format::volume_name(path), &file, Source::File(path), progress)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flate2::write::GzEncoder;
+    use std::io::Write;
+
+    fn nrrd(fields: &str, data: &[u8]) -> Vec<u8> {
+        let mut v = format!("NRRD0004\n# comment\n{fields}\n").into_bytes();
+        v.extend_from_slice(data);
+        v
+    }
+
+    fn gzip(data: &[u8]) -> Vec<u8> {
+        let mut e = GzEncoder::new(Vec::new(), flate2::Compression::default());
+        e.write_all(data).unwrap();
+        e.finish().unwrap()
+    }
+
+    const FIELDS: &str =
+        "type: unsigned short\ndimension: 3\nsizes: 2 3 4\nendian: big\nencoding: raw\nspacings: 0.5 0.75 2\n";
+
+    fn values() -> Vec<u16> {
+        (0..24).map(|i| i * 1000).collect()
+    }
+
+    #[test]
+    fn raw_gzip_ascii() {
+        let be: Vec<u8> = values().iter().flat_map(|v| v.to_be_bytes()).collect();
+        let text: String = values().iter().map(|v| format!("{v} ")).collect();
+        for bytes in [
+            nrrd(FIELDS, &be),
+            nrrd(&FIELDS.replace("raw", "gzip"), &gzip(&be)),
+            nrrd(&FIELDS.replace("raw", "ascii"), text.as_bytes()),
+        ] {
+            let v = from_bytes(&bytes).unwrap();
+            assert_eq!(v.dims, [2, 3, 4]);
+            assert_eq!(v.spacing, [0.5, 0.75, 2.0]);
+            assert_eq!(v.source_type, VoxelType::U16);
+            assert_eq!(v.value(1, 2, 3), 23000.0);
+            assert_eq!(v.range, [0.0, 23000.0]);
+        }
+    }
+
+    #[test]
+    fn space_directions_and_origin() {
+        let fields = "type: float\ndimension: 3\nsizes: 2 1 1\nencoding: raw\nendian: little\nspace: RAS\n\
+                      space directions: (0,-2,0) (0.5,0,0) (0,0,3)\nspace origin: (1,2,3)\n";
+        let data: Vec<u8> = [1.5f32, -2.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let v = from_bytes(&nrrd(fields, &data)).unwrap();
+        assert_eq!(v.spacing, [2.0, 0.5, 3.0]);
+        assert_eq!(v.origin, Some([1.0, 2.0, 3.0]));
+        assert_eq!(v.value(1, 0, 0), -2.0);
+        // 4-D with a non-spatial axis: the first volume and a note.
+        let fields = "type: int8\ndimension: 4\nsizes: 2 1 1 3\nencoding: raw\nspacings: 1 1 1 nan\n";
+        let v = from_bytes(&nrrd(fields, &[0xff, 7, 1, 2, 3, 4])).unwrap();
+        assert_eq!(v.dims, [2, 1, 1]);
+        assert_eq!((v.value(0, 0, 0), v.value(1, 0, 0)), (-1.0, 7.0));
+        assert!(
+            v.notes.iter().any(|n| n.contains("first of 3 volumes")),
+            "{:?}",
+            v.notes
+        );
+    }
+
+    fn error(fields: &str, data: &[u8]) -> String {
+        from_bytes(&nrrd(fields, data)).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn hostile_headers() {
+        let be: Vec<u8> = values().iter().flat_map(|v| v.to_be_bytes()).collect();
+        let cases = [
+            (FIELDS.replace("2 3 4", "2 0 4"), "zero or negative size"),
+            (FIELDS.replace("2 3 4", "2 -3 4"), "zero or negative size"),
+            (
+                FIELDS.replace("2 3 4", "100000 100000 100000"),
+                "exceed the limit of 16384",
+            ),
+            (
+                FIELDS.replace("2 3 4", "2 3"),
+                "'sizes' has 2 values but dimension is 3",
+            ),
+            (
+                FIELDS.replace("unsigned short", "int64"),
+                "unsupported NRRD voxel type 'int64'",
+            ),
+            (
+                FIELDS.replace("encoding: raw", "encoding: bzip2"),
+                "encoding 'bzip2' is not supported",
+            ),
+            (FIELDS.replace("encoding: raw\n", ""), "no 'encoding' field"),
+            (
+                FIELDS.replace("dimension: 3", "dimension: 7"),
+                "dimension 7 is not supported",
+            ),
+            (FIELDS.replace("big", "middle"), "endian 'middle' must be little or big"),
+            (
+                FIELDS.replace("0.5 0.75 2", "0.5 0 2"),
+                "voxel spacing 0.5 0 2 is invalid",
+            ),
+            (
+                FIELDS.to_string() + "data file: LIST\n",
+                "lists and numbered file patterns",
+            ),
+            (
+                FIELDS.to_string() + "data file: ../../etc/passwd\n",
+                "cannot be read from memory",
+            ),
+            (
+                FIELDS.replace("encoding: raw", "encoding: gzip"),
+                "gzip data is corrupt",
+            ),
+            (FIELDS.replace("encoding: raw", "encoding: ascii"), "ASCII value 0"),
+        ];
+        for (fields, expected) in cases {
+            let e = error(&fields, &be);
+            assert!(e.contains(expected), "{e} should contain {expected}");
+        }
+        let e = error(FIELDS, &be[..40]);
+        assert!(
+            e.contains("end after 40 of the 48 bytes that 2x3x4 uint16 needs"),
+            "{e}"
+        );
+        let gz = gzip(&be);
+        let e = error(&FIELDS.replace("raw", "gzip"), &gz[..gz.len() / 2]);
+        assert!(e.contains("gzip data is corrupt") || e.contains("end after"), "{e}");
+        // A tiny gzip stream claiming a huge volume is refused before allocating.
+        let e = error(&FIELDS.replace("raw", "gzip").replace("2 3 4", "1000 1000 1000"), &gz);
+        assert!(e.contains("cannot hold the 2000000000 bytes"), "{e}");
+        let e = from_bytes(b"NRRD0004\ntype: uchar\ndimension: 1\nsizes: 3\nencoding: raw").unwrap_err();
+        assert!(e.to_string().contains("no blank line ends the header"), "{e}");
+        assert!(from_bytes(b"NRRX")
+            .unwrap_err()
+            .to_string()
+            .contains("must start with 'NRRD000'"));
+    }
+}
