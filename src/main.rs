@@ -47,7 +47,8 @@ enum Command {
 
 #[derive(Args, Clone)]
 struct VolumeArgs {
-    /// A raw volume file (dims and type from --dims/--type or from a NAME_WxHxD_TYPE.raw name).
+    /// A volume file: raw, VTK (.vtk), NRRD (.nrrd/.nhdr), NIfTI-1 (.nii/.nii.gz), MetaImage (.mha/.mhd), DICOM
+    /// (a folder of slices or one file). Raw files take dims and type from --dims/--type or a NAME_WxHxD_TYPE name.
     file: Option<PathBuf>,
     /// A built-in volume: helix, box, colormap or marschner-lobb.
     #[arg(long, conflicts_with = "file")]
@@ -61,9 +62,21 @@ struct VolumeArgs {
     /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
     #[arg(long = "type")]
     voxel_type: Option<String>,
-    /// Voxel spacing: SX SY SZ (default 1 1 1).
+    /// Voxel spacing: SX SY SZ (default: from the file's header; 1 1 1 for raw files). Overrides the header.
     #[arg(long, num_args = 3, value_names = ["SX", "SY", "SZ"])]
     spacing: Option<Vec<f32>>,
+    /// Byte order of a raw file's voxels.
+    #[arg(long, value_parser = ["little", "big"])]
+    endian: Option<String>,
+    /// Bytes to skip at the start of a raw file (a header volcast does not read).
+    #[arg(long, value_name = "N")]
+    header_bytes: Option<u64>,
+    /// Largest dimension: a larger volume is downsampled 2x per axis until it fits (with a warning).
+    #[arg(long, value_name = "N", default_value_t = 2048)]
+    max_dim: u32,
+    /// Refuse a volume larger than --max-dim instead of downsampling it.
+    #[arg(long)]
+    no_downsample: bool,
 }
 
 impl VolumeArgs {
@@ -77,7 +90,30 @@ impl VolumeArgs {
                 volume::BUILTIN_NAMES.join(", ")
             );
         };
-        Ok(volume::load_raw(path, &self.raw_options()?)?)
+        let opts = volume::OpenOptions {
+            raw: self.raw_options()?,
+            endian: match self.endian.as_deref() {
+                Some("big") => volume::Endian::Big,
+                _ => volume::Endian::Little,
+            },
+            header_bytes: self.header_bytes.unwrap_or(0),
+            max_dim: Some(self.max_dim),
+            no_downsample: self.no_downsample,
+        };
+        // A progress bar only where loading takes long enough to watch (files over 8 MiB).
+        let big = std::fs::metadata(path).is_ok_and(|m| m.len() > 8 << 20);
+        let bar = indicatif::ProgressBar::new(1000);
+        if !big {
+            bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+        }
+        bar.set_message(format!("loading {}", path.display()));
+        let loaded = volume::open_with_progress(path, &opts, &mut |f| bar.set_position((f * 1000.0) as u64));
+        bar.finish_and_clear();
+        let v = loaded?;
+        for note in &v.notes {
+            eprintln!("note: {note}");
+        }
+        Ok(v)
     }
 
     fn raw_options(&self) -> Result<RawOptions> {
@@ -496,8 +532,9 @@ fn compare(args: &CompareArgs) -> Result<()> {
 fn info(args: &VolumeArgs) -> Result<()> {
     let v = args.load()?;
     let e = v.extent();
-    let phys: Vec<f32> = (0..3).map(|i| v.dims[i] as f32 * v.spacing[i]).collect();
+    let phys: Vec<f64> = (0..3).map(|i| f64::from(v.dims[i]) * f64::from(v.spacing[i])).collect();
     println!("name:      {}", v.name);
+    println!("format:    {}", v.format);
     println!("dims:      {} x {} x {}", v.dims[0], v.dims[1], v.dims[2]);
     println!("type:      {}", v.source_type);
     println!("spacing:   {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
@@ -505,7 +542,29 @@ fn info(args: &VolumeArgs) -> Result<()> {
         "size:      {:.1} x {:.1} x {:.1} (spacing units); box {:.3} x {:.3} x {:.3}",
         phys[0], phys[1], phys[2], e.x, e.y, e.z
     );
-    println!("range:     {} .. {}", v.range[0], v.range[1]);
+    if let Some(o) = v.origin {
+        println!("origin:    {} {} {}", o[0], o[1], o[2]);
+    }
+    if v.scaling.is_identity() {
+        println!("range:     {} .. {}", v.range[0], v.range[1]);
+    } else {
+        println!("stored:    {} .. {}", v.stored_range[0], v.stored_range[1]);
+        println!(
+            "scaled:    {} .. {} (value = {} * stored + {})",
+            v.range[0], v.range[1], v.scaling.slope, v.scaling.intercept
+        );
+    }
+    let orientation = v
+        .notes
+        .iter()
+        .filter(|n| n.contains("orientation") || n.contains("oblique"));
+    let orientation: Vec<&String> = orientation.collect();
+    if orientation.is_empty() {
+        println!("axes:      voxel axes as stored (x fastest); no orientation applied");
+    }
+    for n in &orientation {
+        println!("axes:      {n}");
+    }
     let gpu_format = match v.gpu_texel_size() {
         1 => "R8_UNORM",
         2 => "R16_UNORM",
@@ -513,7 +572,7 @@ fn info(args: &VolumeArgs) -> Result<()> {
     };
     println!(
         "gpu:       {gpu_format}, {:.1} MiB",
-        v.gpu_bytes().len() as f64 / (1 << 20) as f64
+        v.gpu_memory_bytes() as f64 / (1 << 20) as f64
     );
     Ok(())
 }
@@ -540,6 +599,10 @@ fn main() -> ExitCode {
                 dims: None,
                 voxel_type: None,
                 spacing: None,
+                endian: None,
+                header_bytes: None,
+                max_dim: 2048,
+                no_downsample: false,
             },
             gpu: GpuArgs {
                 validate: false,
