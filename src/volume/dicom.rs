@@ -59,6 +59,8 @@ struct Slice {
     series: String,
     instance: i64,
     slice_step: Option<f64>,
+    /// Implicit or explicit VR little endian: pixel bytes in the file are the values, little-endian.
+    native_little_endian: bool,
 }
 
 fn floats(obj: &DefaultDicomObject, tag: Tag) -> Option<Vec<f64>> {
@@ -124,6 +126,10 @@ fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Sl
         orientation: floats(obj, IMAGE_ORIENTATION).and_then(six),
         series,
         instance: int(obj, INSTANCE_NUMBER).unwrap_or(0),
+        native_little_endian: matches!(
+            obj.meta().transfer_syntax().trim_end_matches('\0'),
+            "1.2.840.10008.1.2" | "1.2.840.10008.1.2.1"
+        ),
         slice_step: floats(obj, SPACING_BETWEEN_SLICES)
             .or_else(|| floats(obj, SLICE_THICKNESS))
             .and_then(|v| v.first().copied())
@@ -263,9 +269,14 @@ fn plan(mut slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
     })
 }
 
-/// Appends one slice's (or one multi-frame file's) pixels in the stored representation, keeping only
-/// `bits_stored` bits and sign-extending signed values.
-fn append_pixels(obj: &DefaultDicomObject, s: &Slice, out: &mut VoxelData, label: &str) -> Result<(), VolumeError> {
+/// Pixel data as found: little-endian bytes (OB, or read from the file) or decoded 16-bit words (OW).
+enum Pixels<'a> {
+    Bytes(&'a [u8]),
+    Words(Vec<u16>),
+}
+
+/// The PixelData element's value, refusing encapsulated (compressed) data.
+fn pixel_value<'a>(obj: &'a DefaultDicomObject, label: &str) -> Result<Pixels<'a>, VolumeError> {
     let err = |problem: String| header_error(label, problem);
     let element = obj
         .element_opt(PIXEL_DATA)
@@ -279,6 +290,17 @@ fn append_pixels(obj: &DefaultDicomObject, s: &Slice, out: &mut VoxelData, label
             obj.meta().transfer_syntax().trim_end_matches('\0')
         )));
     };
+    match value {
+        P::U8(bytes) => Ok(Pixels::Bytes(bytes)),
+        P::U16(w) => Ok(Pixels::Words(w.to_vec())),
+        P::I16(w) => Ok(Pixels::Words(w.iter().map(|&x| x as u16).collect())),
+        _ => Err(err("PixelData has a value representation volcast cannot read".into())),
+    }
+}
+
+/// Appends one slice's (or one multi-frame file's) pixels in the stored representation, keeping only
+/// `bits_stored` bits and sign-extending signed values.
+fn append_pixels(pixels: Pixels, s: &Slice, out: &mut VoxelData, label: &str) -> Result<(), VolumeError> {
     let count = s.rows as usize * s.columns as usize * s.frames as usize;
     let bits = u32::from(s.bits_stored);
     let mask = if bits >= 32 { u32::MAX } else { (1u32 << bits) - 1 };
@@ -290,8 +312,8 @@ fn append_pixels(obj: &DefaultDicomObject, s: &Slice, out: &mut VoxelData, label
             v as i32
         }
     };
-    let words: Vec<u16> = match (value, s.bits_allocated) {
-        (P::U8(bytes), 8) => {
+    let words: Vec<u16> = match (pixels, s.bits_allocated) {
+        (Pixels::Bytes(bytes), 8) => {
             let bytes = bytes
                 .get(..count)
                 .ok_or_else(|| short(label, bytes.len() as u64, count as u64))?;
@@ -305,7 +327,7 @@ fn append_pixels(obj: &DefaultDicomObject, s: &Slice, out: &mut VoxelData, label
             }
             return Ok(());
         }
-        (P::U8(bytes), _) => {
+        (Pixels::Bytes(bytes), _) => {
             let need = count as u64 * 2;
             let bytes = bytes
                 .get(..count * 2)
@@ -315,27 +337,48 @@ fn append_pixels(obj: &DefaultDicomObject, s: &Slice, out: &mut VoxelData, label
                 .map(|b| u16::from_le_bytes([b[0], b[1]]))
                 .collect()
         }
-        (P::U16(w), 16) => w
-            .get(..count)
-            .ok_or_else(|| short(label, w.len() as u64 * 2, count as u64 * 2))?
-            .to_vec(),
-        (P::I16(w), 16) => w
-            .get(..count)
-            .ok_or_else(|| short(label, w.len() as u64 * 2, count as u64 * 2))?
-            .iter()
-            .map(|&x| x as u16)
-            .collect(),
-        _ => return Err(err("PixelData has a value representation volcast cannot read".into())),
+        (Pixels::Words(w), 16) => {
+            if w.len() < count {
+                return Err(short(label, w.len() as u64 * 2, count as u64 * 2));
+            }
+            w
+        }
+        (Pixels::Words(_), _) => return Err(header_error(label, "16-bit PixelData in an 8-bit image".into())),
     };
     let VoxelData::U16(v) = out else {
         unreachable_layout(label)?
     };
     if s.signed {
-        v.extend(words.iter().map(|&w| (to_signed(u32::from(w)) + 32768) as u16));
+        v.extend(words[..count].iter().map(|&w| (to_signed(u32::from(w)) + 32768) as u16));
     } else {
-        v.extend(words.iter().map(|&w| (u32::from(w) & mask) as u16));
+        v.extend(words[..count].iter().map(|&w| (u32::from(w) & mask) as u16));
     }
     Ok(())
+}
+
+/// Finds uncompressed little-endian PixelData of exactly `needed` bytes in a file that dicom-object could not
+/// read to the end (junk after the pixels): the last `(7FE0,0010)` element header, explicit (OB/OW) or implicit
+/// VR, whose length covers `needed` bytes that are present.
+fn find_pixel_bytes(bytes: &[u8], needed: usize) -> Option<&[u8]> {
+    let u32_at = |i: usize| {
+        bytes
+            .get(i..i + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
+    };
+    (0..bytes.len().saturating_sub(8)).rev().find_map(|i| {
+        if bytes[i..i + 4] != [0xE0, 0x7F, 0x10, 0x00] {
+            return None;
+        }
+        let explicit = matches!(&bytes[i + 4..i + 6], b"OW" | b"OB") && bytes[i + 6..i + 8] == [0, 0];
+        let (len, start) = if explicit {
+            (u32_at(i + 8)?, i + 12)
+        } else {
+            (u32_at(i + 4)?, i + 8)
+        };
+        (len >= needed)
+            .then(|| bytes.get(start..start.checked_add(needed)?))
+            .flatten()
+    })
 }
 
 fn short(label: &str, actual: u64, needed: u64) -> VolumeError {
@@ -398,16 +441,20 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
         return Err(short(label, bytes.len() as u64, bytes_needed));
     }
     let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
-    append_pixels(&obj, &slices[0], &mut data, label)?;
+    append_pixels(pixel_value(&obj, label)?, &slices[0], &mut data, label)?;
     finish("dicom".into(), dims, spacing, voxel_type, scaling, notes, data)
 }
 
 fn open_dicom(path: &Path, header_only: bool) -> Result<DefaultDicomObject, VolumeError> {
     let label = format::file_label(path);
-    let mut options = OpenFileOptions::new().read_preamble(ReadPreamble::Auto);
-    if header_only {
-        options = options.read_until(PIXEL_DATA);
-    }
+    // Pass 1 stops before the pixels. Pass 2 reads everything; dicom-object 0.9 fails on junk after PixelData
+    // (one GE slice in the test data has such bytes), for which `load` falls back to `find_pixel_bytes`.
+    let options = OpenFileOptions::new().read_preamble(ReadPreamble::Auto);
+    let options = if header_only {
+        options.read_until(PIXEL_DATA)
+    } else {
+        options
+    };
     options
         .open_file(path)
         .map_err(|e| header_error(&label, format!("not a readable DICOM file: {e}")))
@@ -501,8 +548,24 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
     let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
     for (i, s) in slices.iter().enumerate() {
         let f = &files[s.source];
-        let obj = open_dicom(f, false)?;
-        append_pixels(&obj, s, &mut data, &format::file_label(f))?;
+        let f_label = format::file_label(f);
+        match open_dicom(f, false) {
+            Ok(obj) => append_pixels(pixel_value(&obj, &f_label)?, s, &mut data, &f_label)?,
+            Err(e) => {
+                // Pass 1 read this header, so the file is DICOM; dicom-object stops on bytes after the pixels.
+                if !s.native_little_endian {
+                    return Err(e);
+                }
+                let bytes = std::fs::read(f).map_err(|source| VolumeError::Io {
+                    path: f.clone(),
+                    source,
+                })?;
+                let frame_bytes =
+                    s.rows as usize * s.columns as usize * s.frames as usize * usize::from(s.bits_allocated / 8);
+                let pixels = find_pixel_bytes(&bytes, frame_bytes).ok_or(e)?;
+                append_pixels(Pixels::Bytes(pixels), s, &mut data, &f_label)?;
+            }
+        }
         progress.report((i + 1) as f64 / slices.len() as f64);
     }
     finish(
@@ -536,6 +599,7 @@ mod tests {
             series: "1".into(),
             instance,
             slice_step: Some(9.0),
+            native_little_endian: true,
         }
     }
 
