@@ -367,12 +367,8 @@ fn real_nifti_files_match_the_manifest_and_their_raw_twins() {
             ("NIfTI-1", dims, t),
             "{native}"
         );
-        for i in 0..3 {
-            assert!(
-                (f64::from(v.spacing[i]) - spacing[i]).abs() < 1e-4,
-                "{native}: {:?}",
-                v.spacing
-            );
+        for (got, want) in v.spacing.iter().zip(spacing) {
+            assert!((f64::from(*got) - want).abs() < 1e-4, "{native}: {:?}", v.spacing);
         }
         // MANIFEST values are printed to 6 significant digits.
         assert!(
