@@ -1,17 +1,21 @@
 //! Proves the CPU reference itself against closed forms, so that a GPU test failing against it points at the GPU.
 //!
-//! Most cases use a 16³ volume of constant value on a unit cube, looked at head-on along -z through the centre
-//! pixel of an odd-sized image: that ray crosses the box over exactly L = 1 = 16 voxels, so with step length `s`
-//! it takes n = #{k : (k + 0.5)·s < 16} samples and, with opacity α per voxel, reaches A = 1 - (1 - α)^(n·s).
+//! Most cases use a 16³ volume on a unit cube, looked at head-on along -z through the centre pixel of an odd-sized
+//! image: that ray crosses the box over exactly L = 1 = 16 voxels, so with step length `s` it takes
+//! n = #{k : (k + o)·s < 16} samples (o = 0.5 without jitter) and, with opacity α per voxel, reaches
+//! A = 1 - (1 - α)^(n·s). Colours are composited in linear light and encoded to sRGB once (rule 8).
 
 mod common;
 
 use common::compare;
-use common::reference::{quantise, ray_segment, render_reference, Reference};
+use common::reference::{
+    encode, linear_to_srgb, pixel_ray, quantise, ray_segment, render_reference, srgb_to_linear, Reference,
+};
 use glam::{DVec3, Vec3};
-use image::RgbaImage;
+use image::{Rgba, RgbaImage};
 use volcast::camera::Camera;
-use volcast::settings::RenderSettings;
+use volcast::settings::{jitter_offset, CompositeMode, RenderSettings, Shading};
+use volcast::tf::{self, TfUnits, TransferFunction};
 use volcast::volume::{Volume, VoxelData, VoxelType};
 
 const N: u32 = 16;
@@ -26,28 +30,40 @@ fn keep() -> f64 {
     1.0 - f64::from(STEP_ALPHA)
 }
 
-/// A 16³ volume on the unit cube whose voxels are `value(x, y, z)`, normalised with the data range fixed at
-/// [0, 2] (so raw 1 reads 0.5 whatever the data's own range is).
-fn volume_from(value: impl Fn(u32, u32, u32) -> f32) -> Volume {
-    let mut data = Vec::with_capacity((N * N * N) as usize);
-    for z in 0..N {
-        for y in 0..N {
-            for x in 0..N {
+/// A volume of `dims` voxels with `spacing` whose voxels are `value(x, y, z)`, normalised with the data range fixed
+/// at `range`.
+fn volume_with(dims: [u32; 3], spacing: [f32; 3], range: [f64; 2], value: impl Fn(u32, u32, u32) -> f32) -> Volume {
+    let mut data = Vec::with_capacity((dims[0] * dims[1] * dims[2]) as usize);
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
                 data.push(value(x, y, z));
             }
         }
     }
     let mut volume =
-        Volume::new("selftest", [N; 3], [1.0; 3], VoxelType::F32, VoxelData::F32(data)).expect("a valid volume");
-    volume.range = [0.0, 2.0];
+        Volume::new("selftest", dims, spacing, VoxelType::F32, VoxelData::F32(data)).expect("a valid volume");
+    volume.range = range;
     volume
+}
+
+/// A 16³ volume on the unit cube whose voxels are `value(x, y, z)`, normalised with the data range fixed at
+/// [0, 2] (so raw 1 reads 0.5 whatever the data's own range is).
+fn volume_from(value: impl Fn(u32, u32, u32) -> f32) -> Volume {
+    volume_with([N; 3], [1.0; 3], [0.0, 2.0], value)
 }
 
 fn constant_volume() -> Volume {
     volume_from(|_, _, _| 1.0)
 }
 
-/// Looking down -z at the unit cube from z = 3, window [0,1] (so the constant volume has c = 0.5), no early stop.
+/// A 16³ unit cube whose normalised value is z/16 at texel z: along z, v(tex) = tex − 1/32, clamped to [0, 15/16].
+fn z_ramp() -> Volume {
+    volume_with([N; 3], [1.0; 3], [0.0, 16.0], |_, _, z| z as f32)
+}
+
+/// Looking down -z at the unit cube from z = 3, window [0,1] (so the constant volume has v = 0.5), no early stop,
+/// samples at the step midpoints.
 fn head_on(volume: &Volume, size: u32) -> RenderSettings {
     let mut s = RenderSettings::new(size, size, volume.extent());
     s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO);
@@ -55,20 +71,53 @@ fn head_on(volume: &Volume, size: u32) -> RenderSettings {
     s.step_alpha = STEP_ALPHA;
     s.early_termination = 1.0;
     s.background = BACKGROUND;
+    s.jitter = None;
     s
 }
 
-fn lut_rgb(s: &RenderSettings, c: f64) -> DVec3 {
-    let lut = s.colormap.lut();
-    let i = (c * 255.0).floor() as usize;
-    let t = c * 255.0 - i as f64;
-    let rgb = |e: [u8; 4]| DVec3::new(e[0].into(), e[1].into(), e[2].into()) / 255.0;
-    rgb(lut[i]) * (1.0 - t) + rgb(lut[(i + 1).min(255)]) * t
+/// A transfer function (normalised units) with colour `srgb` and opacity `alpha` everywhere.
+fn constant_tf(srgb: [f32; 3], alpha: f32) -> TransferFunction {
+    TransferFunction {
+        name: "constant".into(),
+        units: TfUnits::Normalized,
+        colors: vec![[0.0, srgb[0], srgb[1], srgb[2]], [1.0, srgb[0], srgb[1], srgb[2]]],
+        colormap: Default::default(),
+        opacity: vec![[0.0, alpha], [1.0, alpha]],
+    }
+}
+
+/// Grey level = v (sRGB), opacity `alpha`.
+fn grey_ramp_tf(alpha: f32) -> TransferFunction {
+    TransferFunction {
+        colors: vec![[0.0, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 1.0]],
+        ..constant_tf([0.0; 3], alpha)
+    }
+}
+
+fn linear(c: Vec3) -> DVec3 {
+    let c = c.as_dvec3();
+    DVec3::new(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z))
+}
+
+/// The pixel a miss shows: the background, decoded for compositing and encoded again.
+fn background_pixel() -> Rgba<u8> {
+    quantise(encode(linear(BACKGROUND)))
+}
+
+/// The classification table's colour at `v` by the library's own (f32) lookup, for the simple-model tests.
+fn table_rgb(volume: &Volume, s: &RenderSettings, v: f64) -> DVec3 {
+    let lut = tf::bake(&s.classification(), s.window, volume.range);
+    let [r, g, b, _] = tf::lookup(&lut, v as f32);
+    DVec3::new(r.into(), g.into(), b.into())
 }
 
 fn expected_samples(distance_in_voxels: f64, step_length: f64) -> u32 {
+    expected_samples_at(distance_in_voxels, step_length, 0.5)
+}
+
+fn expected_samples_at(distance_in_voxels: f64, step_length: f64, offset: f64) -> u32 {
     (0..)
-        .take_while(|&k| (f64::from(k) + 0.5) * step_length < distance_in_voxels)
+        .take_while(|&k| (f64::from(k) + offset) * step_length < distance_in_voxels)
         .count() as u32
 }
 
@@ -79,8 +128,15 @@ fn assert_near(what: &str, actual: f64, expected: f64, tolerance: f64) {
     );
 }
 
+fn assert_near3(what: &str, actual: DVec3, expected: DVec3, tolerance: f64) {
+    assert!(
+        (actual - expected).abs().max_element() <= tolerance,
+        "{what}: {actual} but expected {expected} (± {tolerance})"
+    );
+}
+
 fn assert_all_background(image: &RgbaImage, what: &str) {
-    let bg = quantise(BACKGROUND.as_dvec3());
+    let bg = background_pixel();
     for (x, y, p) in image.enumerate_pixels() {
         assert_eq!(*p, bg, "{what}: pixel ({x}, {y}) is not the background");
     }
@@ -99,24 +155,25 @@ fn constant_volume_head_on_matches_closed_form() {
 
     let alpha = 1.0 - keep().powi(16);
     assert_near("opacity", trace.alpha, alpha, 1e-12);
-    // c = 0.5 sits halfway between table entries 127 and 128.
-    let color = lut_rgb(&s, 0.5) * alpha;
-    assert!(
-        (trace.color - color).abs().max_element() < 1e-12,
-        "{:?} vs {color:?}",
-        trace.color
-    );
+    // v = 0.5 sits halfway between table entries 2047 and 2048.
+    let color = table_rgb(&volume, &s, 0.5) * alpha;
+    assert_near3("colour", trace.color, color, 1e-7);
 
+    // Rule 8: over the background in linear light, encoded to sRGB once.
     let image = render_reference(&volume, &s);
-    let expected = quantise(color + (1.0 - alpha) * BACKGROUND.as_dvec3());
+    let linear_out = color + (1.0 - alpha) * linear(BACKGROUND);
+    assert_near3("linear output", trace.linear, linear_out, 1e-7);
+    let srgb = |c: f64| linear_to_srgb(c);
+    let expected = quantise(DVec3::new(srgb(linear_out.x), srgb(linear_out.y), srgb(linear_out.z)));
     assert_eq!(*image.get_pixel(CENTRE, CENTRE), expected);
 
     // Off-centre rays cross more or less of the box, but a constant volume keeps every pixel's hue: C = rgb·A.
+    let (tracer, rgb) = (reference.tracer(&s), table_rgb(&volume, &s, 0.5));
     for y in 0..SIZE {
         for x in 0..SIZE {
-            let t = reference.trace(&s, x, y);
-            let closed = lut_rgb(&s, 0.5) * (1.0 - keep().powi(t.samples as i32));
-            assert!((t.color - closed).abs().max_element() < 1e-12, "pixel ({x}, {y})");
+            let t = tracer.trace(x, y);
+            let closed = rgb * (1.0 - keep().powi(t.samples as i32));
+            assert_near3(&format!("pixel ({x}, {y})"), t.color, closed, 1e-7);
         }
     }
 }
@@ -129,11 +186,18 @@ fn window_excluding_every_value_gives_the_background() {
     assert_all_background(&render_reference(&volume, &s), "window above the value");
     s.window = [0.0, 0.4];
     assert_all_background(&render_reference(&volume, &s), "window below the value");
-    // A window whose edge is the value itself still includes it (the rule excludes only v < lo or v > hi).
+    // A window whose edge is the value itself still includes it (the rule excludes only v < lo or v > hi); the
+    // table, zero below the window, blends v = 0.5 = 2047.5/4095 halfway from entry 2047 (zero) to 2048.
     s.window = [0.5, 1.0];
     let trace = Reference::new(&volume).trace(&s, CENTRE, CENTRE);
     assert_eq!(trace.composited, 16);
-    assert_near("opacity at c = 0", trace.alpha, 1.0 - keep().powi(16), 1e-12);
+    let a = f64::from(STEP_ALPHA) / 2.0;
+    assert_near(
+        "opacity at the window's edge",
+        trace.alpha,
+        1.0 - (1.0 - a).powi(16),
+        1e-12,
+    );
 }
 
 #[test]
@@ -157,8 +221,13 @@ fn slab_restricts_the_segment() {
     assert_eq!(trace.samples, 0);
     assert_eq!(
         quantise(trace.output),
-        quantise(BACKGROUND.as_dvec3()),
+        background_pixel(),
         "no segment shows the background"
+    );
+    assert_eq!(
+        background_pixel(),
+        Rgba([51, 102, 153, 255]),
+        "sRGB → linear → sRGB keeps the bytes"
     );
 }
 
@@ -184,7 +253,7 @@ fn camera_inside_the_box_starts_at_the_near_plane() {
         stats.hit_pixels, stats.pixels,
         "every ray from inside the box has a segment"
     );
-    let bg = quantise(BACKGROUND.as_dvec3());
+    let bg = background_pixel();
     assert!(image.pixels().all(|p| *p != bg), "every pixel shows some volume");
     for (x, y) in [(0, 0), (SIZE - 1, 2), (3, SIZE - 1)] {
         let segment = reference.trace(&s, x, y).segment.expect("hit");
@@ -234,7 +303,7 @@ fn early_termination_caps_opacity() {
         assert_eq!(trace.samples, samples, "termination at {threshold}");
         assert_near("opacity", trace.alpha, 1.0 - 0.5f64.powi(samples as i32), 1e-12);
         assert_eq!(trace.terminated_early, threshold < 1.0);
-        assert!((trace.color - lut_rgb(&s, 0.5) * trace.alpha).abs().max_element() < 1e-12);
+        assert_near3("colour", trace.color, table_rgb(&volume, &s, 0.5) * trace.alpha, 1e-7);
     }
 }
 
@@ -247,9 +316,10 @@ fn multiplied_alpha_scales_opacity_by_the_windowed_value() {
     s.window = [0.25, 1.0];
     let c = (0.5 - 0.25) / 0.75;
     let trace = reference.trace(&s, CENTRE, CENTRE);
+    // The table is linear in c between neighbouring entries, so the lookup gives c × step alpha up to f32 rounding.
     let alpha = 1.0 - (1.0 - c * f64::from(STEP_ALPHA)).powi(16);
-    assert_near("opacity", trace.alpha, alpha, 1e-12);
-    assert!((trace.color - lut_rgb(&s, c) * alpha).abs().max_element() < 1e-12);
+    assert_near("opacity", trace.alpha, alpha, 1e-6);
+    assert_near3("colour", trace.color, table_rgb(&volume, &s, 0.5) * trace.alpha, 1e-7);
 }
 
 #[test]
@@ -284,7 +354,7 @@ fn image_orientation_follows_the_camera() {
     s.window = [0.25, 1.0];
     s.background = BACKGROUND;
     let image = render_reference(&volume, &s);
-    let bg = quantise(BACKGROUND.as_dvec3());
+    let bg = background_pixel();
     let mut top_right = 0;
     for (x, y, p) in image.enumerate_pixels() {
         if *p == bg {
@@ -319,7 +389,7 @@ fn silhouette_matches_the_camera_projection() {
     let (x1, y1) = to_pixel(Vec3::new(0.5, 0.5, 0.5));
     let (xs, ys) = ((x0.min(x1), x0.max(x1)), (y0.min(y1), y0.max(y1)));
     // Centres are ≥ 0.05 px from the projected edge here, so the reading is unambiguous.
-    let bg = quantise(BACKGROUND.as_dvec3());
+    let bg = background_pixel();
     for (x, y, p) in image.enumerate_pixels() {
         let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
         let inside = cx > xs.0 && cx < xs.1 && cy > ys.0 && cy < ys.1;
@@ -413,5 +483,501 @@ fn reference_speed_on_a_builtin_volume() {
     assert!(
         image.pixels().any(|p| p[0] != 0 || p[1] != 0 || p[2] != 0),
         "the helix is visible"
+    );
+}
+
+/// Rule 8: compositing happens in linear light and is encoded once, so 50% white over black is sRGB 188, not 128.
+#[test]
+fn half_white_over_black_is_srgb_188() {
+    let volume = constant_volume();
+    let reference = Reference::new(&volume);
+    let mut s = head_on(&volume, SIZE);
+    s.transfer_function = Some(constant_tf([1.0; 3], 0.5));
+    s.background = Vec3::ZERO;
+    // One voxel of the box along the ray: one sample, whose opacity is the table's 0.5.
+    s.set_slab(2, 0.5, 1.0 / 16.0);
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    assert_eq!(trace.samples, 1);
+    assert_near("opacity", trace.alpha, 0.5, 1e-12);
+    assert_near3("linear output", trace.linear, DVec3::splat(0.5), 1e-12);
+    assert_eq!(quantise(trace.output), Rgba([188, 188, 188, 255]));
+    assert_eq!(
+        *render_reference(&volume, &s).get_pixel(CENTRE, CENTRE),
+        Rgba([188, 188, 188, 255])
+    );
+
+    // And 50% black over a white background: also half the light, also 188.
+    s.transfer_function = Some(constant_tf([0.0; 3], 0.5));
+    s.background = Vec3::ONE;
+    assert_eq!(
+        quantise(reference.trace(&s, CENTRE, CENTRE).output),
+        Rgba([188, 188, 188, 255])
+    );
+}
+
+/// Rule 1, orthographic: rays parallel to the view direction from the plane through the eye, the view as high as
+/// the perspective view is at the target's distance.
+#[test]
+fn orthographic_rays_are_parallel_and_framed_like_perspective_at_the_target() {
+    let volume = constant_volume();
+    let (width, height) = (15u32, 9u32);
+    let mut persp = head_on(&volume, SIZE);
+    (persp.width, persp.height) = (width, height);
+    persp.camera = Camera::orbit(30.0, 20.0, 3.0, Vec3::new(0.1, 0.0, -0.05));
+    persp.camera.fov_y_deg = 40.0;
+    let mut ortho = persp.clone();
+    ortho.camera.ortho = true;
+
+    let eye = ortho.camera.eye.as_dvec3();
+    let target = ortho.camera.target.as_dvec3();
+    let d = (target - eye).length();
+    let forward = (target - eye) / d;
+    let origins: Vec<Vec<DVec3>> = (0..height)
+        .map(|y| {
+            (0..width)
+                .map(|x| {
+                    let (origin, dir) = pixel_ray(&ortho, x, y);
+                    assert_near3("direction is the view direction", dir, forward, 1e-12);
+                    assert_near(
+                        "origin on the plane through the eye",
+                        (origin - eye).dot(forward),
+                        0.0,
+                        1e-12,
+                    );
+                    // Where the perspective ray of the same pixel crosses the target's plane.
+                    let (p_origin, p_dir) = pixel_ray(&persp, x, y);
+                    let at_target = p_origin + p_dir * (d / p_dir.dot(forward));
+                    assert_near3(
+                        &format!("pixel ({x}, {y}) at the target"),
+                        origin + forward * d,
+                        at_target,
+                        1e-9,
+                    );
+                    origin
+                })
+                .collect()
+        })
+        .collect();
+    // The view is 2·d·tan(fov/2) high and aspect times as wide: pixel centres are that over the size apart.
+    let view_h = 2.0 * d * (40f64.to_radians() / 2.0).tan();
+    let view_w = view_h * f64::from(width) / f64::from(height);
+    let rows = (origins[height as usize - 1][0] - origins[0][0]).length();
+    let cols = (origins[0][width as usize - 1] - origins[0][0]).length();
+    assert_near(
+        "rows span",
+        rows,
+        view_h * f64::from(height - 1) / f64::from(height),
+        1e-9,
+    );
+    assert_near(
+        "columns span",
+        cols,
+        view_w * f64::from(width - 1) / f64::from(width),
+        1e-9,
+    );
+
+    // Head-on, every ray inside the front face crosses the whole unit depth: 16 samples each, the same colour, and
+    // the silhouette is the face itself, at any distance.
+    let reference = Reference::new(&volume);
+    for distance in [3.0f32, 7.0] {
+        let mut s = head_on(&volume, SIZE);
+        s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, distance), Vec3::ZERO);
+        s.camera.ortho = true;
+        let half_h = f64::from(distance) * 15f64.to_radians().tan();
+        let tracer = reference.tracer(&s);
+        let centre_trace = tracer.trace(CENTRE, CENTRE);
+        for y in 0..SIZE {
+            for x in 0..SIZE {
+                let world = |i: u32| ((f64::from(i) + 0.5) / f64::from(SIZE) * 2.0 - 1.0) * half_h;
+                let inside = world(x).abs() < 0.5 && world(y).abs() < 0.5;
+                let trace = tracer.trace(x, y);
+                assert_eq!(
+                    trace.segment.is_some(),
+                    inside,
+                    "pixel ({x}, {y}) at distance {distance}"
+                );
+                if inside {
+                    assert_eq!(trace.samples, 16);
+                    assert_eq!(trace.output, centre_trace.output);
+                }
+            }
+        }
+    }
+
+    // From inside the box every ray starts at the near plane: view depth `near` = distance `near` along it.
+    let mut s = head_on(&volume, SIZE);
+    s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, 0.2), Vec3::new(0.0, 0.0, -1.0));
+    s.camera.ortho = true;
+    s.camera.near = 0.05;
+    let eye = s.camera.eye.as_dvec3();
+    let tracer = reference.tracer(&s);
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let segment = tracer.trace(x, y).segment.expect("every ray starts inside the box");
+            let depth = (segment.at(segment.t_start) - eye).dot(DVec3::new(0.0, 0.0, -1.0));
+            assert_near("view depth of the start", depth, 0.05, 1e-7);
+            assert_near("end", segment.at(segment.t_end).z, -0.5, 1e-12);
+        }
+    }
+}
+
+/// The values the centre ray samples on [`z_ramp`] looking down -z: tex_z = 1 − (k + o)/16.
+fn ramp_samples(offset: f64) -> Vec<f64> {
+    (0..16)
+        .map(|k| f64::from(k) + offset)
+        .take_while(|&u| u < 16.0)
+        .map(|u| (31.0 / 32.0 - u / 16.0).clamp(0.0, 15.0 / 16.0))
+        .collect()
+}
+
+/// Rule 7 for MIP, MinIP and average: the colour at the max/min/mean of the visible samples, A = 1; with and
+/// without jitter, whose offset moves every sample.
+#[test]
+fn mip_minip_and_average_on_a_linear_ramp() {
+    let volume = z_ramp();
+    let reference = Reference::new(&volume);
+    let mut s = head_on(&volume, SIZE);
+    s.transfer_function = Some(grey_ramp_tf(0.3));
+    let mut offsets = Vec::new();
+    for jitter in [None, Some(0), Some(1), Some(7), Some(12345), Some(u32::MAX)] {
+        s.jitter = jitter;
+        let offset = jitter.map_or(0.5, |seed| f64::from(jitter_offset(CENTRE, CENTRE, seed)));
+        offsets.push(offset);
+        for window in [[0.0f32, 1.0], [0.2, 0.8], [0.25, 0.75], [0.3, 0.31]] {
+            s.window = window;
+            let [lo, hi] = window.map(f64::from);
+            let visible: Vec<f64> = ramp_samples(offset)
+                .into_iter()
+                .filter(|v| (lo..=hi).contains(v))
+                .collect();
+            for mode in [CompositeMode::Mip, CompositeMode::MinIp, CompositeMode::Average] {
+                s.mode = mode;
+                let what = format!("{mode:?}, jitter {jitter:?}, window {window:?}");
+                let trace = reference.trace(&s, CENTRE, CENTRE);
+                assert_eq!(trace.offset, offset, "{what}");
+                assert_eq!(trace.composited as usize, visible.len(), "{what}");
+                if visible.is_empty() {
+                    assert_eq!(trace.value, None, "{what}");
+                    assert_eq!(quantise(trace.output), background_pixel(), "{what}");
+                    continue;
+                }
+                let m = match mode {
+                    CompositeMode::Mip => visible.iter().copied().fold(f64::MIN, f64::max),
+                    CompositeMode::MinIp => visible.iter().copied().fold(f64::MAX, f64::min),
+                    _ => visible.iter().sum::<f64>() / visible.len() as f64,
+                };
+                assert_near(&what, trace.value.expect("a visible sample"), m, 1e-12);
+                assert_near(&format!("{what}: opacity"), trace.alpha, 1.0, 0.0);
+                // Grey level v in sRGB: entry i holds linear(i/4095) inside the window and zero outside it, which
+                // the lookup blends in when m lies within one entry of the window's edge (as at m = 0.75 here).
+                let u = m * 4095.0;
+                let (lo_entry, hi_entry) = (u.floor() / 4095.0, (u.floor() + 1.0) / 4095.0);
+                let expected = if lo_entry >= lo && hi_entry <= hi {
+                    srgb_to_linear(m)
+                } else {
+                    let inside = |e: f64| {
+                        if (lo..=hi).contains(&(e as f32 as f64)) {
+                            srgb_to_linear(e)
+                        } else {
+                            0.0
+                        }
+                    };
+                    let f = u - u.floor();
+                    inside(lo_entry) * (1.0 - f) + inside(hi_entry) * f
+                };
+                assert_near3(&format!("{what}: colour"), trace.color, DVec3::splat(expected), 1e-6);
+                let srgb = linear_to_srgb(expected);
+                assert_near3(&format!("{what}: output"), trace.output, DVec3::splat(srgb), 1e-6);
+            }
+        }
+    }
+    // Without jitter: v_k = (15 − k)/16, so MIP 15/16, MinIP 0, mean 7.5/16.
+    s.jitter = None;
+    s.window = [0.0, 1.0];
+    for (mode, m) in [
+        (CompositeMode::Mip, 15.0 / 16.0),
+        (CompositeMode::MinIp, 0.0),
+        (CompositeMode::Average, 7.5 / 16.0),
+    ] {
+        s.mode = mode;
+        assert_near(
+            &format!("{mode:?}"),
+            reference.trace(&s, CENTRE, CENTRE).value.unwrap(),
+            m,
+            1e-15,
+        );
+    }
+    offsets.sort_by(f64::total_cmp);
+    offsets.dedup();
+    assert_eq!(offsets.len(), 6, "every seed moves the samples: {offsets:?}");
+    // NaN samples are never visible.
+    let nan = volume_from(|_, _, _| f32::NAN);
+    s.mode = CompositeMode::Mip;
+    assert_all_background(&render_reference(&nan, &s), "MIP of NaN");
+}
+
+/// Rule 2 with jitter: offsets are the hash of pixel and seed, and averaged over seeds the jittered ray's optical
+/// depth is the continuous integral, which the midpoint samples miss when the steps don't fit the ray.
+#[test]
+fn jittered_mean_converges_to_the_integral() {
+    // Normalised value along the centre ray, t in voxels from the entry: 0 until 0.5, (t − 0.5)/16 until 15.5,
+    // then 15/16; opacity 0.3·v, so the extinction per voxel is −ln(1 − 0.3·v).
+    let volume = volume_with([N; 3], [1.0; 3], [0.0, 16.0], |_, _, z| (15 - z) as f32);
+    let reference = Reference::new(&volume);
+    let mut s = head_on(&volume, 1);
+    s.transfer_function = Some(TransferFunction {
+        opacity: vec![[0.0, 0.0], [1.0, 0.3]],
+        ..constant_tf([1.0; 3], 0.0)
+    });
+    s.step_length = 1.3;
+    let u_end: f64 = 0.3 * 15.0 / 16.0;
+    let integral = 16.0 / 0.3 * ((1.0 - u_end) * (1.0 - u_end).ln() + u_end) - 0.5 * (1.0 - u_end).ln();
+
+    let depth = |s: &RenderSettings| -(1.0 - reference.trace(s, 0, 0).alpha).ln();
+    let midpoint = depth(&s);
+    assert!(
+        (midpoint - integral).abs() > 0.08,
+        "midpoint samples cover 15.6 of 16 voxels: {midpoint} vs {integral}"
+    );
+    let seeds = 1024;
+    let (mut sum, mut offset_sum) = (0.0, 0.0);
+    for seed in 0..seeds {
+        s.jitter = Some(seed);
+        let trace = reference.trace(&s, 0, 0);
+        let o = f64::from(jitter_offset(0, 0, seed));
+        assert_eq!(trace.offset, o);
+        assert!((0.0..1.0).contains(&o));
+        assert_eq!(trace.samples, expected_samples_at(16.0, 1.3, o), "seed {seed}");
+        offset_sum += o;
+        sum += -(1.0 - trace.alpha).ln();
+    }
+    let mean = sum / f64::from(seeds);
+    assert_near("mean offset", offset_sum / f64::from(seeds), 0.5, 0.03);
+    assert_near("mean jittered optical depth", mean, integral, 0.015);
+}
+
+/// Rule 7's isosurface on a linear ramp along the ray: the hit is the analytic crossing within step/512 (8
+/// bisections of one step, then the midpoint); the first sample at or above the iso value hits at itself; the
+/// window is ignored for the search; the colour is the table's at the iso value, shaded with the default lighting.
+#[test]
+fn isosurface_hits_the_analytic_crossing() {
+    // Looking up +z at z_ramp: t world units into the box, tex_z = t, v = t − 1/32.
+    let volume = z_ramp();
+    let reference = Reference::new(&volume);
+    let mut s = head_on(&volume, SIZE);
+    s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO);
+    s.mode = CompositeMode::Isosurface;
+    s.transfer_function = Some(grey_ramp_tf(0.3));
+    for step_length in [0.5f32, 1.0, 1.7, 3.0] {
+        for jitter in [None, Some(3), Some(99)] {
+            for iso in [0.1f32, 0.37, 0.5, 0.8] {
+                for window in [[0.0f32, 1.0], [0.95, 1.0]] {
+                    (s.step_length, s.jitter, s.iso_value, s.window) = (step_length, jitter, iso, window);
+                    let what = format!("iso {iso}, step {step_length}, jitter {jitter:?}, window {window:?}");
+                    let h = f64::from(step_length) / 16.0;
+                    let trace = reference.trace(&s, CENTRE, CENTRE);
+                    let crossing = 2.5 + f64::from(iso) + 1.0 / 32.0;
+                    let hit = trace.hit.unwrap_or_else(|| panic!("{what}: no hit"));
+                    assert_near(&what, hit, crossing, h / 512.0 + 1e-12);
+                    assert_eq!(trace.alpha, 1.0);
+                    if window == [0.0, 1.0] {
+                        // Gradient (0, 0, 1/16) per voxel = (0, 0, 1) per world unit, facing the eye: |n·L| = 1.
+                        let lit = srgb_to_linear(f64::from(iso)) * (0.2 + 0.7) + 0.3;
+                        assert_near3(&format!("{what}: colour"), trace.color, DVec3::splat(lit), 1e-6);
+                    } else {
+                        // The table is zero outside the window: only the specular highlight is left.
+                        assert_near3(&format!("{what}: colour"), trace.color, DVec3::splat(0.3), 1e-6);
+                    }
+                }
+            }
+        }
+    }
+    // The first sample already at or above the value: the hit is that sample, exactly.
+    s.iso_value = 0.0;
+    for jitter in [None, Some(5)] {
+        s.jitter = jitter;
+        let trace = reference.trace(&s, CENTRE, CENTRE);
+        assert_eq!(trace.samples, 1);
+        assert_near(
+            "first sample",
+            trace.hit.unwrap(),
+            2.5 + trace.offset * f64::from(s.step_length) / 16.0,
+            1e-12,
+        );
+    }
+    // Above every value, or NaN everywhere: no hit, the background.
+    (s.iso_value, s.step_length, s.jitter) = (0.95, 1.0, None);
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    assert_eq!((trace.hit, trace.samples), (None, 16));
+    assert_all_background(&render_reference(&volume, &s), "iso above the data");
+    s.iso_value = 0.0;
+    assert_all_background(&render_reference(&volume_from(|_, _, _| f32::NAN), &s), "iso in NaN");
+}
+
+/// A planar ramp on a box with anisotropic voxels (1/32 × 1/32 × 1/16 world units): raw 2x + y + 3z over the range
+/// [0, 120], so the gradient is (2, 1, 3)/120 per voxel everywhere trilinear filtering is not clamped.
+fn planar_ramp() -> Volume {
+    volume_with([N; 3], [1.0, 1.0, 2.0], [0.0, 120.0], |x, y, z| {
+        (2 * x + y + 3 * z) as f32
+    })
+}
+
+/// Looking along `-axis_dir` at the box through the centre pixel, the segment kept where the gradient's stencil
+/// stays clear of the clamped edges.
+fn planar_view(volume: &Volume, eye: Vec3) -> RenderSettings {
+    let mut s = head_on(volume, SIZE);
+    s.camera = Camera::looking_at(eye, Vec3::ZERO);
+    s.transfer_function = Some(constant_tf([0.8, 0.5, 0.3], STEP_ALPHA));
+    for axis in 0..3 {
+        s.set_slab(axis, 0.5, 0.75);
+    }
+    s
+}
+
+/// Rule 5's lighting on a planar ramp, whose gradient is known exactly: C = lit·A with
+/// lit = rgb·(ambient + diffuse·|cos θ|) + specular·|cos θ|^shininess, θ between the world gradient and the view.
+#[test]
+fn shading_on_a_planar_ramp() {
+    let volume = planar_ramp();
+    let reference = Reference::new(&volume);
+    assert_near3(
+        "voxel size",
+        reference.voxel_world(),
+        DVec3::new(1.0 / 32.0, 1.0 / 32.0, 1.0 / 16.0),
+        1e-9,
+    );
+    let shading = Shading {
+        ambient: 0.1,
+        diffuse: 0.6,
+        specular: 0.4,
+        shininess: 8.0,
+    };
+    let world_gradient = DVec3::new(2.0 * 32.0, 32.0, 3.0 * 16.0) / 120.0;
+    let rgb = linear(Vec3::new(0.8, 0.5, 0.3));
+    for (eye, view) in [
+        (Vec3::new(0.0, 0.0, 3.0), DVec3::Z),
+        (Vec3::new(0.0, 0.0, -3.0), -DVec3::Z),
+        (Vec3::new(3.0, 0.0, 0.0), DVec3::X),
+        (Vec3::new(0.0, -3.0, 0.0), -DVec3::Y),
+    ] {
+        let mut s = planar_view(&volume, eye);
+        s.shading = Some(shading);
+        let trace = reference.trace(&s, CENTRE, CENTRE);
+        let cos = world_gradient.normalize().dot(view).abs();
+        let lit = rgb * (0.1 + 0.6 * cos) + DVec3::splat(0.4 * cos.powi(8));
+        let seg = trace.segment.expect("hit");
+        let n = expected_samples(seg.length() / reference.step_world(&s) * f64::from(s.step_length), 1.0);
+        assert!(n >= 8, "{n} samples");
+        assert_eq!(trace.samples, n);
+        let alpha = 1.0 - keep().powi(n as i32);
+        assert_near(&format!("opacity from {eye}"), trace.alpha, alpha, 1e-12);
+        assert_near3(&format!("shaded colour from {eye}"), trace.color, lit * alpha, 1e-6);
+        // Without `shading` the colour is unlit.
+        s.shading = None;
+        assert_near3("unlit", reference.trace(&s, CENTRE, CENTRE).color, rgb * alpha, 1e-6);
+    }
+    // The gradient itself, in value per voxel.
+    let g = reference.gradient(DVec3::new(0.4, 0.55, 0.6));
+    assert_near3("gradient", g, DVec3::new(2.0, 1.0, 3.0) / 120.0, 1e-12);
+
+    // A constant volume has no gradient: the colour is kept.
+    let constant = constant_volume();
+    let mut s = planar_view(&constant, Vec3::new(0.0, 0.0, 3.0));
+    s.shading = Some(shading);
+    let trace = Reference::new(&constant).trace(&s, CENTRE, CENTRE);
+    assert_near3("zero gradient keeps rgb", trace.color, rgb * trace.alpha, 1e-6);
+    // A NaN among the six samples zeroes the gradient.
+    let half_nan = volume_from(|x, _, _| if x < N / 2 { f32::NAN } else { x as f32 / 8.0 });
+    let r = Reference::new(&half_nan);
+    assert_eq!(r.gradient(DVec3::new(9.0 / 16.0, 0.5, 0.5)), DVec3::ZERO);
+    assert_near3(
+        "clear of the NaN",
+        r.gradient(DVec3::new(11.0 / 16.0, 0.5, 0.5)),
+        DVec3::X / 16.0,
+        1e-12,
+    );
+}
+
+/// Rule 5's gradient opacity: a ← a·min(1, |g|/r), |g| in value per voxel; applied with or without lighting.
+#[test]
+fn gradient_opacity_scales_alpha_by_the_gradient() {
+    let volume = planar_ramp();
+    let reference = Reference::new(&volume);
+    let g = 14f64.sqrt() / 120.0;
+    let a = f64::from(STEP_ALPHA);
+    for (r, nominal) in [(g * 2.0, 0.5), (g * 4.0, 0.25), (g / 2.0, 1.0), (g, 1.0)] {
+        let r = r as f32;
+        // r as the f32 setting holds it: `nominal` up to that rounding.
+        let scale = (g / f64::from(r)).min(1.0);
+        assert_near("scale", scale, nominal, 1e-6);
+        for shading in [None, Some(Shading::default())] {
+            let mut s = planar_view(&volume, Vec3::new(0.0, 0.0, 3.0));
+            s.gradient_opacity = Some(r);
+            s.shading = shading;
+            let trace = reference.trace(&s, CENTRE, CENTRE);
+            let alpha = 1.0 - (1.0 - a * scale).powi(trace.samples as i32);
+            assert_near(
+                &format!("opacity with r = {r}, shading {shading:?}"),
+                trace.alpha,
+                alpha,
+                1e-12,
+            );
+        }
+    }
+    // No gradient, no opacity.
+    let constant = constant_volume();
+    let mut s = planar_view(&constant, Vec3::new(0.0, 0.0, 3.0));
+    s.gradient_opacity = Some(0.01);
+    assert_eq!(Reference::new(&constant).trace(&s, CENTRE, CENTRE).alpha, 0.0);
+}
+
+/// Rule 6's density model: the step's opacity a·density·step_length, linear in the density up to 1.
+#[test]
+fn density_mode_opacity_is_linear_in_density() {
+    let volume = constant_volume();
+    let reference = Reference::new(&volume);
+    let mut s = head_on(&volume, SIZE);
+    s.mode = CompositeMode::Density;
+    let a = f64::from(STEP_ALPHA);
+    // One sample: the pixel's opacity is the step's.
+    s.set_slab(2, 0.5, 1.0 / 16.0);
+    for density in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
+        s.density = density;
+        let trace = reference.trace(&s, CENTRE, CENTRE);
+        assert_eq!(trace.samples, 1);
+        assert_near(
+            &format!("density {density}"),
+            trace.alpha,
+            a * f64::from(density),
+            1e-12,
+        );
+    }
+    s.density = 10.0;
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    assert_eq!(trace.alpha, 1.0, "clamped at 1");
+    // The whole ray, at several step lengths: A = 1 − (1 − min(1, a·d·s))^n, not the emission model's correction.
+    s.slab_lo = Vec3::ZERO;
+    s.slab_hi = Vec3::ONE;
+    for (density, step_length) in [(0.5f32, 1.0f32), (1.0, 0.5), (2.0, 0.7), (2.0, 2.0)] {
+        (s.density, s.step_length) = (density, step_length);
+        let sl = f64::from(step_length);
+        let n = expected_samples(16.0, sl);
+        let step = (a * f64::from(density) * sl).min(1.0);
+        let trace = reference.trace(&s, CENTRE, CENTRE);
+        assert_eq!(trace.samples, n);
+        assert_near(
+            &format!("density {density}, step {step_length}"),
+            trace.alpha,
+            1.0 - (1.0 - step).powi(n as i32),
+            1e-12,
+        );
+    }
+    s.mode = CompositeMode::Emission;
+    (s.density, s.step_length) = (1.0, 0.5);
+    assert_near(
+        "emission differs",
+        reference.trace(&s, CENTRE, CENTRE).alpha,
+        1.0 - keep().powf(16.0),
+        1e-12,
     );
 }

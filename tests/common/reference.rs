@@ -1,18 +1,24 @@
 //! The independent CPU ray caster the GPU images are proven against.
 //!
-//! Written from the eight rules in `RenderSettings`'s docs, in f64, sharing no code with the GPU path: the ray is
-//! built from the camera's eye/target/up/fov directly (not from `Camera::view`/`projection`), the box is
-//! intersected with the slab method, and the volume is filtered here rather than by a sampler. Where the GPU works
-//! in f32 the two differ by rounding only, which the image tolerances absorb.
+//! Written from the eight rules in `RenderSettings`'s docs, in f64, sharing no rendering code with the GPU path:
+//! the rays (perspective and orthographic) are built from the camera's eye/target/up/fov directly (not from
+//! `Camera::view`/`projection`), the box is intersected with the slab method, the volume is filtered here rather
+//! than by a sampler, and gradients, shading, every compositing mode, the isosurface bisection and the output
+//! encoding are written out here. Shared with the GPU path are only the pure definitions the rules name:
+//! `tf::bake` (the classification table, interpolated here in f64) and `settings::jitter_offset` (the per-pixel
+//! hash). Where the GPU works in f32 the two differ by rounding only, which the image tolerances absorb.
 
 #![allow(dead_code)]
 
 use glam::DVec3;
 use image::{Rgba, RgbaImage};
-use volcast::settings::RenderSettings;
+use volcast::settings::{jitter_offset, CompositeMode, RenderSettings, Shading};
+use volcast::tf;
 use volcast::volume::Volume;
 
-/// A ray segment inside the slab box, in world units along the unit direction `dir` from `origin` (the eye).
+/// A ray segment inside the slab box, in world units along the unit direction `dir` from `origin` (the eye for a
+/// perspective camera; for an orthographic one the pixel's point on the plane through the eye perpendicular to
+/// the view direction).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment {
     pub origin: DVec3,
@@ -35,16 +41,25 @@ impl Segment {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PixelTrace {
     pub segment: Option<Segment>,
-    /// Sample positions visited (rule 2), up to early termination.
+    /// Rule 2's start offset `o` of this pixel (0.5, or the jitter hash).
+    pub offset: f64,
+    /// Sample positions visited (rule 2), up to early termination or the isosurface hit.
     pub samples: u32,
-    /// Samples that passed the NaN and window tests and were composited.
+    /// Samples that passed the NaN and window tests and were used (composited, or counted by MIP/MinIP/average;
+    /// 1 for an isosurface hit).
     pub composited: u32,
-    /// Accumulated colour `C` (premultiplied by opacity).
+    /// MIP/MinIP/average: the value m whose colour the pixel shows; None when no sample was visible.
+    pub value: Option<f64>,
+    /// Isosurface: the hit, as the distance along the ray from `segment.origin` (so `segment.at(hit)` is the point).
+    pub hit: Option<f64>,
+    /// Accumulated colour `C` (premultiplied by opacity), linear light.
     pub color: DVec3,
     /// Accumulated opacity `A`.
     pub alpha: f64,
     pub terminated_early: bool,
-    /// Rule 8 before quantisation: `C + (1 - A)·background`, clamped to [0,1].
+    /// Rule 8 in linear light: `C + (1 - A)·linear(background)`, clamped to [0,1].
+    pub linear: DVec3,
+    /// Rule 8 encoded to sRGB, before 8-bit rounding ([`quantise`] rounds it).
     pub output: DVec3,
 }
 
@@ -75,10 +90,11 @@ impl RenderStats {
     }
 }
 
-/// The ray through the centre of pixel (x, y), row 0 at the top: the eye and a unit direction.
+/// The ray of pixel (x, y), row 0 at the top: its origin (the eye, or for an orthographic camera the pixel's point
+/// on the plane through the eye perpendicular to the view direction) and unit direction.
 pub fn pixel_ray(s: &RenderSettings, x: u32, y: u32) -> (DVec3, DVec3) {
-    let basis = CameraBasis::new(s);
-    (basis.eye, basis.direction(x, y))
+    let (origin, dir, _) = CameraBasis::new(s).ray(x, y);
+    (origin, dir)
 }
 
 /// The part of the ray `origin + t·dir` (t in world units, `dir` a unit vector) inside the axis-aligned box
@@ -102,6 +118,54 @@ pub fn ray_segment(origin: DVec3, dir: DVec3, lo: DVec3, hi: DVec3, t_min: f64) 
     (t0 < t1).then_some((t0, t1))
 }
 
+/// The sRGB decoding (IEC 61966-2-1), in f64.
+pub fn srgb_to_linear(c: f64) -> f64 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The sRGB encoding, in f64.
+pub fn linear_to_srgb(c: f64) -> f64 {
+    if c <= 0.003_130_8 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Rule 8's encoding of a linear-light colour: clamped to [0,1], then sRGB-encoded (not yet rounded).
+pub fn encode(linear: DVec3) -> DVec3 {
+    let c = linear.clamp(DVec3::ZERO, DVec3::ONE);
+    DVec3::new(linear_to_srgb(c.x), linear_to_srgb(c.y), linear_to_srgb(c.z))
+}
+
+/// Rule 4's lookup in f64 over the baked (f32) table: linear interpolation at `v`·(N − 1), `v` clamped to [0,1].
+pub fn lookup(lut: &[[f32; 4]], v: f64) -> [f64; 4] {
+    let u = v.clamp(0.0, 1.0) * (lut.len() - 1) as f64;
+    let i0 = (u.floor() as usize).min(lut.len() - 2);
+    let f = u - i0 as f64;
+    std::array::from_fn(|k| {
+        let (a, b) = (f64::from(lut[i0][k]), f64::from(lut[i0 + 1][k]));
+        a + (b - a) * f
+    })
+}
+
+/// Rule 5's lighting: `rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` with `n` the normalised world
+/// gradient and `light` the unit vector towards the eye; `rgb` unchanged where the world gradient vanishes.
+pub fn shade(rgb: DVec3, world_gradient: DVec3, light: DVec3, shading: &Shading) -> DVec3 {
+    let len = world_gradient.length();
+    if len < 1e-8 {
+        return rgb;
+    }
+    let ndl = (world_gradient / len).dot(light).abs();
+    let [ambient, diffuse, specular, shininess] =
+        [shading.ambient, shading.diffuse, shading.specular, shading.shininess].map(f64::from);
+    rgb * (ambient + diffuse * ndl) + DVec3::splat(specular * ndl.powf(shininess))
+}
+
 /// Renders `volume` with `s` by the CPU reference. Prefer [`Reference`] to render one volume several times.
 pub fn render_reference(volume: &Volume, s: &RenderSettings) -> RgbaImage {
     Reference::new(volume).render(s)
@@ -112,11 +176,12 @@ pub fn samples_per_pixel(volume: &Volume, s: &RenderSettings) -> f64 {
     Reference::new(volume).render_with_stats(s).1.samples_per_pixel()
 }
 
-/// A volume prepared for the reference: normalised values in f64 and the box it fills.
+/// A volume prepared for the reference: normalised values in f64, the box it fills and its data range.
 pub struct Reference {
     dims: [usize; 3],
     values: Vec<f64>,
     extent: DVec3,
+    range: [f64; 2],
 }
 
 impl Reference {
@@ -134,6 +199,7 @@ impl Reference {
             dims: volume.dims.map(|d| d as usize),
             values,
             extent: volume.extent().as_dvec3(),
+            range: volume.range,
         }
     }
 
@@ -141,18 +207,34 @@ impl Reference {
         self.extent
     }
 
+    /// A voxel's world size along each axis: `extent_i / dims_i`.
+    pub fn voxel_world(&self) -> DVec3 {
+        DVec3::new(
+            self.extent.x / self.dims[0] as f64,
+            self.extent.y / self.dims[1] as f64,
+            self.extent.z / self.dims[2] as f64,
+        )
+    }
+
     /// Rule 2's step `h` in world units: `step_length` × the smallest voxel side.
     pub fn step_world(&self, s: &RenderSettings) -> f64 {
-        let voxel = (0..3)
-            .map(|a| self.extent[a] / self.dims[a] as f64)
-            .fold(f64::INFINITY, f64::min);
-        f64::from(s.step_length) * voxel
+        f64::from(s.step_length) * self.voxel_world().min_element()
+    }
+
+    /// Rule 4's table for `s` and this volume's data range.
+    pub fn table(&self, s: &RenderSettings) -> Vec<[f32; 4]> {
+        tf::bake(&s.classification(), s.window, self.range)
     }
 
     /// The slab box `[slab_lo, slab_hi]` (texture space) in world space.
     pub fn slab_box_world(&self, s: &RenderSettings) -> (DVec3, DVec3) {
         let to_world = |t: DVec3| (t - 0.5) * self.extent;
         (to_world(s.slab_lo.as_dvec3()), to_world(s.slab_hi.as_dvec3()))
+    }
+
+    /// Texture coordinate of world point `p`.
+    pub fn tex_of(&self, p: DVec3) -> DVec3 {
+        p / self.extent + 0.5
     }
 
     /// Rule 3: trilinear interpolation at texture coordinate `tex`, texel centres at (i + 0.5)/dim, clamped to
@@ -179,6 +261,23 @@ impl Reference {
         let c01 = lerp(at(x0, y0, z1), at(x1, y0, z1), w[0]);
         let c11 = lerp(at(x0, y1, z1), at(x1, y1, z1), w[0]);
         lerp(lerp(c00, c10, w[1]), lerp(c01, c11, w[1]), w[2])
+    }
+
+    /// Rule 5's gradient at texture coordinate `tex`, in value per voxel (index space): central differences of
+    /// rule 3's samples one voxel (1/dim_i in texture space) apart, `g_i = (v(p + e_i) − v(p − e_i))/2`. Zero
+    /// when any of the six samples is NaN.
+    pub fn gradient(&self, tex: DVec3) -> DVec3 {
+        let mut g = DVec3::ZERO;
+        for a in 0..3 {
+            let mut e = DVec3::ZERO;
+            e[a] = 1.0 / self.dims[a] as f64;
+            g[a] = (self.sample(tex + e) - self.sample(tex - e)) / 2.0;
+        }
+        if g.is_nan() {
+            DVec3::ZERO
+        } else {
+            g
+        }
     }
 
     pub fn render(&self, s: &RenderSettings) -> RgbaImage {
@@ -232,12 +331,28 @@ impl Reference {
     pub fn trace(&self, s: &RenderSettings, x: u32, y: u32) -> PixelTrace {
         Frame::new(self, s).trace(x, y)
     }
+
+    /// Prepares `s` once (the table, the camera) for tracing many pixels with [`Tracer::trace`].
+    pub fn tracer(&self, s: &RenderSettings) -> Tracer<'_> {
+        Tracer(Frame::new(self, s))
+    }
 }
 
-/// Rule 8's storage: 8-bit unsigned normalised, rounded, opaque.
-pub fn quantise(rgb: DVec3) -> Rgba<u8> {
+/// One frame's settings prepared for tracing single pixels.
+pub struct Tracer<'a>(Frame<'a>);
+
+impl Tracer<'_> {
+    /// As [`Reference::trace`].
+    pub fn trace(&self, x: u32, y: u32) -> PixelTrace {
+        self.0.trace(x, y)
+    }
+}
+
+/// Rule 8's storage of an sRGB-encoded colour ([`PixelTrace::output`], or see [`encode`]): 8-bit unsigned
+/// normalised, rounded, opaque.
+pub fn quantise(srgb: DVec3) -> Rgba<u8> {
     let q = |c: f64| (c.clamp(0.0, 1.0) * 255.0).round() as u8;
-    Rgba([q(rgb.x), q(rgb.y), q(rgb.z), 255])
+    Rgba([q(srgb.x), q(srgb.y), q(srgb.z), 255])
 }
 
 /// The camera as an orthonormal basis: `forward` towards the target, `right`, and `up` completing it.
@@ -250,33 +365,61 @@ struct CameraBasis {
     aspect: f64,
     width: f64,
     height: f64,
+    /// Orthographic: half the view's height, `|eye − target|·tan(fov/2)`.
+    ortho_half_height: Option<f64>,
+    near: f64,
 }
 
 impl CameraBasis {
     fn new(s: &RenderSettings) -> CameraBasis {
         let c = &s.camera;
         let eye = c.eye.as_dvec3();
-        let forward = (c.target.as_dvec3() - eye).normalize();
+        let target = c.target.as_dvec3();
+        let forward = (target - eye).normalize();
         let right = forward.cross(c.up.as_dvec3()).normalize();
         let up = right.cross(forward);
+        let tan_half_fov = (f64::from(c.fov_y_deg).to_radians() * 0.5).tan();
         CameraBasis {
             eye,
             forward,
             right,
             up,
-            tan_half_fov: (f64::from(c.fov_y_deg).to_radians() * 0.5).tan(),
+            tan_half_fov,
             aspect: f64::from(s.width) / f64::from(s.height),
             width: f64::from(s.width),
             height: f64::from(s.height),
+            ortho_half_height: c.ortho.then(|| (target - eye).length() * tan_half_fov),
+            near: f64::from(c.near),
         }
     }
 
-    /// Unit direction through the centre of pixel (x, y); normalised device y grows downwards with the row.
-    fn direction(&self, x: u32, y: u32) -> DVec3 {
-        let ndc_x = 2.0 * (f64::from(x) + 0.5) / self.width - 1.0;
-        let ndc_y = 2.0 * (f64::from(y) + 0.5) / self.height - 1.0;
-        (self.forward + ndc_x * self.tan_half_fov * self.aspect * self.right - ndc_y * self.tan_half_fov * self.up)
-            .normalize()
+    /// Normalised device coordinates of pixel (x, y)'s centre; y grows downwards with the row.
+    fn ndc(&self, x: u32, y: u32) -> (f64, f64) {
+        (
+            2.0 * (f64::from(x) + 0.5) / self.width - 1.0,
+            2.0 * (f64::from(y) + 0.5) / self.height - 1.0,
+        )
+    }
+
+    /// Rule 1: pixel (x, y)'s ray origin, unit direction, and the distance along it at which the view depth
+    /// `dot(p − eye, forward)` reaches the near plane.
+    fn ray(&self, x: u32, y: u32) -> (DVec3, DVec3, f64) {
+        let (nx, ny) = self.ndc(x, y);
+        match self.ortho_half_height {
+            Some(half_h) => {
+                // Parallel to the view direction from the plane through the eye perpendicular to it: the view
+                // depth of origin + t·forward is t itself.
+                let origin = self.eye + nx * half_h * self.aspect * self.right - ny * half_h * self.up;
+                (origin, self.forward, self.near)
+            }
+            None => {
+                let dir = (self.forward + nx * self.tan_half_fov * self.aspect * self.right
+                    - ny * self.tan_half_fov * self.up)
+                    .normalize();
+                // A unit ray from the eye reaches view depth `near` after near / cos(angle to forward).
+                (self.eye, dir, self.near / dir.dot(self.forward))
+            }
+        }
     }
 }
 
@@ -284,111 +427,231 @@ impl CameraBasis {
 struct Frame<'a> {
     volume: &'a Reference,
     camera: CameraBasis,
-    near: f64,
     box_lo: DVec3,
     box_hi: DVec3,
     step: f64,
-    lut: [[f64; 3]; 256],
+    /// Rule 4's table: linear RGB and per-voxel-step opacity.
+    lut: Vec<[f32; 4]>,
     window: [f64; 2],
-    step_alpha: f64,
-    /// Exponent of rule 6's opacity correction.
+    /// Exponent of rule 6's opacity correction (and factor of the density model).
     step_length: f64,
-    multiplied_alpha: bool,
+    mode: CompositeMode,
+    iso_value: f64,
+    density: f64,
+    /// Rule 5's lighting where it applies: `shading` in emission/density modes, `shading` or its defaults in
+    /// isosurface mode.
+    shading: Option<Shading>,
+    gradient_opacity: Option<f64>,
+    jitter: Option<u32>,
     early_termination: f64,
+    /// Linear light.
     background: DVec3,
+    voxel_world: DVec3,
+}
+
+/// The result of one mode's march: colour and opacity before rule 8.
+struct Composite {
+    color: DVec3,
+    alpha: f64,
 }
 
 impl<'a> Frame<'a> {
     fn new(volume: &'a Reference, s: &RenderSettings) -> Frame<'a> {
-        // Rule 5 takes colour only from the table; opacity comes from rule 6, so the table's alpha is unused.
-        let lut = s
-            .colormap
-            .lut()
-            .map(|[r, g, b, _]| [r, g, b].map(|c| f64::from(c) / 255.0));
         let (box_lo, box_hi) = volume.slab_box_world(s);
+        let shading = match s.mode {
+            CompositeMode::Isosurface => Some(s.shading.unwrap_or_default()),
+            _ => s.shading,
+        };
+        let bg = s.background.as_dvec3();
         Frame {
             volume,
             camera: CameraBasis::new(s),
-            near: f64::from(s.camera.near),
             box_lo,
             box_hi,
             step: volume.step_world(s),
-            lut,
+            lut: volume.table(s),
             window: s.window.map(f64::from),
-            step_alpha: f64::from(s.step_alpha),
             step_length: f64::from(s.step_length),
-            multiplied_alpha: s.multiplied_alpha,
+            mode: s.mode,
+            iso_value: f64::from(s.iso_value),
+            density: f64::from(s.density),
+            shading,
+            gradient_opacity: s.gradient_opacity.map(f64::from),
+            jitter: s.jitter,
             early_termination: f64::from(s.early_termination),
-            background: s.background.as_dvec3(),
+            background: DVec3::new(srgb_to_linear(bg.x), srgb_to_linear(bg.y), srgb_to_linear(bg.z)),
+            voxel_world: volume.voxel_world(),
         }
     }
 
-    fn lut_rgb(&self, c: f64) -> DVec3 {
-        let index = c * 255.0;
-        let i0 = (index.floor() as usize).min(254);
-        let t = index - i0 as f64;
-        let (a, b) = (DVec3::from_array(self.lut[i0]), DVec3::from_array(self.lut[i0 + 1]));
-        a + t * (b - a)
+    fn rgb(&self, v: f64) -> DVec3 {
+        let [r, g, b, _] = lookup(&self.lut, v);
+        DVec3::new(r, g, b)
+    }
+
+    /// Rule 3's visibility test (every mode but isosurface).
+    fn visible(&self, v: f64) -> bool {
+        !v.is_nan() && v >= self.window[0] && v <= self.window[1]
     }
 
     fn trace(&self, x: u32, y: u32) -> PixelTrace {
-        let dir = self.camera.direction(x, y);
-        // The near plane is at view depth `near`, which a unit ray reaches after near / cos(angle to forward).
-        let t_near = self.near / dir.dot(self.camera.forward);
+        let (origin, dir, t_near) = self.camera.ray(x, y);
+        let offset = self.jitter.map_or(0.5, |seed| f64::from(jitter_offset(x, y, seed)));
+        let background = self.background.clamp(DVec3::ZERO, DVec3::ONE);
         let mut trace = PixelTrace {
             segment: None,
+            offset,
             samples: 0,
             composited: 0,
+            value: None,
+            hit: None,
             color: DVec3::ZERO,
             alpha: 0.0,
             terminated_early: false,
-            output: self.background.clamp(DVec3::ZERO, DVec3::ONE),
+            linear: background,
+            output: encode(background),
         };
-        let Some((t_start, t_end)) = ray_segment(self.camera.eye, dir, self.box_lo, self.box_hi, t_near) else {
+        let Some((t_start, t_end)) = ray_segment(origin, dir, self.box_lo, self.box_hi, t_near) else {
             return trace;
         };
         let segment = Segment {
-            origin: self.camera.eye,
+            origin,
             dir,
             t_start,
             t_end,
         };
         trace.segment = Some(segment);
-        let length = segment.length();
-        let [w_lo, w_hi] = self.window;
-        let inv_extent = 1.0 / self.volume.extent;
+        let result = match self.mode {
+            CompositeMode::Emission | CompositeMode::Density => self.absorb(&segment, &mut trace),
+            CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => self.extremum(&segment, &mut trace),
+            CompositeMode::Isosurface => self.isosurface(&segment, &mut trace),
+        };
+        trace.color = result.color;
+        trace.alpha = result.alpha;
+        trace.linear = (result.color + (1.0 - result.alpha) * self.background).clamp(DVec3::ZERO, DVec3::ONE);
+        trace.output = encode(trace.linear);
+        trace
+    }
+
+    /// Rule 2's sample distances from the segment's start: `(k + o)·h` while below the segment's length.
+    fn sample_offsets(&self, segment: &Segment, offset: f64) -> impl Iterator<Item = f64> + '_ {
+        let (length, step) = (segment.length(), self.step);
+        (0u32..)
+            .map(move |k| (f64::from(k) + offset) * step)
+            .take_while(move |&t| t < length)
+    }
+
+    /// Texture coordinate of the point at distance `t` from the segment's start.
+    fn tex_at(&self, segment: &Segment, t: f64) -> DVec3 {
+        self.volume.tex_of(segment.at(segment.t_start + t))
+    }
+
+    /// Rules 5–7 for emission–absorption and the density model.
+    fn absorb(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
         let (mut color, mut alpha) = (DVec3::ZERO, 0.0f64);
-        let mut k = 0u32;
-        loop {
-            let t = (f64::from(k) + 0.5) * self.step;
-            if t >= length {
-                break;
-            }
-            k += 1;
+        let light = -segment.dir;
+        for t in self.sample_offsets(segment, trace.offset) {
             trace.samples += 1;
-            let tex = segment.at(t_start + t) * inv_extent + 0.5;
+            let tex = self.tex_at(segment, t);
             let v = self.volume.sample(tex);
-            if v.is_nan() || v < w_lo || v > w_hi {
+            if !self.visible(v) {
                 continue;
             }
-            let c = (v - w_lo) / (w_hi - w_lo);
-            let a = if self.multiplied_alpha {
-                c * self.step_alpha
-            } else {
-                self.step_alpha
+            let [r, g, b, mut a] = lookup(&self.lut, v);
+            let mut rgb = DVec3::new(r, g, b);
+            if self.shading.is_some() || self.gradient_opacity.is_some() {
+                let grad = self.volume.gradient(tex);
+                if let Some(reference) = self.gradient_opacity {
+                    a *= (grad.length() / reference).min(1.0);
+                }
+                if let Some(shading) = &self.shading {
+                    rgb = shade(rgb, grad / self.voxel_world, light, shading);
+                }
+            }
+            let a_step = match self.mode {
+                CompositeMode::Density => (a * self.density * self.step_length).min(1.0),
+                _ => 1.0 - (1.0 - a).powf(self.step_length),
             };
-            let a = 1.0 - (1.0 - a).powf(self.step_length);
-            color += (1.0 - alpha) * a * self.lut_rgb(c);
-            alpha += (1.0 - alpha) * a;
+            color += (1.0 - alpha) * a_step * rgb;
+            alpha += (1.0 - alpha) * a_step;
             trace.composited += 1;
             if alpha >= self.early_termination {
                 trace.terminated_early = true;
                 break;
             }
         }
-        trace.color = color;
-        trace.alpha = alpha;
-        trace.output = (color + (1.0 - alpha) * self.background).clamp(DVec3::ZERO, DVec3::ONE);
-        trace
+        Composite { color, alpha }
+    }
+
+    /// Rule 7 for MIP, MinIP and average: the colour of the max/min/mean of the visible samples.
+    fn extremum(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
+        let mut visible = Vec::new();
+        for t in self.sample_offsets(segment, trace.offset) {
+            trace.samples += 1;
+            let v = self.volume.sample(self.tex_at(segment, t));
+            if self.visible(v) {
+                visible.push(v);
+            }
+        }
+        trace.composited = visible.len() as u32;
+        if visible.is_empty() {
+            return Composite {
+                color: DVec3::ZERO,
+                alpha: 0.0,
+            };
+        }
+        let m = match self.mode {
+            CompositeMode::Mip => visible.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            CompositeMode::MinIp => visible.iter().copied().fold(f64::INFINITY, f64::min),
+            _ => visible.iter().sum::<f64>() / visible.len() as f64,
+        };
+        trace.value = Some(m);
+        Composite {
+            color: self.rgb(m),
+            alpha: 1.0,
+        }
+    }
+
+    /// Rule 7 for the isosurface: the first sample at or above the iso value (window ignored, NaN never counts),
+    /// refined by 8 bisection steps on the step before it, coloured by the table at the iso value and shaded.
+    fn isosurface(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
+        let iso = self.iso_value;
+        let reaches = |t: f64| {
+            let v = self.volume.sample(self.tex_at(segment, t));
+            !v.is_nan() && v >= iso
+        };
+        let mut previous: Option<f64> = None;
+        for t in self.sample_offsets(segment, trace.offset) {
+            trace.samples += 1;
+            if !reaches(t) {
+                previous = Some(t);
+                continue;
+            }
+            let t_hit = match previous {
+                None => t,
+                Some(t_prev) => {
+                    let (mut lo, mut hi) = (t_prev, t);
+                    for _ in 0..8 {
+                        let mid = (lo + hi) / 2.0;
+                        if reaches(mid) {
+                            hi = mid;
+                        } else {
+                            lo = mid;
+                        }
+                    }
+                    (lo + hi) / 2.0
+                }
+            };
+            trace.composited = 1;
+            trace.hit = Some(segment.t_start + t_hit);
+            let shading = self.shading.unwrap_or_default();
+            let grad = self.volume.gradient(self.tex_at(segment, t_hit));
+            let color = shade(self.rgb(iso), grad / self.voxel_world, -segment.dir, &shading);
+            return Composite { color, alpha: 1.0 };
+        }
+        Composite {
+            color: DVec3::ZERO,
+            alpha: 0.0,
+        }
     }
 }
