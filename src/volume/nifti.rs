@@ -249,6 +249,12 @@ fn load_gzip(
     }
     // Skip the extensions between the header and the voxels.
     let skip = offset - HEADER_SIZE as u64;
+    if skip > compressed_len.saturating_mul(1032) {
+        return Err(header_error(
+            file,
+            format!("vox_offset {offset} is beyond what {compressed_len} compressed bytes can hold"),
+        ));
+    }
     let skipped = std::io::copy(&mut (&mut inflated).take(skip), &mut std::io::sink()).map_err(corrupt)?;
     if skipped < skip {
         return Err(header_error(file, format!("the file ends before vox_offset {offset}")));

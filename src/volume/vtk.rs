@@ -127,9 +127,10 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     }
     let dims = dims.ok_or_else(|| err("no DIMENSIONS line".into()))?;
     let voxel_type = scalars.ok_or_else(|| err("no SCALARS line before LOOKUP_TABLE".into()))?;
-    let count: u64 = dims.iter().map(|&d| u64::from(d)).product();
+    // u128: three u32 sizes can overflow u64.
+    let count: u128 = dims.iter().map(|&d| u128::from(d)).product();
     match point_data {
-        Some(n) if n == count => {}
+        Some(n) if u128::from(n) == count => {}
         Some(n) => {
             return Err(err(format!(
                 "POINT_DATA {n} does not match DIMENSIONS {}x{}x{} ({count} points)",
