@@ -259,6 +259,11 @@ mod tests {
                 ok.replace("POINT_DATA 12", "POINT_DATA 13"),
                 "POINT_DATA 13 does not match",
             ),
+            // Three u32 sizes whose product overflows u64.
+            (
+                ok.replace("DIMENSIONS 3 2 2", "DIMENSIONS 4294967295 4294967295 4294967295"),
+                "POINT_DATA 12 does not match",
+            ),
             (
                 ok.replace("short 1", "long 1"),
                 "unsupported VTK legacy voxel type 'long'",
