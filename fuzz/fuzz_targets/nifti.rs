@@ -1,0 +1,11 @@
+//! Header parsing and full loading of nifti data from arbitrary bytes: must return Ok or Err, never panic, hang or
+//! allocate beyond what the input justifies.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use volcast::volume::from_bytes;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = from_bytes::nifti_header(data);
+    let _ = from_bytes::nifti(data);
+});
