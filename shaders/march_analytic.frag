@@ -6,7 +6,7 @@
 layout(location = 0) out vec4 out_color;
 
 void main() {
-    vec3 origin = frame.eye_tex.xyz;
+    vec3 origin = ray_origin(gl_FragCoord.xy);
     // t is distance along the view axis, so the near plane is t = near: clamping t0 to it starts rays where
     // rasterisation would clip them.
     vec3 dir = ray_direction(gl_FragCoord.xy);
@@ -18,8 +18,8 @@ void main() {
     float t0 = max(max(max(t_min.x, t_min.y), t_min.z), frame.ray_forward.w);
     float t1 = min(min(t_max.x, t_max.y), t_max.z);
     if (!(t1 > t0)) {
-        out_color = vec4(frame.background.rgb, 1.0);
+        out_color = background_pixel();
         return;
     }
-    out_color = march(origin + dir * t0, origin + dir * t1);
+    out_color = march(origin + dir * t0, origin + dir * t1, gl_FragCoord.xy);
 }

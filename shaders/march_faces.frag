@@ -13,12 +13,12 @@ void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     vec4 exit_pos = texelFetch(sampler2D(exit_tex, point_smp), px, 0);
     if (exit_pos.a == 0.0) {
-        out_color = vec4(frame.background.rgb, 1.0);
+        out_color = background_pixel();
         return;
     }
     vec4 entry_pos = texelFetch(sampler2D(entry_tex, point_smp), px, 0);
     // No front face here but a back face: the near plane clipped the front face away (or the eye is inside),
     // so the ray starts on the near plane. This is what keeps a camera inside the volume free of holes.
     vec3 a = entry_pos.a > 0.0 ? entry_pos.xyz : near_point(gl_FragCoord.xy);
-    out_color = march(a, exit_pos.xyz);
+    out_color = march(a, exit_pos.xyz, gl_FragCoord.xy);
 }

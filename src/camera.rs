@@ -17,6 +17,9 @@ pub struct Camera {
     /// Distance of the near plane from the eye along the view direction (world units).
     pub near: f32,
     pub far: f32,
+    /// Orthographic projection, `2·|eye − target|·tan(fov/2)` high (so switching keeps the framing).
+    #[serde(default)]
+    pub ortho: bool,
 }
 
 pub const DEFAULT_FOV_Y_DEG: f32 = 30.0;
@@ -47,6 +50,7 @@ impl Camera {
             fov_y_deg: DEFAULT_FOV_Y_DEG,
             near: DEFAULT_NEAR,
             far: DEFAULT_FAR,
+            ortho: false,
         }
     }
 
@@ -79,6 +83,17 @@ impl Camera {
     pub fn projection(&self, aspect: f32) -> Mat4 {
         let f = 1.0 / (self.fov_y_deg.to_radians() * 0.5).tan();
         let (n, fa) = (self.near, self.far);
+        if self.ortho {
+            // Half-height of the view at the target's distance, as the perspective view shows it.
+            let half_h = (self.eye - self.target).length() / f;
+            let half_w = half_h * aspect;
+            return Mat4::from_cols(
+                Vec4::new(1.0 / half_w, 0.0, 0.0, 0.0),
+                Vec4::new(0.0, -1.0 / half_h, 0.0, 0.0),
+                Vec4::new(0.0, 0.0, 1.0 / (n - fa), 0.0),
+                Vec4::new(0.0, 0.0, n / (n - fa), 1.0),
+            );
+        }
         Mat4::from_cols(
             Vec4::new(f / aspect, 0.0, 0.0, 0.0),
             Vec4::new(0.0, -f, 0.0, 0.0),
@@ -126,6 +141,22 @@ mod tests {
         let far_point = cam.eye + cam.forward() * cam.far;
         assert!((project(vp, far_point).z - 1.0).abs() < 1e-4);
         assert!(project(vp, Vec3::ZERO).length() < 1.0);
+    }
+
+    #[test]
+    fn orthographic_projection_keeps_the_framing_at_the_target() {
+        let mut cam = Camera::orbit(0.0, 0.0, 3.0, Vec3::ZERO);
+        let persp = project(cam.projection(1.5) * cam.view(), Vec3::new(0.2, 0.0, 0.3));
+        cam.ortho = true;
+        let vp = cam.projection(1.5) * cam.view();
+        let ortho = project(vp, Vec3::new(0.2, 0.0, 0.3));
+        assert!(
+            (persp.truncate() - ortho.truncate()).length() < 1e-5,
+            "same size in the target's plane"
+        );
+        let behind = project(vp, Vec3::new(0.2, -1.0, 0.3));
+        assert!((behind.truncate() - ortho.truncate()).length() < 1e-5, "parallel rays");
+        assert!(project(vp, cam.eye + cam.forward() * cam.near).z.abs() < 1e-5);
     }
 
     #[test]

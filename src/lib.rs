@@ -7,6 +7,7 @@ pub mod gpu;
 pub mod headless;
 pub mod render;
 pub mod settings;
+pub mod tf;
 pub mod transfer;
 pub mod viewer;
 pub mod volume;

@@ -10,7 +10,9 @@ use volcast::camera::Camera;
 use volcast::compare;
 use volcast::gpu::{Gpu, GpuError, GpuOptions};
 use volcast::headless::Headless;
+use volcast::settings::CompositeMode;
 use volcast::settings::{PositionFormat, RaySetup, RenderSettings};
+use volcast::tf::TransferFunction;
 use volcast::transfer::Colormap;
 use volcast::viewer::{self, ViewerError, ViewerOptions, VolumeSource};
 use volcast::volume::{self, RawOptions, Volume, VoxelType};
@@ -227,9 +229,46 @@ struct FrameArgs {
     /// Colormap: cool-warm, plasma, viridis, rainbow, gnuplot, grayscale.
     #[arg(long, default_value = "cool-warm")]
     colormap: String,
-    /// Visible value range TMIN,TMAX in [0,1] of the data's range; values outside are transparent.
-    #[arg(long, value_parser = parse_pair, default_value = "0.1,1")]
-    window: (f32, f32),
+    /// Visible value range TMIN,TMAX in [0,1] of the data's range; values outside are transparent
+    /// (default 0.1,1; with a transfer function 0,1).
+    #[arg(long, value_parser = parse_pair)]
+    window: Option<(f32, f32)>,
+    /// A transfer-function preset: ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example.
+    #[arg(long, conflicts_with = "tf")]
+    preset: Option<String>,
+    /// A transfer function from a JSON file (see README).
+    #[arg(long)]
+    tf: Option<PathBuf>,
+    /// Write the transfer function in use (preset or file) as JSON, to start your own from.
+    #[arg(long)]
+    save_tf: Option<PathBuf>,
+    /// Compositing: emission, mip, minip, average, iso, density.
+    #[arg(long, default_value = "emission")]
+    mode: String,
+    /// Iso value for --mode iso, in [0,1] of the data range.
+    #[arg(long, default_value_t = 0.5)]
+    iso: f32,
+    /// Density factor for --mode density (the OSG article's model).
+    #[arg(long, default_value_t = 1.0)]
+    density: f32,
+    /// Gradient shading (Blinn-Phong headlight).
+    #[arg(long)]
+    shading: bool,
+    /// Shading coefficients AMBIENT,DIFFUSE,SPECULAR,SHININESS.
+    #[arg(long, value_parser = parse_shading, default_value = "0.2,0.7,0.3,20")]
+    lighting: volcast::settings::Shading,
+    /// Scale opacity by gradient magnitude, full at this value change per voxel (e.g. 0.05).
+    #[arg(long)]
+    gradient_opacity: Option<f32>,
+    /// Sample at step midpoints instead of a per-pixel jittered start.
+    #[arg(long)]
+    no_jitter: bool,
+    /// Seed of the jitter pattern.
+    #[arg(long, default_value_t = 0)]
+    jitter_seed: u32,
+    /// Orthographic projection (same framing at the target as the perspective view).
+    #[arg(long)]
+    ortho: bool,
     /// Opacity of one voxel-length step.
     #[arg(long, default_value_t = volcast::settings::DEFAULT_STEP_ALPHA)]
     step_alpha: f32,
@@ -281,6 +320,16 @@ fn parse_pair(s: &str) -> Result<(f32, f32), String> {
     parse_floats(s, 2, "TMIN,TMAX").map(|v| (v[0], v[1]))
 }
 
+fn parse_shading(s: &str) -> Result<volcast::settings::Shading, String> {
+    let v = parse_floats(s, 4, "AMBIENT,DIFFUSE,SPECULAR,SHININESS")?;
+    Ok(volcast::settings::Shading {
+        ambient: v[0],
+        diffuse: v[1],
+        specular: v[2],
+        shininess: v[3],
+    })
+}
+
 fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {
     let parts: Vec<&str> = s.split(':').collect();
     let bad = || format!("slice '{s}' must look like x:0.5:0.2 (axis x|y|z, position, width in [0,1])");
@@ -321,7 +370,30 @@ impl FrameArgs {
                 names.join(", ")
             )
         })?;
-        s.window = [self.window.0, self.window.1];
+        let tf = match (&self.preset, &self.tf) {
+            (Some(name), _) => Some(TransferFunction::preset(name)?),
+            (None, Some(path)) => Some(TransferFunction::load(path)?),
+            (None, None) => None,
+        };
+        if let (Some(path), Some(tf)) = (&self.save_tf, &tf) {
+            std::fs::write(path, tf.to_json()).with_context(|| format!("writing {}", path.display()))?;
+        }
+        s.window = match (self.window, &tf) {
+            (Some(w), _) => [w.0, w.1],
+            (None, Some(_)) => [0.0, 1.0],
+            (None, None) => volcast::settings::DEFAULT_WINDOW,
+        };
+        s.transfer_function = tf;
+        s.mode = CompositeMode::parse(&self.mode).with_context(|| {
+            let names: Vec<&str> = CompositeMode::ALL.iter().map(|m| m.name()).collect();
+            format!("unknown mode '{}'; choose one of {}", self.mode, names.join(", "))
+        })?;
+        s.iso_value = self.iso;
+        s.density = self.density;
+        s.shading = self.shading.then_some(self.lighting);
+        s.gradient_opacity = self.gradient_opacity;
+        s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
+        s.camera.ortho = self.ortho;
         s.step_alpha = self.step_alpha;
         s.step_length = self.step_length;
         s.multiplied_alpha = self.multiplied_alpha;

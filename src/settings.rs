@@ -3,6 +3,7 @@
 //! implemented twice: by the GPU passes (`shaders/`) and by the independent CPU reference (`tests/common`).
 
 use crate::camera::Camera;
+use crate::tf::{Classification, TransferFunction};
 use crate::transfer::Colormap;
 use glam::Vec3;
 
@@ -29,43 +30,165 @@ pub enum PositionFormat {
     Rgba16f,
 }
 
+/// How samples along a ray combine into a pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CompositeMode {
+    /// Emission–absorption, front to back (the default).
+    #[default]
+    Emission,
+    /// Maximum intensity projection.
+    Mip,
+    /// Minimum intensity projection.
+    MinIp,
+    /// Mean of the visible samples.
+    Average,
+    /// First crossing of `iso_value`, refined by bisection and shaded.
+    Isosurface,
+    /// The OSG article's density-factor model: opacity `a × density × step`, linear (not exponential).
+    Density,
+}
+
+impl CompositeMode {
+    pub const ALL: [CompositeMode; 6] = [
+        CompositeMode::Emission,
+        CompositeMode::Mip,
+        CompositeMode::MinIp,
+        CompositeMode::Average,
+        CompositeMode::Isosurface,
+        CompositeMode::Density,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            CompositeMode::Emission => "emission",
+            CompositeMode::Mip => "mip",
+            CompositeMode::MinIp => "minip",
+            CompositeMode::Average => "average",
+            CompositeMode::Isosurface => "iso",
+            CompositeMode::Density => "density",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<CompositeMode> {
+        CompositeMode::ALL
+            .into_iter()
+            .find(|m| m.name() == s.trim().to_ascii_lowercase())
+    }
+
+    /// The index the shader switches on (`frame.mode.x`).
+    pub fn index(self) -> u32 {
+        CompositeMode::ALL.iter().position(|m| *m == self).unwrap_or(0) as u32
+    }
+}
+
+/// Blinn–Phong with a headlight.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Shading {
+    pub ambient: f32,
+    pub diffuse: f32,
+    pub specular: f32,
+    pub shininess: f32,
+}
+
+impl Default for Shading {
+    /// VTK's defaults as used by ../shared/tools/vtk_bench.py.
+    fn default() -> Shading {
+        Shading {
+            ambient: 0.2,
+            diffuse: 0.7,
+            specular: 0.3,
+            shininess: 20.0,
+        }
+    }
+}
+
 /// Everything that decides a frame's pixels.
 ///
 /// The rendering rules (the GPU and the CPU reference both follow exactly these):
-/// 1. **Ray.** Pixel (x, y), row 0 at the top, shoots a ray from the camera's eye through its centre
-///    (x + 0.5, y + 0.5). The segment used is the part of that ray inside the *slab box* (texture-space box
-///    `[slab_lo, slab_hi]` ⊆ [0,1]³ of the volume) and beyond the camera's near plane. No segment: background.
-/// 2. **Samples.** With world-space segment length `L` and step `h = step_length × voxel` (`voxel` = the
-///    smallest voxel side in world units), samples lie at `t = (k + 0.5)·h`, k = 0, 1, … while `t < L`.
-/// 3. **Value.** Trilinear interpolation (texel centres at (i + 0.5)/dim, clamped to the edge) of the voxel values
-///    normalised by the data range: `v = (raw - min) / (max - min)`. NaN is transparent.
-/// 4. **Window.** Samples with `v < window[0]` or `v > window[1]` are transparent; otherwise
-///    `c = (v - window[0]) / (window[1] - window[0])`.
-/// 5. **Colour.** The colormap's 256-entry RGBA8 table is interpolated linearly at index `c × 255`.
-/// 6. **Opacity.** `α = step_alpha`, or `c × step_alpha` with `multiplied_alpha`. `step_alpha` is the opacity of one
-///    voxel-length step; opacity correction for the actual step: `α' = 1 - (1 - α)^step_length`.
-/// 7. **Compositing**, front to back: `C += (1 - A)·α'·rgb`, `A += (1 - A)·α'`; stop once `A ≥ early_termination`.
-/// 8. **Output**: `C + (1 - A)·background`, opaque, stored as 8-bit unsigned normalised (rounded).
+/// 1. **Ray.** Pixel (x, y), row 0 at the top, at its centre (x + 0.5, y + 0.5), ndc = 2·centre/size − 1.
+///    Perspective: from the eye through the pixel. Orthographic (`camera.ortho`): parallel to the view direction,
+///    starting on the plane through the eye perpendicular to it, the view `2·d·tan(fov/2)` high (d = |eye −
+///    target|). The segment used is the part inside the *slab box* (texture-space `[slab_lo, slab_hi]` ⊆ [0,1]³)
+///    and at view depth ≥ `camera.near`. No segment: background.
+/// 2. **Samples.** World segment length `L`, step `h = step_length × voxel` (`voxel` = the smallest voxel side in
+///    world units); samples at `t = (k + o)·h`, k = 0, 1, … while `t < L`. `o = 0.5`, or with `jitter = Some(seed)`
+///    `o = jitter_offset(x, y, seed)` ∈ [0, 1).
+/// 3. **Value.** Trilinear interpolation (texel centres at (i + 0.5)/dim, clamped to the edge) of the values
+///    normalised by the data range: `v = (raw − min)/(max − min)`. NaN samples are skipped. Samples outside the
+///    `window` are skipped (every mode but isosurface).
+/// 4. **Classification.** `tf::bake` turns [`RenderSettings::classification`] into a 4096-entry table of linear
+///    RGB and opacity over v ∈ [0, 1]; a sample looks it up with `tf::lookup` (linear interpolation at
+///    v·4095): `(rgb, a)`.
+/// 5. **Shading** (with `shading`, in emission/density modes; always in isosurface mode): gradient `g` by central
+///    differences of v one voxel apart along each texture axis, `g_i = (v(p + e_i) − v(p − e_i))/2` (value per
+///    voxel); world normal `n = normalize(g_i / voxel_world_i)`; headlight `L = −ray direction`;
+///    `rgb ← rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` (white, two-sided). `|g| = 0`: rgb kept.
+///    With `gradient_opacity = Some(r)`: `a ← a·min(1, |g|/r)`.
+/// 6. **Opacity for the step.** Emission: `α = 1 − (1 − a)^step_length`. Density: `α = min(1, a·density·step_length)`.
+/// 7. **Compositing.** Emission/density, front to back: `C += (1 − A)·α·rgb`, `A += (1 − A)·α`; stop once
+///    `A ≥ early_termination`. MIP/MinIP/average: m = max/min/mean of the visible samples' v; none: background;
+///    else `C = lookup(m).rgb`, `A = 1`. Isosurface: the first sample k with `v_k ≥ iso_value`; k = 0 hits at
+///    `t_0`; otherwise 8 bisection steps on [t_{k−1}, t_k] keeping `v(lo) < iso ≤ v(hi)`, hit at the final
+///    midpoint; `C` = `lookup(iso_value).rgb` shaded (rule 5, with `shading` or its defaults) at the hit, `A = 1`.
+/// 8. **Output**: `C + (1 − A)·linear(background)` (background given in sRGB), encoded to sRGB once, stored as
+///    8-bit unsigned normalised (rounded). Compositing happens in linear light (gamma-correct).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
     pub camera: Camera,
+    /// The simple (Qt) model's colormap, used when `transfer_function` is None.
     pub colormap: Colormap,
     /// Visible value range in normalised units [0,1] (`window[0] < window[1]`).
     pub window: [f32; 2],
+    /// The simple model's opacity of one voxel-length step.
     pub step_alpha: f32,
     /// Step length in voxels (of the smallest voxel side).
     pub step_length: f32,
+    /// The simple model: opacity = windowed value × step alpha.
     pub multiplied_alpha: bool,
+    /// A transfer function replaces the simple model when given.
+    pub transfer_function: Option<TransferFunction>,
+    pub mode: CompositeMode,
+    /// Normalised iso value for the isosurface mode.
+    pub iso_value: f32,
+    /// Density factor of the density mode.
+    pub density: f32,
+    pub shading: Option<Shading>,
+    /// Gradient-magnitude-modulated opacity: full opacity from this gradient (value per voxel) up.
+    pub gradient_opacity: Option<f32>,
+    /// Jittered ray start with this seed (stable per seed); None: samples at the step midpoints.
+    pub jitter: Option<u32>,
     pub early_termination: f32,
-    /// Linear RGB in [0,1].
+    /// sRGB in [0,1].
     pub background: Vec3,
     /// Slab box in texture space; [0,0,0]..[1,1,1] shows everything.
     pub slab_lo: Vec3,
     pub slab_hi: Vec3,
     pub ray_setup: RaySetup,
     pub position_format: PositionFormat,
+}
+
+impl Default for RenderSettings {
+    fn default() -> RenderSettings {
+        RenderSettings::new(512, 512, Vec3::ONE)
+    }
+}
+
+/// The per-pixel start offset of jittered rays, in [0, 1): a PCG hash of pixel and seed (the shader computes the
+/// same in 32-bit integer arithmetic).
+pub fn jitter_offset(x: u32, y: u32, seed: u32) -> f32 {
+    let v = x
+        .wrapping_mul(1973)
+        .wrapping_add(y.wrapping_mul(9277))
+        .wrapping_add(seed.wrapping_mul(26699))
+        | 1;
+    let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    let h = (word >> 22) ^ word;
+    (h >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
 pub const DEFAULT_STEP_ALPHA: f32 = 0.1;
@@ -86,12 +209,31 @@ impl RenderSettings {
             step_alpha: DEFAULT_STEP_ALPHA,
             step_length: 1.0,
             multiplied_alpha: false,
+            transfer_function: None,
+            mode: CompositeMode::Emission,
+            iso_value: 0.5,
+            density: 1.0,
+            shading: None,
+            gradient_opacity: None,
+            jitter: Some(0),
             early_termination: DEFAULT_EARLY_TERMINATION,
             background: Vec3::ZERO,
             slab_lo: Vec3::ZERO,
             slab_hi: Vec3::ONE,
             ray_setup: RaySetup::Faces,
             position_format: PositionFormat::Rgba32f,
+        }
+    }
+
+    /// The classification rule 4 bakes: the transfer function if given, else the simple model.
+    pub fn classification(&self) -> Classification {
+        match &self.transfer_function {
+            Some(tf) => Classification::Function(tf.clone()),
+            None => Classification::Simple {
+                colormap: self.colormap,
+                step_alpha: self.step_alpha,
+                multiplied: self.multiplied_alpha,
+            },
         }
     }
 
@@ -119,9 +261,10 @@ impl RenderSettings {
         if !(0.05..=64.0).contains(&self.step_length) {
             return Err(format!("step length {} voxels must be in [0.05, 64]", self.step_length));
         }
-        if !(0.0..=1.0).contains(&self.early_termination) {
+        // Above 0: with 0, "stop after the first visible sample" would hinge on whether it is transparent.
+        if !(self.early_termination > 0.0 && self.early_termination <= 1.0) {
             return Err(format!(
-                "early termination opacity {} must be in [0,1]",
+                "early termination opacity {} must be in (0,1]",
                 self.early_termination
             ));
         }
@@ -134,6 +277,29 @@ impl RenderSettings {
                     self.slab_hi[a]
                 ));
             }
+        }
+        if !(0.0..=1.0).contains(&self.iso_value) {
+            return Err(format!("iso value {} must be in [0,1]", self.iso_value));
+        }
+        if !(self.density.is_finite() && self.density >= 0.0) {
+            return Err(format!("density factor {} must be a non-negative number", self.density));
+        }
+        if let Some(r) = self.gradient_opacity {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(format!("gradient opacity reference {r} must be positive"));
+            }
+        }
+        if let Some(sh) = &self.shading {
+            let ok = [sh.ambient, sh.diffuse, sh.specular]
+                .iter()
+                .all(|v| (0.0..=4.0).contains(v))
+                && (1.0..=1000.0).contains(&sh.shininess);
+            if !ok {
+                return Err("shading: ambient, diffuse and specular must be in [0,4], shininess in [1,1000]".into());
+            }
+        }
+        if let Some(tf) = &self.transfer_function {
+            tf.validate().map_err(|e| e.to_string())?;
         }
         let c = &self.camera;
         if !(c.eye - c.target).length().is_normal() || !(1.0..=170.0).contains(&c.fov_y_deg) {

@@ -23,7 +23,8 @@ use glam::Vec3;
 use volcast::camera::Camera;
 use volcast::gpu::{Gpu, GpuOptions};
 use volcast::headless::Headless;
-use volcast::settings::{RaySetup, RenderSettings};
+use volcast::settings::{CompositeMode, RaySetup, RenderSettings, Shading};
+use volcast::tf::TransferFunction;
 use volcast::transfer::Colormap;
 use volcast::volume::{self, Volume, VoxelData, VoxelType};
 
@@ -112,6 +113,58 @@ fn settings_cases(v: &Volume, size: u32) -> Vec<Case> {
         with(v, size, "non-square", |s| {
             s.width = size + 37;
             s.height = size - 21;
+        }),
+        with(v, size, "no-jitter", |s| s.jitter = None),
+        with(v, size, "jitter-seed-7", |s| s.jitter = Some(7)),
+        with(v, size, "orthographic", |s| s.camera.ortho = true),
+        with(v, size, "orthographic-inside", |s| {
+            s.camera = Camera::looking_at(Vec3::new(0.1, -0.2, 0.05), Vec3::new(0.3, 0.4, 0.1));
+            s.camera.ortho = true;
+        }),
+    ]
+}
+
+/// One case per compositing mode, shading and classification option (issue 6's rules), on one volume.
+fn quality_cases(v: &Volume, size: u32) -> Vec<Case> {
+    vec![
+        with(v, size, "mip", |s| s.mode = CompositeMode::Mip),
+        with(v, size, "minip", |s| {
+            s.mode = CompositeMode::MinIp;
+            s.window = [0.2, 1.0];
+        }),
+        with(v, size, "average", |s| s.mode = CompositeMode::Average),
+        with(v, size, "iso", |s| {
+            s.mode = CompositeMode::Isosurface;
+            s.iso_value = 0.4;
+        }),
+        with(v, size, "iso-ortho-phong", |s| {
+            s.mode = CompositeMode::Isosurface;
+            s.iso_value = 0.6;
+            s.camera.ortho = true;
+            s.shading = Some(Shading {
+                ambient: 0.1,
+                diffuse: 0.6,
+                specular: 0.6,
+                shininess: 40.0,
+            });
+        }),
+        with(v, size, "density", |s| {
+            s.mode = CompositeMode::Density;
+            s.density = 2.5;
+        }),
+        with(v, size, "shaded", |s| s.shading = Some(Shading::default())),
+        with(v, size, "shaded-gradient-opacity", |s| {
+            s.shading = Some(Shading::default());
+            s.gradient_opacity = Some(0.05);
+            s.step_alpha = 0.4;
+        }),
+        with(v, size, "tf-mr-default", |s| {
+            s.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
+            s.window = [0.0, 1.0];
+        }),
+        with(v, size, "tf-qt-example-multiplied-off", |s| {
+            s.transfer_function = Some(TransferFunction::preset("qt-example").unwrap());
+            s.window = [0.0, 1.0];
         }),
     ]
 }
@@ -226,9 +279,12 @@ fn builtins_match_the_reference() {
     let helix = volume::builtin("helix", Some(96)).expect("helix");
     let mut cases = standard_cases(&helix, 96);
     cases.extend(settings_cases(&helix, 96));
+    cases.extend(quality_cases(&helix, 96));
     run_cases(&gpu, &mut headless, &helix, cases, &mut outcomes);
     let ml = volume::builtin("marschner-lobb", None).expect("marschner-lobb");
-    run_cases(&gpu, &mut headless, &ml, standard_cases(&ml, 80), &mut outcomes);
+    let mut cases = standard_cases(&ml, 80);
+    cases.extend(quality_cases(&ml, 80));
+    run_cases(&gpu, &mut headless, &ml, cases, &mut outcomes);
     for name in ["box", "colormap"] {
         let v = volume::builtin(name, Some(64)).expect("built-in");
         run_cases(
@@ -275,8 +331,65 @@ fn real_volumes_match_the_reference() {
         if v.name.starts_with("cranium") {
             // A CT bone window, at the CT's true (non-cubic) aspect.
             cases.push(with(&v, 96, "bone-window", |s| s.window = [0.45, 1.0]));
+            // The presets in Hounsfield units, shaded, on real CT data.
+            for preset in ["ct-bone", "ct-soft-tissue", "ct-lung"] {
+                cases.push(with(&v, 96, &format!("{preset}-shaded"), |s| {
+                    s.transfer_function = Some(TransferFunction::preset(preset).unwrap());
+                    s.window = [0.0, 1.0];
+                    s.shading = Some(Shading::default());
+                }));
+            }
+        }
+        if v.name.starts_with("motor") {
+            // The fMRI activation map: MIP shows the blobs.
+            cases.push(with(&v, 96, "mip-activation", |s| {
+                s.mode = CompositeMode::Mip;
+                s.window = [0.55, 1.0];
+            }));
         }
         run_cases(&gpu, &mut headless, &v, cases, &mut outcomes);
     }
     finish(gpu, headless, outcomes);
+}
+
+/// Jitter trades banding for noise that averages out: the mean of several jittered frames at a coarse step is
+/// closer to a finely sampled reference than the un-jittered frame at that step.
+#[test]
+fn jitter_averages_towards_the_finely_sampled_image() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let ml = volume::builtin("marschner-lobb", Some(64)).expect("marschner-lobb");
+    headless.set_volume(&gpu, &ml).expect("upload");
+    let mut coarse = RenderSettings::new(96, 96, ml.extent());
+    coarse.step_length = 3.0;
+    coarse.step_alpha = 0.15;
+    coarse.colormap = Colormap::Viridis;
+    coarse.jitter = None;
+    let mut fine = coarse.clone();
+    fine.step_length = 0.25;
+    let truth = Reference::new(&ml).render(&fine);
+    let unjittered = headless.render(&gpu, &coarse).expect("render").image;
+    let seeds = 16u32;
+    let mut sum = vec![0.0f64; (96 * 96 * 4) as usize];
+    for seed in 0..seeds {
+        let mut s = coarse.clone();
+        s.jitter = Some(seed);
+        let img = headless.render(&gpu, &s).expect("render").image;
+        for (acc, &p) in sum.iter_mut().zip(img.as_raw()) {
+            *acc += p as f64;
+        }
+    }
+    let mean_img = image::RgbaImage::from_raw(96, 96, sum.iter().map(|v| (v / seeds as f64).round() as u8).collect())
+        .expect("image");
+    let e_unjittered = diff(&unjittered, &truth).mean;
+    let e_jittered = diff(&mean_img, &truth).mean;
+    eprintln!("mean error vs step-0.25 reference: unjittered {e_unjittered:.3}/255, mean of {seeds} jittered {e_jittered:.3}/255");
+    headless.destroy(&gpu);
+    let log = gpu.log.clone();
+    drop(gpu);
+    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    assert!(
+        e_jittered < 0.8 * e_unjittered,
+        "jittered mean {e_jittered:.3} should beat unjittered {e_unjittered:.3} clearly"
+    );
 }

@@ -8,7 +8,7 @@ use crate::gpu::resources::{upload_image, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::settings::{PositionFormat, RaySetup, RenderSettings};
-use crate::transfer::Colormap;
+use crate::tf::{bake, srgb_to_linear, Classification, LUT_SIZE};
 use crate::volume::{Volume, VoxelData};
 use ash::vk;
 use glam::Vec3;
@@ -23,6 +23,8 @@ pub struct FrameUniforms {
     pub ray_forward: [f32; 4],
     pub ray_right: [f32; 4],
     pub ray_down: [f32; 4],
+    pub origin_dx: [f32; 4],
+    pub origin_dy: [f32; 4],
     pub slab_lo: [f32; 4],
     pub slab_hi: [f32; 4],
     pub extent: [f32; 4],
@@ -30,6 +32,11 @@ pub struct FrameUniforms {
     pub alpha: [f32; 4],
     pub background: [f32; 4],
     pub viewport: [f32; 4],
+    pub texel: [f32; 4],
+    pub voxel_world: [f32; 4],
+    pub shading: [f32; 4],
+    pub mode_params: [f32; 4],
+    pub flags: [u32; 4],
 }
 
 /// GPU facts about the loaded volume that the uniforms need.
@@ -38,6 +45,8 @@ pub struct VolumeInfo {
     pub dims: [u32; 3],
     pub extent: Vec3,
     pub scale_bias: (f32, f32),
+    /// The data's value range (for transfer functions in data units).
+    pub range: [f64; 2],
 }
 
 impl FrameUniforms {
@@ -51,17 +60,26 @@ impl FrameUniforms {
         let up = right.cross(forward);
         let tan = (cam.fov_y_deg.to_radians() * 0.5).tan();
         let eye_tex = cam.eye / v.extent + Vec3::splat(0.5);
+        // Perspective rays fan out from the eye; orthographic rays start spread over the eye's plane.
+        let (fan, spread) = if cam.ortho {
+            (0.0, (cam.eye - cam.target).length())
+        } else {
+            (1.0, 0.0)
+        };
         let h = s.step_world(v.extent, v.dims);
         let diagonal = v.extent.length();
         let max_steps = (diagonal / h).ceil() + 2.0;
         let v4 = |a: Vec3, w: f32| [a.x, a.y, a.z, w];
+        let shading = s.shading.unwrap_or_default();
         FrameUniforms {
             tex_to_clip: tex_to_clip.as_mat4().to_cols_array(),
             eye_tex: v4(eye_tex, 1.0),
             ray_forward: v4(forward / v.extent, cam.near),
-            ray_right: v4(right * (tan * aspect) / v.extent, 0.0),
+            ray_right: v4(right * (fan * tan * aspect) / v.extent, 0.0),
             // NDC y grows downwards (row 0 is the top of the image).
-            ray_down: v4(-up * tan / v.extent, 0.0),
+            ray_down: v4(-up * (fan * tan) / v.extent, 0.0),
+            origin_dx: v4(right * (spread * tan * aspect) / v.extent, 0.0),
+            origin_dy: v4(-up * (spread * tan) / v.extent, 0.0),
             slab_lo: v4(s.slab_lo, 0.0),
             slab_hi: v4(s.slab_hi, 0.0),
             extent: v4(v.extent, h),
@@ -72,8 +90,21 @@ impl FrameUniforms {
                 s.early_termination,
                 if s.multiplied_alpha { 1.0 } else { 0.0 },
             ],
-            background: v4(s.background, 1.0),
+            background: v4(s.background.to_array().map(srgb_to_linear).into(), 1.0),
             viewport: [s.width as f32, s.height as f32, max_steps, 0.0],
+            texel: v4(Vec3::ONE / Vec3::from(v.dims.map(|d| d as f32)), 0.0),
+            voxel_world: v4(
+                v.extent / Vec3::from(v.dims.map(|d| d as f32)),
+                s.gradient_opacity.unwrap_or(0.0),
+            ),
+            shading: [shading.ambient, shading.diffuse, shading.specular, shading.shininess],
+            mode_params: [s.iso_value, s.density, 0.0, 0.0],
+            flags: [
+                s.mode.index(),
+                s.jitter.is_some() as u32,
+                s.jitter.unwrap_or(0),
+                s.shading.is_some() as u32,
+            ],
         }
     }
 }
@@ -142,7 +173,8 @@ pub struct Renderer {
     linear_sampler: vk::Sampler,
     point_sampler: vk::Sampler,
     lut: Image,
-    colormap: Colormap,
+    /// What the table holds: classification, window and data range it was baked for.
+    baked: Option<(Classification, [f32; 2], [f64; 2])>,
     volume: Option<GpuVolume>,
     positions: Option<PositionTargets>,
     timestamp_period_ns: f64,
@@ -205,12 +237,12 @@ impl Renderer {
         let all = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         let frag = vk::ShaderStageFlags::FRAGMENT;
         let lut_desc = ImageDesc::d2(
-            vk::Format::R8G8B8A8_UNORM,
-            256,
+            vk::Format::R32G32B32A32_SFLOAT,
+            LUT_SIZE as u32,
             1,
             vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
         );
-        let lut = Image::new(gpu, lut_desc, "colormap lut")?;
+        let lut = Image::new(gpu, lut_desc, "transfer function lut")?;
         let mut r = Renderer {
             output_format,
             frame_set_layout: vk::DescriptorSetLayout::null(),
@@ -229,7 +261,7 @@ impl Renderer {
             linear_sampler: vk::Sampler::null(),
             point_sampler: vk::Sampler::null(),
             lut,
-            colormap: Colormap::CoolWarm,
+            baked: None,
             volume: None,
             positions: None,
             timestamp_period_ns: gpu.properties.limits.timestamp_period as f64,
@@ -380,14 +412,21 @@ impl Renderer {
                 recorded: None,
             });
         }
-        self.upload_colormap(gpu, Colormap::CoolWarm)?;
+        let initial = RenderSettings::default();
+        self.upload_lut(gpu, &initial.classification(), initial.window, [0.0, 1.0])?;
         Ok(())
     }
 
-    fn upload_colormap(&mut self, gpu: &Gpu, colormap: Colormap) -> Result<(), GpuError> {
-        let lut = colormap.lut();
+    fn upload_lut(
+        &mut self,
+        gpu: &Gpu,
+        classification: &Classification,
+        window: [f32; 2],
+        range: [f64; 2],
+    ) -> Result<(), GpuError> {
+        let lut = bake(classification, window, range);
         upload_image(gpu, &self.lut, bytemuck::cast_slice(&lut))?;
-        self.colormap = colormap;
+        self.baked = Some((classification.clone(), window, range));
         self.write_volume_set(gpu);
         Ok(())
     }
@@ -496,6 +535,7 @@ impl Renderer {
                 dims: volume.dims,
                 extent: volume.extent(),
                 scale_bias: volume.gpu_scale_bias(),
+                range: volume.range,
             },
         });
         self.write_volume_set(gpu);
@@ -521,14 +561,22 @@ impl Renderer {
             }),
             RaySetup::Analytic => self.positions.is_none(),
         };
-        s.colormap != self.colormap || !targets_fit
+        !targets_fit || !self.lut_is_current(s)
+    }
+
+    fn lut_is_current(&self, s: &RenderSettings) -> bool {
+        let range = self.volume.as_ref().map(|v| v.info.range).unwrap_or([0.0, 1.0]);
+        self.baked
+            .as_ref()
+            .is_some_and(|(c, w, r)| *w == s.window && *r == range && *c == s.classification())
     }
 
     /// Creates (or re-creates) what `settings` needs that depends on more than the frame: colormap, targets.
     /// Must be called while no submitted frame is in flight.
     pub fn prepare(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
-        if s.colormap != self.colormap {
-            self.upload_colormap(gpu, s.colormap)?;
+        if !self.lut_is_current(s) {
+            let range = self.volume.as_ref().map(|v| v.info.range).unwrap_or([0.0, 1.0]);
+            self.upload_lut(gpu, &s.classification(), s.window, range)?;
         }
         if s.ray_setup == RaySetup::Faces {
             let fits = self.positions.as_ref().is_some_and(|p| {

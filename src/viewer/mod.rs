@@ -7,6 +7,7 @@
 //! changed, so an idle viewer sleeps in the event loop.
 
 pub mod controls;
+pub mod tf_editor;
 pub mod ui;
 
 use crate::gpu::resources::{record_readback, Buffer, Image, ImageDesc};
@@ -217,7 +218,7 @@ struct FrameSync {
 struct Loading {
     label: String,
     progress: Arc<AtomicU32>,
-    rx: Receiver<Result<Volume, String>>,
+    rx: Receiver<Result<(Volume, Vec<u64>), String>>,
 }
 
 struct Script {
@@ -253,6 +254,13 @@ struct Running {
     has_volume: bool,
 }
 
+/// The editor's histogram: 256 bins of normalised values.
+fn value_histogram(v: &Volume) -> Vec<u64> {
+    let [w, h, d] = v.dims;
+    let values = (0..d).flat_map(move |z| (0..h).flat_map(move |y| (0..w).map(move |x| (x, y, z))));
+    tf_editor::histogram(values.map(|(x, y, z)| v.normalized(x, y, z)), 256)
+}
+
 fn load_in_background(source: VolumeSource) -> Loading {
     let label = match &source {
         VolumeSource::Builtin(name, _) => name.clone(),
@@ -266,8 +274,13 @@ fn load_in_background(source: VolumeSource) -> Loading {
             VolumeSource::Builtin(name, size) => volume::builtin(&name, size),
             VolumeSource::File(path, opts) => volume::load_raw(&path, &opts),
         };
+        p.store(0.9f32.to_bits(), Ordering::Relaxed);
+        let analysed = result.map(|v| {
+            let h = value_histogram(&v);
+            (v, h)
+        });
         p.store(1.0f32.to_bits(), Ordering::Relaxed);
-        let _ = tx.send(result.map_err(|e| e.to_string()));
+        let _ = tx.send(analysed.map_err(|e| e.to_string()));
     });
     Loading { label, progress, rx }
 }
@@ -408,11 +421,12 @@ impl Running {
             VolumeSource::File(path, o) => volume::load_raw(path, o),
         }
         .map_err(|e| ViewerError::Other(e.to_string()))?;
-        self.install_volume(first)?;
+        let histogram = value_histogram(&first);
+        self.install_volume(first, histogram)?;
         Ok(())
     }
 
-    fn install_volume(&mut self, v: Volume) -> Result<(), GpuError> {
+    fn install_volume(&mut self, v: Volume, histogram: Vec<u64>) -> Result<(), GpuError> {
         // SAFETY: plain wait on a live device; set_volume rewrites descriptors that in-flight frames use.
         unsafe { self.gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")?;
         let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
@@ -423,6 +437,8 @@ impl Running {
         );
         self.state.set_volume(v.extent(), label);
         self.state.raw_spacing = v.spacing;
+        self.state.histogram = histogram;
+        self.state.range = v.range;
         self.has_volume = true;
         Ok(())
     }
@@ -498,11 +514,11 @@ impl Running {
     fn poll_loading(&mut self) -> Result<(), GpuError> {
         let Some(loading) = &self.loading else { return Ok(()) };
         match loading.rx.try_recv() {
-            Ok(Ok(volume)) => {
+            Ok(Ok((volume, histogram))) => {
                 let label = loading.label.clone();
                 self.loading = None;
                 self.state.loading = None;
-                if let Err(e) = self.install_volume(volume) {
+                if let Err(e) = self.install_volume(volume, histogram) {
                     self.state.error = Some(format!("{label}: {e}"));
                 } else {
                     self.state.status = Some(format!("loaded {label}"));
@@ -531,7 +547,7 @@ impl Running {
         let Some(script) = &mut self.script else {
             return Ok(Flow::Continue);
         };
-        if script.started.elapsed() > Duration::from_secs(120) {
+        if script.started.elapsed() > Duration::from_secs(300) {
             return Err(ViewerError::Other(format!(
                 "script timed out with steps left: {:?}",
                 script.steps

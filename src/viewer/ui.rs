@@ -5,7 +5,7 @@
 use super::controls::{gizmo_axes, look_along, pick_axis, OrbitView, RotationAnimation};
 use crate::camera::Camera;
 use crate::render::PassTimings;
-use crate::settings::{PositionFormat, RaySetup, RenderSettings};
+use crate::settings::{CompositeMode, PositionFormat, RaySetup, RenderSettings, Shading};
 use crate::transfer::Colormap;
 use crate::volume::{parse_scivis_name, RawOptions, VoxelType, BUILTIN_NAMES};
 use egui::{Color32, Pos2, Stroke};
@@ -40,6 +40,11 @@ pub struct ViewerState {
     pub animation: Option<RotationAnimation>,
     /// Where the volume view is in the window (points), as laid out by the last UI pass.
     pub view_rect: Option<egui::Rect>,
+    /// Value histogram of the volume (256 bins over the normalised range) and its data range, for the editor.
+    pub histogram: Vec<u64>,
+    pub range: [f64; 2],
+    pub tf_dragging: Option<usize>,
+    pub ortho: bool,
 }
 
 /// What the panel asks the viewer to do.
@@ -78,6 +83,10 @@ impl ViewerState {
             gpu: None,
             animation: None,
             view_rect: None,
+            histogram: Vec::new(),
+            range: [0.0, 1.0],
+            tf_dragging: None,
+            ortho: false,
         }
     }
 
@@ -101,6 +110,7 @@ impl ViewerState {
         s.width = width.max(1);
         s.height = height.max(1);
         s.camera = self.orbit.camera();
+        s.camera.ortho = self.ortho;
         for (axis, &(pos, width)) in self.slabs.iter().enumerate() {
             s.set_slab(axis, pos, width);
             // A slab thinner than the slider's resolution would be empty: keep a sliver.
@@ -217,27 +227,129 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
         .default_open(true)
         .show(ui, |ui| {
             let look = &mut state.look;
+            let current = look
+                .transfer_function
+                .as_ref()
+                .map(|t| t.name.clone())
+                .unwrap_or_else(|| "simple (Qt)".into());
+            egui::ComboBox::from_label("preset")
+                .selected_text(&current)
+                .show_ui(ui, |ui| {
+                    if ui
+                        .selectable_label(look.transfer_function.is_none(), "simple (Qt)")
+                        .clicked()
+                    {
+                        look.transfer_function = None;
+                        look.window = crate::settings::DEFAULT_WINDOW;
+                    }
+                    for name in crate::tf::PRESET_NAMES {
+                        if ui.selectable_label(current == *name, *name).clicked() {
+                            look.transfer_function = crate::tf::TransferFunction::preset(name).ok();
+                            look.window = [0.0, 1.0];
+                        }
+                    }
+                });
             ui.label("Visible value range");
             ui.add(egui::Slider::new(&mut look.window[0], 0.0..=1.0).text("min"));
             ui.add(egui::Slider::new(&mut look.window[1], 0.0..=1.0).text("max"));
             if look.window[0] > look.window[1] {
                 look.window.swap(0, 1);
             }
-            colormap_strip(ui, look.colormap, look.window);
-            egui::ComboBox::from_label("Colormap")
-                .selected_text(look.colormap.name())
-                .show_ui(ui, |ui| {
-                    for c in Colormap::ALL {
-                        ui.selectable_value(&mut look.colormap, c, c.name());
-                    }
-                });
-            ui.add(egui::Slider::new(&mut look.step_alpha, 0.0..=1.0).text("step alpha"));
+            if let Some(tf) = &mut look.transfer_function {
+                ui.label("Opacity (click: add, drag: move, right-click: delete)");
+                super::tf_editor::editor(
+                    ui,
+                    tf,
+                    look.window,
+                    state.range,
+                    &state.histogram,
+                    &mut state.tf_dragging,
+                );
+                if tf.colors.is_empty() {
+                    egui::ComboBox::from_label("Colormap")
+                        .selected_text(tf.colormap.name())
+                        .show_ui(ui, |ui| {
+                            for c in Colormap::ALL {
+                                ui.selectable_value(&mut tf.colormap, c, c.name());
+                            }
+                        });
+                }
+            } else {
+                colormap_strip(ui, look.colormap, look.window);
+                egui::ComboBox::from_label("Colormap")
+                    .selected_text(look.colormap.name())
+                    .show_ui(ui, |ui| {
+                        for c in Colormap::ALL {
+                            ui.selectable_value(&mut look.colormap, c, c.name());
+                        }
+                    });
+                ui.add(egui::Slider::new(&mut look.step_alpha, 0.0..=1.0).text("step alpha"));
+                ui.checkbox(&mut look.multiplied_alpha, "multiplied alpha");
+            }
             ui.add(
                 egui::Slider::new(&mut look.step_length, 0.1..=4.0)
                     .logarithmic(true)
                     .text("step length (voxels)"),
             );
-            ui.checkbox(&mut look.multiplied_alpha, "multiplied alpha");
+        });
+
+    egui::CollapsingHeader::new("Rendering")
+        .default_open(true)
+        .show(ui, |ui| {
+            let look = &mut state.look;
+            egui::ComboBox::from_label("mode")
+                .selected_text(look.mode.name())
+                .show_ui(ui, |ui| {
+                    for m in CompositeMode::ALL {
+                        ui.selectable_value(&mut look.mode, m, m.name());
+                    }
+                });
+            match look.mode {
+                CompositeMode::Isosurface => {
+                    ui.add(egui::Slider::new(&mut look.iso_value, 0.0..=1.0).text("iso value"));
+                }
+                CompositeMode::Density => {
+                    ui.add(egui::Slider::new(&mut look.density, 0.0..=20.0).text("density factor"));
+                }
+                _ => {}
+            }
+            let mut shading = look.shading.is_some();
+            if ui.checkbox(&mut shading, "gradient shading").changed() {
+                look.shading = shading.then(Shading::default);
+            }
+            if let Some(sh) = &mut look.shading {
+                ui.add(egui::Slider::new(&mut sh.ambient, 0.0..=1.0).text("ambient"));
+                ui.add(egui::Slider::new(&mut sh.diffuse, 0.0..=1.0).text("diffuse"));
+                ui.add(egui::Slider::new(&mut sh.specular, 0.0..=1.0).text("specular"));
+                ui.add(egui::Slider::new(&mut sh.shininess, 1.0..=100.0).text("shininess"));
+            }
+            let mut grad = look.gradient_opacity.is_some();
+            if ui.checkbox(&mut grad, "gradient-modulated opacity").changed() {
+                look.gradient_opacity = grad.then_some(0.05);
+            }
+            if let Some(r) = &mut look.gradient_opacity {
+                ui.add(
+                    egui::Slider::new(r, 0.005..=0.5)
+                        .logarithmic(true)
+                        .text("full at |grad v|"),
+                );
+            }
+            let mut jitter = look.jitter.is_some();
+            if ui.checkbox(&mut jitter, "jittered ray start").changed() {
+                look.jitter = jitter.then_some(0);
+            }
+            ui.checkbox(&mut state.ortho, "orthographic");
+            ui.horizontal_wrapped(|ui| {
+                ui.label("look along");
+                for (axis, name) in ["X", "Y", "Z"].iter().enumerate() {
+                    for (positive, sign) in [(true, "+"), (false, "-")] {
+                        if ui.small_button(format!("{sign}{name}")).clicked() {
+                            state.animation =
+                                Some(RotationAnimation::new(state.orbit.rotation, look_along(axis, positive)));
+                        }
+                    }
+                }
+            });
         });
 
     egui::CollapsingHeader::new("Slicing")
