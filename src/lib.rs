@@ -1,6 +1,7 @@
 //! volcast: a volume ray caster on raw Vulkan. The binary (`src/main.rs`) and the tests drive this library, so
 //! both exercise one render path.
 
+pub mod bench;
 pub mod camera;
 pub mod compare;
 pub mod gpu;

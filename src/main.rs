@@ -43,6 +43,8 @@ enum Command {
     },
     /// Render built-in viewpoints with both ray setups and measure how they differ and what each costs.
     Compare(Box<CompareArgs>),
+    /// Time a fixed set of scenes and the raw 3D-texture sample rate (see README, Performance).
+    Bench(Box<BenchArgs>),
     /// List the Vulkan devices and which one volcast would pick.
     Devices,
 }
@@ -170,6 +172,9 @@ struct RenderArgs {
     /// Print GPU time per pass (after a warm-up frame; lavapipe compiles shaders on first use).
     #[arg(long)]
     timings: bool,
+    /// Print peak resident memory and the GPU memory allocated (volume, targets, buffers).
+    #[arg(long)]
+    memory: bool,
     /// Frames to time with --timings (the median is reported).
     #[arg(long, default_value_t = 5)]
     frames: u32,
@@ -187,6 +192,42 @@ struct ViewArgs {
     /// Drive the window with a script (for tests), e.g. "frames:3;resize:320x240;screenshot:a.png;exit".
     #[arg(long, hide = true)]
     script: Option<String>,
+}
+
+#[derive(Args, Clone)]
+struct BenchArgs {
+    #[command(flatten)]
+    gpu: GpuArgs,
+    /// Timed frames per configuration (median, min and max are reported).
+    #[arg(long, default_value_t = 10)]
+    frames: u32,
+    /// Untimed frames first (lavapipe compiles shaders on first use).
+    #[arg(long, default_value_t = 2)]
+    warmup: u32,
+    /// Folder with the CT head and MRI brain raw files (scenes whose file is missing are skipped).
+    #[arg(long, default_value = "../shared/data/raw")]
+    data: PathBuf,
+    /// make_volume.py's helix_256x256x256_uint8.raw for the vtk-helix scene (default: the same field generated).
+    #[arg(long)]
+    vtk_raw: Option<PathBuf>,
+    /// Only these scenes (repeatable): helix, dense, ct-head, mri-brain, vtk-helix, quick-helix.
+    #[arg(long = "scene")]
+    scenes: Vec<String>,
+    /// Only these image sizes (repeatable), e.g. --size 512.
+    #[arg(long = "size")]
+    sizes: Vec<u32>,
+    /// Only these shading variants (repeatable): off, on.
+    #[arg(long = "shading")]
+    shadings: Vec<String>,
+    /// CI smoke mode: a 64³ helix at 64x64, both ray setups, shading off and on, tiny sample-only run.
+    #[arg(long)]
+    quick: bool,
+    /// Only the sample-only micro-benchmark (all three texel formats).
+    #[arg(long)]
+    sample_only: bool,
+    /// Print the results as JSON on stdout (progress still goes to stderr).
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args, Clone)]
@@ -504,6 +545,9 @@ fn render(args: &RenderArgs) -> Result<()> {
             if !timing_line.is_empty() {
                 println!("{timing_line}");
             }
+            if args.memory {
+                println!("{}", volcast::bench::memory_line(gpu, &headless, &s)?);
+            }
             Ok(())
         })();
         headless.destroy(gpu);
@@ -601,6 +645,29 @@ fn compare(args: &CompareArgs) -> Result<()> {
     })
 }
 
+fn bench(args: &BenchArgs) -> Result<()> {
+    let opts = volcast::bench::BenchOptions {
+        frames: if args.quick { args.frames.min(2) } else { args.frames },
+        warmup: if args.quick { args.warmup.min(1) } else { args.warmup },
+        data_dir: args.data.clone(),
+        vtk_raw: args.vtk_raw.clone(),
+        quick: args.quick,
+        scenes: args.scenes.clone(),
+        sizes: args.sizes.clone(),
+        shadings: args.shadings.clone(),
+        sample_only: args.sample_only,
+    };
+    with_gpu(&args.gpu, |gpu| {
+        let report = volcast::bench::run(gpu, &opts, &mut |line| eprintln!("{line}"))?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&report)?);
+        } else {
+            print!("{}", report.text());
+        }
+        Ok(())
+    })
+}
+
 fn info(args: &VolumeArgs) -> Result<()> {
     let v = args.load()?;
     let e = v.extent();
@@ -686,6 +753,7 @@ fn main() -> ExitCode {
         Some(Command::View(a)) => view(a),
         Some(Command::Render(a)) => render(a),
         Some(Command::Compare(a)) => compare(a),
+        Some(Command::Bench(a)) => bench(a),
         Some(Command::Info { volume }) => info(volume),
         Some(Command::Devices) => devices(),
     };

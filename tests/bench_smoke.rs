@@ -1,0 +1,146 @@
+//! `volcast bench --quick` end to end, under validation: it runs, prints well-formed positive numbers, and its
+//! JSON has the fields scripts rely on. Never asserts speed (the machine is shared and lavapipe is a CPU).
+
+use std::process::{Command, Output};
+
+fn bench(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_volcast"))
+        .arg("bench")
+        .args(args)
+        .output()
+        .expect("could not start the volcast binary")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn positive(cell: &str, what: &str) -> f64 {
+    let v: f64 = cell
+        .parse()
+        .unwrap_or_else(|_| panic!("{what} '{cell}' is not a number"));
+    assert!(v.is_finite() && v > 0.0, "{what} = {v} should be finite and positive");
+    v
+}
+
+#[test]
+fn quick_bench_prints_valid_numbers_without_validation_errors() {
+    let out = bench(&["--quick", "--validate"]);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(
+        out.status.success(),
+        "exit {:?}\nstdout:\n{stdout}\nstderr:\n{stderr}",
+        out.status
+    );
+    assert!(
+        stderr.contains("validation: 0 errors, 0 warnings"),
+        "validation must be clean:\n{stderr}"
+    );
+
+    let rate_line = stdout
+        .lines()
+        .find(|l| l.contains("G samples/s"))
+        .unwrap_or_else(|| panic!("no sample-only line:\n{stdout}"));
+    let rate = rate_line
+        .split(':')
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .unwrap_or("");
+    positive(rate, "sample-only rate");
+
+    let lines: Vec<&str> = stdout.lines().collect();
+    let header = lines
+        .iter()
+        .position(|l| l.split_whitespace().eq(volcast::bench::TABLE_COLUMNS.iter().copied()))
+        .unwrap_or_else(|| panic!("no table header:\n{stdout}"));
+    let col = |name: &str| volcast::bench::TABLE_COLUMNS.iter().position(|c| *c == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines[header + 1..]
+        .iter()
+        .take_while(|l| !l.trim().is_empty())
+        .map(|l| l.split_whitespace().collect())
+        .collect();
+    assert_eq!(rows.len(), 4, "one row per ray setup and shading:\n{stdout}");
+    let mut methods = Vec::new();
+    for row in &rows {
+        assert_eq!(row.len(), volcast::bench::TABLE_COLUMNS.len(), "row {row:?}");
+        methods.push((row[col("method")], row[col("shading")]));
+        for name in [
+            "wall_med", "wall_min", "wall_max", "gpu_med", "gpu_min", "gpu_max", "march",
+        ] {
+            positive(row[col(name)], name);
+        }
+        assert!(positive(row[col("wall_min")], "wall_min") <= positive(row[col("wall_max")], "wall_max"));
+        let seg = positive(row[col("seg_spp")], "samples on the segments per pixel");
+        let spp = positive(row[col("spp")], "samples per pixel");
+        if row[col("shading")] == "off" {
+            // Without gradients every sample lies on the segment (shading adds six per visible step).
+            assert!(spp <= seg + 1e-9, "samples taken {spp} exceed the segments' {seg}");
+        }
+        positive(row[col("Gsamples/s")], "effective rate");
+        positive(row[col("of_raw")], "fraction of the raw rate");
+    }
+    methods.sort();
+    assert_eq!(
+        methods,
+        [
+            ("analytic", "off"),
+            ("analytic", "on"),
+            ("faces", "off"),
+            ("faces", "on")
+        ]
+    );
+    let faces = rows.iter().find(|r| r[col("method")] == "faces").unwrap();
+    positive(faces[col("entry")], "entry pass");
+    positive(faces[col("exit")], "exit pass");
+}
+
+#[test]
+fn quick_bench_json_has_the_expected_fields() {
+    let out = bench(&["--quick", "--json"]);
+    let stdout = text(&out.stdout);
+    assert!(out.status.success(), "stderr:\n{}", text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}):\n{stdout}"));
+    assert!(v["device"].is_string());
+    let rates = v["sample_only"].as_array().expect("sample_only array");
+    assert!(!rates.is_empty());
+    for r in rates {
+        assert!(r["format"].is_string());
+        assert!(r["gsamples_per_s"].as_f64().is_some_and(|x| x.is_finite() && x > 0.0));
+    }
+    let results = v["results"].as_array().expect("results array");
+    assert_eq!(results.len(), 4);
+    for r in results {
+        for key in ["scene", "volume", "format", "method", "shading"] {
+            assert!(r[key].is_string(), "{key} in {r}");
+        }
+        for key in ["wall_ms", "gpu_ms"] {
+            for stat in ["median", "min", "max"] {
+                let x = r[key][stat].as_f64().unwrap_or(f64::NAN);
+                assert!(x.is_finite() && x > 0.0, "{key}.{stat} = {x}");
+            }
+        }
+        for key in [
+            "segment_samples_per_pixel",
+            "samples_per_pixel",
+            "effective_gsamples_per_s",
+            "fraction_of_raw",
+        ] {
+            let x = r[key].as_f64().unwrap_or(f64::NAN);
+            assert!(x.is_finite() && x > 0.0, "{key} = {x}");
+        }
+        assert!(r["width"].as_u64().is_some_and(|w| w > 0));
+        assert!(r["gpu_allocated_bytes"].as_u64().is_some_and(|b| b > 0));
+    }
+    assert!(v["skipped"].is_array());
+}
+
+#[test]
+fn unknown_scene_is_refused_with_the_list() {
+    let out = bench(&["--scene", "nope"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("unknown scene 'nope'") && stderr.contains("vtk-helix"),
+        "{stderr}"
+    );
+}
