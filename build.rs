@@ -31,12 +31,31 @@ fn splice(path: &Path, depth: usize, out: &mut Spliced) -> Result<(), String> {
     Ok(())
 }
 
-fn compile(path: &Path, stage: naga::ShaderStage) -> Result<Vec<u32>, String> {
+/// Variants of the march shaders: (suffix, defines). lavapipe pays for code under an untaken `if` that samples
+/// textures, so each compositing family and the shading path get their own SPIR-V (see shaders/march.glsl).
+const MARCH_VARIANTS: &[(&str, &[&str])] = &[
+    ("ea", &[]),
+    ("ea_shaded", &["SHADED"]),
+    ("proj", &["FAMILY_PROJECTION"]),
+    ("iso", &["FAMILY_ISOSURFACE"]),
+];
+
+fn compile(path: &Path, stage: naga::ShaderStage, defines: &[&str]) -> Result<Vec<u32>, String> {
     let mut sp = Spliced {
         text: String::new(),
         origin: Vec::new(),
     };
     splice(path, 0, &mut sp)?;
+    if !defines.is_empty() {
+        // After the #version line, which must stay first.
+        let first_len = sp.text.find('\n').map(|i| i + 1).unwrap_or(0);
+        let inserted: String = defines.iter().map(|d| format!("#define {d}\n")).collect();
+        sp.text.insert_str(first_len, &inserted);
+        let at = sp.origin.len().min(1);
+        for _ in defines {
+            sp.origin.insert(at, (path.to_path_buf(), 0));
+        }
+    }
     let locate = |span: naga::Span| -> String {
         let loc = span.location(&sp.text);
         match sp.origin.get((loc.line_number as usize).saturating_sub(1)) {
@@ -97,13 +116,27 @@ fn main() {
                 continue;
             }
         };
-        match compile(&path, stage) {
-            Ok(words) => {
-                let name = path.file_name().and_then(|n| n.to_str()).expect("utf-8 shader name");
-                let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-                std::fs::write(out_dir.join(format!("{name}.spv")), bytes).expect("write SPIR-V to OUT_DIR");
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .expect("utf-8 shader name")
+            .to_string();
+        let variants: Vec<(String, &[&str])> = if name.starts_with("march_") {
+            MARCH_VARIANTS
+                .iter()
+                .map(|(suffix, defines)| (format!("{name}.{suffix}"), *defines))
+                .collect()
+        } else {
+            vec![(name.clone(), &[][..])]
+        };
+        for (out_name, defines) in variants {
+            match compile(&path, stage, defines) {
+                Ok(words) => {
+                    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+                    std::fs::write(out_dir.join(format!("{out_name}.spv")), bytes).expect("write SPIR-V to OUT_DIR");
+                }
+                Err(e) => failures.push(format!("{e} (variant {out_name})")),
             }
-            Err(e) => failures.push(e),
         }
     }
     if !failures.is_empty() {

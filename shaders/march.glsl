@@ -3,6 +3,7 @@
 layout(set = 1, binding = 0) uniform texture3D volume_tex;
 layout(set = 1, binding = 1) uniform sampler linear_smp;
 layout(set = 1, binding = 2) uniform texture2D lut_tex;   // 4096 x 1, RGBA32F: linear rgb + opacity per voxel step
+layout(set = 1, binding = 3) uniform texture3D occupancy_tex;   // one texel per 8^3 brick: > 0.5 may be visible
 
 const uint MODE_EMISSION = 0u;
 const uint MODE_MIP = 1u;
@@ -73,6 +74,28 @@ vec3 shade(vec3 rgb, vec3 g, vec3 light) {
     return rgb * (s.x + s.y * ndl) + vec3(s.z * pow(ndl, s.w));
 }
 
+// Empty-space skipping. The ray is walked brick by brick: `brick_span` looks up the 8^3 brick holding the
+// sample at `t` and returns the index of the first sample past that brick (x) and whether the brick may hold
+// visible samples (y). The march leaps over empty bricks without leaving its sample grid, and in occupied ones
+// pays only a comparison per sample. With skipping off, the whole ray is one span.
+ivec2 brick_span(vec3 a, vec3 dir, float t, float h, float o, ivec3 bricks) {
+    if (frame.mode_params.z < 0.5) {
+        return ivec2(2147483647, 1);
+    }
+    vec3 p = a + dir * t;
+    ivec3 b = clamp(ivec3(floor(p / frame.brick.xyz)), ivec3(0), bricks - 1);
+    bool occupied = texelFetch(sampler3D(occupancy_tex, linear_smp), b, 0).r > 0.5;
+    vec3 lo = vec3(b) * frame.brick.xyz;
+    vec3 hi = lo + frame.brick.xyz;
+    // Zero components take the far side, giving a huge (ignored) exit instead of 0/0.
+    vec3 toward = mix(lo, hi, greaterThanEqual(dir, vec3(0.0)));
+    vec3 safe = mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
+    vec3 exits = (toward - a) / safe;
+    // A little short of the exit: rounding must never leap over a sample of the next brick.
+    float t_exit = min(exits.x, min(exits.y, exits.z)) - 1e-4 * h;
+    return ivec2(int(ceil(t_exit / h - o)), occupied ? 1 : 0);
+}
+
 // The per-pixel start offset of jittered rays: must equal settings::jitter_offset.
 float jitter_offset(uvec2 px, uint seed) {
     uint v = (px.x * 1973u + px.y * 9277u + seed * 26699u) | 1u;
@@ -98,6 +121,9 @@ vec4 background_pixel() {
     return finish(vec3(0.0), 0.0);
 }
 
+// The march is compiled in variants (build.rs defines one of FAMILY_PROJECTION / FAMILY_ISOSURFACE, or neither
+// for emission/density, and SHADED), because lavapipe executes an `if` holding texture samples at full cost
+// even when no pixel takes it: unused shading code made the plain march 4x slower.
 vec4 march(vec3 a, vec3 b, vec2 frag) {
     vec3 d = b - a;
     float len = length(d * frame.extent.xyz);
@@ -109,17 +135,31 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     vec3 light = -normalize(d * frame.extent.xyz);
     int max_steps = int(frame.viewport.z);
     float step_length = frame.alpha.y;
+    vec3 dir = d / len;
+    ivec3 bricks = textureSize(sampler3D(occupancy_tex, linear_smp), 0);
 
-    if (mode == MODE_MIP || mode == MODE_MINIP || mode == MODE_AVERAGE) {
-        float m = mode == MODE_MIP ? -1e30 : 1e30;
-        float sum = 0.0;
-        float count = 0.0;
-        for (int k = 0; k < max_steps; k++) {
+#if defined(FAMILY_PROJECTION)
+    float m = mode == MODE_MIP ? -1e30 : 1e30;
+    float sum = 0.0;
+    float count = 0.0;
+    int k = 0;
+    while (k < max_steps) {
+        float t0 = (float(k) + o) * h;
+        if (t0 >= len) {
+            break;
+        }
+        ivec2 span = brick_span(a, dir, t0, h, o, bricks);
+        int end = max(span.x, k + 1);
+        if (span.y == 0) {
+            k = end;
+            continue;
+        }
+        for (; k < end; k++) {
             float t = (float(k) + o) * h;
             if (t >= len) {
                 break;
             }
-            float v = sample_value(a + d * (t / len));
+            float v = sample_value(a + dir * t);
             if (!visible(v)) {
                 continue;
             }
@@ -127,29 +167,41 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             sum += v;
             count += 1.0;
         }
-        if (count == 0.0) {
-            return background_pixel();
-        }
-        return finish(classify(mode == MODE_AVERAGE ? sum / count : m).rgb, 1.0);
     }
-
-    if (mode == MODE_ISOSURFACE) {
-        float iso = frame.mode_params.x;
-        float prev_t = 0.0;
-        for (int k = 0; k < max_steps; k++) {
+    if (count == 0.0) {
+        return background_pixel();
+    }
+    return finish(classify(mode == MODE_AVERAGE ? sum / count : m).rgb, 1.0);
+#elif defined(FAMILY_ISOSURFACE)
+    float iso = frame.mode_params.x;
+    float t_hit = -1.0;
+    int k = 0;
+    while (k < max_steps && t_hit < 0.0) {
+        float t0 = (float(k) + o) * h;
+        if (t0 >= len) {
+            break;
+        }
+        ivec2 span = brick_span(a, dir, t0, h, o, bricks);
+        int end = max(span.x, k + 1);
+        if (span.y == 0) {
+            k = end;
+            continue;
+        }
+        for (; k < end; k++) {
             float t = (float(k) + o) * h;
             if (t >= len) {
                 break;
             }
-            float v = sample_value(a + d * (t / len));
+            float v = sample_value(a + dir * t);
             if (!isnan(v) && v >= iso) {
-                float t_hit = t;
+                t_hit = t;
                 if (k > 0) {
-                    float lo = prev_t;
+                    // The previous grid sample (possibly in a skipped brick, where every value is below iso).
+                    float lo = t - h;
                     float hi = t;
                     for (int i = 0; i < 8; i++) {
                         float mid = 0.5 * (lo + hi);
-                        float vm = sample_value(a + d * (mid / len));
+                        float vm = sample_value(a + dir * mid);
                         if (!isnan(vm) && vm >= iso) {
                             hi = mid;
                         } else {
@@ -158,35 +210,50 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
                     }
                     t_hit = 0.5 * (lo + hi);
                 }
-                vec3 p = a + d * (t_hit / len);
-                return finish(shade(classify(iso).rgb, gradient(p), light), 1.0);
+                break;
             }
-            prev_t = t;
         }
+    }
+    if (t_hit < 0.0) {
         return background_pixel();
     }
-
+    return finish(shade(classify(iso).rgb, gradient(a + dir * t_hit), light), 1.0);
+#else
     // Emission-absorption and the density-factor model.
     vec3 color = vec3(0.0);
     float opacity = 0.0;
-    for (int k = 0; k < max_steps; k++) {
-        float t = (float(k) + o) * h;
-        if (t >= len) {
+    int k = 0;
+    bool done = false;
+    while (k < max_steps && !done) {
+        float t0 = (float(k) + o) * h;
+        if (t0 >= len) {
             break;
         }
-        vec3 p = a + d * (t / len);
-        float v = sample_value(p);
-        if (!visible(v)) {
+        ivec2 span = brick_span(a, dir, t0, h, o, bricks);
+        int end = max(span.x, k + 1);
+        if (span.y == 0) {
+            k = end;
             continue;
         }
-        vec4 c = classify(v);
-        float alpha = c.a;
-        // A transparent sample adds nothing; skipping it also skips its six gradient samples.
-        if (alpha <= 0.0) {
-            continue;
-        }
-        vec3 rgb = c.rgb;
-        if (shading_on || grad_ref > 0.0) {
+        for (; k < end; k++) {
+            float t = (float(k) + o) * h;
+            if (t >= len) {
+                done = true;
+                break;
+            }
+            vec3 p = a + dir * t;
+            float v = sample_value(p);
+            if (!visible(v)) {
+                continue;
+            }
+            vec4 c = classify(v);
+            float alpha = c.a;
+            // A transparent sample adds nothing; skipping it also skips its six gradient samples.
+            if (alpha <= 0.0) {
+                continue;
+            }
+            vec3 rgb = c.rgb;
+#if defined(SHADED)
             vec3 g = gradient(p);
             if (grad_ref > 0.0) {
                 alpha *= min(1.0, length(g) / grad_ref);
@@ -194,15 +261,18 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             if (shading_on) {
                 rgb = shade(rgb, g, light);
             }
-        }
-        float a_step = mode == MODE_DENSITY
-            ? min(1.0, alpha * frame.mode_params.y * step_length)
-            : 1.0 - pow(1.0 - alpha, step_length);
-        color += (1.0 - opacity) * a_step * rgb;
-        opacity += (1.0 - opacity) * a_step;
-        if (opacity >= frame.alpha.z) {
-            break;
+#endif
+            float a_step = mode == MODE_DENSITY
+                ? min(1.0, alpha * frame.mode_params.y * step_length)
+                : 1.0 - pow(1.0 - alpha, step_length);
+            color += (1.0 - opacity) * a_step * rgb;
+            opacity += (1.0 - opacity) * a_step;
+            if (opacity >= frame.alpha.z) {
+                done = true;
+                break;
+            }
         }
     }
     return finish(color, opacity);
+#endif
 }

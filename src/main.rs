@@ -310,6 +310,9 @@ struct FrameArgs {
     /// Orthographic projection (same framing at the target as the perspective view).
     #[arg(long)]
     ortho: bool,
+    /// March every brick, also those empty-space skipping would leap over (for comparisons).
+    #[arg(long)]
+    no_skip: bool,
     /// Opacity of one voxel-length step.
     #[arg(long, default_value_t = volcast::settings::DEFAULT_STEP_ALPHA)]
     step_alpha: f32,
@@ -435,6 +438,7 @@ impl FrameArgs {
         s.gradient_opacity = self.gradient_opacity;
         s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
         s.camera.ortho = self.ortho;
+        s.skip_empty = !self.no_skip;
         s.step_alpha = self.step_alpha;
         s.step_length = self.step_length;
         s.multiplied_alpha = self.multiplied_alpha;

@@ -169,6 +169,8 @@ pub struct RenderSettings {
     pub slab_hi: Vec3,
     pub ray_setup: RaySetup,
     pub position_format: PositionFormat,
+    /// Leap over 8³ bricks that hold nothing visible. Changes which samples are taken, not the image.
+    pub skip_empty: bool,
 }
 
 impl Default for RenderSettings {
@@ -222,6 +224,7 @@ impl RenderSettings {
             slab_hi: Vec3::ONE,
             ray_setup: RaySetup::Faces,
             position_format: PositionFormat::Rgba32f,
+            skip_empty: true,
         }
     }
 

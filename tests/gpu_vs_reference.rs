@@ -393,3 +393,49 @@ fn jitter_averages_towards_the_finely_sampled_image() {
         "jittered mean {e_jittered:.3} should beat unjittered {e_unjittered:.3} clearly"
     );
 }
+
+/// Empty-space skipping leaps over bricks without moving the sample grid, so it may only change which samples are
+/// taken, never the image: skipped and unskipped frames must agree to 1/255 (in practice they are identical).
+#[test]
+fn empty_space_skipping_does_not_change_the_image() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut volumes = vec![
+        volume::builtin("helix", Some(96)).unwrap(),
+        marschner_lobb_as(VoxelType::F32),
+    ];
+    if let Some(path) = common::shared_data("raw/cranium_ct_256x256x108_int16.raw") {
+        volumes.push(volume::load_raw(&path, &Default::default()).unwrap());
+    }
+    let mut failures = Vec::new();
+    for v in &volumes {
+        headless.set_volume(&gpu, v).unwrap();
+        let mut cases = standard_cases(v, 80);
+        cases.extend(quality_cases(v, 80));
+        for case in cases {
+            for method in [RaySetup::Faces, RaySetup::Analytic] {
+                let mut s = case.settings.clone();
+                s.ray_setup = method;
+                s.skip_empty = true;
+                let skipped = headless.render(&gpu, &s).unwrap().image;
+                s.skip_empty = false;
+                let full = headless.render(&gpu, &s).unwrap().image;
+                let d = diff(&skipped, &full);
+                if d.max > 1.0 {
+                    let label = format!("{}-{}-{:?}-skipping", v.name, case.name, method).to_lowercase();
+                    write_failure_images(&label, &skipped, &full);
+                    failures.push(format!("{label}: {d}"));
+                }
+            }
+        }
+    }
+    headless.destroy(&gpu);
+    let log = gpu.log.clone();
+    drop(gpu);
+    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    assert!(
+        failures.is_empty(),
+        "skipping changed the image:\n{}",
+        failures.join("\n")
+    );
+}

@@ -2,6 +2,8 @@
 //! faces → entry positions), pass 2 (back faces → exit positions) and pass 3 (march); for the analytic method
 //! the march alone. The same code serves headless rendering and (later) the window.
 
+pub mod skip;
+
 use crate::camera::tex_to_world;
 use crate::gpu::pipeline::{graphics_pipeline, shader, GraphicsDesc};
 use crate::gpu::resources::{upload_image, Buffer, Image, ImageDesc};
@@ -37,6 +39,7 @@ pub struct FrameUniforms {
     pub shading: [f32; 4],
     pub mode_params: [f32; 4],
     pub flags: [u32; 4],
+    pub brick: [f32; 4],
 }
 
 /// GPU facts about the loaded volume that the uniforms need.
@@ -98,7 +101,11 @@ impl FrameUniforms {
                 s.gradient_opacity.unwrap_or(0.0),
             ),
             shading: [shading.ambient, shading.diffuse, shading.specular, shading.shininess],
-            mode_params: [s.iso_value, s.density, 0.0, 0.0],
+            mode_params: [s.iso_value, s.density, s.skip_empty as u32 as f32, 0.0],
+            brick: v4(
+                Vec3::splat(skip::BRICK as f32) / Vec3::from(v.dims.map(|d| d as f32)),
+                0.0,
+            ),
             flags: [
                 s.mode.index(),
                 s.jitter.is_some() as u32,
@@ -122,6 +129,53 @@ pub struct PassTimings {
 struct GpuVolume {
     image: Image,
     info: VolumeInfo,
+    bricks: skip::BrickGrid,
+    /// One R8 texel per brick: may a sample there be visible (see skip.rs).
+    occupancy: Image,
+    /// What the occupancy was computed for.
+    occupancy_key: Option<OccupancyKey>,
+}
+
+/// Everything the brick occupancy depends on besides the volume.
+#[derive(Clone, Debug, PartialEq)]
+struct OccupancyKey {
+    classification: Classification,
+    window: [f32; 2],
+    mode: crate::settings::CompositeMode,
+    iso: f32,
+}
+
+impl OccupancyKey {
+    fn of(s: &RenderSettings) -> OccupancyKey {
+        OccupancyKey {
+            classification: s.classification(),
+            window: s.window,
+            mode: s.mode,
+            iso: s.iso_value,
+        }
+    }
+}
+
+/// A 3D image of `dims` (a depth of 1 gets a duplicated second slice: a depth-1 image would be 2D).
+fn image_3d(gpu: &Gpu, format: vk::Format, dims: [u32; 3], name: &str) -> Result<Image, GpuError> {
+    let extent = vk::Extent3D {
+        width: dims[0],
+        height: dims[1],
+        depth: dims[2].max(2),
+    };
+    let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+    Image::new(gpu, ImageDesc { format, extent, usage }, name)
+}
+
+/// Uploads `bytes` (dims[2] slices) into an image made by [`image_3d`].
+fn upload_3d(gpu: &Gpu, image: &Image, bytes: &[u8], depth: u32) -> Result<(), GpuError> {
+    if depth == 1 {
+        let mut twice = bytes.to_vec();
+        twice.extend_from_slice(bytes);
+        upload_image(gpu, image, &twice)
+    } else {
+        upload_image(gpu, image, bytes)
+    }
 }
 
 struct PositionTargets {
@@ -141,6 +195,38 @@ impl PositionTargets {
     fn destroy(self, gpu: &Gpu) {
         self.exit.destroy(gpu);
         self.entry.destroy(gpu);
+    }
+}
+
+fn setup_index(setup: RaySetup) -> usize {
+    match setup {
+        RaySetup::Faces => 0,
+        RaySetup::Analytic => 1,
+    }
+}
+
+/// Which compiled variant of the march `s` needs (build.rs MARCH_VARIANTS): 0 emission/density, 1 the same with
+/// gradients (shading or gradient-modulated opacity), 2 MIP/MinIP/average, 3 isosurface.
+pub fn march_variant(s: &RenderSettings) -> usize {
+    use crate::settings::CompositeMode as M;
+    match s.mode {
+        M::Emission | M::Density if s.shading.is_some() || s.gradient_opacity.is_some() => 1,
+        M::Emission | M::Density => 0,
+        M::Mip | M::MinIp | M::Average => 2,
+        M::Isosurface => 3,
+    }
+}
+
+fn march_shader(setup: RaySetup, variant: usize) -> crate::gpu::pipeline::ShaderCode {
+    match (setup, variant) {
+        (RaySetup::Faces, 0) => shader!("march_faces.frag.ea"),
+        (RaySetup::Faces, 1) => shader!("march_faces.frag.ea_shaded"),
+        (RaySetup::Faces, 2) => shader!("march_faces.frag.proj"),
+        (RaySetup::Faces, _) => shader!("march_faces.frag.iso"),
+        (RaySetup::Analytic, 0) => shader!("march_analytic.frag.ea"),
+        (RaySetup::Analytic, 1) => shader!("march_analytic.frag.ea_shaded"),
+        (RaySetup::Analytic, 2) => shader!("march_analytic.frag.proj"),
+        (RaySetup::Analytic, _) => shader!("march_analytic.frag.iso"),
     }
 }
 
@@ -164,8 +250,8 @@ pub struct Renderer {
     march_analytic_layout: vk::PipelineLayout,
     /// Entry and exit pipelines per position format: [Rgba32f, Rgba16f] × [entry, exit].
     position_pipelines: [[vk::Pipeline; 2]; 2],
-    march_faces_pipeline: vk::Pipeline,
-    march_analytic_pipeline: vk::Pipeline,
+    /// March pipelines per ray setup × shader variant, created when first needed (see `march_variant`).
+    march_pipelines: [[vk::Pipeline; 4]; 2],
     descriptor_pool: vk::DescriptorPool,
     volume_set: vk::DescriptorSet,
     positions_set: vk::DescriptorSet,
@@ -252,8 +338,7 @@ impl Renderer {
             march_faces_layout: vk::PipelineLayout::null(),
             march_analytic_layout: vk::PipelineLayout::null(),
             position_pipelines: [[vk::Pipeline::null(); 2]; 2],
-            march_faces_pipeline: vk::Pipeline::null(),
-            march_analytic_pipeline: vk::Pipeline::null(),
+            march_pipelines: [[vk::Pipeline::null(); 4]; 2],
             descriptor_pool: vk::DescriptorPool::null(),
             volume_set: vk::DescriptorSet::null(),
             positions_set: vk::DescriptorSet::null(),
@@ -286,7 +371,12 @@ impl Renderer {
         self.frame_set_layout = set_layout(gpu, &[(D::UNIFORM_BUFFER, all)])?;
         self.volume_set_layout = set_layout(
             gpu,
-            &[(D::SAMPLED_IMAGE, frag), (D::SAMPLER, frag), (D::SAMPLED_IMAGE, frag)],
+            &[
+                (D::SAMPLED_IMAGE, frag),
+                (D::SAMPLER, frag),
+                (D::SAMPLED_IMAGE, frag),
+                (D::SAMPLED_IMAGE, frag),
+            ],
         )?;
         self.positions_set_layout = set_layout(
             gpu,
@@ -303,7 +393,6 @@ impl Renderer {
 
         let faces_vert = shader!("faces.vert");
         let faces_frag = shader!("faces.frag");
-        let fullscreen = shader!("fullscreen.vert");
         for (i, format) in [PositionFormat::Rgba32f, PositionFormat::Rgba16f]
             .into_iter()
             .enumerate()
@@ -324,27 +413,6 @@ impl Renderer {
                 )?;
             }
         }
-        self.march_faces_pipeline = graphics_pipeline(
-            gpu,
-            &GraphicsDesc {
-                vertex: &fullscreen,
-                fragment: &shader!("march_faces.frag"),
-                layout: self.march_faces_layout,
-                color_format: self.output_format,
-                cull: vk::CullModeFlags::NONE,
-            },
-        )?;
-        self.march_analytic_pipeline = graphics_pipeline(
-            gpu,
-            &GraphicsDesc {
-                vertex: &fullscreen,
-                fragment: &shader!("march_analytic.frag"),
-                layout: self.march_analytic_layout,
-                color_format: self.output_format,
-                cull: vk::CullModeFlags::NONE,
-            },
-        )?;
-
         let n = slots as u32;
         let sizes = [
             vk::DescriptorPoolSize {
@@ -353,7 +421,7 @@ impl Renderer {
             },
             vk::DescriptorPoolSize {
                 ty: D::SAMPLED_IMAGE,
-                descriptor_count: 4,
+                descriptor_count: 5,
             },
             vk::DescriptorPoolSize {
                 ty: D::SAMPLER,
@@ -440,7 +508,15 @@ impl Renderer {
         let lut_info = [vk::DescriptorImageInfo::default()
             .image_view(self.lut.view)
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let occupancy_info = [vk::DescriptorImageInfo::default()
+            .image_view(vol.occupancy.view)
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let writes = [
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.volume_set)
+                .dst_binding(3)
+                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                .image_info(&occupancy_info),
             vk::WriteDescriptorSet::default()
                 .dst_set(self.volume_set)
                 .dst_binding(0)
@@ -493,40 +569,31 @@ impl Renderer {
                 "this device cannot filter {format:?} 3D textures linearly"
             )));
         }
-        let [w, h, d] = volume.dims;
-        let desc = ImageDesc {
-            format,
-            extent: vk::Extent3D {
-                width: w,
-                height: h,
-                depth: d,
-            },
-            usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-        };
-        // A depth-1 volume would be a 2D image; give it a second slice so the 3D view still works.
-        let image = Image::new(
-            gpu,
-            ImageDesc {
-                extent: vk::Extent3D {
-                    depth: d.max(2),
-                    ..desc.extent
-                },
-                ..desc
-            },
-            "volume",
-        )?;
-        let upload = if d == 1 {
-            let mut twice = bytes.to_vec();
-            twice.extend_from_slice(bytes);
-            upload_image(gpu, &image, &twice)
-        } else {
-            upload_image(gpu, &image, bytes)
-        };
-        if let Err(e) = upload {
+        let image = image_3d(gpu, format, volume.dims, "volume")?;
+        if let Err(e) = upload_3d(gpu, &image, bytes, volume.dims[2]) {
             image.destroy(gpu);
             return Err(e);
         }
+        let bricks = skip::BrickGrid::new(volume);
+        // Everything occupied until prepare() computes the real occupancy for the settings.
+        let occupancy = match image_3d(gpu, vk::Format::R8_UNORM, bricks.bricks, "brick occupancy").and_then(|o| {
+            let all = vec![255u8; bricks.min.len()];
+            match upload_3d(gpu, &o, &all, bricks.bricks[2]) {
+                Ok(()) => Ok(o),
+                Err(e) => {
+                    o.destroy(gpu);
+                    Err(e)
+                }
+            }
+        }) {
+            Ok(o) => o,
+            Err(e) => {
+                image.destroy(gpu);
+                return Err(e);
+            }
+        };
         if let Some(old) = self.volume.take() {
+            old.occupancy.destroy(gpu);
             old.image.destroy(gpu);
         }
         self.volume = Some(GpuVolume {
@@ -537,6 +604,9 @@ impl Renderer {
                 scale_bias: volume.gpu_scale_bias(),
                 range: volume.range,
             },
+            bricks,
+            occupancy,
+            occupancy_key: None,
         });
         self.write_volume_set(gpu);
         Ok(())
@@ -561,7 +631,18 @@ impl Renderer {
             }),
             RaySetup::Analytic => self.positions.is_none(),
         };
-        !targets_fit || !self.lut_is_current(s)
+        !targets_fit
+            || !self.lut_is_current(s)
+            || !self.occupancy_is_current(s)
+            || self.march_pipelines[setup_index(s.ray_setup)][march_variant(s)] == vk::Pipeline::null()
+    }
+
+    fn occupancy_is_current(&self, s: &RenderSettings) -> bool {
+        !s.skip_empty
+            || self
+                .volume
+                .as_ref()
+                .is_none_or(|v| v.occupancy_key.as_ref() == Some(&OccupancyKey::of(s)))
     }
 
     fn lut_is_current(&self, s: &RenderSettings) -> bool {
@@ -574,9 +655,34 @@ impl Renderer {
     /// Creates (or re-creates) what `settings` needs that depends on more than the frame: colormap, targets.
     /// Must be called while no submitted frame is in flight.
     pub fn prepare(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
+        let (si, vi) = (setup_index(s.ray_setup), march_variant(s));
+        if self.march_pipelines[si][vi] == vk::Pipeline::null() {
+            let layout = match s.ray_setup {
+                RaySetup::Faces => self.march_faces_layout,
+                RaySetup::Analytic => self.march_analytic_layout,
+            };
+            self.march_pipelines[si][vi] = graphics_pipeline(
+                gpu,
+                &GraphicsDesc {
+                    vertex: &shader!("fullscreen.vert"),
+                    fragment: &march_shader(s.ray_setup, vi),
+                    layout,
+                    color_format: self.output_format,
+                    cull: vk::CullModeFlags::NONE,
+                },
+            )?;
+        }
         if !self.lut_is_current(s) {
             let range = self.volume.as_ref().map(|v| v.info.range).unwrap_or([0.0, 1.0]);
             self.upload_lut(gpu, &s.classification(), s.window, range)?;
+        }
+        if !self.occupancy_is_current(s) {
+            if let Some(vol) = &mut self.volume {
+                let lut = bake(&s.classification(), s.window, vol.info.range);
+                let occupancy = vol.bricks.occupancy(&lut, s.mode, s.window, s.iso_value);
+                upload_3d(gpu, &vol.occupancy, &occupancy, vol.bricks.bricks[2])?;
+                vol.occupancy_key = Some(OccupancyKey::of(s));
+            }
         }
         if s.ray_setup == RaySetup::Faces {
             let fits = self.positions.as_ref().is_some_and(|p| {
@@ -659,6 +765,10 @@ impl Renderer {
         slot.uniforms.write(bytemuck::bytes_of(&uniforms))?;
         slot.recorded = Some(s.ray_setup);
         let (frame_set, query_pool) = (slot.set, slot.query_pool);
+        let march_pipeline = self.march_pipelines[setup_index(s.ray_setup)][march_variant(s)];
+        if march_pipeline == vk::Pipeline::null() {
+            return Err(GpuError::Lost("prepare() was not called for these settings"));
+        }
         let dev = &gpu.device;
         let extent = vk::Extent2D {
             width: s.width,
@@ -760,7 +870,7 @@ impl Renderer {
                 begin(output.1, vk::AttachmentLoadOp::DONT_CARE);
                 // SAFETY: rendering has begun; the sets match the march-faces layout and hold live resources.
                 unsafe {
-                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.march_faces_pipeline);
+                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, march_pipeline);
                     dev.cmd_bind_descriptor_sets(
                         cb,
                         vk::PipelineBindPoint::GRAPHICS,
@@ -779,7 +889,7 @@ impl Renderer {
                 begin(output.1, vk::AttachmentLoadOp::DONT_CARE);
                 // SAFETY: rendering has begun; the sets match the march-analytic layout and hold live resources.
                 unsafe {
-                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.march_analytic_pipeline);
+                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, march_pipeline);
                     dev.cmd_bind_descriptor_sets(
                         cb,
                         vk::PipelineBindPoint::GRAPHICS,
@@ -856,14 +966,16 @@ impl Renderer {
                 p.destroy(gpu);
             }
             if let Some(v) = self.volume.take() {
+                v.occupancy.destroy(gpu);
                 v.image.destroy(gpu);
             }
             d.destroy_descriptor_pool(self.descriptor_pool, None);
             for p in self.position_pipelines.iter().flatten() {
                 d.destroy_pipeline(*p, None);
             }
-            d.destroy_pipeline(self.march_faces_pipeline, None);
-            d.destroy_pipeline(self.march_analytic_pipeline, None);
+            for p in self.march_pipelines.iter().flatten() {
+                d.destroy_pipeline(*p, None);
+            }
             d.destroy_pipeline_layout(self.faces_layout, None);
             d.destroy_pipeline_layout(self.march_faces_layout, None);
             d.destroy_pipeline_layout(self.march_analytic_layout, None);

@@ -1,0 +1,155 @@
+//! Empty-space skipping: a grid of 8³-voxel bricks with the min/max of the values their samples can see, and per
+//! transfer function an occupancy bit per brick. The march leaps over unoccupied bricks without moving its
+//! sample grid, so skipping changes which samples are *taken*, never what they would have contributed. Pure code.
+
+use crate::settings::CompositeMode;
+use crate::volume::Volume;
+
+/// Brick edge in voxels.
+pub const BRICK: u32 = 8;
+
+/// Per-brick value range (normalised), over every voxel a trilinear sample inside the brick reads: the brick's
+/// own voxels plus a one-voxel apron. NaN is ignored; a brick of only NaN has min > max (never visible).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BrickGrid {
+    pub bricks: [u32; 3],
+    pub min: Vec<f32>,
+    pub max: Vec<f32>,
+}
+
+impl BrickGrid {
+    pub fn new(volume: &Volume) -> BrickGrid {
+        let dims = volume.dims;
+        let bricks = dims.map(|d| d.div_ceil(BRICK));
+        let [bx, by, bz] = bricks;
+        let n = (bx * by * bz) as usize;
+        let mut min = vec![f32::INFINITY; n];
+        let mut max = vec![f32::NEG_INFINITY; n];
+        let range = |b: u32, d: u32| -> (u32, u32) {
+            let lo = (b * BRICK).saturating_sub(1);
+            let hi = ((b + 1) * BRICK).min(d - 1);
+            (lo, hi)
+        };
+        for k in 0..bz {
+            let (z0, z1) = range(k, dims[2]);
+            for j in 0..by {
+                let (y0, y1) = range(j, dims[1]);
+                for i in 0..bx {
+                    let (x0, x1) = range(i, dims[0]);
+                    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+                    for z in z0..=z1 {
+                        for y in y0..=y1 {
+                            for x in x0..=x1 {
+                                let v = volume.normalized(x, y, z) as f32;
+                                if !v.is_nan() {
+                                    lo = lo.min(v);
+                                    hi = hi.max(v);
+                                }
+                            }
+                        }
+                    }
+                    let idx = (i + bx * (j + by * k)) as usize;
+                    min[idx] = lo;
+                    max[idx] = hi;
+                }
+            }
+        }
+        BrickGrid { bricks, min, max }
+    }
+
+    /// One byte per brick (x fastest): 255 where a sample inside could be visible for this classification, 0
+    /// where none can.
+    ///
+    /// - emission/density: some table entry the brick's value range can interpolate has opacity > 0;
+    /// - MIP/MinIP/average: the value range overlaps the window;
+    /// - isosurface: the brick reaches the iso value (a crossing or a first sample ≥ iso can only lie there).
+    pub fn occupancy(&self, lut: &[[f32; 4]], mode: CompositeMode, window: [f32; 2], iso: f32) -> Vec<u8> {
+        // Prefix counts of visible table entries: "any visible entry in [i, j]" in O(1) per brick.
+        let mut visible_before = Vec::with_capacity(lut.len() + 1);
+        visible_before.push(0u32);
+        for e in lut {
+            let last = *visible_before.last().unwrap_or(&0);
+            visible_before.push(last + (e[3] > 0.0) as u32);
+        }
+        let last = lut.len().saturating_sub(1) as f32;
+        self.min
+            .iter()
+            .zip(&self.max)
+            .map(|(&lo, &hi)| {
+                if lo > hi {
+                    return false;
+                }
+                match mode {
+                    CompositeMode::Emission | CompositeMode::Density => {
+                        let i = (lo.clamp(0.0, 1.0) * last).floor() as usize;
+                        let j = ((hi.clamp(0.0, 1.0) * last).ceil() as usize).min(lut.len() - 1);
+                        visible_before[j + 1] > visible_before[i]
+                    }
+                    CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => {
+                        hi >= window[0] && lo <= window[1]
+                    }
+                    CompositeMode::Isosurface => hi >= iso,
+                }
+            })
+            .map(|occupied| if occupied { 255 } else { 0 })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::{VoxelData, VoxelType};
+
+    /// A 20×9×8 volume that is 0 everywhere except one voxel of 200 at (17, 4, 3).
+    fn spike() -> Volume {
+        let dims = [20u32, 9, 8];
+        let mut data = vec![0u8; (dims[0] * dims[1] * dims[2]) as usize];
+        data[(17 + 20 * (4 + 9 * 3)) as usize] = 200;
+        Volume::new("spike", dims, [1.0; 3], VoxelType::U8, VoxelData::U8(data)).unwrap()
+    }
+
+    #[test]
+    fn grid_covers_the_apron_and_partial_bricks() {
+        let g = BrickGrid::new(&spike());
+        assert_eq!(g.bricks, [3, 2, 1]);
+        let at = |i: u32, j: u32, k: u32| (i + 3 * (j + 2 * k)) as usize;
+        assert_eq!(g.max[at(2, 0, 0)], 1.0, "the spike's own brick");
+        assert_eq!(g.max[at(1, 0, 0)], 0.0, "x = 17 is outside brick 1's apron (7..=16)");
+        assert_eq!(g.max[at(2, 1, 0)], 0.0, "y = 4 is outside brick (2,1)'s apron (7..=8)");
+        let mut v = spike();
+        if let VoxelData::U8(d) = &mut v.data {
+            d[(16 + 20 * (8 + 9 * 3)) as usize] = 100;
+        }
+        let v = Volume::new("s2", v.dims, v.spacing, v.source_type, v.data).unwrap();
+        let g = BrickGrid::new(&v);
+        assert_eq!(
+            g.max[at(1, 1, 0)],
+            0.5,
+            "x = 16 is brick 1's last voxel, y = 8 inside brick (·,1)"
+        );
+        assert_eq!(
+            g.max[at(2, 1, 0)],
+            0.5,
+            "x = 16 is in brick 2's apron (15..=19), the spike's y = 4 is not"
+        );
+    }
+
+    #[test]
+    fn occupancy_follows_the_classification() {
+        let g = BrickGrid::new(&spike());
+        let mut lut = vec![[0.0f32; 4]; 4096];
+        for e in &mut lut[4000..] {
+            e[3] = 0.5;
+        }
+        let occ = g.occupancy(&lut, CompositeMode::Emission, [0.0, 1.0], 0.5);
+        assert_eq!(occ.iter().filter(|&&o| o > 0).count(), 1, "{occ:?}");
+        assert_eq!(occ[2], 255);
+        let none = g.occupancy(&vec![[0.0; 4]; 4096], CompositeMode::Emission, [0.0, 1.0], 0.5);
+        assert!(none.iter().all(|&o| o == 0));
+        let mip = g.occupancy(&lut, CompositeMode::Mip, [0.0, 0.1], 0.5);
+        assert!(mip.iter().all(|&o| o == 255), "every brick has zeros inside the window");
+        let iso = g.occupancy(&lut, CompositeMode::Isosurface, [0.0, 1.0], 0.9);
+        assert_eq!(iso.iter().filter(|&&o| o > 0).count(), 1);
+    }
+}
