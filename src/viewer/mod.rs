@@ -57,6 +57,10 @@ pub enum VolumeSource {
 pub enum ScriptStep {
     /// Render this many frames.
     Frames(u32),
+    /// Rotate the view a little each frame for this many frames, as a drag would, and report the frame times.
+    Drag(u32),
+    /// Interactive level of detail on or off.
+    Lod(bool),
     /// Ask the window system for a new size and wait (a bounded number of frames) until it arrives.
     Resize(u32, u32),
     Minimize,
@@ -80,6 +84,8 @@ pub fn parse_script(s: &str) -> Result<Vec<ScriptStep>, String> {
             let bad = || format!("bad script step '{part}'");
             Ok(match cmd {
                 "frames" => ScriptStep::Frames(arg.parse().map_err(|_| bad())?),
+                "drag" => ScriptStep::Drag(arg.parse().map_err(|_| bad())?),
+                "lod" if arg == "on" || arg == "off" => ScriptStep::Lod(arg == "on"),
                 "resize" => {
                     let (w, h) = arg.split_once('x').ok_or_else(bad)?;
                     ScriptStep::Resize(w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?)
@@ -224,6 +230,7 @@ struct Loading {
 struct Script {
     steps: VecDeque<ScriptStep>,
     frames_left: u32,
+    drag_left: u32,
     waiting_for_size: Option<(u32, u32, u32)>,
     started: Instant,
 }
@@ -250,8 +257,11 @@ struct Running {
     last_frame: Instant,
     repaint_at: Option<Instant>,
     script: Option<Script>,
-    /// Gpu time per frame slot is read back before the slot is reused.
     has_volume: bool,
+    /// The last frame was a reduced-detail one: draw again at full quality once the view is still.
+    refine_pending: bool,
+    /// Frame times (ms) of scripted drags, reported when the script ends.
+    drag_frames: Vec<f64>,
 }
 
 /// The editor's histogram: 256 bins of normalised values.
@@ -346,10 +356,13 @@ impl Running {
             script: (!opts.script.is_empty()).then(|| Script {
                 steps: opts.script.iter().cloned().collect(),
                 frames_left: 0,
+                drag_left: 0,
                 waiting_for_size: None,
                 started: Instant::now(),
             }),
             has_volume: false,
+            refine_pending: false,
+            drag_frames: Vec::new(),
         };
         // On error `r` is torn down properly before the error is returned.
         match r.init(opts) {
@@ -481,7 +494,11 @@ impl Running {
     }
 
     fn wants_continuous_redraw(&self) -> bool {
-        self.loading.is_some() || self.state.auto_rotate || self.state.animation.is_some() || self.script.is_some()
+        self.loading.is_some()
+            || self.state.auto_rotate
+            || self.state.animation.is_some()
+            || self.script.is_some()
+            || self.refine_pending
     }
 
     fn apply(&mut self, actions: Vec<UiAction>) {
@@ -499,6 +516,22 @@ impl Running {
                 UiAction::VsyncChanged => self.recreate_swapchain = true,
             }
         }
+    }
+
+    /// Prints the frame times of scripted drags (the first frame of each drag includes the switch of detail).
+    fn report_drag(&mut self) {
+        if self.drag_frames.len() < 3 {
+            return;
+        }
+        let mut t: Vec<f64> = self.drag_frames.drain(..).skip(2).collect();
+        t.sort_by(|a, b| a.total_cmp(b));
+        let median = t[t.len() / 2];
+        eprintln!(
+            "drag: median frame {median:.1} ms ({:.1} fps) over {} frames, level of detail {}",
+            1e3 / median,
+            t.len(),
+            if self.state.lod { "on" } else { "off" }
+        );
     }
 
     fn start_load(&mut self, source: VolumeSource) {
@@ -557,6 +590,11 @@ impl Running {
             script.frames_left -= 1;
             return Ok(Flow::Continue);
         }
+        if script.drag_left > 0 {
+            script.drag_left -= 1;
+            self.state.orbit.turn(0.03);
+            return Ok(Flow::Continue);
+        }
         if let Some((w, h, tries)) = script.waiting_for_size {
             let size = self.window.inner_size();
             if (size.width, size.height) == (w, h) {
@@ -571,11 +609,17 @@ impl Running {
             }
         }
         let Some(step) = script.steps.pop_front() else {
+            self.report_drag();
             return Ok(Flow::Exit);
         };
         eprintln!("script: {step:?}");
         match step {
             ScriptStep::Frames(n) => script.frames_left = n,
+            ScriptStep::Drag(n) => script.drag_left = n,
+            ScriptStep::Lod(on) => {
+                self.report_drag();
+                self.state.lod = on;
+            }
             ScriptStep::Resize(w, h) => {
                 let _ = self.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
                 script.waiting_for_size = Some((w, h, 200));
@@ -612,14 +656,18 @@ impl Running {
                 self.apply(actions);
             }
             ScriptStep::Screenshot(path) => self.pending_screenshot = Some(path),
-            ScriptStep::Exit => return Ok(Flow::Exit),
+            ScriptStep::Exit => {
+                self.report_drag();
+                return Ok(Flow::Exit);
+            }
         }
         Ok(Flow::Continue)
     }
 
     fn redraw(&mut self) -> Result<Flow, ViewerError> {
         let now = Instant::now();
-        let dt = now.duration_since(self.last_frame).as_secs_f32().min(0.1);
+        let frame_s = now.duration_since(self.last_frame).as_secs_f64();
+        let dt = (frame_s as f32).min(0.1);
         self.last_frame = now;
         self.poll_loading()?;
         self.state.animate(dt);
@@ -671,7 +719,15 @@ impl Running {
         }
         let extent = self.swapchain.as_ref().ok_or(GpuError::Lost("swapchain"))?.extent;
         let (view_offset, view_size) = view_pixels(self.state.view_rect, pixels_per_point, extent);
-        let settings = self.state.render_settings(view_size.width, view_size.height);
+        // Interacting, animating or auto-rotating: a cheaper frame; once still, one at full quality.
+        let dragging = self.script.as_ref().is_some_and(|s| s.drag_left > 0);
+        if dragging {
+            self.drag_frames.push(frame_s * 1e3);
+        }
+        let moving = (self.state.interacting || self.state.animation.is_some() || self.state.auto_rotate || dragging)
+            && self.pending_screenshot.is_none();
+        let settings = self.state.frame_settings(view_size.width, view_size.height, moving);
+        self.refine_pending = moving && self.state.lod;
         self.prepare(&settings)?;
 
         let slot = self.frame_index % FRAMES_IN_FLIGHT;
@@ -754,13 +810,13 @@ impl Running {
         };
         crate::gpu::sync::memory_barrier(dev, cb, Access::TransferWrite, Access::TransferWrite);
         let corner = vk::Offset3D {
-            x: view_size.width as i32,
-            y: view_size.height as i32,
+            x: settings.width as i32,
+            y: settings.height as i32,
             z: 1,
         };
         let dst_corner = vk::Offset3D {
-            x: view_offset.x + corner.x,
-            y: view_offset.y + corner.y,
+            x: view_offset.x + view_size.width as i32,
+            y: view_offset.y + view_size.height as i32,
             z: 1,
         };
         let dst_origin = vk::Offset3D {
@@ -779,8 +835,8 @@ impl Running {
             .src_offsets([vk::Offset3D::default(), corner])
             .dst_subresource(layers)
             .dst_offsets([dst_origin, dst_corner]);
-        // SAFETY: both images are in the layouts named and the regions lie inside them; same size, so the blit
-        // only swizzles RGBA to BGRA.
+        // SAFETY: both images are in the layouts named and the regions lie inside them. At full detail the sizes
+        // match and the blit only swizzles RGBA to BGRA; at reduced detail it also upscales (linear).
         unsafe {
             dev.cmd_blit_image(
                 cb,
@@ -789,7 +845,11 @@ impl Running {
                 target,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &[blit],
-                vk::Filter::NEAREST,
+                if settings.width == view_size.width {
+                    vk::Filter::NEAREST
+                } else {
+                    vk::Filter::LINEAR
+                },
             )
         };
         image_barrier(dev, cb, target, Access::TransferWrite, Access::ColorAttachmentWrite);
@@ -1009,7 +1069,11 @@ mod tests {
                 ScriptStep::Exit
             ]
         );
-        for bad in ["frames:x", "resize:10", "dance", "screenshot:"] {
+        assert_eq!(
+            parse_script("drag:5;lod:off").unwrap(),
+            vec![ScriptStep::Drag(5), ScriptStep::Lod(false)]
+        );
+        for bad in ["frames:x", "resize:10", "dance", "screenshot:", "lod:maybe", "drag:"] {
             assert!(parse_script(bad).is_err(), "{bad}");
         }
     }

@@ -45,6 +45,10 @@ pub struct ViewerState {
     pub range: [f64; 2],
     pub tf_dragging: Option<usize>,
     pub ortho: bool,
+    /// Interactive level of detail: while the view moves, half resolution and double step, then a full frame.
+    pub lod: bool,
+    /// The user moved the view in this UI pass (drag or wheel).
+    pub interacting: bool,
 }
 
 /// What the panel asks the viewer to do.
@@ -87,6 +91,8 @@ impl ViewerState {
             range: [0.0, 1.0],
             tf_dragging: None,
             ortho: false,
+            lod: true,
+            interacting: false,
         }
     }
 
@@ -122,6 +128,18 @@ impl ViewerState {
         if s.window[0] >= s.window[1] {
             s.window[1] = (s.window[0] + 1e-3).min(1.0);
             s.window[0] = s.window[1] - 1e-3;
+        }
+        s
+    }
+
+    /// What a frame of `width`×`height` renders: full quality, or — while the view moves, with `lod` on — half the
+    /// resolution (upscaled when shown) and twice the step, an eighth of the samples.
+    pub fn frame_settings(&self, width: u32, height: u32, moving: bool) -> RenderSettings {
+        let mut s = self.render_settings(width, height);
+        if self.lod && moving {
+            s.width = width.div_ceil(2).max(1);
+            s.height = height.div_ceil(2).max(1);
+            s.step_length = (s.step_length * 2.0).min(64.0);
         }
         s
     }
@@ -339,6 +357,7 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
                 look.jitter = jitter.then_some(0);
             }
             ui.checkbox(&mut state.ortho, "orthographic");
+            ui.checkbox(&mut state.lod, "lower detail while moving");
             ui.horizontal_wrapped(|ui| {
                 ui.label("look along");
                 for (axis, name) in ["X", "Y", "Z"].iter().enumerate() {
@@ -506,6 +525,7 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
     let viewport = Vec2::new(rect.width(), rect.height());
     let gizmo_center = Vec2::new(rect.right() - 60.0, rect.bottom() - 60.0);
     let gizmo_radius = 40.0;
+    state.interacting = response.dragged();
 
     if let Some(pos) = response.interact_pointer_pos() {
         let p = Vec2::new(pos.x - rect.left(), pos.y - rect.top());
@@ -533,6 +553,7 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
         let scroll = ui.input(|i| i.smooth_scroll_delta.y);
         if scroll != 0.0 {
             state.orbit.zoom(scroll / 50.0);
+            state.interacting = true;
         }
     }
 
@@ -638,6 +659,18 @@ mod tests {
         assert!((s.slab_lo.x - 0.1).abs() < 1e-6 && (s.slab_hi.x - 0.4).abs() < 1e-6);
         assert!(s.slab_hi.z > s.slab_lo.z, "zero width keeps a sliver");
         s.validate().expect("always valid");
+    }
+
+    #[test]
+    fn level_of_detail_while_moving() {
+        let mut state = ViewerState::new(Vec3::ONE, "x".into());
+        let still = state.frame_settings(401, 300, false);
+        assert_eq!((still.width, still.height, still.step_length), (401, 300, 1.0));
+        let moving = state.frame_settings(401, 300, true);
+        assert_eq!((moving.width, moving.height, moving.step_length), (201, 150, 2.0));
+        assert_eq!(moving.camera, still.camera);
+        state.lod = false;
+        assert_eq!(state.frame_settings(401, 300, true), still);
     }
 
     #[test]
