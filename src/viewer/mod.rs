@@ -271,7 +271,23 @@ fn value_histogram(v: &Volume) -> Vec<u64> {
     tf_editor::histogram(values.map(|(x, y, z)| v.normalized(x, y, z)), 256)
 }
 
-fn load_in_background(source: VolumeSource) -> Loading {
+/// Loads any format `volume::open` reads (raw with the given options); a volume larger than `max_dim` (the
+/// device's 3D texture limit) is downsampled with a warning rather than refused.
+fn open_source(source: &VolumeSource, max_dim: u32, progress: &mut dyn FnMut(f32)) -> Result<Volume, String> {
+    match source {
+        VolumeSource::Builtin(name, size) => volume::builtin(name, *size).map_err(|e| e.to_string()),
+        VolumeSource::File(path, raw) => {
+            let opts = volume::OpenOptions {
+                raw: raw.clone(),
+                max_dim: Some(max_dim),
+                ..Default::default()
+            };
+            volume::open_with_progress(path, &opts, progress).map_err(|e| e.to_string())
+        }
+    }
+}
+
+fn load_in_background(source: VolumeSource, max_dim: u32) -> Loading {
     let label = match &source {
         VolumeSource::Builtin(name, _) => name.clone(),
         VolumeSource::File(path, _) => path.display().to_string(),
@@ -280,17 +296,17 @@ fn load_in_background(source: VolumeSource) -> Loading {
     let (tx, rx) = std::sync::mpsc::channel();
     let p = progress.clone();
     std::thread::spawn(move || {
-        let result = match source {
-            VolumeSource::Builtin(name, size) => volume::builtin(&name, size),
-            VolumeSource::File(path, opts) => volume::load_raw(&path, &opts),
-        };
+        // Reading is 90% of the bar, the histogram the rest.
+        let result = open_source(&source, max_dim, &mut |f| {
+            p.store((0.9 * f).to_bits(), Ordering::Relaxed)
+        });
         p.store(0.9f32.to_bits(), Ordering::Relaxed);
-        let analysed = result.map(|v| {
+        let analysed: Result<(Volume, Vec<u64>), String> = result.map(|v| {
             let h = value_histogram(&v);
             (v, h)
         });
         p.store(1.0f32.to_bits(), Ordering::Relaxed);
-        let _ = tx.send(analysed.map_err(|e| e.to_string()));
+        let _ = tx.send(analysed);
     });
     Loading { label, progress, rx }
 }
@@ -429,11 +445,8 @@ impl Running {
         .map_err(|e| ViewerError::Other(format!("egui renderer: {e}")))?;
         self.egui_renderer = Some(egui_renderer);
         // The first volume loads synchronously: there is nothing to show until it is there.
-        let first = match &opts.source {
-            VolumeSource::Builtin(name, size) => volume::builtin(name, *size),
-            VolumeSource::File(path, o) => volume::load_raw(path, o),
-        }
-        .map_err(|e| ViewerError::Other(e.to_string()))?;
+        let max_dim = self.gpu.properties.limits.max_image_dimension3_d;
+        let first = open_source(&opts.source, max_dim, &mut |_| {}).map_err(ViewerError::Other)?;
         let histogram = value_histogram(&first);
         self.install_volume(first, histogram)?;
         Ok(())
@@ -540,7 +553,10 @@ impl Running {
             return;
         }
         self.state.error = None;
-        self.loading = Some(load_in_background(source));
+        self.loading = Some(load_in_background(
+            source,
+            self.gpu.properties.limits.max_image_dimension3_d,
+        ));
     }
 
     /// Takes a finished background load, keeping the old volume on error.

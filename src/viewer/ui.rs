@@ -188,7 +188,16 @@ impl ViewerState {
             opts.dims = None;
             opts.voxel_type = None;
         }
-        UiAction::LoadFile(path, opts)
+        UiAction::LoadFile(path.clone(), raw_only(&path, opts))
+    }
+}
+
+/// The panel's dims/type/scale describe raw files; other formats carry their own (and the scale would override
+/// their spacing), so they get none.
+fn raw_only(path: &std::path::Path, opts: RawOptions) -> RawOptions {
+    match crate::volume::detect_format(path) {
+        Ok(crate::volume::Format::Raw) | Err(_) => opts,
+        Ok(_) => RawOptions::default(),
     }
 }
 
@@ -459,7 +468,7 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
                 opts.dims = Some(state.raw_dims);
                 opts.voxel_type = Some(state.raw_type);
             }
-            actions.push(UiAction::LoadFile(path, opts));
+            actions.push(UiAction::LoadFile(path.clone(), raw_only(&path, opts)));
         }
     });
 
