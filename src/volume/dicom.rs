@@ -415,17 +415,130 @@ fn finish(
     Ok(v)
 }
 
-fn parse_bytes(bytes: &[u8], label: &str) -> Result<DefaultDicomObject, VolumeError> {
-    OpenFileOptions::new()
-        .read_preamble(ReadPreamble::Auto)
-        .from_reader(bytes)
+/// dicom-parser allocates each element by its claimed length, so every length is checked against the bytes that
+/// follow before dicom-object sees the data. Walks the file meta group (explicit VR little endian) and the data
+/// set in its transfer syntax, descending into sequences and items; returns where parsing should stop: the end of
+/// PixelData (bytes after it, such as the junk in one GE slice of the test data, are never parsed) or the end.
+fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
+    let mut pos = if is_dicom(bytes) {
+        132
+    } else if bytes.starts_with(b"DICM") {
+        4
+    } else {
+        return Err(header_error(
+            label,
+            "not a readable DICOM file: no 'DICM' marker at byte 128 (not a DICOM Part 10 file)".into(),
+        ));
+    };
+    let (mut explicit, mut big, mut in_meta, mut encapsulated) = (true, false, true, false);
+    let mut transfer_syntax = String::new();
+    while pos + 8 <= bytes.len() {
+        let at16 = |i: usize, big: bool| {
+            let b = [bytes[i], bytes[i + 1]];
+            if big {
+                u16::from_be_bytes(b)
+            } else {
+                u16::from_le_bytes(b)
+            }
+        };
+        let at32 = |i: usize, big: bool| {
+            let b = [bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]];
+            if big {
+                u32::from_be_bytes(b)
+            } else {
+                u32::from_le_bytes(b)
+            }
+        };
+        if in_meta && at16(pos, false) != 0x0002 {
+            in_meta = false;
+            match transfer_syntax.as_str() {
+                "1.2.840.10008.1.2" => explicit = false,
+                "1.2.840.10008.1.2.2" => big = true,
+                "1.2.840.10008.1.2.1.99" => {
+                    return Err(header_error(label, "deflated transfer syntax is not supported".into()))
+                }
+                _ => {}
+            }
+        }
+        let (group, element) = (at16(pos, big), at16(pos + 2, big));
+        let vr = (explicit && group != 0xFFFE).then(|| [bytes[pos + 4], bytes[pos + 5]]);
+        let long_vr = vr.is_some_and(|v| {
+            matches!(
+                &v,
+                b"OB" | b"OD" | b"OF" | b"OL" | b"OV" | b"OW" | b"SQ" | b"SV" | b"UC" | b"UN" | b"UR" | b"UT" | b"UV"
+            )
+        });
+        let (length, header) = match vr {
+            Some(_) if long_vr => {
+                if pos + 12 > bytes.len() {
+                    break;
+                }
+                (at32(pos + 8, big), 12)
+            }
+            Some(_) => (u32::from(at16(pos + 6, big)), 8),
+            None => (at32(pos + 4, big), 8),
+        };
+        pos += header;
+        if length == u32::MAX {
+            // Undefined length: a sequence (descend) or encapsulated pixel data (items hold fragments).
+            if group != 0xFFFE && vr.is_some_and(|v| &v != b"SQ") {
+                encapsulated = true;
+            }
+            continue;
+        }
+        let length = length as usize;
+        if length > bytes.len() - pos {
+            return Err(header_error(
+                label,
+                format!(
+                    "element ({group:04X},{element:04X}) claims {length} bytes but only {} follow (truncated or corrupt file)",
+                    bytes.len() - pos
+                ),
+            ));
+        }
+        if group == 0xFFFE {
+            if element == 0xE0DD {
+                encapsulated = false;
+            }
+            if element == 0xE000 && !encapsulated {
+                continue;
+            }
+        }
+        let starts_with_item =
+            length >= 8 && at16(pos, big) == 0xFFFE && at16(pos + 2, big) == 0xE000 && group != 0xFFFE;
+        if vr.is_some_and(|v| &v == b"SQ") || (vr.is_none() && starts_with_item) {
+            continue;
+        }
+        if in_meta && element == 0x0010 {
+            transfer_syntax = String::from_utf8_lossy(&bytes[pos..pos + length])
+                .trim_end_matches(['\0', ' '])
+                .to_string();
+        }
+        pos += length;
+        if (group, element) == (0x7FE0, 0x0010) && !encapsulated {
+            return Ok(pos);
+        }
+    }
+    Ok(bytes.len())
+}
+
+fn parse_bytes(bytes: &[u8], label: &str, header_only: bool) -> Result<DefaultDicomObject, VolumeError> {
+    let end = check_lengths(bytes, label)?;
+    let options = OpenFileOptions::new().read_preamble(ReadPreamble::Auto);
+    let options = if header_only {
+        options.read_until(PIXEL_DATA)
+    } else {
+        options
+    };
+    options
+        .from_reader(&bytes[..end])
         .map_err(|e| header_error(label, format!("not a readable DICOM file: {e}")))
 }
 
 /// Loads one DICOM file (single- or multi-frame) held in memory.
 pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
     let label = "DICOM data";
-    let obj = parse_bytes(bytes, label)?;
+    let obj = parse_bytes(bytes, label, false)?;
     let slice = slice_info(&obj, 0, label)?;
     let Plan {
         slices,
@@ -446,18 +559,12 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
 }
 
 fn open_dicom(path: &Path, header_only: bool) -> Result<DefaultDicomObject, VolumeError> {
-    let label = format::file_label(path);
-    // Pass 1 stops before the pixels. Pass 2 reads everything; dicom-object 0.9 fails on junk after PixelData
-    // (one GE slice in the test data has such bytes), for which `load` falls back to `find_pixel_bytes`.
-    let options = OpenFileOptions::new().read_preamble(ReadPreamble::Auto);
-    let options = if header_only {
-        options.read_until(PIXEL_DATA)
-    } else {
-        options
-    };
-    options
-        .open_file(path)
-        .map_err(|e| header_error(&label, format!("not a readable DICOM file: {e}")))
+    // Read whole (one slice at a time) so every element length can be checked before dicom-object parses it.
+    let bytes = std::fs::read(path).map_err(|source| VolumeError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_bytes(&bytes, &format::file_label(path), header_only)
 }
 
 /// Loads a folder of slices (or one file). Pass 1 reads every header (stopping before the pixels) to sort the
@@ -493,6 +600,11 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
     let mut skipped = 0;
     for (i, f) in files.iter().enumerate() {
         let f_label = format::file_label(f);
+        // In a folder, only DICOM Part 10 files (DICM at byte 128) are slices; DICOMDIR, notes etc. are skipped.
+        if files.len() > 1 && !format::read_prefix(f, 132).is_ok_and(|p| is_dicom(&p)) {
+            skipped += 1;
+            continue;
+        }
         match open_dicom(f, true).and_then(|obj| slice_info(&obj, i, &f_label)) {
             Ok(s) => slices.push(s),
             // One file: say why. In a folder, DICOMDIR, notes and other files are skipped.
@@ -637,6 +749,21 @@ mod tests {
         assert!(notes[0].contains("uneven slice spacing"), "{notes:?}");
         let e = plan(vec![], "x").unwrap_err().to_string();
         assert!(e.contains("no DICOM image files"), "{e}");
+    }
+
+    /// Found by the dicom fuzz target: a file meta element claiming 2.7 GB made dicom-object reserve that much.
+    #[test]
+    fn lengths_beyond_the_file_are_refused_before_parsing() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-meta.dcm");
+        let bytes = std::fs::read(path).unwrap();
+        let e = from_bytes(&bytes).unwrap_err().to_string();
+        assert!(e.contains("claims") && e.contains("bytes but only"), "{e}");
+        let seed = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/slice.dcm")).unwrap();
+        assert_eq!(check_lengths(&seed, "x").unwrap(), seed.len());
+        let mut junk = seed.clone();
+        junk.extend([0x10, 0x00, 0x10, 0x00, b'P', b'N', 0xff, 0xff]);
+        assert_eq!(check_lengths(&junk, "x").unwrap(), seed.len());
+        assert!(from_bytes(&junk).is_ok());
     }
 
     #[test]
