@@ -80,11 +80,12 @@ vec3 shade(vec3 rgb, vec3 g, vec3 light) {
 // pays only a comparison per sample. With skipping off, the whole ray is one span.
 ivec2 brick_span(vec3 a, vec3 dir, float t, float h, float o, ivec3 bricks) {
     if (frame.mode_params.z < 0.5) {
-        return ivec2(2147483647, 1);
+        return ivec2(2147483647, 2);
     }
     vec3 p = a + dir * t;
     ivec3 b = clamp(ivec3(floor(p / frame.brick.xyz)), ivec3(0), bricks - 1);
-    bool occupied = texelFetch(sampler3D(occupancy_tex, linear_smp), b, 0).r > 0.5;
+    // 0: empty; 0.5: only faint opacity (adaptive stepping may take every other sample); 1: occupied.
+    float level = texelFetch(sampler3D(occupancy_tex, linear_smp), b, 0).r;
     vec3 lo = vec3(b) * frame.brick.xyz;
     vec3 hi = lo + frame.brick.xyz;
     // Zero components take the far side, giving a huge (ignored) exit instead of 0/0.
@@ -93,7 +94,7 @@ ivec2 brick_span(vec3 a, vec3 dir, float t, float h, float o, ivec3 bricks) {
     vec3 exits = (toward - a) / safe;
     // A little short of the exit: rounding must never leap over a sample of the next brick.
     float t_exit = min(exits.x, min(exits.y, exits.z)) - 1e-4 * h;
-    return ivec2(int(ceil(t_exit / h - o)), occupied ? 1 : 0);
+    return ivec2(int(ceil(t_exit / h - o)), level > 0.75 ? 2 : (level > 0.25 ? 1 : 0));
 }
 
 // The per-pixel start offset of jittered rays: must equal settings::jitter_offset.
@@ -235,7 +236,10 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             k = end;
             continue;
         }
-        for (; k < end; k++) {
+        // Faint bricks (adaptive stepping): every other sample of the same grid, opacity for a double step.
+        int stride = span.y == 1 ? 2 : 1;
+        float steps = step_length * float(stride);
+        for (; k < end; k += stride) {
             float t = (float(k) + o) * h;
             if (t >= len) {
                 done = true;
@@ -263,8 +267,8 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             }
 #endif
             float a_step = mode == MODE_DENSITY
-                ? min(1.0, alpha * frame.mode_params.y * step_length)
-                : 1.0 - pow(1.0 - alpha, step_length);
+                ? min(1.0, alpha * frame.mode_params.y * steps)
+                : 1.0 - pow(1.0 - alpha, steps);
             color += (1.0 - opacity) * a_step * rgb;
             opacity += (1.0 - opacity) * a_step;
             if (opacity >= frame.alpha.z) {

@@ -313,6 +313,9 @@ struct FrameArgs {
     /// March every brick, also those empty-space skipping would leap over (for comparisons).
     #[arg(long)]
     no_skip: bool,
+    /// Adaptive step: every other sample in bricks of faint opacity (approximate; emission and density modes).
+    #[arg(long)]
+    adaptive_step: bool,
     /// Opacity of one voxel-length step.
     #[arg(long, default_value_t = volcast::settings::DEFAULT_STEP_ALPHA)]
     step_alpha: f32,
@@ -439,6 +442,7 @@ impl FrameArgs {
         s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
         s.camera.ortho = self.ortho;
         s.skip_empty = !self.no_skip;
+        s.adaptive_step = self.adaptive_step;
         s.step_alpha = self.step_alpha;
         s.step_length = self.step_length;
         s.multiplied_alpha = self.multiplied_alpha;

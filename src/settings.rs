@@ -171,6 +171,9 @@ pub struct RenderSettings {
     pub position_format: PositionFormat,
     /// Leap over 8³ bricks that hold nothing visible. Changes which samples are taken, not the image.
     pub skip_empty: bool,
+    /// In bricks where no reachable opacity reaches `skip::LOW_OPACITY`, take every other sample with the
+    /// opacity corrected for the double step (emission/density; needs `skip_empty`). Approximate: off by default.
+    pub adaptive_step: bool,
 }
 
 impl Default for RenderSettings {
@@ -225,6 +228,7 @@ impl RenderSettings {
             ray_setup: RaySetup::Faces,
             position_format: PositionFormat::Rgba32f,
             skip_empty: true,
+            adaptive_step: false,
         }
     }
 

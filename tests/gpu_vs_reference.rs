@@ -439,3 +439,57 @@ fn empty_space_skipping_does_not_change_the_image() {
         failures.join("\n")
     );
 }
+
+/// Adaptive stepping takes every other sample in bricks of faint opacity, correcting opacity for the double
+/// step. It is approximate by design; it must stay within the foundation's bound of the full-rate image.
+#[test]
+fn adaptive_step_stays_within_the_bound() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut volumes = vec![
+        volume::builtin("helix", Some(128)).unwrap(),
+        volume::builtin("marschner-lobb", None).unwrap(),
+    ];
+    if let Some(path) = common::shared_data("raw/cranium_ct_256x256x108_int16.raw") {
+        volumes.push(volume::load_raw(&path, &Default::default()).unwrap());
+    }
+    let mut failures = Vec::new();
+    for v in &volumes {
+        headless.set_volume(&gpu, v).unwrap();
+        let mut cases = vec![
+            with(v, 112, "default", |_| {}),
+            with(v, 112, "faint", |s| s.step_alpha = 0.03),
+        ];
+        cases.push(with(v, 112, "mr-default-shaded", |s| {
+            s.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
+            s.window = [0.0, 1.0];
+            s.shading = Some(Shading::default());
+        }));
+        cases.push(with(v, 112, "density", |s| {
+            s.mode = CompositeMode::Density;
+            s.step_alpha = 0.02;
+        }));
+        for case in cases {
+            let mut s = case.settings.clone();
+            let full = headless.render(&gpu, &s).unwrap().image;
+            s.adaptive_step = true;
+            let adaptive = headless.render(&gpu, &s).unwrap().image;
+            let d = diff(&adaptive, &full);
+            let label = format!("{}-{}-adaptive", v.name, case.name).to_lowercase();
+            eprintln!("{label}: {d}");
+            if d.mean >= MAX_MEAN || d.p99 >= MAX_P99 {
+                write_failure_images(&label, &adaptive, &full);
+                failures.push(format!("{label}: {d}"));
+            }
+        }
+    }
+    headless.destroy(&gpu);
+    let log = gpu.log.clone();
+    drop(gpu);
+    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    assert!(
+        failures.is_empty(),
+        "adaptive stepping left the bound:\n{}",
+        failures.join("\n")
+    );
+}

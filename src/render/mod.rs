@@ -143,6 +143,7 @@ struct OccupancyKey {
     window: [f32; 2],
     mode: crate::settings::CompositeMode,
     iso: f32,
+    adaptive: bool,
 }
 
 impl OccupancyKey {
@@ -152,6 +153,7 @@ impl OccupancyKey {
             window: s.window,
             mode: s.mode,
             iso: s.iso_value,
+            adaptive: s.adaptive_step,
         }
     }
 }
@@ -679,7 +681,9 @@ impl Renderer {
         if !self.occupancy_is_current(s) {
             if let Some(vol) = &mut self.volume {
                 let lut = bake(&s.classification(), s.window, vol.info.range);
-                let occupancy = vol.bricks.occupancy(&lut, s.mode, s.window, s.iso_value);
+                let occupancy = vol
+                    .bricks
+                    .classify(&lut, s.mode, s.window, s.iso_value, s.adaptive_step);
                 upload_3d(gpu, &vol.occupancy, &occupancy, vol.bricks.bricks[2])?;
                 vol.occupancy_key = Some(OccupancyKey::of(s));
             }

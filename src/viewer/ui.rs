@@ -140,6 +140,7 @@ impl ViewerState {
             s.width = width.div_ceil(2).max(1);
             s.height = height.div_ceil(2).max(1);
             s.step_length = (s.step_length * 2.0).min(64.0);
+            s.adaptive_step = true;
         }
         s
     }
