@@ -462,10 +462,32 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
         }
         let (group, element) = (at16(pos, big), at16(pos + 2, big));
         let vr = (explicit && group != 0xFFFE).then(|| [bytes[pos + 4], bytes[pos + 5]]);
+        // As dicom-encoding decodes: these VRs have a 2-byte length, every other one (unknown ones included)
+        // 2 reserved bytes and a 4-byte length.
         let long_vr = vr.is_some_and(|v| {
-            matches!(
+            !matches!(
                 &v,
-                b"OB" | b"OD" | b"OF" | b"OL" | b"OV" | b"OW" | b"SQ" | b"SV" | b"UC" | b"UN" | b"UR" | b"UT" | b"UV"
+                b"AE"
+                    | b"AS"
+                    | b"AT"
+                    | b"CS"
+                    | b"DA"
+                    | b"DS"
+                    | b"DT"
+                    | b"FL"
+                    | b"FD"
+                    | b"IS"
+                    | b"LO"
+                    | b"LT"
+                    | b"PN"
+                    | b"SH"
+                    | b"SL"
+                    | b"SS"
+                    | b"ST"
+                    | b"TM"
+                    | b"UI"
+                    | b"UL"
+                    | b"US"
             )
         });
         let (length, header) = match vr {
@@ -758,6 +780,10 @@ mod tests {
         let bytes = std::fs::read(path).unwrap();
         let e = from_bytes(&bytes).unwrap_err().to_string();
         assert!(e.contains("claims") && e.contains("bytes but only"), "{e}");
+        // Also found by fuzzing: an unknown VR, which dicom-encoding reads with a 4-byte length.
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-unknown-vr.dcm");
+        let e = from_bytes(&std::fs::read(path).unwrap()).unwrap_err().to_string();
+        assert!(e.contains("claims 4294574080 bytes but only"), "{e}");
         let seed = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/slice.dcm")).unwrap();
         assert_eq!(check_lengths(&seed, "x").unwrap(), seed.len());
         let mut junk = seed.clone();
