@@ -36,6 +36,7 @@ fn splice(path: &Path, depth: usize, out: &mut Spliced) -> Result<(), String> {
 const MARCH_VARIANTS: &[(&str, &[&str])] = &[
     ("ea", &[]),
     ("ea_shaded", &["SHADED"]),
+    ("ea_shaded_tex", &["SHADED", "GRADIENT_TEXTURE"]),
     ("proj", &["FAMILY_PROJECTION"]),
     ("iso", &["FAMILY_ISOSURFACE"]),
 ];

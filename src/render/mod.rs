@@ -134,6 +134,8 @@ struct GpuVolume {
     occupancy: Image,
     /// What the occupancy was computed for.
     occupancy_key: Option<OccupancyKey>,
+    /// Precomputed gradients (RGBA16 SNORM), made on first use by a frame with `gradient_texture`.
+    gradient: Option<Image>,
 }
 
 /// Everything the brick occupancy depends on besides the volume.
@@ -212,6 +214,7 @@ fn setup_index(setup: RaySetup) -> usize {
 pub fn march_variant(s: &RenderSettings) -> usize {
     use crate::settings::CompositeMode as M;
     match s.mode {
+        M::Emission | M::Density if (s.shading.is_some() || s.gradient_opacity.is_some()) && s.gradient_texture => 4,
         M::Emission | M::Density if s.shading.is_some() || s.gradient_opacity.is_some() => 1,
         M::Emission | M::Density => 0,
         M::Mip | M::MinIp | M::Average => 2,
@@ -224,10 +227,12 @@ fn march_shader(setup: RaySetup, variant: usize) -> crate::gpu::pipeline::Shader
         (RaySetup::Faces, 0) => shader!("march_faces.frag.ea"),
         (RaySetup::Faces, 1) => shader!("march_faces.frag.ea_shaded"),
         (RaySetup::Faces, 2) => shader!("march_faces.frag.proj"),
+        (RaySetup::Faces, 4) => shader!("march_faces.frag.ea_shaded_tex"),
         (RaySetup::Faces, _) => shader!("march_faces.frag.iso"),
         (RaySetup::Analytic, 0) => shader!("march_analytic.frag.ea"),
         (RaySetup::Analytic, 1) => shader!("march_analytic.frag.ea_shaded"),
         (RaySetup::Analytic, 2) => shader!("march_analytic.frag.proj"),
+        (RaySetup::Analytic, 4) => shader!("march_analytic.frag.ea_shaded_tex"),
         (RaySetup::Analytic, _) => shader!("march_analytic.frag.iso"),
     }
 }
@@ -253,7 +258,7 @@ pub struct Renderer {
     /// Entry and exit pipelines per position format: [Rgba32f, Rgba16f] × [entry, exit].
     position_pipelines: [[vk::Pipeline; 2]; 2],
     /// March pipelines per ray setup × shader variant, created when first needed (see `march_variant`).
-    march_pipelines: [[vk::Pipeline; 4]; 2],
+    march_pipelines: [[vk::Pipeline; 5]; 2],
     descriptor_pool: vk::DescriptorPool,
     volume_set: vk::DescriptorSet,
     positions_set: vk::DescriptorSet,
@@ -340,7 +345,7 @@ impl Renderer {
             march_faces_layout: vk::PipelineLayout::null(),
             march_analytic_layout: vk::PipelineLayout::null(),
             position_pipelines: [[vk::Pipeline::null(); 2]; 2],
-            march_pipelines: [[vk::Pipeline::null(); 4]; 2],
+            march_pipelines: [[vk::Pipeline::null(); 5]; 2],
             descriptor_pool: vk::DescriptorPool::null(),
             volume_set: vk::DescriptorSet::null(),
             positions_set: vk::DescriptorSet::null(),
@@ -376,6 +381,7 @@ impl Renderer {
             &[
                 (D::SAMPLED_IMAGE, frag),
                 (D::SAMPLER, frag),
+                (D::SAMPLED_IMAGE, frag),
                 (D::SAMPLED_IMAGE, frag),
                 (D::SAMPLED_IMAGE, frag),
             ],
@@ -423,7 +429,7 @@ impl Renderer {
             },
             vk::DescriptorPoolSize {
                 ty: D::SAMPLED_IMAGE,
-                descriptor_count: 5,
+                descriptor_count: 6,
             },
             vk::DescriptorPoolSize {
                 ty: D::SAMPLER,
@@ -513,7 +519,16 @@ impl Renderer {
         let occupancy_info = [vk::DescriptorImageInfo::default()
             .image_view(vol.occupancy.view)
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        // Without a gradient texture the binding holds the volume: only the gradient-texture variant reads it.
+        let gradient_info = [vk::DescriptorImageInfo::default()
+            .image_view(vol.gradient.as_ref().map(|g| g.view).unwrap_or(vol.image.view))
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let writes = [
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.volume_set)
+                .dst_binding(4)
+                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                .image_info(&gradient_info),
             vk::WriteDescriptorSet::default()
                 .dst_set(self.volume_set)
                 .dst_binding(3)
@@ -596,6 +611,9 @@ impl Renderer {
         };
         if let Some(old) = self.volume.take() {
             old.occupancy.destroy(gpu);
+            if let Some(g) = old.gradient {
+                g.destroy(gpu);
+            }
             old.image.destroy(gpu);
         }
         self.volume = Some(GpuVolume {
@@ -609,7 +627,53 @@ impl Renderer {
             bricks,
             occupancy,
             occupancy_key: None,
+            gradient: None,
         });
+        self.write_volume_set(gpu);
+        Ok(())
+    }
+
+    /// Precomputes `volume`'s gradients (central differences on the voxel grid, RGBA16 SNORM, 8 bytes per voxel)
+    /// for frames with `gradient_texture`: the alternative to six extra samples per shaded sample. `volume` must
+    /// be the one last given to `set_volume`.
+    pub fn enable_gradient_texture(&mut self, gpu: &Gpu, volume: &Volume) -> Result<(), GpuError> {
+        let Some(vol) = &mut self.volume else {
+            return Err(GpuError::Lost("no volume loaded"));
+        };
+        if vol.gradient.is_some() {
+            return Ok(());
+        }
+        let [w, h, d] = volume.dims;
+        let at = |x: i64, y: i64, z: i64| {
+            let c = |v: i64, n: u32| v.clamp(0, n as i64 - 1) as u32;
+            let v = volume.normalized(c(x, w), c(y, h), c(z, d));
+            if v.is_nan() {
+                0.0
+            } else {
+                v
+            }
+        };
+        let mut texels: Vec<i16> = Vec::with_capacity(volume.voxel_count() * 4);
+        for z in 0..d as i64 {
+            for y in 0..h as i64 {
+                for x in 0..w as i64 {
+                    // Stored as 2g so the range of g, [-0.5, 0.5], fills SNORM's [-1, 1].
+                    let g = [
+                        at(x + 1, y, z) - at(x - 1, y, z),
+                        at(x, y + 1, z) - at(x, y - 1, z),
+                        at(x, y, z + 1) - at(x, y, z - 1),
+                    ];
+                    texels.extend(g.map(|v| (v.clamp(-1.0, 1.0) * 32767.0).round() as i16));
+                    texels.push(0);
+                }
+            }
+        }
+        let image = image_3d(gpu, vk::Format::R16G16B16A16_SNORM, volume.dims, "gradients")?;
+        if let Err(e) = upload_3d(gpu, &image, bytemuck::cast_slice(&texels), d) {
+            image.destroy(gpu);
+            return Err(e);
+        }
+        vol.gradient = Some(image);
         self.write_volume_set(gpu);
         Ok(())
     }
@@ -658,6 +722,11 @@ impl Renderer {
     /// Must be called while no submitted frame is in flight.
     pub fn prepare(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
         let (si, vi) = (setup_index(s.ray_setup), march_variant(s));
+        if vi == 4 && self.volume.as_ref().is_some_and(|v| v.gradient.is_none()) {
+            return Err(GpuError::InvalidSettings(
+                "gradient_texture needs enable_gradient_texture() first".into(),
+            ));
+        }
         if self.march_pipelines[si][vi] == vk::Pipeline::null() {
             let layout = match s.ray_setup {
                 RaySetup::Faces => self.march_faces_layout,
@@ -971,6 +1040,9 @@ impl Renderer {
             }
             if let Some(v) = self.volume.take() {
                 v.occupancy.destroy(gpu);
+                if let Some(g) = v.gradient {
+                    g.destroy(gpu);
+                }
                 v.image.destroy(gpu);
             }
             d.destroy_descriptor_pool(self.descriptor_pool, None);
