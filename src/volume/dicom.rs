@@ -430,8 +430,109 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
             "not a readable DICOM file: no 'DICM' marker at byte 128 (not a DICOM Part 10 file)".into(),
         ));
     };
-    let (mut explicit, mut big, mut in_meta, mut encapsulated) = (true, false, true, false);
+    // The file meta group, as dicom-object reads it: (0002,0000) gives its length, its elements are explicit VR
+    // little endian, and the data set starts right after it in the transfer syntax of (0002,0010).
+    let meta_error = || {
+        header_error(
+            label,
+            "not a readable DICOM file: the file meta group is malformed".into(),
+        )
+    };
+    if bytes.get(pos..pos + 8) != Some(&[0x02, 0x00, 0x00, 0x00, b'U', b'L', 0x04, 0x00][..]) {
+        return Err(meta_error());
+    }
+    let group_length = bytes.get(pos + 8..pos + 12).ok_or_else(meta_error)?;
+    let group_length = u32::from_le_bytes([group_length[0], group_length[1], group_length[2], group_length[3]]);
+    let meta_end = (pos + 12).checked_add(group_length as usize).ok_or_else(meta_error)?;
+    if meta_end > bytes.len() {
+        return Err(header_error(
+            label,
+            format!("the file meta group claims {group_length} bytes but the file ends before"),
+        ));
+    }
     let mut transfer_syntax = String::new();
+    pos += 12;
+    while pos + 8 <= meta_end {
+        let vr = [bytes[pos + 4], bytes[pos + 5]];
+        let short = matches!(
+            &vr,
+            b"AE"
+                | b"AS"
+                | b"AT"
+                | b"CS"
+                | b"DA"
+                | b"DS"
+                | b"DT"
+                | b"FL"
+                | b"FD"
+                | b"IS"
+                | b"LO"
+                | b"LT"
+                | b"PN"
+                | b"SH"
+                | b"SL"
+                | b"SS"
+                | b"ST"
+                | b"TM"
+                | b"UI"
+                | b"UL"
+                | b"US"
+        );
+        let (length, header) = if short {
+            (usize::from(u16::from_le_bytes([bytes[pos + 6], bytes[pos + 7]])), 8)
+        } else {
+            let l = bytes.get(pos + 8..pos + 12).ok_or_else(meta_error)?;
+            (u32::from_le_bytes([l[0], l[1], l[2], l[3]]) as usize, 12)
+        };
+        let value = pos + header;
+        if value > meta_end || length > meta_end - value {
+            return Err(header_error(
+                label,
+                format!(
+                    "file meta element ({:02X}{:02X},{:02X}{:02X}) claims {length} bytes but only {} follow",
+                    bytes[pos + 1],
+                    bytes[pos],
+                    bytes[pos + 3],
+                    bytes[pos + 2],
+                    meta_end.saturating_sub(value)
+                ),
+            ));
+        }
+        if bytes[pos..pos + 4] == [0x02, 0x00, 0x10, 0x00] {
+            transfer_syntax = String::from_utf8_lossy(&bytes[value..value + length])
+                .trim_end_matches(['\0', ' '])
+                .to_string();
+        }
+        pos = value + length;
+    }
+    pos = meta_end;
+    let explicit = match transfer_syntax.as_str() {
+        "1.2.840.10008.1.2" => false,
+        "1.2.840.10008.1.2.1"
+        | "1.2.840.10008.1.2.4.50"
+        | "1.2.840.10008.1.2.4.70"
+        | "1.2.840.10008.1.2.4.90"
+        | "1.2.840.10008.1.2.4.91"
+        | "1.2.840.10008.1.2.5" => true,
+        // Big endian is retired and rare, deflate needs a codec volcast does not build; both are refused.
+        "1.2.840.10008.1.2.2" => {
+            return Err(header_error(
+                label,
+                "explicit VR big endian (a retired transfer syntax) is not supported; convert to little endian \
+                 (e.g. `gdcmconv --explicit`)"
+                    .into(),
+            ))
+        }
+        other if other.starts_with("1.2.840.10008.1.2.4.") => true,
+        other => {
+            return Err(header_error(
+                label,
+                format!("transfer syntax '{}' is not supported", clip(other)),
+            ))
+        }
+    };
+    let big = false;
+    let mut encapsulated = false;
     while pos + 8 <= bytes.len() {
         let at16 = |i: usize, big: bool| {
             let b = [bytes[i], bytes[i + 1]];
@@ -449,17 +550,6 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
                 u32::from_le_bytes(b)
             }
         };
-        if in_meta && at16(pos, false) != 0x0002 {
-            in_meta = false;
-            match transfer_syntax.as_str() {
-                "1.2.840.10008.1.2" => explicit = false,
-                "1.2.840.10008.1.2.2" => big = true,
-                "1.2.840.10008.1.2.1.99" => {
-                    return Err(header_error(label, "deflated transfer syntax is not supported".into()))
-                }
-                _ => {}
-            }
-        }
         let (group, element) = (at16(pos, big), at16(pos + 2, big));
         let vr = (explicit && group != 0xFFFE).then(|| [bytes[pos + 4], bytes[pos + 5]]);
         // As dicom-encoding decodes: these VRs have a 2-byte length, every other one (unknown ones included)
@@ -530,11 +620,6 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
             length >= 8 && at16(pos, big) == 0xFFFE && at16(pos + 2, big) == 0xE000 && group != 0xFFFE;
         if vr.is_some_and(|v| &v == b"SQ") || (vr.is_none() && starts_with_item) {
             continue;
-        }
-        if in_meta && element == 0x0010 {
-            transfer_syntax = String::from_utf8_lossy(&bytes[pos..pos + length])
-                .trim_end_matches(['\0', ' '])
-                .to_string();
         }
         pos += length;
         if (group, element) == (0x7FE0, 0x0010) && !encapsulated {
@@ -784,6 +869,9 @@ mod tests {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-unknown-vr.dcm");
         let e = from_bytes(&std::fs::read(path).unwrap()).unwrap_err().to_string();
         assert!(e.contains("claims 4294574080 bytes but only"), "{e}");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-big-endian.dcm");
+        let e = from_bytes(&std::fs::read(path).unwrap()).unwrap_err().to_string();
+        assert!(e.contains("explicit VR big endian"), "{e}");
         let seed = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/slice.dcm")).unwrap();
         assert_eq!(check_lengths(&seed, "x").unwrap(), seed.len());
         let mut junk = seed.clone();
