@@ -262,6 +262,8 @@ struct Running {
     refine_pending: bool,
     /// Frame times (ms) of scripted drags, reported when the script ends.
     drag_frames: Vec<f64>,
+    /// Whether the frame last recorded in each slot was a reduced-detail one.
+    slot_reduced: [bool; FRAMES_IN_FLIGHT],
 }
 
 /// The editor's histogram: 256 bins of normalised values.
@@ -379,6 +381,7 @@ impl Running {
             has_volume: false,
             refine_pending: false,
             drag_frames: Vec::new(),
+            slot_reduced: [false; FRAMES_IN_FLIGHT],
         };
         // On error `r` is torn down properly before the error is returned.
         match r.init(opts) {
@@ -753,7 +756,11 @@ impl Running {
         let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
         if self.frame_index >= FRAMES_IN_FLIGHT {
             self.state.gpu = renderer.timings(&self.gpu, slot)?;
+            if !self.slot_reduced[slot] {
+                self.state.full_frame_ms = self.state.gpu.map(|t| t.total_ms);
+            }
         }
+        self.slot_reduced[slot] = settings.width < view_size.width;
         self.state.frame_ms = dt as f64 * 1e3;
 
         let swapchain = self.swapchain.as_ref().ok_or(GpuError::Lost("swapchain"))?;
