@@ -240,6 +240,18 @@ fn validated_gpu() -> Gpu {
     .expect("a Vulkan device with the validation layer (apt-get install mesa-vulkan-drivers vulkan-validationlayers)")
 }
 
+/// Tears down and asserts the validation layer said nothing, leaks at device destruction included.
+fn close(gpu: Gpu, headless: Headless) {
+    headless.destroy(&gpu);
+    let log = gpu.log.clone();
+    drop(gpu);
+    assert!(
+        log.problems().is_empty(),
+        "validation layer reported:\n{:#?}",
+        log.problems()
+    );
+}
+
 fn finish(gpu: Gpu, headless: Headless, outcomes: Vec<Outcome>) {
     headless.destroy(&gpu);
     let log = gpu.log.clone();
@@ -384,10 +396,7 @@ fn jitter_averages_towards_the_finely_sampled_image() {
     let e_unjittered = diff(&unjittered, &truth).mean;
     let e_jittered = diff(&mean_img, &truth).mean;
     eprintln!("mean error vs step-0.25 reference: unjittered {e_unjittered:.3}/255, mean of {seeds} jittered {e_jittered:.3}/255");
-    headless.destroy(&gpu);
-    let log = gpu.log.clone();
-    drop(gpu);
-    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    close(gpu, headless);
     assert!(
         e_jittered < 0.8 * e_unjittered,
         "jittered mean {e_jittered:.3} should beat unjittered {e_unjittered:.3} clearly"
@@ -429,10 +438,7 @@ fn empty_space_skipping_does_not_change_the_image() {
             }
         }
     }
-    headless.destroy(&gpu);
-    let log = gpu.log.clone();
-    drop(gpu);
-    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    close(gpu, headless);
     assert!(
         failures.is_empty(),
         "skipping changed the image:\n{}",
@@ -483,10 +489,7 @@ fn adaptive_step_stays_within_the_bound() {
             }
         }
     }
-    headless.destroy(&gpu);
-    let log = gpu.log.clone();
-    drop(gpu);
-    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    close(gpu, headless);
     assert!(
         failures.is_empty(),
         "adaptive stepping left the bound:\n{}",
@@ -527,9 +530,6 @@ fn gradient_texture_shades_like_central_differences() {
             failures.push(format!("{}: {d}", v.name));
         }
     }
-    headless.destroy(&gpu);
-    let log = gpu.log.clone();
-    drop(gpu);
-    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    close(gpu, headless);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
