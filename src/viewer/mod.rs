@@ -61,6 +61,8 @@ pub enum ScriptStep {
     Drag(u32),
     /// Interactive level of detail on or off.
     Lod(bool),
+    /// Press "Open…" (the platform file dialog; without a desktop portal it reports that none is available).
+    Dialog,
     /// Ask the window system for a new size and wait (a bounded number of frames) until it arrives.
     Resize(u32, u32),
     Minimize,
@@ -86,6 +88,7 @@ pub fn parse_script(s: &str) -> Result<Vec<ScriptStep>, String> {
                 "frames" => ScriptStep::Frames(arg.parse().map_err(|_| bad())?),
                 "drag" => ScriptStep::Drag(arg.parse().map_err(|_| bad())?),
                 "lod" if arg == "on" || arg == "off" => ScriptStep::Lod(arg == "on"),
+                "dialog" => ScriptStep::Dialog,
                 "resize" => {
                     let (w, h) = arg.split_once('x').ok_or_else(bad)?;
                     ScriptStep::Resize(w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?)
@@ -264,6 +267,8 @@ struct Running {
     drag_frames: Vec<f64>,
     /// Whether the frame last recorded in each slot was a reduced-detail one.
     slot_reduced: [bool; FRAMES_IN_FLIGHT],
+    /// An open file dialog's answer (None inside: cancelled, or no dialog available, e.g. no desktop portal).
+    dialog: Option<Receiver<Option<PathBuf>>>,
 }
 
 /// The editor's histogram: 256 bins of normalised values.
@@ -382,6 +387,7 @@ impl Running {
             refine_pending: false,
             drag_frames: Vec::new(),
             slot_reduced: [false; FRAMES_IN_FLIGHT],
+            dialog: None,
         };
         // On error `r` is torn down properly before the error is returned.
         match r.init(opts) {
@@ -511,6 +517,7 @@ impl Running {
 
     fn wants_continuous_redraw(&self) -> bool {
         self.loading.is_some()
+            || self.dialog.is_some()
             || self.state.auto_rotate
             || self.state.animation.is_some()
             || self.script.is_some()
@@ -530,6 +537,15 @@ impl Running {
                     self.pending_screenshot = Some(PathBuf::from(format!("volcast-{stamp}.png")));
                 }
                 UiAction::VsyncChanged => self.recreate_swapchain = true,
+                UiAction::OpenDialog if self.dialog.is_none() => {
+                    // The dialog blocks until the user answers, so it runs on its own thread.
+                    let (tx, rx) = std::sync::mpsc::channel();
+                    std::thread::spawn(move || {
+                        let _ = tx.send(rfd::FileDialog::new().set_title("Load volume").pick_file());
+                    });
+                    self.dialog = Some(rx);
+                }
+                UiAction::OpenDialog => {}
             }
         }
     }
@@ -635,6 +651,7 @@ impl Running {
         match step {
             ScriptStep::Frames(n) => script.frames_left = n,
             ScriptStep::Drag(n) => script.drag_left = n,
+            ScriptStep::Dialog => self.apply(vec![UiAction::OpenDialog]),
             ScriptStep::Lod(on) => {
                 self.report_drag();
                 self.state.lod = on;
@@ -689,6 +706,20 @@ impl Running {
         let dt = (frame_s as f32).min(0.1);
         self.last_frame = now;
         self.poll_loading()?;
+        if let Some(rx) = &self.dialog {
+            match rx.try_recv() {
+                Ok(Some(path)) => {
+                    self.dialog = None;
+                    let action = self.state.load_action(path);
+                    self.apply(vec![action]);
+                }
+                Ok(None) | Err(TryRecvError::Disconnected) => {
+                    self.dialog = None;
+                    self.state.status = Some("no file chosen (or no file dialog here: type a path)".into());
+                }
+                Err(TryRecvError::Empty) => {}
+            }
+        }
         self.state.animate(dt);
 
         let size = self.window.inner_size();

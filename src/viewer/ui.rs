@@ -60,6 +60,8 @@ pub enum UiAction {
     LoadBuiltin(String),
     Screenshot,
     VsyncChanged,
+    /// Show the platform's file dialog (off the render thread).
+    OpenDialog,
 }
 
 /// Degrees per second of auto-rotation.
@@ -444,7 +446,12 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
                 }
             }
         });
-        ui.label("File (or drop one on the window):");
+        ui.horizontal(|ui| {
+            if ui.button("Open…").clicked() {
+                actions.push(UiAction::OpenDialog);
+            }
+            ui.label("or a path (or drop a file on the window):");
+        });
         if ui.text_edit_singleline(&mut state.load_path).changed() {
             state.take_dims_from_name();
         }
