@@ -608,6 +608,20 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
                 ),
             ));
         }
+        // dicom-parser reads binary numbers as whole values (length / size of them), so a length that is not a
+        // multiple would leave it misaligned with this walk.
+        let value_size = match vr.as_ref().map(|v| &v[..]) {
+            Some(b"SS" | b"US" | b"OW") => 2,
+            Some(b"AT" | b"FL" | b"OF" | b"OL" | b"SL" | b"UL") => 4,
+            Some(b"FD" | b"OD" | b"OV" | b"SV" | b"UV") => 8,
+            _ => 1,
+        };
+        if !length.is_multiple_of(value_size) {
+            return Err(header_error(
+                label,
+                format!("element ({group:04X},{element:04X}) has length {length}, not a multiple of {value_size}"),
+            ));
+        }
         if group == 0xFFFE {
             if element == 0xE0DD {
                 encapsulated = false;
@@ -869,6 +883,9 @@ mod tests {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-unknown-vr.dcm");
         let e = from_bytes(&std::fs::read(path).unwrap()).unwrap_err().to_string();
         assert!(e.contains("claims 4294574080 bytes but only"), "{e}");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-odd-length.dcm");
+        let e = from_bytes(&std::fs::read(path).unwrap()).unwrap_err().to_string();
+        assert!(e.contains("(0020,000E) has length 6, not a multiple of 4"), "{e}");
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-big-endian.dcm");
         let e = from_bytes(&std::fs::read(path).unwrap()).unwrap_err().to_string();
         assert!(e.contains("explicit VR big endian"), "{e}");
