@@ -266,8 +266,10 @@ pub struct Renderer {
     linear_sampler: vk::Sampler,
     point_sampler: vk::Sampler,
     lut: Image,
-    /// What the table holds: classification, window and data range it was baked for.
+    /// What the table holds: classification, window and data range it was baked for, and the table itself (the
+    /// brick occupancy is computed from it).
     baked: Option<(Classification, [f32; 2], [f64; 2])>,
+    lut_table: Vec<[f32; 4]>,
     volume: Option<GpuVolume>,
     positions: Option<PositionTargets>,
     timestamp_period_ns: f64,
@@ -354,6 +356,7 @@ impl Renderer {
             point_sampler: vk::Sampler::null(),
             lut,
             baked: None,
+            lut_table: Vec::new(),
             volume: None,
             positions: None,
             timestamp_period_ns: gpu.properties.limits.timestamp_period as f64,
@@ -503,7 +506,7 @@ impl Renderer {
         let lut = bake(classification, window, range);
         upload_image(gpu, &self.lut, bytemuck::cast_slice(&lut))?;
         self.baked = Some((classification.clone(), window, range));
-        self.write_volume_set(gpu);
+        self.lut_table = lut;
         Ok(())
     }
 
@@ -678,10 +681,6 @@ impl Renderer {
         Ok(())
     }
 
-    pub fn volume_info(&self) -> Option<VolumeInfo> {
-        self.volume.as_ref().map(|v| v.info)
-    }
-
     /// Bytes the volume texture takes on the device.
     pub fn volume_bytes(&self) -> u64 {
         self.volume.as_ref().map(|v| v.image.allocated_bytes()).unwrap_or(0)
@@ -690,11 +689,7 @@ impl Renderer {
     /// Whether [`Renderer::prepare`] has work to do for `s` (callers wait for in-flight frames only then).
     pub fn needs_prepare(&self, s: &RenderSettings) -> bool {
         let targets_fit = match s.ray_setup {
-            RaySetup::Faces => self.positions.as_ref().is_some_and(|p| {
-                p.format == s.position_format
-                    && p.entry.desc.extent.width == s.width
-                    && p.entry.desc.extent.height == s.height
-            }),
+            RaySetup::Faces => self.positions_fit(s),
             RaySetup::Analytic => self.positions.is_none(),
         };
         !targets_fit
@@ -711,8 +706,21 @@ impl Renderer {
                 .is_none_or(|v| v.occupancy_key.as_ref() == Some(&OccupancyKey::of(s)))
     }
 
+    fn positions_fit(&self, s: &RenderSettings) -> bool {
+        self.positions.as_ref().is_some_and(|p| {
+            p.format == s.position_format
+                && p.entry.desc.extent.width == s.width
+                && p.entry.desc.extent.height == s.height
+        })
+    }
+
+    /// The loaded volume's value range (what data-unit transfer functions are baked against).
+    fn volume_range(&self) -> [f64; 2] {
+        self.volume.as_ref().map(|v| v.info.range).unwrap_or([0.0, 1.0])
+    }
+
     fn lut_is_current(&self, s: &RenderSettings) -> bool {
-        let range = self.volume.as_ref().map(|v| v.info.range).unwrap_or([0.0, 1.0]);
+        let range = self.volume_range();
         self.baked
             .as_ref()
             .is_some_and(|(c, w, r)| *w == s.window && *r == range && *c == s.classification())
@@ -744,26 +752,20 @@ impl Renderer {
             )?;
         }
         if !self.lut_is_current(s) {
-            let range = self.volume.as_ref().map(|v| v.info.range).unwrap_or([0.0, 1.0]);
-            self.upload_lut(gpu, &s.classification(), s.window, range)?;
+            self.upload_lut(gpu, &s.classification(), s.window, self.volume_range())?;
         }
         if !self.occupancy_is_current(s) {
+            // The table is current now (above), so the occupancy follows from it.
             if let Some(vol) = &mut self.volume {
-                let lut = bake(&s.classification(), s.window, vol.info.range);
                 let occupancy = vol
                     .bricks
-                    .classify(&lut, s.mode, s.window, s.iso_value, s.adaptive_step);
+                    .classify(&self.lut_table, s.mode, s.window, s.iso_value, s.adaptive_step);
                 upload_3d(gpu, &vol.occupancy, &occupancy, vol.bricks.bricks[2])?;
                 vol.occupancy_key = Some(OccupancyKey::of(s));
             }
         }
         if s.ray_setup == RaySetup::Faces {
-            let fits = self.positions.as_ref().is_some_and(|p| {
-                p.format == s.position_format
-                    && p.entry.desc.extent.width == s.width
-                    && p.entry.desc.extent.height == s.height
-            });
-            if !fits {
+            if !self.positions_fit(s) {
                 if let Some(old) = self.positions.take() {
                     old.destroy(gpu);
                 }
