@@ -11,7 +11,10 @@
 use super::decode::{try_vec, Progress};
 use super::format::{self, clip, header_error};
 use super::{check_dims, Scaling, Volume, VolumeError, VoxelData, VoxelType};
+use dicom_core::dictionary::{DataDictionary, DataDictionaryEntry};
 use dicom_core::value::PrimitiveValue as P;
+use dicom_core::VR;
+use dicom_dictionary_std::StandardDataDictionary;
 use dicom_object::file::ReadPreamble;
 use dicom_object::{DefaultDicomObject, OpenFileOptions, Tag};
 use std::path::{Path, PathBuf};
@@ -443,69 +446,70 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
     }
     let group_length = bytes.get(pos + 8..pos + 12).ok_or_else(meta_error)?;
     let group_length = u32::from_le_bytes([group_length[0], group_length[1], group_length[2], group_length[3]]);
-    let meta_end = (pos + 12).checked_add(group_length as usize).ok_or_else(meta_error)?;
-    if meta_end > bytes.len() {
-        return Err(header_error(
-            label,
-            format!("the file meta group claims {group_length} bytes but the file ends before"),
-        ));
-    }
+    // dicom-object reads elements while fewer than `group_length` bytes were read, so the last one may run past
+    // the claimed length, and the data set starts where that element ends. Walked the same way here.
     let mut transfer_syntax = String::new();
     pos += 12;
-    while pos + 8 <= meta_end {
-        let vr = [bytes[pos + 4], bytes[pos + 5]];
-        let short = matches!(
-            &vr,
-            b"AE"
-                | b"AS"
-                | b"AT"
-                | b"CS"
-                | b"DA"
-                | b"DS"
-                | b"DT"
-                | b"FL"
-                | b"FD"
-                | b"IS"
-                | b"LO"
-                | b"LT"
-                | b"PN"
-                | b"SH"
-                | b"SL"
-                | b"SS"
-                | b"ST"
-                | b"TM"
-                | b"UI"
-                | b"UL"
-                | b"US"
+    let mut consumed = 0u64;
+    while consumed < u64::from(group_length) {
+        let head = bytes.get(pos..pos + 8).ok_or_else(meta_error)?;
+        let (group, element) = (
+            u16::from_le_bytes([head[0], head[1]]),
+            u16::from_le_bytes([head[2], head[3]]),
         );
+        let vr = [head[4], head[5]];
+        let short = group != 0xFFFE
+            && matches!(
+                &vr,
+                b"AE"
+                    | b"AS"
+                    | b"AT"
+                    | b"CS"
+                    | b"DA"
+                    | b"DS"
+                    | b"DT"
+                    | b"FL"
+                    | b"FD"
+                    | b"IS"
+                    | b"LO"
+                    | b"LT"
+                    | b"PN"
+                    | b"SH"
+                    | b"SL"
+                    | b"SS"
+                    | b"ST"
+                    | b"TM"
+                    | b"UI"
+                    | b"UL"
+                    | b"US"
+            );
         let (length, header) = if short {
-            (usize::from(u16::from_le_bytes([bytes[pos + 6], bytes[pos + 7]])), 8)
+            (u32::from(u16::from_le_bytes([head[6], head[7]])), 8)
+        } else if group == 0xFFFE {
+            (u32::from_le_bytes([head[4], head[5], head[6], head[7]]), 8)
         } else {
             let l = bytes.get(pos + 8..pos + 12).ok_or_else(meta_error)?;
-            (u32::from_le_bytes([l[0], l[1], l[2], l[3]]) as usize, 12)
+            (u32::from_le_bytes([l[0], l[1], l[2], l[3]]), 12)
         };
         let value = pos + header;
-        if value > meta_end || length > meta_end - value {
+        let length = length as usize;
+        if length > bytes.len() - value {
             return Err(header_error(
                 label,
                 format!(
-                    "file meta element ({:02X}{:02X},{:02X}{:02X}) claims {length} bytes but only {} follow",
-                    bytes[pos + 1],
-                    bytes[pos],
-                    bytes[pos + 3],
-                    bytes[pos + 2],
-                    meta_end.saturating_sub(value)
+                    "file meta element ({group:04X},{element:04X}) claims {length} bytes but only {} follow",
+                    bytes.len() - value
                 ),
             ));
         }
-        if bytes[pos..pos + 4] == [0x02, 0x00, 0x10, 0x00] {
+        if (group, element) == (0x0002, 0x0010) {
             transfer_syntax = String::from_utf8_lossy(&bytes[value..value + length])
                 .trim_end_matches(['\0', ' '])
                 .to_string();
         }
         pos = value + length;
+        consumed += (header + length) as u64;
     }
-    pos = meta_end;
     let explicit = match transfer_syntax.as_str() {
         "1.2.840.10008.1.2" => false,
         "1.2.840.10008.1.2.1"
@@ -551,49 +555,66 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
             }
         };
         let (group, element) = (at16(pos, big), at16(pos + 2, big));
-        let vr = (explicit && group != 0xFFFE).then(|| [bytes[pos + 4], bytes[pos + 5]]);
+        // The VR as dicom-parser resolves it: read from the data in explicit VR (items and delimiters have none);
+        // in implicit VR looked up in the standard dictionary (pixel and overlay data are OW, unknown tags UN).
+        let vr = if group == 0xFFFE {
+            None
+        } else if explicit {
+            Some([bytes[pos + 4], bytes[pos + 5]])
+        } else if (group, element) == (0x7FE0, 0x0010) || (group >> 8 == 0x60 && element == 0x3000) {
+            Some(*b"OW")
+        } else {
+            Some(
+                StandardDataDictionary
+                    .by_tag(Tag(group, element))
+                    .map_or(VR::UN, |entry| entry.vr().relaxed())
+                    .to_bytes(),
+            )
+        };
         // As dicom-encoding decodes: these VRs have a 2-byte length, every other one (unknown ones included)
         // 2 reserved bytes and a 4-byte length.
-        let long_vr = vr.is_some_and(|v| {
-            !matches!(
-                &v,
-                b"AE"
-                    | b"AS"
-                    | b"AT"
-                    | b"CS"
-                    | b"DA"
-                    | b"DS"
-                    | b"DT"
-                    | b"FL"
-                    | b"FD"
-                    | b"IS"
-                    | b"LO"
-                    | b"LT"
-                    | b"PN"
-                    | b"SH"
-                    | b"SL"
-                    | b"SS"
-                    | b"ST"
-                    | b"TM"
-                    | b"UI"
-                    | b"UL"
-                    | b"US"
-            )
-        });
-        let (length, header) = match vr {
-            Some(_) if long_vr => {
-                if pos + 12 > bytes.len() {
-                    break;
-                }
-                (at32(pos + 8, big), 12)
+        let long_vr = explicit
+            && vr.is_some_and(|v| {
+                !matches!(
+                    &v,
+                    b"AE"
+                        | b"AS"
+                        | b"AT"
+                        | b"CS"
+                        | b"DA"
+                        | b"DS"
+                        | b"DT"
+                        | b"FL"
+                        | b"FD"
+                        | b"IS"
+                        | b"LO"
+                        | b"LT"
+                        | b"PN"
+                        | b"SH"
+                        | b"SL"
+                        | b"SS"
+                        | b"ST"
+                        | b"TM"
+                        | b"UI"
+                        | b"UL"
+                        | b"US"
+                )
+            });
+        let (length, header) = if long_vr {
+            if pos + 12 > bytes.len() {
+                break;
             }
-            Some(_) => (u32::from(at16(pos + 6, big)), 8),
-            None => (at32(pos + 4, big), 8),
+            (at32(pos + 8, big), 12)
+        } else if explicit && vr.is_some() {
+            (u32::from(at16(pos + 6, big)), 8)
+        } else {
+            (at32(pos + 4, big), 8)
         };
         pos += header;
         if length == u32::MAX {
-            // Undefined length: a sequence (descend) or encapsulated pixel data (items hold fragments).
-            if group != 0xFFFE && vr.is_some_and(|v| &v != b"SQ") {
+            // Undefined length: encapsulated pixel data (its items hold fragments) or, for any other element,
+            // a sequence whose items are data sets (dicom-parser discards the VR then): descend.
+            if (group, element) == (0x7FE0, 0x0010) {
                 encapsulated = true;
             }
             continue;
@@ -630,9 +651,7 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
                 continue;
             }
         }
-        let starts_with_item =
-            length >= 8 && at16(pos, big) == 0xFFFE && at16(pos + 2, big) == 0xE000 && group != 0xFFFE;
-        if vr.is_some_and(|v| &v == b"SQ") || (vr.is_none() && starts_with_item) {
+        if vr.is_some_and(|v| &v == b"SQ") {
             continue;
         }
         pos += length;
@@ -897,14 +916,28 @@ mod tests {
         assert!(from_bytes(&junk).is_ok());
     }
 
-    /// Fifth dicom fuzz finding, still open: in an implicit-VR data set dicom-parser takes value sizes from its
-    /// dictionary, which `check_lengths` does not mirror, so it can still reserve a claimed 4 GB. The reservation is
-    /// zeroed virtual memory that is never touched (RSS stays small; libFuzzer flags it by its malloc limit) and the
-    /// load ends in an error; this test pins that it does not panic or succeed.
+    /// Fifth dicom fuzz finding: in an implicit-VR data set dicom-parser takes each element's VR from its
+    /// dictionary; `check_lengths` once walked such data without VRs, fell out of step with the parser and let it
+    /// reserve a claimed 4 GB. The walk now resolves VRs the same way and refuses the file before parsing.
     #[test]
-    fn implicit_vr_claim_ends_in_an_error() {
+    fn implicit_vr_claim_is_refused_before_parsing() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-implicit-vr.dcm");
-        assert!(from_bytes(&std::fs::read(path).unwrap()).is_err());
+        let bytes = std::fs::read(path).unwrap();
+        let e = check_lengths(&bytes, "x").unwrap_err().to_string();
+        assert!(e.contains("(0000,0000) has length 33, not a multiple of 4"), "{e}");
+        assert!(from_bytes(&bytes).is_err());
+    }
+
+    /// Sixth finding: dicom-object reads file meta elements while fewer than the group length were read, so the
+    /// last one may run past that length and the data set starts after it; the walk had cut the group at its
+    /// claimed length and fallen out of step (an OB value of 4 GB followed). It now walks the group the same way.
+    #[test]
+    fn meta_group_overrun_is_walked_like_dicom_object() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-meta-overrun.dcm");
+        let bytes = std::fs::read(path).unwrap();
+        let e = check_lengths(&bytes, "x").unwrap_err().to_string();
+        assert!(e.contains("claims") && e.contains("bytes but only"), "{e}");
+        assert!(from_bytes(&bytes).is_err());
     }
 
     #[test]
