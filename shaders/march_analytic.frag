@@ -1,25 +1,11 @@
 #version 450
-// The analytic ray setup: intersect the pixel's ray with the slab box (slab method) in texture space.
+// The analytic ray setup as a fullscreen fragment pass (see analytic.glsl).
 #include "frame.glsl"
 #include "march.glsl"
+#include "analytic.glsl"
 
 layout(location = 0) out vec4 out_color;
 
 void main() {
-    vec3 origin = ray_origin(gl_FragCoord.xy);
-    // t is distance along the view axis, so the near plane is t = near: clamping t0 to it starts rays where
-    // rasterisation would clip them.
-    vec3 dir = ray_direction(gl_FragCoord.xy);
-    vec3 inv = 1.0 / dir;
-    vec3 t_lo = (frame.slab_lo.xyz - origin) * inv;
-    vec3 t_hi = (frame.slab_hi.xyz - origin) * inv;
-    vec3 t_min = min(t_lo, t_hi);
-    vec3 t_max = max(t_lo, t_hi);
-    float t0 = max(max(max(t_min.x, t_min.y), t_min.z), frame.ray_forward.w);
-    float t1 = min(min(t_max.x, t_max.y), t_max.z);
-    if (!(t1 > t0)) {
-        out_color = background_pixel();
-        return;
-    }
-    out_color = march(origin + dir * t0, origin + dir * t1, gl_FragCoord.xy);
+    out_color = analytic_pixel(gl_FragCoord.xy);
 }

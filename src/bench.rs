@@ -278,6 +278,8 @@ pub struct BenchOptions {
     pub sizes: Vec<u32>,
     /// Shading variants to keep ("off", "on"); empty = each scene's own.
     pub shadings: Vec<String>,
+    /// Methods to keep ("faces", "analytic", "compute"); empty = all three.
+    pub methods: Vec<String>,
     /// Only the sample-only micro-benchmark.
     pub sample_only: bool,
 }
@@ -399,7 +401,7 @@ pub struct SceneResult {
     pub format: TexelFormat,
     pub width: u32,
     pub height: u32,
-    pub method: RaySetup,
+    pub method: Method,
     pub shading: Shading,
     pub frames: u32,
     pub wall_ms: Stats,
@@ -563,11 +565,37 @@ impl BenchReport {
 
 const MIB: f64 = (1u64 << 20) as f64;
 
-fn method_name(m: RaySetup) -> &'static str {
-    match m {
-        RaySetup::Faces => "faces",
-        RaySetup::Analytic => "analytic",
+/// How a frame is marched: the two ray setups, and the analytic one in a compute pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    Faces,
+    Analytic,
+    Compute,
+}
+
+impl Method {
+    pub const ALL: [Method; 3] = [Method::Faces, Method::Analytic, Method::Compute];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Faces => "faces",
+            Method::Analytic => "analytic",
+            Method::Compute => "compute",
+        }
     }
+
+    fn apply(self, s: &mut RenderSettings) {
+        s.ray_setup = match self {
+            Method::Faces => RaySetup::Faces,
+            Method::Analytic | Method::Compute => RaySetup::Analytic,
+        };
+        s.compute = self == Method::Compute;
+    }
+}
+
+fn method_name(m: Method) -> &'static str {
+    m.name()
 }
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -1412,8 +1440,11 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                     shading.apply(&mut s);
                     // Counted before timing, so the count's CPU work never overlaps a timed frame.
                     let count = counter.count(&s);
-                    for method in [RaySetup::Faces, RaySetup::Analytic] {
-                        s.ray_setup = method;
+                    let methods = Method::ALL
+                        .into_iter()
+                        .filter(|m| opts.methods.is_empty() || opts.methods.iter().any(|n| n == m.name()));
+                    for method in methods {
+                        method.apply(&mut s);
                         log(&format!(
                             "{} {size}x{size} {} shading {}: {} warm-up + {} frames",
                             scene.name,

@@ -51,7 +51,9 @@ impl Headless {
             old.readback.destroy(gpu);
             old.image.destroy(gpu);
         }
-        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
+        // STORAGE for the compute march (RGBA8 storage images are required of every Vulkan device).
+        let usage =
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let image = Image::new(
             gpu,
             ImageDesc::d2(OUTPUT_FORMAT, width, height, usage),

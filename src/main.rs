@@ -166,8 +166,9 @@ struct RenderArgs {
     /// Output PNG.
     #[arg(short, long, default_value = "volcast.png")]
     output: PathBuf,
-    /// Ray setup: faces (entry/exit textures) or analytic (ray/box intersection).
-    #[arg(long, default_value = "faces", value_parser = ["faces", "analytic"])]
+    /// Ray setup: faces (entry/exit textures), analytic (ray/box intersection) or compute (analytic, marched in a
+    /// compute pass instead of a fragment pass).
+    #[arg(long, default_value = "faces", value_parser = ["faces", "analytic", "compute"])]
     method: String,
     /// Print GPU time per pass (after a warm-up frame; lavapipe compiles shaders on first use).
     #[arg(long)]
@@ -219,7 +220,10 @@ struct BenchArgs {
     /// Only these shading variants (repeatable): off, on.
     #[arg(long = "shading")]
     shadings: Vec<String>,
-    /// CI smoke mode: a 64³ helix at 64x64, both ray setups, shading off and on, tiny sample-only run.
+    /// Only these methods (repeatable): faces, analytic, compute (the analytic ray setup in a compute pass).
+    #[arg(long = "method", value_parser = ["faces", "analytic", "compute"])]
+    methods: Vec<String>,
+    /// CI smoke mode: a 64³ helix at 64x64, all three methods, shading off and on, tiny sample-only run.
     #[arg(long)]
     quick: bool,
     /// Only the sample-only micro-benchmark (all three texel formats).
@@ -492,11 +496,12 @@ fn render(args: &RenderArgs) -> Result<()> {
     let volume = args.volume.load()?;
     let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
     let mut s = args.frame.settings(&volume)?;
-    s.ray_setup = if args.method == "analytic" {
-        RaySetup::Analytic
-    } else {
+    s.ray_setup = if args.method == "faces" {
         RaySetup::Faces
+    } else {
+        RaySetup::Analytic
     };
+    s.compute = args.method == "compute";
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
         let result = (|| -> Result<()> {
@@ -548,10 +553,10 @@ fn render(args: &RenderArgs) -> Result<()> {
                 volume.spacing[2],
                 s.width,
                 s.height,
-                if s.ray_setup == RaySetup::Faces {
-                    "entry/exit faces"
-                } else {
-                    "analytic"
+                match (s.ray_setup, s.compute) {
+                    (RaySetup::Faces, _) => "entry/exit faces",
+                    (RaySetup::Analytic, false) => "analytic",
+                    (RaySetup::Analytic, true) => "analytic (compute pass)",
                 },
                 gpu.device_name,
                 args.output.display()
@@ -670,6 +675,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
         scenes: args.scenes.clone(),
         sizes: args.sizes.clone(),
         shadings: args.shadings.clone(),
+        methods: args.methods.clone(),
         sample_only: args.sample_only,
     };
     with_gpu(&args.gpu, |gpu| {

@@ -177,6 +177,9 @@ pub struct RenderSettings {
     /// Shade from a precomputed gradient texture (one sample instead of six; 8 bytes per voxel; gradients of the
     /// voxel grid rather than of the interpolant, so not what rule 5 specifies — a measured alternative).
     pub gradient_texture: bool,
+    /// March in a compute pass instead of a fullscreen fragment pass (analytic ray setup only; the output image
+    /// must allow storage). The same rays and rules: a measured alternative for lavapipe (README, Performance).
+    pub compute: bool,
 }
 
 impl Default for RenderSettings {
@@ -233,6 +236,7 @@ impl RenderSettings {
             skip_empty: true,
             adaptive_step: false,
             gradient_texture: false,
+            compute: false,
         }
     }
 
@@ -311,6 +315,9 @@ impl RenderSettings {
         }
         if let Some(tf) = &self.transfer_function {
             tf.validate().map_err(|e| e.to_string())?;
+        }
+        if self.compute && self.ray_setup != RaySetup::Analytic {
+            return Err("the compute march uses the analytic ray setup (--method compute)".into());
         }
         let c = &self.camera;
         if !(c.eye - c.target).length().is_normal() || !(1.0..=170.0).contains(&c.fov_y_deg) {

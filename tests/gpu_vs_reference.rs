@@ -202,7 +202,21 @@ impl Outcome {
     }
 }
 
+/// The two ray setups; the compute march (the analytic setup in a compute pass) has a test of its own.
+const METHODS: &[(RaySetup, bool)] = &[(RaySetup::Faces, false), (RaySetup::Analytic, false)];
+
 fn run_cases(gpu: &Gpu, headless: &mut Headless, volume: &Volume, cases: Vec<Case>, out: &mut Vec<Outcome>) {
+    run_cases_with(gpu, headless, volume, cases, METHODS, out)
+}
+
+fn run_cases_with(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    volume: &Volume,
+    cases: Vec<Case>,
+    methods: &[(RaySetup, bool)],
+    out: &mut Vec<Outcome>,
+) {
     headless.set_volume(gpu, volume).expect("upload volume");
     let reference = Reference::new(volume);
     let max_p99 = if matches!(volume.data, VoxelData::U8(_)) {
@@ -212,10 +226,12 @@ fn run_cases(gpu: &Gpu, headless: &mut Headless, volume: &Volume, cases: Vec<Cas
     };
     for case in cases {
         let expected = reference.render(&case.settings);
-        for method in [RaySetup::Faces, RaySetup::Analytic] {
+        for &(method, compute) in methods {
             let mut s = case.settings.clone();
             s.ray_setup = method;
-            let label = format!("{}-{}-{:?}", volume.name, case.name, method).to_lowercase();
+            s.compute = compute;
+            let suffix = if compute { "-compute" } else { "" };
+            let label = format!("{}-{}-{:?}{suffix}", volume.name, case.name, method).to_lowercase();
             let actual = headless.render(gpu, &s).expect("render").image;
             let d = diff(&actual, &expected);
             eprintln!("{label}: {d}");
@@ -307,6 +323,25 @@ fn builtins_match_the_reference() {
             &mut outcomes,
         );
     }
+    finish(gpu, headless, outcomes);
+}
+
+/// The compute march (`--method compute`) against the reference: every shader variant (compositing families,
+/// shading, gradient opacity) and the settings that change the rays (slabs, inside, orthographic, non-square
+/// images, whose sizes are not multiples of the 8×8 workgroup), on the helix and the Marschner–Lobb volume.
+#[test]
+fn compute_march_matches_the_reference() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut outcomes = Vec::new();
+    let compute = &[(RaySetup::Analytic, true)];
+    let helix = volume::builtin("helix", Some(96)).expect("helix");
+    let mut cases = standard_cases(&helix, 96);
+    cases.extend(settings_cases(&helix, 93));
+    cases.extend(quality_cases(&helix, 96));
+    run_cases_with(&gpu, &mut headless, &helix, cases, compute, &mut outcomes);
+    let ml = volume::builtin("marschner-lobb", None).expect("marschner-lobb");
+    run_cases_with(&gpu, &mut headless, &ml, quality_cases(&ml, 80), compute, &mut outcomes);
     finish(gpu, headless, outcomes);
 }
 

@@ -1,5 +1,5 @@
 //! The two ray setups (entry/exit faces and analytic ray/box) agree with each other, and each with the CPU
-//! reference, at every built-in viewpoint of `volcast compare` — inside the volume, on a face, grazing, with the
+//! reference (the analytic one also marched in a compute pass, which must match its fragment pass within 1/255), at every built-in viewpoint of `volcast compare` — inside the volume, on a face, grazing, with the
 //! near plane cutting the box and inside a slab — for a built-in and a real volume, under validation.
 //! Bounds as in gpu_vs_reference.rs: methods agree within mean 0.5/255 and p99 3/255 (compare::AGREE_*); each
 //! matches the reference within mean 0.5/255 and p99 3/255, or p99 10/255 for uint8 data (lavapipe's 8-bit
@@ -40,8 +40,23 @@ fn check(volume: &Volume, size: u32, window: [f32; 2]) -> Vec<String> {
             write_failure_images(&format!("{label}-methods"), &c.faces.image, &c.analytic.image);
             failures.push(format!("{label}: {}", c.verdict()));
         }
+        let mut cs = view.settings.clone();
+        cs.ray_setup = volcast::settings::RaySetup::Analytic;
+        cs.compute = true;
+        let compute = headless.render(&gpu, &cs).expect("compute march").image;
+        // Same rays, same march code, another pipeline stage: at most rounding apart.
+        let d = diff(&compute, &c.analytic.image);
+        eprintln!("{label}: compute vs analytic fragment: {d}");
+        if d.max > 1.0 {
+            write_failure_images(&format!("{label}-compute"), &compute, &c.analytic.image);
+            failures.push(format!("{label}: compute vs analytic fragment: {d}"));
+        }
         let expected = reference.render(&view.settings);
-        for (method, image) in [("faces", &c.faces.image), ("analytic", &c.analytic.image)] {
+        for (method, image) in [
+            ("faces", &c.faces.image),
+            ("analytic", &c.analytic.image),
+            ("compute", &compute),
+        ] {
             let d = diff(image, &expected);
             eprintln!("{label}: {method} vs reference: {d}");
             if d.mean >= 0.5 || d.p99 >= ref_p99 {

@@ -104,3 +104,24 @@ pub fn graphics_pipeline(gpu: &Gpu, desc: &GraphicsDesc) -> Result<vk::Pipeline,
         Err((_, e)) => Err(GpuError::vk("vkCreateGraphicsPipelines", e)),
     }
 }
+
+/// A compute pipeline running `code`'s `main`.
+pub fn compute_pipeline(gpu: &Gpu, code: &ShaderCode, layout: vk::PipelineLayout) -> Result<vk::Pipeline, GpuError> {
+    let cs = module(gpu, code)?;
+    let stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::COMPUTE)
+        .module(cs)
+        .name(c"main");
+    let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+    // SAFETY: the module and layout are live; the info lives until the call returns.
+    let result = unsafe {
+        gpu.device
+            .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+    };
+    // SAFETY: pipelines keep no reference to their shader modules once created.
+    unsafe { gpu.device.destroy_shader_module(cs, None) };
+    match result {
+        Ok(p) => Ok(p[0]),
+        Err((_, e)) => Err(GpuError::vk("vkCreateComputePipelines", e)),
+    }
+}

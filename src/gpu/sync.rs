@@ -16,6 +16,8 @@ pub enum Access {
     ColorAttachmentWrite,
     /// Sampled or fetched by a fragment shader.
     FragmentSampled,
+    /// Written by a compute shader as a storage image (GENERAL layout).
+    ComputeWrite,
     Present,
     HostRead,
 }
@@ -28,6 +30,7 @@ impl Access {
             Access::TransferWrite | Access::TransferRead => vk::PipelineStageFlags2::TRANSFER,
             Access::ColorAttachmentWrite => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
             Access::FragmentSampled => vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            Access::ComputeWrite => vk::PipelineStageFlags2::COMPUTE_SHADER,
             // Presentation is ordered by semaphores; the barrier needs no later stage.
             Access::Present => vk::PipelineStageFlags2::NONE,
             Access::HostRead => vk::PipelineStageFlags2::HOST,
@@ -43,6 +46,7 @@ impl Access {
             // SHADER_READ rather than SHADER_SAMPLED_READ: the 1.3.239 layer's best-practices check flags the
             // latter with SHADER_READ_ONLY_OPTIMAL (a false positive), and SHADER_READ covers it.
             Access::FragmentSampled => vk::AccessFlags2::SHADER_READ,
+            Access::ComputeWrite => vk::AccessFlags2::SHADER_STORAGE_WRITE,
             Access::HostRead => vk::AccessFlags2::HOST_READ,
         }
     }
@@ -55,7 +59,7 @@ impl Access {
             Access::ColorAttachmentWrite => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
             Access::FragmentSampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Access::Present => vk::ImageLayout::PRESENT_SRC_KHR,
-            Access::HostRead => vk::ImageLayout::GENERAL,
+            Access::HostRead | Access::ComputeWrite => vk::ImageLayout::GENERAL,
         }
     }
 }

@@ -5,7 +5,7 @@
 pub mod skip;
 
 use crate::camera::tex_to_world;
-use crate::gpu::pipeline::{graphics_pipeline, shader, GraphicsDesc};
+use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, GraphicsDesc};
 use crate::gpu::resources::{upload_image, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
@@ -202,9 +202,11 @@ impl PositionTargets {
     }
 }
 
-fn setup_index(setup: RaySetup) -> usize {
-    match setup {
+/// Which march pipeline family `s` uses: 0 entry/exit faces, 1 analytic (fragment), 2 analytic (compute).
+fn setup_index(s: &RenderSettings) -> usize {
+    match s.ray_setup {
         RaySetup::Faces => 0,
+        RaySetup::Analytic if s.compute => 2,
         RaySetup::Analytic => 1,
     }
 }
@@ -222,18 +224,23 @@ pub fn march_variant(s: &RenderSettings) -> usize {
     }
 }
 
-fn march_shader(setup: RaySetup, variant: usize) -> crate::gpu::pipeline::ShaderCode {
+fn march_shader(setup: usize, variant: usize) -> crate::gpu::pipeline::ShaderCode {
     match (setup, variant) {
-        (RaySetup::Faces, 0) => shader!("march_faces.frag.ea"),
-        (RaySetup::Faces, 1) => shader!("march_faces.frag.ea_shaded"),
-        (RaySetup::Faces, 2) => shader!("march_faces.frag.proj"),
-        (RaySetup::Faces, 4) => shader!("march_faces.frag.ea_shaded_tex"),
-        (RaySetup::Faces, _) => shader!("march_faces.frag.iso"),
-        (RaySetup::Analytic, 0) => shader!("march_analytic.frag.ea"),
-        (RaySetup::Analytic, 1) => shader!("march_analytic.frag.ea_shaded"),
-        (RaySetup::Analytic, 2) => shader!("march_analytic.frag.proj"),
-        (RaySetup::Analytic, 4) => shader!("march_analytic.frag.ea_shaded_tex"),
-        (RaySetup::Analytic, _) => shader!("march_analytic.frag.iso"),
+        (2, 0) => shader!("march_compute.comp.ea"),
+        (2, 1) => shader!("march_compute.comp.ea_shaded"),
+        (2, 2) => shader!("march_compute.comp.proj"),
+        (2, 4) => shader!("march_compute.comp.ea_shaded_tex"),
+        (2, _) => shader!("march_compute.comp.iso"),
+        (0, 0) => shader!("march_faces.frag.ea"),
+        (0, 1) => shader!("march_faces.frag.ea_shaded"),
+        (0, 2) => shader!("march_faces.frag.proj"),
+        (0, 4) => shader!("march_faces.frag.ea_shaded_tex"),
+        (0, _) => shader!("march_faces.frag.iso"),
+        (1, 0) => shader!("march_analytic.frag.ea"),
+        (1, 1) => shader!("march_analytic.frag.ea_shaded"),
+        (1, 2) => shader!("march_analytic.frag.proj"),
+        (1, 4) => shader!("march_analytic.frag.ea_shaded_tex"),
+        (_, _) => shader!("march_analytic.frag.iso"),
     }
 }
 
@@ -255,10 +262,12 @@ pub struct Renderer {
     faces_layout: vk::PipelineLayout,
     march_faces_layout: vk::PipelineLayout,
     march_analytic_layout: vk::PipelineLayout,
+    storage_set_layout: vk::DescriptorSetLayout,
+    march_compute_layout: vk::PipelineLayout,
     /// Entry and exit pipelines per position format: [Rgba32f, Rgba16f] × [entry, exit].
     position_pipelines: [[vk::Pipeline; 2]; 2],
-    /// March pipelines per ray setup × shader variant, created when first needed (see `march_variant`).
-    march_pipelines: [[vk::Pipeline; 5]; 2],
+    /// March pipelines per `setup_index` × shader variant, created when first needed (see `march_variant`).
+    march_pipelines: [[vk::Pipeline; 5]; 3],
     descriptor_pool: vk::DescriptorPool,
     volume_set: vk::DescriptorSet,
     positions_set: vk::DescriptorSet,
@@ -281,6 +290,8 @@ struct FrameSlot {
     uniforms: Buffer,
     set: vk::DescriptorSet,
     query_pool: vk::QueryPool,
+    /// The output image as a storage image, for the compute march (written when a frame is recorded).
+    storage_set: vk::DescriptorSet,
     /// The ray setup of the last frame recorded in this slot (None: nothing recorded yet).
     recorded: Option<RaySetup>,
 }
@@ -329,8 +340,8 @@ impl Renderer {
     /// `frames_in_flight` slots let that many recorded frames be pending at once (see [`Renderer::record`]).
     /// On error everything created so far is destroyed again.
     pub fn new(gpu: &Gpu, output_format: vk::Format, frames_in_flight: usize) -> Result<Renderer, GpuError> {
-        let all = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
-        let frag = vk::ShaderStageFlags::FRAGMENT;
+        let all = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
+        let frag = vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
         let lut_desc = ImageDesc::d2(
             vk::Format::R32G32B32A32_SFLOAT,
             LUT_SIZE as u32,
@@ -346,8 +357,10 @@ impl Renderer {
             faces_layout: vk::PipelineLayout::null(),
             march_faces_layout: vk::PipelineLayout::null(),
             march_analytic_layout: vk::PipelineLayout::null(),
+            storage_set_layout: vk::DescriptorSetLayout::null(),
+            march_compute_layout: vk::PipelineLayout::null(),
             position_pipelines: [[vk::Pipeline::null(); 2]; 2],
-            march_pipelines: [[vk::Pipeline::null(); 5]; 2],
+            march_pipelines: [[vk::Pipeline::null(); 5]; 3],
             descriptor_pool: vk::DescriptorPool::null(),
             volume_set: vk::DescriptorSet::null(),
             positions_set: vk::DescriptorSet::null(),
@@ -399,6 +412,11 @@ impl Renderer {
             &[self.frame_set_layout, self.volume_set_layout, self.positions_set_layout],
         )?;
         self.march_analytic_layout = pipeline_layout(gpu, &[self.frame_set_layout, self.volume_set_layout])?;
+        self.storage_set_layout = set_layout(gpu, &[(D::STORAGE_IMAGE, vk::ShaderStageFlags::COMPUTE)])?;
+        self.march_compute_layout = pipeline_layout(
+            gpu,
+            &[self.frame_set_layout, self.volume_set_layout, self.storage_set_layout],
+        )?;
         self.linear_sampler = sampler(gpu, vk::Filter::LINEAR)?;
         self.point_sampler = sampler(gpu, vk::Filter::NEAREST)?;
 
@@ -438,22 +456,27 @@ impl Renderer {
                 ty: D::SAMPLER,
                 descriptor_count: 2,
             },
+            vk::DescriptorPoolSize {
+                ty: D::STORAGE_IMAGE,
+                descriptor_count: n,
+            },
         ];
         let pool_info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(2 + n)
+            .max_sets(2 + 2 * n)
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a live device.
         self.descriptor_pool =
             unsafe { gpu.device.create_descriptor_pool(&pool_info, None) }.ctx("vkCreateDescriptorPool")?;
         let mut layouts = vec![self.volume_set_layout, self.positions_set_layout];
         layouts.extend(std::iter::repeat_n(self.frame_set_layout, slots));
+        layouts.extend(std::iter::repeat_n(self.storage_set_layout, slots));
         let alloc = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(self.descriptor_pool)
             .set_layouts(&layouts);
         // SAFETY: the pool has room for exactly these sets.
         let sets = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
         (self.volume_set, self.positions_set) = (sets[0], sets[1]);
-        for &set in &sets[2..] {
+        for (&set, &storage_set) in sets[2..2 + slots].iter().zip(&sets[2 + slots..]) {
             let uniforms = Buffer::new(
                 gpu,
                 std::mem::size_of::<FrameUniforms>() as u64,
@@ -488,6 +511,7 @@ impl Renderer {
                 uniforms,
                 set,
                 query_pool,
+                storage_set,
                 recorded: None,
             });
         }
@@ -695,7 +719,7 @@ impl Renderer {
         !targets_fit
             || !self.lut_is_current(s)
             || !self.occupancy_is_current(s)
-            || self.march_pipelines[setup_index(s.ray_setup)][march_variant(s)] == vk::Pipeline::null()
+            || self.march_pipelines[setup_index(s)][march_variant(s)] == vk::Pipeline::null()
     }
 
     fn occupancy_is_current(&self, s: &RenderSettings) -> bool {
@@ -729,27 +753,31 @@ impl Renderer {
     /// Creates (or re-creates) what `settings` needs that depends on more than the frame: colormap, targets.
     /// Must be called while no submitted frame is in flight.
     pub fn prepare(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
-        let (si, vi) = (setup_index(s.ray_setup), march_variant(s));
+        let (si, vi) = (setup_index(s), march_variant(s));
         if vi == 4 && self.volume.as_ref().is_some_and(|v| v.gradient.is_none()) {
             return Err(GpuError::InvalidSettings(
                 "gradient_texture needs enable_gradient_texture() first".into(),
             ));
         }
         if self.march_pipelines[si][vi] == vk::Pipeline::null() {
-            let layout = match s.ray_setup {
-                RaySetup::Faces => self.march_faces_layout,
-                RaySetup::Analytic => self.march_analytic_layout,
+            self.march_pipelines[si][vi] = if si == 2 {
+                compute_pipeline(gpu, &march_shader(si, vi), self.march_compute_layout)?
+            } else {
+                let layout = match s.ray_setup {
+                    RaySetup::Faces => self.march_faces_layout,
+                    RaySetup::Analytic => self.march_analytic_layout,
+                };
+                graphics_pipeline(
+                    gpu,
+                    &GraphicsDesc {
+                        vertex: &shader!("fullscreen.vert"),
+                        fragment: &march_shader(si, vi),
+                        layout,
+                        color_format: self.output_format,
+                        cull: vk::CullModeFlags::NONE,
+                    },
+                )?
             };
-            self.march_pipelines[si][vi] = graphics_pipeline(
-                gpu,
-                &GraphicsDesc {
-                    vertex: &shader!("fullscreen.vert"),
-                    fragment: &march_shader(s.ray_setup, vi),
-                    layout,
-                    color_format: self.output_format,
-                    cull: vk::CullModeFlags::NONE,
-                },
-            )?;
         }
         if !self.lut_is_current(s) {
             self.upload_lut(gpu, &s.classification(), s.window, self.volume_range())?;
@@ -839,8 +867,8 @@ impl Renderer {
             .ok_or(GpuError::Lost("frame slot out of range"))?;
         slot.uniforms.write(bytemuck::bytes_of(&uniforms))?;
         slot.recorded = Some(s.ray_setup);
-        let (frame_set, query_pool) = (slot.set, slot.query_pool);
-        let march_pipeline = self.march_pipelines[setup_index(s.ray_setup)][march_variant(s)];
+        let (frame_set, query_pool, storage_set) = (slot.set, slot.query_pool, slot.storage_set);
+        let march_pipeline = self.march_pipelines[setup_index(s)][march_variant(s)];
         if march_pipeline == vk::Pipeline::null() {
             return Err(GpuError::Lost("prepare() was not called for these settings"));
         }
@@ -959,6 +987,51 @@ impl Renderer {
                 }
                 ts(cb, 3);
             }
+            RaySetup::Analytic if s.compute => {
+                let image_info = [vk::DescriptorImageInfo::default()
+                    .image_view(output.1)
+                    .image_layout(vk::ImageLayout::GENERAL)];
+                let write = vk::WriteDescriptorSet::default()
+                    .dst_set(storage_set)
+                    .dst_binding(0)
+                    .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+                    .image_info(&image_info);
+                // SAFETY: the slot's last frame has completed (record's contract), so nothing uses the set.
+                unsafe { dev.update_descriptor_sets(&[write], &[]) };
+                image_barriers(
+                    dev,
+                    cb,
+                    &[ImageTransition {
+                        to: Access::ComputeWrite,
+                        ..output_to_attachment
+                    }],
+                );
+                // SAFETY: the sets match the march-compute layout and hold live resources; `output` is in GENERAL.
+                unsafe {
+                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, march_pipeline);
+                    dev.cmd_bind_descriptor_sets(
+                        cb,
+                        vk::PipelineBindPoint::COMPUTE,
+                        self.march_compute_layout,
+                        0,
+                        &[frame_set, self.volume_set, storage_set],
+                        &[],
+                    );
+                    dev.cmd_dispatch(cb, s.width.div_ceil(8), s.height.div_ceil(8), 1);
+                }
+                ts(cb, 1);
+                // record's contract: the output ends as a colour attachment, whichever pass wrote it.
+                image_barriers(
+                    dev,
+                    cb,
+                    &[ImageTransition {
+                        image: output.0,
+                        from: Access::ComputeWrite,
+                        to: Access::ColorAttachmentWrite,
+                        discard: false,
+                    }],
+                );
+            }
             RaySetup::Analytic => {
                 image_barriers(dev, cb, &[output_to_attachment]);
                 begin(output.1, vk::AttachmentLoadOp::DONT_CARE);
@@ -1054,6 +1127,8 @@ impl Renderer {
             for p in self.march_pipelines.iter().flatten() {
                 d.destroy_pipeline(*p, None);
             }
+            d.destroy_pipeline_layout(self.march_compute_layout, None);
+            d.destroy_descriptor_set_layout(self.storage_set_layout, None);
             d.destroy_pipeline_layout(self.faces_layout, None);
             d.destroy_pipeline_layout(self.march_faces_layout, None);
             d.destroy_pipeline_layout(self.march_analytic_layout, None);
