@@ -59,7 +59,7 @@ fn quick_bench_prints_valid_numbers_without_validation_errors() {
         .take_while(|l| !l.trim().is_empty())
         .map(|l| l.split_whitespace().collect())
         .collect();
-    assert_eq!(rows.len(), 4, "one row per ray setup and shading:\n{stdout}");
+    assert_eq!(rows.len(), 6, "one row per method and shading:\n{stdout}");
     let mut methods = Vec::new();
     for row in &rows {
         assert_eq!(row.len(), volcast::bench::TABLE_COLUMNS.len(), "row {row:?}");
@@ -85,6 +85,8 @@ fn quick_bench_prints_valid_numbers_without_validation_errors() {
         [
             ("analytic", "off"),
             ("analytic", "on"),
+            ("compute", "off"),
+            ("compute", "on"),
             ("faces", "off"),
             ("faces", "on")
         ]
@@ -108,7 +110,7 @@ fn quick_bench_json_has_the_expected_fields() {
         assert!(r["gsamples_per_s"].as_f64().is_some_and(|x| x.is_finite() && x > 0.0));
     }
     let results = v["results"].as_array().expect("results array");
-    assert_eq!(results.len(), 4);
+    assert_eq!(results.len(), 6);
     for r in results {
         for key in ["scene", "volume", "format", "method", "shading"] {
             assert!(r[key].is_string(), "{key} in {r}");
