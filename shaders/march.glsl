@@ -2,7 +2,11 @@
 // rules in RenderSettings (src/settings.rs); the CPU reference in tests/common follows the same rules.
 layout(set = 1, binding = 0) uniform texture3D volume_tex;
 layout(set = 1, binding = 1) uniform sampler linear_smp;
-layout(set = 1, binding = 2) uniform texture2D lut_tex;   // 4096 x 1, RGBA32F: linear rgb + opacity per voxel step
+// The baked table, three rows of 4096 entries (src/render/mod.rs LUT_ROWS): row 0 linear rgb + opacity per voxel
+// step; rows 1 and 2 premultiplied rgb + opacity of one and of two march steps (tf::step_table).
+layout(std430, set = 1, binding = 2) readonly buffer Lut {
+    vec4 entries[];
+} lut;
 layout(set = 1, binding = 3) uniform texture3D occupancy_tex;   // one texel per 8^3 brick: > 0.5 may be visible
 
 const uint MODE_EMISSION = 0u;
@@ -40,13 +44,17 @@ bool visible(float v) {
     return !isnan(v) && v >= frame.value_map.z && v <= frame.value_map.w;
 }
 
-// The baked table at v, interpolated by hand from two fetches (lavapipe filters with reduced precision).
-vec4 classify(float v) {
+// Row `row` of the baked table at v, interpolated linearly between its two nearest entries. (A storage buffer:
+// on lavapipe two loads cost less than two texel fetches, and a filtered fetch less than either.)
+vec4 table(float v, int row) {
     float u = clamp(v, 0.0, 1.0) * 4095.0;
     int i0 = min(int(u), 4094);
-    vec4 a = texelFetch(sampler2D(lut_tex, linear_smp), ivec2(i0, 0), 0);
-    vec4 b = texelFetch(sampler2D(lut_tex, linear_smp), ivec2(i0 + 1, 0), 0);
-    return mix(a, b, u - float(i0));
+    int base = row * 4096 + i0;
+    return mix(lut.entries[base], lut.entries[base + 1], u - float(i0));
+}
+
+vec4 classify(float v) {
+    return table(v, 0);
 }
 
 // Central differences one voxel apart: value change per voxel along each texture axis.
@@ -260,6 +268,15 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             if (!visible(v)) {
                 continue;
             }
+#if !defined(SHADED)
+            // Opacity corrected for this step (one or two march steps) and premultiplied colour, from the table.
+            vec4 c = table(v, stride);
+            if (c.a <= 0.0) {
+                continue;
+            }
+            color += (1.0 - opacity) * c.rgb;
+            opacity += (1.0 - opacity) * c.a;
+#else
             vec4 c = classify(v);
             float alpha = c.a;
             // A transparent sample adds nothing; skipping it also skips its six gradient samples.
@@ -267,7 +284,6 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
                 continue;
             }
             vec3 rgb = c.rgb;
-#if defined(SHADED)
             vec3 g = gradient(p);
             if (grad_ref > 0.0) {
                 alpha *= min(1.0, length(g) / grad_ref);
@@ -275,12 +291,12 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             if (shading_on) {
                 rgb = shade(rgb, g, light);
             }
-#endif
             float a_step = mode == MODE_DENSITY
                 ? min(1.0, alpha * frame.mode_params.y * steps)
                 : 1.0 - pow(1.0 - alpha, steps);
             color += (1.0 - opacity) * a_step * rgb;
             opacity += (1.0 - opacity) * a_step;
+#endif
             if (opacity >= frame.alpha.z) {
                 done = true;
                 break;

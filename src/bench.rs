@@ -1367,28 +1367,8 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
         SampleOnlyConfig::full(opts.frames)
     };
 
-    // Volumes first (they decide which formats the sample-only pass must measure); each is dropped after its
-    // scene, so only one is resident at a time.
-    let mut formats: Vec<TexelFormat> = if opts.sample_only {
-        TexelFormat::ALL.to_vec()
-    } else {
-        Vec::new()
-    };
-    if !opts.sample_only {
-        for scene in &chosen {
-            let format = match scene.source {
-                Source::Builtin { .. } | Source::VtkHelix => TexelFormat::R8Unorm,
-                Source::DataFile { file, .. } => match volume::parse_scivis_name(file).map(|(_, _, t)| t.size()) {
-                    Some(1) => TexelFormat::R8Unorm,
-                    Some(2) => TexelFormat::R16Unorm,
-                    _ => TexelFormat::R32Sfloat,
-                },
-            };
-            if !formats.contains(&format) {
-                formats.push(format);
-            }
-        }
-    }
+    // Every format: which one a scene's volume is stored in depends on the data and on `TexelPolicy::Auto`.
+    let formats = TexelFormat::ALL;
     report.sample_only = sample_only(gpu, &formats, sample_cfg, log)?;
     if opts.sample_only {
         report.load_after = load_average();
@@ -1411,7 +1391,13 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                 }
             };
             headless.set_volume(gpu, &volume)?;
-            let format = TexelFormat::of(&volume);
+            // The format the renderer chose (TexelPolicy::Auto widens 8/16-bit data to float on CPU devices).
+            let format = match headless.renderer.volume_format() {
+                Some(vk::Format::R8_UNORM) => TexelFormat::R8Unorm,
+                Some(vk::Format::R16_UNORM) => TexelFormat::R16Unorm,
+                Some(_) => TexelFormat::R32Sfloat,
+                None => TexelFormat::of(&volume),
+            };
             let described = format!(
                 "{} {}x{}x{} {}",
                 volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type

@@ -142,6 +142,11 @@ struct GpuArgs {
     /// Device index or part of its name (see `volcast devices`).
     #[arg(long)]
     device: Option<String>,
+    /// How volumes are stored on the GPU: auto (32-bit float on CPU devices such as lavapipe, where it filters
+    /// faster and exactly, while it fits in 1 GiB; the data's own format elsewhere), native (8/16-bit data stays
+    /// 8/16-bit: least memory) or float (always 4 bytes per voxel).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "native", "float"])]
+    texture: String,
 }
 
 impl GpuArgs {
@@ -150,6 +155,11 @@ impl GpuArgs {
         GpuOptions {
             validation: self.validate || env,
             device: self.device.clone(),
+            texel_policy: match self.texture.as_str() {
+                "native" => volcast::gpu::TexelPolicy::Native,
+                "float" => volcast::gpu::TexelPolicy::Float,
+                _ => volcast::gpu::TexelPolicy::Auto,
+            },
             ..Default::default()
         }
     }
@@ -734,6 +744,12 @@ fn info(args: &VolumeArgs) -> Result<()> {
         "gpu:       {gpu_format}, {:.1} MiB",
         v.gpu_memory_bytes() as f64 / (1 << 20) as f64
     );
+    if v.gpu_texel_size() < 4 {
+        println!(
+            "           (R32_SFLOAT, {:.1} MiB, on CPU devices such as lavapipe with --texture auto or float)",
+            (v.voxel_count() * 4) as f64 / (1 << 20) as f64
+        );
+    }
     Ok(())
 }
 
@@ -767,6 +783,7 @@ fn main() -> ExitCode {
             gpu: GpuArgs {
                 validate: false,
                 device: None,
+                texture: "auto".into(),
             },
             size: (1280, 800),
             script: None,

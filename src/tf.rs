@@ -258,6 +258,23 @@ pub enum Classification {
     Function(TransferFunction),
 }
 
+/// The opacity-corrected, premultiplied table for a march step of `steps` voxel lengths: for each entry of
+/// `lut` (from [`bake`]), the step's opacity a = 1 − (1 − alpha)^steps (emission–absorption, rule 6) or
+/// a = min(1, alpha · density · steps) (the density model), and the colour it adds, a · rgb. The unshaded march
+/// reads this instead of computing a power per sample; interpolating it differs from correcting the
+/// interpolated entry only inside one of the 4095 intervals where the table jumps.
+pub fn step_table(lut: &[[f32; 4]], steps: f32, density: Option<f32>) -> Vec<[f32; 4]> {
+    lut.iter()
+        .map(|&[r, g, b, alpha]| {
+            let a = match density {
+                Some(d) => (alpha * d * steps).min(1.0),
+                None => 1.0 - (1.0 - alpha).powf(steps),
+            };
+            [a * r, a * g, a * b, a]
+        })
+        .collect()
+}
+
 /// Bakes `classification` for data with value range `range` and the value window `window` (normalised) into
 /// [`LUT_SIZE`] entries of `[r, g, b, alpha]`, colours in linear light. Entry i is the value v = i / (N − 1);
 /// values outside the window get zero (the march skips them anyway).
@@ -316,6 +333,22 @@ pub fn lookup(lut: &[[f32; 4]], v: f32) -> [f32; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn step_table_corrects_opacity_and_premultiplies() {
+        let lut = [[0.5, 0.25, 1.0, 0.2], [1.0, 1.0, 1.0, 0.0], [0.2, 0.4, 0.6, 1.0]];
+        let t = step_table(&lut, 2.0, None);
+        // 1 - 0.8^2 = 0.36
+        assert!((t[0][3] - 0.36).abs() < 1e-6);
+        assert!((t[0][0] - 0.18).abs() < 1e-6 && (t[0][2] - 0.36).abs() < 1e-6);
+        assert_eq!(t[1], [0.0; 4]);
+        assert_eq!(t[2][3], 1.0);
+        let half = step_table(&lut, 0.5, None);
+        assert!((half[0][3] - (1.0 - 0.8f32.sqrt())).abs() < 1e-6);
+        let d = step_table(&lut, 2.0, Some(1.5));
+        assert!((d[0][3] - 0.6).abs() < 1e-6);
+        assert_eq!(d[2][3], 1.0, "density opacity is clamped to 1");
+    }
 
     #[test]
     fn srgb_round_trip_and_known_values() {

@@ -12,8 +12,9 @@
 //!   weights, so a trilinear sample can be off by up to ~1/256 of the value range; where the data is steep
 //!   (the Marschner–Lobb rings, the helix's edges) that moves samples across the window edge and the error
 //!   compounds along the ray. Measured: p99 up to 9/255, mean < 0.4/255. Uploading the same data as R16_UNORM
-//!   brought it to p99 1/255 (mean 0.07/255), which shows the shader itself is exact; R8 is kept because it is
-//!   the native precision at half the memory, and real GPUs filter with 8-bit weights too.
+//!   brought it to p99 1/255 (mean 0.07/255), which shows the shader itself is exact. On CPU devices volcast
+//!   now widens 8- and 16-bit data to R32_SFLOAT by default (`TexelPolicy::Auto`: faster there, and exact), so
+//!   the looser bound applies only where a test asks for the native R8 texture (`TexelPolicy::Native`).
 
 mod common;
 
@@ -23,6 +24,7 @@ use glam::Vec3;
 use volcast::camera::Camera;
 use volcast::gpu::{Gpu, GpuOptions};
 use volcast::headless::Headless;
+use volcast::render::TexelPolicy;
 use volcast::settings::{CompositeMode, RaySetup, RenderSettings, Shading};
 use volcast::tf::TransferFunction;
 use volcast::transfer::Colormap;
@@ -219,7 +221,9 @@ fn run_cases_with(
 ) {
     headless.set_volume(gpu, volume).expect("upload volume");
     let reference = Reference::new(volume);
-    let max_p99 = if matches!(volume.data, VoxelData::U8(_)) {
+    // The looser uint8 bound is for R8_UNORM textures only (lavapipe's 8-bit filter weights); 8-bit data
+    // widened to float (TexelPolicy) is held to the common bound.
+    let max_p99 = if headless.renderer.volume_format() == Some(ash::vk::Format::R8_UNORM) {
         MAX_P99_UINT8
     } else {
         MAX_P99
@@ -352,8 +356,16 @@ fn every_data_type_matches_the_reference() {
     let mut outcomes = Vec::new();
     for ty in [VoxelType::U8, VoxelType::U16, VoxelType::I16, VoxelType::F32] {
         let v = marschner_lobb_as(ty);
-        run_cases(&gpu, &mut headless, &v, standard_cases(&v, 72), &mut outcomes);
+        // Each texture format the data can go to the GPU in: the native one (R8/R16_UNORM) and float, which
+        // TexelPolicy::Auto picks on CPU devices like lavapipe.
+        for policy in [TexelPolicy::Native, TexelPolicy::Float] {
+            headless.renderer.texel_policy = policy;
+            let mut v = v.clone();
+            v.name = format!("{}-{policy:?}", v.name);
+            run_cases(&gpu, &mut headless, &v, standard_cases(&v, 72), &mut outcomes);
+        }
     }
+    headless.renderer.texel_policy = TexelPolicy::Auto;
     finish(gpu, headless, outcomes);
 }
 

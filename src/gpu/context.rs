@@ -19,6 +19,8 @@ pub struct GpuOptions {
     pub instance_extensions: Vec<&'static CStr>,
     /// Enable VK_KHR_swapchain on the device.
     pub swapchain: bool,
+    /// How renderers on this GPU store volumes (`--texture`).
+    pub texel_policy: super::TexelPolicy,
 }
 
 /// One validation-layer message.
@@ -177,6 +179,8 @@ pub struct Gpu {
     pub command_pool: vk::CommandPool,
     /// Size of the largest device-local heap, the budget a volume is checked against.
     pub device_local_bytes: u64,
+    /// From [`GpuOptions::texel_policy`]: the policy new renderers start with.
+    pub texel_policy: super::TexelPolicy,
 }
 
 fn load_entry() -> Result<ash::Entry, GpuError> {
@@ -400,6 +404,7 @@ impl Gpu {
                     allocator: None,
                     command_pool: vk::CommandPool::null(),
                     device_local_bytes,
+                    texel_policy: opts.texel_policy,
                 };
                 gpu.finish()
             }

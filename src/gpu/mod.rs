@@ -11,6 +11,18 @@ pub use context::{list_devices, DeviceInfo, Gpu, GpuOptions, ValidationLog, Vali
 
 use ash::vk;
 
+/// How a volume's voxels are stored on the GPU.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TexelPolicy {
+    /// Float on CPU devices (lavapipe) while the float texture stays under [`crate::render::AUTO_FLOAT_LIMIT`], else native.
+    #[default]
+    Auto,
+    /// The data's own format: R8_UNORM, R16_UNORM or R32_SFLOAT (the least memory).
+    Native,
+    /// Always R32_SFLOAT (4 bytes per voxel).
+    Float,
+}
+
 /// What can go wrong on the GPU side, with messages a user can act on.
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {

@@ -210,14 +210,27 @@ impl Image {
 /// Fills `image` with `bytes` (tightly packed texels) through a staging buffer and leaves it ready for sampling
 /// in fragment shaders.
 pub fn upload_image(gpu: &Gpu, image: &Image, bytes: &[u8]) -> Result<(), GpuError> {
+    upload_image_with(gpu, image, bytes.len() as u64, |dst| dst.copy_from_slice(bytes))
+}
+
+/// Like [`upload_image`], but `fill` writes the `len` bytes of tightly packed texels straight into the staging
+/// buffer (conversions need no second copy of the data).
+pub fn upload_image_with(gpu: &Gpu, image: &Image, len: u64, fill: impl FnOnce(&mut [u8])) -> Result<(), GpuError> {
     let mut staging = Buffer::new(
         gpu,
-        bytes.len() as u64,
+        len,
         vk::BufferUsageFlags::TRANSFER_SRC,
         MemoryLocation::CpuToGpu,
         "staging upload",
     )?;
-    let result = staging.write(bytes).and_then(|_| {
+    let filled = match staging.mapped_mut() {
+        Some(dst) => {
+            fill(dst);
+            Ok(())
+        }
+        None => Err(GpuError::Lost("staging buffer is not host-visible")),
+    };
+    let result = filled.and_then(|_| {
         gpu.submit_and_wait(|cb| {
             image_barrier(&gpu.device, cb, image.raw, Access::Undefined, Access::TransferWrite);
             let region = vk::BufferImageCopy::default()

@@ -6,11 +6,12 @@ pub mod skip;
 
 use crate::camera::tex_to_world;
 use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, GraphicsDesc};
-use crate::gpu::resources::{upload_image, Buffer, Image, ImageDesc};
+use crate::gpu::resources::{upload_image, upload_image_with, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
+pub use crate::gpu::TexelPolicy;
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::settings::{PositionFormat, RaySetup, RenderSettings};
-use crate::tf::{bake, srgb_to_linear, Classification, LUT_SIZE};
+use crate::tf::{bake, srgb_to_linear, step_table, Classification, LUT_SIZE};
 use crate::volume::{Volume, VoxelData};
 use ash::vk;
 use glam::Vec3;
@@ -171,6 +172,25 @@ fn image_3d(gpu: &Gpu, format: vk::Format, dims: [u32; 3], name: &str) -> Result
     Image::new(gpu, ImageDesc { format, extent, usage }, name)
 }
 
+/// The largest float texture `TexelPolicy::Auto` makes from 8- or 16-bit data.
+pub const AUTO_FLOAT_LIMIT: u64 = 1 << 30;
+
+/// Whether `policy` stores `volume` as R32_SFLOAT although its data is 8 or 16 bits. On lavapipe, filtering an
+/// R32_SFLOAT texture is measured 1.6x faster than R8_UNORM (`volcast bench --sample-only`) and exact, where
+/// R8_UNORM is filtered with 8-bit weights; GPUs filter every format in hardware, so they keep the native one.
+fn widen_to_float(gpu: &Gpu, policy: TexelPolicy, volume: &Volume) -> bool {
+    let float_bytes = volume.dims.iter().map(|&d| u64::from(d)).product::<u64>() * 4;
+    match (policy, &volume.data) {
+        (_, VoxelData::F32(_)) | (TexelPolicy::Native, _) => false,
+        (TexelPolicy::Float, _) => true,
+        (TexelPolicy::Auto, _) => {
+            gpu.properties.device_type == vk::PhysicalDeviceType::CPU
+                && float_bytes <= AUTO_FLOAT_LIMIT
+                && float_bytes <= gpu.device_local_bytes / 4
+        }
+    }
+}
+
 /// Uploads `bytes` (dims[2] slices) into an image made by [`image_3d`].
 fn upload_3d(gpu: &Gpu, image: &Image, bytes: &[u8], depth: u32) -> Result<(), GpuError> {
     if depth == 1 {
@@ -180,6 +200,25 @@ fn upload_3d(gpu: &Gpu, image: &Image, bytes: &[u8], depth: u32) -> Result<(), G
     } else {
         upload_image(gpu, image, bytes)
     }
+}
+
+/// Uploads 8- or 16-bit `volume` into an R32_SFLOAT image made by [`image_3d`] as the values a UNORM texture
+/// would return (stored / 255 or / 65535), so `Volume::gpu_scale_bias` holds unchanged. Converted straight into
+/// the staging buffer: no float copy of the volume on the heap.
+fn upload_float(gpu: &Gpu, image: &Image, volume: &Volume) -> Result<(), GpuError> {
+    let n = volume.voxel_count();
+    // A depth-1 volume is uploaded twice (image_3d makes two slices).
+    let copies = if volume.dims[2] == 1 { 2 } else { 1 };
+    upload_image_with(gpu, image, (n * 4 * copies) as u64, |dst| {
+        let dst: &mut [f32] = bytemuck::cast_slice_mut(dst);
+        for chunk in dst.chunks_mut(n) {
+            match &volume.data {
+                VoxelData::U8(v) => chunk.iter_mut().zip(v).for_each(|(d, &x)| *d = f32::from(x) / 255.0),
+                VoxelData::U16(v) => chunk.iter_mut().zip(v).for_each(|(d, &x)| *d = f32::from(x) / 65535.0),
+                VoxelData::F32(v) => chunk.copy_from_slice(v),
+            }
+        }
+    })
 }
 
 struct PositionTargets {
@@ -203,6 +242,28 @@ impl PositionTargets {
 }
 
 /// Which march pipeline family `s` uses: 0 entry/exit faces, 1 analytic (fragment), 2 analytic (compute).
+/// Rows of the table buffer: 0 the baked classification (opacity per voxel-length step); 1 and 2 the same
+/// corrected for one and for two march steps and premultiplied (`tf::step_table`), which the unshaded
+/// emission/density march reads instead of computing a power per sample (2: faint bricks, adaptive step).
+const LUT_ROWS: usize = 3;
+
+/// What rows 1 and 2 of the table depend on beyond the classification: the step length in voxels and, for the
+/// density model, its density factor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct StepRule {
+    steps: f32,
+    density: Option<f32>,
+}
+
+impl StepRule {
+    fn of(s: &RenderSettings) -> StepRule {
+        StepRule {
+            steps: s.step_length,
+            density: (s.mode == crate::settings::CompositeMode::Density).then_some(s.density),
+        }
+    }
+}
+
 fn setup_index(s: &RenderSettings) -> usize {
     match s.ray_setup {
         RaySetup::Faces => 0,
@@ -274,12 +335,15 @@ pub struct Renderer {
     slots: Vec<FrameSlot>,
     linear_sampler: vk::Sampler,
     point_sampler: vk::Sampler,
-    lut: Image,
-    /// What the table holds: classification, window and data range it was baked for, and the table itself (the
-    /// brick occupancy is computed from it).
-    baked: Option<(Classification, [f32; 2], [f64; 2])>,
+    /// The baked table (shaders/march.glsl `Lut`): [`LUT_ROWS`] rows of [`LUT_SIZE`] entries.
+    lut: Buffer,
+    /// What the table holds: classification, window, data range and step rule it was baked for, and row 0
+    /// itself (the brick occupancy is computed from it).
+    baked: Option<(Classification, [f32; 2], [f64; 2], StepRule)>,
     lut_table: Vec<[f32; 4]>,
     volume: Option<GpuVolume>,
+    /// How the next `set_volume` stores voxels (see [`TexelPolicy`]); starts as the GPU's option.
+    pub texel_policy: TexelPolicy,
     positions: Option<PositionTargets>,
     timestamp_period_ns: f64,
 }
@@ -342,13 +406,13 @@ impl Renderer {
     pub fn new(gpu: &Gpu, output_format: vk::Format, frames_in_flight: usize) -> Result<Renderer, GpuError> {
         let all = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
         let frag = vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
-        let lut_desc = ImageDesc::d2(
-            vk::Format::R32G32B32A32_SFLOAT,
-            LUT_SIZE as u32,
-            1,
-            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-        );
-        let lut = Image::new(gpu, lut_desc, "transfer function lut")?;
+        let lut = Buffer::new(
+            gpu,
+            (LUT_ROWS * LUT_SIZE * std::mem::size_of::<[f32; 4]>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+            "transfer function table",
+        )?;
         let mut r = Renderer {
             output_format,
             frame_set_layout: vk::DescriptorSetLayout::null(),
@@ -371,6 +435,7 @@ impl Renderer {
             baked: None,
             lut_table: Vec::new(),
             volume: None,
+            texel_policy: gpu.texel_policy,
             positions: None,
             timestamp_period_ns: gpu.properties.limits.timestamp_period as f64,
         };
@@ -397,7 +462,7 @@ impl Renderer {
             &[
                 (D::SAMPLED_IMAGE, frag),
                 (D::SAMPLER, frag),
-                (D::SAMPLED_IMAGE, frag),
+                (D::STORAGE_BUFFER, frag),
                 (D::SAMPLED_IMAGE, frag),
                 (D::SAMPLED_IMAGE, frag),
             ],
@@ -460,6 +525,10 @@ impl Renderer {
                 ty: D::STORAGE_IMAGE,
                 descriptor_count: n,
             },
+            vk::DescriptorPoolSize {
+                ty: D::STORAGE_BUFFER,
+                descriptor_count: 1,
+            },
         ];
         let pool_info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(2 + 2 * n)
@@ -516,20 +585,21 @@ impl Renderer {
             });
         }
         let initial = RenderSettings::default();
-        self.upload_lut(gpu, &initial.classification(), initial.window, [0.0, 1.0])?;
+        self.upload_lut(gpu, &initial, [0.0, 1.0])?;
         Ok(())
     }
 
-    fn upload_lut(
-        &mut self,
-        gpu: &Gpu,
-        classification: &Classification,
-        window: [f32; 2],
-        range: [f64; 2],
-    ) -> Result<(), GpuError> {
-        let lut = bake(classification, window, range);
-        upload_image(gpu, &self.lut, bytemuck::cast_slice(&lut))?;
-        self.baked = Some((classification.clone(), window, range));
+    /// Bakes the table for `s` on data of value range `range` into the (host-visible) table buffer; no frame
+    /// may be in flight (prepare's contract).
+    fn upload_lut(&mut self, _gpu: &Gpu, s: &RenderSettings, range: [f64; 2]) -> Result<(), GpuError> {
+        let classification = s.classification();
+        let rule = StepRule::of(s);
+        let lut = bake(&classification, s.window, range);
+        let mut rows = lut.clone();
+        rows.extend(step_table(&lut, rule.steps, rule.density));
+        rows.extend(step_table(&lut, 2.0 * rule.steps, rule.density));
+        self.lut.write(bytemuck::cast_slice(&rows))?;
+        self.baked = Some((classification, s.window, range, rule));
         self.lut_table = lut;
         Ok(())
     }
@@ -540,9 +610,11 @@ impl Renderer {
             .image_view(vol.image.view)
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.linear_sampler)];
-        let lut_info = [vk::DescriptorImageInfo::default()
-            .image_view(self.lut.view)
-            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let lut_info = [vk::DescriptorBufferInfo {
+            buffer: self.lut.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }];
         let occupancy_info = [vk::DescriptorImageInfo::default()
             .image_view(vol.occupancy.view)
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
@@ -574,8 +646,8 @@ impl Renderer {
             vk::WriteDescriptorSet::default()
                 .dst_set(self.volume_set)
                 .dst_binding(2)
-                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
-                .image_info(&lut_info),
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .buffer_info(&lut_info),
         ];
         // SAFETY: callers only update descriptors while no submitted work uses them (headless waits per frame).
         unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
@@ -592,15 +664,22 @@ impl Renderer {
             )));
         }
         let bytes = volume.gpu_bytes();
+        let widen = widen_to_float(gpu, self.texel_policy, volume);
+        let texture_bytes = if widen {
+            bytes.len() as u64 / volume.gpu_texel_size() as u64 * 4
+        } else {
+            bytes.len() as u64
+        };
         // Half the heap: the upload needs a staging copy of the same size alongside.
-        if bytes.len() as u64 > gpu.device_local_bytes / 2 {
+        if texture_bytes > gpu.device_local_bytes / 2 {
             return Err(GpuError::TooLarge(format!(
                 "volume needs {} MiB on the GPU (plus as much again to upload) but the device has {} MiB",
-                bytes.len() >> 20,
+                texture_bytes >> 20,
                 gpu.device_local_bytes >> 20
             )));
         }
         let format = match volume.data {
+            _ if widen => vk::Format::R32_SFLOAT,
             VoxelData::U8(_) => vk::Format::R8_UNORM,
             VoxelData::U16(_) => vk::Format::R16_UNORM,
             VoxelData::F32(_) => vk::Format::R32_SFLOAT,
@@ -614,7 +693,12 @@ impl Renderer {
             )));
         }
         let image = image_3d(gpu, format, volume.dims, "volume")?;
-        if let Err(e) = upload_3d(gpu, &image, bytes, volume.dims[2]) {
+        let uploaded = if widen {
+            upload_float(gpu, &image, volume)
+        } else {
+            upload_3d(gpu, &image, bytes, volume.dims[2])
+        };
+        if let Err(e) = uploaded {
             image.destroy(gpu);
             return Err(e);
         }
@@ -706,6 +790,11 @@ impl Renderer {
     }
 
     /// Bytes the volume texture takes on the device.
+    /// The format the loaded volume is stored in on the GPU (None: no volume).
+    pub fn volume_format(&self) -> Option<vk::Format> {
+        self.volume.as_ref().map(|v| v.image.desc.format)
+    }
+
     pub fn volume_bytes(&self) -> u64 {
         self.volume.as_ref().map(|v| v.image.allocated_bytes()).unwrap_or(0)
     }
@@ -745,9 +834,9 @@ impl Renderer {
 
     fn lut_is_current(&self, s: &RenderSettings) -> bool {
         let range = self.volume_range();
-        self.baked
-            .as_ref()
-            .is_some_and(|(c, w, r)| *w == s.window && *r == range && *c == s.classification())
+        self.baked.as_ref().is_some_and(|(c, w, r, rule)| {
+            *w == s.window && *r == range && *rule == StepRule::of(s) && *c == s.classification()
+        })
     }
 
     /// Creates (or re-creates) what `settings` needs that depends on more than the frame: colormap, targets.
@@ -780,7 +869,7 @@ impl Renderer {
             };
         }
         if !self.lut_is_current(s) {
-            self.upload_lut(gpu, &s.classification(), s.window, self.volume_range())?;
+            self.upload_lut(gpu, s, self.volume_range())?;
         }
         if !self.occupancy_is_current(s) {
             // The table is current now (above), so the occupancy follows from it.
