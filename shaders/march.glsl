@@ -7,7 +7,7 @@ layout(set = 1, binding = 1) uniform sampler linear_smp;
 layout(std430, set = 1, binding = 2) readonly buffer Lut {
     vec4 entries[];
 } lut;
-layout(set = 1, binding = 3) uniform texture3D occupancy_tex;   // one texel per 8^3 brick: > 0.5 may be visible
+layout(set = 1, binding = 3) uniform texture3D occupancy_tex;   // one texel per 8^3 brick: class and reach
 
 const uint MODE_EMISSION = 0u;
 const uint MODE_MIP = 1u;
@@ -92,9 +92,9 @@ vec3 shade(vec3 rgb, vec3 g, vec3 light) {
     return rgb * (s.x + s.y * ndl) + vec3(s.z * pow(ndl, s.w));
 }
 
-// Empty-space skipping. The ray is walked brick by brick: `brick_span` looks up the 8^3 brick holding the
-// sample at `t` and returns the index of the first sample past that brick (x) and whether the brick may hold
-// visible samples (y). The march leaps over empty bricks without leaving its sample grid, and in occupied ones
+// Empty-space skipping. The ray is walked span by span: `brick_span` looks up the 8^3 brick holding the
+// sample at `t` and returns the index of the first sample past the cube of bricks around it that share its
+// class (x) and that class (y). The march leaps over empty bricks without leaving its sample grid, and in occupied ones
 // pays only a comparison per sample. With skipping off, the whole ray is one span.
 ivec2 brick_span(vec3 a, vec3 dir, float t, float h, float o, ivec3 bricks) {
     if (frame.mode_params.z < 0.5) {
@@ -102,17 +102,21 @@ ivec2 brick_span(vec3 a, vec3 dir, float t, float h, float o, ivec3 bricks) {
     }
     vec3 p = a + dir * t;
     ivec3 b = clamp(ivec3(floor(p / frame.brick.xyz)), ivec3(0), bricks - 1);
-    // 0: empty; 0.5: only faint opacity (adaptive stepping may take every other sample); 1: occupied.
-    float level = texelFetch(sampler3D(occupancy_tex, linear_smp), b, 0).r;
-    vec3 lo = vec3(b) * frame.brick.xyz;
-    vec3 hi = lo + frame.brick.xyz;
+    // skip::encode_reach: bits 0-1 the class (0 empty; 1 only faint opacity, where adaptive stepping may take
+    // every other sample; 2 occupied), bits 2-7 the reach r: every brick within r bricks has the same class, so
+    // the ray is walked to where it leaves that cube of bricks as one span.
+    int code = int(texelFetch(sampler3D(occupancy_tex, linear_smp), b, 0).r * 255.0 + 0.5);
+    int level = code & 3;
+    int reach = code >> 2;
+    vec3 lo = vec3(b - ivec3(reach)) * frame.brick.xyz;
+    vec3 hi = vec3(b + ivec3(reach + 1)) * frame.brick.xyz;
     // Zero components take the far side, giving a huge (ignored) exit instead of 0/0.
     vec3 toward = mix(lo, hi, greaterThanEqual(dir, vec3(0.0)));
     vec3 safe = mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
     vec3 exits = (toward - a) / safe;
     // A little short of the exit: rounding must never leap over a sample of the next brick.
     float t_exit = min(exits.x, min(exits.y, exits.z)) - 1e-4 * h;
-    return ivec2(int(ceil(t_exit / h - o)), level > 0.75 ? 2 : (level > 0.25 ? 1 : 0));
+    return ivec2(int(ceil(t_exit / h - o)), level);
 }
 
 // The per-pixel start offset of jittered rays: must equal settings::jitter_offset.

@@ -874,9 +874,10 @@ impl Renderer {
         if !self.occupancy_is_current(s) {
             // The table is current now (above), so the occupancy follows from it.
             if let Some(vol) = &mut self.volume {
-                let occupancy = vol
+                let levels = vol
                     .bricks
                     .classify(&self.lut_table, s.mode, s.window, s.iso_value, s.adaptive_step);
+                let occupancy = skip::encode_reach(&levels, vol.bricks.bricks);
                 upload_3d(gpu, &vol.occupancy, &occupancy, vol.bricks.bricks[2])?;
                 vol.occupancy_key = Some(OccupancyKey::of(s));
             }

@@ -138,6 +138,68 @@ impl BrickGrid {
     }
 }
 
+/// The largest reach [`encode_reach`] stores (6 bits).
+pub const MAX_REACH: u8 = 63;
+
+/// The occupancy texture's bytes: `levels` from [`BrickGrid::classify`] (0 empty, 128 faint, 255 occupied) as a
+/// 2-bit class (0, 1, 2) plus, in the upper 6 bits, the brick's *reach*: the largest r ≤ [`MAX_REACH`] such
+/// that every brick within Chebyshev distance r (in bricks; those outside the grid ignored) has the same class.
+/// (capped where the cube already covers the grid). The march then walks the cube of (2r + 1)³ bricks around the one it is in as one span — a leap over empty
+/// space, or a run of samples without lookups through occupied space — instead of brick by brick.
+pub fn encode_reach(levels: &[u8], bricks: [u32; 3]) -> Vec<u8> {
+    let class = |l: u8| match l {
+        0 => 0u8,
+        1..=191 => 1,
+        _ => 2,
+    };
+    let classes: Vec<u8> = levels.iter().map(|&l| class(l)).collect();
+    let [bx, by, bz] = bricks.map(|b| b as i64);
+    let index = |x: i64, y: i64, z: i64| (x + bx * (y + by * z)) as usize;
+    // reach ≥ r exactly when every neighbour (26, inside the grid) has the same class and reach ≥ r − 1: any brick
+    // within distance r lies within r − 1 of some neighbour.
+    let mut reach = vec![0u8; levels.len()];
+    // Beyond the grid's largest side less one, a larger reach covers no more bricks.
+    let cap = (bx.max(by).max(bz) - 1).clamp(0, i64::from(MAX_REACH)) as u8;
+    for r in 1..=cap {
+        let prev = reach.clone();
+        let mut grew = false;
+        for z in 0..bz {
+            for y in 0..by {
+                for x in 0..bx {
+                    let i = index(x, y, z);
+                    if prev[i] != r - 1 {
+                        continue;
+                    }
+                    let mut ok = true;
+                    'n: for dz in -1..=1i64 {
+                        for dy in -1..=1i64 {
+                            for dx in -1..=1i64 {
+                                let (nx, ny, nz) = (x + dx, y + dy, z + dz);
+                                if nx < 0 || ny < 0 || nz < 0 || nx >= bx || ny >= by || nz >= bz {
+                                    continue;
+                                }
+                                let j = index(nx, ny, nz);
+                                if classes[j] != classes[i] || prev[j] < r - 1 {
+                                    ok = false;
+                                    break 'n;
+                                }
+                            }
+                        }
+                    }
+                    if ok {
+                        reach[i] = r;
+                        grew = true;
+                    }
+                }
+            }
+        }
+        if !grew {
+            break;
+        }
+    }
+    classes.iter().zip(&reach).map(|(&c, &r)| (r << 2) | c).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -175,6 +237,37 @@ mod tests {
             0.5,
             "x = 16 is in brick 2's apron (15..=19), the spike's y = 4 is not"
         );
+    }
+
+    #[test]
+    fn reach_is_the_chebyshev_distance_to_another_class_minus_one() {
+        // 9×7×5 bricks, occupied except one empty brick at (6, 2, 1) and a faint one at (0, 0, 0).
+        let bricks = [9u32, 7, 5];
+        let at = |x: u32, y: u32, z: u32| (x + 9 * (y + 7 * z)) as usize;
+        let mut levels = vec![255u8; 9 * 7 * 5];
+        levels[at(6, 2, 1)] = 0;
+        levels[at(0, 0, 0)] = 128;
+        let code = encode_reach(&levels, bricks);
+        let class = |i: usize| code[i] & 3;
+        let reach = |i: usize| code[i] >> 2;
+        assert_eq!((class(at(6, 2, 1)), reach(at(6, 2, 1))), (0, 0));
+        assert_eq!(class(at(0, 0, 0)), 1);
+        for z in 0..5u32 {
+            for y in 0..7u32 {
+                for x in 0..9u32 {
+                    let i = at(x, y, z);
+                    if levels[i] != 255 {
+                        continue;
+                    }
+                    let cheb = |(a, b, c): (u32, u32, u32)| x.abs_diff(a).max(y.abs_diff(b)).max(z.abs_diff(c));
+                    let expected = cheb((6, 2, 1)).min(cheb((0, 0, 0))) - 1;
+                    assert_eq!((class(i), u32::from(reach(i))), (2, expected), "brick ({x}, {y}, {z})");
+                }
+            }
+        }
+        // One class everywhere: a reach of 3 spans a 4³ grid from any brick, and is where it stops.
+        let all = encode_reach(&vec![0u8; 4 * 4 * 4], [4, 4, 4]);
+        assert!(all.iter().all(|&c| c == 3 << 2), "{all:?}");
     }
 
     #[test]
