@@ -266,7 +266,7 @@ mod tests {
             }
         }
         // One class everywhere: a reach of 3 spans a 4³ grid from any brick, and is where it stops.
-        let all = encode_reach(&vec![0u8; 4 * 4 * 4], [4, 4, 4]);
+        let all = encode_reach(&[0u8; 4 * 4 * 4], [4, 4, 4]);
         assert!(all.iter().all(|&c| c == 3 << 2), "{all:?}");
     }
 
