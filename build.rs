@@ -31,15 +31,23 @@ fn splice(path: &Path, depth: usize, out: &mut Spliced) -> Result<(), String> {
     Ok(())
 }
 
-/// Variants of the march shaders: (suffix, defines). lavapipe pays for code under an untaken `if` that samples
-/// textures, so each compositing family and the shading path get their own SPIR-V (see shaders/march.glsl).
+/// Variants of the march shaders: (suffix, defines), in the order of `render::march_variant`'s indices.
+/// lavapipe pays for code under an untaken `if` that samples textures, so each compositing family and the
+/// shading path get their own SPIR-V (see shaders/march.glsl).
 const MARCH_VARIANTS: &[(&str, &[&str])] = &[
     ("ea", &[]),
     ("ea_shaded", &["SHADED"]),
-    ("ea_shaded_tex", &["SHADED", "GRADIENT_TEXTURE"]),
     ("proj", &["FAMILY_PROJECTION"]),
     ("iso", &["FAMILY_ISOSURFACE"]),
+    ("ea_shaded_tex", &["SHADED", "GRADIENT_TEXTURE"]),
 ];
+
+/// How the march reads the volume, in the order of `render::VolumeLayout::index`: a 3D texture, or the corner
+/// buffers of 8- and 16-bit data (see `render::VolumeLayout`).
+const SAMPLINGS: &[(&str, &[&str])] = &[("", &[]), ("_c8", &["CORNERS8"]), ("_c16", &["CORNERS16"])];
+
+/// The march shader files, in the order of `render::setup_index`.
+const MARCH_FILES: &[&str] = &["march_faces.frag", "march_analytic.frag", "march_compute.comp"];
 
 fn compile(path: &Path, stage: naga::ShaderStage, defines: &[&str]) -> Result<Vec<u32>, String> {
     let mut sp = Spliced {
@@ -122,16 +130,22 @@ fn main() {
             .and_then(|n| n.to_str())
             .expect("utf-8 shader name")
             .to_string();
-        let variants: Vec<(String, &[&str])> = if name.starts_with("march_") {
+        let variants: Vec<(String, Vec<&str>)> = if name.starts_with("march_") {
+            let name = &name;
             MARCH_VARIANTS
                 .iter()
-                .map(|(suffix, defines)| (format!("{name}.{suffix}"), *defines))
+                .flat_map(|(suffix, defines)| {
+                    SAMPLINGS.iter().map(move |(sampling, more)| {
+                        let all: Vec<&str> = defines.iter().chain(more.iter()).copied().collect();
+                        (format!("{name}.{suffix}{sampling}"), all)
+                    })
+                })
                 .collect()
         } else {
-            vec![(name.clone(), &[][..])]
+            vec![(name.clone(), Vec::new())]
         };
         for (out_name, defines) in variants {
-            match compile(&path, stage, defines) {
+            match compile(&path, stage, &defines) {
                 Ok(words) => {
                     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
                     std::fs::write(out_dir.join(format!("{out_name}.spv")), bytes).expect("write SPIR-V to OUT_DIR");
@@ -140,6 +154,28 @@ fn main() {
             }
         }
     }
+    // The table of march shaders the renderer indexes by [setup][variant][sampling].
+    let mut table = String::from(
+        "/// March SPIR-V by [`setup_index`][`march_variant`][`VolumeLayout::index`] (written by build.rs).\n\
+         pub(crate) const MARCH_SHADERS: [[[ShaderCode; 3]; 5]; 3] = [\n",
+    );
+    for file in MARCH_FILES {
+        table.push_str("    [\n");
+        for (suffix, _) in MARCH_VARIANTS {
+            table.push_str("        [\n");
+            for (sampling, _) in SAMPLINGS {
+                let name = format!("{file}.{suffix}{sampling}");
+                let _ = writeln!(
+                    table,
+                    "            ShaderCode {{ name: \"{name}\", bytes: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")) }},"
+                );
+            }
+            table.push_str("        ],\n");
+        }
+        table.push_str("    ],\n");
+    }
+    table.push_str("];\n");
+    std::fs::write(out_dir.join("march_shaders.rs"), table).expect("write march_shaders.rs to OUT_DIR");
     if !failures.is_empty() {
         for f in &failures {
             eprintln!("shader error: {f}");

@@ -24,4 +24,5 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 mode_params;     // x: iso value; y: density factor; z: 1 = skip empty bricks
     uvec4 flags;          // x: composite mode (CompositeMode::index); y: jitter on; z: jitter seed; w: shading on
     vec4 brick;           // xyz: a brick's size in texture space (8 / dims)
+    vec4 dims;            // xyz: the volume's size in voxels
 } frame;

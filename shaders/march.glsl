@@ -36,8 +36,50 @@ vec3 near_point(vec2 frag) {
     return ray_origin(frag) + ray_direction(frag) * frame.ray_forward.w;
 }
 
+// Where the volume comes from (render::VolumeLayout). A 3D texture, filtered by the sampler; or, on CPU devices
+// (lavapipe), a "corner buffer": per voxel the eight values of the 2x2x2 cell it starts (neighbours clamped to
+// the edge), so a trilinear sample is one load and seven lerps instead of eight texel fetches. Both return what
+// a UNORM or float texture returns (stored / 255, stored / 65535, or the float).
+#if defined(CORNERS8) || defined(CORNERS16)
+#if defined(CORNERS8)
+layout(std430, set = 1, binding = 5) readonly buffer Corners {
+    uvec2 c[];   // bytes: x0 (y0 z0, x1 y0 z0, x0 y1 z0, x1 y1 z0), y the same at z1
+} corners;
+#else
+layout(std430, set = 1, binding = 5) readonly buffer Corners {
+    uvec4 c[];   // 16-bit halves: x (x0y0, x1y0), y (x0y1, x1y1) at z0; z, w the same at z1
+} corners;
+#endif
+
+float sample_raw(vec3 p) {
+    // Texel centres at (i + 0.5) / n, clamped to the edge, as CLAMP_TO_EDGE linear filtering does.
+    vec3 q = clamp(p * frame.dims.xyz - 0.5, vec3(0.0), frame.dims.xyz - 1.0);
+    ivec3 i = ivec3(q);
+    vec3 f = q - vec3(i);
+    int index = i.x + int(frame.dims.x) * (i.y + int(frame.dims.y) * i.z);
+#if defined(CORNERS8)
+    uvec2 w = corners.c[index];
+    vec4 lo = vec4(uvec4(w.x, w.x >> 8u, w.x >> 16u, w.x >> 24u) & uvec4(255u));
+    vec4 hi = vec4(uvec4(w.y, w.y >> 8u, w.y >> 16u, w.y >> 24u) & uvec4(255u));
+    const float unorm = 1.0 / 255.0;
+#else
+    uvec4 w = corners.c[index];
+    vec4 lo = vec4(uvec4(w.x, w.x >> 16u, w.y, w.y >> 16u) & uvec4(65535u));
+    vec4 hi = vec4(uvec4(w.z, w.z >> 16u, w.w, w.w >> 16u) & uvec4(65535u));
+    const float unorm = 1.0 / 65535.0;
+#endif
+    vec4 z = mix(lo, hi, f.z);
+    vec2 y = mix(z.xy, z.zw, f.y);
+    return mix(y.x, y.y, f.x) * unorm;
+}
+#else
+float sample_raw(vec3 p) {
+    return textureLod(sampler3D(volume_tex, linear_smp), p, 0.0).r;
+}
+#endif
+
 float sample_value(vec3 p) {
-    return textureLod(sampler3D(volume_tex, linear_smp), p, 0.0).r * frame.value_map.x + frame.value_map.y;
+    return sample_raw(p) * frame.value_map.x + frame.value_map.y;
 }
 
 bool visible(float v) {

@@ -15,7 +15,7 @@ use crate::gpu::resources::{upload_image, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::headless::Headless;
-use crate::render::Renderer;
+use crate::render::{Renderer, VolumeLayout};
 use crate::settings::{self, CompositeMode, RaySetup, RenderSettings};
 use crate::tf;
 use crate::transfer::Colormap;
@@ -398,7 +398,8 @@ pub struct SceneResult {
     pub scene: String,
     /// name, dims, type.
     pub volume: String,
-    pub format: TexelFormat,
+    /// How the volume is stored on the GPU (`VolumeLayout::name`: a texture format, or corners8/corners16).
+    pub format: &'static str,
     pub width: u32,
     pub height: u32,
     pub method: Method,
@@ -547,7 +548,7 @@ impl BenchReport {
                         r.width,
                         method_name(r.method),
                         r.volume,
-                        r.format.name(),
+                        r.format,
                         r.gpu_allocated_bytes as f64 / MIB
                     );
                 }
@@ -1391,12 +1392,14 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                 }
             };
             headless.set_volume(gpu, &volume)?;
-            // The format the renderer chose (TexelPolicy::Auto widens 8/16-bit data to float on CPU devices).
-            let format = match headless.renderer.volume_format() {
-                Some(vk::Format::R8_UNORM) => TexelFormat::R8Unorm,
-                Some(vk::Format::R16_UNORM) => TexelFormat::R16Unorm,
-                Some(_) => TexelFormat::R32Sfloat,
-                None => TexelFormat::of(&volume),
+            // The layout the renderer chose (TexelPolicy::Auto: corner buffers or float textures on CPU devices).
+            // Corner buffers bypass the sampler; their rate is stated against the fastest texture format's.
+            let layout = headless.renderer.volume_layout();
+            let format = layout.map_or("none", |l| l.name());
+            let raw_format = match layout {
+                Some(VolumeLayout::Texture(vk::Format::R8_UNORM)) => TexelFormat::R8Unorm,
+                Some(VolumeLayout::Texture(vk::Format::R16_UNORM)) => TexelFormat::R16Unorm,
+                _ => TexelFormat::R32Sfloat,
             };
             let described = format!(
                 "{} {}x{}x{} {}",
@@ -1405,7 +1408,7 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
             let raw_rate = report
                 .sample_only
                 .iter()
-                .find(|r| r.format == format)
+                .find(|r| r.format == raw_format)
                 .map(|r| r.gsamples_per_s);
             let counter = SampleCounter::new(&volume);
             let sizes: Vec<u32> = scene

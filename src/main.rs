@@ -142,10 +142,10 @@ struct GpuArgs {
     /// Device index or part of its name (see `volcast devices`).
     #[arg(long)]
     device: Option<String>,
-    /// How volumes are stored on the GPU: auto (32-bit float on CPU devices such as lavapipe, where it filters
-    /// faster and exactly, while it fits in 1 GiB; the data's own format elsewhere), native (8/16-bit data stays
-    /// 8/16-bit: least memory) or float (always 4 bytes per voxel).
-    #[arg(long, default_value = "auto", value_parser = ["auto", "native", "float"])]
+    /// How volumes are stored on the GPU: auto (on CPU devices such as lavapipe the fastest layout within 1 GiB:
+    /// corner buffers for 8/16-bit data, else a float texture; the data's own format on GPUs), native (least
+    /// memory), float (4 bytes per voxel) or corners (8 or 16 bytes per voxel for 8/16-bit data).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "native", "float", "corners"])]
     texture: String,
 }
 
@@ -158,6 +158,7 @@ impl GpuArgs {
             texel_policy: match self.texture.as_str() {
                 "native" => volcast::gpu::TexelPolicy::Native,
                 "float" => volcast::gpu::TexelPolicy::Float,
+                "corners" => volcast::gpu::TexelPolicy::Corners,
                 _ => volcast::gpu::TexelPolicy::Auto,
             },
             ..Default::default()
@@ -745,9 +746,13 @@ fn info(args: &VolumeArgs) -> Result<()> {
         v.gpu_memory_bytes() as f64 / (1 << 20) as f64
     );
     if v.gpu_texel_size() < 4 {
+        let mib = |bytes_per_voxel: usize| (v.voxel_count() * bytes_per_voxel) as f64 / (1 << 20) as f64;
         println!(
-            "           (R32_SFLOAT, {:.1} MiB, on CPU devices such as lavapipe with --texture auto or float)",
-            (v.voxel_count() * 4) as f64 / (1 << 20) as f64
+            "           on CPU devices (lavapipe), --texture auto: corners{}, {:.1} MiB, while under 1 GiB \
+             (else R32_SFLOAT, {:.1} MiB)",
+            8 * v.gpu_texel_size(),
+            mib(8 * v.gpu_texel_size()),
+            mib(4)
         );
     }
     Ok(())

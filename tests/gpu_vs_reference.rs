@@ -24,7 +24,7 @@ use glam::Vec3;
 use volcast::camera::Camera;
 use volcast::gpu::{Gpu, GpuOptions};
 use volcast::headless::Headless;
-use volcast::render::TexelPolicy;
+use volcast::render::{TexelPolicy, VolumeLayout};
 use volcast::settings::{CompositeMode, RaySetup, RenderSettings, Shading};
 use volcast::tf::TransferFunction;
 use volcast::transfer::Colormap;
@@ -223,7 +223,7 @@ fn run_cases_with(
     let reference = Reference::new(volume);
     // The looser uint8 bound is for R8_UNORM textures only (lavapipe's 8-bit filter weights); 8-bit data
     // widened to float (TexelPolicy) is held to the common bound.
-    let max_p99 = if headless.renderer.volume_format() == Some(ash::vk::Format::R8_UNORM) {
+    let max_p99 = if headless.renderer.volume_layout() == Some(VolumeLayout::Texture(ash::vk::Format::R8_UNORM)) {
         MAX_P99_UINT8
     } else {
         MAX_P99
@@ -356,9 +356,9 @@ fn every_data_type_matches_the_reference() {
     let mut outcomes = Vec::new();
     for ty in [VoxelType::U8, VoxelType::U16, VoxelType::I16, VoxelType::F32] {
         let v = marschner_lobb_as(ty);
-        // Each texture format the data can go to the GPU in: the native one (R8/R16_UNORM) and float, which
-        // TexelPolicy::Auto picks on CPU devices like lavapipe.
-        for policy in [TexelPolicy::Native, TexelPolicy::Float] {
+        // Each layout the data can go to the GPU in: the native texture (R8/R16_UNORM), a float texture and a
+        // corner buffer (8/16-bit data; TexelPolicy::Auto's choice on CPU devices like lavapipe).
+        for policy in [TexelPolicy::Native, TexelPolicy::Float, TexelPolicy::Corners] {
             headless.renderer.texel_policy = policy;
             let mut v = v.clone();
             v.name = format!("{}-{policy:?}", v.name);

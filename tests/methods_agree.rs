@@ -12,6 +12,7 @@ use common::reference::Reference;
 use volcast::compare::{builtin_views, compare_view};
 use volcast::gpu::{Gpu, GpuOptions};
 use volcast::headless::Headless;
+use volcast::render::VolumeLayout;
 use volcast::settings::RenderSettings;
 use volcast::volume::{self, Volume};
 
@@ -26,7 +27,7 @@ fn check(volume: &Volume, size: u32, window: [f32; 2]) -> Vec<String> {
     let reference = Reference::new(volume);
     let mut base = RenderSettings::new(size, size, volume.extent());
     base.window = window;
-    let ref_p99 = if headless.renderer.volume_format() == Some(ash::vk::Format::R8_UNORM) {
+    let ref_p99 = if headless.renderer.volume_layout() == Some(VolumeLayout::Texture(ash::vk::Format::R8_UNORM)) {
         10.0
     } else {
         3.0

@@ -10,7 +10,7 @@ mod common;
 
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
 use volcast::headless::Headless;
 use volcast::settings::RenderSettings;
@@ -23,7 +23,14 @@ struct Xvfb {
 impl Drop for Xvfb {
     fn drop(&mut self) {
         if let Some(c) = &mut self.child {
-            let _ = c.kill();
+            // SIGTERM first, so Xvfb removes its lock file and socket; SIGKILL only if that failed.
+            let terminated = Command::new("kill")
+                .arg(c.id().to_string())
+                .status()
+                .is_ok_and(|s| s.success());
+            if !terminated {
+                let _ = c.kill();
+            }
             let _ = c.wait();
         }
     }
@@ -39,11 +46,11 @@ fn display() -> Option<Xvfb> {
             });
         }
     }
-    let n = 80 + std::process::id() % 100;
-    let display = format!(":{n}");
-    let child = match Command::new("Xvfb")
-        .args([display.as_str(), "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
-        .stdout(Stdio::null())
+    // -displayfd: Xvfb picks a free display itself and writes its number once it accepts connections (a fixed
+    // number can collide with another server or a stale lock, and a socket file can exist before it is ready).
+    let mut child = match Command::new("Xvfb")
+        .args(["-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
+        .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
     {
@@ -58,15 +65,21 @@ fn display() -> Option<Xvfb> {
             return None;
         }
     };
-    let socket = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
-    let start = Instant::now();
-    while !socket.exists() {
-        assert!(
-            start.elapsed() < Duration::from_secs(20),
-            "Xvfb did not start on {display}"
-        );
-        std::thread::sleep(Duration::from_millis(50));
+    let stdout = child.stdout.take().expect("piped stdout");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        let _ = std::io::BufRead::read_line(&mut std::io::BufReader::new(stdout), &mut line);
+        let _ = tx.send(line);
+    });
+    let number = rx.recv_timeout(Duration::from_secs(20)).unwrap_or_default();
+    let number = number.trim();
+    if number.is_empty() || number.parse::<u32>().is_err() {
+        let _ = child.kill();
+        let _ = child.wait();
+        panic!("Xvfb did not report a display within 20 s (got {number:?})");
     }
+    let display = format!(":{number}");
     Some(Xvfb {
         child: Some(child),
         display,

@@ -11,16 +11,19 @@ pub use context::{list_devices, DeviceInfo, Gpu, GpuOptions, ValidationLog, Vali
 
 use ash::vk;
 
-/// How a volume's voxels are stored on the GPU.
+/// How a volume's voxels are stored on the GPU (`--texture`; see `render::VolumeLayout`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum TexelPolicy {
-    /// Float on CPU devices (lavapipe) while the float texture stays under [`crate::render::AUTO_FLOAT_LIMIT`], else native.
+    /// On CPU devices (lavapipe) the fastest layout that fits in [`crate::render::AUTO_LIMIT`]: a corner buffer
+    /// for 8/16-bit data, else a float texture, else native; on GPUs the native texture.
     #[default]
     Auto,
-    /// The data's own format: R8_UNORM, R16_UNORM or R32_SFLOAT (the least memory).
+    /// A texture in the data's own format: R8_UNORM, R16_UNORM or R32_SFLOAT (the least memory).
     Native,
-    /// Always R32_SFLOAT (4 bytes per voxel).
+    /// An R32_SFLOAT texture (4 bytes per voxel).
     Float,
+    /// A corner buffer for 8- and 16-bit data (8 or 16 bytes per voxel); float data keeps its texture.
+    Corners,
 }
 
 /// What can go wrong on the GPU side, with messages a user can act on.

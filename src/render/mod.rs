@@ -5,7 +5,7 @@
 pub mod skip;
 
 use crate::camera::tex_to_world;
-use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, GraphicsDesc};
+use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, GraphicsDesc, ShaderCode};
 use crate::gpu::resources::{upload_image, upload_image_with, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 pub use crate::gpu::TexelPolicy;
@@ -41,6 +41,7 @@ pub struct FrameUniforms {
     pub mode_params: [f32; 4],
     pub flags: [u32; 4],
     pub brick: [f32; 4],
+    pub dims: [f32; 4],
 }
 
 /// GPU facts about the loaded volume that the uniforms need.
@@ -107,6 +108,7 @@ impl FrameUniforms {
                 Vec3::splat(skip::BRICK as f32) / Vec3::from(v.dims.map(|d| d as f32)),
                 0.0,
             ),
+            dims: [v.dims[0] as f32, v.dims[1] as f32, v.dims[2] as f32, 0.0],
             flags: [
                 s.mode.index(),
                 s.jitter.is_some() as u32,
@@ -128,7 +130,9 @@ pub struct PassTimings {
 }
 
 struct GpuVolume {
-    image: Image,
+    layout: VolumeLayout,
+    /// The 3D texture (`VolumeLayout::Texture`), or the corner buffer (the other layouts).
+    image: Option<Image>,
     info: VolumeInfo,
     bricks: skip::BrickGrid,
     /// One R8 texel per brick: may a sample there be visible (see skip.rs).
@@ -137,6 +141,7 @@ struct GpuVolume {
     occupancy_key: Option<OccupancyKey>,
     /// Precomputed gradients (RGBA16 SNORM), made on first use by a frame with `gradient_texture`.
     gradient: Option<Image>,
+    corners: Option<Buffer>,
 }
 
 /// Everything the brick occupancy depends on besides the volume.
@@ -172,21 +177,164 @@ fn image_3d(gpu: &Gpu, format: vk::Format, dims: [u32; 3], name: &str) -> Result
     Image::new(gpu, ImageDesc { format, extent, usage }, name)
 }
 
-/// The largest float texture `TexelPolicy::Auto` makes from 8- or 16-bit data.
-pub const AUTO_FLOAT_LIMIT: u64 = 1 << 30;
+/// The most memory `TexelPolicy::Auto` spends on a volume beyond its native format.
+pub const AUTO_LIMIT: u64 = 1 << 30;
 
-/// Whether `policy` stores `volume` as R32_SFLOAT although its data is 8 or 16 bits. On lavapipe, filtering an
-/// R32_SFLOAT texture is measured 1.6x faster than R8_UNORM (`volcast bench --sample-only`) and exact, where
-/// R8_UNORM is filtered with 8-bit weights; GPUs filter every format in hardware, so they keep the native one.
-fn widen_to_float(gpu: &Gpu, policy: TexelPolicy, volume: &Volume) -> bool {
-    let float_bytes = volume.dims.iter().map(|&d| u64::from(d)).product::<u64>() * 4;
-    match (policy, &volume.data) {
-        (_, VoxelData::F32(_)) | (TexelPolicy::Native, _) => false,
-        (TexelPolicy::Float, _) => true,
-        (TexelPolicy::Auto, _) => {
-            gpu.properties.device_type == vk::PhysicalDeviceType::CPU
-                && float_bytes <= AUTO_FLOAT_LIMIT
-                && float_bytes <= gpu.device_local_bytes / 4
+/// How the march reads the loaded volume (shaders/march.glsl, `sample_raw`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VolumeLayout {
+    /// A 3D texture of this format, filtered by the sampler.
+    Texture(vk::Format),
+    /// 8-bit data as a storage buffer of corner cells: per voxel the eight values of the 2×2×2 cell it starts
+    /// (neighbours clamped to the edge), 8 bytes per voxel, so a trilinear sample is one load and seven lerps.
+    Corners8,
+    /// 16-bit data the same way, 16 bytes per voxel.
+    Corners16,
+}
+
+impl VolumeLayout {
+    /// The sampling index of the march shaders (build.rs SAMPLINGS).
+    pub fn index(self) -> usize {
+        match self {
+            VolumeLayout::Texture(_) => 0,
+            VolumeLayout::Corners8 => 1,
+            VolumeLayout::Corners16 => 2,
+        }
+    }
+
+    pub fn bytes_per_voxel(self) -> u64 {
+        match self {
+            VolumeLayout::Texture(vk::Format::R8_UNORM) => 1,
+            VolumeLayout::Texture(vk::Format::R16_UNORM) => 2,
+            VolumeLayout::Texture(_) => 4,
+            VolumeLayout::Corners8 => 8,
+            VolumeLayout::Corners16 => 16,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            VolumeLayout::Texture(vk::Format::R8_UNORM) => "R8_UNORM",
+            VolumeLayout::Texture(vk::Format::R16_UNORM) => "R16_UNORM",
+            VolumeLayout::Texture(_) => "R32_SFLOAT",
+            VolumeLayout::Corners8 => "corners8",
+            VolumeLayout::Corners16 => "corners16",
+        }
+    }
+}
+
+/// The layout `policy` gives `volume` on `gpu`. GPUs filter every format in hardware, so `Auto` keeps the
+/// native texture there. On a CPU device (lavapipe) the sampler is the march's main cost: measured on the
+/// vtk-helix scene, a corner buffer is ~18% faster than an R32_SFLOAT texture, which is ~30% faster than
+/// R8_UNORM (and exact, where lavapipe filters R8 with 8-bit weights); `Auto` takes the fastest of these that
+/// stays under [`AUTO_LIMIT`] and a quarter of the device's memory.
+fn choose_layout(gpu: &Gpu, policy: TexelPolicy, volume: &Volume) -> VolumeLayout {
+    let voxels = volume.dims.iter().map(|&d| u64::from(d)).product::<u64>();
+    let fits = |layout: VolumeLayout| {
+        let bytes = voxels * layout.bytes_per_voxel();
+        bytes <= AUTO_LIMIT && bytes <= gpu.device_local_bytes / 4
+    };
+    let float = VolumeLayout::Texture(vk::Format::R32_SFLOAT);
+    let (native, corners) = match volume.data {
+        VoxelData::U8(_) => (
+            VolumeLayout::Texture(vk::Format::R8_UNORM),
+            Some(VolumeLayout::Corners8),
+        ),
+        VoxelData::U16(_) => (
+            VolumeLayout::Texture(vk::Format::R16_UNORM),
+            Some(VolumeLayout::Corners16),
+        ),
+        VoxelData::F32(_) => (float, None),
+    };
+    match policy {
+        TexelPolicy::Native => native,
+        TexelPolicy::Float => float,
+        TexelPolicy::Corners => corners.unwrap_or(native),
+        TexelPolicy::Auto if gpu.properties.device_type == vk::PhysicalDeviceType::CPU => match corners {
+            Some(c) if fits(c) => c,
+            _ if fits(float) => float,
+            _ => native,
+        },
+        TexelPolicy::Auto => native,
+    }
+}
+
+/// Builds `volume`'s corner buffer (`layout` Corners8 or Corners16) straight in host-visible memory.
+fn upload_corners(gpu: &Gpu, volume: &Volume, layout: VolumeLayout) -> Result<Buffer, GpuError> {
+    let n = volume.voxel_count();
+    let mut buffer = Buffer::new(
+        gpu,
+        n as u64 * layout.bytes_per_voxel(),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::CpuToGpu,
+        "volume corners",
+    )?;
+    let [nx, ny, nz] = volume.dims.map(|d| d as usize);
+    let filled = match (buffer.mapped_mut(), &volume.data, layout) {
+        (Some(dst), VoxelData::U8(v), VolumeLayout::Corners8) => {
+            let dst: &mut [[u32; 2]] = bytemuck::cast_slice_mut(dst);
+            fill_corners(
+                dst,
+                [nx, ny, nz],
+                |i| u32::from(v[i]),
+                |c| {
+                    [
+                        c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24,
+                        c[4] | c[5] << 8 | c[6] << 16 | c[7] << 24,
+                    ]
+                },
+            );
+            true
+        }
+        (Some(dst), VoxelData::U16(v), VolumeLayout::Corners16) => {
+            let dst: &mut [[u32; 4]] = bytemuck::cast_slice_mut(dst);
+            fill_corners(
+                dst,
+                [nx, ny, nz],
+                |i| u32::from(v[i]),
+                |c| {
+                    [
+                        c[0] | c[1] << 16,
+                        c[2] | c[3] << 16,
+                        c[4] | c[5] << 16,
+                        c[6] | c[7] << 16,
+                    ]
+                },
+            );
+            true
+        }
+        _ => false,
+    };
+    if !filled {
+        buffer.destroy(gpu);
+        return Err(GpuError::Lost(
+            "corner buffer: not host-visible, or data and layout disagree",
+        ));
+    }
+    Ok(buffer)
+}
+
+/// For each voxel (x fastest) the cell values in the order x0y0z0, x1y0z0, x0y1z0, x1y1z0, then the same at z1
+/// (neighbours past the last voxel clamped to it), packed by `pack`.
+fn fill_corners<T>(dst: &mut [T], [nx, ny, nz]: [usize; 3], at: impl Fn(usize) -> u32, pack: impl Fn([u32; 8]) -> T) {
+    for z in 0..nz {
+        let z1 = (z + 1).min(nz - 1);
+        for y in 0..ny {
+            let y1 = (y + 1).min(ny - 1);
+            for x in 0..nx {
+                let x1 = (x + 1).min(nx - 1);
+                let i = |x: usize, y: usize, z: usize| at(x + nx * (y + ny * z));
+                dst[x + nx * (y + ny * z)] = pack([
+                    i(x, y, z),
+                    i(x1, y, z),
+                    i(x, y1, z),
+                    i(x1, y1, z),
+                    i(x, y, z1),
+                    i(x1, y, z1),
+                    i(x, y1, z1),
+                    i(x1, y1, z1),
+                ]);
+            }
         }
     }
 }
@@ -273,7 +421,8 @@ fn setup_index(s: &RenderSettings) -> usize {
 }
 
 /// Which compiled variant of the march `s` needs (build.rs MARCH_VARIANTS): 0 emission/density, 1 the same with
-/// gradients (shading or gradient-modulated opacity), 2 MIP/MinIP/average, 3 isosurface.
+/// gradients (shading or gradient-modulated opacity), 2 MIP/MinIP/average, 3 isosurface, 4 gradients from the
+/// gradient texture.
 pub fn march_variant(s: &RenderSettings) -> usize {
     use crate::settings::CompositeMode as M;
     match s.mode {
@@ -285,25 +434,7 @@ pub fn march_variant(s: &RenderSettings) -> usize {
     }
 }
 
-fn march_shader(setup: usize, variant: usize) -> crate::gpu::pipeline::ShaderCode {
-    match (setup, variant) {
-        (2, 0) => shader!("march_compute.comp.ea"),
-        (2, 1) => shader!("march_compute.comp.ea_shaded"),
-        (2, 2) => shader!("march_compute.comp.proj"),
-        (2, 4) => shader!("march_compute.comp.ea_shaded_tex"),
-        (2, _) => shader!("march_compute.comp.iso"),
-        (0, 0) => shader!("march_faces.frag.ea"),
-        (0, 1) => shader!("march_faces.frag.ea_shaded"),
-        (0, 2) => shader!("march_faces.frag.proj"),
-        (0, 4) => shader!("march_faces.frag.ea_shaded_tex"),
-        (0, _) => shader!("march_faces.frag.iso"),
-        (1, 0) => shader!("march_analytic.frag.ea"),
-        (1, 1) => shader!("march_analytic.frag.ea_shaded"),
-        (1, 2) => shader!("march_analytic.frag.proj"),
-        (1, 4) => shader!("march_analytic.frag.ea_shaded_tex"),
-        (_, _) => shader!("march_analytic.frag.iso"),
-    }
-}
+include!(concat!(env!("OUT_DIR"), "/march_shaders.rs"));
 
 /// Bytes per pixel that the entry/exit method needs beyond the output image (both position targets).
 pub fn position_bytes_per_pixel(format: PositionFormat) -> u64 {
@@ -327,8 +458,9 @@ pub struct Renderer {
     march_compute_layout: vk::PipelineLayout,
     /// Entry and exit pipelines per position format: [Rgba32f, Rgba16f] × [entry, exit].
     position_pipelines: [[vk::Pipeline; 2]; 2],
-    /// March pipelines per `setup_index` × shader variant, created when first needed (see `march_variant`).
-    march_pipelines: [[vk::Pipeline; 5]; 3],
+    /// March pipelines per `setup_index` × shader variant × volume layout, created when first needed (see
+    /// `march_variant`, `VolumeLayout::index`).
+    march_pipelines: [[[vk::Pipeline; 3]; 5]; 3],
     descriptor_pool: vk::DescriptorPool,
     volume_set: vk::DescriptorSet,
     positions_set: vk::DescriptorSet,
@@ -424,7 +556,7 @@ impl Renderer {
             storage_set_layout: vk::DescriptorSetLayout::null(),
             march_compute_layout: vk::PipelineLayout::null(),
             position_pipelines: [[vk::Pipeline::null(); 2]; 2],
-            march_pipelines: [[vk::Pipeline::null(); 5]; 3],
+            march_pipelines: [[[vk::Pipeline::null(); 3]; 5]; 3],
             descriptor_pool: vk::DescriptorPool::null(),
             volume_set: vk::DescriptorSet::null(),
             positions_set: vk::DescriptorSet::null(),
@@ -465,6 +597,7 @@ impl Renderer {
                 (D::STORAGE_BUFFER, frag),
                 (D::SAMPLED_IMAGE, frag),
                 (D::SAMPLED_IMAGE, frag),
+                (D::STORAGE_BUFFER, frag),
             ],
         )?;
         self.positions_set_layout = set_layout(
@@ -527,7 +660,7 @@ impl Renderer {
             },
             vk::DescriptorPoolSize {
                 ty: D::STORAGE_BUFFER,
-                descriptor_count: 1,
+                descriptor_count: 2,
             },
         ];
         let pool_info = vk::DescriptorPoolCreateInfo::default()
@@ -606,12 +739,21 @@ impl Renderer {
 
     fn write_volume_set(&self, gpu: &Gpu) {
         let Some(vol) = &self.volume else { return };
+        // With a corner buffer there is no volume texture; the occupancy texture holds the binding (the corner
+        // variants never read it).
+        let volume_view = vol.image.as_ref().map_or(vol.occupancy.view, |i| i.view);
         let volume_info = [vk::DescriptorImageInfo::default()
-            .image_view(vol.image.view)
+            .image_view(volume_view)
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.linear_sampler)];
         let lut_info = [vk::DescriptorBufferInfo {
             buffer: self.lut.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }];
+        // Without a corner buffer the binding holds the table: only the corner variants read it.
+        let corners_info = [vk::DescriptorBufferInfo {
+            buffer: vol.corners.as_ref().map_or(self.lut.raw, |c| c.raw),
             offset: 0,
             range: vk::WHOLE_SIZE,
         }];
@@ -620,7 +762,7 @@ impl Renderer {
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         // Without a gradient texture the binding holds the volume: only the gradient-texture variant reads it.
         let gradient_info = [vk::DescriptorImageInfo::default()
-            .image_view(vol.gradient.as_ref().map(|g| g.view).unwrap_or(vol.image.view))
+            .image_view(vol.gradient.as_ref().map_or(volume_view, |g| g.view))
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let writes = [
             vk::WriteDescriptorSet::default()
@@ -648,6 +790,11 @@ impl Renderer {
                 .dst_binding(2)
                 .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                 .buffer_info(&lut_info),
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.volume_set)
+                .dst_binding(5)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .buffer_info(&corners_info),
         ];
         // SAFETY: callers only update descriptors while no submitted work uses them (headless waits per frame).
         unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
@@ -663,45 +810,51 @@ impl Renderer {
                 volume.dims[0], volume.dims[1], volume.dims[2]
             )));
         }
-        let bytes = volume.gpu_bytes();
-        let widen = widen_to_float(gpu, self.texel_policy, volume);
-        let texture_bytes = if widen {
-            bytes.len() as u64 / volume.gpu_texel_size() as u64 * 4
-        } else {
-            bytes.len() as u64
-        };
+        let layout = choose_layout(gpu, self.texel_policy, volume);
+        let needed = volume.voxel_count() as u64 * layout.bytes_per_voxel();
         // Half the heap: the upload needs a staging copy of the same size alongside.
-        if texture_bytes > gpu.device_local_bytes / 2 {
+        if needed > gpu.device_local_bytes / 2 {
             return Err(GpuError::TooLarge(format!(
-                "volume needs {} MiB on the GPU (plus as much again to upload) but the device has {} MiB",
-                texture_bytes >> 20,
+                "volume needs {} MiB on the GPU as {} (plus as much again to upload) but the device has {} MiB",
+                needed >> 20,
+                layout.name(),
                 gpu.device_local_bytes >> 20
             )));
         }
-        let format = match volume.data {
-            _ if widen => vk::Format::R32_SFLOAT,
-            VoxelData::U8(_) => vk::Format::R8_UNORM,
-            VoxelData::U16(_) => vk::Format::R16_UNORM,
-            VoxelData::F32(_) => vk::Format::R32_SFLOAT,
+        let (image, corners) = match layout {
+            VolumeLayout::Texture(format) => {
+                // SAFETY: plain query on a live physical device.
+                let features = unsafe { gpu.instance.get_physical_device_format_properties(gpu.physical, format) };
+                let filter =
+                    vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
+                if !features.optimal_tiling_features.contains(filter) {
+                    return Err(GpuError::TooLarge(format!(
+                        "this device cannot filter {format:?} 3D textures linearly"
+                    )));
+                }
+                let image = image_3d(gpu, format, volume.dims, "volume")?;
+                // Widened to float from 8 or 16 bits, or uploaded as stored.
+                let uploaded = if volume.gpu_texel_size() < 4 && format == vk::Format::R32_SFLOAT {
+                    upload_float(gpu, &image, volume)
+                } else {
+                    upload_3d(gpu, &image, volume.gpu_bytes(), volume.dims[2])
+                };
+                if let Err(e) = uploaded {
+                    image.destroy(gpu);
+                    return Err(e);
+                }
+                (Some(image), None)
+            }
+            VolumeLayout::Corners8 | VolumeLayout::Corners16 => (None, Some(upload_corners(gpu, volume, layout)?)),
         };
-        // SAFETY: plain query on a live physical device.
-        let features = unsafe { gpu.instance.get_physical_device_format_properties(gpu.physical, format) };
-        let needed = vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
-        if !features.optimal_tiling_features.contains(needed) {
-            return Err(GpuError::TooLarge(format!(
-                "this device cannot filter {format:?} 3D textures linearly"
-            )));
-        }
-        let image = image_3d(gpu, format, volume.dims, "volume")?;
-        let uploaded = if widen {
-            upload_float(gpu, &image, volume)
-        } else {
-            upload_3d(gpu, &image, bytes, volume.dims[2])
+        let destroy_volume = |gpu: &Gpu, image: Option<Image>, corners: Option<Buffer>| {
+            if let Some(i) = image {
+                i.destroy(gpu);
+            }
+            if let Some(c) = corners {
+                c.destroy(gpu);
+            }
         };
-        if let Err(e) = uploaded {
-            image.destroy(gpu);
-            return Err(e);
-        }
         let bricks = skip::BrickGrid::new(volume);
         // Everything occupied until prepare() computes the real occupancy for the settings.
         let occupancy = match image_3d(gpu, vk::Format::R8_UNORM, bricks.bricks, "brick occupancy").and_then(|o| {
@@ -716,7 +869,7 @@ impl Renderer {
         }) {
             Ok(o) => o,
             Err(e) => {
-                image.destroy(gpu);
+                destroy_volume(gpu, image, corners);
                 return Err(e);
             }
         };
@@ -725,9 +878,10 @@ impl Renderer {
             if let Some(g) = old.gradient {
                 g.destroy(gpu);
             }
-            old.image.destroy(gpu);
+            destroy_volume(gpu, old.image, old.corners);
         }
         self.volume = Some(GpuVolume {
+            layout,
             image,
             info: VolumeInfo {
                 dims: volume.dims,
@@ -739,6 +893,7 @@ impl Renderer {
             occupancy,
             occupancy_key: None,
             gradient: None,
+            corners,
         });
         self.write_volume_set(gpu);
         Ok(())
@@ -789,14 +944,21 @@ impl Renderer {
         Ok(())
     }
 
-    /// Bytes the volume texture takes on the device.
-    /// The format the loaded volume is stored in on the GPU (None: no volume).
-    pub fn volume_format(&self) -> Option<vk::Format> {
-        self.volume.as_ref().map(|v| v.image.desc.format)
+    /// How the loaded volume is stored on the GPU (None: no volume).
+    pub fn volume_layout(&self) -> Option<VolumeLayout> {
+        self.volume.as_ref().map(|v| v.layout)
     }
 
+    /// Bytes the volume (texture or corner buffer) takes on the device.
     pub fn volume_bytes(&self) -> u64 {
-        self.volume.as_ref().map(|v| v.image.allocated_bytes()).unwrap_or(0)
+        self.volume.as_ref().map_or(0, |v| {
+            v.image.as_ref().map_or(0, |i| i.allocated_bytes()) + v.corners.as_ref().map_or(0, |c| c.size)
+        })
+    }
+
+    /// The sampling index of the march shaders for the loaded volume (0 without one).
+    fn layout_index(&self) -> usize {
+        self.volume.as_ref().map_or(0, |v| v.layout.index())
     }
 
     /// Whether [`Renderer::prepare`] has work to do for `s` (callers wait for in-flight frames only then).
@@ -808,7 +970,7 @@ impl Renderer {
         !targets_fit
             || !self.lut_is_current(s)
             || !self.occupancy_is_current(s)
-            || self.march_pipelines[setup_index(s)][march_variant(s)] == vk::Pipeline::null()
+            || self.march_pipelines[setup_index(s)][march_variant(s)][self.layout_index()] == vk::Pipeline::null()
     }
 
     fn occupancy_is_current(&self, s: &RenderSettings) -> bool {
@@ -848,9 +1010,11 @@ impl Renderer {
                 "gradient_texture needs enable_gradient_texture() first".into(),
             ));
         }
-        if self.march_pipelines[si][vi] == vk::Pipeline::null() {
-            self.march_pipelines[si][vi] = if si == 2 {
-                compute_pipeline(gpu, &march_shader(si, vi), self.march_compute_layout)?
+        let li = self.layout_index();
+        if self.march_pipelines[si][vi][li] == vk::Pipeline::null() {
+            let code = &MARCH_SHADERS[si][vi][li];
+            self.march_pipelines[si][vi][li] = if si == 2 {
+                compute_pipeline(gpu, code, self.march_compute_layout)?
             } else {
                 let layout = match s.ray_setup {
                     RaySetup::Faces => self.march_faces_layout,
@@ -860,7 +1024,7 @@ impl Renderer {
                     gpu,
                     &GraphicsDesc {
                         vertex: &shader!("fullscreen.vert"),
-                        fragment: &march_shader(si, vi),
+                        fragment: code,
                         layout,
                         color_format: self.output_format,
                         cull: vk::CullModeFlags::NONE,
@@ -958,7 +1122,7 @@ impl Renderer {
         slot.uniforms.write(bytemuck::bytes_of(&uniforms))?;
         slot.recorded = Some(s.ray_setup);
         let (frame_set, query_pool, storage_set) = (slot.set, slot.query_pool, slot.storage_set);
-        let march_pipeline = self.march_pipelines[setup_index(s)][march_variant(s)];
+        let march_pipeline = self.march_pipelines[setup_index(s)][march_variant(s)][self.layout_index()];
         if march_pipeline == vk::Pipeline::null() {
             return Err(GpuError::Lost("prepare() was not called for these settings"));
         }
@@ -1208,13 +1372,18 @@ impl Renderer {
                 if let Some(g) = v.gradient {
                     g.destroy(gpu);
                 }
-                v.image.destroy(gpu);
+                if let Some(i) = v.image {
+                    i.destroy(gpu);
+                }
+                if let Some(c) = v.corners {
+                    c.destroy(gpu);
+                }
             }
             d.destroy_descriptor_pool(self.descriptor_pool, None);
             for p in self.position_pipelines.iter().flatten() {
                 d.destroy_pipeline(*p, None);
             }
-            for p in self.march_pipelines.iter().flatten() {
+            for p in self.march_pipelines.iter().flatten().flatten() {
                 d.destroy_pipeline(*p, None);
             }
             d.destroy_pipeline_layout(self.march_compute_layout, None);
