@@ -3,9 +3,11 @@
 layout(set = 1, binding = 0) uniform texture3D volume_tex;
 layout(set = 1, binding = 1) uniform sampler linear_smp;
 // The baked table, three rows of 4096 entries (src/render/mod.rs LUT_ROWS): row 0 linear rgb + opacity per voxel
-// step; rows 1 and 2 premultiplied rgb + opacity of one and of two march steps (tf::step_table).
+// step; rows 1 and 2 premultiplied rgb + opacity of one and of two march steps (tf::step_table), each entry
+// packed with its successor as half floats (tf::half_pairs), so interpolating takes one load.
 layout(std430, set = 1, binding = 2) readonly buffer Lut {
-    vec4 entries[];
+    vec4 entries[4096];
+    uvec4 pairs[8192];
 } lut;
 layout(set = 1, binding = 3) uniform texture3D occupancy_tex;   // one texel per 8^3 brick: class and reach
 
@@ -86,17 +88,23 @@ bool visible(float v) {
     return !isnan(v) && v >= frame.value_map.z && v <= frame.value_map.w;
 }
 
-// Row `row` of the baked table at v, interpolated linearly between its two nearest entries. (A storage buffer:
+// The classification (row 0) at v, interpolated linearly between its two nearest entries. (A storage buffer:
 // on lavapipe two loads cost less than two texel fetches, and a filtered fetch less than either.)
-vec4 table(float v, int row) {
+vec4 classify(float v) {
     float u = clamp(v, 0.0, 1.0) * 4095.0;
     int i0 = min(int(u), 4094);
-    int base = row * 4096 + i0;
-    return mix(lut.entries[base], lut.entries[base + 1], u - float(i0));
+    return mix(lut.entries[i0], lut.entries[i0 + 1], u - float(i0));
 }
 
-vec4 classify(float v) {
-    return table(v, 0);
+// Row 1 (stride 1) or 2 (stride 2) at v: corrected, premultiplied colour and opacity for the step, from one
+// load of the entry and its successor.
+vec4 step_table(float v, int stride) {
+    float u = clamp(v, 0.0, 1.0) * 4095.0;
+    int i0 = min(int(u), 4094);
+    uvec4 w = lut.pairs[(stride - 1) * 4096 + i0];
+    vec4 a = vec4(unpackHalf2x16(w.x), unpackHalf2x16(w.y));
+    vec4 b = vec4(unpackHalf2x16(w.z), unpackHalf2x16(w.w));
+    return mix(a, b, u - float(i0));
 }
 
 // Central differences one voxel apart: value change per voxel along each texture axis.
@@ -316,7 +324,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             }
 #if !defined(SHADED)
             // Opacity corrected for this step (one or two march steps) and premultiplied colour, from the table.
-            vec4 c = table(v, stride);
+            vec4 c = step_table(v, stride);
             if (c.a <= 0.0) {
                 continue;
             }

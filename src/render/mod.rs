@@ -11,7 +11,7 @@ use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 pub use crate::gpu::TexelPolicy;
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::settings::{PositionFormat, RaySetup, RenderSettings};
-use crate::tf::{bake, srgb_to_linear, step_table, Classification, LUT_SIZE};
+use crate::tf::{bake, half_pairs, srgb_to_linear, step_table, Classification, LUT_SIZE};
 use crate::volume::{Volume, VoxelData};
 use ash::vk;
 use glam::Vec3;
@@ -389,10 +389,10 @@ impl PositionTargets {
     }
 }
 
-/// Which march pipeline family `s` uses: 0 entry/exit faces, 1 analytic (fragment), 2 analytic (compute).
-/// Rows of the table buffer: 0 the baked classification (opacity per voxel-length step); 1 and 2 the same
-/// corrected for one and for two march steps and premultiplied (`tf::step_table`), which the unshaded
-/// emission/density march reads instead of computing a power per sample (2: faint bricks, adaptive step).
+/// Rows of the table buffer: 0 the baked classification (opacity per voxel-length step, f32 RGBA); 1 and 2 the
+/// same corrected for one and for two march steps and premultiplied (`tf::step_table`), which the unshaded
+/// emission/density march reads instead of computing a power per sample (2: faint bricks, adaptive step),
+/// stored as `tf::half_pairs` (each entry with its successor, as f16: one load per sample).
 const LUT_ROWS: usize = 3;
 
 /// What rows 1 and 2 of the table depend on beyond the classification: the step length in voxels and, for the
@@ -412,6 +412,7 @@ impl StepRule {
     }
 }
 
+/// Which march pipeline family `s` uses: 0 entry/exit faces, 1 analytic (fragment), 2 analytic (compute).
 fn setup_index(s: &RenderSettings) -> usize {
     match s.ray_setup {
         RaySetup::Faces => 0,
@@ -728,9 +729,9 @@ impl Renderer {
         let classification = s.classification();
         let rule = StepRule::of(s);
         let lut = bake(&classification, s.window, range);
-        let mut rows = lut.clone();
-        rows.extend(step_table(&lut, rule.steps, rule.density));
-        rows.extend(step_table(&lut, 2.0 * rule.steps, rule.density));
+        let mut rows: Vec<[u32; 4]> = lut.iter().map(|e| e.map(f32::to_bits)).collect();
+        rows.extend(half_pairs(&step_table(&lut, rule.steps, rule.density)));
+        rows.extend(half_pairs(&step_table(&lut, 2.0 * rule.steps, rule.density)));
         self.lut.write(bytemuck::cast_slice(&rows))?;
         self.baked = Some((classification, s.window, range, rule));
         self.lut_table = lut;
