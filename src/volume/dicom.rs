@@ -418,6 +418,35 @@ fn finish(
     Ok(v)
 }
 
+/// Whether explicit-VR data gives this VR a 2-byte length (PS3.5 7.1.2, as dicom-encoding decodes); every other
+/// VR, unknown ones included, has 2 reserved bytes and a 4-byte length.
+fn short_length_vr(vr: [u8; 2]) -> bool {
+    matches!(
+        &vr,
+        b"AE"
+            | b"AS"
+            | b"AT"
+            | b"CS"
+            | b"DA"
+            | b"DS"
+            | b"DT"
+            | b"FL"
+            | b"FD"
+            | b"IS"
+            | b"LO"
+            | b"LT"
+            | b"PN"
+            | b"SH"
+            | b"SL"
+            | b"SS"
+            | b"ST"
+            | b"TM"
+            | b"UI"
+            | b"UL"
+            | b"US"
+    )
+}
+
 /// dicom-parser allocates each element by its claimed length, so every length is checked against the bytes that
 /// follow before dicom-object sees the data. Walks the file meta group (explicit VR little endian) and the data
 /// set in its transfer syntax, descending into sequences and items; returns where parsing should stop: the end of
@@ -458,31 +487,7 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
             u16::from_le_bytes([head[2], head[3]]),
         );
         let vr = [head[4], head[5]];
-        let short = group != 0xFFFE
-            && matches!(
-                &vr,
-                b"AE"
-                    | b"AS"
-                    | b"AT"
-                    | b"CS"
-                    | b"DA"
-                    | b"DS"
-                    | b"DT"
-                    | b"FL"
-                    | b"FD"
-                    | b"IS"
-                    | b"LO"
-                    | b"LT"
-                    | b"PN"
-                    | b"SH"
-                    | b"SL"
-                    | b"SS"
-                    | b"ST"
-                    | b"TM"
-                    | b"UI"
-                    | b"UL"
-                    | b"US"
-            );
+        let short = group != 0xFFFE && short_length_vr(vr);
         let (length, header) = if short {
             (u32::from(u16::from_le_bytes([head[6], head[7]])), 8)
         } else if group == 0xFFFE {
@@ -571,35 +576,7 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
                     .to_bytes(),
             )
         };
-        // As dicom-encoding decodes: these VRs have a 2-byte length, every other one (unknown ones included)
-        // 2 reserved bytes and a 4-byte length.
-        let long_vr = explicit
-            && vr.is_some_and(|v| {
-                !matches!(
-                    &v,
-                    b"AE"
-                        | b"AS"
-                        | b"AT"
-                        | b"CS"
-                        | b"DA"
-                        | b"DS"
-                        | b"DT"
-                        | b"FL"
-                        | b"FD"
-                        | b"IS"
-                        | b"LO"
-                        | b"LT"
-                        | b"PN"
-                        | b"SH"
-                        | b"SL"
-                        | b"SS"
-                        | b"ST"
-                        | b"TM"
-                        | b"UI"
-                        | b"UL"
-                        | b"US"
-                )
-            });
+        let long_vr = explicit && vr.is_some_and(|v| !short_length_vr(v));
         let (length, header) = if long_vr {
             if pos + 12 > bytes.len() {
                 break;
