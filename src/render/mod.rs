@@ -228,14 +228,15 @@ impl VolumeLayout {
 /// vtk-helix scene, a corner buffer is ~18% faster than an R32_SFLOAT texture, which is ~30% faster than
 /// R8_UNORM (and exact, where lavapipe filters R8 with 8-bit weights); `Auto` takes the fastest of these that
 /// stays under [`AUTO_LIMIT`] and a quarter of the device's memory.
-fn choose_layout(gpu: &Gpu, policy: TexelPolicy, volume: &Volume) -> VolumeLayout {
-    let voxels = volume.dims.iter().map(|&d| u64::from(d)).product::<u64>();
-    let fits = |layout: VolumeLayout| {
-        let bytes = voxels * layout.bytes_per_voxel();
-        bytes <= AUTO_LIMIT && bytes <= gpu.device_local_bytes / 4
-    };
+///
+/// A corner buffer must also fit one storage-buffer binding (`maxStorageBufferRange`: 128 MiB on lavapipe, so
+/// 16.7 M voxels of 8-bit data); `Auto` passes over it when it does not, a forced `Corners` is refused.
+fn choose_layout(dev: DeviceFacts, policy: TexelPolicy, data: &VoxelData, voxels: u64) -> Result<VolumeLayout, String> {
+    let bytes = |layout: VolumeLayout| voxels * layout.bytes_per_voxel();
+    let fits = |layout: VolumeLayout| bytes(layout) <= AUTO_LIMIT && bytes(layout) <= dev.memory / 4;
+    let bindable = |layout: VolumeLayout| bytes(layout) <= dev.max_storage_buffer;
     let float = VolumeLayout::Texture(vk::Format::R32_SFLOAT);
-    let (native, corners) = match volume.data {
+    let (native, corners) = match data {
         VoxelData::U8(_) => (
             VolumeLayout::Texture(vk::Format::R8_UNORM),
             Some(VolumeLayout::Corners8),
@@ -246,16 +247,49 @@ fn choose_layout(gpu: &Gpu, policy: TexelPolicy, volume: &Volume) -> VolumeLayou
         ),
         VoxelData::F32(_) => (float, None),
     };
-    match policy {
+    Ok(match policy {
         TexelPolicy::Native => native,
         TexelPolicy::Float => float,
-        TexelPolicy::Corners => corners.unwrap_or(native),
-        TexelPolicy::Auto if gpu.properties.device_type == vk::PhysicalDeviceType::CPU => match corners {
-            Some(c) if fits(c) => c,
+        TexelPolicy::Corners => match corners {
+            Some(c) if !bindable(c) => {
+                return Err(format!(
+                    "a {} buffer of this volume takes {} MiB, more than this device binds as one storage buffer \
+                     ({} MiB); use --texture auto, native or float",
+                    c.name(),
+                    bytes(c) >> 20,
+                    dev.max_storage_buffer >> 20
+                ))
+            }
+            Some(c) => c,
+            None => native,
+        },
+        TexelPolicy::Auto if dev.cpu => match corners {
+            Some(c) if fits(c) && bindable(c) => c,
             _ if fits(float) => float,
             _ => native,
         },
         TexelPolicy::Auto => native,
+    })
+}
+
+/// What [`choose_layout`] needs to know of the device.
+#[derive(Clone, Copy, Debug)]
+struct DeviceFacts {
+    /// A CPU implementation (lavapipe), where the sampler is slow and memory is host memory.
+    cpu: bool,
+    /// The largest device-local heap.
+    memory: u64,
+    /// `maxStorageBufferRange`.
+    max_storage_buffer: u64,
+}
+
+impl DeviceFacts {
+    fn of(gpu: &Gpu) -> DeviceFacts {
+        DeviceFacts {
+            cpu: gpu.properties.device_type == vk::PhysicalDeviceType::CPU,
+            memory: gpu.device_local_bytes,
+            max_storage_buffer: u64::from(gpu.properties.limits.max_storage_buffer_range),
+        }
     }
 }
 
@@ -811,7 +845,9 @@ impl Renderer {
                 volume.dims[0], volume.dims[1], volume.dims[2]
             )));
         }
-        let layout = choose_layout(gpu, self.texel_policy, volume);
+        let voxels = volume.voxel_count() as u64;
+        let layout =
+            choose_layout(DeviceFacts::of(gpu), self.texel_policy, &volume.data, voxels).map_err(GpuError::TooLarge)?;
         let needed = volume.voxel_count() as u64 * layout.bytes_per_voxel();
         // Half the heap: the upload needs a staging copy of the same size alongside.
         if needed > gpu.device_local_bytes / 2 {
@@ -1399,5 +1435,54 @@ impl Renderer {
             d.destroy_sampler(self.point_sampler, None);
         }
         self.lut.destroy(gpu);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layouts_follow_the_policy_the_device_and_its_limits() {
+        let lavapipe = DeviceFacts {
+            cpu: true,
+            memory: 16 << 30,
+            max_storage_buffer: 128 << 20,
+        };
+        let gpu = DeviceFacts { cpu: false, ..lavapipe };
+        let u8s = VoxelData::U8(Vec::new());
+        let u16s = VoxelData::U16(Vec::new());
+        let f32s = VoxelData::F32(Vec::new());
+        let n256 = 256u64 * 256 * 256;
+        let layout = |dev, policy, data: &VoxelData, voxels| choose_layout(dev, policy, data, voxels).unwrap();
+        use TexelPolicy::*;
+        use VolumeLayout::*;
+        // lavapipe: the 256³ helix just fits one binding as corners (128 MiB); one slice more does not.
+        assert_eq!(layout(lavapipe, Auto, &u8s, n256), Corners8);
+        assert_eq!(
+            layout(lavapipe, Auto, &u8s, n256 + 65536),
+            Texture(vk::Format::R32_SFLOAT)
+        );
+        assert_eq!(layout(lavapipe, Auto, &u16s, 256 * 256 * 108), Corners16);
+        assert_eq!(layout(lavapipe, Auto, &f32s, n256), Texture(vk::Format::R32_SFLOAT));
+        // Over 1 GiB as float: the native texture.
+        assert_eq!(
+            layout(lavapipe, Auto, &u8s, 1024 * 1024 * 512),
+            Texture(vk::Format::R8_UNORM)
+        );
+        // A quarter of a small device's memory bounds it too.
+        let small = DeviceFacts {
+            memory: 200 << 20,
+            ..lavapipe
+        };
+        assert_eq!(layout(small, Auto, &u8s, n256), Texture(vk::Format::R8_UNORM));
+        // GPUs keep the native format unless told otherwise.
+        assert_eq!(layout(gpu, Auto, &u16s, n256), Texture(vk::Format::R16_UNORM));
+        assert_eq!(layout(gpu, Float, &u16s, n256), Texture(vk::Format::R32_SFLOAT));
+        assert_eq!(layout(gpu, Corners, &u8s, n256), Corners8);
+        assert_eq!(layout(lavapipe, Native, &u8s, n256), Texture(vk::Format::R8_UNORM));
+        assert_eq!(layout(lavapipe, Corners, &f32s, n256), Texture(vk::Format::R32_SFLOAT));
+        let e = choose_layout(lavapipe, Corners, &u8s, n256 * 2).unwrap_err();
+        assert!(e.contains("256 MiB") && e.contains("128 MiB"), "{e}");
     }
 }
