@@ -15,6 +15,7 @@ use crate::gpu::resources::{upload_image, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::headless::Headless;
+use crate::render::skip::{self, BrickGrid};
 use crate::render::{Renderer, VolumeLayout};
 use crate::settings::{self, CompositeMode, RaySetup, RenderSettings};
 use crate::tf;
@@ -667,6 +668,8 @@ pub struct SampleCounter {
     values: Vec<f32>,
     extent: Vec3,
     range: [f64; 2],
+    /// The renderer's brick grid, for the occupancy empty-space skipping leaps by.
+    bricks: BrickGrid,
 }
 
 /// Mean samples per pixel of the image (pixels that miss the box count as zero).
@@ -698,6 +701,8 @@ struct RayFrame {
     gradients: bool,
     jitter: Option<u32>,
     early_termination: f32,
+    /// Per brick 0 where empty-space skipping leaps (None: skipping off).
+    occupancy: Option<Vec<u8>>,
 }
 
 /// Texture samples one central-difference gradient takes.
@@ -721,7 +726,23 @@ impl SampleCounter {
             values,
             extent: volume.extent(),
             range: volume.range,
+            bricks: BrickGrid::new(volume),
         }
+    }
+
+    /// Whether the march takes the sample at `p` (texture space): not when it lies in a brick empty-space
+    /// skipping leaps over. Every sample of a span lies in a brick of the span's class (render/skip.rs), so
+    /// this is the march's choice up to float rounding at brick faces.
+    fn in_occupied_brick(&self, f: &RayFrame, p: Vec3) -> bool {
+        let Some(occupancy) = &f.occupancy else {
+            return true;
+        };
+        let b = self.bricks.bricks;
+        let brick = |a: usize| {
+            let i = (p[a] * self.dims[a] as f32 / skip::BRICK as f32).floor();
+            i.clamp(0.0, (b[a] - 1) as f32) as usize
+        };
+        occupancy[brick(0) + b[0] as usize * (brick(1) + b[1] as usize * brick(2))] != 0
     }
 
     fn sample(&self, p: Vec3) -> f32 {
@@ -771,6 +792,10 @@ impl SampleCounter {
             max_steps: ((e.length() / h).ceil() + 2.0) as u64,
             viewport: [s.width as f32, s.height as f32],
             window: s.window,
+            occupancy: s.skip_empty.then(|| {
+                let lut = tf::bake(&s.classification(), s.window, self.range);
+                self.bricks.classify(&lut, s.mode, s.window, s.iso_value, false)
+            }),
             lut: tf::bake(&s.classification(), s.window, self.range),
             step_length: s.step_length,
             mode: s.mode,
@@ -809,8 +834,13 @@ impl SampleCounter {
             if t >= len {
                 break;
             }
+            let p = a + d * (t / len);
+            if !self.in_occupied_brick(f, p) {
+                // Leapt over: nothing there can be visible (nor reach the iso value), so the replay goes on.
+                continue;
+            }
             taken += 1;
-            let v = self.sample(a + d * (t / len));
+            let v = self.sample(p);
             match f.mode {
                 CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => continue,
                 CompositeMode::Isosurface => {
@@ -1518,12 +1548,21 @@ mod tests {
         let mut s = RenderSettings::new(1, 1, v.extent());
         s.camera = Camera::orbit(0.0, 0.0, 3.0, Vec3::ZERO);
         s.step_alpha = 0.0;
-        let c = SampleCounter::new(&v).count(&s);
+        s.skip_empty = false;
+        let counter = SampleCounter::new(&v);
+        let c = counter.count(&s);
         assert_eq!(c.segment_per_pixel, 64.0);
         assert_eq!(c.taken_per_pixel, 64.0, "nothing is opaque, so no ray ends early");
+        s.skip_empty = true;
+        let c = counter.count(&s);
+        assert_eq!(c.segment_per_pixel, 64.0);
+        assert_eq!(
+            c.taken_per_pixel, 0.0,
+            "nothing is visible: skipping leaps over every brick"
+        );
         s.step_alpha = 1.0;
         s.window = [0.0, 1.0];
-        let c = SampleCounter::new(&v).count(&s);
+        let c = counter.count(&s);
         assert_eq!(c.taken_per_pixel, 1.0, "an opaque first sample ends the ray");
     }
 
