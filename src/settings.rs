@@ -117,20 +117,28 @@ impl Default for Shading {
 /// 3. **Value.** Trilinear interpolation (texel centres at (i + 0.5)/dim, clamped to the edge) of the values
 ///    normalised by the data range: `v = (raw − min)/(max − min)`. NaN samples are skipped. Samples outside the
 ///    `window` are skipped (every mode but isosurface).
-/// 4. **Classification.** `tf::bake` turns [`RenderSettings::classification`] into a 4096-entry table of linear
-///    RGB and opacity over v ∈ [0, 1]; a sample looks it up with `tf::lookup` (linear interpolation at
-///    v·4095): `(rgb, a)`.
+/// 4. **Classification** ([`RenderSettings::classification`]) of a value v inside the window [lo, hi], with window
+///    position c = (v − lo)/(hi − lo): the simple model gives colour `colormap(c)` and opacity `step_alpha` (or
+///    `c·step_alpha` when multiplied); a transfer function gives its colour and opacity points interpolated
+///    linearly at x = v (normalised units) or x = min + v·(max − min) (data units), constant beyond its ends,
+///    or its colormap at c when it has no colour points. Colormaps are `Colormap::srgb`'s definitions. Colours
+///    are sRGB and decoded to linear light: `(rgb, a)`, `a` per voxel-length step. The GPU reads this from a
+///    4096-entry table (`tf::bake`, interpolated at v·4095), which follows the definition except within one
+///    entry of a jump in a transfer function.
 /// 5. **Shading** (with `shading`, in emission/density modes; always in isosurface mode): gradient `g` by central
 ///    differences of v one voxel apart along each texture axis, `g_i = (v(p + e_i) − v(p − e_i))/2` (value per
 ///    voxel); world normal `n = normalize(g_i / voxel_world_i)`; headlight `L = −ray direction`;
 ///    `rgb ← rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` (white, two-sided). `|g| = 0`: rgb kept.
-///    With `gradient_opacity = Some(r)`: `a ← a·min(1, |g|/r)`.
+///    With `gradient_opacity = Some(r)`: `a ← a·min(1, |g|/r)`. With `gradient_texture` (emission/density modes),
+///    `g` is instead the grid's central differences `(v[i + e] − v[i − e])/2` per voxel (indices clamped to the
+///    edge, NaN voxels read as 0) filtered trilinearly like the values.
 /// 6. **Opacity for the step.** Emission: `α = 1 − (1 − a)^step_length`. Density: `α = min(1, a·density·step_length)`.
 /// 7. **Compositing.** Emission/density, front to back: `C += (1 − A)·α·rgb`, `A += (1 − A)·α`; stop once
 ///    `A ≥ early_termination`. MIP/MinIP/average: m = max/min/mean of the visible samples' v; none: background;
-///    else `C = lookup(m).rgb`, `A = 1`. Isosurface: the first sample k with `v_k ≥ iso_value`; k = 0 hits at
+///    else `C` = the colour of m, `A = 1`. Isosurface: the first sample k with `v_k ≥ iso_value`; k = 0 hits at
 ///    `t_0`; otherwise 8 bisection steps on [t_{k−1}, t_k] keeping `v(lo) < iso ≤ v(hi)`, hit at the final
-///    midpoint; `C` = `lookup(iso_value).rgb` shaded (rule 5, with `shading` or its defaults) at the hit, `A = 1`.
+///    midpoint; `C` = the colour of `iso_value` clamped into the window, shaded (rule 5, with `shading` or its
+///    defaults) at the hit, `A = 1`.
 /// 8. **Output**: `C + (1 − A)·linear(background)` (background given in sRGB), encoded to sRGB once, stored as
 ///    8-bit unsigned normalised (rounded). Compositing happens in linear light (gamma-correct).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -234,13 +234,9 @@ pub fn linear_to_srgb(c: f32) -> f32 {
     }
 }
 
-/// The colormap's table interpolated linearly at `c` ∈ [0, 1] (index c·255), sRGB.
+/// The colormap's sRGB colour at `c` ∈ [0, 1]: its definition ([`Colormap::srgb`]) in f32.
 pub fn colormap_at(colormap: Colormap, c: f32) -> [f32; 3] {
-    let lut = colormap.lut();
-    let u = c.clamp(0.0, 1.0) * 255.0;
-    let i0 = (u as usize).min(254);
-    let f = u - i0 as f32;
-    std::array::from_fn(|k| (lut[i0][k] as f32 * (1.0 - f) + lut[i0 + 1][k] as f32 * f) / 255.0)
+    colormap.srgb(f64::from(c)).map(|x| x as f32)
 }
 
 /// How opacity is assigned.
@@ -292,17 +288,16 @@ pub fn half_pairs(table: &[[f32; 4]]) -> Vec<[u32; 4]> {
 }
 
 /// Bakes `classification` for data with value range `range` and the value window `window` (normalised) into
-/// [`LUT_SIZE`] entries of `[r, g, b, alpha]`, colours in linear light. Entry i is the value v = i / (N − 1);
-/// values outside the window get zero (the march skips them anyway).
+/// [`LUT_SIZE`] entries of `[r, g, b, alpha]`, colours in linear light. Entry i is the value v = i / (N − 1).
+/// Entries outside the window hold the classification at the window's nearer edge: the march never classifies
+/// a value outside the window, but interpolates between the two entries around a value just inside it, and a
+/// zero entry there would fade the edge's colour and opacity out over one entry's width.
 pub fn bake(classification: &Classification, window: [f32; 2], range: [f64; 2]) -> Vec<[f32; 4]> {
     let [lo, hi] = window;
     let span = (hi - lo).max(f32::MIN_POSITIVE);
     (0..LUT_SIZE)
         .map(|i| {
-            let v = i as f32 / (LUT_SIZE - 1) as f32;
-            if v < lo || v > hi {
-                return [0.0; 4];
-            }
+            let v = (i as f32 / (LUT_SIZE - 1) as f32).clamp(lo, hi);
             let c = (v - lo) / span;
             let (srgb, alpha) = match classification {
                 Classification::Simple {
@@ -404,8 +399,13 @@ mod tests {
         };
         let lut = bake(&simple, [0.25, 0.75], [0.0, 1.0]);
         assert_eq!(lut.len(), LUT_SIZE);
-        assert_eq!(lut[0], [0.0; 4], "below the window");
-        assert_eq!(lut[LUT_SIZE - 1], [0.0; 4], "above the window");
+        assert_eq!(lut[0], lookup(&lut, 0.25), "below the window: its lower edge");
+        assert_eq!(
+            lut[LUT_SIZE - 1],
+            lookup(&lut, 0.75),
+            "above the window: its upper edge"
+        );
+        assert_eq!(lut[0][0], 0.0, "grey at the window's lower edge is black");
         let mid = lookup(&lut, 0.5);
         assert!((mid[3] - 0.4).abs() < 1e-6);
         assert!((mid[0] - srgb_to_linear(colormap_at(Colormap::Grayscale, 0.5)[0])).abs() < 1e-3);

@@ -115,6 +115,12 @@ impl BrickGrid {
                 }
                 let occupied = match mode {
                     CompositeMode::Emission | CompositeMode::Density => {
+                        // Only values inside the window are classified (the table's entries outside it repeat
+                        // its edges for interpolation).
+                        let (lo, hi) = (lo.max(window[0]), hi.min(window[1]));
+                        if lo > hi {
+                            return 0;
+                        }
                         let i = (lo.clamp(0.0, 1.0) * last).floor() as usize;
                         let j = ((hi.clamp(0.0, 1.0) * last).ceil() as usize).min(lut.len() - 1);
                         let visible = visible_before[j + 1] > visible_before[i];

@@ -109,7 +109,12 @@ pub fn editor(
     let steps = 96;
     for i in 0..steps {
         let v = (i as f32 + 0.5) / steps as f32;
-        let e = lookup(&lut, v);
+        // Outside the window nothing is shown (the table repeats the window's edges there for interpolation).
+        let e = if (window[0]..=window[1]).contains(&v) {
+            lookup(&lut, v)
+        } else {
+            [0.0; 4]
+        };
         let c = |x: f32| (linear_to_srgb(x.clamp(0.0, 1.0)) * 255.0).round() as u8;
         let x0 = egui::lerp(strip.left()..=strip.right(), i as f32 / steps as f32);
         let x1 = egui::lerp(strip.left()..=strip.right(), (i + 1) as f32 / steps as f32);
