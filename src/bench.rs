@@ -333,14 +333,6 @@ pub enum TexelFormat {
 impl TexelFormat {
     pub const ALL: [TexelFormat; 3] = [TexelFormat::R8Unorm, TexelFormat::R16Unorm, TexelFormat::R32Sfloat];
 
-    pub fn of(volume: &Volume) -> TexelFormat {
-        match volume.gpu_texel_size() {
-            1 => TexelFormat::R8Unorm,
-            2 => TexelFormat::R16Unorm,
-            _ => TexelFormat::R32Sfloat,
-        }
-    }
-
     pub fn name(self) -> &'static str {
         match self {
             TexelFormat::R8Unorm => "R8_UNORM",
@@ -521,7 +513,7 @@ impl BenchReport {
                 out += &row(vec![
                     r.scene.clone(),
                     format!("{}", r.width),
-                    method_name(r.method).into(),
+                    r.method.name().into(),
                     r.shading.name().into(),
                     format!("{:.2}", r.wall_ms.median),
                     format!("{:.2}", r.wall_ms.min),
@@ -547,7 +539,7 @@ impl BenchReport {
                         "  {:<12} {:<5} {:<9} {} ({}); GPU allocated {:.1} MiB\n",
                         r.scene,
                         r.width,
-                        method_name(r.method),
+                        r.method.name(),
                         r.volume,
                         r.format,
                         r.gpu_allocated_bytes as f64 / MIB
@@ -594,10 +586,6 @@ impl Method {
         };
         s.compute = self == Method::Compute;
     }
-}
-
-fn method_name(m: Method) -> &'static str {
-    m.name()
 }
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -779,6 +767,7 @@ impl SampleCounter {
         let tan = (cam.fov_y_deg.to_radians() * 0.5).tan();
         let voxel = (0..3).map(|i| e[i] / self.dims[i] as f32).fold(f32::INFINITY, f32::min);
         let h = s.step_length * voxel;
+        let lut = tf::bake(&s.classification(), s.window, self.range);
         RayFrame {
             eye: cam.eye / e + Vec3::splat(0.5),
             forward: forward / e,
@@ -792,11 +781,10 @@ impl SampleCounter {
             max_steps: ((e.length() / h).ceil() + 2.0) as u64,
             viewport: [s.width as f32, s.height as f32],
             window: s.window,
-            occupancy: s.skip_empty.then(|| {
-                let lut = tf::bake(&s.classification(), s.window, self.range);
-                self.bricks.classify(&lut, s.mode, s.window, s.iso_value, false)
-            }),
-            lut: tf::bake(&s.classification(), s.window, self.range),
+            occupancy: s
+                .skip_empty
+                .then(|| self.bricks.classify(&lut, s.mode, s.window, s.iso_value, false)),
+            lut,
             step_length: s.step_length,
             mode: s.mode,
             density: s.density,
@@ -1467,7 +1455,7 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                         log(&format!(
                             "{} {size}x{size} {} shading {}: {} warm-up + {} frames",
                             scene.name,
-                            method_name(method),
+                            method.name(),
                             shading.name(),
                             opts.warmup,
                             opts.frames

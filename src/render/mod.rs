@@ -753,13 +753,13 @@ impl Renderer {
             });
         }
         let initial = RenderSettings::default();
-        self.upload_lut(gpu, &initial, [0.0, 1.0])?;
+        self.upload_lut(&initial, [0.0, 1.0])?;
         Ok(())
     }
 
     /// Bakes the table for `s` on data of value range `range` into the (host-visible) table buffer; no frame
     /// may be in flight (prepare's contract).
-    fn upload_lut(&mut self, _gpu: &Gpu, s: &RenderSettings, range: [f64; 2]) -> Result<(), GpuError> {
+    fn upload_lut(&mut self, s: &RenderSettings, range: [f64; 2]) -> Result<(), GpuError> {
         let classification = s.classification();
         let rule = StepRule::of(s);
         let lut = bake(&classification, s.window, range);
@@ -1070,7 +1070,7 @@ impl Renderer {
             };
         }
         if !self.lut_is_current(s) {
-            self.upload_lut(gpu, s, self.volume_range())?;
+            self.upload_lut(s, self.volume_range())?;
         }
         if !self.occupancy_is_current(s) {
             // The table is current now (above), so the occupancy follows from it.
