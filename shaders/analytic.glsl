@@ -13,7 +13,7 @@ vec4 analytic_pixel(vec2 frag) {
     float t0 = max(max(max(t_min.x, t_min.y), t_min.z), frame.ray_forward.w);
     float t1 = min(min(t_max.x, t_max.y), t_max.z);
     if (!(t1 > t0)) {
-        return background_pixel();
+        return output_pixel(background_pixel(), 0u);
     }
     return march(origin + dir * t0, origin + dir * t1, frag);
 }

@@ -17,7 +17,7 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 value_map;       // x, y: sampled -> normalised value (v = s * x + y); z, w: value window
     vec4 alpha;           // y: step length in voxels; z: early termination
     vec4 background;      // rgb: linear light
-    vec4 viewport;        // x, y: target size in pixels; z: most samples a ray may take
+    vec4 viewport;        // x, y: target size in pixels; z: most samples a ray may take; w: 1 = output samples taken
     vec4 texel;           // xyz: 1 / dims (one voxel in texture space)
     vec4 voxel_world;     // xyz: a voxel's world size along each axis; w: gradient-opacity reference (0: off)
     vec4 shading;         // ambient, diffuse, specular, shininess

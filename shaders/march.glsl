@@ -194,6 +194,15 @@ vec4 background_pixel() {
     return finish(vec3(0.0), 0.0);
 }
 
+// The pixel's output: its colour, or with `RenderSettings::count_samples` the number of sample positions the
+// march visited (gradient and bisection samples not counted), as a 24-bit integer in the R, G, B bytes.
+vec4 output_pixel(vec4 colour, uint taken) {
+    if (frame.viewport.w > 0.5) {
+        return vec4(vec3(uvec3(taken, taken >> 8u, taken >> 16u) & uvec3(255u)), 255.0) / 255.0;
+    }
+    return colour;
+}
+
 // The march is compiled in variants (build.rs defines one of FAMILY_PROJECTION / FAMILY_ISOSURFACE, or neither
 // for emission/density, and SHADED), because lavapipe executes an `if` holding texture samples at full cost
 // even when no pixel takes it: unused shading code made the plain march 4x slower.
@@ -210,6 +219,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     float step_length = frame.alpha.y;
     vec3 dir = d / len;
     ivec3 bricks = textureSize(sampler3D(occupancy_tex, linear_smp), 0);
+    uint taken = 0u;
 
 #if defined(FAMILY_PROJECTION)
     float m = mode == MODE_MIP ? -1e30 : 1e30;
@@ -232,6 +242,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             if (t >= len) {
                 break;
             }
+            taken += 1u;
             float v = sample_value(a + dir * t);
             if (!visible(v)) {
                 continue;
@@ -242,9 +253,9 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
         }
     }
     if (count == 0.0) {
-        return background_pixel();
+        return output_pixel(background_pixel(), taken);
     }
-    return finish(classify(mode == MODE_AVERAGE ? sum / count : m).rgb, 1.0);
+    return output_pixel(finish(classify(mode == MODE_AVERAGE ? sum / count : m).rgb, 1.0), taken);
 #elif defined(FAMILY_ISOSURFACE)
     float iso = frame.mode_params.x;
     float t_hit = -1.0;
@@ -265,6 +276,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             if (t >= len) {
                 break;
             }
+            taken += 1u;
             float v = sample_value(a + dir * t);
             if (!isnan(v) && v >= iso) {
                 t_hit = t;
@@ -288,9 +300,9 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
         }
     }
     if (t_hit < 0.0) {
-        return background_pixel();
+        return output_pixel(background_pixel(), taken);
     }
-    return finish(shade(classify(iso).rgb, gradient(a + dir * t_hit), light), 1.0);
+    return output_pixel(finish(shade(classify(iso).rgb, gradient(a + dir * t_hit), light), 1.0), taken);
 #else
     // Emission-absorption and the density-factor model.
     vec3 color = vec3(0.0);
@@ -317,6 +329,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
                 done = true;
                 break;
             }
+            taken += 1u;
             vec3 p = a + dir * t;
             float v = sample_value(p);
             if (!visible(v)) {
@@ -357,6 +370,6 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             }
         }
     }
-    return finish(color, opacity);
+    return output_pixel(finish(color, opacity), taken);
 #endif
 }

@@ -13,7 +13,7 @@ void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     vec4 exit_pos = texelFetch(sampler2D(exit_tex, point_smp), px, 0);
     if (exit_pos.a == 0.0) {
-        out_color = background_pixel();
+        out_color = output_pixel(background_pixel(), 0u);
         return;
     }
     vec4 entry_pos = texelFetch(sampler2D(entry_tex, point_smp), px, 0);

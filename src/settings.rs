@@ -188,6 +188,15 @@ pub struct RenderSettings {
     /// March in a compute pass instead of a fullscreen fragment pass (analytic ray setup only; the output image
     /// must allow storage). The same rays and rules: a measured alternative for lavapipe (README, Performance).
     pub compute: bool,
+    /// Output, instead of each pixel's colour, the number of sample positions its ray visited (rule 2's samples
+    /// actually taken: those that empty-space skipping leaps over, gradient and bisection samples not counted),
+    /// as a 24-bit integer in the R, G, B bytes. For tests and measurement; see [`decode_sample_count`].
+    pub count_samples: bool,
+}
+
+/// The count a `count_samples` frame stores in an RGBA8 pixel.
+pub fn decode_sample_count(pixel: [u8; 4]) -> u32 {
+    u32::from(pixel[0]) | u32::from(pixel[1]) << 8 | u32::from(pixel[2]) << 16
 }
 
 impl Default for RenderSettings {
@@ -245,6 +254,7 @@ impl RenderSettings {
             adaptive_step: false,
             gradient_texture: false,
             compute: false,
+            count_samples: false,
         }
     }
 

@@ -96,7 +96,12 @@ impl FrameUniforms {
                 if s.multiplied_alpha { 1.0 } else { 0.0 },
             ],
             background: v4(s.background.to_array().map(srgb_to_linear).into(), 1.0),
-            viewport: [s.width as f32, s.height as f32, max_steps, 0.0],
+            viewport: [
+                s.width as f32,
+                s.height as f32,
+                max_steps,
+                s.count_samples as u32 as f32,
+            ],
             texel: v4(Vec3::ONE / Vec3::from(v.dims.map(|d| d as f32)), 0.0),
             voxel_world: v4(
                 v.extent / Vec3::from(v.dims.map(|d| d as f32)),
