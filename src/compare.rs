@@ -11,11 +11,14 @@ use glam::Vec3;
 use image::{Rgba, RgbaImage};
 use serde::Serialize;
 
-/// Agreement bound between the two methods: the foundation's GPU-vs-reference tolerance (units of 1/255).
+/// Agreement bound between the two methods over the object pixels (units of 1/255): the GPU-vs-reference bound
+/// of the tests (tests/common/bounds.rs), since each method is held to it.
 pub const AGREE_MEAN: f64 = 0.5;
 pub const AGREE_P99: f64 = 3.0;
 
 /// Differences between two images of the same size, per pixel the largest RGB channel difference, in 1/255.
+/// Mean, p99 and the share over 1/255 are taken over the *object pixels*, those where either image is not the
+/// background, so that empty parts of the view do not dilute them; max and PSNR over the whole image.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct DiffStats {
     pub max: f64,
@@ -23,7 +26,9 @@ pub struct DiffStats {
     pub p99: f64,
     /// Peak signal-to-noise ratio over RGB in dB (infinite for identical images).
     pub psnr_db: f64,
-    /// Share (0..1) of pixels differing by more than 1/255.
+    /// Pixels where either image shows the volume (what mean, p99 and over_1 are taken over).
+    pub object_pixels: usize,
+    /// Share (0..1) of the object pixels differing by more than 1/255.
     pub over_1: f64,
     /// Pixels differing by more than 1/255.
     pub pixels_over_1: usize,
@@ -50,17 +55,21 @@ pub fn diff_stats(a: &RgbaImage, b: &RgbaImage, background: [u8; 3]) -> DiffStat
         b.dimensions(),
         "compared images must have the same size"
     );
-    let n = (a.width() * a.height()).max(1) as usize;
-    let mut errors: Vec<u8> = Vec::with_capacity(n);
+    let pixels = (a.width() * a.height()).max(1) as usize;
+    let mut errors: Vec<u8> = Vec::with_capacity(pixels);
     let mut squared = 0.0f64;
-    let (mut over, mut silhouette) = (0usize, 0usize);
+    let (mut max, mut over, mut silhouette) = (0u8, 0usize, 0usize);
     let mut region: Option<[u32; 4]> = None;
     let is_bg = |p: &Rgba<u8>| p[0] == background[0] && p[1] == background[1] && p[2] == background[2];
     for (x, y, p) in a.enumerate_pixels() {
         let q = b.get_pixel(x, y);
         let e = channel_diff(p, q);
-        errors.push(e);
+        max = max.max(e);
         squared += (0..3).map(|c| (p[c] as f64 - q[c] as f64).powi(2)).sum::<f64>();
+        if is_bg(p) && is_bg(q) {
+            continue;
+        }
+        errors.push(e);
         if e > 1 {
             over += 1;
             if is_bg(p) != is_bg(q) {
@@ -70,15 +79,13 @@ pub fn diff_stats(a: &RgbaImage, b: &RgbaImage, background: [u8; 3]) -> DiffStat
             *r = [r[0].min(x), r[1].min(y), r[2].max(x), r[3].max(y)];
         }
     }
+    let n = errors.len().max(1);
     let mean = errors.iter().map(|&e| e as f64).sum::<f64>() / n as f64;
     errors.sort_unstable();
-    let p99 = errors
-        .get(((n as f64 * 0.99).ceil() as usize).saturating_sub(1))
-        .copied()
-        .unwrap_or(0) as f64;
-    let mse = squared / (3 * n) as f64;
+    let p99 = errors.get((99 * n).div_ceil(100) - 1).copied().unwrap_or(0) as f64;
+    let mse = squared / (3 * pixels) as f64;
     DiffStats {
-        max: errors.last().copied().unwrap_or(0) as f64,
+        max: max as f64,
         mean,
         p99,
         psnr_db: if mse == 0.0 {
@@ -86,6 +93,7 @@ pub fn diff_stats(a: &RgbaImage, b: &RgbaImage, background: [u8; 3]) -> DiffStat
         } else {
             10.0 * (255.0f64 * 255.0 / mse).log10()
         },
+        object_pixels: errors.len(),
         over_1: over as f64 / n as f64,
         pixels_over_1: over,
         silhouette_over_1: silhouette,
@@ -367,7 +375,11 @@ mod tests {
         b.put_pixel(7, 5, Rgba([1, 0, 0, 255]));
         let d = diff_stats(&a, &b, [0, 0, 0]);
         assert_eq!(d.max, 51.0);
-        assert!((d.mean - 52.0 / 100.0).abs() < 1e-9);
+        assert_eq!(
+            d.object_pixels, 2,
+            "only pixels showing something in either image are compared"
+        );
+        assert!((d.mean - 52.0 / 2.0).abs() < 1e-9);
         assert_eq!(d.pixels_over_1, 1, "a 1/255 difference is rounding, not counted");
         assert_eq!(d.silhouette_over_1, 1, "background in one image only");
         assert_eq!(d.region, Some([2, 3, 2, 3]));
