@@ -480,7 +480,8 @@ impl FrameArgs {
     }
 }
 
-/// Runs `body` with a GPU and reports validation messages at the end; validation errors fail the command.
+/// Runs `body` with a GPU and reports validation messages at the end; any validation error or warning fails the
+/// command.
 fn with_gpu<T>(args: &GpuArgs, body: impl FnOnce(&Gpu) -> Result<T>) -> Result<T> {
     let gpu = Gpu::new(&args.options())?;
     let validating = gpu.validation_enabled();
@@ -490,8 +491,8 @@ fn with_gpu<T>(args: &GpuArgs, body: impl FnOnce(&Gpu) -> Result<T>) -> Result<T
     if validating {
         let (errors, warnings) = (log.error_count(), log.warning_count());
         eprintln!("validation: {errors} errors, {warnings} warnings");
-        if errors > 0 && result.is_ok() {
-            bail!("the validation layer reported {errors} error(s)");
+        if errors + warnings > 0 && result.is_ok() {
+            bail!("the validation layer reported {errors} error(s) and {warnings} warning(s)");
         }
     }
     result
@@ -606,8 +607,8 @@ fn view(args: &ViewArgs) -> Result<()> {
     if args.gpu.options().validation {
         let (errors, warnings) = (log.error_count(), log.warning_count());
         eprintln!("validation: {errors} errors, {warnings} warnings");
-        if errors > 0 {
-            bail!("the validation layer reported {errors} error(s)");
+        if errors + warnings > 0 {
+            bail!("the validation layer reported {errors} error(s) and {warnings} warning(s)");
         }
     }
     Ok(())

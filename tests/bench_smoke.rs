@@ -1,5 +1,6 @@
-//! `volcast bench --quick` end to end, under validation: it runs, prints well-formed positive numbers, and its
-//! JSON has the fields scripts rely on. Never asserts speed (the machine is shared and lavapipe is a CPU).
+//! `volcast bench --quick` end to end, always under `--validate` with zero messages: it runs, prints
+//! well-formed positive numbers, and its JSON has the fields scripts rely on. Never asserts speed (the machine is
+//! shared and lavapipe is a CPU).
 
 use std::process::{Command, Output};
 
@@ -98,9 +99,14 @@ fn quick_bench_prints_valid_numbers_without_validation_errors() {
 
 #[test]
 fn quick_bench_json_has_the_expected_fields() {
-    let out = bench(&["--quick", "--json"]);
+    let out = bench(&["--quick", "--json", "--validate"]);
     let stdout = text(&out.stdout);
-    assert!(out.status.success(), "stderr:\n{}", text(&out.stderr));
+    let stderr = text(&out.stderr);
+    assert!(out.status.success(), "stderr:\n{stderr}");
+    assert!(
+        stderr.contains("validation: 0 errors, 0 warnings"),
+        "validation must be clean:\n{stderr}"
+    );
     let v: serde_json::Value = serde_json::from_str(&stdout).unwrap_or_else(|e| panic!("not JSON ({e}):\n{stdout}"));
     assert!(v["device"].is_string());
     let rates = v["sample_only"].as_array().expect("sample_only array");
@@ -138,7 +144,7 @@ fn quick_bench_json_has_the_expected_fields() {
 
 #[test]
 fn unknown_scene_is_refused_with_the_list() {
-    let out = bench(&["--scene", "nope"]);
+    let out = bench(&["--scene", "nope", "--validate"]);
     assert_eq!(out.status.code(), Some(1));
     let stderr = text(&out.stderr);
     assert!(

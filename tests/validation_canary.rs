@@ -29,7 +29,7 @@ fn target(gpu: &Gpu) -> (Image, Buffer) {
 }
 
 #[test]
-fn a_missing_barrier_is_reported() {
+fn a_wrong_image_layout_is_reported() {
     let gpu = validated_gpu();
     let (image, buffer) = target(&gpu);
     gpu.submit_and_wait(|cb| {
@@ -40,7 +40,45 @@ fn a_missing_barrier_is_reported() {
     buffer.destroy(&gpu);
     image.destroy(&gpu);
     let problems = gpu.validation_problems();
-    assert!(!problems.is_empty(), "the validation layer missed a wrong image layout");
+    assert!(
+        problems.iter().any(|p| p.text.contains("InvalidImageLayout")),
+        "the validation layer missed a wrong image layout: {problems:#?}"
+    );
+}
+
+/// Synchronization validation is live: a transfer that writes a buffer and a copy that reads it, recorded with no
+/// barrier between them, is a read-after-write hazard the layer must name.
+#[test]
+fn a_missing_barrier_is_a_sync_hazard() {
+    let gpu = validated_gpu();
+    let buffer = |name: &str| {
+        Buffer::new(
+            &gpu,
+            256,
+            vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST,
+            gpu_allocator::MemoryLocation::GpuOnly,
+            name,
+        )
+        .expect("buffer")
+    };
+    let (source, destination) = (buffer("hazard source"), buffer("hazard destination"));
+    gpu.submit_and_wait(|cb| {
+        let region = vk::BufferCopy::default().size(256);
+        // SAFETY: both buffers are alive, TRANSFER_SRC|DST, 256 bytes, and `cb` is recording; the missing barrier
+        // between the write and the read is the point of the test (a hazard, not undefined memory access).
+        unsafe {
+            gpu.device.cmd_fill_buffer(cb, source.raw, 0, 256, 0x5eed);
+            gpu.device.cmd_copy_buffer(cb, source.raw, destination.raw, &[region]);
+        }
+    })
+    .expect("submit");
+    source.destroy(&gpu);
+    destination.destroy(&gpu);
+    let problems = gpu.validation_problems();
+    assert!(
+        problems.iter().any(|p| p.text.contains("SYNC-HAZARD-READ-AFTER-WRITE")),
+        "synchronization validation missed a read-after-write hazard: {problems:#?}"
+    );
 }
 
 #[test]
