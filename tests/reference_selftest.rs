@@ -7,15 +7,15 @@
 
 mod common;
 
-use common::compare;
-use common::reference::{
-    encode, linear_to_srgb, pixel_ray, quantise, ray_segment, render_reference, srgb_to_linear, Reference,
-};
+use common::classify::{encode, jitter_offset, linear_to_srgb, srgb_to_linear};
+use common::compare::{self, Bounds};
+use common::rays::{pixel_ray, ray_segment};
+use common::reference::{quantise, render_reference, Reference};
 use glam::{DVec3, Vec3};
 use image::{Rgba, RgbaImage};
 use volcast::camera::Camera;
-use volcast::settings::{jitter_offset, CompositeMode, RenderSettings, Shading};
-use volcast::tf::{self, TfUnits, TransferFunction};
+use volcast::settings::{CompositeMode, RenderSettings, Shading};
+use volcast::tf::{TfUnits, TransferFunction};
 use volcast::volume::{Volume, VoxelData, VoxelType};
 
 const N: u32 = 16;
@@ -104,11 +104,9 @@ fn background_pixel() -> Rgba<u8> {
     quantise(encode(linear(BACKGROUND)))
 }
 
-/// The classification table's colour at `v` by the library's own (f32) lookup, for the simple-model tests.
+/// The reference's classification colour at `v` (linear light), for the tests of compositing.
 fn table_rgb(volume: &Volume, s: &RenderSettings, v: f64) -> DVec3 {
-    let lut = tf::bake(&s.classification(), s.window, volume.range);
-    let [r, g, b, _] = tf::lookup(&lut, v as f32);
-    DVec3::new(r.into(), g.into(), b.into())
+    Reference::new(volume).classifier(s).rgb(v)
 }
 
 fn expected_samples(distance_in_voxels: f64, step_length: f64) -> u32 {
@@ -186,12 +184,12 @@ fn window_excluding_every_value_gives_the_background() {
     assert_all_background(&render_reference(&volume, &s), "window above the value");
     s.window = [0.0, 0.4];
     assert_all_background(&render_reference(&volume, &s), "window below the value");
-    // A window whose edge is the value itself still includes it (the rule excludes only v < lo or v > hi); the
-    // table, zero below the window, blends v = 0.5 = 2047.5/4095 halfway from entry 2047 (zero) to 2048.
+    // A window whose edge is the value itself still includes it, at full opacity (the rule excludes only v < lo
+    // or v > hi).
     s.window = [0.5, 1.0];
     let trace = Reference::new(&volume).trace(&s, CENTRE, CENTRE);
     assert_eq!(trace.composited, 16);
-    let a = f64::from(STEP_ALPHA) / 2.0;
+    let a = f64::from(STEP_ALPHA);
     assert_near(
         "opacity at the window's edge",
         trace.alpha,
@@ -428,7 +426,7 @@ fn ray_segment_handles_misses_parallel_rays_and_a_start_inside() {
 }
 
 #[test]
-fn compare_reports_mean_percentile_and_max() {
+fn compare_reports_mean_percentile_max_and_outliers() {
     let a = RgbaImage::from_pixel(10, 10, image::Rgba([10, 20, 30, 255]));
     let zero = compare::diff(&a, &a);
     assert_eq!((zero.mean, zero.p99, zero.max, zero.over_1), (0.0, 0.0, 0.0, 0.0));
@@ -443,7 +441,27 @@ fn compare_reports_mean_percentile_and_max() {
         "2 of 100 pixels differ: the 99th percentile is the smaller"
     );
     assert_near("over_1", d.over_1, 1.0 / 100.0, 1e-12);
-    compare::assert_close("selftest-compare", &b, &a, 0.1, 1.0);
+    assert_eq!((d.above(0), d.above(1), d.above(6), d.above(7)), (2, 1, 1, 0));
+    let bounds = |mean, p99, max, outliers| Bounds {
+        mean,
+        p99,
+        max,
+        outliers,
+    };
+    assert!(bounds(0.1, 1.0, 7, 0).check(&d).is_ok());
+    assert!(bounds(0.1, 1.0, 6, 1).check(&d).is_ok(), "one outlier allowed");
+    let err = bounds(0.05, 0.0, 6, 0).check(&d).unwrap_err();
+    assert!(
+        err.contains("mean") && err.contains("p99") && err.contains("1 px above 6/255"),
+        "{err}"
+    );
+
+    // Over a mask: only the masked pixels count, so a uniform error is not diluted by the rest.
+    let mut mask = vec![false; 100];
+    mask[3 + 4 * 10] = true;
+    let masked = compare::diff_where(&b, &a, &mask);
+    assert_eq!((masked.pixels, masked.mean, masked.max), (1, 7.0, 7.0));
+
     compare::write_failure_images("selftest-compare", &b, &a);
     let diff = image::open(compare::failure_dir().join("selftest-compare-diff.png")).expect("diff image written");
     assert_eq!(
@@ -453,15 +471,29 @@ fn compare_reports_mean_percentile_and_max() {
     );
 }
 
+/// Object pixels: where the reference showed the volume or either image is not the background. A steady error
+/// on a small object is not diluted by the empty rest of the image.
 #[test]
-#[should_panic(expected = "differs from the reference")]
-fn compare_fails_over_the_percentile_bound() {
-    let a = RgbaImage::from_pixel(10, 10, image::Rgba([10, 20, 30, 255]));
-    let mut b = a.clone();
-    // Two of 100 pixels off by 7: the 99th percentile is 7.
-    b.put_pixel(3, 4, image::Rgba([10, 27, 25, 255]));
-    b.put_pixel(5, 6, image::Rgba([10, 27, 25, 255]));
-    compare::assert_close("selftest-compare-fails", &b, &a, 1.0, 6.0);
+fn object_pixels_exclude_agreeing_background_only() {
+    let volume = constant_volume();
+    let mut s = head_on(&volume, 33);
+    s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, 6.0), Vec3::ZERO);
+    let expected = Reference::new(&volume).render_full(&s);
+    let objects = expected.object.iter().filter(|&&o| o).count();
+    assert!(objects > 20 && objects < 33 * 33 / 2, "{objects} object pixels");
+    let mut actual = expected.image.clone();
+    for (i, p) in actual.pixels_mut().enumerate() {
+        if expected.object[i] {
+            p[1] = p[1].saturating_add(2);
+        }
+    }
+    let d = compare::against_reference(&actual, &expected, s.background);
+    assert_eq!(d.pixels as usize, objects);
+    assert_near("a steady 2/255 error is 2/255 on the object", d.mean, 2.0, 1e-12);
+    // A GPU image that draws where the reference shows nothing is compared there too.
+    actual.put_pixel(0, 0, Rgba([255, 0, 0, 255]));
+    let d = compare::against_reference(&actual, &expected, s.background);
+    assert_eq!((d.pixels as usize, d.max), (objects + 1, 204.0), "255 − 51 in red");
 }
 
 /// A realistic size, to keep the reference fast enough for the GPU tests (printed, not asserted: timing is noisy).
@@ -641,7 +673,7 @@ fn mip_minip_and_average_on_a_linear_ramp() {
     let mut offsets = Vec::new();
     for jitter in [None, Some(0), Some(1), Some(7), Some(12345), Some(u32::MAX)] {
         s.jitter = jitter;
-        let offset = jitter.map_or(0.5, |seed| f64::from(jitter_offset(CENTRE, CENTRE, seed)));
+        let offset = jitter.map_or(0.5, |seed| jitter_offset(CENTRE, CENTRE, seed));
         offsets.push(offset);
         for window in [[0.0f32, 1.0], [0.2, 0.8], [0.25, 0.75], [0.3, 0.31]] {
             s.window = window;
@@ -668,24 +700,9 @@ fn mip_minip_and_average_on_a_linear_ramp() {
                 };
                 assert_near(&what, trace.value.expect("a visible sample"), m, 1e-12);
                 assert_near(&format!("{what}: opacity"), trace.alpha, 1.0, 0.0);
-                // Grey level v in sRGB: entry i holds linear(i/4095) inside the window and zero outside it, which
-                // the lookup blends in when m lies within one entry of the window's edge (as at m = 0.75 here).
-                let u = m * 4095.0;
-                let (lo_entry, hi_entry) = (u.floor() / 4095.0, (u.floor() + 1.0) / 4095.0);
-                let expected = if lo_entry >= lo && hi_entry <= hi {
-                    srgb_to_linear(m)
-                } else {
-                    let inside = |e: f64| {
-                        if (lo..=hi).contains(&(e as f32 as f64)) {
-                            srgb_to_linear(e)
-                        } else {
-                            0.0
-                        }
-                    };
-                    let f = u - u.floor();
-                    inside(lo_entry) * (1.0 - f) + inside(hi_entry) * f
-                };
-                assert_near3(&format!("{what}: colour"), trace.color, DVec3::splat(expected), 1e-6);
+                // Grey level v in sRGB, exactly (the reference classifies by the definition, not a table).
+                let expected = srgb_to_linear(m);
+                assert_near3(&format!("{what}: colour"), trace.color, DVec3::splat(expected), 1e-12);
                 let srgb = linear_to_srgb(expected);
                 assert_near3(&format!("{what}: output"), trace.output, DVec3::splat(srgb), 1e-6);
             }
@@ -744,7 +761,7 @@ fn jittered_mean_converges_to_the_integral() {
     for seed in 0..seeds {
         s.jitter = Some(seed);
         let trace = reference.trace(&s, 0, 0);
-        let o = f64::from(jitter_offset(0, 0, seed));
+        let o = jitter_offset(0, 0, seed);
         assert_eq!(trace.offset, o);
         assert!((0.0..1.0).contains(&o));
         assert_eq!(trace.samples, expected_samples_at(16.0, 1.3, o), "seed {seed}");

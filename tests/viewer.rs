@@ -158,7 +158,11 @@ fn viewer_survives_resizes_and_its_screenshot_matches_the_headless_render() {
     let log = gpu.log.clone();
     drop(gpu);
     assert!(log.problems().is_empty(), "{:#?}", log.problems());
-    common::compare::assert_close("viewer-screenshot", &actual, &expected, 0.01, 1.0);
+    let d = common::compare::diff(&actual, &expected);
+    if d.max > 1.0 {
+        common::compare::write_failure_images("viewer-screenshot", &actual, &expected);
+        panic!("the screenshot differs from the headless render: {d}");
+    }
     let lit = actual
         .pixels()
         .filter(|p| p[0] as u32 + p[1] as u32 + p[2] as u32 > 30)

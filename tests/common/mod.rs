@@ -1,31 +1,76 @@
-//! Helpers shared by the integration tests: the CPU reference renderer, image comparison and shared test data.
+//! Helpers shared by the integration tests: the CPU reference renderer, image comparison, shared test data and
+//! the reporting of skipped tests.
 
 #![allow(dead_code)]
 
+pub mod bounds;
+pub mod cases;
+pub mod classify;
 pub mod compare;
+pub mod gpu;
+pub mod rays;
 pub mod reference;
 
+use std::io::Write;
 use std::path::PathBuf;
+use std::sync::{Mutex, Once};
 
-/// `../shared/data/<rel>` beside the repository, where the large test volumes live (not in git).
-///
-/// Missing data skips the test locally (returns `None` after saying so) but fails it in CI, where a silent skip
-/// would hide that nothing was tested.
+/// `../shared` beside the crate (found from the crate's own directory, never an absolute path).
+pub fn shared_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("shared")
+}
+
+/// `../shared/data/<rel>`, where the large test volumes live (not in git); `None` after [`skip`] if missing.
 pub fn shared_data(rel: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("shared")
-        .join("data")
-        .join(rel);
+    let path = shared_dir().join("data").join(rel);
     if path.exists() {
         return Some(path);
     }
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!(
-            "../shared/data/{rel} not found ({}): ../shared is required in CI",
-            path.display()
-        );
-    }
-    eprintln!("skipped: ../shared/data/{rel} not found");
+    skip(&format!("../shared/data/{rel} not found ({})", path.display()));
     None
+}
+
+static SKIPPED: Mutex<Vec<String>> = Mutex::new(Vec::new());
+static SUMMARY: Once = Once::new();
+
+// SAFETY (of the declaration): `atexit` is the C library's, which every Rust program on this platform links.
+unsafe extern "C" {
+    fn atexit(callback: extern "C" fn()) -> std::ffi::c_int;
+}
+
+extern "C" fn print_skip_summary() {
+    let skipped = SKIPPED.lock().map(|s| s.clone()).unwrap_or_default();
+    if skipped.is_empty() {
+        return;
+    }
+    let binary = std::env::current_exe()
+        .ok()
+        .and_then(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .unwrap_or_default();
+    let binary = binary.rsplit_once('-').map_or(binary.as_str(), |(name, _hash)| name);
+    // Straight to the stream: libtest captures only the print macros, so this shows after the binary's results.
+    let _ = writeln!(
+        std::io::stderr(),
+        "SKIPPED in {binary}: {} check(s) did not run: {}",
+        skipped.len(),
+        skipped.join("; ")
+    );
+}
+
+/// Records that a check did not run, and why. With `CI=true` (exported by `.ci/run`) a skip fails the test:
+/// there, a check that silently did not run would hide that nothing was tested. Elsewhere the test passes and the
+/// test binary prints one line naming every skip when it exits, outside libtest's captured output.
+pub fn skip(reason: &str) {
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!("{reason}: with CI=true nothing may be skipped (../shared must be beside the repository)");
+    }
+    SUMMARY.call_once(|| {
+        // SAFETY: registers a plain `extern "C" fn` that only locks a static and writes to stderr.
+        unsafe {
+            atexit(print_skip_summary);
+        }
+    });
+    if let Ok(mut skipped) = SKIPPED.lock() {
+        skipped.push(reason.to_string());
+    }
 }

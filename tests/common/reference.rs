@@ -1,19 +1,29 @@
-//! The independent CPU ray caster the GPU images are proven against.
+//! The independent CPU ray caster the GPU images are proven against, written in f64 from the rendering rules in
+//! `RenderSettings`'s docs.
 //!
-//! Written from the eight rules in `RenderSettings`'s docs, in f64, sharing no rendering code with the GPU path:
-//! the rays (perspective and orthographic) are built from the camera's eye/target/up/fov directly (not from
-//! `Camera::view`/`projection`), the box is intersected with the slab method, the volume is filtered here rather
-//! than by a sampler, and gradients, shading, every compositing mode, the isosurface bisection and the output
-//! encoding are written out here. Shared with the GPU path are only the pure definitions the rules name:
-//! `tf::bake` (the classification table, interpolated here in f64) and `settings::jitter_offset` (the per-pixel
-//! hash). Where the GPU works in f32 the two differ by rounding only, which the image tolerances absorb.
+//! What it shares with the GPU path, and why that is safe:
+//! - **Inputs only**: the voxel values (`Volume::value`, i.e. the stored values after the file's rescale), the
+//!   volume's dims, spacing and value range (`Volume::range`, the min/max the rules normalise by), and the
+//!   `RenderSettings` (camera parameters, transfer function, window, steps, modes). These are what a user gives;
+//!   a bug in producing them is a loader bug, tested by the loaders' own tests against files and second libraries.
+//! - **Documented constants**: the colormaps' control points (`volcast::transfer::tables`: Moreland's table,
+//!   matplotlib's viridis and plasma), checked against their published values in tests/reference_selftest.rs.
+//!
+//! Everything else is computed here: the normalisation of values, the box (dims × spacing, longest side 1),
+//! the rays (rays.rs, from eye/target/up/fov, not `Camera::view`/`projection`), the slab method, trilinear
+//! filtering, gradients (central differences of the interpolant, or the grid gradients of `gradient_texture`),
+//! the classification (classify.rs: window position, colormap interpolation, control points, data units, sRGB),
+//! the jitter hash, opacity correction, every compositing mode, the isosurface bisection and the output encoding.
+//! Where the GPU works in f32, through a 4096-entry table or with half floats, the two differ by rounding; the
+//! tests' bounds (tests/common/compare.rs) say by how much.
 
 #![allow(dead_code)]
 
+use super::classify::{encode, jitter_offset, linear, Classifier};
+use super::rays::{ray_segment, CameraBasis};
 use glam::DVec3;
 use image::{Rgba, RgbaImage};
-use volcast::settings::{jitter_offset, CompositeMode, RenderSettings, Shading};
-use volcast::tf;
+use volcast::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::volume::Volume;
 
 /// A ray segment inside the slab box, in world units along the unit direction `dir` from `origin` (the eye for a
@@ -63,6 +73,13 @@ pub struct PixelTrace {
     pub output: DVec3,
 }
 
+impl PixelTrace {
+    /// Whether the pixel shows the volume: some sample was composited (or the isosurface hit).
+    pub fn shows_volume(&self) -> bool {
+        self.composited > 0 && (self.alpha > 0.0 || self.value.is_some() || self.hit.is_some())
+    }
+}
+
 /// Per-image statistics of a reference render.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RenderStats {
@@ -90,67 +107,14 @@ impl RenderStats {
     }
 }
 
-/// The ray of pixel (x, y), row 0 at the top: its origin (the eye, or for an orthographic camera the pixel's point
-/// on the plane through the eye perpendicular to the view direction) and unit direction.
-pub fn pixel_ray(s: &RenderSettings, x: u32, y: u32) -> (DVec3, DVec3) {
-    let (origin, dir, _) = CameraBasis::new(s).ray(x, y);
-    (origin, dir)
-}
-
-/// The part of the ray `origin + t·dir` (t in world units, `dir` a unit vector) inside the axis-aligned box
-/// `[lo, hi]` and at `t ≥ t_min`, by the slab method; `None` if empty.
-pub fn ray_segment(origin: DVec3, dir: DVec3, lo: DVec3, hi: DVec3, t_min: f64) -> Option<(f64, f64)> {
-    let mut t0 = t_min;
-    let mut t1 = f64::INFINITY;
-    for a in 0..3 {
-        if dir[a] == 0.0 {
-            // Parallel to this slab: inside it everywhere or nowhere (avoids 0/0 on the boundary).
-            if origin[a] < lo[a] || origin[a] > hi[a] {
-                return None;
-            }
-            continue;
-        }
-        let ta = (lo[a] - origin[a]) / dir[a];
-        let tb = (hi[a] - origin[a]) / dir[a];
-        t0 = t0.max(ta.min(tb));
-        t1 = t1.min(ta.max(tb));
-    }
-    (t0 < t1).then_some((t0, t1))
-}
-
-/// The sRGB decoding (IEC 61966-2-1), in f64.
-pub fn srgb_to_linear(c: f64) -> f64 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// The sRGB encoding, in f64.
-pub fn linear_to_srgb(c: f64) -> f64 {
-    if c <= 0.003_130_8 {
-        c * 12.92
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// Rule 8's encoding of a linear-light colour: clamped to [0,1], then sRGB-encoded (not yet rounded).
-pub fn encode(linear: DVec3) -> DVec3 {
-    let c = linear.clamp(DVec3::ZERO, DVec3::ONE);
-    DVec3::new(linear_to_srgb(c.x), linear_to_srgb(c.y), linear_to_srgb(c.z))
-}
-
-/// Rule 4's lookup in f64 over the baked (f32) table: linear interpolation at `v`·(N − 1), `v` clamped to [0,1].
-pub fn lookup(lut: &[[f32; 4]], v: f64) -> [f64; 4] {
-    let u = v.clamp(0.0, 1.0) * (lut.len() - 1) as f64;
-    let i0 = (u.floor() as usize).min(lut.len() - 2);
-    let f = u - i0 as f64;
-    std::array::from_fn(|k| {
-        let (a, b) = (f64::from(lut[i0][k]), f64::from(lut[i0 + 1][k]));
-        a + (b - a) * f
-    })
+/// A reference image with what each pixel's ray did.
+pub struct Rendered {
+    pub image: RgbaImage,
+    /// Per pixel (row-major): the ray showed the volume ([`PixelTrace::shows_volume`]).
+    pub object: Vec<bool>,
+    /// Per pixel: sample positions visited ([`PixelTrace::samples`]).
+    pub samples: Vec<u32>,
+    pub stats: RenderStats,
 }
 
 /// Rule 5's lighting: `rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` with `n` the normalised world
@@ -173,7 +137,19 @@ pub fn render_reference(volume: &Volume, s: &RenderSettings) -> RgbaImage {
 
 /// Mean sample positions visited per pixel when rendering `volume` with `s`.
 pub fn samples_per_pixel(volume: &Volume, s: &RenderSettings) -> f64 {
-    Reference::new(volume).render_with_stats(s).1.samples_per_pixel()
+    Reference::new(volume).render_full(s).stats.samples_per_pixel()
+}
+
+/// Rule 8's storage of an sRGB-encoded colour ([`PixelTrace::output`], or see [`encode`]): 8-bit unsigned
+/// normalised, rounded, opaque.
+pub fn quantise(srgb: DVec3) -> Rgba<u8> {
+    let q = |c: f64| (c.clamp(0.0, 1.0) * 255.0).round() as u8;
+    Rgba([q(srgb.x), q(srgb.y), q(srgb.z), 255])
+}
+
+/// The pixel a ray without volume shows: `background` (sRGB) decoded for compositing and encoded again.
+pub fn background_pixel(background: glam::Vec3) -> Rgba<u8> {
+    quantise(encode(linear(background.as_dvec3())))
 }
 
 /// A volume prepared for the reference: normalised values in f64, the box it fills and its data range.
@@ -182,27 +158,47 @@ pub struct Reference {
     values: Vec<f64>,
     extent: DVec3,
     range: [f64; 2],
+    /// `gradient_texture`'s rule, made on first use: per voxel `G_i = v(x + e_i) − v(x − e_i)` on the grid,
+    /// indices clamped to the edge, NaN voxels read as 0.
+    grid_gradients: std::sync::OnceLock<Vec<DVec3>>,
 }
 
 impl Reference {
     pub fn new(volume: &Volume) -> Reference {
         let [nx, ny, nz] = volume.dims;
+        let [min, max] = volume.range;
+        let normalise = |value: f64| {
+            if value.is_nan() {
+                f64::NAN
+            } else if max > min {
+                (value - min) / (max - min)
+            } else {
+                0.0
+            }
+        };
         let mut values = Vec::with_capacity(nx as usize * ny as usize * nz as usize);
         for z in 0..nz {
             for y in 0..ny {
                 for x in 0..nx {
-                    values.push(volume.normalized(x, y, z));
+                    values.push(normalise(volume.value(x, y, z)));
                 }
             }
         }
+        let size = DVec3::new(
+            f64::from(nx) * f64::from(volume.spacing[0]),
+            f64::from(ny) * f64::from(volume.spacing[1]),
+            f64::from(nz) * f64::from(volume.spacing[2]),
+        );
         Reference {
             dims: volume.dims.map(|d| d as usize),
             values,
-            extent: volume.extent().as_dvec3(),
+            extent: size / size.max_element(),
             range: volume.range,
+            grid_gradients: std::sync::OnceLock::new(),
         }
     }
 
+    /// The box in world units: dims × spacing, centred on the origin, longest side 1.
     pub fn extent(&self) -> DVec3 {
         self.extent
     }
@@ -221,11 +217,6 @@ impl Reference {
         f64::from(s.step_length) * self.voxel_world().min_element()
     }
 
-    /// Rule 4's table for `s` and this volume's data range.
-    pub fn table(&self, s: &RenderSettings) -> Vec<[f32; 4]> {
-        tf::bake(&s.classification(), s.window, self.range)
-    }
-
     /// The slab box `[slab_lo, slab_hi]` (texture space) in world space.
     pub fn slab_box_world(&self, s: &RenderSettings) -> (DVec3, DVec3) {
         let to_world = |t: DVec3| (t - 0.5) * self.extent;
@@ -237,9 +228,13 @@ impl Reference {
         p / self.extent + 0.5
     }
 
-    /// Rule 3: trilinear interpolation at texture coordinate `tex`, texel centres at (i + 0.5)/dim, clamped to
-    /// the edge. A NaN among the eight texels gives NaN, as a filtering `a + w·(b - a)` does even at `w = 0`.
-    pub fn sample(&self, tex: DVec3) -> f64 {
+    fn at(&self, x: usize, y: usize, z: usize) -> f64 {
+        self.values[x + self.dims[0] * (y + self.dims[1] * z)]
+    }
+
+    /// The two texels and the weight along each axis of rule 3's trilinear filter at texture coordinate `tex`:
+    /// texel centres at (i + 0.5)/dim, clamped to the edge.
+    fn corners(&self, tex: DVec3) -> ([[usize; 2]; 3], [f64; 3]) {
         let mut idx = [[0usize; 2]; 3];
         let mut w = [0f64; 3];
         for a in 0..3 {
@@ -250,16 +245,18 @@ impl Reference {
             let clamp = |i: f64| i.clamp(0.0, (n - 1) as f64) as usize;
             idx[a] = [clamp(i0), clamp(i0 + 1.0)];
         }
-        let [nx, ny, _] = self.dims;
-        let at = |x: usize, y: usize, z: usize| self.values[x + nx * (y + ny * z)];
+        (idx, w)
+    }
+
+    /// Rule 3: trilinear interpolation at texture coordinate `tex`. A NaN among the eight texels gives NaN, as a
+    /// filtering `a + w·(b - a)` does even at `w = 0`.
+    pub fn sample(&self, tex: DVec3) -> f64 {
+        let ([[x0, x1], [y0, y1], [z0, z1]], w) = self.corners(tex);
         let lerp = |a: f64, b: f64, t: f64| a + t * (b - a);
-        let [x0, x1] = idx[0];
-        let [y0, y1] = idx[1];
-        let [z0, z1] = idx[2];
-        let c00 = lerp(at(x0, y0, z0), at(x1, y0, z0), w[0]);
-        let c10 = lerp(at(x0, y1, z0), at(x1, y1, z0), w[0]);
-        let c01 = lerp(at(x0, y0, z1), at(x1, y0, z1), w[0]);
-        let c11 = lerp(at(x0, y1, z1), at(x1, y1, z1), w[0]);
+        let c00 = lerp(self.at(x0, y0, z0), self.at(x1, y0, z0), w[0]);
+        let c10 = lerp(self.at(x0, y1, z0), self.at(x1, y1, z0), w[0]);
+        let c01 = lerp(self.at(x0, y0, z1), self.at(x1, y0, z1), w[0]);
+        let c11 = lerp(self.at(x0, y1, z1), self.at(x1, y1, z1), w[0]);
         lerp(lerp(c00, c10, w[1]), lerp(c01, c11, w[1]), w[2])
     }
 
@@ -280,51 +277,101 @@ impl Reference {
         }
     }
 
-    pub fn render(&self, s: &RenderSettings) -> RgbaImage {
-        self.render_with_stats(s).0
+    /// `gradient_texture`'s gradient at `tex`, in value per voxel: the grid gradients `G/2` (see
+    /// [`Reference::grid_gradients`]) interpolated trilinearly like the values (rule 3's filter).
+    pub fn grid_gradient(&self, tex: DVec3) -> DVec3 {
+        let grid = self.grid_gradients.get_or_init(|| self.make_grid_gradients());
+        let ([[x0, x1], [y0, y1], [z0, z1]], w) = self.corners(tex);
+        let at = |x: usize, y: usize, z: usize| grid[x + self.dims[0] * (y + self.dims[1] * z)];
+        let c00 = at(x0, y0, z0).lerp(at(x1, y0, z0), w[0]);
+        let c10 = at(x0, y1, z0).lerp(at(x1, y1, z0), w[0]);
+        let c01 = at(x0, y0, z1).lerp(at(x1, y0, z1), w[0]);
+        let c11 = at(x0, y1, z1).lerp(at(x1, y1, z1), w[0]);
+        c00.lerp(c10, w[1]).lerp(c01.lerp(c11, w[1]), w[2]) / 2.0
     }
 
-    /// Renders rows in parallel bands, one per available core.
+    fn make_grid_gradients(&self) -> Vec<DVec3> {
+        let [nx, ny, nz] = self.dims;
+        let value = |x: i64, y: i64, z: i64| {
+            let c = |i: i64, n: usize| i.clamp(0, n as i64 - 1) as usize;
+            let v = self.at(c(x, nx), c(y, ny), c(z, nz));
+            if v.is_nan() {
+                0.0
+            } else {
+                v
+            }
+        };
+        let mut out = Vec::with_capacity(self.values.len());
+        for z in 0..nz as i64 {
+            for y in 0..ny as i64 {
+                for x in 0..nx as i64 {
+                    out.push(DVec3::new(
+                        value(x + 1, y, z) - value(x - 1, y, z),
+                        value(x, y + 1, z) - value(x, y - 1, z),
+                        value(x, y, z + 1) - value(x, y, z - 1),
+                    ));
+                }
+            }
+        }
+        out
+    }
+
+    pub fn render(&self, s: &RenderSettings) -> RgbaImage {
+        self.render_full(s).image
+    }
+
     pub fn render_with_stats(&self, s: &RenderSettings) -> (RgbaImage, RenderStats) {
+        let r = self.render_full(s);
+        (r.image, r.stats)
+    }
+
+    /// Renders rows in parallel bands, one per available core, keeping what each pixel's ray did.
+    pub fn render_full(&self, s: &RenderSettings) -> Rendered {
         let frame = Frame::new(self, s);
-        let (width, height) = (s.width, s.height);
-        let mut image = RgbaImage::new(width, height);
+        let (width, height) = (s.width as usize, s.height as usize);
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
-            .min(height as usize)
+            .min(height)
             .max(1);
-        let rows_per_band = (height as usize).div_ceil(threads);
-        let row_bytes = width as usize * 4;
-        let mut stats = RenderStats::default();
-        std::thread::scope(|scope| {
-            let bands: Vec<_> = image
-                .chunks_mut(rows_per_band * row_bytes)
-                .enumerate()
-                .map(|(band, pixels)| {
+        let rows_per_band = height.div_ceil(threads);
+        let bands: Vec<Vec<PixelTrace>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..threads)
+                .map(|band| {
                     let frame = &frame;
                     scope.spawn(move || {
-                        let mut stats = RenderStats::default();
-                        let first_row = band * rows_per_band;
-                        for (i, pixel) in pixels.chunks_exact_mut(4).enumerate() {
-                            let x = (i % width as usize) as u32;
-                            let y = (first_row + i / width as usize) as u32;
-                            let trace = frame.trace(x, y);
-                            stats.pixels += 1;
-                            stats.hit_pixels += u64::from(trace.segment.is_some());
-                            stats.samples += u64::from(trace.samples);
-                            stats.composited += u64::from(trace.composited);
-                            stats.terminated_early += u64::from(trace.terminated_early);
-                            pixel.copy_from_slice(&quantise(trace.output).0);
-                        }
-                        stats
+                        let rows = band * rows_per_band..((band + 1) * rows_per_band).min(height);
+                        rows.flat_map(|y| (0..width).map(move |x| frame.trace(x as u32, y as u32)))
+                            .collect()
                     })
                 })
                 .collect();
-            for band in bands {
-                stats.add(&band.join().expect("reference render thread panicked"));
-            }
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("reference render thread panicked"))
+                .collect()
         });
-        (image, stats)
+        let mut image = RgbaImage::new(s.width, s.height);
+        let mut object = Vec::with_capacity(width * height);
+        let mut samples = Vec::with_capacity(width * height);
+        let mut stats = RenderStats::default();
+        for (i, trace) in bands.iter().flatten().enumerate() {
+            image.put_pixel((i % width) as u32, (i / width) as u32, quantise(trace.output));
+            object.push(trace.shows_volume());
+            samples.push(trace.samples);
+            stats.add(&RenderStats {
+                hit_pixels: u64::from(trace.segment.is_some()),
+                samples: u64::from(trace.samples),
+                composited: u64::from(trace.composited),
+                terminated_early: u64::from(trace.terminated_early),
+                pixels: 1,
+            });
+        }
+        Rendered {
+            image,
+            object,
+            samples,
+            stats,
+        }
     }
 
     /// Traces one pixel, keeping the unquantised result (for checks against closed forms).
@@ -332,9 +379,14 @@ impl Reference {
         Frame::new(self, s).trace(x, y)
     }
 
-    /// Prepares `s` once (the table, the camera) for tracing many pixels with [`Tracer::trace`].
+    /// Prepares `s` once (the classification, the camera) for tracing many pixels with [`Tracer::trace`].
     pub fn tracer(&self, s: &RenderSettings) -> Tracer<'_> {
         Tracer(Frame::new(self, s))
+    }
+
+    /// The reference's classification of `s` on this volume (rule 4, classify.rs).
+    pub fn classifier(&self, s: &RenderSettings) -> Classifier {
+        Classifier::new(s, self.range)
     }
 }
 
@@ -348,81 +400,6 @@ impl Tracer<'_> {
     }
 }
 
-/// Rule 8's storage of an sRGB-encoded colour ([`PixelTrace::output`], or see [`encode`]): 8-bit unsigned
-/// normalised, rounded, opaque.
-pub fn quantise(srgb: DVec3) -> Rgba<u8> {
-    let q = |c: f64| (c.clamp(0.0, 1.0) * 255.0).round() as u8;
-    Rgba([q(srgb.x), q(srgb.y), q(srgb.z), 255])
-}
-
-/// The camera as an orthonormal basis: `forward` towards the target, `right`, and `up` completing it.
-struct CameraBasis {
-    eye: DVec3,
-    forward: DVec3,
-    right: DVec3,
-    up: DVec3,
-    tan_half_fov: f64,
-    aspect: f64,
-    width: f64,
-    height: f64,
-    /// Orthographic: half the view's height, `|eye − target|·tan(fov/2)`.
-    ortho_half_height: Option<f64>,
-    near: f64,
-}
-
-impl CameraBasis {
-    fn new(s: &RenderSettings) -> CameraBasis {
-        let c = &s.camera;
-        let eye = c.eye.as_dvec3();
-        let target = c.target.as_dvec3();
-        let forward = (target - eye).normalize();
-        let right = forward.cross(c.up.as_dvec3()).normalize();
-        let up = right.cross(forward);
-        let tan_half_fov = (f64::from(c.fov_y_deg).to_radians() * 0.5).tan();
-        CameraBasis {
-            eye,
-            forward,
-            right,
-            up,
-            tan_half_fov,
-            aspect: f64::from(s.width) / f64::from(s.height),
-            width: f64::from(s.width),
-            height: f64::from(s.height),
-            ortho_half_height: c.ortho.then(|| (target - eye).length() * tan_half_fov),
-            near: f64::from(c.near),
-        }
-    }
-
-    /// Normalised device coordinates of pixel (x, y)'s centre; y grows downwards with the row.
-    fn ndc(&self, x: u32, y: u32) -> (f64, f64) {
-        (
-            2.0 * (f64::from(x) + 0.5) / self.width - 1.0,
-            2.0 * (f64::from(y) + 0.5) / self.height - 1.0,
-        )
-    }
-
-    /// Rule 1: pixel (x, y)'s ray origin, unit direction, and the distance along it at which the view depth
-    /// `dot(p − eye, forward)` reaches the near plane.
-    fn ray(&self, x: u32, y: u32) -> (DVec3, DVec3, f64) {
-        let (nx, ny) = self.ndc(x, y);
-        match self.ortho_half_height {
-            Some(half_h) => {
-                // Parallel to the view direction from the plane through the eye perpendicular to it: the view
-                // depth of origin + t·forward is t itself.
-                let origin = self.eye + nx * half_h * self.aspect * self.right - ny * half_h * self.up;
-                (origin, self.forward, self.near)
-            }
-            None => {
-                let dir = (self.forward + nx * self.tan_half_fov * self.aspect * self.right
-                    - ny * self.tan_half_fov * self.up)
-                    .normalize();
-                // A unit ray from the eye reaches view depth `near` after near / cos(angle to forward).
-                (self.eye, dir, self.near / dir.dot(self.forward))
-            }
-        }
-    }
-}
-
 /// Everything per-frame that `trace` needs, computed once.
 struct Frame<'a> {
     volume: &'a Reference,
@@ -430,8 +407,7 @@ struct Frame<'a> {
     box_lo: DVec3,
     box_hi: DVec3,
     step: f64,
-    /// Rule 4's table: linear RGB and per-voxel-step opacity.
-    lut: Vec<[f32; 4]>,
+    classifier: Classifier,
     window: [f64; 2],
     /// Exponent of rule 6's opacity correction (and factor of the density model).
     step_length: f64,
@@ -442,6 +418,8 @@ struct Frame<'a> {
     /// isosurface mode.
     shading: Option<Shading>,
     gradient_opacity: Option<f64>,
+    /// `gradient_texture`: shade from the grid gradients instead of central differences of the interpolant.
+    grid_gradients: bool,
     jitter: Option<u32>,
     early_termination: f64,
     /// Linear light.
@@ -462,14 +440,13 @@ impl<'a> Frame<'a> {
             CompositeMode::Isosurface => Some(s.shading.unwrap_or_default()),
             _ => s.shading,
         };
-        let bg = s.background.as_dvec3();
         Frame {
             volume,
             camera: CameraBasis::new(s),
             box_lo,
             box_hi,
             step: volume.step_world(s),
-            lut: volume.table(s),
+            classifier: volume.classifier(s),
             window: s.window.map(f64::from),
             step_length: f64::from(s.step_length),
             mode: s.mode,
@@ -477,16 +454,12 @@ impl<'a> Frame<'a> {
             density: f64::from(s.density),
             shading,
             gradient_opacity: s.gradient_opacity.map(f64::from),
+            grid_gradients: s.gradient_texture && matches!(s.mode, CompositeMode::Emission | CompositeMode::Density),
             jitter: s.jitter,
             early_termination: f64::from(s.early_termination),
-            background: DVec3::new(srgb_to_linear(bg.x), srgb_to_linear(bg.y), srgb_to_linear(bg.z)),
+            background: linear(s.background.as_dvec3()),
             voxel_world: volume.voxel_world(),
         }
-    }
-
-    fn rgb(&self, v: f64) -> DVec3 {
-        let [r, g, b, _] = lookup(&self.lut, v);
-        DVec3::new(r, g, b)
     }
 
     /// Rule 3's visibility test (every mode but isosurface).
@@ -494,9 +467,17 @@ impl<'a> Frame<'a> {
         !v.is_nan() && v >= self.window[0] && v <= self.window[1]
     }
 
+    fn gradient(&self, tex: DVec3) -> DVec3 {
+        if self.grid_gradients {
+            self.volume.grid_gradient(tex)
+        } else {
+            self.volume.gradient(tex)
+        }
+    }
+
     fn trace(&self, x: u32, y: u32) -> PixelTrace {
         let (origin, dir, t_near) = self.camera.ray(x, y);
-        let offset = self.jitter.map_or(0.5, |seed| f64::from(jitter_offset(x, y, seed)));
+        let offset = self.jitter.map_or(0.5, |seed| jitter_offset(x, y, seed));
         let background = self.background.clamp(DVec3::ZERO, DVec3::ONE);
         let mut trace = PixelTrace {
             segment: None,
@@ -557,10 +538,9 @@ impl<'a> Frame<'a> {
             if !self.visible(v) {
                 continue;
             }
-            let [r, g, b, mut a] = lookup(&self.lut, v);
-            let mut rgb = DVec3::new(r, g, b);
+            let (mut rgb, mut a) = self.classifier.at(v);
             if self.shading.is_some() || self.gradient_opacity.is_some() {
-                let grad = self.volume.gradient(tex);
+                let grad = self.gradient(tex);
                 if let Some(reference) = self.gradient_opacity {
                     a *= (grad.length() / reference).min(1.0);
                 }
@@ -607,13 +587,14 @@ impl<'a> Frame<'a> {
         };
         trace.value = Some(m);
         Composite {
-            color: self.rgb(m),
+            color: self.classifier.rgb(m),
             alpha: 1.0,
         }
     }
 
     /// Rule 7 for the isosurface: the first sample at or above the iso value (window ignored, NaN never counts),
-    /// refined by 8 bisection steps on the step before it, coloured by the table at the iso value and shaded.
+    /// refined by 8 bisection steps on the step before it, coloured by the classification at the iso value
+    /// clamped into the window, and shaded.
     fn isosurface(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
         let iso = self.iso_value;
         let reaches = |t: f64| {
@@ -645,8 +626,13 @@ impl<'a> Frame<'a> {
             trace.composited = 1;
             trace.hit = Some(segment.t_start + t_hit);
             let shading = self.shading.unwrap_or_default();
-            let grad = self.volume.gradient(self.tex_at(segment, t_hit));
-            let color = shade(self.rgb(iso), grad / self.voxel_world, -segment.dir, &shading);
+            let grad = self.gradient(self.tex_at(segment, t_hit));
+            let color = shade(
+                self.classifier.iso_rgb(iso),
+                grad / self.voxel_world,
+                -segment.dir,
+                &shading,
+            );
             return Composite { color, alpha: 1.0 };
         }
         Composite {

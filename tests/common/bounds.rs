@@ -1,0 +1,55 @@
+//! How close each family of GPU images must come to the reference, over the object pixels (compare.rs). Each bound
+//! sits at most 2× above the worst case measured over its family on lavapipe (Mesa 22.3, LLVM 15), and says the
+//! smallest bug it catches. The README's Tests section lists the same numbers.
+
+#![allow(dead_code)]
+
+use super::compare::Bounds;
+
+/// The GPU against the reference, every layout but 8-bit textures: every test family in gpu_vs_reference.rs,
+/// methods_agree.rs, gpu_features.rs (skipping, gradient texture) and cli_options.rs.
+/// Measured over ~470 comparisons: worst mean 0.142 (the float64 diffusion MRI), p99 1, max 4; at most 3 pixels
+/// of one image above 2/255 (silhouettes and early-termination ties). Catches: a steady error of 1/255 on a
+/// quarter of the object (mean), an error of 3/255 on 2% of it (p99), and any wrong region of more than 6 pixels
+/// by more than 2/255 — a missing row or column of the image, a half-texel shift, a skipped brick.
+pub const REFERENCE: Bounds = Bounds {
+    mean: 0.25,
+    p99: 2.0,
+    max: 2,
+    outliers: 6,
+};
+
+/// R8_UNORM textures (`--texture native` on 8-bit data): lavapipe filters 8-bit UNORM textures with 8-bit
+/// fixed-point weights, so a trilinear sample can be off by up to ~1/256 of the value range; where the data is
+/// steep that moves samples across the window's edge and the error compounds along the ray. The same data as
+/// R16_UNORM, float textures or corner buffers meet [`REFERENCE`].
+/// Measured (uint8 and int8 Marschner–Lobb): worst mean 1.04, p99 8, max 65; at most 8 pixels above 16/255.
+/// Catches: a steady error of 2/255 over the object, or any region of more than 16 pixels off by more than 16.
+pub const REFERENCE_R8: Bounds = Bounds {
+    mean: 2.0,
+    p99: 14.0,
+    max: 16,
+    outliers: 16,
+};
+
+/// Adaptive steps against the reference (which takes every step): an approximation by design.
+/// Measured (helix, Marschner–Lobb, CT head; four transfer functions): worst mean 0.271, p99 7, max 50; at most
+/// 9 pixels above 16/255. Catches: opacity left uncorrected for the double step (TBD), a stride applied in
+/// occupied bricks (TBD).
+pub const ADAPTIVE: Bounds = Bounds {
+    mean: 0.5,
+    p99: 14.0,
+    max: 16,
+    outliers: 18,
+};
+
+/// The two ray setups against each other (entry/exit faces, analytic), at every `compare` viewpoint.
+/// Measured (helix, CT head): worst mean 0.003, p99 0, at most 2 pixels above 1/255 (silhouettes, where the
+/// rasteriser and the analytic slab test decide a grazing ray differently). Catches: any systematic difference
+/// in where rays start or end (an entry target read at the wrong pixel, a near plane applied by one setup only).
+pub const METHODS: Bounds = Bounds {
+    mean: 0.006,
+    p99: 1.0,
+    max: 1,
+    outliers: 4,
+};

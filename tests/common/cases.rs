@@ -1,0 +1,208 @@
+//! The settings and volumes the GPU tests render: viewpoints, one case per setting and per rendering rule, and
+//! synthetic volumes of every voxel type on non-cubic voxels.
+
+#![allow(dead_code)]
+
+use glam::Vec3;
+use volcast::camera::Camera;
+use volcast::settings::{CompositeMode, RenderSettings, Shading};
+use volcast::tf::TransferFunction;
+use volcast::transfer::Colormap;
+use volcast::volume::{self, Volume, VoxelData, VoxelType};
+
+#[derive(Clone)]
+pub struct Case {
+    pub name: String,
+    pub settings: RenderSettings,
+}
+
+pub fn base(volume: &Volume, size: u32) -> RenderSettings {
+    RenderSettings::new(size, size, volume.extent())
+}
+
+pub fn with(volume: &Volume, size: u32, name: &str, f: impl FnOnce(&mut RenderSettings)) -> Case {
+    let mut s = base(volume, size);
+    f(&mut s);
+    Case {
+        name: name.to_string(),
+        settings: s,
+    }
+}
+
+/// Viewpoints every volume goes through.
+pub fn standard_cases(v: &Volume, size: u32) -> Vec<Case> {
+    let e = v.extent();
+    vec![
+        with(v, size, "oblique", |_| {}),
+        with(v, size, "axis-x", |s| {
+            s.camera = Camera::orbit(90.0, 0.0, 2.5, Vec3::ZERO)
+        }),
+        with(v, size, "axis-z-top", |s| {
+            s.camera = Camera::orbit(0.0, 90.0, 2.5, Vec3::ZERO)
+        }),
+        with(v, size, "inside", |s| {
+            s.camera = Camera::looking_at(Vec3::new(0.05, -0.1, 0.02) * e, Vec3::new(0.3, 0.4, 0.1) * e);
+        }),
+        with(v, size, "on-face", |s| {
+            s.camera = Camera::looking_at(Vec3::new(0.0, 0.5 * e.y, 0.0), Vec3::ZERO)
+        }),
+        with(v, size, "multiplied-viridis", |s| {
+            s.multiplied_alpha = true;
+            s.step_alpha = 0.5;
+            s.colormap = Colormap::Viridis;
+        }),
+    ]
+}
+
+/// Cases that exercise one setting each.
+pub fn settings_cases(v: &Volume, size: u32) -> Vec<Case> {
+    vec![
+        with(v, size, "window", |s| s.window = [0.3, 0.7]),
+        with(v, size, "window-plasma", |s| {
+            // Colour follows the window position, not the value: a window off-centre in the range tells them apart.
+            s.window = [0.15, 0.45];
+            s.colormap = Colormap::Plasma;
+        }),
+        with(v, size, "slab", |s| {
+            s.set_slab(0, 0.5, 0.4);
+            s.set_slab(2, 0.3, 0.5);
+        }),
+        with(v, size, "slab-inside", |s| {
+            s.set_slab(1, 0.6, 0.3);
+            s.camera = Camera::looking_at(Vec3::new(0.1, 0.0, 0.05), Vec3::new(-0.2, 0.5, 0.0));
+        }),
+        with(v, size, "half-step", |s| {
+            s.step_length = 0.5;
+            s.colormap = Colormap::Plasma;
+        }),
+        with(v, size, "double-step-gnuplot", |s| {
+            s.step_length = 2.0;
+            s.colormap = Colormap::Gnuplot;
+        }),
+        with(v, size, "no-early-stop-rainbow", |s| {
+            s.early_termination = 1.0;
+            s.step_alpha = 0.05;
+            s.colormap = Colormap::Rainbow;
+        }),
+        with(v, size, "early-stop-half", |s| {
+            s.early_termination = 0.5;
+            s.step_alpha = 0.3;
+        }),
+        with(v, size, "background-grayscale", |s| {
+            // Channels chosen off the .5 rounding ties (0.3 × 255 = 76.5 would round either way).
+            s.background = Vec3::new(0.2, 0.35, 0.45);
+            s.colormap = Colormap::Grayscale;
+        }),
+        with(v, size, "wide-angle-close", |s| {
+            s.camera = Camera::orbit(-60.0, -30.0, 1.2, Vec3::ZERO);
+            s.camera.fov_y_deg = 70.0;
+        }),
+        with(v, size, "near-plane-cuts", |s| {
+            // The near plane, far from the eye, cuts the box: rays start on it, not at the box.
+            s.camera = Camera::orbit(20.0, 10.0, 1.6, Vec3::ZERO);
+            s.camera.near = 1.4;
+        }),
+        with(v, size, "non-square", |s| {
+            s.width = size + 37;
+            s.height = size - 21;
+        }),
+        with(v, size, "no-jitter", |s| s.jitter = None),
+        with(v, size, "jitter-seed-7", |s| s.jitter = Some(7)),
+        with(v, size, "orthographic", |s| s.camera.ortho = true),
+        with(v, size, "orthographic-wide", |s| {
+            s.camera.ortho = true;
+            s.width = size + 41;
+            s.height = size - 17;
+        }),
+        with(v, size, "orthographic-inside", |s| {
+            s.camera = Camera::looking_at(Vec3::new(0.1, -0.2, 0.05), Vec3::new(0.3, 0.4, 0.1));
+            s.camera.ortho = true;
+        }),
+    ]
+}
+
+/// One case per compositing mode, shading and classification option.
+pub fn quality_cases(v: &Volume, size: u32) -> Vec<Case> {
+    vec![
+        with(v, size, "mip", |s| s.mode = CompositeMode::Mip),
+        with(v, size, "minip", |s| {
+            s.mode = CompositeMode::MinIp;
+            s.window = [0.2, 1.0];
+        }),
+        with(v, size, "average", |s| s.mode = CompositeMode::Average),
+        with(v, size, "iso", |s| {
+            s.mode = CompositeMode::Isosurface;
+            s.iso_value = 0.4;
+        }),
+        with(v, size, "iso-ortho-phong", |s| {
+            s.mode = CompositeMode::Isosurface;
+            s.iso_value = 0.6;
+            s.camera.ortho = true;
+            s.shading = Some(Shading {
+                ambient: 0.1,
+                diffuse: 0.6,
+                specular: 0.6,
+                shininess: 40.0,
+            });
+        }),
+        with(v, size, "density", |s| {
+            s.mode = CompositeMode::Density;
+            s.density = 2.5;
+        }),
+        with(v, size, "density-half-step", |s| {
+            s.mode = CompositeMode::Density;
+            s.density = 1.5;
+            s.step_length = 0.5;
+        }),
+        with(v, size, "shaded", |s| s.shading = Some(Shading::default())),
+        with(v, size, "shaded-gradient-opacity", |s| {
+            s.shading = Some(Shading::default());
+            s.gradient_opacity = Some(0.05);
+            s.step_alpha = 0.4;
+        }),
+        with(v, size, "shaded-double-step", |s| {
+            s.shading = Some(Shading::default());
+            s.step_length = 2.0;
+        }),
+        with(v, size, "tf-mr-default", |s| {
+            s.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
+            s.window = [0.0, 1.0];
+        }),
+        with(v, size, "tf-qt-example-multiplied-off", |s| {
+            s.transfer_function = Some(TransferFunction::preset("qt-example").unwrap());
+            s.window = [0.0, 1.0];
+        }),
+    ]
+}
+
+/// The rendering rules that depend on voxel geometry and the data's values: shading, iso-surfaces and gradient
+/// opacity (for non-cubic voxels and every data type).
+pub fn gradient_cases(v: &Volume, size: u32) -> Vec<Case> {
+    quality_cases(v, size)
+        .into_iter()
+        .filter(|c| c.name.starts_with("shaded") || c.name.starts_with("iso"))
+        .collect()
+}
+
+/// The Marschner–Lobb function sampled on 33³ voxels of 1 × 1.2 × 0.8 (non-cubic), stored as `ty` over a range
+/// typical of that type (signed types straddle zero, as CT data do).
+pub fn marschner_lobb_as(ty: VoxelType) -> Volume {
+    let ml = volume::builtin("marschner-lobb", Some(33)).expect("built-in");
+    let values: Vec<f64> = (0..33u32 * 33 * 33)
+        .map(|i| ml.value(i % 33, (i / 33) % 33, i / (33 * 33)))
+        .collect();
+    let scaled = |lo: f64, hi: f64| values.iter().map(move |v| (lo + v * (hi - lo)).round());
+    let data = match ty {
+        VoxelType::U8 => VoxelData::U8(scaled(0.0, 255.0).map(|v| v as u8).collect()),
+        // int8 is stored biased (+128) in a U8, int16 (+32768) in a U16.
+        VoxelType::I8 => VoxelData::U8(scaled(-100.0, 120.0).map(|v| (v as i32 + 128) as u8).collect()),
+        VoxelType::U16 => VoxelData::U16(scaled(0.0, 4095.0).map(|v| v as u16).collect()),
+        VoxelType::I16 => VoxelData::U16(scaled(-1000.0, 2000.0).map(|v| (v as i32 + 32768) as u16).collect()),
+        // 32-bit integers and float64 reach the GPU as f32; values past 2^24 round there.
+        VoxelType::U32 => VoxelData::F32(scaled(0.0, 3.0e6).map(|v| v as f32).collect()),
+        VoxelType::I32 => VoxelData::F32(scaled(-2.0e6, 1.0e6).map(|v| v as f32).collect()),
+        VoxelType::F64 => VoxelData::F32(values.iter().map(|v| (v * 1.0e3 - 250.0) as f32).collect()),
+        VoxelType::F32 => VoxelData::F32(values.iter().map(|&v| v as f32).collect()),
+    };
+    Volume::new(format!("ml-{}", ty.name()), [33, 33, 33], [1.0, 1.2, 0.8], ty, data).expect("valid volume")
+}
