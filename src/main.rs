@@ -86,7 +86,12 @@ struct VolumeArgs {
 impl VolumeArgs {
     fn load(&self) -> Result<Volume> {
         if let Some(name) = &self.builtin {
-            return Ok(volume::builtin(name, self.builtin_size)?);
+            let mut v = volume::builtin(name, self.builtin_size)?;
+            // --spacing overrides every volume's own, the built-ins' included.
+            if let Some(s) = &self.spacing {
+                v = v.with_spacing([s[0], s[1], s[2]])?;
+            }
+            return Ok(v);
         }
         let Some(path) = &self.file else {
             bail!(

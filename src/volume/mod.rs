@@ -285,6 +285,13 @@ impl Volume {
         })
     }
 
+    /// Replaces the voxel size; refused (naming it) unless positive and finite.
+    pub fn with_spacing(mut self, spacing: [f32; 3]) -> Result<Volume, VolumeError> {
+        check_spacing(self.dims, spacing)?;
+        self.spacing = spacing;
+        Ok(self)
+    }
+
     /// Sets the rescale and the scaled range. A slope of 0 or a non-finite slope or intercept is refused.
     pub fn with_scaling(mut self, scaling: Scaling) -> Result<Volume, VolumeError> {
         if !(scaling.slope.is_finite() && scaling.slope != 0.0 && scaling.intercept.is_finite()) {

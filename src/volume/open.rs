@@ -114,8 +114,7 @@ pub fn open_with_progress(
     };
     if format != Format::Raw {
         if let Some(spacing) = opts.raw.spacing {
-            super::check_spacing(volume.dims, spacing)?;
-            volume.spacing = spacing;
+            volume = volume.with_spacing(spacing)?;
         }
     }
     if let Some(max_dim) = opts.max_dim {
