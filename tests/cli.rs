@@ -1,14 +1,29 @@
 //! The `volcast` binary end to end: a render under validation, and every bad input a user can give ending in a
 //! clear message and a non-zero exit, never a panic.
 
+mod common;
+
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+/// Runs the binary; commands that use the GPU run under `--validate`, and whatever they print of the layer must be
+/// its clean summary.
 fn volcast(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_volcast"))
+    let gpu = matches!(args.first(), Some(&("render" | "compare" | "bench" | "view"))) && !args.contains(&"--validate");
+    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
         .args(args)
+        .args(if gpu { &["--validate"][..] } else { &[] })
         .output()
-        .expect("run volcast")
+        .expect("run volcast");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !err.contains("[validation"),
+        "{args:?}: the validation layer spoke:\n{err}"
+    );
+    if err.contains("validation:") {
+        assert!(err.contains("validation: 0 errors, 0 warnings"), "{args:?}:\n{err}");
+    }
+    o
 }
 
 fn stderr(o: &Output) -> String {
@@ -80,6 +95,11 @@ fn analytic_method_and_timings_run() {
     ]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("validation: 0 errors, 0 warnings"),
+        "{}",
+        stderr(&o)
+    );
     assert!(text.contains("analytic ray setup"), "{text}");
     assert!(
         text.contains("median of 2 frames") && text.contains("(march "),
@@ -235,16 +255,9 @@ fn no_vulkan_driver_is_a_clear_error_with_exit_2() {
 
 #[test]
 fn info_reports_the_ct_head() {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/raw/cranium_ct_256x256x108_int16.raw");
-    if !path.exists() {
-        assert_ne!(
-            std::env::var("CI").as_deref(),
-            Ok("true"),
-            "../shared is required in CI"
-        );
-        eprintln!("skipped: {} not found", path.display());
+    let Some(path) = common::shared_data("raw/cranium_ct_256x256x108_int16.raw") else {
         return;
-    }
+    };
     let o = volcast(&["info", path.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", stderr(&o));

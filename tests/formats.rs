@@ -1,6 +1,8 @@
 //! Volume file formats end to end through `volume::open`: files written here (round trips, known values,
 //! detached data, path escapes, hostile input) and the real volumes in ../shared/data against their raw twins.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use volcast::volume::{self, Endian, Format, OpenOptions, RawOptions, Volume, VoxelType};
@@ -48,19 +50,9 @@ fn gzip(data: &[u8]) -> Vec<u8> {
     e.finish().unwrap()
 }
 
-/// The test data folder, or None (with a note) when it is absent outside CI.
+/// The test data folder `../shared/data`, or None after recording the skip (a failure with CI=true).
 fn shared_data() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var("CI").as_deref() != Ok("true"),
-        "{} is missing and CI=true: the real-volume tests need it",
-        dir.display()
-    );
-    eprintln!("note: {} not found; real-volume format tests skipped", dir.display());
-    None
+    common::shared_data("")
 }
 
 #[test]
@@ -400,4 +392,27 @@ fn real_dicom_series_matches_its_raw_twin() {
     assert!((v.spacing[2] - 7.0005).abs() < 1e-3, "{:?}", v.spacing);
     assert!(v.notes.iter().any(|n| n.contains("oblique")), "{:?}", v.notes);
     assert_same_voxels(&v, &raw_twin(&data, "brain_pd_mr_256x256x20_int16.raw"));
+}
+
+#[test]
+fn real_ct_head_loads_with_its_range_and_gpu_mapping() {
+    let Some(path) = common::shared_data("raw/cranium_ct_256x256x108_int16.raw") else {
+        return;
+    };
+    let opts = volume::RawOptions {
+        spacing: Some([0.957031, 0.957031, 1.5]),
+        ..Default::default()
+    };
+    let v = volume::load_raw(&path, &opts).unwrap();
+    assert_eq!(v.name, "cranium_ct");
+    assert_eq!(v.dims, [256, 256, 108]);
+    assert_eq!(v.source_type, VoxelType::I16);
+    assert_eq!(v.range, [-1024.0, 2986.0]);
+    let e = v.extent();
+    assert!((e.z - 108.0 * 1.5 / (256.0 * 0.957031)).abs() < 1e-5, "{e}");
+    let (scale, bias) = v.gpu_scale_bias();
+    // Air (-1024) maps to 0 and the densest bone to 1 through the shader's affine map.
+    let air = f64::from((31744.0f32 / 65535.0) * scale + bias);
+    let bone = f64::from((35754.0f32 / 65535.0) * scale + bias);
+    assert!(air.abs() < 1e-4 && (bone - 1.0).abs() < 1e-4, "{air} {bone}");
 }

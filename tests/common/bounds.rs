@@ -23,11 +23,13 @@ pub const REFERENCE: Bounds = Bounds {
 /// fixed-point weights, so a trilinear sample can be off by up to ~1/256 of the value range; where the data is
 /// steep that moves samples across the window's edge and the error compounds along the ray. The same data as
 /// R16_UNORM, float textures or corner buffers meet [`REFERENCE`].
-/// Measured (uint8 and int8 Marschner–Lobb): worst mean 1.04, p99 8, max 65; at most 8 pixels above 16/255.
-/// Catches: a steady error of 2/255 over the object, or any region of more than 16 pixels off by more than 16.
+/// Measured (uint8 and int8 Marschner–Lobb, the 48³ helix through `--texture native`): worst mean 1.04, p99 23
+/// (the helix's few hundred object pixels make its p99 its fourth-worst pixel), max 89; at most 8 pixels above
+/// 16/255. Catches: a steady error of 2/255 over the object, or any region of more than 16 pixels off by more
+/// than 16/255.
 pub const REFERENCE_R8: Bounds = Bounds {
     mean: 2.0,
-    p99: 14.0,
+    p99: 30.0,
     max: 16,
     outliers: 16,
 };
@@ -51,5 +53,17 @@ pub const METHODS: Bounds = Bounds {
     mean: 0.006,
     p99: 1.0,
     max: 1,
+    outliers: 4,
+};
+
+/// Entry/exit targets of half floats (`--positions rgba16f`): positions keep 11 significant bits, so a ray's ends
+/// move by up to 1/2048 of the box and its samples with them: a documented trade of accuracy for memory, which
+/// `volcast compare` reports as the setups differing (tests/cli_tools.rs).
+/// Measured (the 48³ helix at 64×48, cli_options.rs): mean 0.636, p99 5, max 11; 1 pixel above 8/255.
+/// Catches: rgba16f targets read at the wrong pixel or with the wrong format (mean, p99).
+pub const POSITIONS_RGBA16F: Bounds = Bounds {
+    mean: 1.25,
+    p99: 10.0,
+    max: 8,
     outliers: 4,
 };
