@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 use glam::Vec3;
+use std::f64::consts::PI;
 use volcast::camera::Camera;
 use volcast::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::tf::TransferFunction;
@@ -184,13 +185,22 @@ pub fn gradient_cases(v: &Volume, size: u32) -> Vec<Case> {
         .collect()
 }
 
-/// The Marschner–Lobb function sampled on 33³ voxels of 1 × 1.2 × 0.8 (non-cubic), stored as `ty` over a range
-/// typical of that type (signed types straddle zero, as CT data do).
+/// Marschner & Lobb's test function (1994; f_M = 6, α = 0.25) over [−1, 1]³, sampled on 33 × 29 × 25 voxels
+/// of 1 × 1.2 × 0.8 (neither the grid nor the voxels cubic), stored as `ty` over a range typical of that type
+/// (signed types straddle zero, as CT data do).
 pub fn marschner_lobb_as(ty: VoxelType) -> Volume {
-    let ml = volume::builtin("marschner-lobb", Some(33)).expect("built-in");
-    let values: Vec<f64> = (0..33u32 * 33 * 33)
-        .map(|i| ml.value(i % 33, (i / 33) % 33, i / (33 * 33)))
-        .collect();
+    const DIMS: [u32; 3] = [33, 29, 25];
+    let coord = |i: u32, n: u32| -1.0 + 2.0 * f64::from(i) / f64::from(n - 1);
+    let mut values = Vec::with_capacity(33 * 29 * 25);
+    for k in 0..DIMS[2] {
+        for j in 0..DIMS[1] {
+            for i in 0..DIMS[0] {
+                let (x, y, z) = (coord(i, DIMS[0]), coord(j, DIMS[1]), coord(k, DIMS[2]));
+                let rho_r = (2.0 * PI * 6.0 * (0.5 * PI * x.hypot(y)).cos()).cos();
+                values.push((1.0 - (0.5 * PI * z).sin() + 0.25 * (1.0 + rho_r)) / 2.5);
+            }
+        }
+    }
     let scaled = |lo: f64, hi: f64| values.iter().map(move |v| (lo + v * (hi - lo)).round());
     let data = match ty {
         VoxelType::U8 => VoxelData::U8(scaled(0.0, 255.0).map(|v| v as u8).collect()),
@@ -204,5 +214,5 @@ pub fn marschner_lobb_as(ty: VoxelType) -> Volume {
         VoxelType::F64 => VoxelData::F32(values.iter().map(|v| (v * 1.0e3 - 250.0) as f32).collect()),
         VoxelType::F32 => VoxelData::F32(values.iter().map(|&v| v as f32).collect()),
     };
-    Volume::new(format!("ml-{}", ty.name()), [33, 33, 33], [1.0, 1.2, 0.8], ty, data).expect("valid volume")
+    Volume::new(format!("ml-{}", ty.name()), DIMS, [1.0, 1.2, 0.8], ty, data).expect("valid volume")
 }

@@ -1,0 +1,192 @@
+#!/usr/bin/env python3
+"""Plants plausible bugs in a scratch copy of volcast, one at a time, and reports which tests catch each.
+
+A test suite proves something only if it fails when the code is wrong. Each bug below is a small, realistic
+source change (a wrong sign, a dropped factor, an edge off by one); for each, this script applies it to a scratch
+copy of the committed tree, runs `cargo test --release --no-fail-fast` there, and records the failing tests. A bug
+that no test catches is a *survivor*: a hole in the proof. The README's Tests section lists the last result.
+
+Runs by hand, not in CI (each bug rebuilds the crate and runs the whole suite: ~5 minutes a bug on 2 cores):
+
+    python3 scripts/planted_bugs.py               # every bug; writes target/planted-bugs.md
+    python3 scripts/planted_bugs.py --list        # the bugs, without running
+    python3 scripts/planted_bugs.py --only srgb-twice --only no-opacity-correction
+
+Exits 1 if any bug survives or no longer applies (its source line changed: update the bug).
+"""
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+# name, what it breaks, [(file, exact text, replacement)]: each text must occur exactly once in its file.
+BUGS = [
+    ("colour-by-value", "the colormap is indexed by the value instead of its position in the window",
+     [("src/tf.rs", "let c = (v - lo) / span;", "let c = v;")]),
+    ("no-opacity-correction", "opacity is not corrected for the step length",
+     [("src/tf.rs", "None => 1.0 - (1.0 - alpha).powf(steps),", "None => alpha,"),
+      ("shaders/march.glsl", ": 1.0 - pow(1.0 - alpha, steps);", ": alpha;")]),
+    ("half-texel-offset", "texel centres at i/n instead of (i + 0.5)/n in the corner-buffer sampler",
+     [("shaders/march.glsl", "vec3 q = clamp(p * frame.dims.xyz - 0.5,", "vec3 q = clamp(p * frame.dims.xyz,")]),
+    ("gradient-scaling-dropped", "shading normals ignore the voxel's world size (wrong on non-cubic voxels)",
+     [("shaders/march.glsl", "vec3 gw = g / frame.voxel_world.xyz;", "vec3 gw = g;")]),
+    ("window-upper-edge", "the value window's upper edge is ignored on the GPU",
+     [("src/render/mod.rs", "s.window[0], s.window[1]],", "s.window[0], 1.0],")]),
+    ("brick-apron-dropped", "bricks' value ranges miss the voxel before them, so a brick that is not empty is skipped",
+     [("src/render/skip.rs", "let lo = (b * BRICK).saturating_sub(1);", "let lo = b * BRICK;")]),
+    ("wrong-face-culled", "the entry pass culls front faces and the exit pass back faces",
+     [("src/render/mod.rs", "[vk::CullModeFlags::BACK, vk::CullModeFlags::FRONT]",
+       "[vk::CullModeFlags::FRONT, vk::CullModeFlags::BACK]")]),
+    ("near-plane-ignored", "the analytic setup starts rays behind the near plane",
+     [("shaders/analytic.glsl", "max(max(max(t_min.x, t_min.y), t_min.z), frame.ray_forward.w)",
+       "max(max(max(t_min.x, t_min.y), t_min.z), 0.0)")]),
+    ("srgb-twice", "the output is sRGB-encoded twice",
+     [("shaders/march.glsl", "return vec4(linear_to_srgb(rgb), 1.0);",
+       "return vec4(linear_to_srgb(linear_to_srgb(rgb)), 1.0);")]),
+    ("jitter-hash", "the shader's jitter hash uses another constant than the rule",
+     [("shaders/march.glsl", "seed * 26699u", "seed * 26701u")]),
+    ("early-termination-ignored", "rays never stop early",
+     [("shaders/march.glsl", "if (opacity >= frame.alpha.z) {", "if (opacity >= 1.0) {")]),
+    ("density-step-ignored", "the density model forgets the step length",
+     [("src/tf.rs", "Some(d) => (alpha * d * steps).min(1.0),", "Some(d) => (alpha * d).min(1.0),"),
+      ("shaders/march.glsl", "min(1.0, alpha * frame.mode_params.y * steps)", "min(1.0, alpha * frame.mode_params.y)")]),
+    ("no-bisection", "the isosurface is not refined between samples",
+     [("shaders/march.glsl", "for (int i = 0; i < 8; i++) {", "for (int i = 0; i < 0; i++) {")]),
+    ("int16-bias-sign", "signed 16-bit data are un-biased with the wrong sign",
+     [("src/volume/mod.rs", "((intercept - slope * offset - min) / span) as f32,",
+       "((intercept + slope * offset - min) / span) as f32,")]),
+    ("ortho-aspect", "orthographic rays ignore the image's aspect ratio",
+     [("src/render/mod.rs", "origin_dx: v4(right * (spread * tan * aspect) / v.extent, 0.0),",
+       "origin_dx: v4(right * (spread * tan) / v.extent, 0.0),")]),
+    ("slab-upper-ignored", "the slab box's upper corner is ignored",
+     [("src/render/mod.rs", "slab_hi: v4(s.slab_hi, 0.0),", "slab_hi: v4(Vec3::ONE, 0.0),")]),
+    ("multiplied-alpha-ignored", "the multiplied-alpha model is ignored",
+     [("src/tf.rs", "if *multiplied { c * step_alpha } else { *step_alpha },", "*step_alpha,")]),
+    ("data-units-offset", "transfer functions in data units forget the range's minimum",
+     [("src/tf.rs", "TfUnits::Data => (range[0] + v as f64 * (range[1] - range[0])) as f32,",
+       "TfUnits::Data => (v as f64 * (range[1] - range[0])) as f32,")]),
+    ("corner-clamp-axis", "the corner buffer clamps x neighbours against the height instead of the width",
+     [("src/render/mod.rs", "let x1 = (x + 1).min(nx - 1);", "let x1 = (x + 1).min(ny - 1);")]),
+    ("mip-minimum", "maximum intensity projection keeps the minimum",
+     [("shaders/march.glsl", "m = mode == MODE_MIP ? max(m, v) : min(m, v);", "m = mode == MODE_MIP ? min(m, v) : min(m, v);")]),
+    ("gradient-texture-scale", "the gradient texture's gradients are twice too large (gradient opacity saturates)",
+     [("shaders/march.glsl", "return 0.5 * textureLod(sampler3D(gradient_tex, linear_smp), p, 0.0).xyz;",
+       "return textureLod(sampler3D(gradient_tex, linear_smp), p, 0.0).xyz;")]),
+    ("adaptive-uncorrected", "adaptive double steps use the single step's opacity",
+     [("shaders/march.glsl", "vec4 c = step_table(v, stride);", "vec4 c = step_table(v, 1);")]),
+    ("counter-counts-visible", "the sample counter counts only visible samples, not every sample taken",
+     [("shaders/march.glsl", "            taken += 1u;\n            vec3 p = a + dir * t;", "            vec3 p = a + dir * t;"),
+      ("shaders/march.glsl", "            if (!visible(v)) {\n                continue;\n            }\n#if !defined(SHADED)",
+       "            if (!visible(v)) {\n                continue;\n            }\n            taken += 1u;\n#if !defined(SHADED)")]),
+]
+
+ROOT = Path(__file__).resolve().parent.parent
+SCRATCH = Path(os.environ.get("PLANTED_SCRATCH", "/tmp/volcast-planted"))
+
+
+def run(cmd, cwd, env=None, log=None):
+    out = subprocess.run(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if log:
+        log.write_text(out.stdout)
+    return out
+
+
+def scratch_copy():
+    """The committed tree (HEAD) in SCRATCH/tree, beside ../shared, with its own target folder kept across runs."""
+    tree = SCRATCH / "main"
+    if tree.exists():
+        shutil.rmtree(tree)
+    tree.mkdir(parents=True)
+    archive = subprocess.run(["git", "archive", "HEAD"], cwd=ROOT, stdout=subprocess.PIPE, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(tree)], input=archive, check=True)
+    shared = SCRATCH / "shared"
+    if not shared.exists() and (ROOT.parent / "shared").exists():
+        shared.symlink_to(ROOT.parent / "shared")
+    return tree
+
+
+def failing_tests(output):
+    failed, binary = [], "?"
+    for line in output.splitlines():
+        m = re.match(r"\s*Running (\S+)", line)
+        if m:
+            binary = Path(m.group(1)).stem
+        m = re.match(r"test (\S+) \.\.\. FAILED", line)
+        if m:
+            failed.append(f"{binary}::{m.group(1)}")
+    return failed
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--list", action="store_true", help="list the bugs and exit")
+    ap.add_argument("--only", action="append", default=[], help="run only this bug (repeatable)")
+    args = ap.parse_args()
+    if args.list:
+        for name, what, _ in BUGS:
+            print(f"{name:28} {what}")
+        return 0
+    bugs = [b for b in BUGS if not args.only or b[0] in args.only]
+    tree = scratch_copy()
+    env = dict(os.environ, CARGO_TARGET_DIR=str(SCRATCH / "target"), CI="true")
+    env.setdefault("XDG_RUNTIME_DIR", str(SCRATCH / "xdg"))
+    Path(env["XDG_RUNTIME_DIR"]).mkdir(parents=True, exist_ok=True)
+    logs = SCRATCH / "logs"
+    logs.mkdir(exist_ok=True)
+
+    print("building the unchanged tree and running its tests once (they must pass)...", flush=True)
+    clean = run(["cargo", "test", "--release", "--no-fail-fast"], tree, env, logs / "clean.log")
+    if clean.returncode != 0:
+        print(f"the unchanged tree fails its tests: see {logs / 'clean.log'}", file=sys.stderr)
+        return 2
+
+    rows, bad = [], 0
+    for name, what, edits in bugs:
+        originals = {}
+        try:
+            for rel, old, new in edits:
+                path = tree / rel
+                text = originals.setdefault(rel, path.read_text())
+                current = path.read_text()
+                if current.count(old) != 1:
+                    raise ValueError(f"{rel}: the text to change occurs {current.count(old)} times")
+                path.write_text(current.replace(old, new))
+        except ValueError as e:
+            rows.append((name, what, f"does not apply ({e})"))
+            bad += 1
+            for rel, text in originals.items():
+                (tree / rel).write_text(text)
+            continue
+        start = time.time()
+        out = run(["cargo", "test", "--release", "--no-fail-fast"], tree, env, logs / f"{name}.log")
+        for rel, text in originals.items():
+            (tree / rel).write_text(text)
+        failed = failing_tests(out.stdout)
+        if "could not compile" in out.stdout:
+            verdict = "does not build (fix the bug's edit)"
+            bad += 1
+        elif failed:
+            verdict = "caught by " + ", ".join(f"`{t}`" for t in failed)
+        else:
+            verdict = "**SURVIVES**"
+            bad += 1
+        print(f"{name}: {verdict} ({time.time() - start:.0f} s)", flush=True)
+        rows.append((name, what, verdict))
+
+    table = "| bug | what it breaks | result |\n|---|---|---|\n"
+    table += "".join(f"| `{n}` | {w} | {v} |\n" for n, w, v in rows)
+    report = ROOT / "target" / "planted-bugs.md"
+    report.parent.mkdir(exist_ok=True)
+    report.write_text(table)
+    print("\n" + table)
+    print(f"written to {report}; logs in {logs}")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
