@@ -9,7 +9,7 @@ use volcast::camera::Camera;
 use volcast::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::tf::TransferFunction;
 use volcast::transfer::Colormap;
-use volcast::volume::{self, Volume, VoxelData, VoxelType};
+use volcast::volume::{Volume, VoxelData, VoxelType};
 
 #[derive(Clone)]
 pub struct Case {
