@@ -57,6 +57,8 @@ pub enum VolumeSource {
 pub enum ScriptStep {
     /// Render this many frames.
     Frames(u32),
+    /// Keep the window open and drawing for this long, so that a test can drive it with real X input meanwhile.
+    Wait(Duration),
     /// Rotate the view a little each frame for this many frames, as a drag would, and report the frame times.
     Drag(u32),
     /// Interactive level of detail on or off.
@@ -76,7 +78,8 @@ pub enum ScriptStep {
     Exit,
 }
 
-/// Parses `frames:3;resize:320x240;minimize;restore;zero-size;key:tab;screenshot:PATH;exit`.
+/// Parses `frames:3;wait:500;resize:320x240;minimize;restore;zero-size;key:tab;screenshot:PATH;exit` (wait in
+/// milliseconds).
 pub fn parse_script(s: &str) -> Result<Vec<ScriptStep>, String> {
     s.split(';')
         .filter(|p| !p.trim().is_empty())
@@ -86,6 +89,7 @@ pub fn parse_script(s: &str) -> Result<Vec<ScriptStep>, String> {
             let bad = || format!("bad script step '{part}'");
             Ok(match cmd {
                 "frames" => ScriptStep::Frames(arg.parse().map_err(|_| bad())?),
+                "wait" => ScriptStep::Wait(Duration::from_millis(arg.parse().map_err(|_| bad())?)),
                 "drag" => ScriptStep::Drag(arg.parse().map_err(|_| bad())?),
                 "lod" if arg == "on" || arg == "off" => ScriptStep::Lod(arg == "on"),
                 "dialog" => ScriptStep::Dialog,
@@ -235,6 +239,7 @@ struct Script {
     frames_left: u32,
     drag_left: u32,
     waiting_for_size: Option<(u32, u32, u32)>,
+    wait_until: Option<Instant>,
     started: Instant,
 }
 
@@ -381,6 +386,7 @@ impl Running {
                 frames_left: 0,
                 drag_left: 0,
                 waiting_for_size: None,
+                wait_until: None,
                 started: Instant::now(),
             }),
             has_volume: false,
@@ -625,6 +631,10 @@ impl Running {
             script.frames_left -= 1;
             return Ok(Flow::Continue);
         }
+        if script.wait_until.is_some_and(|t| Instant::now() < t) {
+            return Ok(Flow::Continue);
+        }
+        script.wait_until = None;
         if script.drag_left > 0 {
             script.drag_left -= 1;
             self.state.orbit.turn(0.03);
@@ -650,6 +660,7 @@ impl Running {
         eprintln!("script: {step:?}");
         match step {
             ScriptStep::Frames(n) => script.frames_left = n,
+            ScriptStep::Wait(d) => script.wait_until = Some(Instant::now() + d),
             ScriptStep::Drag(n) => script.drag_left = n,
             ScriptStep::Dialog => self.apply(vec![UiAction::OpenDialog]),
             ScriptStep::Lod(on) => {
@@ -1124,10 +1135,24 @@ mod tests {
             ]
         );
         assert_eq!(
-            parse_script("drag:5;lod:off").unwrap(),
-            vec![ScriptStep::Drag(5), ScriptStep::Lod(false)]
+            parse_script("drag:5;lod:off;wait:1500").unwrap(),
+            vec![
+                ScriptStep::Drag(5),
+                ScriptStep::Lod(false),
+                ScriptStep::Wait(Duration::from_millis(1500))
+            ]
         );
-        for bad in ["frames:x", "resize:10", "dance", "screenshot:", "lod:maybe", "drag:"] {
+        for bad in [
+            "frames:x",
+            "resize:10",
+            "dance",
+            "screenshot:",
+            "lod:maybe",
+            "drag:",
+            "wait:",
+            "wait:-1",
+            "wait:2s",
+        ] {
             assert!(parse_script(bad).is_err(), "{bad}");
         }
     }
