@@ -399,10 +399,11 @@ mod tests {
         };
         let lut = bake(&simple, [0.25, 0.75], [0.0, 1.0]);
         assert_eq!(lut.len(), LUT_SIZE);
-        assert_eq!(lut[0], lookup(&lut, 0.25), "below the window: its lower edge");
+        // Entries up to 1023 (v = 0.2498) and from 3072 (v = 0.7502) are outside; they hold the window's edges.
+        assert_eq!(lut[0], lut[1023], "below the window: its lower edge");
         assert_eq!(
             lut[LUT_SIZE - 1],
-            lookup(&lut, 0.75),
+            lut[3072],
             "above the window: its upper edge"
         );
         assert_eq!(lut[0][0], 0.0, "grey at the window's lower edge is black");
