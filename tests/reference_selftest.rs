@@ -775,7 +775,8 @@ fn jittered_mean_converges_to_the_integral() {
 
 /// Rule 7's isosurface on a linear ramp along the ray: the hit is the analytic crossing within step/512 (8
 /// bisections of one step, then the midpoint); the first sample at or above the iso value hits at itself; the
-/// window is ignored for the search; the colour is the table's at the iso value, shaded with the default lighting.
+/// window is ignored for the search; the colour is the classification's at the iso value clamped into the window,
+/// shaded with the default lighting.
 #[test]
 fn isosurface_hits_the_analytic_crossing() {
     // Looking up +z at z_ramp: t world units into the box, tex_z = t, v = t − 1/32.
@@ -797,14 +798,13 @@ fn isosurface_hits_the_analytic_crossing() {
                     let hit = trace.hit.unwrap_or_else(|| panic!("{what}: no hit"));
                     assert_near(&what, hit, crossing, h / 512.0 + 1e-12);
                     assert_eq!(trace.alpha, 1.0);
-                    if window == [0.0, 1.0] {
-                        // Gradient (0, 0, 1/16) per voxel = (0, 0, 1) per world unit, facing the eye: |n·L| = 1.
-                        let lit = srgb_to_linear(f64::from(iso)) * (0.2 + 0.7) + 0.3;
-                        assert_near3(&format!("{what}: colour"), trace.color, DVec3::splat(lit), 1e-6);
-                    } else {
-                        // The table is zero outside the window: only the specular highlight is left.
-                        assert_near3(&format!("{what}: colour"), trace.color, DVec3::splat(0.3), 1e-6);
-                    }
+                    // The colour of the iso value clamped into the window: this transfer function's grey is the
+                    // value itself, so 0.95 for every iso value below the window [0.95, 1]. Gradient
+                    // (0, 0, 1/16) per voxel = (0, 0, 1) per world unit, facing the eye: |n·L| = 1, and the
+                    // specular highlight is white.
+                    let grey = f64::from(iso.clamp(window[0], window[1]));
+                    let lit = srgb_to_linear(grey) * (0.2 + 0.7) + 0.3;
+                    assert_near3(&format!("{what}: colour"), trace.color, DVec3::splat(lit), 1e-6);
                 }
             }
         }
