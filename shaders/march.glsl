@@ -80,8 +80,11 @@ float sample_raw(vec3 p) {
 }
 #endif
 
+// The normalised value, in [0, 1] by definition (rule 3): f32 rounding of the scale and bias must not push the
+// data's maximum just above 1 (out of a window ending at 1) nor its minimum below 0. NaN stays NaN.
 float sample_value(vec3 p) {
-    return sample_raw(p) * frame.value_map.x + frame.value_map.y;
+    float v = sample_raw(p) * frame.value_map.x + frame.value_map.y;
+    return isnan(v) ? v : clamp(v, 0.0, 1.0);
 }
 
 bool visible(float v) {

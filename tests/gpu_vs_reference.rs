@@ -6,7 +6,7 @@
 mod common;
 
 use common::bounds::{REFERENCE, REFERENCE_R8};
-use common::cases::{gradient_cases, marschner_lobb_as, quality_cases, settings_cases, standard_cases, with};
+use common::cases::{gradient_cases, marschner_lobb_as, mask_as, quality_cases, settings_cases, standard_cases, with};
 use common::compare::Bounds;
 use common::gpu::{finish, validated_gpu, Judge, METHODS};
 use volcast::gpu::Gpu;
@@ -55,6 +55,19 @@ fn builtins_match_the_reference() {
         let v = volume::builtin(name, Some(64)).expect("built-in");
         let cases = standard_cases(&v, 64).into_iter().take(2).collect();
         run(&mut judge, &gpu, &mut headless, &v, cases, METHODS);
+    }
+    // Label masks: whole regions at exactly the data's maximum, the top of the default window.
+    for ty in [VoxelType::U8, VoxelType::U16, VoxelType::F32] {
+        let mask = mask_as(ty);
+        let cases = vec![
+            with(&mask, 72, "emission", |_| {}),
+            with(&mask, 72, "mip", |s| s.mode = CompositeMode::Mip),
+            with(&mask, 72, "minip-low-window", |s| {
+                s.mode = CompositeMode::MinIp;
+                s.window = [0.0, 0.5];
+            }),
+        ];
+        run(&mut judge, &gpu, &mut headless, &mask, cases, METHODS);
     }
     finish(gpu, headless, judge);
 }

@@ -9,7 +9,7 @@ use volcast::camera::Camera;
 use volcast::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::tf::TransferFunction;
 use volcast::transfer::Colormap;
-use volcast::volume::{Volume, VoxelData, VoxelType};
+use volcast::volume::{Scaling, Volume, VoxelData, VoxelType};
 
 #[derive(Clone)]
 pub struct Case {
@@ -215,4 +215,36 @@ pub fn marschner_lobb_as(ty: VoxelType) -> Volume {
         VoxelType::F32 => VoxelData::F32(values.iter().map(|&v| v as f32).collect()),
     };
     Volume::new(format!("ml-{}", ty.name()), DIMS, [1.0, 1.2, 0.8], ty, data).expect("valid volume")
+}
+
+/// A label mask: 1 inside a ball and a slab, 0 elsewhere, stored as `ty` (1 → the type's 1, 255 or 65535
+/// scaled), so that whole regions sit exactly at the data's maximum, the top of the default window.
+pub fn mask_as(ty: VoxelType) -> Volume {
+    const N: u32 = 40;
+    let inside = |x: u32, y: u32, z: u32| {
+        let c = |i: u32| f64::from(i) - 19.5;
+        (c(x).powi(2) + c(y).powi(2) + c(z).powi(2)).sqrt() < 12.0 || (4..8).contains(&z)
+    };
+    let flags: Vec<bool> = (0..N * N * N)
+        .map(|i| inside(i % N, (i / N) % N, i / (N * N)))
+        .collect();
+    let data = match ty {
+        VoxelType::U8 => VoxelData::U8(flags.iter().map(|&f| u8::from(f) * 255).collect()),
+        // As a CT series stores it: 1024 + value, rescale intercept −1024.
+        VoxelType::U16 => VoxelData::U16(flags.iter().map(|&f| 1024 + u16::from(f) * 1000).collect()),
+        _ => VoxelData::F32(flags.iter().map(|&f| f32::from(u8::from(f))).collect()),
+    };
+    let ty = match ty {
+        VoxelType::U8 | VoxelType::U16 => ty,
+        _ => VoxelType::F32,
+    };
+    let v = Volume::new(format!("mask-{}", ty.name()), [N; 3], [1.0, 1.0, 1.3], ty, data).expect("valid volume");
+    if ty == VoxelType::U16 {
+        let ct = Scaling {
+            slope: 1.0,
+            intercept: -1024.0,
+        };
+        return v.with_scaling(ct).expect("valid rescale");
+    }
+    v
 }
