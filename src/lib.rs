@@ -6,6 +6,7 @@ pub mod camera;
 pub mod compare;
 pub mod gpu;
 pub mod headless;
+pub mod info;
 pub mod render;
 pub mod settings;
 pub mod tf;

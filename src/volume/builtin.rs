@@ -172,7 +172,7 @@ mod tests {
             let v = builtin(name, None).unwrap();
             assert_eq!(v.name, name);
             assert_eq!(v.dims, [256; 3]);
-            assert_eq!(v.spacing, [1.0; 3]);
+            assert_eq!(v.spacing(), [1.0; 3]);
             assert_eq!(v.source_type, VoxelType::U8);
             assert!(matches!(v.data, VoxelData::U8(_)));
             assert_eq!(v.range[0], 0.0, "{name} must have empty space");

@@ -9,8 +9,9 @@
 //! slope/intercept becomes [`Volume::scaling`](super::Volume::scaling); the stored integers reach the GPU as is.
 
 use super::decode::{try_vec, Progress};
+use super::dicom_geometry::{self, Placed};
 use super::format::{self, clip, header_error};
-use super::{check_dims, Scaling, Volume, VolumeError, VoxelData, VoxelType};
+use super::{check_dims, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
 use dicom_core::dictionary::{DataDictionary, DataDictionaryEntry};
 use dicom_core::value::PrimitiveValue as P;
 use dicom_core::VR;
@@ -140,30 +141,19 @@ fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Sl
     })
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-#[derive(Debug)]
 struct Plan {
     slices: Vec<Slice>,
     dims: [u32; 3],
-    spacing: [f64; 3],
+    geometry: Geometry,
+    /// Uneven slice spacing: the output slices' positions as fractional indices into `slices`.
+    resample: Option<Vec<f64>>,
     voxel_type: VoxelType,
     scaling: Scaling,
     notes: Vec<String>,
 }
 
 /// Sorts slices along the normal and works out dims, spacing, type and notes.
-fn plan(mut slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
+fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
     let err = |problem: String| header_error(label, problem);
     let mut notes = Vec::new();
     let first = slices
@@ -205,57 +195,22 @@ fn plan(mut slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
     };
     let dims = [first.columns, first.rows, depth];
     check_dims(dims)?;
-    let [row_spacing, column_spacing] = first.pixel_spacing.unwrap_or_else(|| {
+    let pixel_spacing = first.pixel_spacing.unwrap_or_else(|| {
         notes.push("no PixelSpacing: in-plane spacing 1 is used".into());
         [1.0, 1.0]
     });
-    let mut z = first.slice_step.unwrap_or(1.0);
-    let normal = first.orientation.map(|o| cross([o[0], o[1], o[2]], [o[3], o[4], o[5]]));
-    match (normal, slices.iter().all(|s| s.position.is_some())) {
-        (Some(n), true) if slices.len() > 1 => {
-            let along = |s: &Slice| s.position.map_or(0.0, |p| dot(p, n));
-            slices.sort_by(|a, b| along(a).total_cmp(&along(b)));
-            let d: Vec<f64> = slices.iter().map(along).collect();
-            let steps: Vec<f64> = d.windows(2).map(|w| w[1] - w[0]).collect();
-            let mean = (d[d.len() - 1] - d[0]) / (d.len() - 1) as f64;
-            if mean.is_nan() || mean <= 1e-6 {
-                return Err(err(
-                    "the slices all lie at the same position along the slice normal".into()
-                ));
-            }
-            if steps.iter().any(|&s| s < 1e-6 * mean) {
-                return Err(err(
-                    "two slices share a position: the folder holds more than one acquisition".into(),
-                ));
-            }
-            if steps.iter().any(|&s| (s - mean).abs() > 0.01 * mean) {
-                let lo = steps.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = steps.iter().copied().fold(0.0, f64::max);
-                notes.push(format!(
-                    "uneven slice spacing ({lo:.4} to {hi:.4}): the mean {mean:.4} is used"
-                ));
-            }
-            z = mean;
-        }
-        _ if depth > 1 => {
-            slices.sort_by_key(|s| s.instance);
-            notes.push(format!(
-                "no slice positions: slices ordered by InstanceNumber, z spacing {z} from SpacingBetweenSlices/SliceThickness"
-            ));
-        }
-        _ => {}
-    }
-    if let Some(o) = first.orientation {
-        let axis_aligned = [&o[..3], &o[3..]]
-            .iter()
-            .all(|v| v.iter().filter(|c| c.abs() > 1e-3).count() == 1);
-        if !axis_aligned {
-            notes.push(format!(
-                "oblique slices (ImageOrientationPatient {}): the tilt is not applied",
-                o.map(|c| format!("{c:.3}")).join("\\")
-            ));
-        }
-    }
+    let placed: Vec<Placed> = slices
+        .iter()
+        .map(|s| Placed {
+            position: s.position,
+            orientation: s.orientation,
+            instance: s.instance,
+        })
+        .collect();
+    let arrangement = dicom_geometry::arrange(&placed, pixel_spacing, first.slice_step).map_err(err)?;
+    notes.extend(arrangement.notes);
+    let mut slots: Vec<Option<Slice>> = slices.into_iter().map(Some).collect();
+    let slices: Vec<Slice> = arrangement.order.iter().filter_map(|&i| slots[i].take()).collect();
     let voxel_type = match (first.bits_allocated, first.signed) {
         (8, false) => VoxelType::U8,
         (8, true) => VoxelType::I8,
@@ -265,7 +220,8 @@ fn plan(mut slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
     Ok(Plan {
         slices,
         dims,
-        spacing: [column_spacing, row_spacing, z],
+        geometry: arrangement.geometry,
+        resample: arrangement.resample,
         voxel_type,
         scaling: first.scaling,
         notes,
@@ -403,18 +359,18 @@ fn empty_data(voxel_type: VoxelType, count: usize, dims: [u32; 3], bytes: u64) -
     })
 }
 
-fn finish(
-    name: String,
-    dims: [u32; 3],
-    spacing: [f64; 3],
-    voxel_type: VoxelType,
-    scaling: Scaling,
-    notes: Vec<String>,
-    data: VoxelData,
-) -> Result<Volume, VolumeError> {
-    let mut v = Volume::new(name, dims, spacing.map(|s| s as f32), voxel_type, data)?.with_scaling(scaling)?;
+/// The volume from the assembled pixels, placed and (for uneven spacing) resampled as `plan` says.
+fn finish(name: String, plan: Plan, data: VoxelData) -> Result<Volume, VolumeError> {
+    let data = match &plan.resample {
+        Some(at) => dicom_geometry::resample_slices(&data, plan.dims, at),
+        None => data,
+    };
+    let spacing = plan.geometry.spacing().map(|s| s as f32);
+    let mut v = Volume::new(name, plan.dims, spacing, plan.voxel_type, data)?
+        .with_scaling(plan.scaling)?
+        .with_geometry(plan.geometry)?;
     v.format = FORMAT.into();
-    v.notes = notes;
+    v.notes = plan.notes;
     Ok(v)
 }
 
@@ -657,22 +613,15 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
     let label = "DICOM data";
     let obj = parse_bytes(bytes, label, false)?;
     let slice = slice_info(&obj, 0, label)?;
-    let Plan {
-        slices,
-        dims,
-        spacing,
-        voxel_type,
-        scaling,
-        notes,
-    } = plan(vec![slice], label)?;
-    let count = check_dims(dims)? as usize;
-    let bytes_needed = count as u64 * voxel_type.size() as u64;
+    let plan = plan(vec![slice], label)?;
+    let count = check_dims(plan.dims)? as usize;
+    let bytes_needed = count as u64 * plan.voxel_type.size() as u64;
     if bytes_needed > bytes.len() as u64 {
         return Err(short(label, bytes.len() as u64, bytes_needed));
     }
-    let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
-    append_pixels(pixel_value(&obj, label)?, &slices[0], &mut data, label)?;
-    finish("dicom".into(), dims, spacing, voxel_type, scaling, notes, data)
+    let mut data = empty_data(plan.voxel_type, count, plan.dims, bytes_needed)?;
+    append_pixels(pixel_value(&obj, label)?, &plan.slices[0], &mut data, label)?;
+    finish("dicom".into(), plan, data)
 }
 
 fn open_dicom(path: &Path, header_only: bool) -> Result<DefaultDicomObject, VolumeError> {
@@ -755,19 +704,15 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         ));
         slices.retain(|s| s.series == chosen);
     }
-    let Plan {
-        slices,
-        dims,
-        spacing,
-        voxel_type,
-        scaling,
-        notes: plan_notes,
-    } = plan(slices, &label)?;
-    notes.extend(plan_notes);
+    let mut plan = plan(slices, &label)?;
+    notes.append(&mut plan.notes);
+    plan.notes = notes;
+    let (dims, voxel_type) = (plan.dims, plan.voxel_type);
     let count = check_dims(dims)? as usize;
     let bytes_needed = count as u64 * voxel_type.size() as u64;
     // The files must at least hold the pixels they claim before the volume is allocated.
-    let total_file_bytes: u64 = slices
+    let total_file_bytes: u64 = plan
+        .slices
         .iter()
         .map(|s| std::fs::metadata(&files[s.source]).map_or(0, |m| m.len()))
         .sum();
@@ -775,7 +720,7 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         return Err(short(&label, total_file_bytes, bytes_needed));
     }
     let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
-    for (i, s) in slices.iter().enumerate() {
+    for (i, s) in plan.slices.iter().enumerate() {
         let f = &files[s.source];
         let f_label = format::file_label(f);
         match open_dicom(f, false) {
@@ -795,17 +740,9 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
                 append_pixels(Pixels::Bytes(pixels), s, &mut data, &f_label)?;
             }
         }
-        progress.report((i + 1) as f64 / slices.len() as f64);
+        progress.report((i + 1) as f64 / plan.slices.len() as f64);
     }
-    finish(
-        format::volume_name(path),
-        dims,
-        spacing,
-        voxel_type,
-        scaling,
-        notes,
-        data,
-    )
+    finish(format::volume_name(path), plan, data)
 }
 
 #[cfg(test)]
@@ -837,34 +774,41 @@ mod tests {
         let Plan {
             slices: sorted,
             dims,
-            spacing,
+            geometry,
             voxel_type: t,
             notes,
             ..
         } = plan(vec![slice(5.0, 1), slice(-5.0, 2), slice(0.0, 3)], "x").unwrap();
         assert_eq!(sorted.iter().map(|s| s.instance).collect::<Vec<_>>(), [2, 3, 1]);
         assert_eq!(dims, [3, 2, 3]);
-        assert_eq!(spacing, [0.25, 0.5, 5.0]);
+        assert_eq!(geometry.spacing(), [0.25, 0.5, 5.0]);
         assert_eq!(t, VoxelType::I16);
         assert!(notes.is_empty(), "{notes:?}");
     }
 
     #[test]
     fn bad_series() {
-        let e = plan(vec![slice(1.0, 1), slice(1.0, 2)], "x").unwrap_err().to_string();
+        let err = |p: Result<Plan, VolumeError>| p.err().expect("refused").to_string();
+        let e = err(plan(vec![slice(1.0, 1), slice(1.0, 2)], "x"));
         assert!(e.contains("same position"), "{e}");
-        let e = plan(vec![slice(0.0, 1), slice(1.0, 2), slice(1.0, 3)], "x")
-            .unwrap_err()
-            .to_string();
+        let e = err(plan(vec![slice(0.0, 1), slice(1.0, 2), slice(1.0, 3)], "x"));
         assert!(e.contains("share a position"), "{e}");
         let mut other = slice(2.0, 2);
         other.rows = 4;
-        let e = plan(vec![slice(0.0, 1), other], "x").unwrap_err().to_string();
+        let e = err(plan(vec![slice(0.0, 1), other], "x"));
         assert!(e.contains("slices differ: 3x4 16-bit signed against 3x2"), "{e}");
-        let Plan { spacing, notes, .. } = plan(vec![slice(0.0, 1), slice(1.0, 2), slice(3.0, 3)], "x").unwrap();
-        assert_eq!(spacing[2], 1.5);
-        assert!(notes[0].contains("uneven slice spacing"), "{notes:?}");
-        let e = plan(vec![], "x").unwrap_err().to_string();
+        let Plan {
+            geometry,
+            notes,
+            resample,
+            ..
+        } = plan(vec![slice(0.0, 1), slice(1.0, 2), slice(3.0, 3)], "x").unwrap();
+        assert_eq!(geometry.spacing()[2], 1.5);
+        assert!(
+            notes[0].contains("uneven slice spacing") && resample.is_some(),
+            "{notes:?}"
+        );
+        let e = err(plan(vec![], "x"));
         assert!(e.contains("no DICOM image files"), "{e}");
     }
 

@@ -3,7 +3,8 @@
 use super::{Volume, VoxelData};
 
 /// Halves every axis longer than `max_dim` (repeatedly) with a 2-voxel box filter. An odd axis keeps its last
-/// voxel on its own. Spacing grows so the physical size is kept. NaN voxels are left out of an average (all NaN
+/// voxel on its own. Voxels grow to twice their size along a halved
+/// axis, each centred between the two it replaces (`Geometry::downsampled`). NaN voxels are left out of an average (all NaN
 /// stays NaN). Adds a note saying what happened. `max_dim` of 0 is treated as 1.
 pub fn downsample_to(mut volume: Volume, max_dim: u32) -> Volume {
     let max_dim = max_dim.max(1);
@@ -71,19 +72,18 @@ fn halve_axes(volume: Volume, halve: [bool; 3]) -> Volume {
         ),
     };
     let dims = [dst[0] as u32, dst[1] as u32, dst[2] as u32];
-    let spacing: [f32; 3] =
-        std::array::from_fn(|i| (f64::from(volume.spacing[i]) * src[i] as f64 / dst[i] as f64) as f32);
+    // New voxel j averages old voxels 2j and 2j + 1: twice the size, centred between them.
+    let geometry = volume.geometry.downsampled(factor.map(|f| f as u32));
     // Same type, smaller dims: `new` cannot fail on a volume that was valid before.
-    let mut out = match Volume::new(volume.name.clone(), dims, spacing, volume.source_type, data) {
-        Ok(v) => v,
-        Err(_) => return volume,
-    };
-    out = match out.with_scaling(volume.scaling) {
+    let spacing = geometry.spacing().map(|s| s as f32);
+    let out = Volume::new(volume.name.clone(), dims, spacing, volume.source_type, data)
+        .and_then(|v| v.with_scaling(volume.scaling))
+        .and_then(|v| v.with_geometry(geometry));
+    let mut out = match out {
         Ok(v) => v,
         Err(_) => return volume,
     };
     out.format = volume.format;
-    out.origin = volume.origin;
     out.notes = volume.notes;
     out
 }
@@ -105,7 +105,9 @@ mod tests {
             [5.0, 25.0, 40.0]
         );
         assert_eq!(d.value(2, 1, 0), 90.0);
-        assert_eq!(d.spacing, [5.0 / 3.0, 2.0, 3.0]);
+        // Each new voxel is two old ones wide, centred between them (the odd last one too: its value is its own).
+        assert_eq!(d.spacing(), [2.0, 2.0, 3.0]);
+        assert_eq!(d.geometry.origin().to_array(), [0.5, 0.0, 0.0]);
         assert!(d.notes[0].contains("downsampled from 5x2x1 to 3x2x1"), "{:?}", d.notes);
     }
 
@@ -117,7 +119,7 @@ mod tests {
         let d = downsample_to(v, 2);
         assert_eq!(d.dims, [2, 2, 2]);
         assert_eq!(d.value(0, 0, 0), 1.0);
-        assert_eq!(d.spacing, [4.0; 3]);
+        assert_eq!(d.spacing(), [4.0; 3]);
         let small = Volume::new("t", [2, 2, 2], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![3; 8])).unwrap();
         assert!(downsample_to(small, 2).notes.is_empty());
     }

@@ -3,7 +3,7 @@
 //! bytes actually available before anything is allocated.
 
 use super::decode::{self, DecodeError, Endian, Progress};
-use super::{check_dims, check_spacing, Scaling, Volume, VolumeError, VoxelData, VoxelType};
+use super::{check_dims, check_spacing, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Component, Path, PathBuf};
@@ -55,6 +55,9 @@ pub struct Header {
     pub encoding: Encoding,
     pub spacing: [f64; 3],
     pub origin: Option<[f64; 3]>,
+    /// The file's full placement when it has one (orientation, RAS+); otherwise the volume lies along the world's
+    /// axes with `spacing`, voxel (0, 0, 0) at `origin`.
+    pub geometry: Option<Geometry>,
     pub scaling: Scaling,
     pub location: DataLocation,
     pub notes: Vec<String>,
@@ -70,6 +73,7 @@ impl Header {
             encoding: Encoding::Raw,
             spacing: [1.0; 3],
             origin: None,
+            geometry: None,
             scaling: Scaling::IDENTITY,
             location: DataLocation::Inline(Some(0)),
             notes: Vec::new(),
@@ -79,7 +83,7 @@ impl Header {
     /// Voxel count and byte count, checked against the limits.
     fn sizes(&self) -> Result<(usize, u64), VolumeError> {
         let count = check_dims(self.dims)?;
-        check_spacing(self.dims, self.spacing.map(|s| s as f32))?;
+        check_spacing(self.dims, self.spacing.map(|s| s.abs() as f32))?;
         // check_dims bounds count by 2^31, so neither overflows.
         let bytes = count * self.voxel_type.size() as u64;
         let count = usize::try_from(count).map_err(|_| VolumeError::TooLarge {
@@ -90,12 +94,24 @@ impl Header {
         Ok((count, bytes))
     }
 
-    /// The finished volume: spacing as f32 (a non-positive one is refused by [`Volume::new`]), scaling, notes.
+    /// The placement: the file's own geometry, or its spacing along the world's axes from its origin.
+    pub fn placement(&self) -> Geometry {
+        self.geometry.unwrap_or_else(|| {
+            let mut g = Geometry::from_spacing(self.spacing);
+            let [x, y, z] = self.origin.unwrap_or([0.0; 3]);
+            g.affine.w_axis = glam::DVec4::new(x, y, z, 1.0);
+            g
+        })
+    }
+
+    /// The finished volume: spacing as f32 (a zero one is refused by [`Volume::new`]), placement, scaling, notes.
     pub fn into_volume(self, name: String, data: VoxelData) -> Result<Volume, VolumeError> {
-        let spacing = self.spacing.map(|s| s as f32);
-        let mut v = Volume::new(name, self.dims, spacing, self.voxel_type, data)?.with_scaling(self.scaling)?;
+        let spacing = self.spacing.map(|s| s.abs() as f32);
+        let geometry = self.placement();
+        let mut v = Volume::new(name, self.dims, spacing, self.voxel_type, data)?
+            .with_scaling(self.scaling)?
+            .with_geometry(geometry)?;
         v.format = self.format.to_string();
-        v.origin = self.origin;
         v.notes = self.notes;
         Ok(v)
     }
@@ -169,13 +185,13 @@ pub(crate) fn clip(text: &str) -> String {
 
 /// Spacing must be positive: the absolute value is used (a negative one flips the axis in the file's physical
 /// space, which volcast does not apply) and zero or non-finite is refused later by [`Volume::new`].
-pub(crate) fn absolute_spacing(header: &mut Header, spacing: [f64; 3]) {
+pub(crate) fn signed_spacing(header: &mut Header, spacing: [f64; 3]) {
     if spacing.iter().any(|&s| s < 0.0) {
         header
             .notes
-            .push("negative spacing: the absolute value is used and the axis is not flipped".into());
+            .push("negative spacing: the axis runs the other way in space (the volume is mirrored)".into());
     }
-    header.spacing = spacing.map(f64::abs);
+    header.spacing = spacing;
 }
 
 /// The name of `path` for messages.

@@ -3,9 +3,11 @@
 
 use super::decode::{Endian, Progress};
 use super::format::{
-    self, absolute_spacing, clip, header_error, number, numbers, DataLocation, Encoding, Header, Source,
+    self, clip, header_error, number, numbers, signed_spacing, DataLocation, Encoding, Header, Source,
 };
+use super::geometry::{self, Geometry};
 use super::{Volume, VolumeError, VoxelType};
+use glam::DVec3;
 use std::path::Path;
 
 const FORMAT: &str = "MetaImage";
@@ -30,6 +32,33 @@ fn voxel_type(name: &str) -> Option<VoxelType> {
         "MET_DOUBLE" => VoxelType::F64,
         _ => return None,
     })
+}
+
+/// ITK's orientation codes name where each axis comes *from* (ITK's SpatialOrientation: "RAI" is the identity
+/// direction in LPS, axis i running from right to left): the axis directions in LPS.
+fn from_orientation_code(code: &str) -> Option<[DVec3; 3]> {
+    let letters: Vec<char> = code.trim().chars().map(|c| c.to_ascii_uppercase()).collect();
+    if letters.len() != 3 {
+        return None;
+    }
+    let mut seen = [false; 3];
+    let mut out = [DVec3::ZERO; 3];
+    for (axis, letter) in letters.iter().enumerate() {
+        let (world, v) = match letter {
+            'R' => (0, DVec3::X),
+            'L' => (0, -DVec3::X),
+            'A' => (1, DVec3::Y),
+            'P' => (1, -DVec3::Y),
+            'I' => (2, DVec3::Z),
+            'S' => (2, -DVec3::Z),
+            _ => return None,
+        };
+        if std::mem::replace(&mut seen[world], true) {
+            return None;
+        }
+        out[axis] = v;
+    }
+    Some(out)
 }
 
 fn truth(file: &str, key: &str, value: &str) -> Result<bool, VolumeError> {
@@ -72,6 +101,8 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let mut header_size: Option<Option<u64>> = None;
     let mut channels = 1u32;
     let mut data_file = None;
+    let mut matrix: Option<Vec<f64>> = None;
+    let mut anatomical_code: Option<[DVec3; 3]> = None;
     for &(line, end) in &lines {
         if line.trim().is_empty() {
             continue;
@@ -124,18 +155,22 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
             "elementnumberofchannels" => channels = number(file, "ElementNumberOfChannels", value)?,
             "transformmatrix" | "rotation" | "orientation" => {
                 let m: Vec<f64> = value.split_whitespace().filter_map(|p| p.parse().ok()).collect();
-                let identity = m.len() == 9
-                    && m.iter()
-                        .enumerate()
-                        .all(|(i, &v)| v == if i % 4 == 0 { 1.0 } else { 0.0 });
-                if !identity {
-                    h.notes
-                        .push("TransformMatrix is not identity: the rotation is not applied".into());
+                if m.len() < 9 || m.iter().any(|v| !v.is_finite()) {
+                    return Err(err(format!(
+                        "{key} '{}' is not nine numbers (a 3-D direction matrix)",
+                        clip(value)
+                    )));
                 }
+                matrix = Some(m);
             }
-            "anatomicalorientation" => h
-                .notes
-                .push(format!("anatomical orientation {} (not applied)", clip(value))),
+            "anatomicalorientation" => {
+                anatomical_code = Some(from_orientation_code(value).ok_or_else(|| {
+                    err(format!(
+                        "AnatomicalOrientation '{}' is not three of R/L, A/P, S/I, one of each",
+                        clip(value)
+                    ))
+                })?)
+            }
             "elementdatafile" => data_file = Some((value.to_string(), end)),
             _ => {}
         }
@@ -170,7 +205,20 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
         for (i, v) in s.iter().take(3).enumerate() {
             sp[i] = *v;
         }
-        absolute_spacing(&mut h, sp);
+        signed_spacing(&mut h, sp);
+    }
+    // ITK's physical space is LPS. The direction matrix holds axis i's direction in its i-th triple (ITK's
+    // MetaImageIO::Read: SetDirection(i, m[3i..3i + 3])); without one, AnatomicalOrientation names the axes.
+    let directions = match (&matrix, anatomical_code) {
+        (Some(m), _) => Some([0, 1, 2].map(|i| DVec3::new(m[3 * i], m[3 * i + 1], m[3 * i + 2]))),
+        (None, code) => code,
+    };
+    if let Some(directions) = directions {
+        let columns = [0, 1, 2].map(|i| directions[i].normalize_or_zero() * h.spacing[i]);
+        let origin = DVec3::from_array(h.origin.unwrap_or([0.0; 3]));
+        h.geometry = Some(Geometry::anatomical(
+            geometry::LPS_TO_RAS * geometry::from_columns(columns, origin),
+        ));
     }
     h.encoding = match (binary, compressed) {
         (true, false) => Encoding::Raw,
@@ -262,8 +310,12 @@ mod tests {
         ] {
             let v = from_bytes(&bytes).unwrap();
             assert_eq!(v.dims, [3, 2, 2]);
-            assert_eq!(v.spacing, [0.5, 1.0, 1.5]);
-            assert_eq!(v.origin, Some([10.0, 20.0, 30.0]));
+            assert_eq!(v.spacing(), [0.5, 1.0, 1.5]);
+            assert_eq!(v.geometry.origin().to_array(), [10.0, 20.0, 30.0]);
+            assert!(
+                !v.geometry.anatomical,
+                "no TransformMatrix or AnatomicalOrientation: no orientation"
+            );
             assert_eq!(v.source_type, VoxelType::F32);
             assert_eq!(v.value(2, 1, 1), 4.5);
             assert_eq!(v.range, [-1.0, 4.5]);

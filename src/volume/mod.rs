@@ -14,8 +14,10 @@
 mod builtin;
 mod decode;
 mod dicom;
+mod dicom_geometry;
 mod downsample;
 mod format;
+pub mod geometry;
 mod metaimage;
 mod nifti;
 mod nrrd;
@@ -38,6 +40,8 @@ pub mod from_bytes {
     pub use super::nrrd::{from_bytes as nrrd, parse_header as nrrd_header};
     pub use super::vtk::{from_bytes as vtk, parse_header as vtk_header};
 }
+
+pub use geometry::Geometry;
 
 use std::fmt;
 use std::path::PathBuf;
@@ -226,7 +230,9 @@ pub struct Volume {
     pub name: String,
     /// x fastest, then y, then z.
     pub dims: [u32; 3],
-    pub spacing: [f32; 3],
+    /// Where the voxels are: the voxel-to-world affine (RAS+ millimetres for anatomical files) and whether the
+    /// file said which way the patient lies. Set through [`Volume::with_geometry`] and [`Volume::with_spacing`].
+    pub geometry: Geometry,
     pub source_type: VoxelType,
     pub data: VoxelData,
     /// min/max of the values after [`Volume::scaling`] (as the GPU sees them, i.e. after float64->f32),
@@ -238,8 +244,6 @@ pub struct Volume {
     pub scaling: Scaling,
     /// Where the volume came from: "raw", "VTK legacy", "NRRD", "NIfTI-1", "MetaImage", "DICOM", "built-in".
     pub format: String,
-    /// Position of voxel (0, 0, 0) in the file's physical space, if it says.
-    pub origin: Option<[f64; 3]>,
     /// Things the user should know that are not errors: orientation ignored, 4-D reduced, downsampled, ...
     pub notes: Vec<String>,
 }
@@ -273,22 +277,41 @@ impl Volume {
         Ok(Volume {
             name: name.into(),
             dims,
-            spacing,
+            geometry: Geometry::from_spacing(spacing.map(f64::from)),
             source_type,
             data,
             range,
             stored_range: range,
             scaling: Scaling::IDENTITY,
             format: "memory".into(),
-            origin: None,
             notes: Vec::new(),
         })
     }
 
-    /// Replaces the voxel size; refused (naming it) unless positive and finite.
+    /// The voxel size along each index axis (the lengths of the affine's columns).
+    pub fn spacing(&self) -> [f32; 3] {
+        self.geometry.spacing().map(|s| s as f32)
+    }
+
+    /// Replaces the voxel size, keeping the directions and origin; refused (naming it) unless positive and finite.
     pub fn with_spacing(mut self, spacing: [f32; 3]) -> Result<Volume, VolumeError> {
         check_spacing(self.dims, spacing)?;
-        self.spacing = spacing;
+        self.geometry = self.geometry.with_spacing(spacing.map(f64::from));
+        Ok(self)
+    }
+
+    /// Places the volume by `geometry`; refused if its voxel sizes are not positive and finite or its affine is
+    /// singular or not finite.
+    pub fn with_geometry(mut self, geometry: Geometry) -> Result<Volume, VolumeError> {
+        let spacing = geometry.spacing().map(|s| s as f32);
+        check_spacing(self.dims, spacing)?;
+        let finite = geometry.affine.to_cols_array().iter().all(|v| v.is_finite());
+        if !finite || geometry.linear().determinant().abs() < 1e-12 {
+            return Err(VolumeError::BadAffine {
+                rows: Box::new(geometry.rows()),
+            });
+        }
+        self.geometry = geometry;
         Ok(self)
     }
 
@@ -348,7 +371,8 @@ impl Volume {
 
     /// Physical box, dims × spacing, scaled so the largest side is 1.
     pub fn extent(&self) -> glam::Vec3 {
-        let size = [0, 1, 2].map(|i| f64::from(self.dims[i]) * f64::from(self.spacing[i]));
+        let spacing = self.geometry.spacing();
+        let size = [0, 1, 2].map(|i| f64::from(self.dims[i]) * spacing[i]);
         let largest = size[0].max(size[1]).max(size[2]);
         // `new` guarantees positive, finite sides, so `largest` > 0.
         glam::Vec3::new(
@@ -492,6 +516,8 @@ pub enum VolumeError {
         spacing[0], spacing[1], spacing[2]
     )]
     BadSpacing { spacing: [f32; 3] },
+    #[error("the voxel-to-world affine {rows:?} is not finite or not invertible (its axes are parallel or zero)")]
+    BadAffine { rows: Box<[[f64; 4]; 4]> },
     #[error("unknown voxel type '{given}': use one of {}", type_list())]
     UnknownType { given: String },
     #[error(
@@ -858,6 +884,6 @@ mod tests {
         let v = volume(VoxelType::U8, VoxelData::U8(vec![1; 1000]));
         let text = format!("{v:?}");
         assert!(text.contains("VoxelData::U8(len 1000)"), "{text}");
-        assert!(text.len() < 300, "{text}");
+        assert!(text.len() < 600, "{text}");
     }
 }

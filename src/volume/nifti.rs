@@ -7,7 +7,9 @@
 
 use super::decode::{self, DecodeError, Endian, Progress};
 use super::format::{self, header_error, DataLocation, Encoding, Header, Source};
+use super::geometry::{self, Geometry};
 use super::{Scaling, Volume, VolumeError, VoxelType};
+use glam::DMat3;
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::Path;
@@ -162,17 +164,36 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     if slope != 0.0 && slope.is_finite() && intercept.is_finite() && (slope != 1.0 || intercept != 0.0) {
         h.scaling = Scaling { slope, intercept };
     }
+    // nibabel's precedence (Nifti1Header.get_best_affine): the sform if its code is set, else the qform, else
+    // the "base" affine of an Analyze image: pixdim with x flipped (radiological storage), centred on the volume.
     let (qform, sform) = (f.i16(252), f.i16(254));
-    if qform > 0 || sform > 0 {
-        h.origin = if sform > 0 {
-            Some([f.f32(280 + 12), f.f32(296 + 12), f.f32(312 + 12)].map(f64::from))
-        } else {
-            Some([f.f32(268), f.f32(272), f.f32(276)].map(f64::from))
-        };
-        h.notes.push(format!(
-            "orientation (qform code {qform}, sform code {sform}) not applied: voxel axes are shown as stored"
-        ));
+    let affine = if sform > 0 {
+        let row = |at: usize| [0, 1, 2, 3].map(|c| f64::from(f.f32(at + 4 * c)));
+        geometry::from_rows([row(280), row(296), row(312)])
+    } else if qform > 0 {
+        let quaternion = [256, 260, 264].map(|at| f64::from(f.f32(at)));
+        let offset = [268, 272, 276].map(|at| f64::from(f.f32(at)));
+        // pixdim[0] is qfac: −1 negates the third axis; 0 counts as 1 (nifti1.h).
+        let qfac = f64::from(f.f32(76));
+        geometry::nifti_qform(quaternion, qfac, spacing, offset)
+    } else {
+        h.notes
+            .push("no qform or sform: placed as nibabel does (pixdim, x flipped as Analyze stores it, centred)".into());
+        let centre = h.dims.map(|d| (f64::from(d) - 1.0) / 2.0);
+        geometry::from_rows([
+            [-spacing[0], 0.0, 0.0, centre[0] * spacing[0]],
+            [0.0, spacing[1], 0.0, -centre[1] * spacing[1]],
+            [0.0, 0.0, spacing[2], -centre[2] * spacing[2]],
+        ])
+    };
+    if affine.to_cols_array().iter().any(|v| !v.is_finite()) || DMat3::from_mat4(affine).determinant() == 0.0 {
+        return Err(err(format!(
+            "its {} gives no valid voxel-to-world affine (not finite, or axes that are zero or parallel)",
+            if sform > 0 { "sform" } else { "qform" }
+        )));
     }
+    h.geometry = Some(Geometry::anatomical(affine));
+    h.spacing = Geometry::anatomical(affine).spacing();
     h.location = if single_file {
         DataLocation::Inline(Some(vox_offset))
     } else {
@@ -370,7 +391,7 @@ pub(crate) mod tests {
             for b in [bytes.clone(), gzip(&bytes)] {
                 let v = from_bytes(&b).unwrap();
                 assert_eq!(v.dims, [2, 1, 3]);
-                assert_eq!(v.spacing, [0.5, 2.0, 3.0]);
+                assert_eq!(v.spacing(), [0.5, 2.0, 3.0]);
                 assert_eq!(v.source_type, VoxelType::I16);
                 assert!(matches!(v.data, VoxelData::U16(_)));
                 assert_eq!(v.stored(0, 0, 0), -3.0);
@@ -449,7 +470,7 @@ pub(crate) mod tests {
         let mut b = ok.clone();
         b[80..84].copy_from_slice(&f32::NAN.to_le_bytes());
         let v = from_bytes(&b).unwrap();
-        assert_eq!(v.spacing[0], 1.0);
+        assert_eq!(v.spacing()[0], 1.0);
         assert!(v.notes.iter().any(|n| n.contains("pixdim[1] is NaN")));
     }
 }

@@ -2,8 +2,10 @@
 //! ascii; `sizes`, `spacings` or `space directions`, `space origin`, `endian`, `byte skip`, `line skip`.
 
 use super::decode::{Endian, Progress};
-use super::format::{self, absolute_spacing, clip, header_error, number, DataLocation, Encoding, Header, Source};
+use super::format::{self, clip, header_error, number, signed_spacing, DataLocation, Encoding, Header, Source};
+use super::geometry::{self, Geometry};
 use super::{Volume, VolumeError, VoxelType};
+use glam::{DMat4, DVec3, DVec4};
 use std::path::Path;
 
 const FORMAT: &str = "NRRD";
@@ -46,6 +48,7 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let mut voxel_type = None;
     let mut spacings: Option<Vec<f64>> = None;
     let mut directions: Option<Vec<Option<[f64; 3]>>> = None;
+    let mut space: Option<Space> = None;
     let mut encoding = None;
     let mut data_file = None;
     let mut line_skip = 0u64;
@@ -73,6 +76,15 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
             }
             "spacings" => spacings = Some(value.split_whitespace().map(nrrd_float).collect()),
             "space directions" => directions = Some(parse_directions(file, value)?),
+            "space" => {
+                space = Some(Space::parse(value).ok_or_else(|| {
+                    err(format!(
+                        "space '{}' is not one the NRRD format names (e.g. right-anterior-superior, \
+                         left-posterior-superior, scanner-xyz, 3D-right-handed)",
+                        clip(value)
+                    ))
+                })?)
+            }
             "space origin" => {
                 let v =
                     parse_vector(value).ok_or_else(|| err(format!("space origin '{}' is not (x,y,z)", clip(value))))?;
@@ -111,8 +123,8 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
                     n => Some(u64::try_from(n).map_err(|_| err(format!("byte skip {n} must be -1 or at least 0")))?),
                 }
             }
-            "space" | "space dimension" | "kinds" | "centerings" | "labels" | "units" | "space units" | "content"
-            | "min" | "max" | "old min" | "oldmin" | "old max" | "oldmax" | "block size" | "blocksize"
+            "space dimension" | "kinds" | "centerings" | "labels" | "units" | "space units" | "content" | "min"
+            | "max" | "old min" | "oldmin" | "old max" | "oldmax" | "block size" | "blocksize"
             | "measurement frame" | "sample units" | "axis mins" | "axismins" | "axis maxs" | "axismaxs"
             | "thicknesses" | "number" => {}
             other => h.notes.push(format!("NRRD field '{}' ignored", clip(other))),
@@ -146,20 +158,24 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
                 dirs.len()
             )));
         }
+        // Columns of the voxel-to-space matrix; a non-spatial axis ("none") keeps a unit step along its own axis.
+        let mut columns = [DVec3::X, DVec3::Y, DVec3::Z];
         for (i, d) in dirs.iter().take(3).enumerate() {
             if let Some(v) = d {
-                spacing[i] = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                columns[i] = DVec3::from_array(*v);
+                spacing[i] = columns[i].length();
             }
         }
-        let axis_aligned = dirs.iter().flatten().all(|v| {
-            v.iter()
-                .filter(|c| c.abs() > 1e-6 * (v[0].abs() + v[1].abs() + v[2].abs()))
-                .count()
-                == 1
+        let space = space.unwrap_or(Space::Unnamed);
+        let origin = DVec3::from_array(h.origin.unwrap_or([0.0; 3]));
+        let affine = space.to_world() * geometry::from_columns(columns, origin);
+        h.geometry = Some(Geometry {
+            affine,
+            anatomical: space.anatomical(),
         });
-        if !axis_aligned {
+        if space == Space::LeftHanded {
             h.notes
-                .push("oblique 'space directions': spacing is their lengths; the rotation is not applied".into());
+                .push("space 3D-left-handed: x is mirrored to place it in volcast's right-handed world".into());
         }
     } else if let Some(s) = &spacings {
         if s.len() != dimension as usize {
@@ -174,8 +190,12 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
                 spacing[i] = *v;
             }
         }
+        if space.is_some_and(|s| s.anatomical()) {
+            h.notes
+                .push("a space is named but no 'space directions' place the axes in it: no orientation applied".into());
+        }
     }
-    absolute_spacing(&mut h, spacing);
+    signed_spacing(&mut h, spacing);
     if h.voxel_type.size() == 1 {
         h.endian = Endian::Little;
     }
@@ -200,6 +220,50 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     Ok(h)
 }
 
+/// The NRRD format's `space` values (teem's nrrdSpace), and how each maps to volcast's world.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Space {
+    /// right-anterior-superior (RAS), with or without time.
+    Ras,
+    /// left-anterior-superior (LAS).
+    Las,
+    /// left-posterior-superior (LPS): DICOM's and ITK's.
+    Lps,
+    /// scanner-xyz, 3D-right-handed: a right-handed space without anatomical names.
+    Plain,
+    /// 3D-left-handed: mirrored into the right-handed world.
+    LeftHanded,
+    /// No `space` field, only `space dimension`.
+    Unnamed,
+}
+
+impl Space {
+    fn parse(value: &str) -> Option<Space> {
+        Some(match value.trim().to_ascii_lowercase().as_str() {
+            "right-anterior-superior" | "ras" | "right-anterior-superior-time" | "rast" => Space::Ras,
+            "left-anterior-superior" | "las" | "left-anterior-superior-time" | "last" => Space::Las,
+            "left-posterior-superior" | "lps" | "left-posterior-superior-time" | "lpst" => Space::Lps,
+            "scanner-xyz" | "scanner-xyz-time" | "3d-right-handed" | "3d-right-handed-time" => Space::Plain,
+            "3d-left-handed" | "3d-left-handed-time" => Space::LeftHanded,
+            _ => return None,
+        })
+    }
+
+    fn anatomical(self) -> bool {
+        matches!(self, Space::Ras | Space::Las | Space::Lps)
+    }
+
+    /// The file's space to volcast's world (RAS+ for the anatomical spaces).
+    fn to_world(self) -> DMat4 {
+        let flip = |x: f64, y: f64| DMat4::from_diagonal(DVec4::new(x, y, 1.0, 1.0));
+        match self {
+            Space::Ras | Space::Plain | Space::Unnamed => DMat4::IDENTITY,
+            Space::Las | Space::LeftHanded => flip(-1.0, 1.0),
+            Space::Lps => flip(-1.0, -1.0),
+        }
+    }
+}
+
 fn voxel_type_of(value: &str) -> Option<VoxelType> {
     voxel_type(value)
 }
@@ -209,7 +273,7 @@ fn nrrd_float(s: &str) -> f64 {
     s.parse::<f64>().unwrap_or(f64::NAN)
 }
 
-/// `(x,y,z)`.
+/// `(x,y,z)`, or `(x,y,z,t)` in a space with time, whose time component is left out.
 fn parse_vector(s: &str) -> Option<[f64; 3]> {
     let inner = s.trim().strip_prefix('(')?.strip_suffix(')')?;
     let v: Vec<f64> = inner
@@ -217,7 +281,7 @@ fn parse_vector(s: &str) -> Option<[f64; 3]> {
         .map(|c| c.trim().parse::<f64>())
         .collect::<Result<_, _>>()
         .ok()?;
-    (v.len() == 3 && v.iter().all(|c| c.is_finite())).then(|| [v[0], v[1], v[2]])
+    ((v.len() == 3 || v.len() == 4) && v.iter().all(|c| c.is_finite())).then(|| [v[0], v[1], v[2]])
 }
 
 /// `(a,b,c) (d,e,f) none ...`.
@@ -290,7 +354,7 @@ mod tests {
         ] {
             let v = from_bytes(&bytes).unwrap();
             assert_eq!(v.dims, [2, 3, 4]);
-            assert_eq!(v.spacing, [0.5, 0.75, 2.0]);
+            assert_eq!(v.spacing(), [0.5, 0.75, 2.0]);
             assert_eq!(v.source_type, VoxelType::U16);
             assert_eq!(v.value(1, 2, 3), 23000.0);
             assert_eq!(v.range, [0.0, 23000.0]);
@@ -303,8 +367,14 @@ mod tests {
                       space directions: (0,-2,0) (0.5,0,0) (0,0,3)\nspace origin: (1,2,3)\n";
         let data: Vec<u8> = [1.5f32, -2.0].iter().flat_map(|v| v.to_le_bytes()).collect();
         let v = from_bytes(&nrrd(fields, &data)).unwrap();
-        assert_eq!(v.spacing, [2.0, 0.5, 3.0]);
-        assert_eq!(v.origin, Some([1.0, 2.0, 3.0]));
+        assert_eq!(v.spacing(), [2.0, 0.5, 3.0]);
+        assert_eq!(v.geometry.origin().to_array(), [1.0, 2.0, 3.0]);
+        assert_eq!(
+            v.geometry.rows()[0],
+            [0.0, 0.5, 0.0, 1.0],
+            "x row: +j steps 0.5 along x"
+        );
+        assert_eq!(v.geometry.axcodes(), Some(['P', 'R', 'S']));
         assert_eq!(v.value(1, 0, 0), -2.0);
         // 4-D with a non-spatial axis: the first volume and a note.
         let fields = "type: int8\ndimension: 4\nsizes: 2 1 1 3\nencoding: raw\nspacings: 1 1 1 nan\n";

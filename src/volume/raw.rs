@@ -284,7 +284,7 @@ mod tests {
         let v = load(&dir, "ramp_4x3x2_uint8.raw", &bytes).unwrap();
         assert_eq!(v.name, "ramp");
         assert_eq!(v.dims, [4, 3, 2]);
-        assert_eq!(v.spacing, [1.0; 3]);
+        assert_eq!(v.spacing(), [1.0; 3]);
         assert_eq!(v.source_type, VoxelType::U8);
         assert!(matches!(v.data, VoxelData::U8(_)));
         assert_eq!(v.value(1, 2, 1), f64::from((1 + 4 * (2 + 3)) * 10));
@@ -373,7 +373,7 @@ mod tests {
         assert_eq!(v.name, "thing");
         assert_eq!(v.dims, [2, 2, 1]);
         assert_eq!(v.source_type, VoxelType::U16);
-        assert_eq!(v.spacing, [0.5, 0.5, 2.0]);
+        assert_eq!(v.spacing(), [0.5, 0.5, 2.0]);
         assert_eq!(v.value(1, 1, 0), 4.0);
 
         // A name that says nothing: everything from the options, name from the file stem.

@@ -3,7 +3,7 @@
 
 use super::decode::{Endian, Progress};
 use super::format::{
-    self, absolute_spacing, clip, header_error, number, numbers, DataLocation, Encoding, Header, Source,
+    self, clip, header_error, number, numbers, signed_spacing, DataLocation, Encoding, Header, Source,
 };
 use super::{Volume, VolumeError, VoxelType};
 use std::path::Path;
@@ -141,7 +141,7 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     }
     h.dims = dims;
     h.voxel_type = voxel_type;
-    absolute_spacing(&mut h, spacing);
+    signed_spacing(&mut h, spacing);
     Ok(h)
 }
 
@@ -190,8 +190,9 @@ mod tests {
         for bytes in [ascii, binary] {
             let v = from_bytes(&bytes).unwrap();
             assert_eq!(v.dims, [3, 2, 2]);
-            assert_eq!(v.spacing, [0.5, 1.0, 2.0]);
-            assert_eq!(v.origin, Some([1.0, 2.0, 3.0]));
+            assert_eq!(v.spacing(), [0.5, 1.0, 2.0]);
+            assert_eq!(v.geometry.origin().to_array(), [1.0, 2.0, 3.0]);
+            assert!(!v.geometry.anatomical);
             assert_eq!(v.source_type, VoxelType::I16);
             assert_eq!(v.format, "VTK legacy");
             assert_eq!(v.value(0, 0, 0), -500.0);
@@ -220,13 +221,13 @@ mod tests {
             let v = from_bytes(text.as_bytes()).unwrap();
             assert_eq!(v.source_type, t, "{name}");
             assert_eq!(v.value(1, 0, 0), 100.0, "{name}");
-            assert_eq!(v.spacing, [1.0; 3]);
+            assert_eq!(v.spacing(), [1.0; 3]);
         }
         let mut bin = b"# vtk DataFile Version 2.0\nt\nBINARY\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 1 1\nASPECT_RATIO 1 1 3\nPOINT_DATA 2\nSCALARS s char\nLOOKUP_TABLE default\n".to_vec();
         bin.extend([0xff, 0x05]);
         let v = from_bytes(&bin).unwrap();
         assert_eq!((v.value(0, 0, 0), v.value(1, 0, 0)), (-1.0, 5.0));
-        assert_eq!(v.spacing, [1.0, 1.0, 3.0]);
+        assert_eq!(v.spacing(), [1.0, 1.0, 3.0]);
         assert!(matches!(v.data, VoxelData::U8(_)));
     }
 

@@ -1,0 +1,171 @@
+//! What `volcast info` says about a volume, in words and as JSON. Pure formatting of a loaded [`Volume`].
+
+use crate::volume::geometry::Handedness;
+use crate::volume::Volume;
+use serde::Serialize;
+
+/// `volcast info --json`: one object per volume.
+#[derive(Clone, Debug, Serialize)]
+pub struct Info {
+    pub name: String,
+    pub format: String,
+    /// [W, H, D], i fastest on disk.
+    pub dims: [u32; 3],
+    /// The voxel type in the file: uint8, int16, float32, ...
+    #[serde(rename = "type")]
+    pub voxel_type: String,
+    /// Voxel size along i, j, k in millimetres (the affine's column lengths).
+    pub spacing: [f64; 3],
+    /// Min and max of the stored values (before a rescale).
+    pub value_range: [f64; 2],
+    /// Min and max after the file's rescale (slope/intercept), what transfer functions in data units see.
+    pub scaled_range: [f64; 2],
+    /// Time steps (1 for 3-D data).
+    pub timesteps: u32,
+    /// Voxel index (i, j, k, 1) to world millimetres, row-major; RAS+ for anatomical files.
+    pub affine_ras: [[f64; 4]; 4],
+    /// Whether the file says which way the patient lies (else the world is the file's own x, y, z).
+    pub anatomical: bool,
+    /// Where +i, +j and +k point, as nibabel's `aff2axcodes` names it ("LAS"); null without orientation.
+    pub axes: Option<String>,
+    /// "right", or "left" for a mirrored (left-handed) affine.
+    pub handedness: &'static str,
+    /// Largest angle between an index axis and its nearest world axis (degrees): 0 unless oblique.
+    pub obliquity_deg: f64,
+    /// Largest departure of the index axes from perpendicular (degrees): a sheared series (gantry tilt).
+    pub shear_deg: f64,
+    pub notes: Vec<String>,
+}
+
+impl Info {
+    pub fn of(v: &Volume) -> Info {
+        let g = &v.geometry;
+        Info {
+            name: v.name.clone(),
+            format: v.format.clone(),
+            dims: v.dims,
+            voxel_type: v.source_type.name().to_string(),
+            spacing: g.spacing(),
+            value_range: v.stored_range,
+            scaled_range: v.range,
+            timesteps: 1,
+            affine_ras: g.rows(),
+            anatomical: g.anatomical,
+            axes: g.axcodes().map(|c| c.iter().collect()),
+            handedness: g.handedness().name(),
+            obliquity_deg: g.obliquity_deg(),
+            shear_deg: g.shear_deg(),
+            notes: v.notes.clone(),
+        }
+    }
+
+    /// The same in words, as `volcast info` prints it.
+    pub fn text(&self, v: &Volume) -> String {
+        let mut out = String::new();
+        let mut line = |key: &str, value: String| {
+            let key = if key.is_empty() {
+                String::new()
+            } else {
+                format!("{key}:")
+            };
+            out.push_str(&format!("{key:<10} {value}\n"))
+        };
+        line("name", self.name.clone());
+        line("format", self.format.clone());
+        line(
+            "dims",
+            format!("{} x {} x {}", self.dims[0], self.dims[1], self.dims[2]),
+        );
+        line("type", self.voxel_type.clone());
+        let s = v.spacing();
+        line("spacing", format!("{} x {} x {}", s[0], s[1], s[2]));
+        let e = v.extent();
+        let size = [0, 1, 2].map(|i| f64::from(self.dims[i]) * self.spacing[i]);
+        line(
+            "size",
+            format!(
+                "{:.1} x {:.1} x {:.1} mm; box {:.3} x {:.3} x {:.3}",
+                size[0], size[1], size[2], e.x, e.y, e.z
+            ),
+        );
+        if v.scaling.is_identity() {
+            line("range", format!("{} .. {}", self.scaled_range[0], self.scaled_range[1]));
+        } else {
+            line("stored", format!("{} .. {}", self.value_range[0], self.value_range[1]));
+            line(
+                "scaled",
+                format!(
+                    "{} .. {} (value = {} * stored + {})",
+                    self.scaled_range[0], self.scaled_range[1], v.scaling.slope, v.scaling.intercept
+                ),
+            );
+        }
+        line("axes", self.axes_in_words(v));
+        for (i, row) in self.affine_ras.iter().take(3).enumerate() {
+            let key = if i == 0 { "affine" } else { "" };
+            let cells: Vec<String> = row.iter().map(|c| format!("{c:>11.5}")).collect();
+            line(key, cells.join(" "));
+        }
+        let gpu_format = match v.gpu_texel_size() {
+            1 => "R8_UNORM",
+            2 => "R16_UNORM",
+            _ => "R32_SFLOAT",
+        };
+        let mib = |bytes: usize| bytes as f64 / (1 << 20) as f64;
+        line(
+            "gpu",
+            format!("{gpu_format}, {:.1} MiB", mib(v.gpu_memory_bytes() as usize)),
+        );
+        if v.gpu_texel_size() < 4 {
+            line(
+                "",
+                format!(
+                    "on CPU devices (lavapipe), --texture auto: corners{}, {:.1} MiB, while under 1 GiB (else \
+                     R32_SFLOAT, {:.1} MiB)",
+                    8 * v.gpu_texel_size(),
+                    mib(v.voxel_count() * 8 * v.gpu_texel_size()),
+                    mib(v.voxel_count() * 4)
+                ),
+            );
+        }
+        for note in &self.notes {
+            line("note", note.clone());
+        }
+        out
+    }
+
+    fn axes_in_words(&self, v: &Volume) -> String {
+        let Some(codes) = &self.axes else {
+            return "no orientation in the file: the world is its own x, y, z (no anatomical directions)".into();
+        };
+        let names: Vec<String> = codes
+            .chars()
+            .zip(['i', 'j', 'k'])
+            .map(|(c, axis)| format!("+{axis} towards {}", direction_name(c)))
+            .collect();
+        let mut words = format!("{codes} ({}), RAS+ world", names.join(", "));
+        if v.geometry.handedness() == Handedness::Left {
+            words += "; mirrored (left-handed)";
+        }
+        if self.obliquity_deg > 0.5 {
+            words += &format!("; oblique by {:.1}°", self.obliquity_deg);
+        }
+        if self.shear_deg > 0.01 {
+            words += &format!("; sheared by {:.2}°", self.shear_deg);
+        }
+        words
+    }
+}
+
+/// A RAS axis code's name.
+pub fn direction_name(code: char) -> &'static str {
+    match code {
+        'R' => "right",
+        'L' => "left",
+        'A' => "anterior",
+        'P' => "posterior",
+        'S' => "superior",
+        'I' => "inferior",
+        _ => "?",
+    }
+}
