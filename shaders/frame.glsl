@@ -1,6 +1,8 @@
 // Per-frame parameters, shared by every stage (set 0, binding 0). Must match `FrameUniforms` in src/render/mod.rs.
 layout(std140, set = 0, binding = 0) uniform Frame {
     mat4 tex_to_clip;     // texture space [0,1]^3 -> Vulkan clip space (y down)
+    mat4 tex_to_world;    // texture space -> the render world (RenderSettings rule 1): its linear part measures rays
+    mat4 gradient_to_world; // a gradient per voxel (index space) -> along the world normal
     vec4 eye_tex;         // xyz: the eye in texture space
     // Pixel ray, texture space, for ndc in [-1,1]^2 (y down): origin = eye_tex + ndc.x * origin_dx + ndc.y * origin_dy
     // (orthographic) and direction = ray_forward + ndc.x * ray_right + ndc.y * ray_down (perspective), scaled so
@@ -13,13 +15,13 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 origin_dy;
     vec4 slab_lo;         // xyz: slab box, texture space
     vec4 slab_hi;
-    vec4 extent;          // xyz: world size of the box; w: step length in world units
+    vec4 extent;          // w: step length in world units
     vec4 value_map;       // x, y: sampled -> normalised value (v = s * x + y); z, w: value window
     vec4 alpha;           // y: step length in voxels; z: early termination
     vec4 background;      // rgb: linear light
     vec4 viewport;        // x, y: target size in pixels; z: most samples a ray may take; w: 1 = output samples taken
     vec4 texel;           // xyz: 1 / dims (one voxel in texture space)
-    vec4 voxel_world;     // xyz: a voxel's world size along each axis; w: gradient-opacity reference (0: off)
+    vec4 voxel_world;     // w: gradient-opacity reference (0: off)
     vec4 shading;         // ambient, diffuse, specular, shininess
     vec4 mode_params;     // x: iso value; y: density factor; z: 1 = skip empty bricks
     uvec4 flags;          // x: composite mode (CompositeMode::index); y: jitter on; z: jitter seed; w: shading on

@@ -135,7 +135,7 @@ vec3 gradient(vec3 p) {
 
 // Blinn-Phong with a headlight (two-sided): `light` is the unit direction towards the eye, in world space.
 vec3 shade(vec3 rgb, vec3 g, vec3 light) {
-    vec3 gw = g / frame.voxel_world.xyz;
+    vec3 gw = mat3(frame.gradient_to_world) * g;
     float len = length(gw);
     if (len < 1e-8) {
         return rgb;
@@ -211,13 +211,15 @@ vec4 output_pixel(vec4 colour, uint taken) {
 // even when no pixel takes it: unused shading code made the plain march 4x slower.
 vec4 march(vec3 a, vec3 b, vec2 frag) {
     vec3 d = b - a;
-    float len = length(d * frame.extent.xyz);
+    // World length and direction: the placement may scale, rotate, shear or mirror the box.
+    vec3 d_world = mat3(frame.tex_to_world) * d;
+    float len = length(d_world);
     float h = frame.extent.w;
     float o = frame.flags.y != 0u ? jitter_offset(uvec2(frag), frame.flags.z) : 0.5;
     uint mode = frame.flags.x;
     bool shading_on = frame.flags.w != 0u;
     float grad_ref = frame.voxel_world.w;
-    vec3 light = -normalize(d * frame.extent.xyz);
+    vec3 light = -normalize(d_world);
     int max_steps = int(frame.viewport.z);
     float step_length = frame.alpha.y;
     vec3 dir = d / len;

@@ -16,13 +16,13 @@ use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::headless::Headless;
 use crate::render::skip::{self, BrickGrid};
-use crate::render::{Renderer, VolumeLayout};
+use crate::render::{FrameUniforms, Renderer, VolumeInfo, VolumeLayout};
 use crate::settings::{self, CompositeMode, RaySetup, RenderSettings};
 use crate::tf;
 use crate::transfer::Colormap;
-use crate::volume::{self, RawOptions, Volume, VolumeError};
+use crate::volume::{self, Geometry, RawOptions, Volume, VolumeError};
 use ash::vk;
-use glam::Vec3;
+use glam::{Mat3, Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -206,8 +206,9 @@ pub fn configure_vtk_helix(s: &mut RenderSettings, v: &Volume) {
     s.step_alpha = 0.2;
     s.step_length = 1.0;
     s.background = Vec3::ZERO;
-    let world_per_unit = v.extent().x / (v.dims[0] as f32 * v.spacing[0]);
-    let points = Vec3::from_array([0, 1, 2].map(|i| (v.dims[i] as f32 - 1.0) * v.spacing[i]));
+    let spacing = v.spacing();
+    let world_per_unit = v.extent().x / (v.dims[0] as f32 * spacing[0]);
+    let points = Vec3::from_array([0, 1, 2].map(|i| (v.dims[i] as f32 - 1.0) * spacing[i]));
     let radius = 0.5 * points.length() * world_per_unit;
     let distance = radius / 15f32.to_radians().sin();
     s.camera = Camera::orbit(VTK_AZIMUTH_HERE, 25.0, distance, Vec3::ZERO);
@@ -654,7 +655,7 @@ pub fn memory_line(gpu: &Gpu, headless: &Headless, s: &RenderSettings) -> Result
 pub struct SampleCounter {
     dims: [usize; 3],
     values: Vec<f32>,
-    extent: Vec3,
+    geometry: Geometry,
     range: [f64; 2],
     /// The renderer's brick grid, for the occupancy empty-space skipping leaps by.
     bricks: BrickGrid,
@@ -676,7 +677,8 @@ struct RayFrame {
     near: f32,
     slab_lo: Vec3,
     slab_hi: Vec3,
-    extent: Vec3,
+    /// Texture space to world (its linear part measures the ray).
+    to_world: Mat3,
     h: f32,
     max_steps: u64,
     viewport: [f32; 2],
@@ -712,7 +714,7 @@ impl SampleCounter {
         SampleCounter {
             dims: volume.dims.map(|d| d as usize),
             values,
-            extent: volume.extent(),
+            geometry: volume.geometry,
             range: volume.range,
             bricks: BrickGrid::new(volume),
         }
@@ -758,27 +760,27 @@ impl SampleCounter {
     }
 
     fn frame(&self, s: &RenderSettings) -> RayFrame {
-        let e = self.extent;
-        let cam = &s.camera;
-        let aspect = s.width as f32 / s.height as f32;
-        let forward = cam.forward();
-        let right = forward.cross(cam.up).normalize();
-        let up = right.cross(forward);
-        let tan = (cam.fov_y_deg.to_radians() * 0.5).tan();
-        let voxel = (0..3).map(|i| e[i] / self.dims[i] as f32).fold(f32::INFINITY, f32::min);
-        let h = s.step_length * voxel;
+        // The march's own rays: the uniforms the shader reads.
+        let info = VolumeInfo {
+            dims: self.dims.map(|d| d as u32),
+            geometry: self.geometry,
+            scale_bias: (1.0, 0.0),
+            range: self.range,
+        };
+        let u = FrameUniforms::new(s, &info);
+        let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
         let lut = tf::bake(&s.classification(), s.window, self.range);
         RayFrame {
-            eye: cam.eye / e + Vec3::splat(0.5),
-            forward: forward / e,
-            right: right * (tan * aspect) / e,
-            down: -up * tan / e,
-            near: cam.near,
+            eye: v3(u.eye_tex),
+            forward: v3(u.ray_forward),
+            right: v3(u.ray_right),
+            down: v3(u.ray_down),
+            near: s.camera.near,
             slab_lo: s.slab_lo,
             slab_hi: s.slab_hi,
-            extent: e,
-            h,
-            max_steps: ((e.length() / h).ceil() + 2.0) as u64,
+            to_world: Mat3::from_mat4(Mat4::from_cols_array(&u.tex_to_world)),
+            h: u.extent[3],
+            max_steps: u.viewport[2] as u64,
             viewport: [s.width as f32, s.height as f32],
             window: s.window,
             occupancy: s
@@ -811,7 +813,7 @@ impl SampleCounter {
         }
         let a = f.eye + dir * t0;
         let d = dir * (t1 - t0);
-        let len = (d * f.extent).length();
+        let len = (f.to_world * d).length();
         let o = f.jitter.map_or(0.5, |seed| settings::jitter_offset(x, y, seed));
         let segment = ((len / f.h - o).ceil().max(0.0) as u64).min(f.max_steps);
         let [win_lo, win_hi] = f.window;

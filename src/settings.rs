@@ -2,9 +2,10 @@
 //! Pure data; the rules that turn it into pixels are written out once, in [`RenderSettings`]'s docs, and
 //! implemented twice: by the GPU passes (`shaders/`) and by the independent CPU reference (`tests/common`).
 
-use crate::camera::Camera;
+use crate::camera::{Camera, ViewPreset};
 use crate::tf::{Classification, TransferFunction};
 use crate::transfer::Colormap;
+use crate::volume::Volume;
 use glam::Vec3;
 
 /// How each pixel's ray segment through the box is found.
@@ -106,13 +107,17 @@ impl Default for Shading {
 /// Everything that decides a frame's pixels.
 ///
 /// The rendering rules (the GPU and the CPU reference both follow exactly these):
+/// 0. **Placement.** The volume's texture-space box [0,1]³ (voxel centres at (i + 0.5)/dim) is placed in the world
+///    by its voxel-to-world affine (RAS+ millimetres; with `voxel_axes`, along the world's axes by the voxel
+///    sizes alone), then moved so the box's centre is the origin and scaled so its longest side is 1. Lengths,
+///    steps and directions below are in this world.
 /// 1. **Ray.** Pixel (x, y), row 0 at the top, at its centre (x + 0.5, y + 0.5), ndc = 2·centre/size − 1.
 ///    Perspective: from the eye through the pixel. Orthographic (`camera.ortho`): parallel to the view direction,
 ///    starting on the plane through the eye perpendicular to it, the view `2·d·tan(fov/2)` high (d = |eye −
 ///    target|). The segment used is the part inside the *slab box* (texture-space `[slab_lo, slab_hi]` ⊆ [0,1]³)
 ///    and at view depth ≥ `camera.near`. No segment: background.
 /// 2. **Samples.** World segment length `L`, step `h = step_length × voxel` (`voxel` = the smallest voxel side in
-///    world units); samples at `t = (k + o)·h`, k = 0, 1, … while `t < L`. `o = 0.5`, or with `jitter = Some(seed)`
+///    world units, the shortest column of M); samples at `t = (k + o)·h`, k = 0, 1, … while `t < L`. `o = 0.5`, or with `jitter = Some(seed)`
 ///    `o = jitter_offset(x, y, seed)` ∈ [0, 1).
 /// 3. **Value.** Trilinear interpolation (texel centres at (i + 0.5)/dim, clamped to the edge) of the values
 ///    normalised by the data range: `v = (raw − min)/(max − min)`. NaN samples are skipped. Samples outside the
@@ -127,7 +132,8 @@ impl Default for Shading {
 ///    entry of a jump in a transfer function.
 /// 5. **Shading** (with `shading`, in emission/density modes; always in isosurface mode): gradient `g` by central
 ///    differences of v one voxel apart along each texture axis, `g_i = (v(p + e_i) − v(p − e_i))/2` (value per
-///    voxel); world normal `n = normalize(g_i / voxel_world_i)`; headlight `L = −ray direction`;
+///    voxel); world normal `n = normalize(M⁻ᵀ·g)` with M the world step of one voxel along each index axis (rule
+///    0); headlight `L = −ray direction`;
 ///    `rgb ← rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` (white, two-sided). `|g| = 0`: rgb kept.
 ///    With `gradient_opacity = Some(r)`: `a ← a·min(1, |g|/r)`. With `gradient_texture` (emission/density modes),
 ///    `g` is instead the grid's central differences `(v[i + e] − v[i − e])/2` per voxel (indices clamped to the
@@ -188,6 +194,9 @@ pub struct RenderSettings {
     /// March in a compute pass instead of a fullscreen fragment pass (analytic ray setup only; the output image
     /// must allow storage). The same rays and rules: a measured alternative for lavapipe (README, Performance).
     pub compute: bool,
+    /// Render in voxel index space: the box along the world's axes by its voxel sizes, ignoring the file's
+    /// orientation (what volcast showed before it read orientations; `--voxel-axes`).
+    pub voxel_axes: bool,
     /// Output, instead of each pixel's colour, the number of sample positions its ray visited (rule 2's samples
     /// actually taken: those that empty-space skipping leaps over, gradient and bisection samples not counted),
     /// as a 24-bit integer in the R, G, B bytes. For tests and measurement; see [`decode_sample_count`].
@@ -254,8 +263,19 @@ impl RenderSettings {
             adaptive_step: false,
             gradient_texture: false,
             compute: false,
+            voxel_axes: false,
             count_samples: false,
         }
+    }
+
+    /// Defaults for `volume`: as [`RenderSettings::new`], except that a volume whose file says which way the
+    /// patient lies is seen from the front, head up ([`ViewPreset::Anterior`]).
+    pub fn for_volume(width: u32, height: u32, volume: &Volume) -> RenderSettings {
+        let mut s = RenderSettings::new(width, height, volume.extent());
+        if volume.geometry.anatomical {
+            s.camera = ViewPreset::Anterior.camera(s.camera.eye.length(), Vec3::ZERO);
+        }
+        s
     }
 
     /// The classification rule 4 bakes: the transfer function if given, else the simple model.

@@ -401,11 +401,7 @@ mod tests {
         assert_eq!(lut.len(), LUT_SIZE);
         // Entries up to 1023 (v = 0.2498) and from 3072 (v = 0.7502) are outside; they hold the window's edges.
         assert_eq!(lut[0], lut[1023], "below the window: its lower edge");
-        assert_eq!(
-            lut[LUT_SIZE - 1],
-            lut[3072],
-            "above the window: its upper edge"
-        );
+        assert_eq!(lut[LUT_SIZE - 1], lut[3072], "above the window: its upper edge");
         assert_eq!(lut[0][0], 0.0, "grey at the window's lower edge is black");
         let mid = lookup(&lut, 0.5);
         assert!((mid[3] - 0.4).abs() < 1e-6);

@@ -7,7 +7,7 @@
 mod common;
 
 use common::bounds::{ADAPTIVE, REFERENCE};
-use common::cases::{marschner_lobb_as, quality_cases, standard_cases, with};
+use common::cases::{marschner_lobb_as, mirrored, oblique, quality_cases, standard_cases, with};
 use common::compare::{against_reference, diff, write_failure_images};
 use common::gpu::{close, gpu_sample_counts, validated_gpu, Judge};
 use common::reference::Reference;
@@ -39,9 +39,11 @@ fn empty_space_skipping_takes_fewer_samples_and_keeps_the_image() {
     let gpu = validated_gpu();
     let mut headless = Headless::new(&gpu).expect("renderer");
     // Whether the volume has empty space to leap over: Marschner–Lobb fills its whole box with visible values.
+    let helix = volume::builtin("helix", Some(96)).unwrap();
     let mut volumes = vec![
-        (volume::builtin("helix", Some(96)).unwrap(), true),
-        (marschner_lobb_as(VoxelType::F32), false),
+        (mirrored(&helix), true),
+        (helix, true),
+        (oblique(&marschner_lobb_as(VoxelType::F32)), false),
     ];
     volumes.extend(ct_head().map(|v| (v, true)));
     let mut failures = Vec::new();
@@ -193,7 +195,7 @@ fn gradient_texture_matches_the_reference_rule() {
     let mut volumes = vec![
         volume::builtin("marschner-lobb", None).unwrap(),
         volume::builtin("helix", Some(128)).unwrap(),
-        marschner_lobb_as(VoxelType::U16),
+        oblique(&marschner_lobb_as(VoxelType::U16)),
     ];
     volumes.extend(ct_head());
     let mut judge = Judge::default();
@@ -214,6 +216,14 @@ fn gradient_texture_matches_the_reference_rule() {
             let label = format!("{}-gradient-texture-{method:?}", v.name).to_lowercase();
             judge.against("reference", label, &textured, &expected, &s, REFERENCE);
         }
+        // Gradient-modulated opacity reads the gradient's length (shading only its direction).
+        let mut g = s.clone();
+        g.gradient_opacity = Some(0.08);
+        g.step_alpha = 0.6;
+        let expected = reference.render_full(&g);
+        let textured = headless.render(&gpu, &g).unwrap().image;
+        let label = format!("{}-gradient-texture-opacity", v.name).to_lowercase();
+        judge.against("reference", label, &textured, &expected, &g, REFERENCE);
         differs.push((
             v.name.clone(),
             against_reference(&expected.image, &central, s.background),

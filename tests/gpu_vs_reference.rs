@@ -6,7 +6,10 @@
 mod common;
 
 use common::bounds::{REFERENCE, REFERENCE_R8};
-use common::cases::{gradient_cases, marschner_lobb_as, mask_as, quality_cases, settings_cases, standard_cases, with};
+use common::cases::{
+    gradient_cases, marschner_lobb_as, mask_as, mirrored, oblique, quality_cases, settings_cases, sheared,
+    standard_cases, with,
+};
 use common::compare::Bounds;
 use common::gpu::{finish, validated_gpu, Judge, METHODS};
 use volcast::gpu::Gpu;
@@ -69,6 +72,18 @@ fn builtins_match_the_reference() {
         ];
         run(&mut judge, &gpu, &mut headless, &mask, cases, METHODS);
     }
+    // The same rules under an oblique, a mirrored (left-handed) and a sheared placement.
+    let small = volume::builtin("helix", Some(64)).expect("helix");
+    for placed in [oblique(&small), mirrored(&small), sheared(&small)] {
+        let mut cases = standard_cases(&placed, 80);
+        cases.extend(quality_cases(&placed, 80));
+        cases.extend(
+            settings_cases(&placed, 80)
+                .into_iter()
+                .filter(|c| c.name.starts_with("slab") || c.name.starts_with("orthographic")),
+        );
+        run(&mut judge, &gpu, &mut headless, &placed, cases, METHODS);
+    }
     finish(gpu, headless, judge);
 }
 
@@ -88,6 +103,11 @@ fn compute_march_matches_the_reference() {
     run(&mut judge, &gpu, &mut headless, &helix, cases, compute);
     let ml = volume::builtin("marschner-lobb", None).expect("marschner-lobb");
     run(&mut judge, &gpu, &mut headless, &ml, quality_cases(&ml, 80), compute);
+    for placed in [oblique(&ml), mirrored(&ml)] {
+        let mut cases = standard_cases(&placed, 72);
+        cases.extend(gradient_cases(&placed, 72));
+        run(&mut judge, &gpu, &mut headless, &placed, cases, compute);
+    }
     finish(gpu, headless, judge);
 }
 
@@ -114,6 +134,11 @@ fn every_data_type_matches_the_reference() {
         }
         headless.renderer.texel_policy = TexelPolicy::Auto;
         run(&mut judge, &gpu, &mut headless, &v, gradient_cases(&v, 72), METHODS);
+        // Shading normals follow the placement: an oblique and a mirrored one for each type.
+        for placed in [oblique(&v), mirrored(&v)] {
+            let cases = gradient_cases(&placed, 64).into_iter().take(3).collect();
+            run(&mut judge, &gpu, &mut headless, &placed, cases, METHODS);
+        }
     }
     finish(gpu, headless, judge);
 }
@@ -162,6 +187,23 @@ fn real_volumes_match_the_reference() {
                 s.window = [0.55, 1.0];
             }));
         }
+        run(&mut judge, &gpu, &mut headless, &v, cases, METHODS);
+    }
+    // The native files, placed as their headers say: LAS (motor map), oblique (diffusion b0), sheared (S0), and
+    // the tilted DICOM series.
+    for native in [
+        "native/motor_zmap/image_10426.nii.gz",
+        "native/dwi_b0_ascm/ascm_out_test.nii.gz",
+        "native/dwi_s0_10slices/S0_10slices.nii.gz",
+        "native/brain_pd_mr",
+    ] {
+        let Some(path) = common::shared_data(native) else {
+            continue;
+        };
+        let v = volume::open(&path, &Default::default()).expect("load a native file");
+        let mut cases = standard_cases(&v, 72).into_iter().take(4).collect::<Vec<_>>();
+        cases.push(with(&v, 72, "shaded", |s| s.shading = Some(Shading::default())));
+        cases.push(with(&v, 72, "voxel-axes", |s| s.voxel_axes = true));
         run(&mut judge, &gpu, &mut headless, &v, cases, METHODS);
     }
     finish(gpu, headless, judge);

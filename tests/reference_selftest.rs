@@ -442,6 +442,8 @@ fn compare_reports_mean_percentile_max_and_outliers() {
     );
     assert_near("over_1", d.over_1, 1.0 / 100.0, 1e-12);
     assert_eq!((d.above(0), d.above(1), d.above(6), d.above(7)), (2, 1, 1, 0));
+    assert_near("mean without the worst pixel", d.mean_without(1), 1.0 / 99.0, 1e-12);
+    assert_eq!(d.mean_without(100), 0.0);
     let bounds = |mean, p99, max, outliers| Bounds {
         mean,
         p99,
@@ -859,7 +861,7 @@ fn shading_on_a_planar_ramp() {
     let reference = Reference::new(&volume);
     assert_near3(
         "voxel size",
-        reference.voxel_world(),
+        reference.placement(&RenderSettings::default()).voxel_sides(),
         DVec3::new(1.0 / 32.0, 1.0 / 32.0, 1.0 / 16.0),
         1e-9,
     );

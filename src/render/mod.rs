@@ -4,7 +4,6 @@
 
 pub mod skip;
 
-use crate::camera::tex_to_world;
 use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, GraphicsDesc, ShaderCode};
 use crate::gpu::resources::{upload_image, upload_image_with, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
@@ -12,9 +11,9 @@ pub use crate::gpu::TexelPolicy;
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::settings::{PositionFormat, RaySetup, RenderSettings};
 use crate::tf::{bake, half_pairs, srgb_to_linear, step_table, Classification, LUT_SIZE};
-use crate::volume::{Volume, VoxelData};
+use crate::volume::{Geometry, Volume, VoxelData};
 use ash::vk;
-use glam::Vec3;
+use glam::{DMat3, DMat4, DVec3};
 use gpu_allocator::MemoryLocation;
 
 /// The uniform block `Frame` in shaders/frame.glsl (std140: only mat4 and vec4 members, so no padding rules bite).
@@ -22,6 +21,10 @@ use gpu_allocator::MemoryLocation;
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct FrameUniforms {
     pub tex_to_clip: [f32; 16],
+    /// Texture space to the render world (its linear part measures world lengths and directions).
+    pub tex_to_world: [f32; 16],
+    /// A gradient in value per voxel (index space) to a vector along the world normal: `(L·diag(1/dims))⁻ᵀ`.
+    pub gradient_to_world: [f32; 16],
     pub eye_tex: [f32; 4],
     pub ray_forward: [f32; 4],
     pub ray_right: [f32; 4],
@@ -48,10 +51,24 @@ pub struct FrameUniforms {
 #[derive(Clone, Copy, Debug)]
 pub struct VolumeInfo {
     pub dims: [u32; 3],
-    pub extent: Vec3,
+    /// Where the voxels are (the render world follows it unless `RenderSettings::voxel_axes`).
+    pub geometry: Geometry,
     pub scale_bias: (f32, f32),
     /// The data's value range (for transfer functions in data units).
     pub range: [f64; 2],
+}
+
+impl VolumeInfo {
+    /// Texture space to the render world for `s` (the volume's placement, or its voxel axes).
+    pub fn tex_to_world(&self, s: &RenderSettings) -> DMat4 {
+        self.geometry.tex_to_world(self.dims, s.voxel_axes)
+    }
+}
+
+/// Whether a texture-to-world transform mirrors: its box's faces then wind the other way on screen, so the
+/// entry pass must cull front faces and the exit pass back faces.
+pub fn mirrors(tex_to_world: DMat4) -> bool {
+    DMat3::from_mat4(tex_to_world).determinant() < 0.0
 }
 
 impl FrameUniforms {
@@ -59,35 +76,55 @@ impl FrameUniforms {
     pub fn new(s: &RenderSettings, v: &VolumeInfo) -> FrameUniforms {
         let aspect = s.width as f32 / s.height as f32;
         let cam = &s.camera;
-        let tex_to_clip = cam.projection(aspect).as_dmat4() * cam.view().as_dmat4() * tex_to_world(v.extent).as_dmat4();
-        let forward = cam.forward();
-        let right = forward.cross(cam.up).normalize();
+        let model = v.tex_to_world(s);
+        let linear = DMat3::from_mat4(model);
+        let to_tex = linear.inverse();
+        let tex_to_clip = cam.projection(aspect).as_dmat4() * cam.view().as_dmat4() * model;
+        let forward = cam.forward().as_dvec3();
+        let right = forward.cross(cam.up.as_dvec3()).normalize();
         let up = right.cross(forward);
-        let tan = (cam.fov_y_deg.to_radians() * 0.5).tan();
-        let eye_tex = cam.eye / v.extent + Vec3::splat(0.5);
+        let tan = f64::from((cam.fov_y_deg.to_radians() * 0.5).tan());
+        let eye_tex = model.inverse().transform_point3(cam.eye.as_dvec3());
         // Perspective rays fan out from the eye; orthographic rays start spread over the eye's plane.
         let (fan, spread) = if cam.ortho {
-            (0.0, (cam.eye - cam.target).length())
+            (0.0, f64::from((cam.eye - cam.target).length()))
         } else {
             (1.0, 0.0)
         };
-        let h = s.step_world(v.extent, v.dims);
-        let diagonal = v.extent.length();
+        let aspect = f64::from(aspect);
+        let dims = DVec3::from_array(v.dims.map(f64::from));
+        // A voxel's step along each index axis, in world units: the columns of L·diag(1/dims).
+        let index_to_world = linear * DMat3::from_diagonal(1.0 / dims);
+        let voxel = [0, 1, 2].map(|i| index_to_world.col(i).length());
+        let h = s.step_length * voxel.iter().copied().fold(f64::INFINITY, f64::min) as f32;
+        // The longest path through the box: its longest diagonal.
+        let diagonal = [
+            DVec3::ONE,
+            DVec3::new(-1.0, 1.0, 1.0),
+            DVec3::new(1.0, -1.0, 1.0),
+            DVec3::new(1.0, 1.0, -1.0),
+        ]
+        .iter()
+        .map(|d| (linear * *d).length())
+        .fold(0.0, f64::max) as f32;
         let max_steps = (diagonal / h).ceil() + 2.0;
-        let v4 = |a: Vec3, w: f32| [a.x, a.y, a.z, w];
+        let v4 = |a: DVec3, w: f32| [a.x as f32, a.y as f32, a.z as f32, w];
+        let m4 = |m: DMat4| m.as_mat4().to_cols_array();
         let shading = s.shading.unwrap_or_default();
         FrameUniforms {
-            tex_to_clip: tex_to_clip.as_mat4().to_cols_array(),
+            tex_to_clip: m4(tex_to_clip),
+            tex_to_world: m4(model),
+            gradient_to_world: m4(DMat4::from_mat3(index_to_world.inverse().transpose())),
             eye_tex: v4(eye_tex, 1.0),
-            ray_forward: v4(forward / v.extent, cam.near),
-            ray_right: v4(right * (fan * tan * aspect) / v.extent, 0.0),
+            ray_forward: v4(to_tex * forward, cam.near),
+            ray_right: v4(to_tex * (right * (fan * tan * aspect)), 0.0),
             // NDC y grows downwards (row 0 is the top of the image).
-            ray_down: v4(-up * (fan * tan) / v.extent, 0.0),
-            origin_dx: v4(right * (spread * tan * aspect) / v.extent, 0.0),
-            origin_dy: v4(-up * (spread * tan) / v.extent, 0.0),
-            slab_lo: v4(s.slab_lo, 0.0),
-            slab_hi: v4(s.slab_hi, 0.0),
-            extent: v4(v.extent, h),
+            ray_down: v4(to_tex * (-up * (fan * tan)), 0.0),
+            origin_dx: v4(to_tex * (right * (spread * tan * aspect)), 0.0),
+            origin_dy: v4(to_tex * (-up * (spread * tan)), 0.0),
+            slab_lo: v4(s.slab_lo.as_dvec3(), 0.0),
+            slab_hi: v4(s.slab_hi.as_dvec3(), 0.0),
+            extent: [0.0, 0.0, 0.0, h],
             value_map: [v.scale_bias.0, v.scale_bias.1, s.window[0], s.window[1]],
             alpha: [
                 s.step_alpha,
@@ -95,24 +132,23 @@ impl FrameUniforms {
                 s.early_termination,
                 if s.multiplied_alpha { 1.0 } else { 0.0 },
             ],
-            background: v4(s.background.to_array().map(srgb_to_linear).into(), 1.0),
+            background: [
+                srgb_to_linear(s.background.x),
+                srgb_to_linear(s.background.y),
+                srgb_to_linear(s.background.z),
+                1.0,
+            ],
             viewport: [
                 s.width as f32,
                 s.height as f32,
                 max_steps,
                 s.count_samples as u32 as f32,
             ],
-            texel: v4(Vec3::ONE / Vec3::from(v.dims.map(|d| d as f32)), 0.0),
-            voxel_world: v4(
-                v.extent / Vec3::from(v.dims.map(|d| d as f32)),
-                s.gradient_opacity.unwrap_or(0.0),
-            ),
+            texel: v4(1.0 / dims, 0.0),
+            voxel_world: [0.0, 0.0, 0.0, s.gradient_opacity.unwrap_or(0.0)],
             shading: [shading.ambient, shading.diffuse, shading.specular, shading.shininess],
             mode_params: [s.iso_value, s.density, s.skip_empty as u32 as f32, 0.0],
-            brick: v4(
-                Vec3::splat(skip::BRICK as f32) / Vec3::from(v.dims.map(|d| d as f32)),
-                0.0,
-            ),
+            brick: v4(DVec3::splat(f64::from(skip::BRICK)) / dims, 0.0),
             dims: [v.dims[0] as f32, v.dims[1] as f32, v.dims[2] as f32, 0.0],
             flags: [
                 s.mode.index(),
@@ -927,7 +963,7 @@ impl Renderer {
             image,
             info: VolumeInfo {
                 dims: volume.dims,
-                extent: volume.extent(),
+                geometry: volume.geometry,
                 scale_bias: volume.gpu_scale_bias(),
                 range: volume.range,
             },
@@ -1240,11 +1276,17 @@ impl Renderer {
                     cb,
                     &[discard(p.entry.raw), discard(p.exit.raw), output_to_attachment],
                 );
+                // Pipeline 0 culls back faces, 1 front faces; a mirroring placement swaps which is which.
+                let flip = usize::from(self.volume.as_ref().is_some_and(|v| mirrors(v.info.tex_to_world(s))));
                 for (j, target) in [&p.entry, &p.exit].into_iter().enumerate() {
                     begin(target.view, vk::AttachmentLoadOp::CLEAR);
                     // SAFETY: rendering has begun; the pipeline and set match the faces layout.
                     unsafe {
-                        dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, self.position_pipelines[pi][j]);
+                        dev.cmd_bind_pipeline(
+                            cb,
+                            vk::PipelineBindPoint::GRAPHICS,
+                            self.position_pipelines[pi][j ^ flip],
+                        );
                         dev.cmd_bind_descriptor_sets(
                             cb,
                             vk::PipelineBindPoint::GRAPHICS,

@@ -231,7 +231,7 @@ mod tests {
         if let VoxelData::U8(d) = &mut v.data {
             d[(16 + 20 * (8 + 9 * 3)) as usize] = 100;
         }
-        let v = Volume::new("s2", v.dims, v.spacing, v.source_type, v.data).unwrap();
+        let v = Volume::new("s2", v.dims, v.spacing(), v.source_type, v.data).unwrap();
         let g = BrickGrid::new(&v);
         assert_eq!(
             g.max[at(1, 1, 0)],

@@ -3,13 +3,13 @@
 
 #![allow(dead_code)]
 
-use glam::Vec3;
+use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::f64::consts::PI;
 use volcast::camera::Camera;
 use volcast::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::tf::TransferFunction;
 use volcast::transfer::Colormap;
-use volcast::volume::{Scaling, Volume, VoxelData, VoxelType};
+use volcast::volume::{Geometry, Scaling, Volume, VoxelData, VoxelType};
 
 #[derive(Clone)]
 pub struct Case {
@@ -215,6 +215,37 @@ pub fn marschner_lobb_as(ty: VoxelType) -> Volume {
         VoxelType::F32 => VoxelData::F32(values.iter().map(|&v| v as f32).collect()),
     };
     Volume::new(format!("ml-{}", ty.name()), DIMS, [1.0, 1.2, 0.8], ty, data).expect("valid volume")
+}
+
+/// `v` placed obliquely: turned 25° about z and 12° about x, voxels 1.0 × 1.3 × 0.8, shifted off the origin (a
+/// right-handed, anatomical placement like an oblique acquisition's sform).
+pub fn oblique(v: &Volume) -> Volume {
+    let turn = DMat3::from_rotation_x(12f64.to_radians()) * DMat3::from_rotation_z(25f64.to_radians());
+    place(v, "oblique", turn * DMat3::from_diagonal(DVec3::new(1.0, 1.3, 0.8)))
+}
+
+/// `v` stored mirrored, as a NIfTI with qfac −1 or an LAS sform: i runs to the patient's left.
+pub fn mirrored(v: &Volume) -> Volume {
+    place(v, "mirrored", DMat3::from_diagonal(DVec3::new(-1.2, 1.0, 0.9)))
+}
+
+/// `v` sheared as a gantry-tilted CT series: each slice offset along y by 0.3 of a slice step.
+pub fn sheared(v: &Volume) -> Volume {
+    place(
+        v,
+        "sheared",
+        DMat3::from_cols(DVec3::X, DVec3::Y, DVec3::new(0.0, 0.3, 1.0)),
+    )
+}
+
+fn place(v: &Volume, what: &str, linear: DMat3) -> Volume {
+    let affine = DMat4::from_mat3_translation(linear, DVec3::new(-40.0, 12.0, 7.5));
+    let mut placed = v
+        .clone()
+        .with_geometry(Geometry::anatomical(affine))
+        .expect("a valid affine");
+    placed.name = format!("{}-{what}", v.name);
+    placed
 }
 
 /// A label mask: 1 inside a ball and a slab, 0 elsewhere, stored as `ty` (1 → the type's 1, 255 or 65535

@@ -146,10 +146,12 @@ impl Judge {
                 .iter()
                 .map(|&e| format!(">{e}: {}", list.iter().map(|o| o.diff.above(e)).max().unwrap_or(0)))
                 .collect();
+            let outliers = list[0].bounds.outliers;
             eprintln!(
-                "family {family}: {} comparisons; worst mean {:.3}, p99 {}, max {}; most pixels {}; bounds {}",
+                "family {family}: {} comparisons; worst mean {:.3} (without {outliers} outliers), p99 {}, max {}; \
+                 most pixels {}; bounds {}",
                 list.len(),
-                worst(&|d| d.mean),
+                worst(&|d| d.mean_without(outliers)),
                 worst(&|d| d.p99),
                 worst(&|d| d.max),
                 above.join(", "),

@@ -3,14 +3,16 @@
 //!
 //! What it shares with the GPU path, and why that is safe:
 //! - **Inputs only**: the voxel values (`Volume::value`, i.e. the stored values after the file's rescale), the
-//!   volume's dims, spacing and value range (`Volume::range`, the min/max the rules normalise by), and the
-//!   `RenderSettings` (camera parameters, transfer function, window, steps, modes). These are what a user gives;
-//!   a bug in producing them is a loader bug, tested by the loaders' own tests against files and second libraries.
+//!   volume's dims, voxel-to-world affine (`Volume::geometry`) and value range (`Volume::range`, the min/max the
+//!   rules normalise by), and the `RenderSettings` (camera parameters, transfer function, window, steps, modes).
+//!   These are what a file or a user gives; a bug in producing them is a loader bug, tested by the loaders' own
+//!   tests against files written by other tools and read back by second libraries.
 //! - **Documented constants**: the colormaps' control points (`volcast::transfer::tables`: Moreland's table,
 //!   matplotlib's viridis and plasma), checked against their published values in tests/reference_selftest.rs.
 //!
-//! Everything else is computed here: the normalisation of values, the box (dims × spacing, longest side 1),
-//! the rays (rays.rs, from eye/target/up/fov, not `Camera::view`/`projection`), the slab method, trilinear
+//! Everything else is computed here: the normalisation of values, the placement of the box in the world (the
+//! affine or the voxel axes, centred, longest side 1: `Placement`), the rays (rays.rs, from eye/target/up/fov,
+//! not `Camera::view`/`projection`), their passage into texture space and the slab method there, trilinear
 //! filtering, gradients (central differences of the interpolant, or the grid gradients of `gradient_texture`),
 //! the classification (classify.rs: window position, colormap interpolation, control points, data units, sRGB),
 //! the jitter hash, opacity correction, every compositing mode, the isosurface bisection and the output encoding.
@@ -21,7 +23,7 @@
 
 use super::classify::{encode, jitter_offset, linear, Classifier};
 use super::rays::{ray_segment, CameraBasis};
-use glam::DVec3;
+use glam::{DMat3, DMat4, DVec3};
 use image::{Rgba, RgbaImage};
 use volcast::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::volume::Volume;
@@ -156,7 +158,8 @@ pub fn background_pixel(background: glam::Vec3) -> Rgba<u8> {
 pub struct Reference {
     dims: [usize; 3],
     values: Vec<f64>,
-    extent: DVec3,
+    /// Voxel index to millimetres, as the file places it.
+    affine: DMat4,
     range: [f64; 2],
     /// `gradient_texture`'s rule, made on first use: per voxel `G_i = v(x + e_i) − v(x − e_i)` on the grid,
     /// indices clamped to the edge, NaN voxels read as 0.
@@ -184,48 +187,23 @@ impl Reference {
                 }
             }
         }
-        let size = DVec3::new(
-            f64::from(nx) * f64::from(volume.spacing[0]),
-            f64::from(ny) * f64::from(volume.spacing[1]),
-            f64::from(nz) * f64::from(volume.spacing[2]),
-        );
         Reference {
             dims: volume.dims.map(|d| d as usize),
             values,
-            extent: size / size.max_element(),
+            affine: volume.geometry.affine,
             range: volume.range,
             grid_gradients: std::sync::OnceLock::new(),
         }
     }
 
-    /// The box in world units: dims × spacing, centred on the origin, longest side 1.
-    pub fn extent(&self) -> DVec3 {
-        self.extent
-    }
-
-    /// A voxel's world size along each axis: `extent_i / dims_i`.
-    pub fn voxel_world(&self) -> DVec3 {
-        DVec3::new(
-            self.extent.x / self.dims[0] as f64,
-            self.extent.y / self.dims[1] as f64,
-            self.extent.z / self.dims[2] as f64,
-        )
+    /// Where the box is for `s`: the rule-1 placement of the texture-space box in the world.
+    pub fn placement(&self, s: &RenderSettings) -> Placement {
+        Placement::new(self.affine, self.dims, s.voxel_axes)
     }
 
     /// Rule 2's step `h` in world units: `step_length` × the smallest voxel side.
     pub fn step_world(&self, s: &RenderSettings) -> f64 {
-        f64::from(s.step_length) * self.voxel_world().min_element()
-    }
-
-    /// The slab box `[slab_lo, slab_hi]` (texture space) in world space.
-    pub fn slab_box_world(&self, s: &RenderSettings) -> (DVec3, DVec3) {
-        let to_world = |t: DVec3| (t - 0.5) * self.extent;
-        (to_world(s.slab_lo.as_dvec3()), to_world(s.slab_hi.as_dvec3()))
-    }
-
-    /// Texture coordinate of world point `p`.
-    pub fn tex_of(&self, p: DVec3) -> DVec3 {
-        p / self.extent + 0.5
+        f64::from(s.step_length) * self.placement(s).voxel_sides().min_element()
     }
 
     fn at(&self, x: usize, y: usize, z: usize) -> f64 {
@@ -404,6 +382,8 @@ impl Tracer<'_> {
 struct Frame<'a> {
     volume: &'a Reference,
     camera: CameraBasis,
+    placement: Placement,
+    /// The slab box, texture space.
     box_lo: DVec3,
     box_hi: DVec3,
     step: f64,
@@ -424,7 +404,6 @@ struct Frame<'a> {
     early_termination: f64,
     /// Linear light.
     background: DVec3,
-    voxel_world: DVec3,
 }
 
 /// The result of one mode's march: colour and opacity before rule 8.
@@ -435,7 +414,7 @@ struct Composite {
 
 impl<'a> Frame<'a> {
     fn new(volume: &'a Reference, s: &RenderSettings) -> Frame<'a> {
-        let (box_lo, box_hi) = volume.slab_box_world(s);
+        let placement = volume.placement(s);
         let shading = match s.mode {
             CompositeMode::Isosurface => Some(s.shading.unwrap_or_default()),
             _ => s.shading,
@@ -443,9 +422,10 @@ impl<'a> Frame<'a> {
         Frame {
             volume,
             camera: CameraBasis::new(s),
-            box_lo,
-            box_hi,
-            step: volume.step_world(s),
+            step: f64::from(s.step_length) * placement.voxel_sides().min_element(),
+            placement,
+            box_lo: s.slab_lo.as_dvec3(),
+            box_hi: s.slab_hi.as_dvec3(),
             classifier: volume.classifier(s),
             window: s.window.map(f64::from),
             step_length: f64::from(s.step_length),
@@ -458,7 +438,6 @@ impl<'a> Frame<'a> {
             jitter: s.jitter,
             early_termination: f64::from(s.early_termination),
             background: linear(s.background.as_dvec3()),
-            voxel_world: volume.voxel_world(),
         }
     }
 
@@ -492,7 +471,9 @@ impl<'a> Frame<'a> {
             linear: background,
             output: encode(background),
         };
-        let Some((t_start, t_end)) = ray_segment(origin, dir, self.box_lo, self.box_hi, t_near) else {
+        // The slab box is a box in texture space: intersect there, with t still in world units along `dir`.
+        let (origin_tex, dir_tex) = (self.placement.to_tex(origin), self.placement.dir_to_tex(dir));
+        let Some((t_start, t_end)) = ray_segment(origin_tex, dir_tex, self.box_lo, self.box_hi, t_near) else {
             return trace;
         };
         let segment = Segment {
@@ -524,7 +505,7 @@ impl<'a> Frame<'a> {
 
     /// Texture coordinate of the point at distance `t` from the segment's start.
     fn tex_at(&self, segment: &Segment, t: f64) -> DVec3 {
-        self.volume.tex_of(segment.at(segment.t_start + t))
+        self.placement.to_tex(segment.at(segment.t_start + t))
     }
 
     /// Rules 5–7 for emission–absorption and the density model.
@@ -545,7 +526,7 @@ impl<'a> Frame<'a> {
                     a *= (grad.length() / reference).min(1.0);
                 }
                 if let Some(shading) = &self.shading {
-                    rgb = shade(rgb, grad / self.voxel_world, light, shading);
+                    rgb = shade(rgb, self.placement.normal(grad), light, shading);
                 }
             }
             let a_step = match self.mode {
@@ -629,7 +610,7 @@ impl<'a> Frame<'a> {
             let grad = self.gradient(self.tex_at(segment, t_hit));
             let color = shade(
                 self.classifier.iso_rgb(iso),
-                grad / self.voxel_world,
+                self.placement.normal(grad),
                 -segment.dir,
                 &shading,
             );
@@ -639,5 +620,69 @@ impl<'a> Frame<'a> {
             color: DVec3::ZERO,
             alpha: 0.0,
         }
+    }
+}
+
+/// Rule 1's placement of the volume's texture-space box [0, 1]³ in the world: voxel centres at (i + ½)/dims,
+/// through the file's affine to millimetres (or, with `voxel_axes`, along the world's axes by the voxel sizes),
+/// then moved so the box's centre is the origin and scaled so its longest side (voxels × voxel size) is 1.
+pub struct Placement {
+    /// Texture space to world.
+    to_world: DMat4,
+    to_tex: DMat4,
+    /// Voxel index steps in world units (the columns: one voxel along i, j, k).
+    index_to_world: DMat3,
+}
+
+impl Placement {
+    pub fn new(affine: DMat4, dims: [usize; 3], voxel_axes: bool) -> Placement {
+        let n = DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64);
+        let linear = DMat3::from_mat4(affine);
+        let sides = DVec3::new(linear.x_axis.length(), linear.y_axis.length(), linear.z_axis.length());
+        let (a, t) = if voxel_axes {
+            (DMat3::from_diagonal(sides), DVec3::ZERO)
+        } else {
+            (linear, affine.w_axis.truncate())
+        };
+        // mm(tex) = a·(tex ⊙ n − ½) + t; its centre (tex = ½) is a·(n − 1)/2 + t.
+        let centre = a * ((n - 1.0) / 2.0) + t;
+        let scale = 1.0 / (n * sides).max_element();
+        let linear_tex = a * DMat3::from_diagonal(n) * scale;
+        let offset = (a * DVec3::splat(-0.5) + t - centre) * scale;
+        let to_world = DMat4::from_mat3_translation(linear_tex, offset);
+        Placement {
+            to_tex: to_world.inverse(),
+            to_world,
+            index_to_world: a * scale,
+        }
+    }
+
+    pub fn to_world(&self, tex: DVec3) -> DVec3 {
+        self.to_world.transform_point3(tex)
+    }
+
+    pub fn to_tex(&self, world: DVec3) -> DVec3 {
+        self.to_tex.transform_point3(world)
+    }
+
+    /// A world direction (per world unit) in texture space.
+    pub fn dir_to_tex(&self, dir: DVec3) -> DVec3 {
+        self.to_tex.transform_vector3(dir)
+    }
+
+    /// A voxel's side along each index axis, in world units.
+    pub fn voxel_sides(&self) -> DVec3 {
+        let m = self.index_to_world;
+        DVec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length())
+    }
+
+    /// Rule 5: the world gradient of a gradient in value per voxel: `(index_to_world)⁻ᵀ·g`.
+    pub fn normal(&self, g: DVec3) -> DVec3 {
+        self.index_to_world.inverse().transpose() * g
+    }
+
+    /// Whether the placement mirrors (a left-handed affine).
+    pub fn mirrors(&self) -> bool {
+        self.index_to_world.determinant() < 0.0
     }
 }
