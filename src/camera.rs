@@ -103,9 +103,76 @@ impl Camera {
     }
 }
 
-/// Maps texture space [0,1]³ of a box with side lengths `extent` (centred on the origin) to world space.
-pub fn tex_to_world(extent: Vec3) -> Mat4 {
-    Mat4::from_scale(extent) * Mat4::from_translation(Vec3::splat(-0.5))
+/// In a RAS+ world, the anatomical direction at each edge of the view of `camera`: [left, right, top, bottom]
+/// ('R', 'L', 'A', 'P', 'S' or 'I'), the one the screen's direction points to most.
+pub fn edge_labels(camera: &Camera) -> [char; 4] {
+    let forward = camera.forward().as_dvec3();
+    let right = forward.cross(camera.up.as_dvec3()).normalize();
+    let up = right.cross(forward);
+    let label = crate::volume::geometry::direction_label;
+    [label(-right), label(right), label(up), label(-up)]
+}
+
+/// The six standard views of anatomy: where the camera stands, looking at the centre. In a RAS+ world (+x
+/// right, +y anterior, +z superior) "anterior" is in front of the face; for a volume without orientation they
+/// are views along the world's axes (+y, −y, −x, +x, +z, −z).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ViewPreset {
+    Anterior,
+    Posterior,
+    Left,
+    Right,
+    Superior,
+    Inferior,
+}
+
+impl ViewPreset {
+    pub const ALL: [ViewPreset; 6] = [
+        ViewPreset::Anterior,
+        ViewPreset::Posterior,
+        ViewPreset::Left,
+        ViewPreset::Right,
+        ViewPreset::Superior,
+        ViewPreset::Inferior,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewPreset::Anterior => "anterior",
+            ViewPreset::Posterior => "posterior",
+            ViewPreset::Left => "left",
+            ViewPreset::Right => "right",
+            ViewPreset::Superior => "superior",
+            ViewPreset::Inferior => "inferior",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<ViewPreset> {
+        let key = s.trim().to_ascii_lowercase();
+        ViewPreset::ALL
+            .into_iter()
+            .find(|v| v.name() == key || v.name()[..1] == key)
+    }
+
+    /// The camera's azimuth and elevation ([`Camera::orbit`]'s convention) for this view. Head up (+z) from the
+    /// four sides; anterior up (+y) from above and below.
+    pub fn angles(self) -> (f32, f32) {
+        match self {
+            ViewPreset::Anterior => (0.0, 0.0),
+            ViewPreset::Posterior => (180.0, 0.0),
+            ViewPreset::Left => (90.0, 0.0),
+            ViewPreset::Right => (-90.0, 0.0),
+            ViewPreset::Superior => (0.0, 90.0),
+            ViewPreset::Inferior => (0.0, -90.0),
+        }
+    }
+
+    /// The camera for this view at `distance` from `target`.
+    pub fn camera(self, distance: f32, target: Vec3) -> Camera {
+        let (azimuth, elevation) = self.angles();
+        Camera::orbit(azimuth, elevation, distance, target)
+    }
 }
 
 #[cfg(test)]
@@ -166,9 +233,45 @@ mod tests {
     }
 
     #[test]
-    fn tex_to_world_centres_the_box() {
-        let m = tex_to_world(Vec3::new(1.0, 0.5, 0.25));
-        assert!((m.transform_point3(Vec3::ZERO) - Vec3::new(-0.5, -0.25, -0.125)).length() < 1e-6);
-        assert!((m.transform_point3(Vec3::ONE) - Vec3::new(0.5, 0.25, 0.125)).length() < 1e-6);
+    fn edge_labels_name_the_patient_sides() {
+        // From the front the patient's left is on the screen's right, the head at the top.
+        assert_eq!(
+            edge_labels(&ViewPreset::Anterior.camera(2.0, Vec3::ZERO)),
+            ['R', 'L', 'S', 'I']
+        );
+        assert_eq!(
+            edge_labels(&ViewPreset::Posterior.camera(2.0, Vec3::ZERO)),
+            ['L', 'R', 'S', 'I']
+        );
+        // From above, anterior up: the patient's right on the screen's right (as seen from above).
+        assert_eq!(
+            edge_labels(&ViewPreset::Superior.camera(2.0, Vec3::ZERO)),
+            ['L', 'R', 'A', 'P']
+        );
+        assert_eq!(
+            edge_labels(&ViewPreset::Left.camera(2.0, Vec3::ZERO)),
+            ['A', 'P', 'S', 'I']
+        );
+    }
+
+    #[test]
+    fn presets_look_at_the_named_side_head_up() {
+        let c = ViewPreset::Anterior.camera(2.0, Vec3::ZERO);
+        assert!(
+            (c.eye - Vec3::new(0.0, 2.0, 0.0)).length() < 1e-5,
+            "in front of the face (+y)"
+        );
+        assert_eq!(c.up, Vec3::Z);
+        // From anterior the patient's left (−x) is on the screen's right.
+        let vp = c.projection(1.0) * c.view();
+        assert!(project(vp, Vec3::new(-0.3, 0.0, 0.0)).x > 0.0);
+        let c = ViewPreset::Left.camera(2.0, Vec3::ZERO);
+        assert!((c.eye - Vec3::new(-2.0, 0.0, 0.0)).length() < 1e-5);
+        let c = ViewPreset::Superior.camera(2.0, Vec3::ZERO);
+        assert!((c.eye - Vec3::new(0.0, 0.0, 2.0)).length() < 1e-5);
+        assert_eq!(c.up, Vec3::Y, "anterior up");
+        assert_eq!(ViewPreset::parse("Posterior"), Some(ViewPreset::Posterior));
+        assert_eq!(ViewPreset::parse("s"), Some(ViewPreset::Superior));
+        assert_eq!(ViewPreset::parse("front"), None);
     }
 }

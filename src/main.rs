@@ -6,7 +6,7 @@ use glam::Vec3;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
-use volcast::camera::Camera;
+use volcast::camera::{Camera, ViewPreset};
 use volcast::compare;
 use volcast::gpu::{Gpu, GpuError, GpuOptions};
 use volcast::headless::Headless;
@@ -36,11 +36,8 @@ enum Command {
     View(Box<ViewArgs>),
     /// Render a volume to a PNG file without a window.
     Render(Box<RenderArgs>),
-    /// Print a volume's dimensions, type, spacing, value range and memory needs.
-    Info {
-        #[command(flatten)]
-        volume: VolumeArgs,
-    },
+    /// Print a volume's dimensions, type, spacing, value range, placement in space and memory needs.
+    Info(Box<InfoArgs>),
     /// Render built-in viewpoints with both ray setups and measure how they differ and what each costs.
     Compare(Box<CompareArgs>),
     /// Time a fixed set of scenes and the raw 3D-texture sample rate (see README, Performance).
@@ -136,6 +133,16 @@ impl VolumeArgs {
             spacing: self.spacing.as_ref().map(|s| [s[0], s[1], s[2]]),
         })
     }
+}
+
+#[derive(Args, Clone)]
+struct InfoArgs {
+    #[command(flatten)]
+    volume: VolumeArgs,
+    /// Print one JSON object (format, dims, type, spacing, value_range, timesteps, affine_ras, axes,
+    /// handedness, ...) instead of text.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Args, Clone)]
@@ -272,18 +279,26 @@ struct FrameArgs {
     /// Image size WxH.
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     size: (u32, u32),
-    /// Camera azimuth in degrees (about +z, from +y).
-    #[arg(long, default_value_t = 35.0, allow_negative_numbers = true)]
-    azimuth: f32,
-    /// Camera elevation in degrees.
-    #[arg(long, default_value_t = 25.0, allow_negative_numbers = true)]
-    elevation: f32,
+    /// Camera azimuth in degrees (about +z, from +y) [default: 35, or 0 for an anatomical volume].
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "view")]
+    azimuth: Option<f32>,
+    /// Camera elevation in degrees [default: 25, or 0 for an anatomical volume].
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "view")]
+    elevation: Option<f32>,
     /// Camera distance from the volume centre (the box's longest side is 1); default fits the volume.
     #[arg(long)]
     distance: Option<f32>,
-    /// Camera position X,Y,Z (world units; the box is centred on the origin), looking at the centre.
-    #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "distance"], allow_hyphen_values = true)]
+    /// Camera position X,Y,Z (world units: RAS for anatomical volumes, centred, the box's longest side 1),
+    /// looking at the centre.
+    #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "distance", "view"], allow_hyphen_values = true)]
     eye: Option<Vec3>,
+    /// View from a side of the patient: anterior, posterior, left, right, superior or inferior (head up; from
+    /// above and below anterior up). An anatomical volume is seen from anterior unless told otherwise.
+    #[arg(long)]
+    view: Option<String>,
+    /// Render in voxel index space (the box along the world's axes, the file's orientation ignored).
+    #[arg(long)]
+    voxel_axes: bool,
     /// Vertical field of view in degrees.
     #[arg(long, default_value_t = volcast::camera::DEFAULT_FOV_Y_DEG)]
     fov: f32,
@@ -424,12 +439,28 @@ impl FrameArgs {
     fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
         let extent = volume.extent();
         let mut s = RenderSettings::new(self.size.0, self.size.1, extent);
+        s.voxel_axes = self.voxel_axes;
         let distance = self
             .distance
             .unwrap_or_else(|| Camera::fit_distance(extent.length() * 0.5, self.fov));
-        s.camera = match self.eye {
-            Some(eye) => Camera::looking_at(eye, Vec3::ZERO),
-            None => Camera::orbit(self.azimuth, self.elevation, distance, Vec3::ZERO),
+        let anatomical = volume.geometry.anatomical && !self.voxel_axes;
+        let view = match &self.view {
+            Some(name) => Some(ViewPreset::parse(name).with_context(|| {
+                let names: Vec<&str> = ViewPreset::ALL.iter().map(|v| v.name()).collect();
+                format!("unknown view '{name}'; choose one of {}", names.join(", "))
+            })?),
+            None if anatomical && self.azimuth.is_none() && self.elevation.is_none() => Some(ViewPreset::Anterior),
+            None => None,
+        };
+        s.camera = match (self.eye, view) {
+            (Some(eye), _) => Camera::looking_at(eye, Vec3::ZERO),
+            (None, Some(view)) => view.camera(distance, Vec3::ZERO),
+            (None, None) => Camera::orbit(
+                self.azimuth.unwrap_or(if anatomical { 0.0 } else { 35.0 }),
+                self.elevation.unwrap_or(if anatomical { 0.0 } else { 25.0 }),
+                distance,
+                Vec3::ZERO,
+            ),
         };
         s.camera.fov_y_deg = self.fov;
         s.colormap = Colormap::parse(&self.colormap).with_context(|| {
@@ -565,9 +596,9 @@ fn render(args: &RenderArgs) -> Result<()> {
                 volume.dims[1],
                 volume.dims[2],
                 volume.source_type,
-                volume.spacing[0],
-                volume.spacing[1],
-                volume.spacing[2],
+                volume.spacing()[0],
+                volume.spacing()[1],
+                volume.spacing()[2],
                 s.width,
                 s.height,
                 match (s.ray_setup, s.compute) {
@@ -706,60 +737,13 @@ fn bench(args: &BenchArgs) -> Result<()> {
     })
 }
 
-fn info(args: &VolumeArgs) -> Result<()> {
-    let v = args.load()?;
-    let e = v.extent();
-    let phys: Vec<f64> = (0..3).map(|i| f64::from(v.dims[i]) * f64::from(v.spacing[i])).collect();
-    println!("name:      {}", v.name);
-    println!("format:    {}", v.format);
-    println!("dims:      {} x {} x {}", v.dims[0], v.dims[1], v.dims[2]);
-    println!("type:      {}", v.source_type);
-    println!("spacing:   {} x {} x {}", v.spacing[0], v.spacing[1], v.spacing[2]);
-    println!(
-        "size:      {:.1} x {:.1} x {:.1} (spacing units); box {:.3} x {:.3} x {:.3}",
-        phys[0], phys[1], phys[2], e.x, e.y, e.z
-    );
-    if let Some(o) = v.origin {
-        println!("origin:    {} {} {}", o[0], o[1], o[2]);
-    }
-    if v.scaling.is_identity() {
-        println!("range:     {} .. {}", v.range[0], v.range[1]);
+fn info(args: &InfoArgs) -> Result<()> {
+    let v = args.volume.load()?;
+    let info = volcast::info::Info::of(&v);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&info)?);
     } else {
-        println!("stored:    {} .. {}", v.stored_range[0], v.stored_range[1]);
-        println!(
-            "scaled:    {} .. {} (value = {} * stored + {})",
-            v.range[0], v.range[1], v.scaling.slope, v.scaling.intercept
-        );
-    }
-    let orientation = v
-        .notes
-        .iter()
-        .filter(|n| n.contains("orientation") || n.contains("oblique"));
-    let orientation: Vec<&String> = orientation.collect();
-    if orientation.is_empty() {
-        println!("axes:      voxel axes as stored (x fastest); no orientation applied");
-    }
-    for n in &orientation {
-        println!("axes:      {n}");
-    }
-    let gpu_format = match v.gpu_texel_size() {
-        1 => "R8_UNORM",
-        2 => "R16_UNORM",
-        _ => "R32_SFLOAT",
-    };
-    println!(
-        "gpu:       {gpu_format}, {:.1} MiB",
-        v.gpu_memory_bytes() as f64 / (1 << 20) as f64
-    );
-    if v.gpu_texel_size() < 4 {
-        let mib = |bytes_per_voxel: usize| (v.voxel_count() * bytes_per_voxel) as f64 / (1 << 20) as f64;
-        println!(
-            "           on CPU devices (lavapipe), --texture auto: corners{}, {:.1} MiB, while under 1 GiB \
-             (else R32_SFLOAT, {:.1} MiB)",
-            8 * v.gpu_texel_size(),
-            mib(8 * v.gpu_texel_size()),
-            mib(4)
-        );
+        print!("{}", info.text(&v));
     }
     Ok(())
 }
@@ -803,7 +787,7 @@ fn main() -> ExitCode {
         Some(Command::Render(a)) => render(a),
         Some(Command::Compare(a)) => compare(a),
         Some(Command::Bench(a)) => bench(a),
-        Some(Command::Info { volume }) => info(volume),
+        Some(Command::Info(a)) => info(a),
         Some(Command::Devices) => devices(),
     };
     match result {

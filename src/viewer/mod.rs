@@ -472,12 +472,13 @@ impl Running {
         unsafe { self.gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")?;
         let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
         renderer.set_volume(&self.gpu, &v)?;
+        let spacing = v.spacing();
         let label = format!(
             "{} — {}×{}×{} {}, spacing {}×{}×{}",
-            v.name, v.dims[0], v.dims[1], v.dims[2], v.source_type, v.spacing[0], v.spacing[1], v.spacing[2]
+            v.name, v.dims[0], v.dims[1], v.dims[2], v.source_type, spacing[0], spacing[1], spacing[2]
         );
-        self.state.set_volume(v.extent(), label);
-        self.state.raw_spacing = v.spacing;
+        self.state.set_volume(v.extent(), v.geometry, v.dims, label);
+        self.state.raw_spacing = spacing;
         self.state.histogram = histogram;
         self.state.range = v.range;
         self.has_volume = true;

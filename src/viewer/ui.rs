@@ -3,11 +3,12 @@
 //! for what needs the GPU or a thread (loading, screenshots).
 
 use super::controls::{gizmo_axes, look_along, pick_axis, OrbitView, RotationAnimation};
-use crate::camera::Camera;
+use crate::camera::{edge_labels, Camera, ViewPreset};
 use crate::render::PassTimings;
 use crate::settings::{CompositeMode, PositionFormat, RaySetup, RenderSettings, Shading};
 use crate::transfer::Colormap;
-use crate::volume::{parse_scivis_name, RawOptions, VoxelType, BUILTIN_NAMES};
+use crate::volume::geometry::index_axis_names;
+use crate::volume::{parse_scivis_name, Geometry, RawOptions, VoxelType, BUILTIN_NAMES};
 use egui::{Color32, Pos2, Stroke};
 use glam::{Mat4, Vec2, Vec3};
 use std::path::PathBuf;
@@ -26,6 +27,9 @@ pub struct ViewerState {
     pub slabs: [(f32, f32); 3],
     /// Box side lengths of the volume on screen.
     pub extent: Vec3,
+    /// Where the volume's voxels are (its affine, and whether it is anatomical) and its grid.
+    pub geometry: Geometry,
+    pub dims: [u32; 3],
     pub volume_label: String,
     pub load_path: String,
     pub raw_dims: [u32; 3],
@@ -79,6 +83,8 @@ impl ViewerState {
             vsync: true,
             slabs: [(0.5, 1.0); 3],
             extent,
+            geometry: Geometry::from_spacing([1.0; 3]),
+            dims: [1; 3],
             volume_label,
             load_path: String::new(),
             raw_dims: [256, 256, 256],
@@ -101,18 +107,44 @@ impl ViewerState {
         }
     }
 
-    /// The default view of a box of `extent`: what `volcast render` shows without camera options.
+    /// Whether the view is of patient space (an anatomical volume, not shown in voxel axes).
+    pub fn anatomical(&self) -> bool {
+        self.geometry.anatomical && !self.look.voxel_axes
+    }
+
+    /// The default view: what `volcast render` shows without camera options (an anatomical volume from the
+    /// front, head up).
     pub fn reset_view(&mut self) {
         let defaults = RenderSettings::new(1, 1, self.extent);
-        self.orbit = OrbitView::from_camera(&defaults.camera);
+        let camera = if self.anatomical() {
+            ViewPreset::Anterior.camera(defaults.camera.eye.length(), Vec3::ZERO)
+        } else {
+            defaults.camera
+        };
+        self.orbit = OrbitView::from_camera(&camera);
         self.animation = None;
     }
 
-    /// A new volume: its box and a default view; transfer function and slicing stay.
-    pub fn set_volume(&mut self, extent: Vec3, label: String) {
+    /// Turns the view to look from `preset`'s side, at the same distance.
+    pub fn look_from(&mut self, preset: ViewPreset) {
+        let distance = self.orbit.camera().eye.distance(self.orbit.camera().target);
+        let target = self.orbit.camera().target;
+        self.orbit = OrbitView::from_camera(&preset.camera(distance, target));
+        self.animation = None;
+    }
+
+    /// A new volume: its box, placement and a default view; transfer function and slicing stay.
+    pub fn set_volume(&mut self, extent: Vec3, geometry: Geometry, dims: [u32; 3], label: String) {
         self.extent = extent;
+        self.geometry = geometry;
+        self.dims = dims;
         self.volume_label = label;
         self.reset_view();
+    }
+
+    /// Texture space to the render world for what the view shows.
+    pub fn tex_to_world(&self) -> Mat4 {
+        self.geometry.tex_to_world(self.dims, self.look.voxel_axes).as_mat4()
     }
 
     /// The renderer's parameters for a `width`×`height` frame.
@@ -399,7 +431,12 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
     egui::CollapsingHeader::new("Slicing")
         .default_open(true)
         .show(ui, |ui| {
-            for (axis, name) in ["X", "Y", "Z"].iter().enumerate() {
+            let names = if state.anatomical() {
+                index_axis_names(&state.geometry)
+            } else {
+                ["x", "y", "z"].map(String::from)
+            };
+            for (axis, name) in names.iter().enumerate() {
                 let (pos, width) = &mut state.slabs[axis];
                 ui.add(egui::Slider::new(pos, 0.0..=1.0).text(format!("{name} position")));
                 ui.add(egui::Slider::new(width, 0.0..=1.0).text(format!("{name} width")));
@@ -410,6 +447,23 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
         });
 
     egui::CollapsingHeader::new("View").default_open(true).show(ui, |ui| {
+        ui.horizontal(|ui| {
+            ui.label("from");
+            for preset in ViewPreset::ALL {
+                let name = preset.name();
+                let letter = name[..1].to_ascii_uppercase();
+                if ui.button(letter).on_hover_text(name).clicked() {
+                    state.look_from(preset);
+                }
+            }
+        });
+        if state.geometry.anatomical {
+            let voxel_axes = state.look.voxel_axes;
+            ui.checkbox(&mut state.look.voxel_axes, "voxel axes (ignore the file's orientation)");
+            if voxel_axes != state.look.voxel_axes {
+                state.reset_view();
+            }
+        }
         ui.checkbox(&mut state.show_boxes, "draw bounding box");
         ui.checkbox(&mut state.auto_rotate, "auto-rotate (Space)");
         if ui.checkbox(&mut state.vsync, "vsync").changed() {
@@ -511,11 +565,11 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
     actions
 }
 
-/// World-space corners of the texture-space box [lo, hi] of a volume with `extent`.
-fn box_corners(extent: Vec3, lo: Vec3, hi: Vec3) -> [Vec3; 8] {
+/// World-space corners of the texture-space box [lo, hi] of a volume placed by `tex_to_world`.
+pub fn box_corners(tex_to_world: Mat4, lo: Vec3, hi: Vec3) -> [Vec3; 8] {
     std::array::from_fn(|i| {
         let t = Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
-        (lo + (hi - lo) * t - Vec3::splat(0.5)) * extent
+        tex_to_world.transform_point3(lo + (hi - lo) * t)
     })
 }
 
@@ -592,8 +646,9 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
         let s = state.render_settings(rect.width() as u32, rect.height() as u32);
         let cam: Camera = s.camera;
         let vp = cam.projection(rect.width() / rect.height().max(1.0)) * cam.view();
+        let model = state.tex_to_world();
         let draw_box = |lo: Vec3, hi: Vec3, color: Color32| {
-            let corners = box_corners(state.extent, lo, hi).map(|c| project(vp, c, rect));
+            let corners = box_corners(model, lo, hi).map(|c| project(vp, c, rect));
             for (a, b) in BOX_EDGES {
                 if let (Some(pa), Some(pb)) = (corners[a], corners[b]) {
                     painter.line_segment([pa, pb], Stroke::new(1.0, color));
@@ -624,8 +679,13 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
             painter.line_segment([c, end], Stroke::new(2.0, color));
         }
         painter.circle_filled(end, 8.0, color);
-        if a.positive {
-            let label = ["X", "Y", "Z"][a.axis];
+        // In patient space every end is named (R/L, A/P, S/I); otherwise the positive ends X, Y, Z.
+        let label = if state.anatomical() {
+            Some([['L', 'R'], ['P', 'A'], ['I', 'S']][a.axis][usize::from(a.positive)])
+        } else {
+            a.positive.then_some(['X', 'Y', 'Z'][a.axis])
+        };
+        if let Some(label) = label {
             painter.text(
                 end,
                 egui::Align2::CENTER_CENTER,
@@ -633,6 +693,25 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
                 egui::FontId::proportional(11.0),
                 Color32::BLACK,
             );
+        }
+    }
+    if state.anatomical() {
+        // Which side of the patient each edge of the view faces.
+        let [left, right, top, bottom] = edge_labels(&state.orbit.camera());
+        let font = egui::FontId::proportional(16.0);
+        let color = Color32::from_rgb(255, 220, 120);
+        let mid = rect.center();
+        for (text, pos, align) in [
+            (left, Pos2::new(rect.left() + 8.0, mid.y), egui::Align2::LEFT_CENTER),
+            (right, Pos2::new(rect.right() - 8.0, mid.y), egui::Align2::RIGHT_CENTER),
+            (top, Pos2::new(mid.x, rect.top() + 8.0), egui::Align2::CENTER_TOP),
+            (
+                bottom,
+                Pos2::new(mid.x, rect.bottom() - 8.0),
+                egui::Align2::CENTER_BOTTOM,
+            ),
+        ] {
+            painter.text(pos, align, text, font.clone(), color);
         }
     }
 }
@@ -741,9 +820,33 @@ mod tests {
         let s = state.render_settings(100, 100);
         let vp = s.camera.projection(1.0) * s.camera.view();
         let rect = egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(100.0, 100.0));
-        for c in box_corners(Vec3::ONE, Vec3::ZERO, Vec3::ONE) {
+        for c in box_corners(state.tex_to_world(), Vec3::ZERO, Vec3::ONE) {
             let p = project(vp, c, rect).expect("in front of the camera");
             assert!(rect.contains(p), "{p:?}");
         }
+    }
+
+    #[test]
+    fn an_anatomical_volume_starts_from_the_front_and_names_its_axes() {
+        let mut state = ViewerState::new(Vec3::ONE, "x".into());
+        let las = Geometry::anatomical(glam::DMat4::from_diagonal(glam::DVec4::new(-2.0, 2.0, 2.0, 1.0)));
+        state.set_volume(Vec3::ONE, las, [10, 10, 10], "las".into());
+        assert!(state.anatomical());
+        let cam = state.orbit.camera();
+        assert!(
+            cam.eye.y > 0.0 && cam.eye.x.abs() < 1e-4 && cam.eye.z.abs() < 1e-4,
+            "in front: {cam:?}"
+        );
+        assert_eq!(edge_labels(&cam), ['R', 'L', 'S', 'I']);
+        // Mirrored storage: texture x = 0 (voxel i = 0) is on the patient's right (+x).
+        assert!(state.tex_to_world().transform_point3(Vec3::ZERO).x > 0.0);
+        state.look_from(ViewPreset::Left);
+        assert!(state.orbit.camera().eye.x < 0.0);
+        state.look.voxel_axes = true;
+        assert!(!state.anatomical());
+        assert!(
+            state.tex_to_world().transform_point3(Vec3::ZERO).x < 0.0,
+            "voxel axes: as stored"
+        );
     }
 }
