@@ -308,12 +308,14 @@ fn voxel_axes_draw_the_grid_as_stored() {
                 "--window",
                 "0,1",
             ])
-            .args(["--no-jitter", "--size", "128x128", "-o"])
+            .args(["--no-jitter", "--size", "128x128", "--validate", "-o"])
             .arg(&out)
             .args(extra)
             .output()
             .expect("run volcast");
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{stderr}");
+        assert!(stderr.contains("validation: 0 errors, 0 warnings"), "{stderr}");
         let image = image::open(&out).unwrap().to_rgba8();
         let (x, _) = marker_at(&image, 1.0).expect("the left marker is visible");
         sides.push(x - 64.0);
