@@ -1,14 +1,18 @@
 //! DICOM: a folder of single-frame slices (one series), or one multi-frame file, through `dicom-object`.
 //!
-//! Only uncompressed (native) pixel data is read, straight from the parsed element: `dicom-pixeldata` would add
-//! image codecs (JPEG, JPEG 2000, RLE) with their build cost for data volcast's users rarely have, and its decoded
-//! output is an extra full copy. Compressed transfer syntaxes are refused with a message saying so.
+//! Native pixel data is read straight from the parsed element. RLE Lossless, JPEG (baseline, extended,
+//! lossless) and JPEG 2000 are decoded frame by frame ([`dicom_codec`]), each frame checked to decode to exactly
+//! Rows x Columns x BitsAllocated before it lands in the volume; other compressed transfer syntaxes (JPEG-LS,
+//! JPEG XL, video) are refused with a message naming them. An enhanced multi-frame object's per-frame and shared
+//! functional groups (plane position and orientation, pixel measures, pixel value transformation) place and
+//! rescale its frames like the slices of a folder.
 //!
 //! Slices are ordered by their position along the slice normal (ImageOrientationPatient row × column), so file
 //! names and InstanceNumber do not matter; the z spacing is the mean step between sorted positions. Rescale
 //! slope/intercept becomes [`Volume::scaling`](super::Volume::scaling); the stored integers reach the GPU as is.
 
 use super::decode::{try_vec, Progress};
+use super::dicom_codec::{self, FrameShape, Kind};
 use super::dicom_geometry::{self, Placed};
 use super::format::{self, clip, header_error};
 use super::{check_dims, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
@@ -17,7 +21,7 @@ use dicom_core::value::PrimitiveValue as P;
 use dicom_core::VR;
 use dicom_dictionary_std::StandardDataDictionary;
 use dicom_object::file::ReadPreamble;
-use dicom_object::{DefaultDicomObject, OpenFileOptions, Tag};
+use dicom_object::{DefaultDicomObject, InMemDicomObject, OpenFileOptions, Tag};
 use std::path::{Path, PathBuf};
 
 const FORMAT: &str = "DICOM";
@@ -38,6 +42,12 @@ const INSTANCE_NUMBER: Tag = Tag(0x0020, 0x0013);
 const SLICE_THICKNESS: Tag = Tag(0x0018, 0x0050);
 const SPACING_BETWEEN_SLICES: Tag = Tag(0x0018, 0x0088);
 const PIXEL_DATA: Tag = Tag(0x7FE0, 0x0010);
+const SHARED_GROUPS: Tag = Tag(0x5200, 0x9229);
+const PER_FRAME_GROUPS: Tag = Tag(0x5200, 0x9230);
+const PLANE_POSITION: Tag = Tag(0x0020, 0x9113);
+const PLANE_ORIENTATION: Tag = Tag(0x0020, 0x9116);
+const PIXEL_MEASURES: Tag = Tag(0x0028, 0x9110);
+const PIXEL_VALUE_TRANSFORMATION: Tag = Tag(0x0028, 0x9145);
 
 /// Most files looked at in a folder: more slices than [`super::MAX_DIM`] cannot make a volume anyway.
 const MAX_FILES: usize = 20_000;
@@ -65,15 +75,33 @@ struct Slice {
     slice_step: Option<f64>,
     /// Implicit or explicit VR little endian: pixel bytes in the file are the values, little-endian.
     native_little_endian: bool,
+    /// How the pixel data is encoded, and the transfer syntax UID.
+    kind: Kind,
+    transfer_syntax: String,
+    /// A multi-frame object's per-frame places (PerFrameFunctionalGroupsSequence), one per frame; empty when the
+    /// frames are placed by one position and the slice step.
+    frame_places: Vec<Placed>,
 }
 
-fn floats(obj: &DefaultDicomObject, tag: Tag) -> Option<Vec<f64>> {
+fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
     let v = obj.element_opt(tag).ok().flatten()?.to_multi_float64().ok()?;
     v.iter().all(|x| x.is_finite()).then_some(v)
 }
 
-fn int(obj: &DefaultDicomObject, tag: Tag) -> Option<i64> {
+fn int(obj: &InMemDicomObject, tag: Tag) -> Option<i64> {
     obj.element_opt(tag).ok().flatten()?.to_int::<i64>().ok()
+}
+
+/// The first item of sequence `tag` in `obj`.
+fn item(obj: &InMemDicomObject, tag: Tag) -> Option<&InMemDicomObject> {
+    obj.element_opt(tag).ok().flatten()?.items()?.first()
+}
+
+/// `tag` inside the functional group macro `group` (e.g. PlanePositionSequence), looked up in one frame's
+/// group item and then in the shared one.
+fn in_groups(frame: Option<&InMemDicomObject>, shared: Option<&InMemDicomObject>, group: Tag, tag: Tag) -> Option<Vec<f64>> {
+    let from = |g: Option<&InMemDicomObject>| g.and_then(|g| item(g, group)).and_then(|m| floats(m, tag));
+    from(frame).or_else(|| from(shared))
 }
 
 fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Slice, VolumeError> {
@@ -107,9 +135,61 @@ fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Sl
     let intercept = floats(obj, RESCALE_INTERCEPT)
         .and_then(|v| v.first().copied())
         .unwrap_or(0.0);
+    let shared = item(obj, SHARED_GROUPS);
+    let per_frame: &[InMemDicomObject] = obj
+        .element_opt(PER_FRAME_GROUPS)
+        .ok()
+        .flatten()
+        .and_then(|e| e.items())
+        .unwrap_or(&[]);
+    let first_frame = per_frame.first();
+    // An enhanced object's rescale lives in PixelValueTransformationSequence; volcast needs one for all frames.
+    let rescale = |frame: Option<&InMemDicomObject>| {
+        let pick = |tag: Tag| {
+            in_groups(frame, shared, PIXEL_VALUE_TRANSFORMATION, tag).and_then(|v| v.first().copied())
+        };
+        (pick(RESCALE_SLOPE), pick(RESCALE_INTERCEPT))
+    };
+    let (group_slope, group_intercept) = rescale(first_frame);
+    if per_frame.iter().any(|f| rescale(Some(f)) != (group_slope, group_intercept)) {
+        return Err(err(
+            "frames have different rescale slope/intercept (PixelValueTransformationSequence); volcast needs one per \
+             series"
+                .into(),
+        ));
+    }
+    let slope = group_slope.unwrap_or(slope);
+    let intercept = group_intercept.unwrap_or(intercept);
     let three = |v: Vec<f64>| (v.len() == 3).then(|| [v[0], v[1], v[2]]);
     let six = |v: Vec<f64>| (v.len() == 6).then(|| [v[0], v[1], v[2], v[3], v[4], v[5]]);
     let two = |v: Vec<f64>| (v.len() == 2 && v.iter().all(|&s| s > 0.0)).then(|| [v[0], v[1]]);
+    let pixel_spacing = in_groups(first_frame, shared, PIXEL_MEASURES, PIXEL_SPACING).or_else(|| floats(obj, PIXEL_SPACING));
+    let orientation =
+        in_groups(first_frame, shared, PLANE_ORIENTATION, IMAGE_ORIENTATION).or_else(|| floats(obj, IMAGE_ORIENTATION));
+    let slice_step = in_groups(first_frame, shared, PIXEL_MEASURES, SPACING_BETWEEN_SLICES)
+        .or_else(|| floats(obj, SPACING_BETWEEN_SLICES))
+        .or_else(|| in_groups(first_frame, shared, PIXEL_MEASURES, SLICE_THICKNESS))
+        .or_else(|| floats(obj, SLICE_THICKNESS));
+    // Per-frame positions (and orientations) place each frame of an enhanced object; all or none are used.
+    let mut frame_places = Vec::new();
+    if dims[2] > 1 && per_frame.len() == dims[2] as usize {
+        let places: Vec<Placed> = per_frame
+            .iter()
+            .enumerate()
+            .map(|(k, f)| Placed {
+                position: in_groups(Some(f), shared, PLANE_POSITION, IMAGE_POSITION).and_then(three),
+                orientation: in_groups(Some(f), shared, PLANE_ORIENTATION, IMAGE_ORIENTATION)
+                    .and_then(six)
+                    .or_else(|| orientation.clone().and_then(six)),
+                instance: k as i64,
+            })
+            .collect();
+        if places.iter().all(|p| p.position.is_some()) {
+            frame_places = places;
+        }
+    }
+    let transfer_syntax = obj.meta().transfer_syntax().trim_end_matches(['\0', ' ']).to_string();
+    let kind = dicom_codec::codec(&transfer_syntax).map_err(err)?;
     let series = obj
         .element_opt(SERIES_UID)
         .ok()
@@ -125,19 +205,22 @@ fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Sl
         bits_stored: bits_stored as u16,
         signed: int(obj, PIXEL_REPRESENTATION).unwrap_or(0) == 1,
         scaling: Scaling { slope, intercept },
-        pixel_spacing: floats(obj, PIXEL_SPACING).and_then(two),
-        position: floats(obj, IMAGE_POSITION).and_then(three),
-        orientation: floats(obj, IMAGE_ORIENTATION).and_then(six),
+        pixel_spacing: pixel_spacing.and_then(two),
+        position: frame_places
+            .first()
+            .and_then(|p| p.position)
+            .or_else(|| floats(obj, IMAGE_POSITION).and_then(three)),
+        orientation: orientation.and_then(six),
         series,
         instance: int(obj, INSTANCE_NUMBER).unwrap_or(0),
         native_little_endian: matches!(
             obj.meta().transfer_syntax().trim_end_matches('\0'),
             "1.2.840.10008.1.2" | "1.2.840.10008.1.2.1"
         ),
-        slice_step: floats(obj, SPACING_BETWEEN_SLICES)
-            .or_else(|| floats(obj, SLICE_THICKNESS))
-            .and_then(|v| v.first().copied())
-            .filter(|&s| s > 0.0),
+        slice_step: slice_step.and_then(|v| v.first().copied()).filter(|&s| s > 0.0),
+        kind,
+        transfer_syntax,
+        frame_places,
     })
 }
 
@@ -145,8 +228,10 @@ struct Plan {
     slices: Vec<Slice>,
     dims: [u32; 3],
     geometry: Geometry,
-    /// Uneven slice spacing: the output slices' positions as fractional indices into `slices`.
+    /// Uneven slice spacing: the output slices' positions as fractional indices into `slices` (or frames).
     resample: Option<Vec<f64>>,
+    /// One multi-frame file: its frames in volume order (identity unless per-frame positions sorted them).
+    frame_order: Vec<usize>,
     voxel_type: VoxelType,
     scaling: Scaling,
     notes: Vec<String>,
@@ -199,18 +284,28 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
         notes.push("no PixelSpacing: in-plane spacing 1 is used".into());
         [1.0, 1.0]
     });
-    let placed: Vec<Placed> = slices
-        .iter()
-        .map(|s| Placed {
-            position: s.position,
-            orientation: s.orientation,
-            instance: s.instance,
-        })
-        .collect();
+    let per_frame = !first.frame_places.is_empty();
+    let placed: Vec<Placed> = if per_frame {
+        first.frame_places.clone()
+    } else {
+        slices
+            .iter()
+            .map(|s| Placed {
+                position: s.position,
+                orientation: s.orientation,
+                instance: s.instance,
+            })
+            .collect()
+    };
     let arrangement = dicom_geometry::arrange(&placed, pixel_spacing, first.slice_step).map_err(err)?;
     notes.extend(arrangement.notes);
-    let mut slots: Vec<Option<Slice>> = slices.into_iter().map(Some).collect();
-    let slices: Vec<Slice> = arrangement.order.iter().filter_map(|&i| slots[i].take()).collect();
+    let (slices, frame_order) = if per_frame {
+        (slices, arrangement.order.clone())
+    } else {
+        let mut slots: Vec<Option<Slice>> = slices.into_iter().map(Some).collect();
+        let sorted = arrangement.order.iter().filter_map(|&i| slots[i].take()).collect();
+        (sorted, (0..first.frames as usize).collect())
+    };
     let voxel_type = match (first.bits_allocated, first.signed) {
         (8, false) => VoxelType::U8,
         (8, true) => VoxelType::I8,
@@ -222,45 +317,24 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
         dims,
         geometry: arrangement.geometry,
         resample: arrangement.resample,
+        frame_order,
         voxel_type,
         scaling: first.scaling,
         notes,
     })
 }
 
-/// Pixel data as found: little-endian bytes (OB, or read from the file) or decoded 16-bit words (OW).
+/// Pixel data as found: little-endian bytes (OB, decoded, or read from the file) or 16-bit words (OW).
+#[derive(Clone, Copy)]
 enum Pixels<'a> {
     Bytes(&'a [u8]),
-    Words(Vec<u16>),
+    Words(&'a [u16]),
 }
 
-/// The PixelData element's value, refusing encapsulated (compressed) data.
-fn pixel_value<'a>(obj: &'a DefaultDicomObject, label: &str) -> Result<Pixels<'a>, VolumeError> {
-    let err = |problem: String| header_error(label, problem);
-    let element = obj
-        .element_opt(PIXEL_DATA)
-        .ok()
-        .flatten()
-        .ok_or_else(|| err("no PixelData element".into()))?;
-    let Some(value) = element.value().primitive() else {
-        return Err(err(format!(
-            "compressed (encapsulated) pixel data in transfer syntax {} is not supported: convert the series to an \
-             uncompressed transfer syntax (e.g. `gdcmconv --raw` or `dcmdjpeg`)",
-            obj.meta().transfer_syntax().trim_end_matches('\0')
-        )));
-    };
-    match value {
-        P::U8(bytes) => Ok(Pixels::Bytes(bytes)),
-        P::U16(w) => Ok(Pixels::Words(w.to_vec())),
-        P::I16(w) => Ok(Pixels::Words(w.iter().map(|&x| x as u16).collect())),
-        _ => Err(err("PixelData has a value representation volcast cannot read".into())),
-    }
-}
-
-/// Appends one slice's (or one multi-frame file's) pixels in the stored representation, keeping only
-/// `bits_stored` bits and sign-extending signed values.
-fn append_pixels(pixels: Pixels, s: &Slice, out: &mut VoxelData, label: &str) -> Result<(), VolumeError> {
-    let count = s.rows as usize * s.columns as usize * s.frames as usize;
+/// Appends one frame (Rows x Columns values) in the stored representation, keeping only `bits_stored` bits and
+/// sign-extending signed values.
+fn append_frame(pixels: Pixels, s: &Slice, out: &mut VoxelData, label: &str) -> Result<(), VolumeError> {
+    let count = s.rows as usize * s.columns as usize;
     let bits = u32::from(s.bits_stored);
     let mask = if bits >= 32 { u32::MAX } else { (1u32 << bits) - 1 };
     let to_signed = |v: u32| -> i32 {
@@ -300,7 +374,7 @@ fn append_pixels(pixels: Pixels, s: &Slice, out: &mut VoxelData, label: &str) ->
             if w.len() < count {
                 return Err(short(label, w.len() as u64 * 2, count as u64 * 2));
             }
-            w
+            w[..count].to_vec()
         }
         (Pixels::Words(_), _) => return Err(header_error(label, "16-bit PixelData in an 8-bit image".into())),
     };
@@ -308,9 +382,100 @@ fn append_pixels(pixels: Pixels, s: &Slice, out: &mut VoxelData, label: &str) ->
         unreachable_layout(label)?
     };
     if s.signed {
-        v.extend(words[..count].iter().map(|&w| (to_signed(u32::from(w)) + 32768) as u16));
+        v.extend(words.iter().map(|&w| (to_signed(u32::from(w)) + 32768) as u16));
     } else {
-        v.extend(words[..count].iter().map(|&w| (u32::from(w) & mask) as u16));
+        v.extend(words.iter().map(|&w| (u32::from(w) & mask) as u16));
+    }
+    Ok(())
+}
+
+/// Appends native pixel data's frames in `order`.
+fn append_native(pixels: Pixels, s: &Slice, order: &[usize], out: &mut VoxelData, label: &str) -> Result<(), VolumeError> {
+    let frame_values = s.rows as usize * s.columns as usize;
+    let value_bytes = usize::from(s.bits_allocated / 8);
+    let needed = (frame_values * s.frames as usize * value_bytes) as u64;
+    let available = match pixels {
+        Pixels::Bytes(b) => b.len() as u64,
+        Pixels::Words(w) => w.len() as u64 * 2,
+    };
+    if available < needed {
+        return Err(short(label, available, needed));
+    }
+    for &k in order {
+        let frame = match pixels {
+            Pixels::Bytes(b) => Pixels::Bytes(&b[k * frame_values * value_bytes..]),
+            Pixels::Words(w) => Pixels::Words(&w[k * frame_values..]),
+        };
+        append_frame(frame, s, out, label)?;
+    }
+    Ok(())
+}
+
+/// Appends one file's frames in `order`: native pixel data as found, compressed data decoded frame by frame.
+fn append_file(obj: &DefaultDicomObject, s: &Slice, order: &[usize], out: &mut VoxelData, label: &str) -> Result<(), VolumeError> {
+    let err = |problem: String| header_error(label, problem);
+    let element = obj
+        .element_opt(PIXEL_DATA)
+        .ok()
+        .flatten()
+        .ok_or_else(|| err("no PixelData element".into()))?;
+    if s.kind == Kind::Native {
+        let Some(value) = element.value().primitive() else {
+            return Err(err("encapsulated PixelData in an uncompressed transfer syntax".into()));
+        };
+        let words: Vec<u16>;
+        let pixels = match value {
+            P::U8(bytes) => Pixels::Bytes(bytes),
+            P::U16(w) => Pixels::Words(w),
+            P::I16(w) => {
+                words = w.iter().map(|&x| x as u16).collect();
+                Pixels::Words(&words)
+            }
+            _ => return Err(err("PixelData has a value representation volcast cannot read".into())),
+        };
+        return append_native(pixels, s, order, out, label);
+    }
+    let fragments = element.value().fragments().ok_or_else(|| {
+        err(format!(
+            "{} ({}) needs encapsulated PixelData, the file has native",
+            dicom_codec::name(&s.transfer_syntax),
+            clip(&s.transfer_syntax)
+        ))
+    })?;
+    let offsets = element.value().offset_table().unwrap_or(&[]);
+    let frames = dicom_codec::frames(fragments, offsets, s.frames).map_err(err)?;
+    let shape = FrameShape {
+        rows: s.rows as u16,
+        columns: s.columns as u16,
+        samples: 1,
+        bits_allocated: s.bits_allocated,
+        bits_stored: s.bits_stored,
+    };
+    for &k in order {
+        let decoded = dicom_codec::decode(s.kind, &s.transfer_syntax, &frames[k], &shape)
+            .map_err(|e| err(format!("frame {} of {}: {e}", k + 1, s.frames)))?;
+        append_frame(Pixels::Bytes(&decoded), s, out, label)?;
+    }
+    Ok(())
+}
+
+/// The files must back the volume before it is allocated: native pixels byte for byte, compressed ones within
+/// [`dicom_codec::MAX_RATIO`] (past that, a small file claiming a large volume is a decompression bomb).
+fn check_backed(label: &str, needed: u64, files: &[(Kind, u64)]) -> Result<(), VolumeError> {
+    let native: u64 = files.iter().filter(|f| f.0 == Kind::Native).map(|f| f.1).sum();
+    let compressed: u64 = files.iter().filter(|f| f.0 != Kind::Native).map(|f| f.1).sum();
+    if compressed == 0 {
+        return if needed > native { Err(short(label, native, needed)) } else { Ok(()) };
+    }
+    if needed > native.saturating_add(compressed.saturating_mul(dicom_codec::MAX_RATIO)) {
+        return Err(header_error(
+            label,
+            format!(
+                "{compressed} bytes of compressed pixel data claim to decode to {needed} bytes, more than {}x: \
+                 refused as a decompression bomb",
+                dicom_codec::MAX_RATIO
+            ),
+        ));
     }
     Ok(())
 }
@@ -492,7 +657,11 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
         other => {
             return Err(header_error(
                 label,
-                format!("transfer syntax '{}' is not supported", clip(other)),
+                format!(
+                    "uses {} ({}); volcast cannot decode it",
+                    dicom_codec::name(other),
+                    clip(other)
+                ),
             ))
         }
     };
@@ -553,6 +722,16 @@ fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
             continue;
         }
         let length = length as usize;
+        if length > bytes.len() - pos && encapsulated && (group, element) == (0xFFFE, 0xE000) {
+            return Err(header_error(
+                label,
+                format!(
+                    "a compressed pixel data fragment claims {length} bytes but only {} follow (truncated or corrupt \
+                     file)",
+                    bytes.len() - pos
+                ),
+            ));
+        }
         if length > bytes.len() - pos {
             return Err(header_error(
                 label,
@@ -616,11 +795,9 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
     let plan = plan(vec![slice], label)?;
     let count = check_dims(plan.dims)? as usize;
     let bytes_needed = count as u64 * plan.voxel_type.size() as u64;
-    if bytes_needed > bytes.len() as u64 {
-        return Err(short(label, bytes.len() as u64, bytes_needed));
-    }
+    check_backed(label, bytes_needed, &[(plan.slices[0].kind, bytes.len() as u64)])?;
     let mut data = empty_data(plan.voxel_type, count, plan.dims, bytes_needed)?;
-    append_pixels(pixel_value(&obj, label)?, &plan.slices[0], &mut data, label)?;
+    append_file(&obj, &plan.slices[0], &plan.frame_order, &mut data, label)?;
     finish("dicom".into(), plan, data)
 }
 
@@ -711,20 +888,18 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
     let count = check_dims(dims)? as usize;
     let bytes_needed = count as u64 * voxel_type.size() as u64;
     // The files must at least hold the pixels they claim before the volume is allocated.
-    let total_file_bytes: u64 = plan
+    let file_bytes: Vec<(Kind, u64)> = plan
         .slices
         .iter()
-        .map(|s| std::fs::metadata(&files[s.source]).map_or(0, |m| m.len()))
-        .sum();
-    if bytes_needed > total_file_bytes {
-        return Err(short(&label, total_file_bytes, bytes_needed));
-    }
+        .map(|s| (s.kind, std::fs::metadata(&files[s.source]).map_or(0, |m| m.len())))
+        .collect();
+    check_backed(&label, bytes_needed, &file_bytes)?;
     let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
     for (i, s) in plan.slices.iter().enumerate() {
         let f = &files[s.source];
         let f_label = format::file_label(f);
         match open_dicom(f, false) {
-            Ok(obj) => append_pixels(pixel_value(&obj, &f_label)?, s, &mut data, &f_label)?,
+            Ok(obj) => append_file(&obj, s, &plan.frame_order, &mut data, &f_label)?,
             Err(e) => {
                 // Pass 1 read this header, so the file is DICOM; dicom-object stops on bytes after the pixels.
                 if !s.native_little_endian {
@@ -737,7 +912,7 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
                 let frame_bytes =
                     s.rows as usize * s.columns as usize * s.frames as usize * usize::from(s.bits_allocated / 8);
                 let pixels = find_pixel_bytes(&bytes, frame_bytes).ok_or(e)?;
-                append_pixels(Pixels::Bytes(pixels), s, &mut data, &f_label)?;
+                append_native(Pixels::Bytes(pixels), s, &plan.frame_order, &mut data, &f_label)?;
             }
         }
         progress.report((i + 1) as f64 / plan.slices.len() as f64);
@@ -766,6 +941,9 @@ mod tests {
             instance,
             slice_step: Some(9.0),
             native_little_endian: true,
+            kind: Kind::Native,
+            transfer_syntax: "1.2.840.10008.1.2.1".into(),
+            frame_places: Vec::new(),
         }
     }
 

@@ -14,6 +14,7 @@
 mod builtin;
 mod decode;
 mod dicom;
+mod dicom_codec;
 mod dicom_geometry;
 mod downsample;
 mod format;
