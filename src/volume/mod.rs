@@ -23,7 +23,10 @@ mod nifti;
 mod nrrd;
 mod open;
 mod raw;
+mod vti;
+mod vti_data;
 mod vtk;
+mod vtk_scan;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use decode::Endian;
@@ -38,6 +41,7 @@ pub mod from_bytes {
     pub use super::metaimage::{from_bytes as metaimage, parse_header as metaimage_header};
     pub use super::nifti::{from_bytes as nifti, parse_header as nifti_header};
     pub use super::nrrd::{from_bytes as nrrd, parse_header as nrrd_header};
+    pub use super::vti::from_bytes as vti;
     pub use super::vtk::{from_bytes as vtk, parse_header as vtk_header};
 }
 
@@ -246,6 +250,20 @@ pub struct Volume {
     pub format: String,
     /// Things the user should know that are not errors: orientation ignored, 4-D reduced, downsampled, ...
     pub notes: Vec<String>,
+    /// Every point-data array the file holds (VTK files can hold several); empty for single-array formats.
+    pub arrays: Vec<ArrayInfo>,
+}
+
+/// One data array of a multi-array file, as `volcast info` lists it.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct ArrayInfo {
+    pub name: String,
+    /// The type as the file names it (`unsigned_char`, `Float32`, ...).
+    #[serde(rename = "type")]
+    pub type_name: String,
+    pub components: u32,
+    /// This is the array the volume holds.
+    pub loaded: bool,
 }
 
 impl Volume {
@@ -285,6 +303,7 @@ impl Volume {
             scaling: Scaling::IDENTITY,
             format: "memory".into(),
             notes: Vec::new(),
+            arrays: Vec::new(),
         })
     }
 
@@ -463,7 +482,7 @@ fn compute_range(source_type: VoxelType, data: &VoxelData) -> [f64; 2] {
 }
 
 /// Checks dims and returns the voxel count.
-fn check_dims(dims: [u32; 3]) -> Result<u64, VolumeError> {
+pub(crate) fn check_dims(dims: [u32; 3]) -> Result<u64, VolumeError> {
     if dims.contains(&0) {
         return Err(VolumeError::ZeroDimension { dims });
     }

@@ -2,7 +2,7 @@
 //! extension second, then applies the caller's overrides and the maximum dimension.
 
 use super::decode::{Endian, Progress};
-use super::{dicom, downsample, format, metaimage, nifti, nrrd, raw, vtk};
+use super::{dicom, downsample, format, metaimage, nifti, nrrd, raw, vti, vtk};
 use super::{RawOptions, Volume, VolumeError};
 use std::path::Path;
 
@@ -10,6 +10,7 @@ use std::path::Path;
 pub enum Format {
     Raw,
     Vtk,
+    Vti,
     Nrrd,
     Nifti,
     MetaImage,
@@ -21,6 +22,7 @@ impl Format {
         match self {
             Format::Raw => "raw",
             Format::Vtk => "VTK legacy",
+            Format::Vti => "VTK XML ImageData",
             Format::Nrrd => "NRRD",
             Format::Nifti => "NIfTI-1",
             Format::MetaImage => "MetaImage",
@@ -42,10 +44,13 @@ pub struct OpenOptions {
     pub max_dim: Option<u32>,
     /// If a dimension exceeds `max_dim`: refuse (true) instead of downsampling (false, the default).
     pub no_downsample: bool,
+    /// The data array to load from a file holding several (VTK legacy and `.vti`); `None`: the file's active
+    /// scalars, else its first one-component array.
+    pub array: Option<String>,
 }
 
 /// Which reader a path needs. A folder is a DICOM series. Content decides where it can (magic bytes of VTK, NRRD,
-/// NIfTI-1, DICOM; gzip only means NIfTI when the name says so); then the extension; anything else is raw.
+/// NIfTI-1, DICOM, VTK XML; gzip only means NIfTI when the name says so); then the extension; anything else is raw.
 pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     if path.is_dir() {
         return Ok(Format::Dicom);
@@ -53,6 +58,9 @@ pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     let prefix = format::read_prefix(path, 512)?;
     if vtk::is_vtk(&prefix) {
         return Ok(Format::Vtk);
+    }
+    if vti::is_vtk_xml(&prefix) {
+        return Ok(Format::Vti);
     }
     if nrrd::is_nrrd(&prefix) {
         return Ok(Format::Nrrd);
@@ -66,6 +74,7 @@ pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     let name = format::file_label(path).to_ascii_lowercase();
     let by_extension = [
         (".vtk", Format::Vtk),
+        (".vti", Format::Vti),
         (".nrrd", Format::Nrrd),
         (".nhdr", Format::Nrrd),
         (".nii", Format::Nifti),
@@ -106,7 +115,8 @@ pub fn open_with_progress(
             };
             raw::load_raw_with_progress(path, &opts.raw, extras, &mut progress)?
         }
-        Format::Vtk => vtk::load(path, &mut progress)?,
+        Format::Vtk => vtk::load(path, opts.array.as_deref(), &mut progress)?,
+        Format::Vti => vti::load(path, opts.array.as_deref(), &mut progress)?,
         Format::Nrrd => nrrd::load(path, &mut progress)?,
         Format::Nifti => nifti::load(path, &mut progress)?,
         Format::MetaImage => metaimage::load(path, &mut progress)?,
