@@ -190,7 +190,7 @@ fn encoded_len(bytes: usize) -> usize {
 }
 
 /// The raw little- or big-endian bytes of the array.
-fn binary(layout: &Layout, location: Location) -> Result<std::borrow::Cow<'_, [u8]>, VolumeError> {
+fn binary<'b>(layout: &Layout, location: Location<'b>) -> Result<std::borrow::Cow<'b, [u8]>, VolumeError> {
     let w = layout.word;
     match location {
         Location::Ascii(_) => unreachable!("ascii arrays are not binary"),
