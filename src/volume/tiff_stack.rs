@@ -588,6 +588,9 @@ fn finish(
 
 /// The kept pages' voxel count, checked against the limits before anything is allocated.
 fn plan(file: &str, pages: &[Page], slices: &[usize]) -> Result<(Page, [u32; 3], usize), VolumeError> {
+    if slices.is_empty() {
+        return Err(header_error(file, "holds no slices".into()));
+    }
     let first = pages[slices[0]];
     for (z, &i) in slices.iter().enumerate() {
         check_same(file, &first, &pages[i], &format!("slice {} (page {})", z + 1, i + 1))?;
