@@ -55,7 +55,7 @@ pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     if path.is_dir() {
         return folder_format(path);
     }
-    let prefix = format::read_prefix(path, 1024)?;
+    let prefix = format::read_prefix(path, 512)?;
     if vtk::is_vtk(&prefix) {
         return Ok(Format::Vtk);
     }

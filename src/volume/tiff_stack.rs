@@ -247,8 +247,8 @@ fn metadata<R: Read + Seek>(dec: &mut Decoder<R>, file: &str) -> Result<Metadata
     };
     Ok(Metadata {
         description,
-        x_resolution: resolution(dec, Tag::XResolution)?,
-        y_resolution: resolution(dec, Tag::YResolution)?,
+        x_resolution: resolution(&mut *dec, Tag::XResolution)?,
+        y_resolution: resolution(&mut *dec, Tag::YResolution)?,
         resolution_unit: dec.find_tag_unsigned::<u16>(Tag::ResolutionUnit).map_err(err)?,
     })
 }

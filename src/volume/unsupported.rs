@@ -42,7 +42,7 @@ pub(crate) fn identify(path: &Path, prefix: &[u8]) -> Option<Kind> {
     if prefix.starts_with(b"MATLAB 5.0 MAT-file") || prefix.starts_with(b"MATLAB 7.3 MAT-file") {
         return kind("a MATLAB MAT-file", "MATLAB MAT-files");
     }
-    if prefix.starts_with(HDF5_MAGIC) || (prefix.len() >= 520 && &prefix[512..520] == HDF5_MAGIC) {
+    if prefix.starts_with(HDF5_MAGIC) {
         return if ext(".nc") || ext(".nc4") || ext(".cdf") {
             kind("a NetCDF-4 file (HDF5)", "NetCDF")
         } else if ext(".mnc") {
