@@ -797,8 +797,8 @@ mod tests {
         let l = layout(&meta, 5);
         assert_eq!(l.slices, [0, 1, 2, 3, 4]);
         let want = [0.25e-3, 0.5e-3, 2.5e-3];
-        for i in 0..3 {
-            assert!((l.spacing[i] - want[i]).abs() < 1e-12, "{:?}", l.spacing);
+        for (got, want) in l.spacing.iter().zip(want) {
+            assert!((got - want).abs() < 1e-12, "{:?}", l.spacing);
         }
         // A hyperstack: the first channel of the first frame.
         let meta = Metadata {
