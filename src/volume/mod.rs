@@ -23,6 +23,8 @@ mod nifti;
 mod nrrd;
 mod open;
 mod raw;
+mod tiff_stack;
+mod unsupported;
 mod vti;
 mod vti_data;
 mod vtk;
@@ -41,6 +43,7 @@ pub mod from_bytes {
     pub use super::metaimage::{from_bytes as metaimage, parse_header as metaimage_header};
     pub use super::nifti::{from_bytes as nifti, parse_header as nifti_header};
     pub use super::nrrd::{from_bytes as nrrd, parse_header as nrrd_header};
+    pub use super::tiff_stack::from_bytes as tiff;
     pub use super::vti::from_bytes as vti;
     pub use super::vtk::{from_bytes as vtk, parse_header as vtk_header};
 }
@@ -246,7 +249,7 @@ pub struct Volume {
     pub stored_range: [f64; 2],
     /// Applied to every source value by [`Volume::value`]; identity unless the file asked for a rescale.
     pub scaling: Scaling,
-    /// Where the volume came from: "raw", "VTK legacy", "NRRD", "NIfTI-1", "MetaImage", "DICOM", "built-in".
+    /// Where the volume came from: "raw", "VTK legacy", "NRRD", "NIfTI-1", "MetaImage", "DICOM", "TIFF", "built-in".
     pub format: String,
     /// Things the user should know that are not errors: orientation ignored, 4-D reduced, downsampled, ...
     pub notes: Vec<String>,
@@ -626,6 +629,11 @@ pub enum VolumeError {
         Dims(*dims)
     )]
     DownsampleRefused { dims: [u32; 3], max_dim: u32 },
+    #[error(
+        "{file} is {kind}; volcast cannot read {what}. It reads raw, VTK legacy, NRRD, NIfTI-1, MetaImage, DICOM \
+         and TIFF (convert the file to one of these, or give --dims and --type to read it as raw)"
+    )]
+    Unsupported { file: String, kind: String, what: String },
 }
 
 #[cfg(test)]
