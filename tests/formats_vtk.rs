@@ -57,8 +57,16 @@ fn every_file_matches_what_vtk_reads_back() {
                 failures.push(format!("{name}: {what}"));
             }
         };
-        let dims: Vec<u64> = want["dims"].as_array().unwrap().iter().map(|d| d.as_u64().unwrap()).collect();
-        check(v.dims.map(u64::from).to_vec() == dims, format!("dims {:?} vs {dims:?}", v.dims));
+        let dims: Vec<u64> = want["dims"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d.as_u64().unwrap())
+            .collect();
+        check(
+            v.dims.map(u64::from).to_vec() == dims,
+            format!("dims {:?} vs {dims:?}", v.dims),
+        );
         assert!(!v.geometry.anatomical, "{name}: VTK has no anatomical convention");
         let spacing: Vec<f64> = want["spacing"].as_array().unwrap().iter().map(f).collect();
         let origin: Vec<f64> = want["origin"].as_array().unwrap().iter().map(f).collect();
@@ -68,25 +76,42 @@ fn every_file_matches_what_vtk_reads_back() {
         for r in 0..3 {
             for c in 0..3 {
                 let want = direction[3 * r + c] * spacing[c];
-                check(close(rows[r][c], want), format!("affine[{r}][{c}] {} vs {want}", rows[r][c]));
+                check(
+                    close(rows[r][c], want),
+                    format!("affine[{r}][{c}] {} vs {want}", rows[r][c]),
+                );
             }
-            check(close(rows[r][3], origin[r]), format!("origin[{r}] {} vs {}", rows[r][3], origin[r]));
+            check(
+                close(rows[r][3], origin[r]),
+                format!("origin[{r}] {} vs {}", rows[r][3], origin[r]),
+            );
         }
         // The default array is VTK's active scalars.
         let active = want["active_scalars"].as_str().unwrap();
         let loaded: Vec<&str> = v.arrays.iter().filter(|a| a.loaded).map(|a| a.name.as_str()).collect();
-        check(loaded == [active], format!("loaded {loaded:?}, VTK's active scalars {active}"));
+        check(
+            loaded == [active],
+            format!("loaded {loaded:?}, VTK's active scalars {active}"),
+        );
         // Every array VTK lists, volcast lists with the same components.
         for a in want["arrays"].as_array().unwrap() {
             let (an, ac) = (a["name"].as_str().unwrap(), a["components"].as_u64().unwrap());
             let listed = v.arrays.iter().any(|x| x.name == an && u64::from(x.components) == ac);
-            check(listed, format!("array {an} ({ac} components) not listed in {:?}", v.arrays));
+            check(
+                listed,
+                format!("array {an} ({ac} components) not listed in {:?}", v.arrays),
+            );
         }
         for a in want["arrays"].as_array().unwrap() {
             let an = a["name"].as_str().unwrap();
             if a["components"].as_u64() != Some(1) {
-                let e = open(&path, Some(an)).expect_err("multi-component arrays are refused").to_string();
-                check(e.contains(name) && e.contains("components"), format!("--array {an}: {e}"));
+                let e = open(&path, Some(an))
+                    .expect_err("multi-component arrays are refused")
+                    .to_string();
+                check(
+                    e.contains(name) && e.contains("components"),
+                    format!("--array {an}: {e}"),
+                );
                 continue;
             }
             let v = match open(&path, Some(an)) {
@@ -97,7 +122,10 @@ fn every_file_matches_what_vtk_reads_back() {
                 }
             };
             let t = a["type"].as_str().unwrap();
-            check(v.source_type.name() == t, format!("{an}: type {} vs {t}", v.source_type.name()));
+            check(
+                v.source_type.name() == t,
+                format!("{an}: type {} vs {t}", v.source_type.name()),
+            );
             let count = v.voxel_count() as u64;
             let sum: f64 = (0..count).map(|i| voxel(&v, i)).sum();
             check(close(sum, f(&a["sum"])), format!("{an}: sum {sum} vs {}", a["sum"]));
@@ -122,24 +150,44 @@ fn info_lists_arrays_in_json() {
     assert_eq!(arrays[3]["type"], "short");
     assert_eq!(arrays[3]["loaded"], true);
     assert_eq!(arrays[1]["components"], 3);
-    assert!(volcast::info::Info::of(&v).text(&v).contains("label: short, 1 component(s) (loaded)"));
+    assert!(volcast::info::Info::of(&v)
+        .text(&v)
+        .contains("label: short, 1 component(s) (loaded)"));
 }
 
 #[test]
 fn clear_refusals_name_the_file() {
-    let e = open(&data().join("legacy_rectilinear_uneven.vtk"), None).unwrap_err().to_string();
-    assert!(e.contains("legacy_rectilinear_uneven.vtk") && e.contains("Y_COORDINATES are not evenly spaced"), "{e}");
+    let e = open(&data().join("legacy_rectilinear_uneven.vtk"), None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("legacy_rectilinear_uneven.vtk") && e.contains("Y_COORDINATES are not evenly spaced"),
+        "{e}"
+    );
     let e = open(&data().join("unsupported.vtu"), None).unwrap_err().to_string();
     assert!(
         e.contains("unsupported.vtu is a VTK XML UnstructuredGrid file; volcast reads ImageData (.vti) only"),
         "{e}"
     );
-    let e = open(&data().join("vti_zlib.vti"), Some("nope")).unwrap_err().to_string();
-    assert!(e.contains("vti_zlib.vti") && e.contains("no point array named 'nope'") && e.contains("density"), "{e}");
-    let e = open(&data().join("legacy_u8_ascii.vtk"), Some("nope")).unwrap_err().to_string();
+    let e = open(&data().join("vti_zlib.vti"), Some("nope"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("vti_zlib.vti") && e.contains("no point array named 'nope'") && e.contains("density"),
+        "{e}"
+    );
+    let e = open(&data().join("legacy_u8_ascii.vtk"), Some("nope"))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("legacy_u8_ascii.vtk") && e.contains("ramp"), "{e}");
-    assert_eq!(volume::detect_format(&data().join("vti_ascii.vti")).unwrap(), volume::Format::Vti);
-    assert_eq!(volume::detect_format(&data().join("unsupported.vtu")).unwrap(), volume::Format::Vti);
+    assert_eq!(
+        volume::detect_format(&data().join("vti_ascii.vti")).unwrap(),
+        volume::Format::Vti
+    );
+    assert_eq!(
+        volume::detect_format(&data().join("unsupported.vtu")).unwrap(),
+        volume::Format::Vti
+    );
 }
 
 /// A fresh folder under the temp dir, removed on drop.
@@ -208,25 +256,89 @@ fn hostile_vti_files_are_refused() {
     let block = |c: &[u8]| [1, 210, 210, c.len() as u32];
     let cases: Vec<(&str, Vec<u8>, &str)> = vec![
         // Each compressor's stream holds 4 MiB; the header claims the 210 bytes the extent needs.
-        ("bomb-zlib.vti", vti(small, "vtkZLibDataCompressor", &block(&z), &z, "0"), "more than"),
-        ("bomb-lz4.vti", vti(small, "vtkLZ4DataCompressor", &block(&l), &l, "0"), "lz4 block 0 is corrupt"),
-        ("bomb-lzma.vti", vti(small, "vtkLZMADataCompressor", &block(&xz), &xz, "0"), "lzma block 0 is corrupt"),
+        (
+            "bomb-zlib.vti",
+            vti(small, "vtkZLibDataCompressor", &block(&z), &z, "0"),
+            "more than",
+        ),
+        (
+            "bomb-lz4.vti",
+            vti(small, "vtkLZ4DataCompressor", &block(&l), &l, "0"),
+            "lz4 block 0 is corrupt",
+        ),
+        (
+            "bomb-lzma.vti",
+            vti(small, "vtkLZMADataCompressor", &block(&xz), &xz, "0"),
+            "lzma block 0 is corrupt",
+        ),
         // A header claiming 1 GiB from a few compressed bytes, per compressor.
-        ("claim-zlib.vti", vti(huge, "vtkZLibDataCompressor", &[1, 1 << 30, 0, 20], &[0; 20], "0"), "claims"),
-        ("claim-lz4.vti", vti(huge, "vtkLZ4DataCompressor", &[1, 1 << 30, 0, 20], &[0; 20], "0"), "claims"),
-        ("claim-lzma.vti", vti(huge, "vtkLZMADataCompressor", &[1, 1 << 30, 0, 20], &[0; 20], "0"), "claims"),
+        (
+            "claim-zlib.vti",
+            vti(huge, "vtkZLibDataCompressor", &[1, 1 << 30, 0, 20], &[0; 20], "0"),
+            "claims",
+        ),
+        (
+            "claim-lz4.vti",
+            vti(huge, "vtkLZ4DataCompressor", &[1, 1 << 30, 0, 20], &[0; 20], "0"),
+            "claims",
+        ),
+        (
+            "claim-lzma.vti",
+            vti(huge, "vtkLZMADataCompressor", &[1, 1 << 30, 0, 20], &[0; 20], "0"),
+            "claims",
+        ),
         // Sizes that disagree with the extent.
-        ("sizes.vti", vti(small, "vtkZLibDataCompressor", &[1, 300, 300, 9], &[0; 9], "0"), "does not add up"),
-        ("blocks.vti", vti(small, "vtkZLibDataCompressor", &[5_000_000, 64, 18, 9], &[0; 9], "0"), "does not add up"),
-        ("raw-size.vti", vti(small, "", &[1 << 31], &[0; 210], "0"), "says 2147483648 bytes"),
+        (
+            "sizes.vti",
+            vti(small, "vtkZLibDataCompressor", &[1, 300, 300, 9], &[0; 9], "0"),
+            "does not add up",
+        ),
+        (
+            "blocks.vti",
+            vti(small, "vtkZLibDataCompressor", &[5_000_000, 64, 18, 9], &[0; 9], "0"),
+            "does not add up",
+        ),
+        (
+            "raw-size.vti",
+            vti(small, "", &[1 << 31], &[0; 210], "0"),
+            "says 2147483648 bytes",
+        ),
         // Data missing.
-        ("truncated.vti", vti(small, "", &[210], &[7; 100], "0"), "needs 210 bytes"),
-        ("truncated-blocks.vti", vti(small, "vtkZLibDataCompressor", &[1, 210, 210, 900], &[0; 9], "0"), "compressed blocks"),
-        ("huge-extent.vti", vti("0 99999 0 99999 0 99999", "", &[0], &[], "0"), "exceed the limit"),
-        ("many-voxels.vti", vti("0 16000 0 16000 0 16000", "", &[0], &[], "0"), "more than the limit"),
-        ("empty-extent.vti", vti("5 4 0 1 0 1", "", &[0], &[], "0"), "zero or negative"),
-        ("offset-past-end.vti", vti(small, "", &[210], &[0; 210], "999999"), "offset 999999, outside"),
-        ("negative-offset.vti", vti(small, "", &[210], &[0; 210], "-4"), "offset -4, outside"),
+        (
+            "truncated.vti",
+            vti(small, "", &[210], &[7; 100], "0"),
+            "needs 210 bytes",
+        ),
+        (
+            "truncated-blocks.vti",
+            vti(small, "vtkZLibDataCompressor", &[1, 210, 210, 900], &[0; 9], "0"),
+            "compressed blocks",
+        ),
+        (
+            "huge-extent.vti",
+            vti("0 99999 0 99999 0 99999", "", &[0], &[], "0"),
+            "exceed the limit",
+        ),
+        (
+            "many-voxels.vti",
+            vti("0 16000 0 16000 0 16000", "", &[0], &[], "0"),
+            "more than the limit",
+        ),
+        (
+            "empty-extent.vti",
+            vti("5 4 0 1 0 1", "", &[0], &[], "0"),
+            "zero or negative",
+        ),
+        (
+            "offset-past-end.vti",
+            vti(small, "", &[210], &[0; 210], "999999"),
+            "offset 999999, outside",
+        ),
+        (
+            "negative-offset.vti",
+            vti(small, "", &[210], &[0; 210], "-4"),
+            "offset -4, outside",
+        ),
         ("not-xml.vti", b"<VTKFile type=\"ImageData\" <<<".to_vec(), "malformed"),
     ];
     for (name, bytes, expected) in cases {

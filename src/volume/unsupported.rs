@@ -91,7 +91,7 @@ pub(crate) fn identify(path: &Path, prefix: &[u8]) -> Option<Kind> {
     }
     // MRC2014 / CCP4: "MAP " at byte 208.
     if (prefix.len() >= 212 && &prefix[208..212] == b"MAP ")
-        || [".mrc", ".mrcs", ".ccp4", ".map", ".rec"].iter().any(|e| ext(*e))
+        || [".mrc", ".mrcs", ".ccp4", ".map", ".rec"].iter().any(|e| ext(e))
     {
         return kind("an MRC/CCP4 map", "MRC/CCP4");
     }

@@ -63,8 +63,10 @@ fn attributes(e: &BytesStart, file: &str) -> Result<Vec<(String, String)>, Volum
     let mut out = Vec::new();
     for a in e.attributes() {
         let a = a.map_err(|err| header_error(file, format!("malformed XML attribute: {err}")))?;
-        let key = String::from_utf8_lossy(a.key.as_ref()).into_owned();
-        let value = a.unescape_value().map_or_else(|_| a.value.to_string(), |v| v.into_owned());
+        let key = a.key.as_ref().to_owned();
+        let value = a
+            .normalized_value(quick_xml::XmlVersion::Implicit1_0)
+            .map_or_else(|_| a.value.to_string(), |v| v.into_owned());
         out.push((key, value));
     }
     Ok(out)
@@ -93,8 +95,8 @@ fn parse_xml(bytes: &[u8], file: &str) -> Result<Parsed, VolumeError> {
             Event::Empty(e) => (e, false),
             Event::End(e) => {
                 match e.name().as_ref() {
-                    b"PointData" => in_point_data = false,
-                    b"DataArray" => {
+                    "PointData" => in_point_data = false,
+                    "DataArray" => {
                         if let Some(mut a) = open_array.take() {
                             a.text.1 = before;
                             p.arrays.push(a);
@@ -109,29 +111,29 @@ fn parse_xml(bytes: &[u8], file: &str) -> Result<Parsed, VolumeError> {
         };
         let attrs = attributes(e, file)?;
         match e.name().as_ref() {
-            b"VTKFile" if p.file_type.is_none() => {
+            "VTKFile" if p.file_type.is_none() => {
                 p.file_type = Some(get(&attrs, "type").unwrap_or_default());
                 p.byte_order = get(&attrs, "byte_order");
                 p.header_type = get(&attrs, "header_type");
                 p.compressor = get(&attrs, "compressor");
             }
-            b"ImageData" => {
+            "ImageData" => {
                 p.whole_extent = get(&attrs, "WholeExtent");
                 p.origin = get(&attrs, "Origin");
                 p.spacing = get(&attrs, "Spacing");
                 p.direction = get(&attrs, "Direction");
             }
-            b"Piece" => {
+            "Piece" => {
                 p.pieces += 1;
                 if p.pieces == 1 {
                     p.piece_extent = get(&attrs, "Extent");
                 }
             }
-            b"PointData" if p.pieces == 1 => {
+            "PointData" if p.pieces == 1 => {
                 in_point_data = is_start;
                 p.scalars = get(&attrs, "Scalars");
             }
-            b"DataArray" if in_point_data => {
+            "DataArray" if in_point_data => {
                 let format = match get(&attrs, "format").unwrap_or_default().as_str() {
                     "ascii" => ArrayFormat::Ascii,
                     "binary" => ArrayFormat::Binary,
@@ -162,7 +164,7 @@ fn parse_xml(bytes: &[u8], file: &str) -> Result<Parsed, VolumeError> {
                     p.arrays.push(a);
                 }
             }
-            b"AppendedData" => {
+            "AppendedData" => {
                 let encoding = get(&attrs, "encoding").unwrap_or_else(|| "raw".into());
                 p.appended = Some((encoding, reader.buffer_position() as usize));
                 break;
@@ -187,7 +189,12 @@ fn voxel_type(name: &str) -> Option<VoxelType> {
     })
 }
 
-fn floats<const N: usize>(file: &str, field: &str, text: Option<&str>, default: [f64; N]) -> Result<[f64; N], VolumeError> {
+fn floats<const N: usize>(
+    file: &str,
+    field: &str,
+    text: Option<&str>,
+    default: [f64; N],
+) -> Result<[f64; N], VolumeError> {
     let Some(text) = text else { return Ok(default) };
     let v: Vec<f64> = format::numbers(file, field, text, N)?;
     let mut out = default;
@@ -215,7 +222,10 @@ fn select<'a>(p: &'a Parsed, wanted: Option<&str>, file: &str) -> Result<&'a Xml
     let by_name = |name: &str| p.arrays.iter().find(|a| a.name == name);
     let chosen = match wanted {
         Some(name) => by_name(name).ok_or_else(|| {
-            header_error(file, format!("no point array named '{}'; the file has: {}", clip(name), list()))
+            header_error(
+                file,
+                format!("no point array named '{}'; the file has: {}", clip(name), list()),
+            )
         })?,
         None => p
             .scalars
@@ -244,7 +254,13 @@ fn select<'a>(p: &'a Parsed, wanted: Option<&str>, file: &str) -> Result<&'a Xml
 }
 
 /// Parses and loads a `.vti` held in memory; `file` names it in messages.
-fn read(bytes: &[u8], file: &str, name: String, wanted: Option<&str>, progress: &mut Progress) -> Result<Volume, VolumeError> {
+fn read(
+    bytes: &[u8],
+    file: &str,
+    name: String,
+    wanted: Option<&str>,
+    progress: &mut Progress,
+) -> Result<Volume, VolumeError> {
     let err = |problem: String| header_error(file, problem);
     let p = parse_xml(bytes, file)?;
     match p.file_type.as_deref() {
@@ -269,7 +285,12 @@ fn read(bytes: &[u8], file: &str, name: String, wanted: Option<&str>, progress: 
     let endian = match p.byte_order.as_deref() {
         None | Some("LittleEndian") => Endian::Little,
         Some("BigEndian") => Endian::Big,
-        Some(other) => return Err(err(format!("byte_order '{}' is not LittleEndian or BigEndian", clip(other)))),
+        Some(other) => {
+            return Err(err(format!(
+                "byte_order '{}' is not LittleEndian or BigEndian",
+                clip(other)
+            )))
+        }
     };
     let word = match p.header_type.as_deref() {
         None | Some("UInt32") => 4,
@@ -296,13 +317,23 @@ fn read(bytes: &[u8], file: &str, name: String, wanted: Option<&str>, progress: 
         .ok_or_else(|| err("no Extent on the Piece and no WholeExtent".into()))?;
     let extent: Vec<i64> = format::numbers(file, "Extent", extent_text, 6)?;
     let sizes: Vec<i64> = (0..3)
-        .map(|a| extent[2 * a + 1].checked_sub(extent[2 * a]).and_then(|d| d.checked_add(1)).unwrap_or(0))
+        .map(|a| {
+            extent[2 * a + 1]
+                .checked_sub(extent[2 * a])
+                .and_then(|d| d.checked_add(1))
+                .unwrap_or(0)
+        })
         .collect();
     let dims = format::dims_from(file, "Extent sizes", &sizes)?;
     let count = super::check_dims(dims).map_err(|e| named(file, e))?;
     let spacing = floats(file, "Spacing", p.spacing.as_deref(), [1.0; 3])?;
     let origin = floats(file, "Origin", p.origin.as_deref(), [0.0; 3])?;
-    let d = floats(file, "Direction", p.direction.as_deref(), [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])?;
+    let d = floats(
+        file,
+        "Direction",
+        p.direction.as_deref(),
+        [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+    )?;
     // Row-major: column a of the matrix is where index axis a points.
     let direction = DMat3::from_cols(
         DVec3::new(d[0], d[3], d[6]),
@@ -329,7 +360,8 @@ fn read(bytes: &[u8], file: &str, name: String, wanted: Option<&str>, progress: 
         anatomical: false,
     });
     if p.piece_extent.is_some() && p.whole_extent.is_some() && p.piece_extent != p.whole_extent {
-        h.notes.push("the piece's Extent differs from WholeExtent; the piece is read".into());
+        h.notes
+            .push("the piece's Extent differs from WholeExtent; the piece is read".into());
     }
     h.arrays = p
         .arrays
@@ -345,10 +377,12 @@ fn read(bytes: &[u8], file: &str, name: String, wanted: Option<&str>, progress: 
         ArrayFormat::Ascii => Location::Ascii(&bytes[chosen.text.0..chosen.text.1]),
         ArrayFormat::Binary => Location::Base64(&bytes[chosen.text.0..chosen.text.1]),
         ArrayFormat::Appended => {
-            let (encoding, after_tag) = p
-                .appended
-                .as_ref()
-                .ok_or_else(|| err(format!("array '{}' is appended but there is no <AppendedData>", clip(&chosen.name))))?;
+            let (encoding, after_tag) = p.appended.as_ref().ok_or_else(|| {
+                err(format!(
+                    "array '{}' is appended but there is no <AppendedData>",
+                    clip(&chosen.name)
+                ))
+            })?;
             let offset_text = chosen
                 .offset
                 .as_deref()
@@ -376,7 +410,12 @@ fn read(bytes: &[u8], file: &str, name: String, wanted: Option<&str>, progress: 
             match encoding.as_str() {
                 "raw" => Location::Raw(&data[offset..]),
                 "base64" => Location::Base64(&data[offset..]),
-                other => return Err(err(format!("AppendedData encoding '{}' is not raw or base64", clip(other)))),
+                other => {
+                    return Err(err(format!(
+                        "AppendedData encoding '{}' is not raw or base64",
+                        clip(other)
+                    )))
+                }
             }
         }
     };
@@ -392,7 +431,6 @@ fn read(bytes: &[u8], file: &str, name: String, wanted: Option<&str>, progress: 
     let data = vti_data::decode(&layout, location, progress)?;
     h.into_volume(name, data).map_err(|e| named(file, e))
 }
-
 
 /// Loads a `.vti` held in memory.
 pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {

@@ -141,7 +141,11 @@ impl Layout<'_> {
             return Err(bad("does not add up to the array's size"));
         }
         if n > room as u64 {
-            return Err(self.truncated("compression header", n.saturating_mul(self.word as u64), (room * self.word) as u64));
+            return Err(self.truncated(
+                "compression header",
+                n.saturating_mul(self.word as u64),
+                (room * self.word) as u64,
+            ));
         }
         let to_usize = |v: u64| usize::try_from(v).map_err(|_| bad("is too large for this machine"));
         let mut sizes = vec![to_usize(size)?; to_usize(n)?];
@@ -166,7 +170,12 @@ fn base64(layout: &Layout, text: &[u8]) -> Result<Vec<u8>, VolumeError> {
 }
 
 /// The first `chars` base64 characters of `text` (whitespace skipped), or an error if it has fewer.
-fn take_chars<'t>(layout: &Layout, text: &'t [u8], chars: usize, what: &str) -> Result<(&'t [u8], &'t [u8]), VolumeError> {
+fn take_chars<'t>(
+    layout: &Layout,
+    text: &'t [u8],
+    chars: usize,
+    what: &str,
+) -> Result<(&'t [u8], &'t [u8]), VolumeError> {
     if text.len() < chars {
         return Err(layout.err(format!(
             "the base64 {what} needs {chars} characters but only {} remain (truncated file?)",
@@ -221,7 +230,8 @@ fn binary<'b>(layout: &Layout, location: Location<'b>) -> Result<std::borrow::Co
             let text: Vec<u8> = text.iter().copied().filter(|b| !b.is_ascii_whitespace()).collect();
             let Some(compressor) = layout.compressor else {
                 let (first, _) = take_chars(layout, &text, encoded_len(w), "array header")?;
-                let size = layout.check_size(layout.words(&base64_at_least(layout, first, w, "array header")?[..w])[0])?;
+                let size =
+                    layout.check_size(layout.words(&base64_at_least(layout, first, w, "array header")?[..w])[0])?;
                 let (all, _) = take_chars(layout, &text, encoded_len(w + size), "array")?;
                 let mut decoded = base64_at_least(layout, all, w + size, "array")?;
                 decoded.truncate(w + size);
@@ -238,7 +248,12 @@ fn binary<'b>(layout: &Layout, location: Location<'b>) -> Result<std::borrow::Co
             let total = compressed.iter().fold(0u64, |a, &c| a.saturating_add(c));
             let chars = usize::try_from(total).map_or(usize::MAX, encoded_len);
             let (blocks, _) = take_chars(layout, rest, chars, "compressed blocks")?;
-            let blocks = base64_at_least(layout, blocks, usize::try_from(total).unwrap_or(usize::MAX), "compressed blocks")?;
+            let blocks = base64_at_least(
+                layout,
+                blocks,
+                usize::try_from(total).unwrap_or(usize::MAX),
+                "compressed blocks",
+            )?;
             inflate(layout, compressor, &sizes, &compressed, &blocks).map(std::borrow::Cow::Owned)
         }
     }
@@ -305,8 +320,8 @@ fn inflate(
                     bytes: layout.expected(),
                 })?;
                 out.resize(start + size, 0);
-                let n = lz4_flex::block::decompress_into(input, &mut out[start..])
-                    .map_err(|e| corrupt(e.to_string()))?;
+                let n =
+                    lz4_flex::block::decompress_into(input, &mut out[start..]).map_err(|e| corrupt(e.to_string()))?;
                 out.truncate(start + n);
             }
             Compressor::Lzma => {
@@ -340,10 +355,7 @@ pub(crate) fn decode(layout: &Layout, location: Location, progress: &mut Progres
     let result = match location {
         Location::Ascii(text) => {
             if layout.count > text.len() as u64 / 2 + 1 {
-                return Err(layout.err(format!(
-                    "{} bytes of ASCII data cannot hold {count} values",
-                    text.len()
-                )));
+                return Err(layout.err(format!("{} bytes of ASCII data cannot hold {count} values", text.len())));
             }
             let mut reader = text;
             decode::read_ascii(&mut reader, t, count, progress)

@@ -5,7 +5,9 @@
 //! the first `SCALARS`/`COLOR_SCALARS`, else the first one-component `FIELD` array under `POINT_DATA`.
 
 use super::decode::{Endian, Progress};
-use super::format::{self, clip, header_error, number, numbers, signed_spacing, DataLocation, Encoding, Header, Source};
+use super::format::{
+    self, clip, header_error, number, numbers, signed_spacing, DataLocation, Encoding, Header, Source,
+};
 use super::vtk_scan::{ArrayKind, PointArray, Scanner, Section};
 use super::{ArrayInfo, Volume, VolumeError, VoxelData, MAX_DIM};
 use std::io::{BufRead, BufReader, Cursor, Seek};
@@ -45,7 +47,10 @@ fn walk<R: BufRead + Seek>(s: &mut Scanner<R>, file: &str) -> Result<Layout, Vol
         ));
     }
     let mut notes = Vec::new();
-    let version = first[14..].trim().trim_start_matches(|c: char| c.is_ascii_alphabetic()).trim();
+    let version = first[14..]
+        .trim()
+        .trim_start_matches(|c: char| c.is_ascii_alphabetic())
+        .trim();
     match version.parse::<f64>() {
         Ok(v) if v <= 5.1 + 1e-9 => {}
         _ => notes.push(format!(
@@ -156,7 +161,15 @@ fn walk<R: BufRead + Seek>(s: &mut Scanner<R>, file: &str) -> Result<Layout, Vol
                     s.line()?;
                 }
                 let what = format!("SCALARS {}", clip(args[0]));
-                add(&mut l.arrays, section, args[0], args[1], ArrayKind::Scalars, components, s.pos);
+                add(
+                    &mut l.arrays,
+                    section,
+                    args[0],
+                    args[1],
+                    ArrayKind::Scalars,
+                    components,
+                    s.pos,
+                );
                 s.skip_values(&what, args[1], n.saturating_mul(u64::from(components)))?;
             }
             "COLOR_SCALARS" => {
@@ -165,7 +178,15 @@ fn walk<R: BufRead + Seek>(s: &mut Scanner<R>, file: &str) -> Result<Layout, Vol
                 let components: u32 = number(file, "COLOR_SCALARS component count", args[1])?;
                 let what = format!("COLOR_SCALARS {}", clip(args[0]));
                 let kind = ArrayKind::ColorScalars;
-                add(&mut l.arrays, section, args[0], "unsigned_char", kind, components, s.pos);
+                add(
+                    &mut l.arrays,
+                    section,
+                    args[0],
+                    "unsigned_char",
+                    kind,
+                    components,
+                    s.pos,
+                );
                 s.skip_values(&what, "unsigned_char", n.saturating_mul(u64::from(components)))?;
             }
             "LOOKUP_TABLE" => {
@@ -184,7 +205,15 @@ fn walk<R: BufRead + Seek>(s: &mut Scanner<R>, file: &str) -> Result<Layout, Vol
                     _ => 1,
                 };
                 let what = format!("{keyword} {}", clip(args[0]));
-                add(&mut l.arrays, section, args[0], args[1], ArrayKind::Other, components, s.pos);
+                add(
+                    &mut l.arrays,
+                    section,
+                    args[0],
+                    args[1],
+                    ArrayKind::Other,
+                    components,
+                    s.pos,
+                );
                 s.skip_values(&what, args[1], n.saturating_mul(u64::from(components)))?;
             }
             "TEXTURE_COORDINATES" => {
@@ -192,7 +221,15 @@ fn walk<R: BufRead + Seek>(s: &mut Scanner<R>, file: &str) -> Result<Layout, Vol
                 let n = tuples()?;
                 let components: u32 = number(file, "TEXTURE_COORDINATES dimension", args[1])?;
                 let what = format!("TEXTURE_COORDINATES {}", clip(args[0]));
-                add(&mut l.arrays, section, args[0], args[2], ArrayKind::Other, components, s.pos);
+                add(
+                    &mut l.arrays,
+                    section,
+                    args[0],
+                    args[2],
+                    ArrayKind::Other,
+                    components,
+                    s.pos,
+                );
                 s.skip_values(&what, args[2], n.saturating_mul(u64::from(components)))?;
             }
             "METADATA" => skip_metadata(s)?,
@@ -258,7 +295,10 @@ fn field<R: BufRead + Seek>(
         if args.len() < 4 {
             return Err(header_error(
                 file,
-                format!("FIELD array line '{}' needs a name, components, tuples and a type", clip(&line)),
+                format!(
+                    "FIELD array line '{}' needs a name, components, tuples and a type",
+                    clip(&line)
+                ),
             ));
         }
         let components: u32 = number(file, "FIELD array components", args[1])?;
@@ -298,13 +338,20 @@ fn add(
 /// through the first and last.
 fn uniform(file: &str, axis: char, c: &[f64]) -> Result<(f64, f64), VolumeError> {
     let n = c.len();
+    let Some(&first) = c.first() else {
+        return Err(header_error(
+            file,
+            format!("RECTILINEAR_GRID has no {axis}_COORDINATES"),
+        ));
+    };
     if n < 2 {
-        return Ok((c[0], 1.0));
+        return Ok((first, 1.0));
     }
     let step = (c[n - 1] - c[0]) / (n - 1) as f64;
     for (i, &v) in c.iter().enumerate() {
         let expected = c[0] + step * i as f64;
-        if !((v - expected).abs() <= 1e-4 * step.abs()) {
+        let off = (v - expected).abs();
+        if off.is_nan() || off > 1e-4 * step.abs() {
             return Err(header_error(
                 file,
                 format!(
@@ -336,7 +383,11 @@ fn select<'a>(arrays: &'a [PointArray], wanted: Option<&str>, file: &str) -> Res
         Some(name) => arrays.iter().find(|a| a.name == name).ok_or_else(|| {
             header_error(
                 file,
-                format!("no point array named '{}'; the file has: {}", clip(name), array_list(arrays)),
+                format!(
+                    "no point array named '{}'; the file has: {}",
+                    clip(name),
+                    array_list(arrays)
+                ),
             )
         })?,
         None => arrays
@@ -443,7 +494,15 @@ pub fn from_bytes_with(bytes: &[u8], array: Option<&str>) -> Result<Volume, Volu
     let file = "VTK data";
     let mut s = Scanner::new(Cursor::new(bytes), bytes.len() as u64, file);
     let (header, chosen) = header_from(&mut s, file, array)?;
-    finish(&mut s, header, &chosen, "vtk".into(), file, Source::Bytes(bytes), &mut Progress::none())
+    finish(
+        &mut s,
+        header,
+        &chosen,
+        "vtk".into(),
+        file,
+        Source::Bytes(bytes),
+        &mut Progress::none(),
+    )
 }
 
 pub(crate) fn load(path: &Path, array: Option<&str>, progress: &mut Progress) -> Result<Volume, VolumeError> {
@@ -456,7 +515,15 @@ pub(crate) fn load(path: &Path, array: Option<&str>, progress: &mut Progress) ->
     let reader = BufReader::new(std::fs::File::open(path).map_err(io)?);
     let mut s = Scanner::new(reader, len, &file);
     let (header, chosen) = header_from(&mut s, &file, array)?;
-    finish(&mut s, header, &chosen, format::volume_name(path), &file, Source::File(path), progress)
+    finish(
+        &mut s,
+        header,
+        &chosen,
+        format::volume_name(path),
+        &file,
+        Source::File(path),
+        progress,
+    )
 }
 
 /// Reads the chosen array: ASCII colour scalars here (floats to bytes), everything else by the shared loader.
@@ -473,7 +540,9 @@ fn finish<R: BufRead + Seek>(
         let count = super::check_dims(header.dims).map_err(|e| format::named(file, e))? as usize;
         s.seek_to(chosen.offset)?;
         let values = s.read_color_ascii(count)?;
-        return header.into_volume(name, VoxelData::U8(values)).map_err(|e| format::named(file, e));
+        return header
+            .into_volume(name, VoxelData::U8(values))
+            .map_err(|e| format::named(file, e));
     }
     format::load(header, name, file, source, progress).map_err(|e| format::named(file, e))
 }
@@ -481,7 +550,7 @@ fn finish<R: BufRead + Seek>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::VoxelData;
+    use crate::volume::{VoxelData, VoxelType};
 
     fn header(kind: &str, extra: &str) -> String {
         format!(
@@ -635,10 +704,13 @@ mod tests {
     /// a lookup table, tensors, texture coordinates, a FIELD under POINT_DATA, and SCALARS without LOOKUP_TABLE.
     #[test]
     fn sections_around_the_scalars_are_stepped_over() {
-        let mut b = b"# vtk DataFile Version 5.1\nt\nBINARY\nDATASET STRUCTURED_POINTS\nFIELD FieldData 1\nnote 1 2 double\n"
-            .to_vec();
+        let mut b =
+            b"# vtk DataFile Version 5.1\nt\nBINARY\nDATASET STRUCTURED_POINTS\nFIELD FieldData 1\nnote 1 2 double\n"
+                .to_vec();
         b.extend([0u8; 16]);
-        b.extend(b"\nDIMENSIONS 3 2 1\nSPACING 1 1 1\nORIGIN 0 0 0\nCELL_DATA 2\nSCALARS c int\nLOOKUP_TABLE default\n");
+        b.extend(
+            b"\nDIMENSIONS 3 2 1\nSPACING 1 1 1\nORIGIN 0 0 0\nCELL_DATA 2\nSCALARS c int\nLOOKUP_TABLE default\n",
+        );
         b.extend([1u8; 8]);
         b.extend(b"\nPOINT_DATA 6\nVECTORS v float\n");
         b.extend([2u8; 72]);
@@ -658,11 +730,21 @@ mod tests {
         b.extend(b"\n");
         let v = from_bytes(&b).unwrap();
         assert_eq!(v.value(2, 1, 0), 12.0);
-        let names: Vec<(&str, u32, bool)> =
-            v.arrays.iter().map(|a| (a.name.as_str(), a.components, a.loaded)).collect();
+        let names: Vec<(&str, u32, bool)> = v
+            .arrays
+            .iter()
+            .map(|a| (a.name.as_str(), a.components, a.loaded))
+            .collect();
         assert_eq!(
             names,
-            [("v", 3, false), ("t", 6, false), ("tc", 2, false), ("f", 1, false), ("bits", 1, false), ("s", 1, true)]
+            [
+                ("v", 3, false),
+                ("t", 6, false),
+                ("tc", 2, false),
+                ("f", 1, false),
+                ("bits", 1, false),
+                ("s", 1, true)
+            ]
         );
         let f = from_bytes_with(&b, Some("f")).unwrap();
         assert_eq!((f.source_type, f.value(1, 1, 0)), (VoxelType::U16, 50.0));
@@ -684,7 +766,10 @@ mod tests {
         assert_eq!(v.source_type, VoxelType::U8);
         let rgb = text.replace("COLOR_SCALARS c 1", "COLOR_SCALARS c 3") + &"0 ".repeat(12);
         let e = from_bytes(rgb.as_bytes()).unwrap_err().to_string();
-        assert!(e.contains("no one-component point array") && e.contains("c (unsigned_char, 3 components)"), "{e}");
+        assert!(
+            e.contains("no one-component point array") && e.contains("c (unsigned_char, 3 components)"),
+            "{e}"
+        );
     }
 
     #[test]

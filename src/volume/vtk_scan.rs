@@ -110,7 +110,9 @@ impl<'f, R: BufRead + Seek> Scanner<'f, R> {
     /// The next line without its end (`\n` or `\r\n`), None at the end of the file.
     pub fn line(&mut self) -> Result<Option<String>, VolumeError> {
         let mut bytes = Vec::new();
-        let read = (&mut self.reader).take(MAX_LINE as u64 + 1).read_until(b'\n', &mut bytes);
+        let read = (&mut self.reader)
+            .take(MAX_LINE as u64 + 1)
+            .read_until(b'\n', &mut bytes);
         let n = read.map_err(|e| self.io(e))?;
         if n == 0 {
             return Ok(None);
@@ -173,7 +175,7 @@ impl<'f, R: BufRead + Seek> Scanner<'f, R> {
         let bytes = if size == 0 {
             count.div_ceil(8)
         } else {
-            count.checked_mul(size).unwrap_or(u64::MAX)
+            count.saturating_mul(size)
         };
         self.skip_bytes(what, bytes)
     }
@@ -195,7 +197,10 @@ impl<'f, R: BufRead + Seek> Scanner<'f, R> {
         let mut token = Vec::new();
         let file = self.file;
         loop {
-            let buf = self.reader.fill_buf().map_err(|e| header_error(file, format!("reading the file failed: {e}")))?;
+            let buf = self
+                .reader
+                .fill_buf()
+                .map_err(|e| header_error(file, format!("reading the file failed: {e}")))?;
             if buf.is_empty() {
                 break;
             }
@@ -224,7 +229,9 @@ impl<'f, R: BufRead + Seek> Scanner<'f, R> {
     fn skip_tokens(&mut self, what: &str, count: u64) -> Result<(), VolumeError> {
         for i in 0..count {
             if self.token()?.is_none() {
-                self.truncated = Some(format!("{what} ends after {i} of {count} ASCII values (truncated file?)"));
+                self.truncated = Some(format!(
+                    "{what} ends after {i} of {count} ASCII values (truncated file?)"
+                ));
                 return Ok(());
             }
         }
@@ -234,14 +241,19 @@ impl<'f, R: BufRead + Seek> Scanner<'f, R> {
     /// Reads `count` numbers of `type_name` (rectilinear coordinates), `count` already bounded by the caller.
     pub fn read_numbers(&mut self, what: &str, type_name: &str, count: usize) -> Result<Vec<f64>, VolumeError> {
         let t = voxel_type(type_name).ok_or_else(|| {
-            self.err(format!("{what} has type '{}': volcast reads numeric coordinates", clip(type_name)))
+            self.err(format!(
+                "{what} has type '{}': volcast reads numeric coordinates",
+                clip(type_name)
+            ))
         })?;
         let mut out = Vec::with_capacity(count);
         if self.binary {
             let size = t.size();
             let bytes = (count * size) as u64;
             if self.pos.saturating_add(bytes) > self.len {
-                return Err(self.err(format!("{what} needs {bytes} bytes but the file ends first (truncated file?)")));
+                return Err(self.err(format!(
+                    "{what} needs {bytes} bytes but the file ends first (truncated file?)"
+                )));
             }
             let mut buf = vec![0u8; count * size];
             self.reader.read_exact(&mut buf).map_err(|e| self.io(e))?;
@@ -251,9 +263,9 @@ impl<'f, R: BufRead + Seek> Scanner<'f, R> {
             }
         } else {
             for i in 0..count {
-                let token = self.token()?.ok_or_else(|| {
-                    self.err(format!("{what} ends after {i} of {count} values (truncated file?)"))
-                })?;
+                let token = self
+                    .token()?
+                    .ok_or_else(|| self.err(format!("{what} ends after {i} of {count} values (truncated file?)")))?;
                 out.push(number::<f64>(self.file, what, &token)?);
             }
         }
@@ -272,9 +284,11 @@ impl<'f, R: BufRead + Seek> Scanner<'f, R> {
                     "the ASCII data end after {i} of {count} values (truncated file?)"
                 ))
             })?;
-            let v: f64 = token.parse().ok().filter(|v: &f64| v.is_finite()).ok_or_else(|| {
-                self.err(format!("ASCII colour value {i} ('{}') is not a number", clip(&token)))
-            })?;
+            let v: f64 = token
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite())
+                .ok_or_else(|| self.err(format!("ASCII colour value {i} ('{}') is not a number", clip(&token))))?;
             out.push((v * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8);
         }
         Ok(out)
