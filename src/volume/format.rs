@@ -186,6 +186,18 @@ pub(crate) fn named(file: &str, e: VolumeError) -> VolumeError {
     }
 }
 
+/// The error for a chosen VTK point array that holds more than one value per voxel.
+pub(crate) fn not_one_component(file: &str, name: &str, components: u32) -> VolumeError {
+    header_error(
+        file,
+        format!(
+            "point array '{}' has {components} components: volcast reads one value per voxel (choose another with \
+             --array)",
+            clip(name)
+        ),
+    )
+}
+
 /// At most 40 characters of user text in a message.
 pub(crate) fn clip(text: &str) -> String {
     let t = text.trim();

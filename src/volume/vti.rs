@@ -241,14 +241,7 @@ fn select<'a>(p: &'a Parsed, wanted: Option<&str>, file: &str) -> Result<&'a Xml
             })?,
     };
     if chosen.components != 1 {
-        return Err(header_error(
-            file,
-            format!(
-                "point array '{}' has {} components: volcast reads one value per voxel (choose another with --array)",
-                clip(&chosen.name),
-                chosen.components
-            ),
-        ));
+        return Err(format::not_one_component(file, &chosen.name, chosen.components));
     }
     Ok(chosen)
 }

@@ -405,14 +405,7 @@ fn select<'a>(arrays: &'a [PointArray], wanted: Option<&str>, file: &str) -> Res
             })?,
     };
     if chosen.components != 1 || chosen.kind == ArrayKind::Other {
-        return Err(header_error(
-            file,
-            format!(
-                "point array '{}' has {} components: volcast reads one value per voxel (choose another with --array)",
-                clip(&chosen.name),
-                chosen.components
-            ),
-        ));
+        return Err(format::not_one_component(file, &chosen.name, chosen.components));
     }
     Ok(chosen)
 }
