@@ -166,7 +166,7 @@ fn clear_refusals_name_the_file() {
     );
     let e = open(&data().join("unsupported.vtu"), None).unwrap_err().to_string();
     assert!(
-        e.contains("unsupported.vtu is a VTK XML UnstructuredGrid file; volcast reads ImageData (.vti) only"),
+        e.contains("unsupported.vtu: a VTK XML UnstructuredGrid file; volcast reads ImageData (.vti) only"),
         "{e}"
     );
     let e = open(&data().join("vti_zlib.vti"), Some("nope"))

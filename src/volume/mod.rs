@@ -630,8 +630,9 @@ pub enum VolumeError {
     )]
     DownsampleRefused { dims: [u32; 3], max_dim: u32 },
     #[error(
-        "{file} is {kind}; volcast cannot read {what}. It reads raw, VTK legacy, NRRD, NIfTI-1, MetaImage, DICOM \
-         and TIFF (convert the file to one of these, or give --dims and --type to read it as raw)"
+        "{file} is {kind}; volcast cannot read {what}. It reads raw, VTK legacy, VTK XML ImageData (.vti), NRRD, \
+         NIfTI-1, MetaImage, DICOM and TIFF (convert the file to one of these, or give --dims and --type to read it \
+         as raw)"
     )]
     Unsupported { file: String, kind: String, what: String },
 }

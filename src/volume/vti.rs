@@ -260,7 +260,7 @@ fn read(
         Some("ImageData") => {}
         Some(other) => {
             return Err(err(format!(
-                "{file} is a VTK XML {} file; volcast reads ImageData (.vti) only",
+                "a VTK XML {} file; volcast reads ImageData (.vti) only",
                 clip(other)
             )))
         }
