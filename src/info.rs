@@ -35,6 +35,8 @@ pub struct Info {
     /// Largest departure of the index axes from perpendicular (degrees): a sheared series (gantry tilt).
     pub shear_deg: f64,
     pub notes: Vec<String>,
+    /// The file's point-data arrays (VTK files hold several; `--array NAME` picks one); empty for other formats.
+    pub arrays: Vec<crate::volume::ArrayInfo>,
 }
 
 impl Info {
@@ -56,6 +58,7 @@ impl Info {
             obliquity_deg: g.obliquity_deg(),
             shear_deg: g.shear_deg(),
             notes: v.notes.clone(),
+            arrays: v.arrays.clone(),
         }
     }
 
@@ -126,6 +129,13 @@ impl Info {
                     mib(v.voxel_count() * 8 * v.gpu_texel_size()),
                     mib(v.voxel_count() * 4)
                 ),
+            );
+        }
+        for (i, a) in self.arrays.iter().enumerate() {
+            let loaded = if a.loaded { " (loaded)" } else { "" };
+            line(
+                if i == 0 { "arrays" } else { "" },
+                format!("{}: {}, {} component(s){loaded}", a.name, a.type_name, a.components),
             );
         }
         for note in &self.notes {

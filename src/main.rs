@@ -48,7 +48,7 @@ enum Command {
 
 #[derive(Args, Clone)]
 struct VolumeArgs {
-    /// A volume file: raw, VTK (.vtk), NRRD (.nrrd/.nhdr), NIfTI-1 (.nii/.nii.gz), MetaImage (.mha/.mhd), DICOM
+    /// A volume file: raw, VTK (.vtk, .vti), NRRD (.nrrd/.nhdr), NIfTI-1 (.nii/.nii.gz), MetaImage (.mha/.mhd), DICOM
     /// (a folder of slices or one file). Raw files take dims and type from --dims/--type or a NAME_WxHxD_TYPE name.
     file: Option<PathBuf>,
     /// A built-in volume: helix, box, colormap or marschner-lobb.
@@ -78,6 +78,10 @@ struct VolumeArgs {
     /// Refuse a volume larger than --max-dim instead of downsampling it.
     #[arg(long)]
     no_downsample: bool,
+    /// The point array to load from a VTK file holding several (default: its active scalars, else the first
+    /// one-component array); `volcast info` lists them.
+    #[arg(long, value_name = "NAME")]
+    array: Option<String>,
 }
 
 impl VolumeArgs {
@@ -105,6 +109,7 @@ impl VolumeArgs {
             header_bytes: self.header_bytes.unwrap_or(0),
             max_dim: Some(self.max_dim),
             no_downsample: self.no_downsample,
+            array: self.array.clone(),
         };
         // A progress bar only where loading takes long enough to watch (files over 8 MiB).
         let big = std::fs::metadata(path).is_ok_and(|m| m.len() > 8 << 20);
@@ -774,6 +779,7 @@ fn main() -> ExitCode {
                 header_bytes: None,
                 max_dim: 2048,
                 no_downsample: false,
+                array: None,
             },
             gpu: GpuArgs {
                 validate: false,

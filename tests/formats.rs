@@ -105,7 +105,12 @@ fn formats_are_detected_by_content_not_just_name() {
         b"NDims = 1\nDimSize = 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n\x05",
     );
     assert_eq!(volume::detect_format(&p).unwrap(), Format::MetaImage);
-    assert_eq!(volume::detect_format(&dir.0).unwrap(), Format::Dicom);
+    // A folder is judged by its files: this one holds none that is TIFF or DICOM; one with a DICOM file is a series.
+    assert!(volume::detect_format(&dir.0).is_err());
+    let series = Scratch::new();
+    let slice = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/slice.dcm")).unwrap();
+    series.write("1.dcm", &slice);
+    assert_eq!(volume::detect_format(&series.0).unwrap(), Format::Dicom);
     let p = dir.write("thing_2x1x1_uint8.raw", &[1, 2]);
     assert_eq!(volume::detect_format(&p).unwrap(), Format::Raw);
 }
@@ -250,7 +255,7 @@ fn hostile_files_give_clear_errors() {
     let e = err(&dir.write("junk.dcm", b"this is not dicom"));
     assert!(e.contains("junk.dcm: not a readable DICOM file"), "{e}");
     let empty = Scratch::new();
-    assert!(err(&empty.0).contains("no DICOM image files found"));
+    assert!(err(&empty.0).contains("the folder holds neither TIFF nor DICOM files"));
 }
 
 #[test]

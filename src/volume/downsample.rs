@@ -85,6 +85,7 @@ fn halve_axes(volume: Volume, halve: [bool; 3]) -> Volume {
     };
     out.format = volume.format;
     out.notes = volume.notes;
+    out.arrays = volume.arrays;
     out
 }
 

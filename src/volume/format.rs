@@ -61,6 +61,8 @@ pub struct Header {
     pub scaling: Scaling,
     pub location: DataLocation,
     pub notes: Vec<String>,
+    /// The file's point-data arrays, for `volcast info` (VTK).
+    pub arrays: Vec<super::ArrayInfo>,
 }
 
 impl Header {
@@ -77,6 +79,7 @@ impl Header {
             scaling: Scaling::IDENTITY,
             location: DataLocation::Inline(Some(0)),
             notes: Vec::new(),
+            arrays: Vec::new(),
         }
     }
 
@@ -113,6 +116,7 @@ impl Header {
             .with_geometry(geometry)?;
         v.format = self.format.to_string();
         v.notes = self.notes;
+        v.arrays = self.arrays;
         Ok(v)
     }
 }
@@ -171,6 +175,27 @@ pub(crate) fn header_error(file: &str, problem: String) -> VolumeError {
         file: file.to_string(),
         problem,
     }
+}
+
+/// `e`, made to say which file it is about where it does not already (the dimension and spacing checks).
+pub(crate) fn named(file: &str, e: VolumeError) -> VolumeError {
+    if e.to_string().contains(file) {
+        e
+    } else {
+        header_error(file, e.to_string())
+    }
+}
+
+/// The error for a chosen VTK point array that holds more than one value per voxel.
+pub(crate) fn not_one_component(file: &str, name: &str, components: u32) -> VolumeError {
+    header_error(
+        file,
+        format!(
+            "point array '{}' has {components} components: volcast reads one value per voxel (choose another with \
+             --array)",
+            clip(name)
+        ),
+    )
 }
 
 /// At most 40 characters of user text in a message.

@@ -24,7 +24,12 @@ mod nifti;
 mod nrrd;
 mod open;
 mod raw;
+mod tiff_stack;
+mod unsupported;
+mod vti;
+mod vti_data;
 mod vtk;
+mod vtk_scan;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use decode::Endian;
@@ -39,6 +44,8 @@ pub mod from_bytes {
     pub use super::metaimage::{from_bytes as metaimage, parse_header as metaimage_header};
     pub use super::nifti::{from_bytes as nifti, parse_header as nifti_header};
     pub use super::nrrd::{from_bytes as nrrd, parse_header as nrrd_header};
+    pub use super::tiff_stack::from_bytes as tiff;
+    pub use super::vti::from_bytes as vti;
     pub use super::vtk::{from_bytes as vtk, parse_header as vtk_header};
 }
 
@@ -243,10 +250,24 @@ pub struct Volume {
     pub stored_range: [f64; 2],
     /// Applied to every source value by [`Volume::value`]; identity unless the file asked for a rescale.
     pub scaling: Scaling,
-    /// Where the volume came from: "raw", "VTK legacy", "NRRD", "NIfTI-1", "MetaImage", "DICOM", "built-in".
+    /// Where the volume came from: "raw", "VTK legacy", "NRRD", "NIfTI-1", "MetaImage", "DICOM", "TIFF", "built-in".
     pub format: String,
     /// Things the user should know that are not errors: orientation ignored, 4-D reduced, downsampled, ...
     pub notes: Vec<String>,
+    /// Every point-data array the file holds (VTK files can hold several); empty for single-array formats.
+    pub arrays: Vec<ArrayInfo>,
+}
+
+/// One data array of a multi-array file, as `volcast info` lists it.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct ArrayInfo {
+    pub name: String,
+    /// The type as the file names it (`unsigned_char`, `Float32`, ...).
+    #[serde(rename = "type")]
+    pub type_name: String,
+    pub components: u32,
+    /// This is the array the volume holds.
+    pub loaded: bool,
 }
 
 impl Volume {
@@ -286,6 +307,7 @@ impl Volume {
             scaling: Scaling::IDENTITY,
             format: "memory".into(),
             notes: Vec::new(),
+            arrays: Vec::new(),
         })
     }
 
@@ -464,7 +486,7 @@ fn compute_range(source_type: VoxelType, data: &VoxelData) -> [f64; 2] {
 }
 
 /// Checks dims and returns the voxel count.
-fn check_dims(dims: [u32; 3]) -> Result<u64, VolumeError> {
+pub(crate) fn check_dims(dims: [u32; 3]) -> Result<u64, VolumeError> {
     if dims.contains(&0) {
         return Err(VolumeError::ZeroDimension { dims });
     }
@@ -608,6 +630,12 @@ pub enum VolumeError {
         Dims(*dims)
     )]
     DownsampleRefused { dims: [u32; 3], max_dim: u32 },
+    #[error(
+        "{file} is {kind}; volcast cannot read {what}. It reads raw, VTK legacy, VTK XML ImageData (.vti), NRRD, \
+         NIfTI-1, MetaImage, DICOM and TIFF (convert the file to one of these, or give --dims and --type to read it \
+         as raw)"
+    )]
+    Unsupported { file: String, kind: String, what: String },
 }
 
 #[cfg(test)]

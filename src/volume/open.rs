@@ -2,7 +2,7 @@
 //! extension second, then applies the caller's overrides and the maximum dimension.
 
 use super::decode::{Endian, Progress};
-use super::{dicom, downsample, format, metaimage, nifti, nrrd, raw, vtk};
+use super::{dicom, downsample, format, metaimage, nifti, nrrd, raw, tiff_stack, unsupported, vti, vtk};
 use super::{RawOptions, Volume, VolumeError};
 use std::path::Path;
 
@@ -10,10 +10,12 @@ use std::path::Path;
 pub enum Format {
     Raw,
     Vtk,
+    Vti,
     Nrrd,
     Nifti,
     MetaImage,
     Dicom,
+    Tiff,
 }
 
 impl Format {
@@ -21,10 +23,12 @@ impl Format {
         match self {
             Format::Raw => "raw",
             Format::Vtk => "VTK legacy",
+            Format::Vti => "VTK XML ImageData",
             Format::Nrrd => "NRRD",
             Format::Nifti => "NIfTI-1",
             Format::MetaImage => "MetaImage",
             Format::Dicom => "DICOM",
+            Format::Tiff => "TIFF",
         }
     }
 }
@@ -42,17 +46,26 @@ pub struct OpenOptions {
     pub max_dim: Option<u32>,
     /// If a dimension exceeds `max_dim`: refuse (true) instead of downsampling (false, the default).
     pub no_downsample: bool,
+    /// The data array to load from a file holding several (VTK legacy and `.vti`); `None`: the file's active
+    /// scalars, else its first one-component array.
+    pub array: Option<String>,
 }
 
-/// Which reader a path needs. A folder is a DICOM series. Content decides where it can (magic bytes of VTK, NRRD,
-/// NIfTI-1, DICOM; gzip only means NIfTI when the name says so); then the extension; anything else is raw.
+/// Which reader a path needs. A folder is decided by its files: TIFFs make a TIFF stack, DICOM files a DICOM
+/// series (a Zarr store is named as unsupported). For a file, content decides where it can (magic bytes of VTK,
+/// VTK XML, NRRD, NIfTI-1, DICOM, TIFF; gzip only means NIfTI when the name says so); then the extension; then a format
+/// volcast does not read is named ([`VolumeError::Unsupported`]); anything else is raw. A file named like a raw
+/// file (`NAME_WxHxD_TYPE`, `.raw`) is raw whatever its first bytes.
 pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     if path.is_dir() {
-        return Ok(Format::Dicom);
+        return folder_format(path);
     }
     let prefix = format::read_prefix(path, 512)?;
     if vtk::is_vtk(&prefix) {
         return Ok(Format::Vtk);
+    }
+    if vti::is_vtk_xml(&prefix) {
+        return Ok(Format::Vti);
     }
     if nrrd::is_nrrd(&prefix) {
         return Ok(Format::Nrrd);
@@ -63,9 +76,13 @@ pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     if dicom::is_dicom(&prefix) {
         return Ok(Format::Dicom);
     }
+    if tiff_stack::is_tiff(&prefix) {
+        return Ok(Format::Tiff);
+    }
     let name = format::file_label(path).to_ascii_lowercase();
     let by_extension = [
         (".vtk", Format::Vtk),
+        (".vti", Format::Vti),
         (".nrrd", Format::Nrrd),
         (".nhdr", Format::Nrrd),
         (".nii", Format::Nifti),
@@ -75,6 +92,8 @@ pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
         (".mhd", Format::MetaImage),
         (".dcm", Format::Dicom),
         (".dicom", Format::Dicom),
+        (".tif", Format::Tiff),
+        (".tiff", Format::Tiff),
     ];
     if let Some((_, f)) = by_extension.iter().find(|(ext, _)| name.ends_with(ext)) {
         return Ok(*f);
@@ -82,10 +101,67 @@ pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     if metaimage::is_metaimage(&prefix) {
         return Ok(Format::MetaImage);
     }
+    let named_raw = name.ends_with(".raw") || raw::parse_scivis_name(&name).is_some();
+    if !named_raw {
+        if let Some(k) = unsupported::identify(path, &prefix) {
+            return Err(VolumeError::Unsupported {
+                file: format::file_label(path),
+                kind: k.kind,
+                what: k.what,
+            });
+        }
+    }
     Ok(Format::Raw)
 }
 
-/// Opens a volume file (or a DICOM folder) of any supported format.
+/// A folder: a Zarr store is named; otherwise its files decide (TIFF stack or DICOM series, never both).
+fn folder_format(path: &Path) -> Result<Format, VolumeError> {
+    let label = format::file_label(path);
+    if let Some(k) = unsupported::identify_folder(path) {
+        return Err(VolumeError::Unsupported {
+            file: label,
+            kind: k.kind,
+            what: k.what,
+        });
+    }
+    let io = |source| VolumeError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let (mut tiffs, mut dicoms, mut seen) = (0usize, 0usize, 0usize);
+    for entry in std::fs::read_dir(path).map_err(io)? {
+        let p = entry.map_err(io)?.path();
+        let hidden = p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
+        if hidden || !p.is_file() {
+            continue;
+        }
+        seen += 1;
+        if seen > tiff_stack::MAX_FILES {
+            break;
+        }
+        match format::read_prefix(&p, 132) {
+            Ok(prefix) if tiff_stack::is_tiff(&prefix) => tiffs += 1,
+            Ok(prefix) if dicom::is_dicom(&prefix) => dicoms += 1,
+            _ => {}
+        }
+    }
+    match (tiffs, dicoms) {
+        (0, 0) => Err(format::header_error(
+            &label,
+            "the folder holds neither TIFF nor DICOM files; a folder opens as a TIFF stack (one slice per file) or \
+             a DICOM series"
+                .into(),
+        )),
+        (_, 0) => Ok(Format::Tiff),
+        (0, _) => Ok(Format::Dicom),
+        (t, d) => Err(format::header_error(
+            &label,
+            format!("the folder holds both TIFF ({t}) and DICOM ({d}) files; put the slices of one stack in a folder of their own"),
+        )),
+    }
+}
+
+/// Opens a volume file (or a DICOM or TIFF folder) of any supported format.
 pub fn open(path: &Path, opts: &OpenOptions) -> Result<Volume, VolumeError> {
     open_with_progress(path, opts, &mut |_| {})
 }
@@ -97,7 +173,12 @@ pub fn open_with_progress(
     progress: &mut dyn FnMut(f32),
 ) -> Result<Volume, VolumeError> {
     let mut progress = Progress::new(Some(progress));
-    let format = detect_format(path)?;
+    // A file of a format volcast does not read can still be read as raw when the layout is given explicitly.
+    let explicit_raw = opts.raw.dims.is_some() && opts.raw.voxel_type.is_some();
+    let format = match detect_format(path) {
+        Err(VolumeError::Unsupported { .. }) if explicit_raw && !path.is_dir() => Format::Raw,
+        other => other?,
+    };
     let mut volume = match format {
         Format::Raw => {
             let extras = raw::RawExtras {
@@ -106,11 +187,13 @@ pub fn open_with_progress(
             };
             raw::load_raw_with_progress(path, &opts.raw, extras, &mut progress)?
         }
-        Format::Vtk => vtk::load(path, &mut progress)?,
+        Format::Vtk => vtk::load(path, opts.array.as_deref(), &mut progress)?,
+        Format::Vti => vti::load(path, opts.array.as_deref(), &mut progress)?,
         Format::Nrrd => nrrd::load(path, &mut progress)?,
         Format::Nifti => nifti::load(path, &mut progress)?,
         Format::MetaImage => metaimage::load(path, &mut progress)?,
         Format::Dicom => dicom::load(path, &mut progress)?,
+        Format::Tiff => tiff_stack::load(path, &mut progress)?,
     };
     if format != Format::Raw {
         if let Some(spacing) = opts.raw.spacing {

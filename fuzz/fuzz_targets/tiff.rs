@@ -1,0 +1,10 @@
+//! Full loading of a TIFF stack from arbitrary bytes: must return Ok or Err, never panic, hang or allocate beyond
+//! what the input justifies.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use volcast::volume::from_bytes;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = from_bytes::tiff(data);
+});

@@ -1,0 +1,10 @@
+//! Full loading of VTK XML ImageData (`.vti`) from arbitrary bytes: XML, base64, every compressor and block header
+//! must return Ok or Err, never panic, hang or allocate beyond what the input justifies.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use volcast::volume::from_bytes;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = from_bytes::vti(data);
+});
