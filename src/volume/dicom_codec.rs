@@ -10,9 +10,9 @@
 //! the registry's RLE adapter allocates by the segment count it reads and indexes past short segments.
 
 use dicom_encoding::adapters::{PixelDataObject, RawPixelData};
+use dicom_encoding::transfer_syntax::TransferSyntaxIndex;
 use dicom_encoding::Codec;
 use dicom_transfer_syntax_registry::TransferSyntaxRegistry;
-use dicom_encoding::transfer_syntax::TransferSyntaxIndex;
 use std::borrow::Cow;
 
 /// How a transfer syntax's pixel data is read.
@@ -48,12 +48,18 @@ pub(super) fn name(uid: &str) -> &'static str {
         "1.2.840.10008.1.2.4.92" => "JPEG 2000 Part 2 Multi-component Lossless",
         "1.2.840.10008.1.2.4.93" => "JPEG 2000 Part 2 Multi-component",
         "1.2.840.10008.1.2.4.94" => "JPIP Referenced",
-        "1.2.840.10008.1.2.4.100" | "1.2.840.10008.1.2.4.101" | "1.2.840.10008.1.2.4.102"
-        | "1.2.840.10008.1.2.4.103" | "1.2.840.10008.1.2.4.104" | "1.2.840.10008.1.2.4.105"
+        "1.2.840.10008.1.2.4.100"
+        | "1.2.840.10008.1.2.4.101"
+        | "1.2.840.10008.1.2.4.102"
+        | "1.2.840.10008.1.2.4.103"
+        | "1.2.840.10008.1.2.4.104"
+        | "1.2.840.10008.1.2.4.105"
         | "1.2.840.10008.1.2.4.106" => "MPEG video",
         "1.2.840.10008.1.2.4.107" | "1.2.840.10008.1.2.4.108" => "HEVC video",
         "1.2.840.10008.1.2.4.110" | "1.2.840.10008.1.2.4.111" | "1.2.840.10008.1.2.4.112" => "JPEG XL",
-        "1.2.840.10008.1.2.4.201" | "1.2.840.10008.1.2.4.202" | "1.2.840.10008.1.2.4.203" => "High-Throughput JPEG 2000",
+        "1.2.840.10008.1.2.4.201" | "1.2.840.10008.1.2.4.202" | "1.2.840.10008.1.2.4.203" => {
+            "High-Throughput JPEG 2000"
+        }
         _ => "an unknown transfer syntax",
     }
 }
@@ -162,7 +168,10 @@ fn check_jpeg(data: &[u8], shape: &FrameShape) -> Result<(), String> {
             .ok_or("a JPEG frame ends inside a marker segment")?;
         let sof = matches!(marker, 0xC0..=0xCF) && !matches!(marker, 0xC4 | 0xC8 | 0xCC);
         if sof {
-            let seg = data.get(pos + 4..pos + 2 + len).filter(|s| s.len() >= 6).ok_or("a JPEG frame header is cut short")?;
+            let seg = data
+                .get(pos + 4..pos + 2 + len)
+                .filter(|s| s.len() >= 6)
+                .ok_or("a JPEG frame header is cut short")?;
             let precision = seg[0];
             let height = u16::from_be_bytes([seg[1], seg[2]]);
             let width = u16::from_be_bytes([seg[3], seg[4]]);
@@ -227,7 +236,10 @@ fn check_j2k(data: &[u8], shape: &FrameShape) -> Result<(), String> {
     }
     for c in 0..usize::from(components) {
         let ssiz = *siz.get(38 + 3 * c).ok_or_else(short)?;
-        let (xr, yr) = (*siz.get(39 + 3 * c).ok_or_else(short)?, *siz.get(40 + 3 * c).ok_or_else(short)?);
+        let (xr, yr) = (
+            *siz.get(39 + 3 * c).ok_or_else(short)?,
+            *siz.get(40 + 3 * c).ok_or_else(short)?,
+        );
         let precision = (ssiz & 0x7F) + 1;
         if u16::from(precision) > shape.bits_allocated || (xr, yr) != (1, 1) {
             return Err(format!(
@@ -244,7 +256,9 @@ fn check_j2k(data: &[u8], shape: &FrameShape) -> Result<(), String> {
 fn decode_rle(data: &[u8], shape: &FrameShape) -> Result<Vec<u8>, String> {
     let bytes_per_sample = usize::from(shape.bits_allocated / 8);
     let segments = usize::from(shape.samples) * bytes_per_sample;
-    let header = data.get(..64).ok_or("an RLE frame is shorter than its 64-byte header")?;
+    let header = data
+        .get(..64)
+        .ok_or("an RLE frame is shorter than its 64-byte header")?;
     let word = |i: usize| u32::from_le_bytes([header[4 * i], header[4 * i + 1], header[4 * i + 2], header[4 * i + 3]]);
     if word(0) as usize != segments {
         return Err(format!(
@@ -258,7 +272,11 @@ fn decode_rle(data: &[u8], shape: &FrameShape) -> Result<Vec<u8>, String> {
     let mut out = vec![0u8; pixels * segments];
     for s in 0..segments {
         let start = word(1 + s) as usize;
-        let end = if s + 1 < segments { word(2 + s) as usize } else { data.len() };
+        let end = if s + 1 < segments {
+            word(2 + s) as usize
+        } else {
+            data.len()
+        };
         let segment = data
             .get(start..end)
             .filter(|_| start >= 64)
@@ -290,7 +308,9 @@ fn decode_rle(data: &[u8], shape: &FrameShape) -> Result<Vec<u8>, String> {
                 }
                 i += n as usize + 1;
             } else if n != -128 {
-                let b = *segment.get(i).ok_or_else(|| format!("RLE segment {s} ends inside a repeat run"))?;
+                let b = *segment
+                    .get(i)
+                    .ok_or_else(|| format!("RLE segment {s} ends inside a repeat run"))?;
                 for _ in 0..(1 - isize::from(n)) {
                     put(b, &mut written);
                 }
@@ -373,9 +393,27 @@ pub(super) fn decode(codec: Kind, uid: &str, data: &[u8], shape: &FrameShape) ->
                 return Err(format!("no decoder for {} ({uid}) in this build", name(uid)));
             };
             let mut out = Vec::new();
-            decoder
-                .decode_frame(&OneFrame { uid, shape: *shape, data }, 0, &mut out)
-                .map_err(|e| format!("{} decoder: {e}", name(uid)))?;
+            // The header checks above keep the adapters off their known panics; a decoder panic on some other
+            // malformed frame still becomes this file's error instead of ending the program. (Fuzzing sees it
+            // anyway: libFuzzer's panic hook aborts before unwinding.)
+            let frame = OneFrame {
+                uid,
+                shape: *shape,
+                data,
+            };
+            let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                decoder.decode_frame(&frame, 0, &mut out)
+            }));
+            match decoded {
+                Ok(Ok(())) => {}
+                Ok(Err(e)) => return Err(format!("{} decoder: {e}", name(uid))),
+                Err(_) => {
+                    return Err(format!(
+                        "the {} decoder failed on this frame (malformed data)",
+                        name(uid)
+                    ))
+                }
+            }
             out
         }
     };
