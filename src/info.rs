@@ -50,7 +50,7 @@ impl Info {
             spacing: g.spacing(),
             value_range: v.stored_range,
             scaled_range: v.range,
-            timesteps: 1,
+            timesteps: v.timesteps(),
             affine_ras: g.rows(),
             anatomical: g.anatomical,
             axes: g.axcodes().map(|c| c.iter().collect()),
@@ -80,6 +80,16 @@ impl Info {
             format!("{} x {} x {}", self.dims[0], self.dims[1], self.dims[2]),
         );
         line("type", self.voxel_type.clone());
+        if self.timesteps > 1 {
+            line(
+                "timesteps",
+                format!(
+                    "{} (showing {}; the range below is over all of them; --time N picks one)",
+                    self.timesteps,
+                    v.shown_step()
+                ),
+            );
+        }
         let s = v.spacing();
         line("spacing", format!("{} x {} x {}", s[0], s[1], s[2]));
         let e = v.extent();

@@ -82,6 +82,9 @@ struct VolumeArgs {
     /// one-component array); `volcast info` lists them.
     #[arg(long, value_name = "NAME")]
     array: Option<String>,
+    /// The time step of a 4-D series to show, from 0 (default 0); the value range stays the whole series'.
+    #[arg(long, value_name = "N")]
+    time: Option<u32>,
 }
 
 impl VolumeArgs {
@@ -91,6 +94,9 @@ impl VolumeArgs {
             // --spacing overrides every volume's own, the built-ins' included.
             if let Some(s) = &self.spacing {
                 v = v.with_spacing([s[0], s[1], s[2]])?;
+            }
+            if let Some(t) = self.time {
+                v.show_step(t)?;
             }
             return Ok(v);
         }
@@ -120,9 +126,12 @@ impl VolumeArgs {
         bar.set_message(format!("loading {}", path.display()));
         let loaded = volume::open_with_progress(path, &opts, &mut |f| bar.set_position((f * 1000.0) as u64));
         bar.finish_and_clear();
-        let v = loaded?;
+        let mut v = loaded?;
         for note in &v.notes {
             eprintln!("note: {note}");
+        }
+        if let Some(t) = self.time {
+            v.show_step(t)?;
         }
         Ok(v)
     }
@@ -780,6 +789,7 @@ fn main() -> ExitCode {
                 max_dim: 2048,
                 no_downsample: false,
                 array: None,
+                time: None,
             },
             gpu: GpuArgs {
                 validate: false,

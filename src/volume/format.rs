@@ -63,6 +63,8 @@ pub struct Header {
     pub notes: Vec<String>,
     /// The file's point-data arrays, for `volcast info` (VTK).
     pub arrays: Vec<super::ArrayInfo>,
+    /// Time steps stored one after another (the slowest, fourth axis of a 4-D file); 1 for a 3-D volume.
+    pub timesteps: u32,
 }
 
 impl Header {
@@ -80,14 +82,19 @@ impl Header {
             location: DataLocation::Inline(Some(0)),
             notes: Vec::new(),
             arrays: Vec::new(),
+            timesteps: 1,
         }
     }
 
-    /// Voxel count and byte count, checked against the limits.
-    fn sizes(&self) -> Result<(usize, u64), VolumeError> {
-        let count = check_dims(self.dims)?;
+    /// Voxel count and byte count of every time step together, checked against the limits (each step's, and
+    /// the memory a series needs).
+    fn sizes(&self, file: &str) -> Result<(usize, u64), VolumeError> {
+        let step = check_dims(self.dims)?;
         check_spacing(self.dims, self.spacing.map(|s| s.abs() as f32))?;
-        // check_dims bounds count by 2^31, so neither overflows.
+        let steps = u64::from(self.timesteps.max(1));
+        // check_dims bounds a step by 2^31 voxels and the fourth axis is at most MAX_DIM, so nothing overflows.
+        super::time::check_series_memory(file, self.timesteps, step * self.voxel_type.size() as u64)?;
+        let count = step * steps;
         let bytes = count * self.voxel_type.size() as u64;
         let count = usize::try_from(count).map_err(|_| VolumeError::TooLarge {
             dims: self.dims,
@@ -111,7 +118,10 @@ impl Header {
     pub fn into_volume(self, name: String, data: VoxelData) -> Result<Volume, VolumeError> {
         let spacing = self.spacing.map(|s| s.abs() as f32);
         let geometry = self.placement();
-        let mut v = Volume::new(name, self.dims, spacing, self.voxel_type, data)?
+        let mut steps = data.split_steps(self.timesteps.max(1) as usize).into_iter();
+        let first = steps.next().expect("at least one step");
+        let mut v = Volume::new(name, self.dims, spacing, self.voxel_type, first)?
+            .with_time_steps(steps.collect())?
             .with_scaling(self.scaling)?
             .with_geometry(geometry)?;
         v.format = self.format.to_string();
@@ -165,6 +175,15 @@ pub(crate) fn dims_from(file: &str, field: &str, values: &[i64]) -> Result<[u32;
         })?;
         if i < 3 {
             dims[i] = v;
+        }
+        if i == 3 && v > super::MAX_DIM {
+            return Err(header_error(
+                file,
+                format!(
+                    "{field} {values:?} has {v} time steps, more than the limit of {}",
+                    super::MAX_DIM
+                ),
+            ));
         }
     }
     Ok(dims)
@@ -285,7 +304,7 @@ pub(crate) fn load(
     source: Source,
     progress: &mut Progress,
 ) -> Result<Volume, VolumeError> {
-    let (count, needed) = header.sizes()?;
+    let (count, needed) = header.sizes(file)?;
     let data = match (&header.location, source) {
         (DataLocation::Inline(offset), Source::Bytes(bytes)) => {
             let len = bytes.len() as u64;

@@ -163,6 +163,8 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
                 }
                 matrix = Some(m);
             }
+            // ITK writes '????' (one '?' per axis) where it has no code: 4-D images, oblique directions.
+            "anatomicalorientation" if !value.is_empty() && value.chars().all(|c| c == '?') => {}
             "anatomicalorientation" => {
                 anatomical_code = Some(from_orientation_code(value).ok_or_else(|| {
                     err(format!(
@@ -187,11 +189,9 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
         )));
     }
     h.dims = format::dims_from(file, "DimSize", &dim_size)?;
-    if ndims == 4 && dim_size[3] > 1 {
-        h.notes.push(format!(
-            "4-D MetaImage: only the first of {} volumes is loaded",
-            dim_size[3]
-        ));
+    // The fourth (slowest) axis is time: every step is loaded.
+    if ndims == 4 {
+        h.timesteps = dim_size[3].max(1) as u32;
     }
     if channels != 1 {
         return Err(err(format!(
@@ -210,7 +210,12 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     // ITK's physical space is LPS. The direction matrix holds axis i's direction in its i-th triple (ITK's
     // MetaImageIO::Read: SetDirection(i, m[3i..3i + 3])); without one, AnatomicalOrientation names the axes.
     let directions = match (&matrix, anatomical_code) {
-        (Some(m), _) => Some([0, 1, 2].map(|i| DVec3::new(m[3 * i], m[3 * i + 1], m[3 * i + 2]))),
+        // A 4-D image's matrix is 4x4 (ITK writes NDims x NDims); its spatial part is the first three of the
+        // first three rows.
+        (Some(m), _) => {
+            let n = if ndims == 4 && m.len() >= 16 { 4 } else { 3 };
+            Some([0, 1, 2].map(|i| DVec3::new(m[n * i], m[n * i + 1], m[n * i + 2])))
+        }
         (None, code) => code,
     };
     if let Some(directions) = directions {

@@ -25,6 +25,7 @@ mod nrrd;
 mod open;
 mod raw;
 mod tiff_stack;
+mod time;
 mod unsupported;
 mod vti;
 mod vti_data;
@@ -36,6 +37,7 @@ pub use decode::Endian;
 pub use downsample::downsample_to;
 pub use open::{detect_format, open, open_with_progress, Format, OpenOptions};
 pub use raw::{load_raw, parse_scivis_name, RawOptions};
+pub use time::TimeSteps;
 
 /// Parsers that read from memory and never touch the file system: the fuzz targets drive these.
 pub mod from_bytes {
@@ -256,6 +258,8 @@ pub struct Volume {
     pub notes: Vec<String>,
     /// Every point-data array the file holds (VTK files can hold several); empty for single-array formats.
     pub arrays: Vec<ArrayInfo>,
+    /// A time series' other steps ([`Volume::timesteps`], [`Volume::show_step`]); `data` is the step shown.
+    pub time: TimeSteps,
 }
 
 /// One data array of a multi-array file, as `volcast info` lists it.
@@ -308,6 +312,7 @@ impl Volume {
             format: "memory".into(),
             notes: Vec::new(),
             arrays: Vec::new(),
+            time: TimeSteps::default(),
         })
     }
 
@@ -457,6 +462,11 @@ fn stored_value(source_type: VoxelType, data: &VoxelData, i: usize) -> f64 {
 }
 
 fn compute_range(source_type: VoxelType, data: &VoxelData) -> [f64; 2] {
+    compute_range_of(source_type, data).unwrap_or([0.0, 0.0])
+}
+
+/// The data's min/max as source values (NaN/Inf ignored); `None` if no voxel is finite.
+fn compute_range_of(source_type: VoxelType, data: &VoxelData) -> Option<[f64; 2]> {
     fn min_max<T: Copy + PartialOrd>(values: &[T]) -> Option<(T, T)> {
         let mut iter = values.iter().copied();
         let first = iter.next()?;
@@ -481,8 +491,7 @@ fn compute_range(source_type: VoxelType, data: &VoxelData) -> [f64; 2] {
             })
         }
     };
-    let (lo, hi) = found.unwrap_or((0.0, 0.0));
-    [lo, hi]
+    found.map(|(lo, hi)| [lo, hi])
 }
 
 /// Checks dims and returns the voxel count.

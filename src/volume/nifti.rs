@@ -91,10 +91,13 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     }
     let dim: Vec<i64> = (1..=ndim as usize).map(|i| i64::from(f.i16(40 + 2 * i))).collect();
     h.dims = format::dims_from(file, "dim", &dim)?;
-    let extra: i64 = dim.iter().skip(3).product();
+    // dim[4] is time: every step is loaded. Higher axes (dim[5..7]) are not: the first of them.
+    h.timesteps = dim.get(3).map_or(1, |&t| t.max(1) as u32);
+    let extra: i64 = dim.iter().skip(4).product();
     if extra > 1 {
-        h.notes
-            .push(format!("{}-D NIfTI: only the first of {extra} volumes is loaded", ndim));
+        h.notes.push(format!(
+            "{ndim}-D NIfTI: only the first of {extra} groups along dim[5..{ndim}] is loaded"
+        ));
     }
     let datatype = f.i16(70);
     h.voxel_type = match datatype {
@@ -280,7 +283,9 @@ fn load_gzip(
     if skipped < skip {
         return Err(header_error(file, format!("the file ends before vox_offset {offset}")));
     }
-    let count = super::check_dims(header.dims)?;
+    let step = super::check_dims(header.dims)?;
+    super::time::check_series_memory(file, header.timesteps, step * header.voxel_type.size() as u64)?;
+    let count = step * u64::from(header.timesteps.max(1));
     let needed = count * header.voxel_type.size() as u64;
     // The claim is checked against what the compressed bytes can hold before the output is allocated.
     header.encoding = Encoding::Gzip;
@@ -405,13 +410,20 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn four_d_loads_the_first_volume() {
+    fn four_d_loads_every_step_and_five_d_the_first_group() {
         let data: Vec<u8> = (0..16).collect();
-        let v = from_bytes(&nifti_bytes(&[4, 2, 2, 1, 4], 2, [1.0; 3], (0.0, 0.0), false, &data)).unwrap();
-        assert_eq!(v.dims, [2, 2, 1]);
-        assert_eq!(v.value(1, 1, 0), 3.0);
+        let mut v = from_bytes(&nifti_bytes(&[4, 2, 2, 1, 4], 2, [1.0; 3], (0.0, 0.0), false, &data)).unwrap();
+        assert_eq!((v.dims, v.timesteps()), ([2, 2, 1], 4));
+        assert_eq!((v.value(1, 1, 0), v.stored_range), (3.0, [0.0, 15.0]));
+        v.show_step(3).unwrap();
+        assert_eq!(v.value(1, 1, 0), 15.0);
+        let data: Vec<u8> = (0..32).collect();
+        let v = from_bytes(&nifti_bytes(&[5, 2, 2, 1, 4, 2], 2, [1.0; 3], (0.0, 0.0), false, &data)).unwrap();
+        assert_eq!((v.timesteps(), v.stored_range), (4, [0.0, 15.0]));
         assert!(
-            v.notes.iter().any(|n| n.contains("first of 4 volumes")),
+            v.notes
+                .iter()
+                .any(|n| n.contains("only the first of 2 groups along dim[5..5]")),
             "{:?}",
             v.notes
         );

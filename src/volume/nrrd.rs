@@ -144,9 +144,9 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
         )));
     }
     h.dims = format::dims_from(file, "sizes", &sizes)?;
-    if dimension == 4 && sizes[3] > 1 {
-        h.notes
-            .push(format!("4-D NRRD: only the first of {} volumes is loaded", sizes[3]));
+    // The fourth (slowest) axis is time or a list of volumes: every step is loaded.
+    if dimension == 4 {
+        h.timesteps = sizes[3].max(1) as u32;
     }
     h.voxel_type = voxel_type.ok_or_else(|| err("no 'type' field".into()))?;
     h.encoding = encoding.ok_or_else(|| err("no 'encoding' field".into()))?;
@@ -376,16 +376,14 @@ mod tests {
         );
         assert_eq!(v.geometry.axcodes(), Some(['P', 'R', 'S']));
         assert_eq!(v.value(1, 0, 0), -2.0);
-        // 4-D with a non-spatial axis: the first volume and a note.
+        // 4-D with a non-spatial axis: every step, the range over all of them.
         let fields = "type: int8\ndimension: 4\nsizes: 2 1 1 3\nencoding: raw\nspacings: 1 1 1 nan\n";
-        let v = from_bytes(&nrrd(fields, &[0xff, 7, 1, 2, 3, 4])).unwrap();
-        assert_eq!(v.dims, [2, 1, 1]);
+        let mut v = from_bytes(&nrrd(fields, &[0xff, 7, 1, 2, 3, 4])).unwrap();
+        assert_eq!((v.dims, v.timesteps()), ([2, 1, 1], 3));
         assert_eq!((v.value(0, 0, 0), v.value(1, 0, 0)), (-1.0, 7.0));
-        assert!(
-            v.notes.iter().any(|n| n.contains("first of 3 volumes")),
-            "{:?}",
-            v.notes
-        );
+        assert_eq!(v.stored_range, [-1.0, 7.0]);
+        v.show_step(2).unwrap();
+        assert_eq!((v.value(0, 0, 0), v.value(1, 0, 0)), (3.0, 4.0));
     }
 
     fn error(fields: &str, data: &[u8]) -> String {

@@ -208,7 +208,7 @@ pub fn open_with_progress(
                     max_dim,
                 });
             }
-            volume = downsample::downsample_to(volume, max_dim);
+            volume = volume.map_steps(|step| downsample::downsample_to(step, max_dim));
         }
     }
     Ok(volume)
