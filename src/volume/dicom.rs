@@ -13,6 +13,7 @@
 
 mod lengths;
 mod pixels;
+mod temporal;
 
 use super::decode::Progress;
 use super::dicom_codec::{self, Kind};
@@ -22,7 +23,7 @@ use super::{check_dims, Geometry, Scaling, Volume, VolumeError, VoxelData, Voxel
 use dicom_object::file::ReadPreamble;
 use dicom_object::{DefaultDicomObject, InMemDicomObject, OpenFileOptions, Tag};
 use lengths::check_lengths;
-use pixels::{append_file, append_native, check_backed, empty_data, find_pixel_bytes, Pixels};
+use pixels::{append_file, check_backed, empty_data, load_planned};
 use std::path::{Path, PathBuf};
 
 const FORMAT: &str = "DICOM";
@@ -43,6 +44,7 @@ const INSTANCE_NUMBER: Tag = Tag(0x0020, 0x0013);
 const SLICE_THICKNESS: Tag = Tag(0x0018, 0x0050);
 const SPACING_BETWEEN_SLICES: Tag = Tag(0x0018, 0x0088);
 const PIXEL_DATA: Tag = Tag(0x7FE0, 0x0010);
+const TEMPORAL_POSITION: Tag = Tag(0x0020, 0x0100);
 const SHARED_GROUPS: Tag = Tag(0x5200, 0x9229);
 const PER_FRAME_GROUPS: Tag = Tag(0x5200, 0x9230);
 const PLANE_POSITION: Tag = Tag(0x0020, 0x9113);
@@ -82,6 +84,8 @@ struct Slice {
     /// A multi-frame object's per-frame places (PerFrameFunctionalGroupsSequence), one per frame; empty when the
     /// frames are placed by one position and the slice step.
     frame_places: Vec<Placed>,
+    /// TemporalPositionIdentifier: slices of one series at several times (cine, perfusion, 4-D CT).
+    temporal: Option<i64>,
 }
 
 fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
@@ -222,6 +226,7 @@ fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Sl
         orientation: orientation.and_then(six),
         series,
         instance: int(obj, INSTANCE_NUMBER).unwrap_or(0),
+        temporal: int(obj, TEMPORAL_POSITION),
         native_little_endian: matches!(
             obj.meta().transfer_syntax().trim_end_matches('\0'),
             "1.2.840.10008.1.2" | "1.2.840.10008.1.2.1"
@@ -471,43 +476,25 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         ));
         slices.retain(|s| s.series == chosen);
     }
-    let mut plan = plan(slices, &label)?;
-    notes.append(&mut plan.notes);
-    plan.notes = notes;
-    let (dims, voxel_type) = (plan.dims, plan.voxel_type);
-    let count = check_dims(dims)? as usize;
-    let bytes_needed = count as u64 * voxel_type.size() as u64;
-    // The files must at least hold the pixels they claim before the volume is allocated.
-    let file_bytes: Vec<(Kind, u64)> = plan
-        .slices
-        .iter()
-        .map(|s| (s.kind, std::fs::metadata(&files[s.source]).map_or(0, |m| m.len())))
-        .collect();
-    check_backed(&label, bytes_needed, &file_bytes)?;
-    let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
-    for (i, s) in plan.slices.iter().enumerate() {
-        let f = &files[s.source];
-        let f_label = format::file_label(f);
-        match open_dicom(f, false) {
-            Ok(obj) => append_file(&obj, s, &plan.frame_order, &mut data, &f_label)?,
-            Err(e) => {
-                // Pass 1 read this header, so the file is DICOM; dicom-object stops on bytes after the pixels.
-                if !s.native_little_endian {
-                    return Err(e);
-                }
-                let bytes = std::fs::read(f).map_err(|source| VolumeError::Io {
-                    path: f.clone(),
-                    source,
-                })?;
-                let frame_bytes =
-                    s.rows as usize * s.columns as usize * s.frames as usize * usize::from(s.bits_allocated / 8);
-                let pixels = find_pixel_bytes(&bytes, frame_bytes).ok_or(e)?;
-                append_native(Pixels::Bytes(pixels), s, &plan.frame_order, &mut data, &f_label)?;
-            }
-        }
-        progress.report((i + 1) as f64 / plan.slices.len() as f64);
+    // Several temporal positions (TemporalPositionIdentifier): one volume per position, as time steps.
+    let mut times: Vec<i64> = slices.iter().filter_map(|s| s.temporal).collect();
+    times.sort_unstable();
+    times.dedup();
+    if times.len() < 2 || slices.iter().any(|s| s.temporal.is_none()) {
+        let mut plan = plan(slices, &label)?;
+        notes.append(&mut plan.notes);
+        plan.notes = notes;
+        return load_planned(plan, &files, format::volume_name(path), &label, progress);
     }
-    finish(format::volume_name(path), plan, data)
+    temporal::load_steps(
+        slices,
+        &times,
+        &files,
+        format::volume_name(path),
+        &label,
+        notes,
+        progress,
+    )
 }
 
 #[cfg(test)]
@@ -534,6 +521,7 @@ mod tests {
             kind: Kind::Native,
             transfer_syntax: "1.2.840.10008.1.2.1".into(),
             frame_places: Vec::new(),
+            temporal: None,
         }
     }
 

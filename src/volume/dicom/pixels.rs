@@ -2,13 +2,17 @@
 //! frames decoded one by one through [`dicom_codec`], and the check that the files can back the volume before it
 //! is allocated.
 
-use super::{Slice, PIXEL_DATA};
+use super::{finish, open_dicom, Plan, Slice, PIXEL_DATA};
 use crate::volume::decode::try_vec;
+use crate::volume::decode::Progress;
 use crate::volume::dicom_codec::{self, FrameShape, Kind};
+use crate::volume::format;
 use crate::volume::format::{clip, header_error};
+use crate::volume::{check_dims, Volume};
 use crate::volume::{VolumeError, VoxelData, VoxelType};
 use dicom_core::value::PrimitiveValue as P;
 use dicom_object::DefaultDicomObject;
+use std::path::PathBuf;
 
 /// Pixel data as found: little-endian bytes (OB, decoded, or read from the file) or 16-bit words (OW).
 #[derive(Clone, Copy)]
@@ -229,4 +233,48 @@ pub(super) fn empty_data(
         VoxelType::U8 | VoxelType::I8 => VoxelData::U8(try_vec(count).map_err(oom)?),
         _ => VoxelData::U16(try_vec(count).map_err(oom)?),
     })
+}
+
+/// Reads the planned slices' pixels into a volume.
+pub(super) fn load_planned(
+    plan: Plan,
+    files: &[PathBuf],
+    name: String,
+    label: &str,
+    progress: &mut Progress,
+) -> Result<Volume, VolumeError> {
+    let (dims, voxel_type) = (plan.dims, plan.voxel_type);
+    let count = check_dims(dims)? as usize;
+    let bytes_needed = count as u64 * voxel_type.size() as u64;
+    // The files must at least hold the pixels they claim before the volume is allocated.
+    let file_bytes: Vec<(Kind, u64)> = plan
+        .slices
+        .iter()
+        .map(|s| (s.kind, std::fs::metadata(&files[s.source]).map_or(0, |m| m.len())))
+        .collect();
+    check_backed(label, bytes_needed, &file_bytes)?;
+    let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
+    for (i, s) in plan.slices.iter().enumerate() {
+        let f = &files[s.source];
+        let f_label = format::file_label(f);
+        match open_dicom(f, false) {
+            Ok(obj) => append_file(&obj, s, &plan.frame_order, &mut data, &f_label)?,
+            Err(e) => {
+                // Pass 1 read this header, so the file is DICOM; dicom-object stops on bytes after the pixels.
+                if !s.native_little_endian {
+                    return Err(e);
+                }
+                let bytes = std::fs::read(f).map_err(|source| VolumeError::Io {
+                    path: f.clone(),
+                    source,
+                })?;
+                let frame_bytes =
+                    s.rows as usize * s.columns as usize * s.frames as usize * usize::from(s.bits_allocated / 8);
+                let pixels = find_pixel_bytes(&bytes, frame_bytes).ok_or(e)?;
+                append_native(Pixels::Bytes(pixels), s, &plan.frame_order, &mut data, &f_label)?;
+            }
+        }
+        progress.report((i + 1) as f64 / plan.slices.len() as f64);
+    }
+    finish(name, plan, data)
 }

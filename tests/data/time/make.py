@@ -103,6 +103,61 @@ lps[:3, :3] = direction @ np.diag(read.GetSpacing()[:3])
 lps[:3, 3] = read.GetOrigin()[:3]
 record("series_u8.mha", back, np.diag([-1.0, -1.0, 1.0, 1.0]) @ lps)
 
+# DICOM: a cine MR series by pydicom, 3 temporal positions x 4 axial slices of 8x6 uint16, one file per slice,
+# named in shuffled order; TemporalPositionIdentifier 1..3, NumberOfTemporalPositions 3. Read back per file by
+# SimpleITK (GDCM underneath) for the expected values.
+import pydicom
+from pydicom.dataset import FileDataset, FileMetaDataset
+from pydicom.uid import ExplicitVRLittleEndian, generate_uid
+
+cine = os.path.join(HERE, "cine_dicom")
+os.makedirs(cine, exist_ok=True)
+for old in os.listdir(cine):
+    os.remove(os.path.join(cine, old))
+CW, CH, CD, CT = 8, 6, 4, 3
+series_uid = "1.2.826.0.1.3680043.8.498.1"
+frame_uid = "1.2.826.0.1.3680043.8.498.2"
+vals = np.zeros((CW, CH, CD, CT), dtype=np.uint16)
+rng = np.random.default_rng(7)
+order = rng.permutation(CD * CT)
+for n, idx in enumerate(order):
+    t, z = divmod(int(idx), CD)
+    px = (np.add.outer(np.arange(CH) * 10, np.arange(CW)) + 100 * z + 1000 * t).astype(np.uint16)  # rows x cols
+    vals[:, :, z, t] = px.T
+    meta = FileMetaDataset()
+    meta.MediaStorageSOPClassUID = "1.2.840.10008.5.1.4.1.1.4"
+    meta.MediaStorageSOPInstanceUID = "1.2.826.0.1.3680043.8.498.%d" % (100 + idx)
+    meta.TransferSyntaxUID = ExplicitVRLittleEndian
+    ds = FileDataset(None, {}, file_meta=meta, preamble=b"\0" * 128)
+    ds.SOPClassUID = meta.MediaStorageSOPClassUID
+    ds.SOPInstanceUID = meta.MediaStorageSOPInstanceUID
+    ds.Modality = "MR"
+    ds.SeriesInstanceUID = series_uid
+    ds.StudyInstanceUID = "1.2.826.0.1.3680043.8.498.3"
+    ds.FrameOfReferenceUID = frame_uid
+    ds.InstanceNumber = int(idx) + 1
+    ds.TemporalPositionIdentifier = t + 1
+    ds.NumberOfTemporalPositions = CT
+    ds.ImageOrientationPatient = [1, 0, 0, 0, 1, 0]
+    ds.ImagePositionPatient = [-2.0, -1.5, 4.0 * z]
+    ds.PixelSpacing = [0.5, 0.25]
+    ds.SliceThickness = 4.0
+    ds.Rows, ds.Columns = CH, CW
+    ds.SamplesPerPixel = 1
+    ds.PhotometricInterpretation = "MONOCHROME2"
+    ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 16, 15, 0
+    ds.PixelData = px.tobytes()
+    ds.save_as(os.path.join(cine, "im%02d.dcm" % n), enforce_file_format=True)
+for name in os.listdir(cine):
+    path = os.path.join(cine, name)
+    ds = pydicom.dcmread(path)
+    img = sitk.ReadImage(path)
+    z = int(round(img.GetOrigin()[2] / 4.0))
+    t = int(ds.TemporalPositionIdentifier) - 1
+    assert np.array_equal(sitk.GetArrayFromImage(img)[0].T, vals[:, :, z, t])
+# Axial slices, DICOM LPS: RAS x = -(column direction), y = -(row direction); PixelSpacing is row\column spacing.
+record("cine_dicom", vals, [[-0.25, 0, 0, 2.0], [0, -0.5, 0, 1.5], [0, 0, 4.0, 0.0], [0, 0, 0, 1]])
+
 with open(os.path.join(HERE, "expected.json"), "w") as f:
     json.dump(
         {
