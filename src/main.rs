@@ -652,6 +652,7 @@ fn view(args: &ViewArgs) -> Result<()> {
         gpu: args.gpu.options(),
         size: args.size,
         script,
+        time: args.volume.time,
     };
     let log = viewer::run(opts)?;
     if args.gpu.options().validation {

@@ -8,6 +8,7 @@
 
 pub mod controls;
 pub mod tf_editor;
+pub mod time_control;
 pub mod ui;
 
 use crate::gpu::resources::{record_readback, Buffer, Image, ImageDesc};
@@ -114,6 +115,8 @@ pub struct ViewerOptions {
     pub gpu: GpuOptions,
     pub size: (u32, u32),
     pub script: Vec<ScriptStep>,
+    /// The step of a time series to show first (`--time`).
+    pub time: Option<u32>,
 }
 
 /// Opens the viewer and runs until the window closes. Returns the validation log for the caller to report.
@@ -274,6 +277,8 @@ struct Running {
     slot_reduced: [bool; FRAMES_IN_FLIGHT],
     /// An open file dialog's answer (None inside: cancelled, or no dialog available, e.g. no desktop portal).
     dialog: Option<Receiver<Option<PathBuf>>>,
+    /// A time series' every step, kept to upload the one the time controls ask for; `None` for a 3-D volume.
+    series: Option<Volume>,
 }
 
 /// The editor's histogram: 256 bins of normalised values.
@@ -393,6 +398,7 @@ impl Running {
             refine_pending: false,
             drag_frames: Vec::new(),
             slot_reduced: [false; FRAMES_IN_FLIGHT],
+            series: None,
             dialog: None,
         };
         // On error `r` is torn down properly before the error is returned.
@@ -464,6 +470,16 @@ impl Running {
         let first = open_source(&opts.source, max_dim, &mut |_| {}).map_err(ViewerError::Other)?;
         let histogram = value_histogram(&first);
         self.install_volume(first, histogram)?;
+        if let Some(t) = opts.time {
+            let steps = self.state.time.steps;
+            if t >= steps {
+                return Err(ViewerError::Other(format!(
+                    "time step {t} does not exist: the volume has {steps} (0 to {})",
+                    steps - 1
+                )));
+            }
+            self.state.time.wanted = t;
+        }
         Ok(())
     }
 
@@ -481,8 +497,25 @@ impl Running {
         self.state.raw_spacing = spacing;
         self.state.histogram = histogram;
         self.state.range = v.range;
+        self.state.time = time_control::TimeControl::new(v.timesteps(), v.shown_step());
+        self.series = (v.timesteps() > 1).then_some(v);
         self.has_volume = true;
         Ok(())
+    }
+
+    /// Uploads the step the time controls ask for, if it is not the one on the GPU.
+    fn show_wanted_step(&mut self) -> Result<(), GpuError> {
+        let wanted = self.state.time.wanted;
+        let Some(series) = self.series.as_mut().filter(|s| s.shown_step() != wanted) else {
+            return Ok(());
+        };
+        if series.show_step(wanted).is_err() {
+            return Ok(());
+        }
+        // SAFETY: plain wait on a live device; set_volume replaces resources that in-flight frames use.
+        unsafe { self.gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")?;
+        let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
+        renderer.set_volume(&self.gpu, series)
     }
 
     fn wait_idle(&self) -> Result<(), GpuError> {
@@ -529,6 +562,7 @@ impl Running {
             || self.state.animation.is_some()
             || self.script.is_some()
             || self.refine_pending
+            || self.state.time.playing
     }
 
     fn apply(&mut self, actions: Vec<UiAction>) {
@@ -733,6 +767,7 @@ impl Running {
             }
         }
         self.state.animate(dt);
+        self.state.time.advance(dt);
 
         let size = self.window.inner_size();
         if self.zero_size || size.width == 0 || size.height == 0 || self.window.is_minimized() == Some(true) {
@@ -757,6 +792,7 @@ impl Running {
             egui::CentralPanel::no_frame().show(ui, |ui| ui::view_overlay(ui, state));
         });
         self.apply(actions);
+        self.show_wanted_step()?;
         // FullOutput implements Drop, so its parts are taken rather than moved out.
         let mut full = full;
         let platform_output = std::mem::take(&mut full.platform_output);

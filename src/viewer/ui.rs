@@ -3,6 +3,7 @@
 //! for what needs the GPU or a thread (loading, screenshots).
 
 use super::controls::{gizmo_axes, look_along, pick_axis, OrbitView, RotationAnimation};
+use super::time_control::TimeControl;
 use crate::camera::{edge_labels, Camera, ViewPreset};
 use crate::render::PassTimings;
 use crate::settings::{CompositeMode, PositionFormat, RaySetup, RenderSettings, Shading};
@@ -55,6 +56,8 @@ pub struct ViewerState {
     pub interacting: bool,
     /// GPU time of the last full-quality frame, for choosing the level of detail.
     pub full_frame_ms: Option<f64>,
+    /// A series' step slider and playback.
+    pub time: TimeControl,
 }
 
 /// What the panel asks the viewer to do.
@@ -104,6 +107,7 @@ impl ViewerState {
             lod: true,
             interacting: false,
             full_frame_ms: None,
+            time: TimeControl::new(1, 0),
         }
     }
 
@@ -296,6 +300,7 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
     if let Some(status) = &state.status {
         ui.label(status);
     }
+    state.time.panel(ui);
     ui.separator();
 
     egui::CollapsingHeader::new("Transfer function")
@@ -734,6 +739,9 @@ pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> 
         }
         if i.key_pressed(egui::Key::F12) {
             actions.push(UiAction::Screenshot);
+        }
+        if i.key_pressed(egui::Key::P) {
+            state.time.toggle_play();
         }
     });
     actions

@@ -1,0 +1,255 @@
+//! The viewer under its own Xvfb, driven by real X input (xdotool through XTEST) and read back with `xwd`:
+//! shared by the viewer tests.
+
+use image::RgbaImage;
+use std::io::BufRead;
+use std::path::Path;
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::time::{Duration, Instant};
+use volcast::settings::RenderSettings;
+
+/// How long the viewer keeps its window open for the test's input (`wait:` script step). The input and captures
+/// took 2.3 s on a 2-core machine with lavapipe; the rest is margin for a loaded one. The test spends what is
+/// left of it rendering the headless images, then waits for the viewer to exit (xdotool 3.2016 cannot close a
+/// window gracefully, and there is no window manager to ask).
+pub const WAIT_MS: u64 = 20_000;
+
+pub struct Xvfb {
+    child: Child,
+    pub display: String,
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        // SIGTERM first, so Xvfb removes its lock file and socket; SIGKILL only if that failed.
+        let terminated = Command::new("kill")
+            .arg(self.child.id().to_string())
+            .status()
+            .is_ok_and(|s| s.success());
+        if !terminated {
+            let _ = self.child.kill();
+        }
+        let _ = self.child.wait();
+    }
+}
+
+/// A fresh Xvfb, or None after a skip where it cannot start.
+pub fn xvfb() -> Option<Xvfb> {
+    // -displayfd: Xvfb picks a free display itself and writes its number once it accepts connections (a fixed
+    // number can collide with another server or a stale lock, and a socket file can exist before it is ready).
+    let mut child = match Command::new("Xvfb")
+        .args(["-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+    {
+        Ok(c) => c,
+        Err(e) => {
+            super::skip(&format!("Xvfb could not start ({e}); apt-get install xvfb"));
+            return None;
+        }
+    };
+    let stdout = child.stdout.take().expect("piped stdout");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        let _ = std::io::BufReader::new(stdout).read_line(&mut line);
+        let _ = tx.send(line);
+    });
+    let number = rx.recv_timeout(Duration::from_secs(20)).unwrap_or_default();
+    let number = number.trim();
+    if number.is_empty() || number.parse::<u32>().is_err() {
+        let _ = child.kill();
+        let _ = child.wait();
+        panic!("Xvfb did not report a display within 20 s (got {number:?})");
+    }
+    Some(Xvfb {
+        child,
+        display: format!(":{number}"),
+    })
+}
+
+/// Whether `program` can be started at all (its exit status does not matter).
+pub fn have(program: &str, arg: &str) -> bool {
+    Command::new(program)
+        .arg(arg)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok()
+}
+
+/// Runs an X client on `display` and returns its stdout; any failure fails the test.
+pub fn x_client(display: &str, program: &str, args: &[&str]) -> Vec<u8> {
+    let out = Command::new(program)
+        .args(args)
+        .env("DISPLAY", display)
+        .output()
+        .unwrap_or_else(|e| panic!("{program}: {e}"));
+    assert!(
+        out.status.success(),
+        "{program} {args:?}: {}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out.stdout
+}
+
+/// Types `keys` into `window` as a user would: focus it, then key events through XTEST. (`xdotool key --window`
+/// sends synthetic events with XSendEvent instead; the viewer did not react to them when tried.)
+pub fn type_keys(display: &str, window: &str, keys: &[&str]) {
+    x_client(display, "xdotool", &["windowfocus", "--sync", window]);
+    let mut args = vec!["key", "--delay", "50"];
+    args.extend_from_slice(keys);
+    x_client(display, "xdotool", &args);
+}
+
+/// What the X server shows in `window` now.
+pub fn capture(display: &str, window: &str) -> RgbaImage {
+    let xwd = x_client(display, "xwd", &["-id", window, "-silent"]);
+    parse_xwd(&xwd).unwrap_or_else(|e| panic!("xwd output: {e}"))
+}
+
+/// Decodes an XWD dump (X11 `XWDFileHeader`: 25 big-endian u32, the window name, the colormap, then the image
+/// as the server sent it). Only what Xvfb at depth 24 produces is accepted: ZPixmap, 32 bits per pixel, true
+/// colour with 8-bit masks.
+pub fn parse_xwd(b: &[u8]) -> Result<RgbaImage, String> {
+    let field = |i: usize| -> Result<u32, String> {
+        b.get(4 * i..4 * i + 4)
+            .map(|s| u32::from_be_bytes([s[0], s[1], s[2], s[3]]))
+            .ok_or_else(|| format!("truncated header ({} bytes)", b.len()))
+    };
+    let (header_size, version, format) = (field(0)? as usize, field(1)?, field(2)?);
+    let (width, height) = (field(4)?, field(5)?);
+    let (little_endian, bits_per_pixel, bytes_per_line) = (field(7)? == 0, field(11)?, field(12)? as usize);
+    let masks = [field(14)?, field(15)?, field(16)?];
+    let colors = field(19)? as usize;
+    if version != 7 || format != 2 || bits_per_pixel != 32 {
+        return Err(format!(
+            "version {version}, format {format}, {bits_per_pixel} bpp (expected 7, ZPixmap = 2, 32)"
+        ));
+    }
+    if masks.iter().any(|m| m.count_ones() != 8) {
+        return Err(format!("colour masks {masks:x?} are not 8 bits each"));
+    }
+    // Colormap entries (XWDColor) are 12 bytes each.
+    let start = header_size + 12 * colors;
+    let pixels = b
+        .get(start..start + bytes_per_line * height as usize)
+        .ok_or_else(|| format!("{} bytes, {width}x{height} needs more", b.len()))?;
+    Ok(RgbaImage::from_fn(width, height, |x, y| {
+        let at = y as usize * bytes_per_line + 4 * x as usize;
+        let p = [pixels[at], pixels[at + 1], pixels[at + 2], pixels[at + 3]];
+        let v = if little_endian {
+            u32::from_le_bytes(p)
+        } else {
+            u32::from_be_bytes(p)
+        };
+        let channel = |m: u32| ((v & m) >> m.trailing_zeros()) as u8;
+        image::Rgba([channel(masks[0]), channel(masks[1]), channel(masks[2]), 255])
+    }))
+}
+
+/// The viewer process, its stderr read line by line as it comes. Killed if the test fails before it ends.
+pub struct Viewer {
+    child: Child,
+    lines: Receiver<String>,
+    pub stderr: String,
+}
+
+impl Viewer {
+    /// Starts `volcast view VOLUME... --validate --size 900x600 --script SCRIPT` in `dir` on `display`.
+    pub fn start(display: &str, dir: &Path, volume: &[&str], script: &str) -> Viewer {
+        let runtime = dir.join("xdg");
+        std::fs::create_dir_all(&runtime).expect("XDG_RUNTIME_DIR");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_volcast"))
+            .arg("view")
+            .args(volume)
+            .args(["--validate", "--size", "900x600", "--script", script])
+            // F12 writes its screenshot into the working directory.
+            .current_dir(dir)
+            .env("DISPLAY", display)
+            .env("XDG_RUNTIME_DIR", &runtime)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run the viewer");
+        let stderr = child.stderr.take().expect("piped stderr");
+        let (tx, lines) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in std::io::BufReader::new(stderr).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+        Viewer {
+            child,
+            lines,
+            stderr: String::new(),
+        }
+    }
+
+    /// Waits for a stderr line containing `needle` and returns it.
+    pub fn wait_for(&mut self, needle: &str, timeout: Duration) -> String {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    self.stderr.push_str(&line);
+                    self.stderr.push('\n');
+                    if line.contains(needle) {
+                        return line;
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => {
+                    panic!(
+                        "no '{needle}' from the viewer within {timeout:?}; stderr so far:\n{}",
+                        self.stderr
+                    )
+                }
+                Err(RecvTimeoutError::Disconnected) => panic!(
+                    "the viewer ended before '{needle}' (its wait:{WAIT_MS} ran out, or it failed); stderr:\n{}",
+                    self.stderr
+                ),
+            }
+        }
+    }
+
+    /// Waits for the viewer to exit (its script ends the session) and collects the rest of its stderr.
+    pub fn finish(&mut self) -> ExitStatus {
+        let status = self.child.wait().expect("wait for the viewer");
+        while let Ok(line) = self.lines.recv_timeout(Duration::from_secs(10)) {
+            self.stderr.push_str(&line);
+            self.stderr.push('\n');
+        }
+        status
+    }
+
+    pub fn pid(&self) -> String {
+        self.child.id().to_string()
+    }
+}
+
+impl Drop for Viewer {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// The PNG and settings that F12 wrote, named by the viewer's "saved screenshot NAME" line.
+pub fn read_screenshot(dir: &Path, saved_line: &str) -> (RgbaImage, RenderSettings) {
+    let name = saved_line
+        .split_once("saved screenshot ")
+        .map(|(_, n)| n.trim())
+        .expect("file name");
+    let png = dir.join(name);
+    let image = image::open(&png)
+        .unwrap_or_else(|e| panic!("{}: {e}", png.display()))
+        .to_rgba8();
+    let json = std::fs::read_to_string(png.with_extension("json")).expect("settings beside the screenshot");
+    (image, serde_json::from_str(&json).expect("settings JSON"))
+}

@@ -1,0 +1,101 @@
+//! A time series in the desktop viewer, driven by real X input under its own Xvfb (xdotool through XTEST, as a
+//! keyboard would): `view FILE --time 2` opens on step 2, the P key plays the series (the window changes while it
+//! plays) and P again pauses it. Each F12 screenshot must equal, within 1/255, the headless render of exactly one
+//! step under the screenshot's own settings: step 2 at the start, and some step after playing. Validation with
+//! synchronization validation reports nothing.
+//!
+//! Needs Xvfb, xdotool and xwd like tests/viewer.rs; a missing one is a skip (a failure with CI=true).
+
+mod common;
+
+use common::compare::diff;
+use common::x11::{capture, have, read_screenshot, type_keys, x_client, xvfb, Viewer, WAIT_MS};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+use volcast::gpu::{Gpu, GpuOptions};
+use volcast::headless::Headless;
+
+#[test]
+fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
+    let Some(x) = xvfb() else { return };
+    for (tool, arg, package) in [("xdotool", "version", "xdotool"), ("xwd", "-help", "x11-apps")] {
+        if !have(tool, arg) {
+            common::skip(&format!("{tool} not found; apt-get install {package}"));
+            return;
+        }
+    }
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer-time");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/time/sim_u16.nrrd");
+    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let mut viewer = Viewer::start(&x.display, &dir, &[file.to_str().unwrap(), "--time", "2"], &script);
+    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    let found = x_client(
+        &x.display,
+        "xdotool",
+        &["search", "--all", "--pid", &viewer.pid(), "--name", "^volcast$"],
+    );
+    let found = String::from_utf8_lossy(&found);
+    let window = found.split_whitespace().next().expect("the volcast window").to_string();
+
+    type_keys(&x.display, &window, &["F12"]);
+    let (start, start_settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
+    // Play: the window must change while the series plays.
+    type_keys(&x.display, &window, &["p"]);
+    let mut frames = Vec::new();
+    for _ in 0..4 {
+        std::thread::sleep(Duration::from_millis(350));
+        frames.push(capture(&x.display, &window));
+    }
+    assert!(
+        frames.windows(2).any(|w| w[0].as_raw() != w[1].as_raw()),
+        "P (play) changes the window"
+    );
+    type_keys(&x.display, &window, &["p"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let paused = capture(&x.display, &window);
+    std::thread::sleep(Duration::from_millis(500));
+    assert_eq!(paused.as_raw(), capture(&x.display, &window).as_raw(), "P again pauses");
+    type_keys(&x.display, &window, &["F12"]);
+    let (after, after_settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
+
+    // Which steps each screenshot equals, rendered headless from the same file and settings.
+    let gpu = Gpu::new(&GpuOptions {
+        validation: true,
+        ..Default::default()
+    })
+    .expect("Vulkan");
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut series = volcast::volume::open(&file, &Default::default()).expect("series");
+    let (mut start_matches, mut after_matches) = (Vec::new(), Vec::new());
+    for t in 0..series.timesteps() {
+        series.show_step(t).unwrap();
+        headless.set_volume(&gpu, &series).unwrap();
+        if diff(&start, &headless.render(&gpu, &start_settings).expect("render").image).max <= 1.0 {
+            start_matches.push(t);
+        }
+        if diff(&after, &headless.render(&gpu, &after_settings).expect("render").image).max <= 1.0 {
+            after_matches.push(t);
+        }
+    }
+    headless.destroy(&gpu);
+    let log = gpu.log.clone();
+    drop(gpu);
+    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    assert_eq!(
+        start_matches,
+        vec![2],
+        "--time 2 opens on step 2 (and only step 2 looks like it)"
+    );
+    assert_eq!(
+        after_matches.len(),
+        1,
+        "after playing, the view is one step of the series: {after_matches:?}"
+    );
+
+    let status = viewer.finish();
+    let stderr = &viewer.stderr;
+    assert!(status.success(), "viewer failed:\n{stderr}");
+    assert!(stderr.contains("validation: 0 errors, 0 warnings"), "{stderr}");
+}
