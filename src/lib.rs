@@ -7,6 +7,7 @@ pub mod compare;
 pub mod gpu;
 pub mod headless;
 pub mod info;
+pub mod playback;
 pub mod render;
 pub mod settings;
 pub mod tf;

@@ -266,6 +266,10 @@ struct BenchArgs {
     /// Only the sample-only micro-benchmark (all three texel formats).
     #[arg(long)]
     sample_only: bool,
+    /// Only time-series playback as the viewer plays it: 64 steps of 128³ float32 at 512² (with --quick 6 steps
+    /// of 24³ at 64²); each step is uploaded and rendered, the two timed apart.
+    #[arg(long, conflicts_with_all = ["sample_only", "scenes"])]
+    playback: bool,
     /// Print the results as JSON on stdout (progress still goes to stderr).
     #[arg(long)]
     json: bool,
@@ -741,6 +745,22 @@ fn bench(args: &BenchArgs) -> Result<()> {
         methods: args.methods.clone(),
         sample_only: args.sample_only,
     };
+    if args.playback {
+        let play = if args.quick {
+            volcast::playback::PlaybackOptions::QUICK
+        } else {
+            volcast::playback::PlaybackOptions::FULL
+        };
+        return with_gpu(&args.gpu, |gpu| {
+            let report = volcast::playback::run(gpu, &play, &mut |line| eprintln!("{line}"))?;
+            if args.json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.text());
+            }
+            Ok(())
+        });
+    }
     with_gpu(&args.gpu, |gpu| {
         let report = volcast::bench::run(gpu, &opts, &mut |line| eprintln!("{line}"))?;
         if args.json {

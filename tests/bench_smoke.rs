@@ -152,3 +152,26 @@ fn unknown_scene_is_refused_with_the_list() {
         "{stderr}"
     );
 }
+
+/// `bench --playback --quick`: a 6-step series played twice under validation; the JSON's times are positive, the
+/// frame is at least the upload plus the render's median parts, and every step was timed.
+#[test]
+fn quick_playback_times_every_step_without_validation_errors() {
+    let out = bench(&["--playback", "--quick", "--validate", "--json"]);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "exit {:?}\nstderr:\n{stderr}", out.status);
+    assert!(stderr.contains("validation: 0 errors, 0 warnings"), "{stderr}");
+    let json: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+    assert_eq!(
+        (json["steps"].as_u64(), json["frames"].as_u64()),
+        (Some(6), Some(6)),
+        "{json}"
+    );
+    for key in ["upload_ms", "render_ms", "frame_ms"] {
+        for stat in ["median", "min", "max"] {
+            positive(&json[key][stat].to_string(), &format!("{key}.{stat}"));
+        }
+    }
+    let fps = positive(&json["steps_per_second"].to_string(), "steps_per_second");
+    assert!((fps - 1e3 / json["frame_ms"]["median"].as_f64().unwrap()).abs() < 1e-6);
+}

@@ -3,7 +3,7 @@
 //! sample grid, so skipping changes which samples are *taken*, never what they would have contributed. Pure code.
 
 use crate::settings::CompositeMode;
-use crate::volume::Volume;
+use crate::volume::{Volume, VoxelData};
 
 /// Brick edge in voxels.
 pub const BRICK: u32 = 8;
@@ -25,38 +25,26 @@ impl BrickGrid {
     pub fn new(volume: &Volume) -> BrickGrid {
         let dims = volume.dims;
         let bricks = dims.map(|d| d.div_ceil(BRICK));
-        let [bx, by, bz] = bricks;
-        let n = (bx * by * bz) as usize;
-        let mut min = vec![f32::INFINITY; n];
-        let mut max = vec![f32::NEG_INFINITY; n];
-        let range = |b: u32, d: u32| -> (u32, u32) {
-            let lo = (b * BRICK).saturating_sub(1);
-            let hi = ((b + 1) * BRICK).min(d - 1);
-            (lo, hi)
+        // The extremes of the elements as stored, by rows (a series uploads a step per frame: this is on the
+        // playback path), then normalised: normalisation is affine in the element, so the extremes map to
+        // extremes (f32 rounding is monotonic too, so the result equals a per-voxel min/max of normalised f32).
+        let extremes: Vec<Option<(f64, f64)>> = match &volume.data {
+            VoxelData::U8(v) => brick_extremes(v, dims, bricks),
+            VoxelData::U16(v) => brick_extremes(v, dims, bricks),
+            VoxelData::F32(v) => brick_extremes(v, dims, bricks),
         };
-        for k in 0..bz {
-            let (z0, z1) = range(k, dims[2]);
-            for j in 0..by {
-                let (y0, y1) = range(j, dims[1]);
-                for i in 0..bx {
-                    let (x0, x1) = range(i, dims[0]);
-                    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-                    for z in z0..=z1 {
-                        for y in y0..=y1 {
-                            for x in x0..=x1 {
-                                let v = volume.normalized(x, y, z) as f32;
-                                if !v.is_nan() {
-                                    lo = lo.min(v);
-                                    hi = hi.max(v);
-                                }
-                            }
-                        }
-                    }
-                    let idx = (i + bx * (j + by * k)) as usize;
-                    min[idx] = lo;
-                    max[idx] = hi;
+        let mut min = Vec::with_capacity(extremes.len());
+        let mut max = Vec::with_capacity(extremes.len());
+        for e in extremes {
+            let (lo, hi) = match e {
+                Some((a, b)) => {
+                    let (a, b) = (volume.normalize_element(a) as f32, volume.normalize_element(b) as f32);
+                    (a.min(b), a.max(b))
                 }
-            }
+                None => (f32::INFINITY, f32::NEG_INFINITY),
+            };
+            min.push(lo);
+            max.push(hi);
         }
         BrickGrid { bricks, min, max }
     }
@@ -206,6 +194,49 @@ pub fn encode_reach(levels: &[u8], bricks: [u32; 3]) -> Vec<u8> {
     classes.iter().zip(&reach).map(|(&c, &r)| (r << 2) | c).collect()
 }
 
+/// Per brick, the smallest and largest element over its voxels and a one-voxel apron (NaN ignored; `None` for
+/// a brick of only NaN), walking the volume row by row.
+fn brick_extremes<T: Copy + PartialOrd + Into<f64>>(
+    data: &[T],
+    dims: [u32; 3],
+    bricks: [u32; 3],
+) -> Vec<Option<(f64, f64)>> {
+    let [w, h, d] = dims.map(|v| v as usize);
+    let [bx, by, bz] = bricks.map(|v| v as usize);
+    let b = BRICK as usize;
+    let span = |k: usize, n: usize| ((k * b).saturating_sub(1), ((k + 1) * b).min(n - 1));
+    let mut out: Vec<Option<(T, T)>> = vec![None; bx * by * bz];
+    for k in 0..bz {
+        let (z0, z1) = span(k, d);
+        for j in 0..by {
+            let (y0, y1) = span(j, h);
+            for z in z0..=z1 {
+                for y in y0..=y1 {
+                    let row = &data[(y + h * z) * w..][..w];
+                    for i in 0..bx {
+                        let (x0, x1) = span(i, w);
+                        let slot = &mut out[i + bx * (j + by * k)];
+                        for &v in &row[x0..=x1] {
+                            #[allow(clippy::eq_op)] // NaN is the only value unequal to itself.
+                            let is_nan = v != v;
+                            if is_nan {
+                                continue;
+                            }
+                            *slot = Some(match *slot {
+                                None => (v, v),
+                                Some((lo, hi)) => (if v < lo { v } else { lo }, if v > hi { v } else { hi }),
+                            });
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out.into_iter()
+        .map(|e| e.map(|(lo, hi)| (lo.into(), hi.into())))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,6 +274,54 @@ mod tests {
             0.5,
             "x = 16 is in brick 2's apron (15..=19), the spike's y = 4 is not"
         );
+    }
+
+    /// The row-wise extremes equal the definition: per brick, min/max over the brick and its apron of the
+    /// normalised f32 of every non-NaN voxel; with int16 bias, a negative slope, NaN and a NaN-only brick.
+    #[test]
+    fn grid_equals_the_per_voxel_definition() {
+        let dims = [19u32, 10, 9];
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        let words: Vec<u16> = (0..n).map(|i| ((i * 7919) % 65536) as u16).collect();
+        let i16v = Volume::new("i16", dims, [1.0; 3], VoxelType::I16, VoxelData::U16(words))
+            .unwrap()
+            .with_scaling(crate::volume::Scaling {
+                slope: -2.5,
+                intercept: 7.0,
+            })
+            .unwrap();
+        let mut floats: Vec<f32> = (0..n).map(|i| ((i * 31) % 97) as f32 - 40.0).collect();
+        for (i, f) in floats.iter_mut().enumerate() {
+            let (x, y, z) = (i % 19, (i / 19) % 10, i / 190);
+            if (x < 9 && y < 9 && z < 9) || i % 13 == 0 {
+                *f = f32::NAN;
+            }
+        }
+        let f32v = Volume::new("f32", dims, [1.0; 3], VoxelType::F32, VoxelData::F32(floats)).unwrap();
+        for v in [i16v, f32v] {
+            let g = BrickGrid::new(&v);
+            for k in 0..g.bricks[2] {
+                for j in 0..g.bricks[1] {
+                    for i in 0..g.bricks[0] {
+                        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+                        let r = |b: u32, d: u32| (b * BRICK).saturating_sub(1)..=((b + 1) * BRICK).min(d - 1);
+                        for z in r(k, dims[2]) {
+                            for y in r(j, dims[1]) {
+                                for x in r(i, dims[0]) {
+                                    let n = v.normalized(x, y, z) as f32;
+                                    if !n.is_nan() {
+                                        lo = lo.min(n);
+                                        hi = hi.max(n);
+                                    }
+                                }
+                            }
+                        }
+                        let b = (i + g.bricks[0] * (j + g.bricks[1] * k)) as usize;
+                        assert_eq!((g.min[b], g.max[b]), (lo, hi), "{} brick ({i}, {j}, {k})", v.name);
+                    }
+                }
+            }
+        }
     }
 
     #[test]

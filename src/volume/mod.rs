@@ -397,6 +397,21 @@ impl Volume {
         }
     }
 
+    /// [`Volume::normalized`] of an element as `data` holds it (a biased integer, or the f32): affine in it, so
+    /// the extremes of a block of elements map to the extremes of its normalised values (swapped for a negative
+    /// slope).
+    pub fn normalize_element(&self, element: f64) -> f64 {
+        let v = self.scaling.apply(element - stored_offset(self.source_type));
+        let [min, max] = self.range;
+        if v.is_nan() {
+            f64::NAN
+        } else if max == min {
+            0.0
+        } else {
+            (v - min) / (max - min)
+        }
+    }
+
     /// Physical box, dims × spacing, scaled so the largest side is 1.
     pub fn extent(&self) -> glam::Vec3 {
         let spacing = self.geometry.spacing();
