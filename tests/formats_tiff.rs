@@ -493,3 +493,18 @@ fn cli_reads_a_tiff_folder_and_renders_it() {
     assert!(o.status.success(), "{stderr}");
     assert!(png.is_file());
 }
+
+/// Found by the tiff fuzz target: a directory entry claiming ~89 M values made the tiff crate reserve 2 GiB for
+/// their list before reading them (its list limit is `decoding_buffer_size`, which volcast had set to the
+/// largest page). While directories are read the limit is now what the file can hold, so the claim is refused
+/// as a limit before any allocation (before the fix: the 2 GiB list, then a read error).
+#[test]
+fn fuzz_ifd_value_claim_is_refused_as_a_limit() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-tiff-oom-ifd-values.tif");
+    let e = err(&path);
+    assert!(
+        e.contains("fuzz-tiff-oom-ifd-values.tif")
+            && e.contains("a TIFF value or page is larger than the file can hold"),
+        "{e}"
+    );
+}

@@ -270,8 +270,16 @@ fn walk_pages<R: Read + Seek>(
 ) -> Result<(Decoder<R>, Vec<Page>, Metadata), VolumeError> {
     let err = |e| tiff_error(file, e);
     // The largest page volcast accepts; each page is checked against its own declared size before decoding.
+    // The tiff crate also sizes each directory value's list by `decoding_buffer_size` (a count of values, each a
+    // `Value`, before reading them), so while only directories are read that limit is what the file can hold: at
+    // most one value per byte. (Found by the tiff fuzz target: a tag claiming 89 M values reserved 2 GiB.)
     let most = (MAX_DIM as usize).pow(2) * 8;
-    let mut dec = Decoder::new(reader).map_err(err)?.with_limits(limits(most));
+    let listable = usize::try_from(len)
+        .unwrap_or(usize::MAX)
+        .saturating_mul(std::mem::size_of::<Value>());
+    let mut dec = Decoder::new(reader)
+        .map_err(err)?
+        .with_limits(limits(most.min(listable)));
     let meta = metadata(&mut dec, file)?;
     let mut pages = Vec::new();
     let mut chunks = 0u64;
