@@ -13,6 +13,9 @@ use ::tiff::decoder::{Decoder, DecodingResult, Limits};
 use ::tiff::tags::Tag;
 use ::tiff::{ColorType, TiffError};
 use std::cmp::Ordering;
+
+mod meta;
+use meta::{layout, metadata, Layout, Metadata};
 use std::fs::File;
 use std::io::{BufReader, Cursor, ErrorKind, Read, Seek};
 use std::path::{Path, PathBuf};
@@ -40,16 +43,6 @@ struct Page {
     width: u32,
     height: u32,
     voxel_type: VoxelType,
-}
-
-/// What the first page says about the physical size of a voxel.
-#[derive(Clone, Debug, Default)]
-struct Metadata {
-    description: Option<String>,
-    x_resolution: Option<f64>,
-    y_resolution: Option<f64>,
-    /// TIFF ResolutionUnit: 1 none, 2 inch, 3 centimetre.
-    resolution_unit: Option<u16>,
 }
 
 fn tiff_error(file: &str, e: TiffError) -> VolumeError {
@@ -219,40 +212,6 @@ fn page_info<R: Read + Seek>(
     ))
 }
 
-/// A resolution as a number: RATIONAL as the TIFF spec says, or whatever numeric type a writer used.
-fn as_f64(v: Value) -> Option<f64> {
-    match v {
-        Value::Rational(n, d) if d != 0 => Some(f64::from(n) / f64::from(d)),
-        Value::SRational(n, d) if d != 0 => Some(f64::from(n) / f64::from(d)),
-        Value::Double(x) => Some(x),
-        Value::Float(x) => Some(f64::from(x)),
-        Value::Short(x) => Some(f64::from(x)),
-        Value::Unsigned(x) => Some(f64::from(x)),
-        Value::List(l) => l.into_iter().next().and_then(as_f64),
-        _ => None,
-    }
-}
-
-fn metadata<R: Read + Seek>(dec: &mut Decoder<R>, file: &str) -> Result<Metadata, VolumeError> {
-    let err = |e| tiff_error(file, e);
-    let description = match dec.find_tag(Tag::ImageDescription).map_err(err)? {
-        Some(v) => v.into_string().ok(),
-        None => None,
-    };
-    let resolution = |dec: &mut Decoder<R>, tag| -> Result<Option<f64>, VolumeError> {
-        Ok(match dec.find_tag(tag).map_err(err)? {
-            Some(v) => as_f64(v).filter(|r| r.is_finite() && *r > 0.0),
-            None => None,
-        })
-    };
-    Ok(Metadata {
-        description,
-        x_resolution: resolution(&mut *dec, Tag::XResolution)?,
-        y_resolution: resolution(&mut *dec, Tag::YResolution)?,
-        resolution_unit: dec.find_tag_unsigned::<u16>(Tag::ResolutionUnit).map_err(err)?,
-    })
-}
-
 fn limits(page_bytes: usize) -> Limits {
     let mut limits = Limits::default();
     limits.decoding_buffer_size = page_bytes;
@@ -378,198 +337,6 @@ fn check_same(file: &str, first: &Page, page: &Page, which: &str) -> Result<(), 
         ));
     }
     Ok(())
-}
-
-// ---------------------------------------------------------------------------------------------------------------
-// Spacing and hyperstacks.
-
-/// Millimetres per unit; `None` for no unit ("pixel", "none", unknown words).
-fn unit_to_mm(unit: &str) -> Option<f64> {
-    let u = unit.trim().trim_matches('"').to_ascii_lowercase();
-    match u.as_str() {
-        "micron" | "microns" | "um" | "µm" | "\u{3bc}m" | "\\u00b5m" | "micrometer" | "micrometre" => Some(1e-3),
-        "nm" | "nanometer" | "nanometre" => Some(1e-6),
-        "mm" | "millimeter" | "millimetre" => Some(1.0),
-        "cm" | "centimeter" | "centimetre" => Some(10.0),
-        "m" | "meter" | "metre" => Some(1000.0),
-        "inch" | "in" | "inches" => Some(25.4),
-        _ => None,
-    }
-}
-
-/// `key=value` lines of an ImageJ description.
-fn imagej_fields(description: &str) -> Option<Vec<(&str, &str)>> {
-    if !description.starts_with("ImageJ=") {
-        return None;
-    }
-    Some(
-        description
-            .lines()
-            .filter_map(|l| l.split_once('='))
-            .map(|(k, v)| (k.trim(), v.trim()))
-            .collect(),
-    )
-}
-
-/// An attribute of the first `Pixels` element of an OME-XML description.
-fn ome_pixels(description: &str) -> Option<&str> {
-    if !description.contains("<OME") && !description.contains(":OME") {
-        return None;
-    }
-    let start = description.find("<Pixels ").or_else(|| description.find(":Pixels "))?;
-    let rest = &description[start..];
-    Some(&rest[..rest.find('>').unwrap_or(rest.len())])
-}
-
-fn xml_attr<'a>(element: &'a str, name: &str) -> Option<&'a str> {
-    let key = format!(" {name}=");
-    let at = element.find(&key)? + key.len();
-    let rest = &element[at..];
-    let quote = rest.chars().next()?;
-    if quote != '"' && quote != '\'' {
-        return None;
-    }
-    let rest = &rest[1..];
-    Some(&rest[..rest.find(quote)?])
-}
-
-/// Which pages are the z slices and the voxel size in millimetres.
-struct Layout {
-    slices: Vec<usize>,
-    spacing: [f64; 3],
-    notes: Vec<String>,
-}
-
-fn positive(text: &str) -> Option<f64> {
-    text.trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0)
-}
-
-fn layout(meta: &Metadata, pages: usize) -> Layout {
-    let mut notes = Vec::new();
-    let mut slices: Vec<usize> = (0..pages).collect();
-    let description = meta.description.as_deref().unwrap_or("");
-    let mut z_spacing = None;
-    let mut unit_mm = None;
-    let mut have_unit_word = false;
-    if let Some(fields) = imagej_fields(description) {
-        let get = |k: &str| fields.iter().find(|(key, _)| *key == k).map(|(_, v)| *v);
-        let count = |k: &str| get(k).and_then(|v| v.parse::<usize>().ok()).filter(|&n| n >= 1);
-        let (c, z, t) = (
-            count("channels").unwrap_or(1),
-            count("slices"),
-            count("frames").unwrap_or(1),
-        );
-        let z = z.unwrap_or_else(|| pages / c.max(1) / t.max(1));
-        if c > 1 || t > 1 {
-            if c.checked_mul(z).and_then(|n| n.checked_mul(t)) == Some(pages) {
-                // ImageJ's page order is channel fastest, then slice, then frame.
-                slices = (0..z).map(|i| i * c).collect();
-                notes.push(format!(
-                    "ImageJ hyperstack of {c} channel(s) × {z} slices × {t} frame(s): the first channel of the first \
-                     frame is loaded"
-                ));
-            } else {
-                notes.push(format!(
-                    "ImageJ says {c} channel(s) × {z} slices × {t} frame(s) but the file has {pages} pages: every \
-                     page is taken as a slice"
-                ));
-            }
-        }
-        z_spacing = get("spacing").and_then(positive);
-        if let Some(u) = get("unit") {
-            unit_mm = unit_to_mm(u);
-            have_unit_word = true;
-        }
-    }
-    if let Some(pixels) = ome_pixels(description) {
-        let size = |k: &str| {
-            xml_attr(pixels, k)
-                .and_then(|v| v.parse::<usize>().ok())
-                .filter(|&n| n >= 1)
-        };
-        let (z, c, t) = (
-            size("SizeZ").unwrap_or(1),
-            size("SizeC").unwrap_or(1),
-            size("SizeT").unwrap_or(1),
-        );
-        let order = xml_attr(pixels, "DimensionOrder").unwrap_or("XYZCT");
-        if (c > 1 || t > 1) && z.checked_mul(c).and_then(|n| n.checked_mul(t)) == Some(pages) {
-            let mut stride = 1;
-            for axis in order.chars().skip(2) {
-                match axis {
-                    'Z' => break,
-                    'C' => stride *= c,
-                    'T' => stride *= t,
-                    _ => {}
-                }
-            }
-            slices = (0..z).map(|i| i * stride).collect();
-            notes.push(format!(
-                "OME-TIFF of {c} channel(s) × {z} slices × {t} time point(s): the first channel and time point are loaded"
-            ));
-        } else if c > 1 || t > 1 {
-            notes.push(format!(
-                "OME-XML says {z} slices × {c} channel(s) × {t} time point(s) but the file has {pages} pages: every \
-                 page is taken as a slice"
-            ));
-        }
-        let physical = |k: &str| {
-            let v = xml_attr(pixels, k).and_then(positive)?;
-            let unit = xml_attr(pixels, &format!("{k}Unit")).unwrap_or("µm");
-            unit_to_mm(unit).map(|f| v * f)
-        };
-        let (x, y, zs) = (
-            physical("PhysicalSizeX"),
-            physical("PhysicalSizeY"),
-            physical("PhysicalSizeZ"),
-        );
-        if let (Some(x), Some(y)) = (x, y) {
-            let z = zs.unwrap_or_else(|| {
-                notes.push("the OME-XML gives no PhysicalSizeZ: z spacing taken equal to x".into());
-                x
-            });
-            notes.push("spacing from OME-XML PhysicalSize, in mm".into());
-            return Layout {
-                slices,
-                spacing: [x, y, z],
-                notes,
-            };
-        }
-    }
-    if !have_unit_word {
-        unit_mm = match meta.resolution_unit {
-            Some(2) => Some(25.4),
-            Some(3) => Some(10.0),
-            _ => None,
-        };
-    }
-    let in_units = [
-        meta.x_resolution.map(|r| 1.0 / r),
-        meta.y_resolution.map(|r| 1.0 / r),
-        z_spacing,
-    ];
-    let imagej = description.starts_with("ImageJ=");
-    let spacing = match unit_mm {
-        Some(f) => {
-            let x = in_units[0].unwrap_or(1.0);
-            let y = in_units[1].unwrap_or(x);
-            let z = in_units[2].unwrap_or_else(|| {
-                notes.push("the file gives no z spacing: taken equal to x".into());
-                x
-            });
-            notes.push("spacing from the TIFF resolution / ImageJ metadata, converted to mm".into());
-            [x * f, y * f, z * f]
-        }
-        None if imagej => {
-            let x = in_units[0].unwrap_or(1.0);
-            let y = in_units[1].unwrap_or(x);
-            let z = in_units[2].unwrap_or(x);
-            notes.push("ImageJ metadata without a length unit: spacing used as written".into());
-            [x, y, z]
-        }
-        None => [1.0; 3],
-    };
-    Layout { slices, spacing, notes }
 }
 
 // ---------------------------------------------------------------------------------------------------------------
@@ -788,59 +555,5 @@ mod tests {
         );
         assert_eq!(natural_cmp("img2", "img10"), Ordering::Less);
         assert_eq!(natural_cmp("s_0099", "s_0100"), Ordering::Less);
-    }
-
-    #[test]
-    fn units_and_imagej_spacing() {
-        assert_eq!(unit_to_mm("micron"), Some(1e-3));
-        assert_eq!(unit_to_mm("\\u00B5m"), Some(1e-3));
-        assert_eq!(unit_to_mm("inch"), Some(25.4));
-        assert_eq!(unit_to_mm("pixel"), None);
-        let meta = Metadata {
-            description: Some("ImageJ=1.11a\nimages=5\nslices=5\nunit=micron\nspacing=2.5\n".into()),
-            x_resolution: Some(4.0),
-            y_resolution: Some(2.0),
-            resolution_unit: Some(1),
-        };
-        let l = layout(&meta, 5);
-        assert_eq!(l.slices, [0, 1, 2, 3, 4]);
-        let want = [0.25e-3, 0.5e-3, 2.5e-3];
-        for (got, want) in l.spacing.iter().zip(want) {
-            assert!((got - want).abs() < 1e-12, "{:?}", l.spacing);
-        }
-        // A hyperstack: the first channel of the first frame.
-        let meta = Metadata {
-            description: Some("ImageJ=1.11a\nimages=12\nchannels=2\nslices=3\nframes=2\nhyperstack=true\n".into()),
-            ..Metadata::default()
-        };
-        let l = layout(&meta, 12);
-        assert_eq!(l.slices, [0, 2, 4]);
-        assert_eq!(l.spacing, [1.0; 3]);
-        // No unit, no ImageJ: spacing 1 whatever the resolution.
-        let meta = Metadata {
-            x_resolution: Some(72.0),
-            y_resolution: Some(72.0),
-            ..Metadata::default()
-        };
-        assert_eq!(layout(&meta, 3).spacing, [1.0; 3]);
-        // Inches: 72 dpi, z taken equal to x.
-        let meta = Metadata {
-            resolution_unit: Some(2),
-            ..meta
-        };
-        let s = layout(&meta, 3).spacing;
-        assert!((s[0] - 25.4 / 72.0).abs() < 1e-12 && s[2] == s[0], "{s:?}");
-    }
-
-    #[test]
-    fn ome_xml() {
-        let xml = r#"<?xml version="1.0"?><OME xmlns="x"><Image ID="Image:0"><Pixels DimensionOrder="XYCZT" ID="Pixels:0" SizeC="2" SizeT="1" SizeX="9" SizeY="7" SizeZ="5" Type="uint16" PhysicalSizeX="0.5" PhysicalSizeY="0.25" PhysicalSizeZ="2" PhysicalSizeZUnit="mm"><Channel/></Pixels></Image></OME>"#;
-        let meta = Metadata {
-            description: Some(xml.into()),
-            ..Metadata::default()
-        };
-        let l = layout(&meta, 10);
-        assert_eq!(l.slices, [0, 2, 4, 6, 8]);
-        assert_eq!(l.spacing, [0.5e-3, 0.25e-3, 2.0]);
     }
 }
