@@ -76,10 +76,13 @@ pub enum ScriptStep {
     Key(String),
     /// Save the current view through the screenshot path (PNG, plus the settings as JSON beside it).
     Screenshot(PathBuf),
+    /// Load a file as if it were dropped on the window (the `DroppedFile` handler's path), then wait until the
+    /// load ends and say on stderr whether it loaded.
+    Drop(PathBuf),
     Exit,
 }
 
-/// Parses `frames:3;wait:500;resize:320x240;minimize;restore;zero-size;key:tab;screenshot:PATH;exit` (wait in
+/// Parses `frames:3;wait:500;resize:320x240;minimize;restore;zero-size;key:tab;screenshot:PATH;drop:PATH;exit` (wait in
 /// milliseconds).
 pub fn parse_script(s: &str) -> Result<Vec<ScriptStep>, String> {
     s.split(';')
@@ -103,6 +106,7 @@ pub fn parse_script(s: &str) -> Result<Vec<ScriptStep>, String> {
                 "zero-size" => ScriptStep::ZeroSize,
                 "key" => ScriptStep::Key(arg.to_lowercase()),
                 "screenshot" if !arg.is_empty() => ScriptStep::Screenshot(PathBuf::from(arg)),
+                "drop" if !arg.is_empty() => ScriptStep::Drop(PathBuf::from(arg)),
                 "exit" => ScriptStep::Exit,
                 _ => return Err(bad()),
             })
@@ -244,6 +248,8 @@ struct Script {
     waiting_for_size: Option<(u32, u32, u32)>,
     wait_until: Option<Instant>,
     started: Instant,
+    /// A `drop:` step's load is under way.
+    waiting_for_load: bool,
 }
 
 /// The live viewer. Field order is irrelevant: `destroy` tears down explicitly, the Gpu last.
@@ -391,6 +397,7 @@ impl Running {
                 frames_left: 0,
                 drag_left: 0,
                 waiting_for_size: None,
+                waiting_for_load: false,
                 wait_until: None,
                 started: Instant::now(),
             }),
@@ -688,6 +695,16 @@ impl Running {
                 return Ok(Flow::Continue);
             }
         }
+        if script.waiting_for_load {
+            if self.loading.is_some() {
+                return Ok(Flow::Continue);
+            }
+            script.waiting_for_load = false;
+            match &self.state.error {
+                Some(e) => eprintln!("script: load failed: {e}"),
+                None => eprintln!("script: loaded {}", self.state.volume_label),
+            }
+        }
         let Some(step) = script.steps.pop_front() else {
             self.report_drag();
             return Ok(Flow::Exit);
@@ -698,6 +715,11 @@ impl Running {
             ScriptStep::Wait(d) => script.wait_until = Some(Instant::now() + d),
             ScriptStep::Drag(n) => script.drag_left = n,
             ScriptStep::Dialog => self.apply(vec![UiAction::OpenDialog]),
+            ScriptStep::Drop(path) => {
+                script.waiting_for_load = true;
+                let action = self.state.load_action(path);
+                self.apply(vec![action]);
+            }
             ScriptStep::Lod(on) => {
                 self.report_drag();
                 self.state.lod = on;
