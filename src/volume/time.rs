@@ -156,21 +156,16 @@ impl Volume {
         let shown = self.time.shown;
         let steps = std::mem::take(&mut self.time.steps);
         let (range, stored_range) = (self.range, self.stored_range);
-        let template = Volume {
-            data: VoxelData::U8(Vec::new()),
-            ..self.clone()
-        };
+        // The template carries everything but voxels, so cloning it per step copies no data.
+        let mut shown_data = Some(std::mem::replace(&mut self.data, VoxelData::U8(Vec::new())));
+        let template = self;
         let mut mapped: Vec<Volume> = Vec::with_capacity(steps.len());
-        let mut own = Some(self);
         for step in steps {
-            let v = match step {
-                Some(data) => Volume {
-                    data,
-                    ..template.clone()
-                },
-                None => own.take().expect("one shown step"),
-            };
-            mapped.push(f(v));
+            let data = step.or_else(|| shown_data.take()).expect("one shown step");
+            mapped.push(f(Volume {
+                data,
+                ..template.clone()
+            }));
         }
         let mut first = mapped.remove(shown);
         let mut all: Vec<Option<VoxelData>> = mapped.into_iter().map(|v| Some(v.data)).collect();
