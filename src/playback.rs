@@ -1,12 +1,13 @@
 //! `volcast bench --playback`: a time series played step after step as the viewer plays it. Each frame shows
-//! the next step ([`Volume::show_step`]), uploads it ([`Headless::set_volume`]: the volume in the device's
-//! layout, its brick grid and occupancy) and renders it; the upload and the render are timed apart, so a
-//! shortfall says which to work on. The series (default 64 steps of 128³ float32, the issue's case) is generated:
+//! the step due, renders it, and uploads the step after it ahead of display (`Renderer::prepare_volume`: the
+//! volume in the device's layout, its brick grid and occupancy), so that showing a step is only an install. The
+//! three are timed apart, so a shortfall says which to work on. The series (default 64 steps of 128³ float32, the issue's case) is generated:
 //! the helix field moving along z by two voxels a step and brightening, every step different.
 
 use crate::bench::{load_average, Stats};
 use crate::gpu::{Gpu, GpuError};
 use crate::headless::Headless;
+use crate::render::PreparedVolume;
 use crate::settings::RenderSettings;
 use crate::volume::{self, Volume, VolumeError, VoxelData, VoxelType};
 use std::time::Instant;
@@ -47,11 +48,13 @@ pub struct PlaybackReport {
     pub edge: u32,
     pub image: u32,
     pub frames: u32,
-    /// show_step + upload (volume, bricks) per step, ms.
+    /// Showing the step due, uploaded ahead by the previous frame (an install: descriptor update), ms.
+    pub show_ms: Stats,
+    /// Uploading the next step ahead (layout conversion, copy, brick grid), ms.
     pub upload_ms: Stats,
     /// Render (with readback) per step, ms.
     pub render_ms: Stats,
-    /// Both, per step, ms.
+    /// All three, per step, ms.
     pub frame_ms: Stats,
     /// 1000 / median frame.
     pub steps_per_second: f64,
@@ -66,13 +69,14 @@ impl PlaybackReport {
         let s = |x: &Stats| format!("{:.1} ms (min {:.1}, max {:.1})", x.median, x.min, x.max);
         format!(
             "playback: {} steps of {e}x{e}x{e} float32 ({:.0} MiB) at {i}x{i} on {}, {} timed frames\n  \
-             upload {}\n  render {}\n  frame  {}\n  => {:.1} steps/s{}\n",
+             show step {}\n  render {}\n  upload next step ahead {}\n  frame  {}\n  => {:.1} steps/s{}\n",
             self.steps,
             self.series_mib,
             self.device,
             self.frames,
-            s(&self.upload_ms),
+            s(&self.show_ms),
             s(&self.render_ms),
+            s(&self.upload_ms),
             s(&self.frame_ms),
             self.steps_per_second,
             self.load_average.map_or(String::new(), |l| format!(
@@ -133,21 +137,49 @@ fn play(
     opts: &PlaybackOptions,
     log: &mut dyn FnMut(&str),
 ) -> Result<PlaybackReport, GpuError> {
+    let mut ahead: Option<PreparedVolume> = None;
+    let result = play_steps(gpu, headless, series, opts, &mut ahead, log);
+    if let Some(p) = ahead {
+        p.destroy(gpu);
+    }
+    result
+}
+
+/// As the viewer plays: the step due is shown (installed, uploaded ahead by the previous frame), rendered, and
+/// the step after it uploaded ahead.
+fn play_steps(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    series: &mut Volume,
+    opts: &PlaybackOptions,
+    ahead: &mut Option<PreparedVolume>,
+    log: &mut dyn FnMut(&str),
+) -> Result<PlaybackReport, GpuError> {
     let settings = RenderSettings::new(opts.image, opts.image, series.extent());
-    let (mut upload, mut render, mut frame) = (Vec::new(), Vec::new(), Vec::new());
+    let steps = series.timesteps();
+    let volume_error = |e: VolumeError| GpuError::TooLarge(e.to_string());
+    let (mut show, mut upload, mut render, mut frame) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for pass in 0..opts.loops.max(2) {
         log(&format!("playback: pass {} of {}", pass + 1, opts.loops.max(2)));
-        for t in 0..series.timesteps() {
+        for t in 0..steps {
             let start = Instant::now();
-            series.show_step(t).map_err(|e| GpuError::TooLarge(e.to_string()))?;
-            headless.set_volume(gpu, series)?;
-            let uploaded = Instant::now();
+            series.show_step(t).map_err(volume_error)?;
+            match ahead.take() {
+                Some(prepared) => headless.renderer.install_volume(gpu, prepared),
+                None => headless.set_volume(gpu, series)?,
+            }
+            let shown = Instant::now();
             headless.render(gpu, &settings)?;
+            let rendered = Instant::now();
+            series.show_step((t + 1) % steps).map_err(volume_error)?;
+            *ahead = Some(headless.renderer.prepare_volume(gpu, series)?);
             let done = Instant::now();
             if pass > 0 {
-                upload.push((uploaded - start).as_secs_f64() * 1e3);
-                render.push((done - uploaded).as_secs_f64() * 1e3);
-                frame.push((done - start).as_secs_f64() * 1e3);
+                let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+                show.push(ms(start, shown));
+                render.push(ms(shown, rendered));
+                upload.push(ms(rendered, done));
+                frame.push(ms(start, done));
             }
         }
     }
@@ -159,6 +191,7 @@ fn play(
         edge: opts.edge,
         image: opts.image,
         frames: frame.len() as u32,
+        show_ms: Stats::of(&show).ok_or(GpuError::Lost("no step change timed"))?,
         upload_ms: Stats::of(&upload).ok_or(GpuError::Lost("no upload timed"))?,
         render_ms: Stats::of(&render).ok_or(GpuError::Lost("no render timed"))?,
         frame_ms,

@@ -167,7 +167,7 @@ fn quick_playback_times_every_step_without_validation_errors() {
         (Some(6), Some(6)),
         "{json}"
     );
-    for key in ["upload_ms", "render_ms", "frame_ms"] {
+    for key in ["show_ms", "upload_ms", "render_ms", "frame_ms"] {
         for stat in ["median", "min", "max"] {
             positive(&json[key][stat].to_string(), &format!("{key}.{stat}"));
         }

@@ -1,7 +1,8 @@
 //! A time series in the desktop viewer, driven by real X input under its own Xvfb (xdotool through XTEST, as a
 //! keyboard would): `view FILE --time 2` opens on step 2, the P key plays the series (the window changes while it
-//! plays) and P again pauses it. Each F12 screenshot must equal, within 1/255, the headless render of exactly one
-//! step under the screenshot's own settings: step 2 at the start, and some step after playing. Validation with
+//! plays, each step after the first uploaded ahead of display) and P again pauses it. Each F12 screenshot must
+//! equal, within 1/255, the headless render of exactly the step the viewer logs with it, under the screenshot's
+//! own settings: step 2 at the start, and the step reached after playing. Validation with
 //! synchronization validation reports nothing.
 //!
 //! Needs Xvfb, xdotool and xwd like tests/viewer.rs; a missing one is a skip (a failure with CI=true).
@@ -9,7 +10,7 @@
 mod common;
 
 use common::compare::diff;
-use common::x11::{capture, have, read_screenshot, type_keys, x_client, xvfb, Viewer, WAIT_MS};
+use common::x11::{capture, have, read_screenshot, screenshot_step, type_keys, x_client, xvfb, Viewer, WAIT_MS};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
@@ -40,7 +41,9 @@ fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
     let window = found.split_whitespace().next().expect("the volcast window").to_string();
 
     type_keys(&x.display, &window, &["F12"]);
-    let (start, start_settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    assert_eq!(screenshot_step(&saved), Some(2), "{saved}");
+    let (start, start_settings) = read_screenshot(&dir, &saved);
     // Play: the window must change while the series plays.
     type_keys(&x.display, &window, &["p"]);
     let mut frames = Vec::new();
@@ -58,7 +61,9 @@ fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
     std::thread::sleep(Duration::from_millis(500));
     assert_eq!(paused.as_raw(), capture(&x.display, &window).as_raw(), "P again pauses");
     type_keys(&x.display, &window, &["F12"]);
-    let (after, after_settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    let after_step = screenshot_step(&saved).expect("the screenshot line names the step");
+    let (after, after_settings) = read_screenshot(&dir, &saved);
 
     // Which steps each screenshot equals, rendered headless from the same file and settings.
     let gpu = Gpu::new(&GpuOptions {
@@ -89,9 +94,9 @@ fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
         "--time 2 opens on step 2 (and only step 2 looks like it)"
     );
     assert_eq!(
-        after_matches.len(),
-        1,
-        "after playing, the view is one step of the series: {after_matches:?}"
+        after_matches,
+        vec![after_step],
+        "after playing (steps uploaded ahead of display), the view is exactly the step the viewer says it shows"
     );
 
     let status = viewer.finish();

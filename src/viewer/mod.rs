@@ -16,7 +16,7 @@ use crate::gpu::swapchain::{Surface, Swapchain, SwapchainDesc};
 use crate::gpu::sync::{image_barrier, Access};
 use crate::gpu::{Gpu, GpuError, GpuOptions, ValidationLog, VkContext};
 use crate::headless::OUTPUT_FORMAT;
-use crate::render::Renderer;
+use crate::render::{PreparedVolume, Renderer};
 use crate::settings::RenderSettings;
 use crate::volume::{self, RawOptions, Volume};
 use ash::vk;
@@ -285,6 +285,8 @@ struct Running {
     dialog: Option<Receiver<Option<PathBuf>>>,
     /// A time series' every step, kept to upload the one the time controls ask for; `None` for a 3-D volume.
     series: Option<Volume>,
+    /// The step after the shown one while playing, uploaded ahead of display (see `upload_ahead`).
+    ahead: Option<(u32, PreparedVolume)>,
 }
 
 /// The editor's histogram: 256 bins of normalised values.
@@ -406,6 +408,7 @@ impl Running {
             drag_frames: Vec::new(),
             slot_reduced: [false; FRAMES_IN_FLIGHT],
             series: None,
+            ahead: None,
             dialog: None,
         };
         // On error `r` is torn down properly before the error is returned.
@@ -493,6 +496,9 @@ impl Running {
     fn install_volume(&mut self, v: Volume, histogram: Vec<u64>) -> Result<(), GpuError> {
         // SAFETY: plain wait on a live device; set_volume rewrites descriptors that in-flight frames use.
         unsafe { self.gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")?;
+        if let Some((_, old)) = self.ahead.take() {
+            old.destroy(&self.gpu);
+        }
         let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
         renderer.set_volume(&self.gpu, &v)?;
         let spacing = v.spacing();
@@ -519,10 +525,51 @@ impl Running {
         if series.show_step(wanted).is_err() {
             return Ok(());
         }
-        // SAFETY: plain wait on a live device; set_volume replaces resources that in-flight frames use.
+        // SAFETY: plain wait on a live device; the volume replaced is one that in-flight frames use.
         unsafe { self.gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")?;
         let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
-        renderer.set_volume(&self.gpu, series)
+        match self.ahead.take() {
+            // Uploaded ahead: showing it is a descriptor update.
+            Some((step, prepared)) if step == wanted => {
+                renderer.install_volume(&self.gpu, prepared);
+                Ok(())
+            }
+            other => {
+                if let Some((_, stale)) = other {
+                    stale.destroy(&self.gpu);
+                }
+                renderer.set_volume(&self.gpu, series)
+            }
+        }
+    }
+
+    /// While a series plays, uploads the step after the shown one, so that when its time comes it is shown without
+    /// waiting for an upload. Called after a frame is submitted: the volume's conversion and brick grid are made on
+    /// the CPU while the device renders that frame (on a GPU in parallel; on lavapipe the two share the cores).
+    fn upload_ahead(&mut self) -> Result<(), GpuError> {
+        let time = &self.state.time;
+        let Some(series) = self.series.as_mut().filter(|_| time.playing && time.steps > 1) else {
+            return Ok(());
+        };
+        let next = (time.wanted + 1) % time.steps;
+        if self.ahead.as_ref().is_some_and(|(step, _)| *step == next) {
+            return Ok(());
+        }
+        if let Some((_, stale)) = self.ahead.take() {
+            stale.destroy(&self.gpu);
+        }
+        let shown = series.shown_step();
+        if series.show_step(next).is_err() {
+            return Ok(());
+        }
+        let renderer = self.renderer.as_ref().ok_or(GpuError::Lost("renderer"))?;
+        let prepared = renderer.prepare_volume(&self.gpu, series);
+        // Moving the step's voxels back costs nothing: show_step swaps vectors.
+        let _ = series.show_step(shown);
+        // A step that cannot be uploaded now (memory for two volumes) is uploaded when it is due instead, where
+        // a failure is reported.
+        self.ahead = prepared.ok().map(|p| (next, p));
+        Ok(())
     }
 
     fn wait_idle(&self) -> Result<(), GpuError> {
@@ -1041,12 +1088,13 @@ impl Running {
             Err(e) => return Err(GpuError::vk("vkQueuePresentKHR", e).into()),
         }
         self.frame_index += 1;
+        self.upload_ahead()?;
 
         if let Some((path, buffer)) = screenshot {
             let saved = self
                 .wait_idle()
                 .map_err(ViewerError::from)
-                .and_then(|_| save_screenshot(&path, &buffer, &settings));
+                .and_then(|_| save_screenshot(&path, &buffer, &settings, self.series.as_ref().map(Volume::shown_step)));
             buffer.destroy(&self.gpu);
             match saved {
                 Ok(()) => self.state.status = Some(format!("saved {}", path.display())),
@@ -1097,6 +1145,9 @@ impl Running {
         let _ = self.wait_idle();
         // egui's renderer holds a clone of the allocator: drop it before the Gpu drops the allocator.
         drop(self.egui_renderer.take());
+        if let Some((_, v)) = self.ahead.take() {
+            v.destroy(&self.gpu);
+        }
         if let Some(r) = self.renderer.take() {
             r.destroy(&self.gpu);
         }
@@ -1154,8 +1205,14 @@ fn view_pixels(rect: Option<egui::Rect>, pixels_per_point: f32, extent: vk::Exte
     )
 }
 
-/// Writes the view image's pixels (RGBA8, exactly what the view shows without the panel) and the settings.
-fn save_screenshot(path: &std::path::Path, buffer: &Buffer, settings: &RenderSettings) -> Result<(), ViewerError> {
+/// Writes the view image's pixels (RGBA8, exactly what the view shows without the panel) and the settings; a
+/// series' shown step is logged after the file name.
+fn save_screenshot(
+    path: &std::path::Path,
+    buffer: &Buffer,
+    settings: &RenderSettings,
+    step: Option<u32>,
+) -> Result<(), ViewerError> {
     let pixels = buffer
         .mapped()
         .ok_or(GpuError::Lost("screenshot buffer is not mapped"))?
@@ -1167,7 +1224,10 @@ fn save_screenshot(path: &std::path::Path, buffer: &Buffer, settings: &RenderSet
     let json = serde_json::to_string_pretty(settings).map_err(|e| ViewerError::Other(e.to_string()))?;
     std::fs::write(path.with_extension("json"), json)
         .map_err(|e| ViewerError::Other(format!("writing {}: {e}", path.with_extension("json").display())))?;
-    eprintln!("saved screenshot {}", path.display());
+    match step {
+        Some(t) => eprintln!("saved screenshot {} (time step {t})", path.display()),
+        None => eprintln!("saved screenshot {}", path.display()),
+    }
     Ok(())
 }
 

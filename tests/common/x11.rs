@@ -240,11 +240,17 @@ impl Drop for Viewer {
     }
 }
 
+/// A series' step that the "saved screenshot NAME (time step N)" line names.
+pub fn screenshot_step(saved_line: &str) -> Option<u32> {
+    let rest = saved_line.split_once(" (time step ")?.1;
+    rest.split(')').next()?.parse().ok()
+}
+
 /// The PNG and settings that F12 wrote, named by the viewer's "saved screenshot NAME" line.
 pub fn read_screenshot(dir: &Path, saved_line: &str) -> (RgbaImage, RenderSettings) {
     let name = saved_line
         .split_once("saved screenshot ")
-        .map(|(_, n)| n.trim())
+        .map(|(_, n)| n.split(" (time step ").next().unwrap_or(n).trim())
         .expect("file name");
     let png = dir.join(name);
     let image = image::open(&png)

@@ -1,0 +1,418 @@
+//! The volume on the device: the layout the march reads it in (a 3D texture or a corner buffer, chosen per device
+//! and policy), its upload, brick grid and occupancy texture. A [`GpuVolume`] is made whole before it replaces the
+//! shown one, so the next step of a series can be uploaded ahead of display (`Renderer::prepare_volume`).
+
+use super::{skip, OccupancyKey, VolumeInfo};
+use crate::gpu::resources::{upload_image, upload_image_with, Buffer, Image, ImageDesc};
+use crate::gpu::TexelPolicy;
+use crate::gpu::{Gpu, GpuError};
+use crate::volume::{Volume, VoxelData};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+pub(super) struct GpuVolume {
+    pub(super) layout: VolumeLayout,
+    /// The 3D texture (`VolumeLayout::Texture`), or the corner buffer (the other layouts).
+    pub(super) image: Option<Image>,
+    pub(super) info: VolumeInfo,
+    pub(super) bricks: skip::BrickGrid,
+    /// One R8 texel per brick: may a sample there be visible (see skip.rs).
+    pub(super) occupancy: Image,
+    /// What the occupancy was computed for.
+    pub(super) occupancy_key: Option<OccupancyKey>,
+    /// Precomputed gradients (RGBA16 SNORM), made on first use by a frame with `gradient_texture`.
+    pub(super) gradient: Option<Image>,
+    pub(super) corners: Option<Buffer>,
+}
+
+/// A 3D image of `dims` (a depth of 1 gets a duplicated second slice: a depth-1 image would be 2D).
+pub(super) fn image_3d(gpu: &Gpu, format: vk::Format, dims: [u32; 3], name: &str) -> Result<Image, GpuError> {
+    let extent = vk::Extent3D {
+        width: dims[0],
+        height: dims[1],
+        depth: dims[2].max(2),
+    };
+    let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+    Image::new(gpu, ImageDesc { format, extent, usage }, name)
+}
+
+/// The most memory `TexelPolicy::Auto` spends on a volume beyond its native format.
+pub const AUTO_LIMIT: u64 = 1 << 30;
+
+/// How the march reads the loaded volume (shaders/march.glsl, `sample_raw`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VolumeLayout {
+    /// A 3D texture of this format, filtered by the sampler.
+    Texture(vk::Format),
+    /// 8-bit data as a storage buffer of corner cells: per voxel the eight values of the 2×2×2 cell it starts
+    /// (neighbours clamped to the edge), 8 bytes per voxel, so a trilinear sample is one load and seven lerps.
+    Corners8,
+    /// 16-bit data the same way, 16 bytes per voxel.
+    Corners16,
+}
+
+impl VolumeLayout {
+    /// The sampling index of the march shaders (build.rs SAMPLINGS).
+    pub fn index(self) -> usize {
+        match self {
+            VolumeLayout::Texture(_) => 0,
+            VolumeLayout::Corners8 => 1,
+            VolumeLayout::Corners16 => 2,
+        }
+    }
+
+    pub fn bytes_per_voxel(self) -> u64 {
+        match self {
+            VolumeLayout::Texture(vk::Format::R8_UNORM) => 1,
+            VolumeLayout::Texture(vk::Format::R16_UNORM) => 2,
+            VolumeLayout::Texture(_) => 4,
+            VolumeLayout::Corners8 => 8,
+            VolumeLayout::Corners16 => 16,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            VolumeLayout::Texture(vk::Format::R8_UNORM) => "R8_UNORM",
+            VolumeLayout::Texture(vk::Format::R16_UNORM) => "R16_UNORM",
+            VolumeLayout::Texture(_) => "R32_SFLOAT",
+            VolumeLayout::Corners8 => "corners8",
+            VolumeLayout::Corners16 => "corners16",
+        }
+    }
+}
+
+/// The layout `policy` gives `volume` on `gpu`. GPUs filter every format in hardware, so `Auto` keeps the
+/// native texture there. On a CPU device (lavapipe) the sampler is the march's main cost: measured on the
+/// vtk-helix scene, a corner buffer is ~18% faster than an R32_SFLOAT texture, which is ~30% faster than
+/// R8_UNORM (and exact, where lavapipe filters R8 with 8-bit weights); `Auto` takes the fastest of these that
+/// stays under [`AUTO_LIMIT`] and a quarter of the device's memory.
+///
+/// A corner buffer must also fit one storage-buffer binding (`maxStorageBufferRange`: 128 MiB on lavapipe, so
+/// 16.7 M voxels of 8-bit data); `Auto` passes over it when it does not, a forced `Corners` is refused.
+fn choose_layout(dev: DeviceFacts, policy: TexelPolicy, data: &VoxelData, voxels: u64) -> Result<VolumeLayout, String> {
+    let bytes = |layout: VolumeLayout| voxels * layout.bytes_per_voxel();
+    let fits = |layout: VolumeLayout| bytes(layout) <= AUTO_LIMIT && bytes(layout) <= dev.memory / 4;
+    let bindable = |layout: VolumeLayout| bytes(layout) <= dev.max_storage_buffer;
+    let float = VolumeLayout::Texture(vk::Format::R32_SFLOAT);
+    let (native, corners) = match data {
+        VoxelData::U8(_) => (
+            VolumeLayout::Texture(vk::Format::R8_UNORM),
+            Some(VolumeLayout::Corners8),
+        ),
+        VoxelData::U16(_) => (
+            VolumeLayout::Texture(vk::Format::R16_UNORM),
+            Some(VolumeLayout::Corners16),
+        ),
+        VoxelData::F32(_) => (float, None),
+    };
+    Ok(match policy {
+        TexelPolicy::Native => native,
+        TexelPolicy::Float => float,
+        TexelPolicy::Corners => match corners {
+            Some(c) if !bindable(c) => {
+                return Err(format!(
+                    "a {} buffer of this volume takes {} MiB, more than this device binds as one storage buffer \
+                     ({} MiB); use --texture auto, native or float",
+                    c.name(),
+                    bytes(c) >> 20,
+                    dev.max_storage_buffer >> 20
+                ))
+            }
+            Some(c) => c,
+            None => native,
+        },
+        TexelPolicy::Auto if dev.cpu => match corners {
+            Some(c) if fits(c) && bindable(c) => c,
+            _ if fits(float) => float,
+            _ => native,
+        },
+        TexelPolicy::Auto => native,
+    })
+}
+
+/// What [`choose_layout`] needs to know of the device.
+#[derive(Clone, Copy, Debug)]
+struct DeviceFacts {
+    /// A CPU implementation (lavapipe), where the sampler is slow and memory is host memory.
+    cpu: bool,
+    /// The largest device-local heap.
+    memory: u64,
+    /// `maxStorageBufferRange`.
+    max_storage_buffer: u64,
+}
+
+impl DeviceFacts {
+    fn of(gpu: &Gpu) -> DeviceFacts {
+        DeviceFacts {
+            cpu: gpu.properties.device_type == vk::PhysicalDeviceType::CPU,
+            memory: gpu.device_local_bytes,
+            max_storage_buffer: u64::from(gpu.properties.limits.max_storage_buffer_range),
+        }
+    }
+}
+
+/// Builds `volume`'s corner buffer (`layout` Corners8 or Corners16) straight in host-visible memory.
+fn upload_corners(gpu: &Gpu, volume: &Volume, layout: VolumeLayout) -> Result<Buffer, GpuError> {
+    let n = volume.voxel_count();
+    let mut buffer = Buffer::new(
+        gpu,
+        n as u64 * layout.bytes_per_voxel(),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::CpuToGpu,
+        "volume corners",
+    )?;
+    let [nx, ny, nz] = volume.dims.map(|d| d as usize);
+    let filled = match (buffer.mapped_mut(), &volume.data, layout) {
+        (Some(dst), VoxelData::U8(v), VolumeLayout::Corners8) => {
+            let dst: &mut [[u32; 2]] = bytemuck::cast_slice_mut(dst);
+            fill_corners(
+                dst,
+                [nx, ny, nz],
+                |i| u32::from(v[i]),
+                |c| {
+                    [
+                        c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24,
+                        c[4] | c[5] << 8 | c[6] << 16 | c[7] << 24,
+                    ]
+                },
+            );
+            true
+        }
+        (Some(dst), VoxelData::U16(v), VolumeLayout::Corners16) => {
+            let dst: &mut [[u32; 4]] = bytemuck::cast_slice_mut(dst);
+            fill_corners(
+                dst,
+                [nx, ny, nz],
+                |i| u32::from(v[i]),
+                |c| {
+                    [
+                        c[0] | c[1] << 16,
+                        c[2] | c[3] << 16,
+                        c[4] | c[5] << 16,
+                        c[6] | c[7] << 16,
+                    ]
+                },
+            );
+            true
+        }
+        _ => false,
+    };
+    if !filled {
+        buffer.destroy(gpu);
+        return Err(GpuError::Lost(
+            "corner buffer: not host-visible, or data and layout disagree",
+        ));
+    }
+    Ok(buffer)
+}
+
+/// For each voxel (x fastest) the cell values in the order x0y0z0, x1y0z0, x0y1z0, x1y1z0, then the same at z1
+/// (neighbours past the last voxel clamped to it), packed by `pack`.
+fn fill_corners<T>(dst: &mut [T], [nx, ny, nz]: [usize; 3], at: impl Fn(usize) -> u32, pack: impl Fn([u32; 8]) -> T) {
+    for z in 0..nz {
+        let z1 = (z + 1).min(nz - 1);
+        for y in 0..ny {
+            let y1 = (y + 1).min(ny - 1);
+            for x in 0..nx {
+                let x1 = (x + 1).min(nx - 1);
+                let i = |x: usize, y: usize, z: usize| at(x + nx * (y + ny * z));
+                dst[x + nx * (y + ny * z)] = pack([
+                    i(x, y, z),
+                    i(x1, y, z),
+                    i(x, y1, z),
+                    i(x1, y1, z),
+                    i(x, y, z1),
+                    i(x1, y, z1),
+                    i(x, y1, z1),
+                    i(x1, y1, z1),
+                ]);
+            }
+        }
+    }
+}
+
+/// Uploads `bytes` (dims[2] slices) into an image made by [`image_3d`].
+pub(super) fn upload_3d(gpu: &Gpu, image: &Image, bytes: &[u8], depth: u32) -> Result<(), GpuError> {
+    if depth == 1 {
+        let mut twice = bytes.to_vec();
+        twice.extend_from_slice(bytes);
+        upload_image(gpu, image, &twice)
+    } else {
+        upload_image(gpu, image, bytes)
+    }
+}
+
+/// Uploads 8- or 16-bit `volume` into an R32_SFLOAT image made by [`image_3d`] as the values a UNORM texture
+/// would return (stored / 255 or / 65535), so `Volume::gpu_scale_bias` holds unchanged. Converted straight into
+/// the staging buffer: no float copy of the volume on the heap.
+fn upload_float(gpu: &Gpu, image: &Image, volume: &Volume) -> Result<(), GpuError> {
+    let n = volume.voxel_count();
+    // A depth-1 volume is uploaded twice (image_3d makes two slices).
+    let copies = if volume.dims[2] == 1 { 2 } else { 1 };
+    upload_image_with(gpu, image, (n * 4 * copies) as u64, |dst| {
+        let dst: &mut [f32] = bytemuck::cast_slice_mut(dst);
+        for chunk in dst.chunks_mut(n) {
+            match &volume.data {
+                VoxelData::U8(v) => chunk.iter_mut().zip(v).for_each(|(d, &x)| *d = f32::from(x) / 255.0),
+                VoxelData::U16(v) => chunk.iter_mut().zip(v).for_each(|(d, &x)| *d = f32::from(x) / 65535.0),
+                VoxelData::F32(v) => chunk.copy_from_slice(v),
+            }
+        }
+    })
+}
+
+impl GpuVolume {
+    /// Uploads `volume` in the layout `policy` gives it on `gpu`. The size is checked against the device's 3D
+    /// image limit and memory before anything is allocated.
+    pub(super) fn new(gpu: &Gpu, policy: TexelPolicy, volume: &Volume) -> Result<GpuVolume, GpuError> {
+        let limit = gpu.properties.limits.max_image_dimension3_d;
+        if volume.dims.iter().any(|&d| d > limit) {
+            return Err(GpuError::TooLarge(format!(
+                "volume {}x{}x{} exceeds this device's 3D texture limit of {limit} per side",
+                volume.dims[0], volume.dims[1], volume.dims[2]
+            )));
+        }
+        let voxels = volume.voxel_count() as u64;
+        let layout = choose_layout(DeviceFacts::of(gpu), policy, &volume.data, voxels).map_err(GpuError::TooLarge)?;
+        let needed = volume.voxel_count() as u64 * layout.bytes_per_voxel();
+        // Half the heap: the upload needs a staging copy of the same size alongside.
+        if needed > gpu.device_local_bytes / 2 {
+            return Err(GpuError::TooLarge(format!(
+                "volume needs {} MiB on the GPU as {} (plus as much again to upload) but the device has {} MiB",
+                needed >> 20,
+                layout.name(),
+                gpu.device_local_bytes >> 20
+            )));
+        }
+        let (image, corners) = match layout {
+            VolumeLayout::Texture(format) => {
+                // SAFETY: plain query on a live physical device.
+                let features = unsafe { gpu.instance.get_physical_device_format_properties(gpu.physical, format) };
+                let filter =
+                    vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
+                if !features.optimal_tiling_features.contains(filter) {
+                    return Err(GpuError::TooLarge(format!(
+                        "this device cannot filter {format:?} 3D textures linearly"
+                    )));
+                }
+                let image = image_3d(gpu, format, volume.dims, "volume")?;
+                // Widened to float from 8 or 16 bits, or uploaded as stored.
+                let uploaded = if volume.gpu_texel_size() < 4 && format == vk::Format::R32_SFLOAT {
+                    upload_float(gpu, &image, volume)
+                } else {
+                    upload_3d(gpu, &image, volume.gpu_bytes(), volume.dims[2])
+                };
+                if let Err(e) = uploaded {
+                    image.destroy(gpu);
+                    return Err(e);
+                }
+                (Some(image), None)
+            }
+            VolumeLayout::Corners8 | VolumeLayout::Corners16 => (None, Some(upload_corners(gpu, volume, layout)?)),
+        };
+        let destroy_volume = |gpu: &Gpu, image: Option<Image>, corners: Option<Buffer>| {
+            if let Some(i) = image {
+                i.destroy(gpu);
+            }
+            if let Some(c) = corners {
+                c.destroy(gpu);
+            }
+        };
+        let bricks = skip::BrickGrid::new(volume);
+        // Everything occupied until prepare() computes the real occupancy for the settings.
+        let occupancy = match image_3d(gpu, vk::Format::R8_UNORM, bricks.bricks, "brick occupancy").and_then(|o| {
+            let all = vec![255u8; bricks.min.len()];
+            match upload_3d(gpu, &o, &all, bricks.bricks[2]) {
+                Ok(()) => Ok(o),
+                Err(e) => {
+                    o.destroy(gpu);
+                    Err(e)
+                }
+            }
+        }) {
+            Ok(o) => o,
+            Err(e) => {
+                destroy_volume(gpu, image, corners);
+                return Err(e);
+            }
+        };
+        Ok(GpuVolume {
+            layout,
+            image,
+            info: VolumeInfo {
+                dims: volume.dims,
+                geometry: volume.geometry,
+                scale_bias: volume.gpu_scale_bias(),
+                range: volume.range,
+            },
+            bricks,
+            occupancy,
+            occupancy_key: None,
+            gradient: None,
+            corners,
+        })
+    }
+
+    pub(super) fn destroy(self, gpu: &Gpu) {
+        self.occupancy.destroy(gpu);
+        if let Some(g) = self.gradient {
+            g.destroy(gpu);
+        }
+        if let Some(i) = self.image {
+            i.destroy(gpu);
+        }
+        if let Some(c) = self.corners {
+            c.destroy(gpu);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layouts_follow_the_policy_the_device_and_its_limits() {
+        let lavapipe = DeviceFacts {
+            cpu: true,
+            memory: 16 << 30,
+            max_storage_buffer: 128 << 20,
+        };
+        let gpu = DeviceFacts { cpu: false, ..lavapipe };
+        let u8s = VoxelData::U8(Vec::new());
+        let u16s = VoxelData::U16(Vec::new());
+        let f32s = VoxelData::F32(Vec::new());
+        let n256 = 256u64 * 256 * 256;
+        let layout = |dev, policy, data: &VoxelData, voxels| choose_layout(dev, policy, data, voxels).unwrap();
+        use TexelPolicy::*;
+        use VolumeLayout::*;
+        // lavapipe: the 256³ helix just fits one binding as corners (128 MiB); one slice more does not.
+        assert_eq!(layout(lavapipe, Auto, &u8s, n256), Corners8);
+        assert_eq!(
+            layout(lavapipe, Auto, &u8s, n256 + 65536),
+            Texture(vk::Format::R32_SFLOAT)
+        );
+        assert_eq!(layout(lavapipe, Auto, &u16s, 256 * 256 * 108), Corners16);
+        assert_eq!(layout(lavapipe, Auto, &f32s, n256), Texture(vk::Format::R32_SFLOAT));
+        // Over 1 GiB as float: the native texture.
+        assert_eq!(
+            layout(lavapipe, Auto, &u8s, 1024 * 1024 * 512),
+            Texture(vk::Format::R8_UNORM)
+        );
+        // A quarter of a small device's memory bounds it too.
+        let small = DeviceFacts {
+            memory: 200 << 20,
+            ..lavapipe
+        };
+        assert_eq!(layout(small, Auto, &u8s, n256), Texture(vk::Format::R8_UNORM));
+        // GPUs keep the native format unless told otherwise.
+        assert_eq!(layout(gpu, Auto, &u16s, n256), Texture(vk::Format::R16_UNORM));
+        assert_eq!(layout(gpu, Float, &u16s, n256), Texture(vk::Format::R32_SFLOAT));
+        assert_eq!(layout(gpu, Corners, &u8s, n256), Corners8);
+        assert_eq!(layout(lavapipe, Native, &u8s, n256), Texture(vk::Format::R8_UNORM));
+        assert_eq!(layout(lavapipe, Corners, &f32s, n256), Texture(vk::Format::R32_SFLOAT));
+        let e = choose_layout(lavapipe, Corners, &u8s, n256 * 2).unwrap_err();
+        assert!(e.contains("256 MiB") && e.contains("128 MiB"), "{e}");
+    }
+}
