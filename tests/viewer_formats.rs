@@ -4,13 +4,13 @@
 //! must equal, within 1/255, the headless render of the same file (opened by `volume::open`) under the
 //! screenshot's own settings; a time series opens on step 0.
 //!
-//! What this does not do: synthesise the drop itself. X's drag and drop (XDND) needs a drag source client, and
-//! xdotool has none; winit turns an XDND drop into the `DroppedFile` event whose handler is the path tested here.
+//! A second test drops a file for real: `common::xdnd` is an XDND drag source (what a file manager is), so the
+//! drop goes through the X server and the window's own XDND handling, which xdotool cannot drive.
 
 mod common;
 
 use common::compare::diff;
-use common::x11::{have, xvfb, Viewer};
+use common::x11::{have, read_screenshot, type_keys, x_client, xvfb, Viewer, WAIT_MS};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
@@ -87,4 +87,62 @@ fn viewer_opens_every_new_format_as_a_dropped_file() {
     let log = gpu.log.clone();
     drop(gpu);
     assert!(log.problems().is_empty(), "{:#?}", log.problems());
+}
+
+/// A `.vti` dropped on the window by a real XDND source: the viewer must accept the drop, load the file (its log
+/// says so) and show it: the F12 screenshot equals the headless render of the file within 1/255.
+#[test]
+fn viewer_loads_a_file_dropped_by_xdnd() {
+    let Some(x) = xvfb() else { return };
+    if !have("xdotool", "version") {
+        common::skip("xdotool not found; apt-get install xdotool");
+        return;
+    }
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer-xdnd");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk/vti_zlib.vti");
+    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);
+    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    let found = x_client(
+        &x.display,
+        "xdotool",
+        &["search", "--all", "--pid", &viewer.pid(), "--name", "^volcast$"],
+    );
+    let found = String::from_utf8_lossy(&found);
+    let window = found.split_whitespace().next().expect("the volcast window").to_string();
+    let id: u32 = window.parse().expect("window id");
+    let accepted = common::xdnd::drop_file(&x.display, id, (600, 300), &file).expect("XDND drop");
+    assert!(accepted, "the window accepts the drop (XdndFinished)");
+    let loaded = viewer.wait_for("load", Duration::from_secs(60));
+    assert!(
+        loaded.starts_with("loaded ") && loaded.ends_with("tests/data/vtk/vti_zlib.vti"),
+        "{loaded}"
+    );
+    type_keys(&x.display, &window, &["F12"]);
+    let (shot, settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
+
+    let gpu = Gpu::new(&GpuOptions {
+        validation: true,
+        ..Default::default()
+    })
+    .expect("Vulkan");
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let volume = volcast::volume::open(&file, &Default::default()).expect("volume");
+    headless.set_volume(&gpu, &volume).expect("upload");
+    let expected = headless.render(&gpu, &settings).expect("render").image;
+    headless.destroy(&gpu);
+    let log = gpu.log.clone();
+    drop(gpu);
+    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    let d = diff(&shot, &expected);
+    assert!(
+        d.max <= 1.0,
+        "the dropped file's view differs from its headless render: {d}"
+    );
+    let status = viewer.finish();
+    let stderr = &viewer.stderr;
+    assert!(status.success(), "viewer failed:\n{stderr}");
+    assert!(stderr.contains("validation: 0 errors, 0 warnings"), "{stderr}");
 }

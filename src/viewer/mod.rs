@@ -681,13 +681,17 @@ impl Running {
                 let label = loading.label.clone();
                 self.loading = None;
                 self.state.loading = None;
+                // Logged too: a load from the panel or a drop has no other trace outside the window.
                 if let Err(e) = self.install_volume(volume, histogram) {
+                    eprintln!("could not show {label}: {e}");
                     self.state.error = Some(format!("{label}: {e}"));
                 } else {
+                    eprintln!("loaded {label}");
                     self.state.status = Some(format!("loaded {label}"));
                 }
             }
             Ok(Err(e)) => {
+                eprintln!("could not load {}: {e}", loading.label);
                 self.state.error = Some(format!("{}: {e}", loading.label));
                 self.loading = None;
                 self.state.loading = None;

@@ -11,6 +11,7 @@ pub mod gpu;
 pub mod rays;
 pub mod reference;
 pub mod x11;
+pub mod xdnd;
 
 use std::io::Write;
 use std::path::PathBuf;
