@@ -79,7 +79,7 @@ fn every_oracle_case_loads_with_its_geometry_and_voxels() {
         }
         checked += 1;
     }
-    assert_eq!(checked, 16);
+    assert_eq!(checked, 20);
 }
 
 fn load_err(path: &Path) -> String {
@@ -89,12 +89,21 @@ fn load_err(path: &Path) -> String {
     }
 }
 
+/// A transfer syntax volcast has no decoder for is named: JPEG-LS file whose UID is changed to JPIP Referenced
+/// (the same length, so the file stays well formed).
 #[test]
-fn jpeg_ls_is_named_and_refused() {
-    let e = load_err(&data().join("u16_jpegls.dcm"));
+fn a_syntax_without_a_decoder_is_named_and_refused() {
+    let dir = Scratch::new("jpip");
+    let mut bytes = std::fs::read(data().join("u16_jpegls/00.dcm")).unwrap();
+    let uid = b"1.2.840.10008.1.2.4.80";
+    let at = bytes
+        .windows(uid.len())
+        .position(|w| w == uid)
+        .expect("transfer syntax UID");
+    bytes[at..at + uid.len()].copy_from_slice(b"1.2.840.10008.1.2.4.94");
+    let e = load_err(&dir.write("jpip.dcm", &bytes));
     assert!(
-        e.contains("u16_jpegls.dcm")
-            && e.contains("uses JPEG-LS Lossless (1.2.840.10008.1.2.4.80); volcast cannot decode it"),
+        e.contains("jpip.dcm") && e.contains("uses JPIP Referenced (1.2.840.10008.1.2.4.94); volcast cannot decode it"),
         "{e}"
     );
 }
@@ -155,6 +164,7 @@ fn hostile_compressed_frames_are_refused_naming_the_file() {
     let rle = std::fs::read(data().join("u16_rle/00.dcm")).unwrap();
     let jpeg = std::fs::read(data().join("u16_jpeg/00.dcm")).unwrap();
     let j2k = std::fs::read(data().join("u16_j2k/00.dcm")).unwrap();
+    let jpegls = std::fs::read(data().join("u16_jpegls/00.dcm")).unwrap();
 
     // A fragment claiming a huge length: refused by the length walk before anything is allocated.
     let mut huge = rle.clone();
@@ -167,7 +177,12 @@ fn hostile_compressed_frames_are_refused_naming_the_file() {
     );
 
     // Truncated compressed frames, structurally valid files.
-    for (name, file) in [("cut_rle.dcm", &rle), ("cut_jpeg.dcm", &jpeg), ("cut_j2k.dcm", &j2k)] {
+    for (name, file) in [
+        ("cut_rle.dcm", &rle),
+        ("cut_jpeg.dcm", &jpeg),
+        ("cut_j2k.dcm", &j2k),
+        ("cut_jpegls.dcm", &jpegls),
+    ] {
         let cut = with_fragment(file, |c| c[..c.len() / 2].to_vec());
         let e = load_err(&dir.write(name, &cut));
         assert!(e.contains(name) && e.contains("frame 1 of 1"), "{e}");
@@ -204,6 +219,19 @@ fn hostile_compressed_frames_are_refused_naming_the_file() {
     let e = load_err(&dir.write("bomb_j2k.dcm", &bomb));
     assert!(
         e.contains("bomb_j2k.dcm") && e.contains("JPEG 2000 frame header says 2147483647x2147483647"),
+        "{e}"
+    );
+
+    // JPEG-LS: SOF-55 (FF F7) then Lf, P, Y, X.
+    let bomb = with_fragment(&jpegls, |c| {
+        let mut c = c.to_vec();
+        let sof = c.windows(2).position(|w| w == [0xFF, 0xF7]).expect("SOF55");
+        c[sof + 5..sof + 9].copy_from_slice(&[0xFF, 0xFF, 0xFF, 0xFF]);
+        c
+    });
+    let e = load_err(&dir.write("bomb_jpegls.dcm", &bomb));
+    assert!(
+        e.contains("bomb_jpegls.dcm") && e.contains("JPEG-LS frame header says 65535x65535"),
         "{e}"
     );
 

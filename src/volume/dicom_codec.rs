@@ -6,8 +6,10 @@
 //! volcast assembled. Those adapters write the decoded image into a buffer sized from the DICOM header by the
 //! codestream's own dimensions and panic when the two disagree, so the codestream header (JPEG SOF, JPEG 2000
 //! SIZ) is checked against Rows, Columns, SamplesPerPixel and BitsAllocated first; that also bounds what the
-//! decoder allocates to one frame the header already accounts for. RLE Lossless (PS3.5 Annex G) is decoded here:
-//! the registry's RLE adapter allocates by the segment count it reads and indexes past short segments.
+//! decoder allocates to one frame the header already accounts for. JPEG-LS (lossless and near-lossless) goes to
+//! CharLS, the reference JPEG-LS codec (through the `charls` crate, as dicom-rs's own optional adapter does), with
+//! its frame header checked the same way first. RLE Lossless (PS3.5 Annex G) is decoded here: the registry's RLE
+//! adapter allocates by the segment count it reads and indexes past short segments.
 
 use dicom_encoding::adapters::{PixelDataObject, RawPixelData};
 use dicom_encoding::transfer_syntax::TransferSyntaxIndex;
@@ -22,6 +24,7 @@ pub(super) enum Kind {
     Rle,
     Jpeg,
     Jpeg2000,
+    JpegLs,
 }
 
 /// Most decoded bytes per compressed byte accepted before the volume is allocated. Lossless codecs give 2–4 on
@@ -73,6 +76,7 @@ pub(super) fn codec(uid: &str) -> Result<Kind, String> {
             Kind::Jpeg
         }
         "1.2.840.10008.1.2.4.90" | "1.2.840.10008.1.2.4.91" => Kind::Jpeg2000,
+        "1.2.840.10008.1.2.4.80" | "1.2.840.10008.1.2.4.81" => Kind::JpegLs,
         other => {
             return Err(format!(
                 "uses {} ({}); volcast cannot decode it (convert it with e.g. `gdcmconv --raw`)",
@@ -252,6 +256,31 @@ fn check_j2k(data: &[u8], shape: &FrameShape) -> Result<(), String> {
     Ok(())
 }
 
+/// Decodes one JPEG-LS frame with CharLS after checking its frame header (SOF-55) against `shape`. CharLS writes
+/// 2-16-bit samples as one or two bytes in native (little-endian here) order, components interleaved by pixel.
+fn decode_jpeg_ls(data: &[u8], shape: &FrameShape) -> Result<Vec<u8>, String> {
+    let info = charls::CharLS::default()
+        .get_frame_info(data)
+        .map_err(|e| format!("a JPEG-LS frame header cannot be read: {e}"))?;
+    let components = u16::try_from(info.component_count).unwrap_or(0);
+    if (info.width, info.height, components) != (u32::from(shape.columns), u32::from(shape.rows), shape.samples) {
+        return Err(format!(
+            "a JPEG-LS frame header says {}x{} with {} component(s), the DICOM header {}x{} with {}",
+            info.width, info.height, info.component_count, shape.columns, shape.rows, shape.samples
+        ));
+    }
+    let bytes = if info.bits_per_sample > 8 { 16 } else { 8 };
+    if !(2..=16).contains(&info.bits_per_sample) || bytes != shape.bits_allocated {
+        return Err(format!(
+            "a JPEG-LS frame has {}-bit samples but BitsAllocated is {}",
+            info.bits_per_sample, shape.bits_allocated
+        ));
+    }
+    charls::CharLS::default()
+        .decode(data)
+        .map_err(|e| format!("JPEG-LS decoder (CharLS): {e}"))
+}
+
 /// Decodes one RLE Lossless frame (PS3.5 Annex G) to little-endian samples, pixel-interleaved.
 fn decode_rle(data: &[u8], shape: &FrameShape) -> Result<Vec<u8>, String> {
     let bytes_per_sample = usize::from(shape.bits_allocated / 8);
@@ -380,6 +409,7 @@ pub(super) fn decode(codec: Kind, uid: &str, data: &[u8], shape: &FrameShape) ->
     let out = match codec {
         Kind::Native => return Err("native pixel data is not decoded".into()),
         Kind::Rle => decode_rle(data, shape)?,
+        Kind::JpegLs => decode_jpeg_ls(data, shape)?,
         Kind::Jpeg | Kind::Jpeg2000 => {
             if codec == Kind::Jpeg {
                 check_jpeg(data, shape)?;
