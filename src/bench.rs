@@ -10,6 +10,7 @@
 //!   volume's texel format ([`sample_only`]).
 
 use crate::camera::Camera;
+use crate::fidelity::{converged, Fidelity, CONVERGED_STEP};
 use crate::gpu::pipeline::{graphics_pipeline, shader, GraphicsDesc};
 use crate::gpu::resources::{upload_image, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
@@ -284,6 +285,8 @@ pub struct BenchOptions {
     pub methods: Vec<String>,
     /// Only the sample-only micro-benchmark.
     pub sample_only: bool,
+    /// A step length (voxels) forced on every scene.
+    pub step_length: Option<f32>,
 }
 
 /// Median, min and max of a set of measurements.
@@ -417,6 +420,10 @@ pub struct SceneResult {
     pub gpu_allocated_bytes: u64,
     /// /proc/loadavg (1, 5, 15 min) right after the timed frames.
     pub load: Option<[f64; 3]>,
+    /// The step length the frames were rendered with, in voxels.
+    pub step_length: f32,
+    /// The last timed frame against the scene's converged image (`fidelity`), in 1/255.
+    pub error: Fidelity,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -441,7 +448,7 @@ pub struct BenchReport {
 }
 
 /// The columns of [`BenchReport::text`]'s table, in order (tests parse the table by these).
-pub const TABLE_COLUMNS: [&str; 17] = [
+pub const TABLE_COLUMNS: [&str; 21] = [
     "scene",
     "size",
     "method",
@@ -459,6 +466,10 @@ pub const TABLE_COLUMNS: [&str; 17] = [
     "spp",
     "Gsamples/s",
     "of_raw",
+    "step",
+    "err_mean",
+    "err_p99",
+    "err_max",
 ];
 
 impl BenchReport {
@@ -498,8 +509,10 @@ impl BenchReport {
             out += "\nms per frame (wall: render + readback; gpu: timestamps, entry + exit + march); \
                     seg_spp: samples on the ray segments per pixel, before early termination; spp: 3D-texture \
                     samples taken per pixel, gradients included (CPU replay of the march rules); Gsamples/s: spp x pixels / gpu_med; of_raw: that / \
-                    sample-only rate of the volume's format\n";
-            let widths = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7];
+                    sample-only rate of the volume's format; step: in voxels; err_mean/p99/max: the last frame \
+                    against the same scene converged (1/8-voxel steps, approximations off), in 1/255 over object \
+                    pixels\n";
+            let widths = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7, 6, 8, 7, 7];
             let row = |cells: Vec<String>| -> String {
                 let mut line = String::new();
                 for (c, w) in cells.iter().zip(widths) {
@@ -529,6 +542,10 @@ impl BenchReport {
                     format!("{:.1}", r.samples_per_pixel),
                     format!("{:.4}", r.effective_gsamples_per_s),
                     opt(r.fraction_of_raw, 3),
+                    format!("{}", r.step_length),
+                    format!("{:.3}", r.error.mean),
+                    format!("{:.0}", r.error.p99),
+                    format!("{:.0}", r.error.max),
                 ]);
             }
             out += "\nvolumes and GPU memory:\n";
@@ -1440,6 +1457,9 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
             for &size in &sizes {
                 let mut base = RenderSettings::new(size, size, volume.extent());
                 (scene.configure)(&mut base, &volume);
+                if let Some(step) = opts.step_length {
+                    base.step_length = step;
+                }
                 let shadings = scene
                     .shadings
                     .iter()
@@ -1449,6 +1469,12 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                     shading.apply(&mut s);
                     // Counted before timing, so the count's CPU work never overlaps a timed frame.
                     let count = counter.count(&s);
+                    log(&format!(
+                        "{} {size}x{size} shading {}: converged image (step {CONVERGED_STEP})",
+                        scene.name,
+                        shading.name()
+                    ));
+                    let converged_image = headless.render(gpu, &converged(&s))?.image;
                     let methods = Method::ALL
                         .into_iter()
                         .filter(|m| opts.methods.is_empty() || opts.methods.iter().any(|n| n == m.name()));
@@ -1464,6 +1490,7 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                         ));
                         let (mut wall, mut total, mut entry, mut exit, mut march) =
                             (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+                        let mut last = None;
                         for i in 0..opts.warmup + opts.frames {
                             let t = Instant::now();
                             let frame = headless.render(gpu, &s)?;
@@ -1472,6 +1499,7 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                                 continue;
                             }
                             wall.push(ms);
+                            last = Some(frame.image.clone());
                             if let Some(tm) = frame.timings {
                                 total.push(tm.total_ms);
                                 march.push(tm.march_ms);
@@ -1505,6 +1533,8 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                             fraction_of_raw: raw_rate.map(|r| effective / r),
                             gpu_allocated_bytes: allocated,
                             load: load_average(),
+                            step_length: s.step_length,
+                            error: Fidelity::of(&last.ok_or(GpuError::Lost("no frames timed"))?, &converged_image, &s),
                         });
                     }
                 }

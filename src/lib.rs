@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod camera;
 pub mod compare;
+pub mod fidelity;
 pub mod gpu;
 pub mod headless;
 pub mod info;

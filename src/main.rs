@@ -270,6 +270,10 @@ struct BenchArgs {
     /// of 24³ at 64²); each step is uploaded and rendered, the two timed apart.
     #[arg(long, conflicts_with_all = ["sample_only", "scenes"])]
     playback: bool,
+    /// Force this step length (in voxels) on every scene instead of its own; each frame's error is still taken
+    /// against the scene's converged image (1/8-voxel steps).
+    #[arg(long)]
+    step_length: Option<f32>,
     /// Print the results as JSON on stdout (progress still goes to stderr).
     #[arg(long)]
     json: bool,
@@ -744,6 +748,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
         shadings: args.shadings.clone(),
         methods: args.methods.clone(),
         sample_only: args.sample_only,
+        step_length: args.step_length,
     };
     if args.playback {
         let play = if args.quick {

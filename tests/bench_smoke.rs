@@ -175,3 +175,44 @@ fn quick_playback_times_every_step_without_validation_errors() {
     let fps = positive(&json["steps_per_second"].to_string(), "steps_per_second");
     assert!((fps - 1e3 / json["frame_ms"]["median"].as_f64().unwrap()).abs() < 1e-6);
 }
+
+/// The error column measures what it says: at `--step-length 0.125` a frame is rendered exactly as the converged
+/// image is (same settings), so its error is 0; at 4-voxel steps it is larger than at the default 1-voxel steps.
+#[test]
+fn bench_errors_are_against_the_converged_image_at_the_forced_step() {
+    let mean_error = |step: &str| -> Vec<(String, f64, f64)> {
+        let out = bench(&["--quick", "--method", "faces", "--step-length", step, "--json"]);
+        let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+        assert!(out.status.success(), "exit {:?}\nstderr:\n{stderr}", out.status);
+        let json: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+        let results = json["results"].as_array().expect("results");
+        assert_eq!(results.len(), 2, "shading off and on: {json}");
+        results
+            .iter()
+            .map(|r| {
+                assert_eq!(r["step_length"].as_f64(), Some(step.parse().unwrap()), "{r}");
+                assert!(r["error"]["object_pixels"].as_u64().unwrap() > 100, "{r}");
+                (
+                    r["shading"].to_string(),
+                    r["error"]["mean"].as_f64().unwrap(),
+                    r["error"]["max"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    for (shading, mean, max) in mean_error("0.125") {
+        assert_eq!(
+            (mean, max),
+            (0.0, 0.0),
+            "shading {shading}: the converged settings themselves"
+        );
+    }
+    let default = mean_error("1");
+    let coarse = mean_error("4");
+    for ((shading, fine, _), (_, rough, _)) in default.iter().zip(&coarse) {
+        assert!(
+            *fine > 0.0 && rough > fine,
+            "shading {shading}: error at 1-voxel steps {fine}, at 4-voxel steps {rough}"
+        );
+    }
+}
