@@ -1,0 +1,301 @@
+//! Counting the march's samples on the CPU by replaying its rules, so the march shader is left untouched.
+
+use crate::render::skip::{self, BrickGrid};
+use crate::render::{FrameUniforms, VolumeInfo};
+use crate::settings::{self, CompositeMode, RenderSettings};
+use crate::tf;
+use crate::volume::{Geometry, Volume};
+use glam::{Mat3, Mat4, Vec3};
+
+/// Counts the samples the march takes by replaying its rules on the CPU (settings.rs rules 1–7) in the shader's
+/// f32 arithmetic: the analytic ray setup built from the camera basis as `FrameUniforms::new` builds it, samples at
+/// `(k + o)·h` (jitter included), trilinear values, the window, the baked classification table, the compositing
+/// mode and early termination. Two counts per pixel:
+/// - *segment*: sample positions on the ray segment, before early termination (an upper bound);
+/// - *taken*: 3D-texture samples the march actually takes: one per step until the ray ends, plus six per step
+///   that computes a gradient (shading or gradient opacity, on steps with opacity > 0) and, in isosurface mode,
+///   the bisection's eight and the hit's gradient.
+///
+/// Approximations, all small: the entry/exit method finds the same segments to float precision (README, "Two ray
+/// setups"), so one count serves both setups; lavapipe filters 8-bit textures with 8-bit weights, so a ray may end
+/// a step earlier or later than here; gradient opacity is not modelled (its rays may run longer on the GPU).
+/// When the march changes how many samples it takes (empty-space skipping, adaptive steps), change
+/// [`SampleCounter::pixel`] with it.
+pub struct SampleCounter {
+    dims: [usize; 3],
+    values: Vec<f32>,
+    geometry: Geometry,
+    range: [f64; 2],
+    /// The renderer's brick grid, for the occupancy empty-space skipping leaps by.
+    bricks: BrickGrid,
+}
+
+/// Mean samples per pixel of the image (pixels that miss the box count as zero).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SampleCount {
+    pub segment_per_pixel: f64,
+    pub taken_per_pixel: f64,
+}
+
+/// What every pixel's replay shares, in texture space (the fields of `FrameUniforms` the march reads).
+struct RayFrame {
+    eye: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    down: Vec3,
+    near: f32,
+    slab_lo: Vec3,
+    slab_hi: Vec3,
+    /// Texture space to world (its linear part measures the ray).
+    to_world: Mat3,
+    h: f32,
+    max_steps: u64,
+    viewport: [f32; 2],
+    window: [f32; 2],
+    lut: Vec<[f32; 4]>,
+    step_length: f32,
+    mode: CompositeMode,
+    density: f32,
+    iso_value: f32,
+    gradients: bool,
+    jitter: Option<u32>,
+    early_termination: f32,
+    /// Per brick 0 where empty-space skipping leaps (None: skipping off).
+    occupancy: Option<Vec<u8>>,
+}
+
+/// Texture samples one central-difference gradient takes.
+const GRADIENT_SAMPLES: u64 = 6;
+/// Bisection steps of the isosurface mode.
+const ISO_BISECTIONS: u64 = 8;
+
+impl SampleCounter {
+    pub fn new(volume: &Volume) -> SampleCounter {
+        let [nx, ny, nz] = volume.dims;
+        let mut values = Vec::with_capacity(volume.voxel_count());
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    values.push(volume.normalized(x, y, z) as f32);
+                }
+            }
+        }
+        SampleCounter {
+            dims: volume.dims.map(|d| d as usize),
+            values,
+            geometry: volume.geometry,
+            range: volume.range,
+            bricks: BrickGrid::new(volume),
+        }
+    }
+
+    /// Whether the march takes the sample at `p` (texture space): not when it lies in a brick empty-space
+    /// skipping leaps over. Every sample of a span lies in a brick of the span's class (render/skip.rs), so
+    /// this is the march's choice up to float rounding at brick faces.
+    fn in_occupied_brick(&self, f: &RayFrame, p: Vec3) -> bool {
+        let Some(occupancy) = &f.occupancy else {
+            return true;
+        };
+        let b = self.bricks.bricks;
+        let brick = |a: usize| {
+            let i = (p[a] * self.dims[a] as f32 / skip::BRICK as f32).floor();
+            i.clamp(0.0, (b[a] - 1) as f32) as usize
+        };
+        occupancy[brick(0) + b[0] as usize * (brick(1) + b[1] as usize * brick(2))] != 0
+    }
+
+    fn sample(&self, p: Vec3) -> f32 {
+        let mut idx = [[0usize; 2]; 3];
+        let mut w = [0f32; 3];
+        for a in 0..3 {
+            let n = self.dims[a];
+            let u = p[a] * n as f32 - 0.5;
+            let i0 = u.floor();
+            w[a] = u - i0;
+            let clamp = |i: f32| i.clamp(0.0, (n - 1) as f32) as usize;
+            idx[a] = [clamp(i0), clamp(i0 + 1.0)];
+        }
+        let [nx, ny, _] = self.dims;
+        let at = |x: usize, y: usize, z: usize| self.values[x + nx * (y + ny * z)];
+        let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+        let [x0, x1] = idx[0];
+        let [y0, y1] = idx[1];
+        let [z0, z1] = idx[2];
+        let c00 = lerp(at(x0, y0, z0), at(x1, y0, z0), w[0]);
+        let c10 = lerp(at(x0, y1, z0), at(x1, y1, z0), w[0]);
+        let c01 = lerp(at(x0, y0, z1), at(x1, y0, z1), w[0]);
+        let c11 = lerp(at(x0, y1, z1), at(x1, y1, z1), w[0]);
+        lerp(lerp(c00, c10, w[1]), lerp(c01, c11, w[1]), w[2])
+    }
+
+    fn frame(&self, s: &RenderSettings) -> RayFrame {
+        // The march's own rays: the uniforms the shader reads.
+        let info = VolumeInfo {
+            dims: self.dims.map(|d| d as u32),
+            geometry: self.geometry,
+            scale_bias: (1.0, 0.0),
+            range: self.range,
+        };
+        let u = FrameUniforms::new(s, &info);
+        let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
+        let lut = tf::bake(&s.classification(), s.window, self.range);
+        RayFrame {
+            eye: v3(u.eye_tex),
+            forward: v3(u.ray_forward),
+            right: v3(u.ray_right),
+            down: v3(u.ray_down),
+            near: s.camera.near,
+            slab_lo: s.slab_lo,
+            slab_hi: s.slab_hi,
+            to_world: Mat3::from_mat4(Mat4::from_cols_array(&u.tex_to_world)),
+            h: u.extent[3],
+            max_steps: u.viewport[2] as u64,
+            viewport: [s.width as f32, s.height as f32],
+            window: s.window,
+            occupancy: s
+                .skip_empty
+                .then(|| self.bricks.classify(&lut, s.mode, s.window, s.iso_value, false)),
+            lut,
+            step_length: s.step_length,
+            mode: s.mode,
+            density: s.density,
+            iso_value: s.iso_value,
+            gradients: s.shading.is_some() || s.gradient_opacity.is_some(),
+            jitter: s.jitter,
+            early_termination: s.early_termination,
+        }
+    }
+
+    /// (segment, taken) samples of pixel (x, y); mirrors march_analytic.frag and march.glsl.
+    fn pixel(&self, f: &RayFrame, x: u32, y: u32) -> (u64, u64) {
+        let ndc_x = (x as f32 + 0.5) / f.viewport[0] * 2.0 - 1.0;
+        let ndc_y = (y as f32 + 0.5) / f.viewport[1] * 2.0 - 1.0;
+        let dir = f.forward + ndc_x * f.right + ndc_y * f.down;
+        let inv = Vec3::ONE / dir;
+        let t_lo = (f.slab_lo - f.eye) * inv;
+        let t_hi = (f.slab_hi - f.eye) * inv;
+        let t0 = t_lo.min(t_hi).max_element().max(f.near);
+        let t1 = t_lo.max(t_hi).min_element();
+        // NaN (a ray along a face) misses, as in the shader's `!(t1 > t0)`.
+        if t1.is_nan() || t0.is_nan() || t1 <= t0 {
+            return (0, 0);
+        }
+        let a = f.eye + dir * t0;
+        let d = dir * (t1 - t0);
+        let len = (f.to_world * d).length();
+        let o = f.jitter.map_or(0.5, |seed| settings::jitter_offset(x, y, seed));
+        let segment = ((len / f.h - o).ceil().max(0.0) as u64).min(f.max_steps);
+        let [win_lo, win_hi] = f.window;
+        let mut opacity = 0f32;
+        let mut taken = 0u64;
+        for k in 0..f.max_steps {
+            let t = (k as f32 + o) * f.h;
+            if t >= len {
+                break;
+            }
+            let p = a + d * (t / len);
+            if !self.in_occupied_brick(f, p) {
+                // Leapt over: nothing there can be visible (nor reach the iso value), so the replay goes on.
+                continue;
+            }
+            taken += 1;
+            let v = self.sample(p);
+            match f.mode {
+                CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => continue,
+                CompositeMode::Isosurface => {
+                    if !v.is_nan() && v >= f.iso_value {
+                        let bisection = if k > 0 { ISO_BISECTIONS } else { 0 };
+                        return (segment, taken + bisection + GRADIENT_SAMPLES);
+                    }
+                    continue;
+                }
+                CompositeMode::Emission | CompositeMode::Density => {}
+            }
+            if v.is_nan() || v < win_lo || v > win_hi {
+                continue;
+            }
+            let alpha = tf::lookup(&f.lut, v)[3];
+            if alpha <= 0.0 {
+                continue;
+            }
+            if f.gradients {
+                taken += GRADIENT_SAMPLES;
+            }
+            let a_step = if f.mode == CompositeMode::Density {
+                (alpha * f.density * f.step_length).min(1.0)
+            } else {
+                1.0 - (1.0 - alpha).powf(f.step_length)
+            };
+            opacity += (1.0 - opacity) * a_step;
+            if opacity >= f.early_termination {
+                break;
+            }
+        }
+        (segment, taken)
+    }
+
+    /// Counts over the whole image of `s`, rows split across the available cores.
+    pub fn count(&self, s: &RenderSettings) -> SampleCount {
+        let frame = self.frame(s);
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .clamp(1, s.height as usize);
+        let totals: Vec<(u64, u64)> = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..threads)
+                .map(|t| {
+                    let frame = &frame;
+                    scope.spawn(move || {
+                        let mut sum = (0u64, 0u64);
+                        for y in (t as u32..s.height).step_by(threads) {
+                            for x in 0..s.width {
+                                let (seg, taken) = self.pixel(frame, x, y);
+                                sum.0 += seg;
+                                sum.1 += taken;
+                            }
+                        }
+                        sum
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap_or((0, 0))).collect()
+        });
+        let pixels = (u64::from(s.width) * u64::from(s.height)).max(1) as f64;
+        let (seg, taken) = totals.iter().fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        SampleCount {
+            segment_per_pixel: seg as f64 / pixels,
+            taken_per_pixel: taken as f64 / pixels,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Camera;
+    use crate::volume;
+
+    #[test]
+    fn counter_counts_the_segment_of_an_axis_aligned_ray() {
+        // A ray straight down the box's axis crosses 64 voxels of a 64³ volume: 64 samples at 1-voxel steps.
+        let v = volume::builtin("box", Some(64)).unwrap();
+        let mut s = RenderSettings::new(1, 1, v.extent());
+        s.camera = Camera::orbit(0.0, 0.0, 3.0, Vec3::ZERO);
+        s.step_alpha = 0.0;
+        s.skip_empty = false;
+        let counter = SampleCounter::new(&v);
+        let c = counter.count(&s);
+        assert_eq!(c.segment_per_pixel, 64.0);
+        assert_eq!(c.taken_per_pixel, 64.0, "nothing is opaque, so no ray ends early");
+        s.skip_empty = true;
+        let c = counter.count(&s);
+        assert_eq!(c.segment_per_pixel, 64.0);
+        assert_eq!(
+            c.taken_per_pixel, 0.0,
+            "nothing is visible: skipping leaps over every brick"
+        );
+        s.step_alpha = 1.0;
+        s.window = [0.0, 1.0];
+        let c = counter.count(&s);
+        assert_eq!(c.taken_per_pixel, 1.0, "an opaque first sample ends the ray");
+    }
+}
