@@ -1,0 +1,242 @@
+//! Creating the renderer: descriptor set and pipeline layouts, samplers, pipelines for every variant, the
+//! table buffer and the frame slots.
+
+use super::{FrameSlot, FrameUniforms, PositionTargets, Renderer, LUT_ROWS, QUERIES};
+use crate::gpu::pipeline::{graphics_pipeline, shader, GraphicsDesc};
+use crate::gpu::resources::Buffer;
+use crate::gpu::{Gpu, GpuError, VkContext};
+use crate::settings::{PositionFormat, RenderSettings};
+use crate::tf::LUT_SIZE;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+fn set_layout(
+    gpu: &Gpu,
+    bindings: &[(vk::DescriptorType, vk::ShaderStageFlags)],
+) -> Result<vk::DescriptorSetLayout, GpuError> {
+    let b: Vec<vk::DescriptorSetLayoutBinding> = bindings
+        .iter()
+        .enumerate()
+        .map(|(i, &(ty, stages))| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(i as u32)
+                .descriptor_type(ty)
+                .descriptor_count(1)
+                .stage_flags(stages)
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&b);
+    // SAFETY: valid create info on a live device.
+    unsafe { gpu.device.create_descriptor_set_layout(&info, None) }.ctx("vkCreateDescriptorSetLayout")
+}
+
+fn pipeline_layout(gpu: &Gpu, sets: &[vk::DescriptorSetLayout]) -> Result<vk::PipelineLayout, GpuError> {
+    let info = vk::PipelineLayoutCreateInfo::default().set_layouts(sets);
+    // SAFETY: the set layouts are live.
+    unsafe { gpu.device.create_pipeline_layout(&info, None) }.ctx("vkCreatePipelineLayout")
+}
+
+fn sampler(gpu: &Gpu, filter: vk::Filter) -> Result<vk::Sampler, GpuError> {
+    let info = vk::SamplerCreateInfo::default()
+        .mag_filter(filter)
+        .min_filter(filter)
+        .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+        .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+        .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+        .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+        .max_lod(0.0);
+    // SAFETY: valid create info on a live device.
+    unsafe { gpu.device.create_sampler(&info, None) }.ctx("vkCreateSampler")
+}
+
+impl Renderer {
+    /// Creates pipelines and fixed resources. `output_format` is the colour target's format (RGBA8 headless);
+    /// `frames_in_flight` slots let that many recorded frames be pending at once (see [`Renderer::record`]).
+    /// On error everything created so far is destroyed again.
+    pub fn new(gpu: &Gpu, output_format: vk::Format, frames_in_flight: usize) -> Result<Renderer, GpuError> {
+        let all = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
+        let frag = vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
+        let lut = Buffer::new(
+            gpu,
+            (LUT_ROWS * LUT_SIZE * std::mem::size_of::<[f32; 4]>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+            "transfer function table",
+        )?;
+        let mut r = Renderer {
+            output_format,
+            frame_set_layout: vk::DescriptorSetLayout::null(),
+            volume_set_layout: vk::DescriptorSetLayout::null(),
+            positions_set_layout: vk::DescriptorSetLayout::null(),
+            faces_layout: vk::PipelineLayout::null(),
+            march_faces_layout: vk::PipelineLayout::null(),
+            march_analytic_layout: vk::PipelineLayout::null(),
+            storage_set_layout: vk::DescriptorSetLayout::null(),
+            march_compute_layout: vk::PipelineLayout::null(),
+            position_pipelines: [[vk::Pipeline::null(); 2]; 2],
+            march_pipelines: [[[vk::Pipeline::null(); 3]; 5]; 3],
+            descriptor_pool: vk::DescriptorPool::null(),
+            volume_set: vk::DescriptorSet::null(),
+            positions_set: vk::DescriptorSet::null(),
+            slots: Vec::new(),
+            linear_sampler: vk::Sampler::null(),
+            point_sampler: vk::Sampler::null(),
+            lut,
+            baked: None,
+            lut_table: Vec::new(),
+            volume: None,
+            texel_policy: gpu.texel_policy,
+            positions: None,
+            timestamp_period_ns: gpu.properties.limits.timestamp_period as f64,
+        };
+        match r.init(gpu, all, frag, frames_in_flight.max(1)) {
+            Ok(()) => Ok(r),
+            Err(e) => {
+                r.destroy(gpu);
+                Err(e)
+            }
+        }
+    }
+
+    fn init(
+        &mut self,
+        gpu: &Gpu,
+        all: vk::ShaderStageFlags,
+        frag: vk::ShaderStageFlags,
+        slots: usize,
+    ) -> Result<(), GpuError> {
+        use vk::DescriptorType as D;
+        self.frame_set_layout = set_layout(gpu, &[(D::UNIFORM_BUFFER, all)])?;
+        self.volume_set_layout = set_layout(
+            gpu,
+            &[
+                (D::SAMPLED_IMAGE, frag),
+                (D::SAMPLER, frag),
+                (D::STORAGE_BUFFER, frag),
+                (D::SAMPLED_IMAGE, frag),
+                (D::SAMPLED_IMAGE, frag),
+                (D::STORAGE_BUFFER, frag),
+            ],
+        )?;
+        self.positions_set_layout = set_layout(
+            gpu,
+            &[(D::SAMPLED_IMAGE, frag), (D::SAMPLED_IMAGE, frag), (D::SAMPLER, frag)],
+        )?;
+        self.faces_layout = pipeline_layout(gpu, &[self.frame_set_layout])?;
+        self.march_faces_layout = pipeline_layout(
+            gpu,
+            &[self.frame_set_layout, self.volume_set_layout, self.positions_set_layout],
+        )?;
+        self.march_analytic_layout = pipeline_layout(gpu, &[self.frame_set_layout, self.volume_set_layout])?;
+        self.storage_set_layout = set_layout(gpu, &[(D::STORAGE_IMAGE, vk::ShaderStageFlags::COMPUTE)])?;
+        self.march_compute_layout = pipeline_layout(
+            gpu,
+            &[self.frame_set_layout, self.volume_set_layout, self.storage_set_layout],
+        )?;
+        self.linear_sampler = sampler(gpu, vk::Filter::LINEAR)?;
+        self.point_sampler = sampler(gpu, vk::Filter::NEAREST)?;
+
+        let faces_vert = shader!("faces.vert");
+        let faces_frag = shader!("faces.frag");
+        for (i, format) in [PositionFormat::Rgba32f, PositionFormat::Rgba16f]
+            .into_iter()
+            .enumerate()
+        {
+            for (j, cull) in [vk::CullModeFlags::BACK, vk::CullModeFlags::FRONT]
+                .into_iter()
+                .enumerate()
+            {
+                self.position_pipelines[i][j] = graphics_pipeline(
+                    gpu,
+                    &GraphicsDesc {
+                        vertex: &faces_vert,
+                        fragment: &faces_frag,
+                        layout: self.faces_layout,
+                        color_format: PositionTargets::vk_format(format),
+                        cull,
+                    },
+                )?;
+            }
+        }
+        let n = slots as u32;
+        let sizes = [
+            vk::DescriptorPoolSize {
+                ty: D::UNIFORM_BUFFER,
+                descriptor_count: n,
+            },
+            vk::DescriptorPoolSize {
+                ty: D::SAMPLED_IMAGE,
+                descriptor_count: 6,
+            },
+            vk::DescriptorPoolSize {
+                ty: D::SAMPLER,
+                descriptor_count: 2,
+            },
+            vk::DescriptorPoolSize {
+                ty: D::STORAGE_IMAGE,
+                descriptor_count: n,
+            },
+            vk::DescriptorPoolSize {
+                ty: D::STORAGE_BUFFER,
+                descriptor_count: 2,
+            },
+        ];
+        let pool_info = vk::DescriptorPoolCreateInfo::default()
+            .max_sets(2 + 2 * n)
+            .pool_sizes(&sizes);
+        // SAFETY: valid create info on a live device.
+        self.descriptor_pool =
+            unsafe { gpu.device.create_descriptor_pool(&pool_info, None) }.ctx("vkCreateDescriptorPool")?;
+        let mut layouts = vec![self.volume_set_layout, self.positions_set_layout];
+        layouts.extend(std::iter::repeat_n(self.frame_set_layout, slots));
+        layouts.extend(std::iter::repeat_n(self.storage_set_layout, slots));
+        let alloc = vk::DescriptorSetAllocateInfo::default()
+            .descriptor_pool(self.descriptor_pool)
+            .set_layouts(&layouts);
+        // SAFETY: the pool has room for exactly these sets.
+        let sets = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
+        (self.volume_set, self.positions_set) = (sets[0], sets[1]);
+        for (&set, &storage_set) in sets[2..2 + slots].iter().zip(&sets[2 + slots..]) {
+            let uniforms = Buffer::new(
+                gpu,
+                std::mem::size_of::<FrameUniforms>() as u64,
+                vk::BufferUsageFlags::UNIFORM_BUFFER,
+                MemoryLocation::CpuToGpu,
+                "frame uniforms",
+            )?;
+            let query_info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::TIMESTAMP)
+                .query_count(QUERIES);
+            // SAFETY: valid create info on a live device.
+            let query_pool = match unsafe { gpu.device.create_query_pool(&query_info, None) } {
+                Ok(q) => q,
+                Err(e) => {
+                    uniforms.destroy(gpu);
+                    return Err(GpuError::vk("vkCreateQueryPool", e));
+                }
+            };
+            let buffer_info = [vk::DescriptorBufferInfo {
+                buffer: uniforms.raw,
+                offset: 0,
+                range: vk::WHOLE_SIZE,
+            }];
+            let write = vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(0)
+                .descriptor_type(D::UNIFORM_BUFFER)
+                .buffer_info(&buffer_info);
+            // SAFETY: the set is not in use by any command buffer.
+            unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
+            self.slots.push(FrameSlot {
+                uniforms,
+                set,
+                query_pool,
+                storage_set,
+                recorded: None,
+            });
+        }
+        let initial = RenderSettings::default();
+        self.upload_lut(&initial, [0.0, 1.0])?;
+        Ok(())
+    }
+}

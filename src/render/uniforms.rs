@@ -1,0 +1,151 @@
+//! The frame's uniform block and what it is computed from: the volume's GPU facts and the render settings.
+
+use super::skip;
+use crate::settings::RenderSettings;
+use crate::tf::srgb_to_linear;
+use crate::volume::Geometry;
+use glam::{DMat3, DMat4, DVec3};
+
+/// The uniform block `Frame` in shaders/frame.glsl (std140: only mat4 and vec4 members, so no padding rules bite).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct FrameUniforms {
+    pub tex_to_clip: [f32; 16],
+    /// Texture space to the render world (its linear part measures world lengths and directions).
+    pub tex_to_world: [f32; 16],
+    /// A gradient in value per voxel (index space) to a vector along the world normal: `(L·diag(1/dims))⁻ᵀ`.
+    pub gradient_to_world: [f32; 16],
+    pub eye_tex: [f32; 4],
+    pub ray_forward: [f32; 4],
+    pub ray_right: [f32; 4],
+    pub ray_down: [f32; 4],
+    pub origin_dx: [f32; 4],
+    pub origin_dy: [f32; 4],
+    pub slab_lo: [f32; 4],
+    pub slab_hi: [f32; 4],
+    pub extent: [f32; 4],
+    pub value_map: [f32; 4],
+    pub alpha: [f32; 4],
+    pub background: [f32; 4],
+    pub viewport: [f32; 4],
+    pub texel: [f32; 4],
+    pub voxel_world: [f32; 4],
+    pub shading: [f32; 4],
+    pub mode_params: [f32; 4],
+    pub flags: [u32; 4],
+    pub brick: [f32; 4],
+    pub dims: [f32; 4],
+}
+
+/// GPU facts about the loaded volume that the uniforms need.
+#[derive(Clone, Copy, Debug)]
+pub struct VolumeInfo {
+    pub dims: [u32; 3],
+    /// Where the voxels are (the render world follows it unless `RenderSettings::voxel_axes`).
+    pub geometry: Geometry,
+    pub scale_bias: (f32, f32),
+    /// The data's value range (for transfer functions in data units).
+    pub range: [f64; 2],
+}
+
+impl VolumeInfo {
+    /// Texture space to the render world for `s` (the volume's placement, or its voxel axes).
+    pub fn tex_to_world(&self, s: &RenderSettings) -> DMat4 {
+        self.geometry.tex_to_world(self.dims, s.voxel_axes)
+    }
+}
+
+/// Whether a texture-to-world transform mirrors: its box's faces then wind the other way on screen, so the
+/// entry pass must cull front faces and the exit pass back faces.
+pub fn mirrors(tex_to_world: DMat4) -> bool {
+    DMat3::from_mat4(tex_to_world).determinant() < 0.0
+}
+
+impl FrameUniforms {
+    /// Pure: computes the uniforms for `s` (unit-tested without a GPU).
+    pub fn new(s: &RenderSettings, v: &VolumeInfo) -> FrameUniforms {
+        let aspect = s.width as f32 / s.height as f32;
+        let cam = &s.camera;
+        let model = v.tex_to_world(s);
+        let linear = DMat3::from_mat4(model);
+        let to_tex = linear.inverse();
+        let tex_to_clip = cam.projection(aspect).as_dmat4() * cam.view().as_dmat4() * model;
+        let forward = cam.forward().as_dvec3();
+        let right = forward.cross(cam.up.as_dvec3()).normalize();
+        let up = right.cross(forward);
+        let tan = f64::from((cam.fov_y_deg.to_radians() * 0.5).tan());
+        let eye_tex = model.inverse().transform_point3(cam.eye.as_dvec3());
+        // Perspective rays fan out from the eye; orthographic rays start spread over the eye's plane.
+        let (fan, spread) = if cam.ortho {
+            (0.0, f64::from((cam.eye - cam.target).length()))
+        } else {
+            (1.0, 0.0)
+        };
+        let aspect = f64::from(aspect);
+        let dims = DVec3::from_array(v.dims.map(f64::from));
+        // A voxel's step along each index axis, in world units: the columns of L·diag(1/dims).
+        let index_to_world = linear * DMat3::from_diagonal(1.0 / dims);
+        let voxel = [0, 1, 2].map(|i| index_to_world.col(i).length());
+        let h = s.step_length * voxel.iter().copied().fold(f64::INFINITY, f64::min) as f32;
+        // The longest path through the box: its longest diagonal.
+        let diagonal = [
+            DVec3::ONE,
+            DVec3::new(-1.0, 1.0, 1.0),
+            DVec3::new(1.0, -1.0, 1.0),
+            DVec3::new(1.0, 1.0, -1.0),
+        ]
+        .iter()
+        .map(|d| (linear * *d).length())
+        .fold(0.0, f64::max) as f32;
+        let max_steps = (diagonal / h).ceil() + 2.0;
+        let v4 = |a: DVec3, w: f32| [a.x as f32, a.y as f32, a.z as f32, w];
+        let m4 = |m: DMat4| m.as_mat4().to_cols_array();
+        let shading = s.shading.unwrap_or_default();
+        FrameUniforms {
+            tex_to_clip: m4(tex_to_clip),
+            tex_to_world: m4(model),
+            gradient_to_world: m4(DMat4::from_mat3(index_to_world.inverse().transpose())),
+            eye_tex: v4(eye_tex, 1.0),
+            ray_forward: v4(to_tex * forward, cam.near),
+            ray_right: v4(to_tex * (right * (fan * tan * aspect)), 0.0),
+            // NDC y grows downwards (row 0 is the top of the image).
+            ray_down: v4(to_tex * (-up * (fan * tan)), 0.0),
+            origin_dx: v4(to_tex * (right * (spread * tan * aspect)), 0.0),
+            origin_dy: v4(to_tex * (-up * (spread * tan)), 0.0),
+            slab_lo: v4(s.slab_lo.as_dvec3(), 0.0),
+            slab_hi: v4(s.slab_hi.as_dvec3(), 0.0),
+            extent: [0.0, 0.0, 0.0, h],
+            value_map: [v.scale_bias.0, v.scale_bias.1, s.window[0], s.window[1]],
+            alpha: [
+                s.step_alpha,
+                s.step_length,
+                s.early_termination,
+                if s.multiplied_alpha { 1.0 } else { 0.0 },
+            ],
+            background: [
+                srgb_to_linear(s.background.x),
+                srgb_to_linear(s.background.y),
+                srgb_to_linear(s.background.z),
+                1.0,
+            ],
+            viewport: [
+                s.width as f32,
+                s.height as f32,
+                max_steps,
+                s.count_samples as u32 as f32,
+            ],
+            texel: v4(1.0 / dims, 0.0),
+            voxel_world: [0.0, 0.0, 0.0, s.gradient_opacity.unwrap_or(0.0)],
+            shading: [shading.ambient, shading.diffuse, shading.specular, shading.shininess],
+            mode_params: [s.iso_value, s.density, s.skip_empty as u32 as f32, 0.0],
+            brick: v4(DVec3::splat(f64::from(skip::BRICK)) / dims, 0.0),
+            dims: [v.dims[0] as f32, v.dims[1] as f32, v.dims[2] as f32, 0.0],
+            flags: [
+                s.mode.index(),
+                s.jitter.is_some() as u32,
+                s.jitter.unwrap_or(0),
+                s.shading.is_some() as u32,
+            ],
+        }
+    }
+}
