@@ -108,6 +108,28 @@ fn a_syntax_without_a_decoder_is_named_and_refused() {
     );
 }
 
+/// A JPEG-LS frame found by the `dicom` fuzz target whose code runs past the end of its data: CharLS 2.4.2 counted
+/// the leading zeros past the end to INT_MAX (5 s of spinning) before failing; the vendored CharLS
+/// (vendor/charls-sys/VOLCAST.md) bounds the count by LIMIT. The error was the same either way, so the spin is
+/// caught by time: a hang guard, not a speed target. The refusal takes about 1 ms; the spin took 4.9 s on this
+/// project's 2-core AMD EPYC, and the bound of 1.5 s sits between them with a margin of three on the slow side
+/// and over 1000 on the fast one.
+#[test]
+fn a_jpeg_ls_code_running_past_its_data_is_refused_at_once() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-jpegls-spin.dcm");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(load_err(&file));
+    });
+    let e = rx
+        .recv_timeout(std::time::Duration::from_millis(1500))
+        .expect("CharLS gives up at once (unfixed, it spun for 4.9 s)");
+    assert!(
+        e.contains("fuzz-dicom-jpegls-spin.dcm") && e.contains("JPEG-LS decoder (CharLS): Invalid JPEG-LS stream"),
+        "{e}"
+    );
+}
+
 struct Scratch(PathBuf);
 
 impl Scratch {
