@@ -123,6 +123,10 @@ impl VolumeArgs {
         if !big {
             bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
         }
+        // indicatif's default style draws no message: the label needs a template that has one.
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed}") {
+            bar.set_style(style.progress_chars("=> "));
+        }
         bar.set_message(format!("loading {}", path.display()));
         let loaded = volume::open_with_progress(path, &opts, &mut |f| bar.set_position((f * 1000.0) as u64));
         bar.finish_and_clear();

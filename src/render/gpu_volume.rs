@@ -9,6 +9,7 @@ use crate::gpu::{Gpu, GpuError};
 use crate::volume::{Volume, VoxelData};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
+use rayon::prelude::*;
 
 pub(super) struct GpuVolume {
     pub(super) layout: VolumeLayout,
@@ -250,14 +251,27 @@ fn upload_float(gpu: &Gpu, image: &Image, volume: &Volume) -> Result<(), GpuErro
     let n = volume.voxel_count();
     // A depth-1 volume is uploaded twice (image_3d makes two slices).
     let copies = if volume.dims[2] == 1 { 2 } else { 1 };
-    upload_image_with(gpu, image, (n * 4 * copies) as u64, |dst| {
-        let dst: &mut [f32] = bytemuck::cast_slice_mut(dst);
-        for chunk in dst.chunks_mut(n) {
+    upload_image_with(gpu, image, (n * 4 * copies) as u64, |range, dst| {
+        let mut rest: &mut [f32] = bytemuck::cast_slice_mut(dst);
+        // The slab is whole slices: split where it passes from one copy of the volume to the next.
+        let mut at = range.start / 4;
+        while !rest.is_empty() {
+            let i = at % n;
+            let take = (n - i).min(rest.len());
+            let (head, tail) = rest.split_at_mut(take);
             match &volume.data {
-                VoxelData::U8(v) => chunk.iter_mut().zip(v).for_each(|(d, &x)| *d = f32::from(x) / 255.0),
-                VoxelData::U16(v) => chunk.iter_mut().zip(v).for_each(|(d, &x)| *d = f32::from(x) / 65535.0),
-                VoxelData::F32(v) => chunk.copy_from_slice(v),
+                VoxelData::U8(v) => head
+                    .par_iter_mut()
+                    .zip(&v[i..i + take])
+                    .for_each(|(d, &x)| *d = f32::from(x) / 255.0),
+                VoxelData::U16(v) => head
+                    .par_iter_mut()
+                    .zip(&v[i..i + take])
+                    .for_each(|(d, &x)| *d = f32::from(x) / 65535.0),
+                VoxelData::F32(v) => head.copy_from_slice(&v[i..i + take]),
             }
+            rest = tail;
+            at += take;
         }
     })
 }

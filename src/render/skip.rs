@@ -4,6 +4,7 @@
 
 use crate::settings::CompositeMode;
 use crate::volume::{Volume, VoxelData};
+use rayon::prelude::*;
 
 /// Brick edge in voxels.
 pub const BRICK: u32 = 8;
@@ -196,7 +197,7 @@ pub fn encode_reach(levels: &[u8], bricks: [u32; 3]) -> Vec<u8> {
 
 /// Per brick, the smallest and largest element over its voxels and a one-voxel apron (NaN ignored; `None` for
 /// a brick of only NaN), walking the volume row by row.
-fn brick_extremes<T: Copy + PartialOrd + Into<f64>>(
+fn brick_extremes<T: Copy + PartialOrd + Into<f64> + Send + Sync>(
     data: &[T],
     dims: [u32; 3],
     bricks: [u32; 3],
@@ -206,7 +207,8 @@ fn brick_extremes<T: Copy + PartialOrd + Into<f64>>(
     let b = BRICK as usize;
     let span = |k: usize, n: usize| ((k * b).saturating_sub(1), ((k + 1) * b).min(n - 1));
     let mut out: Vec<Option<(T, T)>> = vec![None; bx * by * bz];
-    for k in 0..bz {
+    // Each layer of bricks (k) on its own core: the layers only read the data they share at their seams.
+    out.par_chunks_mut(bx * by).enumerate().for_each(|(k, layer)| {
         let (z0, z1) = span(k, d);
         for j in 0..by {
             let (y0, y1) = span(j, h);
@@ -215,7 +217,7 @@ fn brick_extremes<T: Copy + PartialOrd + Into<f64>>(
                     let row = &data[(y + h * z) * w..][..w];
                     for i in 0..bx {
                         let (x0, x1) = span(i, w);
-                        let slot = &mut out[i + bx * (j + by * k)];
+                        let slot = &mut layer[i + bx * j];
                         for &v in &row[x0..=x1] {
                             #[allow(clippy::eq_op)] // NaN is the only value unequal to itself.
                             let is_nan = v != v;
@@ -231,7 +233,7 @@ fn brick_extremes<T: Copy + PartialOrd + Into<f64>>(
                 }
             }
         }
-    }
+    });
     out.into_iter()
         .map(|e| e.map(|(lo, hi)| (lo.into(), hi.into())))
         .collect()
