@@ -78,12 +78,23 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
             u16::from_le_bytes([head[0], head[1]]),
             u16::from_le_bytes([head[2], head[3]]),
         );
+        // An item or delimiter inside the meta group's length: dicom-object consumes it as an off-group element,
+        // and dicom-parser then read the data set out of step with this walk (a fuzz finding, ending in a value
+        // claiming 4 GB). Such a file breaks PS3.10 7.1; it is refused. (Other off-group elements, as a wrong
+        // group length produces, are walked as dicom-object reads them.)
+        if group == 0xFFFE {
+            return Err(header_error(
+                label,
+                format!(
+                    "the file meta group (0002) holds an item or delimiter (FFFE,{element:04X}) within its length: \
+                     a malformed file"
+                ),
+            ));
+        }
         let vr = [head[4], head[5]];
-        let short = group != 0xFFFE && short_length_vr(vr);
+        let short = short_length_vr(vr);
         let (length, header) = if short {
             (u32::from(u16::from_le_bytes([head[6], head[7]])), 8)
-        } else if group == 0xFFFE {
-            (u32::from_le_bytes([head[4], head[5], head[6], head[7]]), 8)
         } else {
             let l = bytes.get(pos + 8..pos + 12).ok_or_else(meta_error)?;
             (u32::from_le_bytes([l[0], l[1], l[2], l[3]]), 12)
@@ -297,6 +308,18 @@ mod tests {
         let bytes = std::fs::read(path).unwrap();
         let e = check_lengths(&bytes, "x").unwrap_err().to_string();
         assert!(e.contains("claims") && e.contains("bytes but only"), "{e}");
+        assert!(from_bytes(&bytes).is_err());
+    }
+
+    /// Seventh finding of the dicom fuzz target: the file meta group's length covers an item (FFFE,E000) after its
+    /// last element. dicom-object consumed it as an off-group element and then parsed the data set out of step
+    /// with this walk, until a value claimed 4 GB (an allocation libFuzzer's 2 GiB limit caught). Refused now.
+    #[test]
+    fn items_inside_the_meta_group_are_refused() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-meta-item.dcm");
+        let bytes = std::fs::read(path).unwrap();
+        let e = check_lengths(&bytes, "x").unwrap_err().to_string();
+        assert!(e.contains("holds an item or delimiter (FFFE,E000)"), "{e}");
         assert!(from_bytes(&bytes).is_err());
     }
 }
