@@ -195,6 +195,14 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
             (at32(pos + 4, big), 8)
         };
         pos += header;
+        // Delimiters (item and sequence delimitation) end a value; dicom-parser ignores their length field, which
+        // should be 0 (a fuzz finding: a sequence delimiter claiming 47 bytes, skipped here and not there, put
+        // the two out of step until a value claimed 4 GB).
+        let length = if group == 0xFFFE && matches!(element, 0xE00D | 0xE0DD) {
+            0
+        } else {
+            length
+        };
         if length == u32::MAX {
             // Undefined length: encapsulated pixel data (its items hold fragments) or, for any other element,
             // a sequence whose items are data sets (dicom-parser discards the VR then): descend.
@@ -305,6 +313,17 @@ mod tests {
     #[test]
     fn meta_group_overrun_is_walked_like_dicom_object() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-meta-overrun.dcm");
+        let bytes = std::fs::read(path).unwrap();
+        let e = check_lengths(&bytes, "x").unwrap_err().to_string();
+        assert!(e.contains("claims") && e.contains("bytes but only"), "{e}");
+        assert!(from_bytes(&bytes).is_err());
+    }
+
+    /// Eighth finding: a sequence delimiter with a non-zero length field, which dicom-parser ignores; the walk
+    /// skipped it, fell out of step and missed a value claiming 4 GB. Delimiters are now walked with length 0.
+    #[test]
+    fn delimiter_lengths_are_ignored_like_dicom_parser() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-delimiter-length.dcm");
         let bytes = std::fs::read(path).unwrap();
         let e = check_lengths(&bytes, "x").unwrap_err().to_string();
         assert!(e.contains("claims") && e.contains("bytes but only"), "{e}");
