@@ -149,7 +149,14 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
     };
     let big = false;
     let mut encapsulated = false;
+    // The sequences the walk is inside: where a defined-length one ends, None for an undefined length (ended by
+    // its delimiter). An item outside every sequence is refused: dicom-parser reads it otherwise than this walk (a
+    // fuzz finding ended in a value claiming 4 GB).
+    let mut open: Vec<Option<usize>> = Vec::new();
     while pos + 8 <= bytes.len() {
+        while matches!(open.last(), Some(Some(end)) if pos >= *end) {
+            open.pop();
+        }
         let at16 = |i: usize, big: bool| {
             let b = [bytes[i], bytes[i + 1]];
             if big {
@@ -195,19 +202,23 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
             (at32(pos + 4, big), 8)
         };
         pos += header;
-        // Delimiters (item and sequence delimitation) end a value; dicom-parser ignores their length field, which
-        // should be 0 (a fuzz finding: a sequence delimiter claiming 47 bytes, skipped here and not there, put
-        // the two out of step until a value claimed 4 GB).
-        let length = if group == 0xFFFE && matches!(element, 0xE00D | 0xE0DD) {
-            0
-        } else {
-            length
-        };
+        // Delimiters (item and sequence delimitation) must have length 0 (PS3.5 7.5). dicom-parser ignores the
+        // field inside a sequence but reads a value of that length at the top level, so no walk can follow both:
+        // a non-zero one is refused (two fuzz findings: a delimiter claiming 47 bytes inside a sequence, one
+        // claiming 4 GB outside).
+        if group == 0xFFFE && matches!(element, 0xE00D | 0xE0DD) && length != 0 {
+            return Err(header_error(
+                label,
+                format!("a delimiter (FFFE,{element:04X}) has length {length}; it must be 0 (corrupt file)"),
+            ));
+        }
         if length == u32::MAX {
             // Undefined length: encapsulated pixel data (its items hold fragments) or, for any other element,
             // a sequence whose items are data sets (dicom-parser discards the VR then): descend.
             if (group, element) == (0x7FE0, 0x0010) {
                 encapsulated = true;
+            } else if group != 0xFFFE {
+                open.push(None);
             }
             continue;
         }
@@ -247,13 +258,24 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
         }
         if group == 0xFFFE {
             if element == 0xE0DD {
-                encapsulated = false;
+                if encapsulated {
+                    encapsulated = false;
+                } else if open.last() == Some(&None) {
+                    open.pop();
+                }
             }
             if element == 0xE000 && !encapsulated {
+                if open.is_empty() {
+                    return Err(header_error(
+                        label,
+                        "an item (FFFE,E000) outside any sequence (corrupt file)".into(),
+                    ));
+                }
                 continue;
             }
         }
         if vr.is_some_and(|v| &v == b"SQ") {
+            open.push(Some(pos + length));
             continue;
         }
         pos += length;
@@ -319,15 +341,40 @@ mod tests {
         assert!(from_bytes(&bytes).is_err());
     }
 
-    /// Eighth finding: a sequence delimiter with a non-zero length field, which dicom-parser ignores; the walk
-    /// skipped it, fell out of step and missed a value claiming 4 GB. Delimiters are now walked with length 0.
+    /// Eighth and ninth findings: delimiters with a non-zero length field. Inside a sequence dicom-parser ignores
+    /// it (the walk skipped it, fell out of step and missed a value claiming 4 GB); at the top level it reads a
+    /// value that long (4 GB). Both are refused.
     #[test]
-    fn delimiter_lengths_are_ignored_like_dicom_parser() {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz-dicom-oom-delimiter-length.dcm");
+    fn delimiters_with_a_length_are_refused() {
+        for (file, length) in [
+            ("fuzz-dicom-oom-delimiter-length.dcm", "length 47"),
+            ("fuzz-dicom-oom-top-level-delimiter.dcm", "length 4143983616"),
+        ] {
+            let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(file);
+            let bytes = std::fs::read(path).unwrap();
+            let e = check_lengths(&bytes, "x").unwrap_err().to_string();
+            assert!(
+                e.contains("a delimiter (FFFE,E0DD) has") && e.contains(length),
+                "{file}: {e}"
+            );
+            assert!(from_bytes(&bytes).is_err());
+        }
+    }
+
+    /// An item at the top level of the data set (outside every sequence) is refused: dicom-parser does not read it
+    /// as this walk would.
+    #[test]
+    fn items_outside_sequences_are_refused() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom/u16_native/00.dcm");
         let bytes = std::fs::read(path).unwrap();
-        let e = check_lengths(&bytes, "x").unwrap_err().to_string();
-        assert!(e.contains("claims") && e.contains("bytes but only"), "{e}");
-        assert!(from_bytes(&bytes).is_err());
+        assert!(check_lengths(&bytes, "x").is_ok());
+        let group_length = u32::from_le_bytes(bytes[140..144].try_into().unwrap()) as usize;
+        let data_set = 144 + group_length;
+        let mut hostile = bytes[..data_set].to_vec();
+        hostile.extend([0xFE, 0xFF, 0x00, 0xE0, 0, 0, 0, 0]);
+        hostile.extend(&bytes[data_set..]);
+        let e = check_lengths(&hostile, "x").unwrap_err().to_string();
+        assert!(e.contains("an item (FFFE,E000) outside any sequence"), "{e}");
     }
 
     /// Seventh finding of the dicom fuzz target: the file meta group's length covers an item (FFFE,E000) after its
