@@ -7,7 +7,8 @@
 //! - samples per pixel, counted on the CPU by replaying the march's rules (see [`SampleCounter`]): the march
 //!   shader is left untouched, so the count costs the GPU nothing;
 //! - effective samples per second (samples taken ÷ GPU frame time) and its fraction of the sample-only rate for the
-//!   volume's texel format ([`sample_only`]).
+//!   volume's texel format ([`sample_only`]);
+//! - each configuration's error against the same scene rendered converged ([`crate::fidelity`]).
 
 mod counter;
 mod report;
