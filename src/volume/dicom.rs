@@ -1,9 +1,9 @@
 //! DICOM: a folder of single-frame slices (one series), or one multi-frame file, through `dicom-object`.
 //!
 //! Native pixel data is read straight from the parsed element. RLE Lossless, JPEG (baseline, extended,
-//! lossless) and JPEG 2000 are decoded frame by frame ([`dicom_codec`]), each frame checked to decode to exactly
-//! Rows x Columns x BitsAllocated before it lands in the volume; other compressed transfer syntaxes (JPEG-LS,
-//! JPEG XL, video) are refused with a message naming them. An enhanced multi-frame object's per-frame and shared
+//! lossless), JPEG-LS and JPEG 2000 are decoded frame by frame ([`dicom_codec`]), each frame checked to decode to
+//! exactly Rows x Columns x BitsAllocated before it lands in the volume; other compressed transfer syntaxes
+//! (JPEG XL, HTJ2K, video) are refused with a message naming them. An enhanced multi-frame object's per-frame and shared
 //! functional groups (plane position and orientation, pixel measures, pixel value transformation) place and
 //! rescale its frames like the slices of a folder.
 //!
