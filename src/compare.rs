@@ -48,6 +48,12 @@ fn channel_diff(a: &Rgba<u8>, b: &Rgba<u8>) -> u8 {
     (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0)
 }
 
+/// The 8-bit background colour a frame with settings `s` shows where no volume is (`s.background` is sRGB).
+pub fn background_u8(s: &crate::settings::RenderSettings) -> [u8; 3] {
+    let to_u8 = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    [to_u8(s.background.x), to_u8(s.background.y), to_u8(s.background.z)]
+}
+
 /// Compares `a` and `b` (same size); `background` marks silhouette pixels.
 pub fn diff_stats(a: &RgbaImage, b: &RgbaImage, background: [u8; 3]) -> DiffStats {
     assert_eq!(
@@ -268,9 +274,7 @@ pub fn run_method(
 pub fn compare_view(gpu: &Gpu, headless: &mut Headless, view: &View, frames: u32) -> Result<Comparison, GpuError> {
     let faces = run_method(gpu, headless, &view.settings, RaySetup::Faces, frames)?;
     let analytic = run_method(gpu, headless, &view.settings, RaySetup::Analytic, frames)?;
-    let bg = view.settings.background;
-    let to_u8 = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-    let diff = diff_stats(&faces.image, &analytic.image, [to_u8(bg.x), to_u8(bg.y), to_u8(bg.z)]);
+    let diff = diff_stats(&faces.image, &analytic.image, background_u8(&view.settings));
     Ok(Comparison {
         view: view.clone(),
         faces,

@@ -4,7 +4,7 @@
 //! The error is taken over object pixels (where either image shows the volume, `compare::diff_stats`), so a
 //! small object on a large background cannot dilute it.
 
-use crate::compare::diff_stats;
+use crate::compare::{background_u8, diff_stats};
 use crate::settings::RenderSettings;
 use image::RgbaImage;
 
@@ -33,9 +33,7 @@ pub struct Fidelity {
 impl Fidelity {
     /// `frame` against `converged`, both rendered with settings whose background is `s.background`.
     pub fn of(frame: &RgbaImage, converged: &RgbaImage, s: &RenderSettings) -> Fidelity {
-        let to_u8 = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
-        let bg = s.background;
-        let d = diff_stats(frame, converged, [to_u8(bg.x), to_u8(bg.y), to_u8(bg.z)]);
+        let d = diff_stats(frame, converged, background_u8(s));
         Fidelity {
             mean: d.mean,
             p99: d.p99,

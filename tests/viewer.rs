@@ -17,7 +17,7 @@
 
 mod common;
 
-use common::x11::{capture, have, read_screenshot, type_keys, x_client, xvfb, Viewer, WAIT_MS};
+use common::x11::{capture, have, read_screenshot, type_keys, xvfb, Viewer, WAIT_MS};
 
 use image::RgbaImage;
 use std::path::PathBuf;
@@ -168,15 +168,7 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
     let helix = volcast::volume::builtin("helix", None).unwrap();
     viewer.wait_for("script: Wait(", Duration::from_secs(180));
     let waiting = Instant::now();
-    let found = x_client(
-        &x.display,
-        "xdotool",
-        &["search", "--all", "--pid", &viewer.pid(), "--name", "^volcast$"],
-    );
-    let found = String::from_utf8_lossy(&found);
-    let windows: Vec<&str> = found.split_whitespace().collect();
-    assert_eq!(windows.len(), 1, "one volcast window: {windows:?}");
-    let window = windows[0];
+    let window = &viewer.window(&x.display);
 
     // Space starts auto-rotation, which must show: the same key path as a user's.
     let before = capture(&x.display, window);

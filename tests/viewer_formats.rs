@@ -10,7 +10,7 @@
 mod common;
 
 use common::compare::diff;
-use common::x11::{have, read_screenshot, type_keys, x_client, xvfb, Viewer, WAIT_MS};
+use common::x11::{have, read_screenshot, type_keys, xvfb, Viewer, WAIT_MS};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
@@ -105,13 +105,7 @@ fn viewer_loads_a_file_dropped_by_xdnd() {
     let script = format!("frames:3;wait:{WAIT_MS};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);
     viewer.wait_for("script: Wait(", Duration::from_secs(180));
-    let found = x_client(
-        &x.display,
-        "xdotool",
-        &["search", "--all", "--pid", &viewer.pid(), "--name", "^volcast$"],
-    );
-    let found = String::from_utf8_lossy(&found);
-    let window = found.split_whitespace().next().expect("the volcast window").to_string();
+    let window = viewer.window(&x.display);
     let id: u32 = window.parse().expect("window id");
     let accepted = common::xdnd::drop_file(&x.display, id, (600, 300), &file).expect("XDND drop");
     assert!(accepted, "the window accepts the drop (XdndFinished)");

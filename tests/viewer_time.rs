@@ -10,7 +10,7 @@
 mod common;
 
 use common::compare::diff;
-use common::x11::{capture, have, read_screenshot, screenshot_step, type_keys, x_client, xvfb, Viewer, WAIT_MS};
+use common::x11::{capture, have, read_screenshot, screenshot_step, type_keys, xvfb, Viewer, WAIT_MS};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
@@ -32,13 +32,7 @@ fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
     let script = format!("frames:3;wait:{WAIT_MS};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &[file.to_str().unwrap(), "--time", "2"], &script);
     viewer.wait_for("script: Wait(", Duration::from_secs(180));
-    let found = x_client(
-        &x.display,
-        "xdotool",
-        &["search", "--all", "--pid", &viewer.pid(), "--name", "^volcast$"],
-    );
-    let found = String::from_utf8_lossy(&found);
-    let window = found.split_whitespace().next().expect("the volcast window").to_string();
+    let window = viewer.window(&x.display);
 
     type_keys(&x.display, &window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));

@@ -227,13 +227,13 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                                 continue;
                             }
                             wall.push(ms);
-                            last = Some(frame.image.clone());
                             if let Some(tm) = frame.timings {
                                 total.push(tm.total_ms);
                                 march.push(tm.march_ms);
                                 entry.extend(tm.entry_ms);
                                 exit.extend(tm.exit_ms);
                             }
+                            last = Some(frame.image);
                         }
                         let wall_ms = Stats::of(&wall).ok_or(GpuError::Lost("no frames timed"))?;
                         let gpu_ms = Stats::of(&total);

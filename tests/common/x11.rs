@@ -229,6 +229,19 @@ impl Viewer {
     pub fn pid(&self) -> String {
         self.child.id().to_string()
     }
+
+    /// The viewer's one window on `display` (xdotool's id), asserting there is exactly one.
+    pub fn window(&self, display: &str) -> String {
+        let found = x_client(
+            display,
+            "xdotool",
+            &["search", "--all", "--pid", &self.pid(), "--name", "^volcast$"],
+        );
+        let found = String::from_utf8_lossy(&found);
+        let windows: Vec<&str> = found.split_whitespace().collect();
+        assert_eq!(windows.len(), 1, "one volcast window: {windows:?}");
+        windows[0].to_string()
+    }
 }
 
 impl Drop for Viewer {
