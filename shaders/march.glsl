@@ -2,13 +2,16 @@
 // rules in RenderSettings (src/settings.rs); the CPU reference in tests/common follows the same rules.
 layout(set = 1, binding = 0) uniform texture3D volume_tex;
 layout(set = 1, binding = 1) uniform sampler linear_smp;
-// The baked table, three rows of 4096 entries (src/render/mod.rs LUT_ROWS): row 0 linear rgb + opacity per voxel
-// step; rows 1 and 2 premultiplied rgb + opacity of one and of two march steps (tf::step_table), each entry
-// packed with its successor as half floats (tf::half_pairs), so interpolating takes one load.
+// The baked table (src/render/mod.rs LUT_ROWS): linear rgb + opacity per voxel step at 4096 values.
 layout(std430, set = 1, binding = 2) readonly buffer Lut {
     vec4 entries[4096];
-    uvec4 pairs[8192];
 } lut;
+// Its integral functions (src/preintegrate.rs): per entry the integrals over the value of extinction x colour
+// (rgb) and of extinction (a), from 0 to the entry's value. A uniform buffer: on lavapipe its per-lane loads are
+// branch-free, where a storage buffer's are a loop over the lanes.
+layout(std140, set = 1, binding = 6) uniform Integrals {
+    vec4 cumulative[4096];
+} integrals;
 layout(set = 1, binding = 3) uniform texture3D occupancy_tex;   // one texel per 8^3 brick: class and reach
 
 const uint MODE_EMISSION = 0u;
@@ -99,15 +102,29 @@ vec4 classify(float v) {
     return mix(lut.entries[i0], lut.entries[i0 + 1], u - float(i0));
 }
 
-// Row 1 (stride 1) or 2 (stride 2) at v: corrected, premultiplied colour and opacity for the step, from one
-// load of the entry and its successor.
-vec4 step_table(float v, int stride) {
-    float u = clamp(v, 0.0, 1.0) * 4095.0;
+// The integral functions at v clamped into the window (interpolated linearly between entries) and, in `slope`,
+// their slope over the entry holding it. Clamping applies the window exactly: the integral over [vp, v] of what
+// lies inside it is the difference of the integrals at the clamped ends. NaN reads as 0 (its segments are dropped
+// by segment_mean).
+vec4 integral_at(float v, out vec4 slope) {
+    float u = (isnan(v) ? 0.0 : clamp(v, frame.value_map.z, frame.value_map.w)) * 4095.0;
     int i0 = min(int(u), 4094);
-    uvec4 w = lut.pairs[(stride - 1) * 4096 + i0];
-    vec4 a = vec4(unpackHalf2x16(w.x), unpackHalf2x16(w.y));
-    vec4 b = vec4(unpackHalf2x16(w.z), unpackHalf2x16(w.w));
-    return mix(a, b, u - float(i0));
+    vec4 lo = integrals.cumulative[i0];
+    vec4 hi = integrals.cumulative[i0 + 1];
+    slope = (hi - lo) * 4095.0;
+    return mix(lo, hi, u - float(i0));
+}
+
+// Pre-integration (src/preintegrate.rs, rule 6): the mean (extinction x colour, extinction) of the segment from
+// value vp (integrals ip) to v (integrals iv, slope at v), as the quotient of differences; within one entry
+// (preintegrate::SLOPE_BELOW) the slope instead, which f32 cancellation cannot spoil, if the segment's midpoint
+// is inside the window. A NaN end drops the segment.
+vec4 segment_mean(float vp, vec4 ip, float v, vec4 iv, vec4 slope) {
+    float dv = v - vp;
+    float mid = 0.5 * (v + vp);
+    vec4 near = (mid >= frame.value_map.z && mid <= frame.value_map.w) ? slope : vec4(0.0);
+    vec4 mean = abs(dv) >= 1.0 / 4095.0 ? (iv - ip) / dv : near;
+    return (isnan(v) || isnan(vp)) ? vec4(0.0) : mean;
 }
 
 // Central differences one voxel apart: value change per voxel along each texture axis.
@@ -204,6 +221,31 @@ vec4 output_pixel(vec4 colour, uint taken) {
         return vec4(vec3(uvec3(taken, taken >> 8u, taken >> 16u) & uvec3(255u)), 255.0) / 255.0;
     }
     return colour;
+}
+
+// A pre-integrated segment (rule 6) over `seg_steps` voxel lengths, from its mean (extinction x colour,
+// extinction): colour (not premultiplied) and opacity. With shading, lit by the gradient at its end `p`.
+vec4 segment_sample(vec4 mean, float seg_steps, vec3 p, vec3 light, bool density_model) {
+    float sigma = max(mean.a, 0.0);
+#if defined(SHADED)
+    // A transparent segment adds nothing; leaving here also skips its six gradient samples.
+    if (sigma <= 0.0) {
+        return vec4(0.0);
+    }
+    vec3 rgb = clamp(mean.rgb / sigma, 0.0, 1.0);
+    vec3 g = gradient(p);
+    float grad_ref = frame.voxel_world.w;
+    if (grad_ref > 0.0) {
+        sigma *= min(1.0, length(g) / grad_ref);
+    }
+    if (frame.flags.w != 0u) {
+        rgb = shade(rgb, g, light);
+    }
+#else
+    vec3 rgb = sigma > 0.0 ? clamp(mean.rgb / sigma, 0.0, 1.0) : vec3(0.0);
+#endif
+    float alpha = density_model ? min(1.0, sigma * seg_steps) : 1.0 - exp(-sigma * seg_steps);
+    return vec4(rgb, alpha);
 }
 
 // The march is compiled in variants (build.rs defines one of FAMILY_PROJECTION / FAMILY_ISOSURFACE, or neither
@@ -309,71 +351,85 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     }
     return output_pixel(finish(shade(classify(iso).rgb, gradient(a + dir * t_hit), light), 1.0), taken);
 #else
-    // Emission-absorption and the density-factor model.
+    // Emission-absorption and the density-factor model, pre-integrated (rule 6): the ray from its start to its
+    // end is composited segment by segment between consecutive points: the start, the samples, the end.
     vec3 color = vec3(0.0);
     float opacity = 0.0;
+    bool density_model = mode == MODE_DENSITY;
     int k = 0;
     bool done = false;
+    bool reached_end = false;
+    // The segment's start: index -1 is the ray's start.
+    int k_prev = -1;
+    float t_prev = 0.0;
+    float v_prev = sample_value(a);
+    vec4 unused;
+    vec4 i_prev = integral_at(v_prev, unused);
+    int k_occupied = -1;   // the last point taken in an occupied span
     while (k < max_steps && !done) {
         float t0 = (float(k) + o) * h;
         if (t0 >= len) {
+            reached_end = true;
             break;
         }
         ivec2 span = brick_span(a, dir, t0, h, o, bricks);
         int end = max(span.x, k + 1);
-        if (span.y == 0) {
+        // Leaving occupied bricks, the segment from the last sample there to the first one beyond still spans the
+        // values between theirs: that one sample is taken before the leap.
+        bool exiting = span.y == 0 && k_prev == k_occupied && k_prev >= k - 2;
+        if (span.y == 0 && !exiting) {
             k = end;
             continue;
         }
-        // Faint bricks (adaptive stepping): every other sample of the same grid, opacity for a double step.
-        int stride = span.y == 1 ? 2 : 1;
-        float steps = step_length * float(stride);
+        // Faint bricks (adaptive stepping): every other sample of the same grid, segments two steps long.
+        int stride = exiting ? k - k_prev : (span.y == 1 ? 2 : 1);
+        end = exiting ? k + 1 : end;
+        // The segment ending at this span's first sample starts at the point `stride` before it: taken already
+        // unless a skipped span lies before.
+        if (k_prev != k - stride) {
+            k_prev = max(k - stride, -1);
+            t_prev = k_prev < 0 ? 0.0 : (float(k_prev) + o) * h;
+            v_prev = sample_value(a + dir * t_prev);
+            i_prev = integral_at(v_prev, unused);
+        }
         for (; k < end; k += stride) {
             float t = (float(k) + o) * h;
             if (t >= len) {
+                reached_end = true;
                 done = true;
                 break;
             }
             taken += 1u;
             vec3 p = a + dir * t;
             float v = sample_value(p);
-            if (!visible(v)) {
-                continue;
-            }
-#if !defined(SHADED)
-            // Opacity corrected for this step (one or two march steps) and premultiplied colour, from the table.
-            vec4 c = step_table(v, stride);
-            if (c.a <= 0.0) {
-                continue;
-            }
-            color += (1.0 - opacity) * c.rgb;
+            vec4 slope;
+            vec4 iv = integral_at(v, slope);
+            vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), step_length * (t - t_prev) / h, p,
+                                    light, density_model);
+            v_prev = v;
+            i_prev = iv;
+            t_prev = t;
+            k_prev = k;
+            k_occupied = exiting ? k_occupied : k;
+            color += (1.0 - opacity) * c.a * c.rgb;
             opacity += (1.0 - opacity) * c.a;
-#else
-            vec4 c = classify(v);
-            float alpha = c.a;
-            // A transparent sample adds nothing; skipping it also skips its six gradient samples.
-            if (alpha <= 0.0) {
-                continue;
-            }
-            vec3 rgb = c.rgb;
-            vec3 g = gradient(p);
-            if (grad_ref > 0.0) {
-                alpha *= min(1.0, length(g) / grad_ref);
-            }
-            if (shading_on) {
-                rgb = shade(rgb, g, light);
-            }
-            float a_step = mode == MODE_DENSITY
-                ? min(1.0, alpha * frame.mode_params.y * steps)
-                : 1.0 - pow(1.0 - alpha, steps);
-            color += (1.0 - opacity) * a_step * rgb;
-            opacity += (1.0 - opacity) * a_step;
-#endif
             if (opacity >= frame.alpha.z) {
                 done = true;
                 break;
             }
         }
+    }
+    // The last segment, from the last sample to the ray's end, where the march got there (not by early
+    // termination, nor by leaping over the last samples).
+    if (reached_end && opacity < frame.alpha.z && len - t_prev <= h * 1.001) {
+        vec3 p = a + dir * len;
+        float v = sample_value(p);
+        vec4 slope;
+        vec4 iv = integral_at(v, slope);
+        vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), step_length * (len - t_prev) / h, p,
+                                light, density_model);
+        color += (1.0 - opacity) * c.a * c.rgb;
+        opacity += (1.0 - opacity) * c.a;
     }
     return output_pixel(finish(color, opacity), taken);
 #endif

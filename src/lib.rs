@@ -9,6 +9,7 @@ pub mod gpu;
 pub mod headless;
 pub mod info;
 pub mod playback;
+pub mod preintegrate;
 pub mod render;
 pub mod settings;
 pub mod tf;

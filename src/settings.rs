@@ -135,12 +135,22 @@ impl Default for Shading {
 ///    voxel); world normal `n = normalize(M⁻ᵀ·g)` with M the world step of one voxel along each index axis (rule
 ///    0); headlight `L = −ray direction`;
 ///    `rgb ← rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` (white, two-sided). `|g| = 0`: rgb kept.
-///    With `gradient_opacity = Some(r)`: `a ← a·min(1, |g|/r)`. With `gradient_texture` (emission/density modes),
+///    In emission/density modes a segment (rule 6) is lit by the gradient at its far end.
+///    With `gradient_opacity = Some(r)`: the segment's extinction `σ̄ ← σ̄·min(1, |g|/r)`. With `gradient_texture` (emission/density modes),
 ///    `g` is instead the grid's central differences `(v[i + e] − v[i − e])/2` per voxel (indices clamped to the
 ///    edge, NaN voxels read as 0) filtered trilinearly like the values.
-/// 6. **Opacity for the step.** Emission: `α = 1 − (1 − a)^step_length`. Density: `α = min(1, a·density·step_length)`.
-/// 7. **Compositing.** Emission/density, front to back: `C += (1 − A)·α·rgb`, `A += (1 − A)·α`; stop once
-///    `A ≥ early_termination`. MIP/MinIP/average: m = max/min/mean of the visible samples' v; none: background;
+/// 6. **Segments, pre-integrated** (emission/density; Engel, Kraus and Ertl 2001). The ray is cut at its start
+///    (t = 0), its samples and its end (t = L); each segment between consecutive points, of length `s` voxels
+///    (`s = step_length` between samples), is taken as a value varying linearly from the value at its near end
+///    `v_a` to the value at its far end `v_b`. The extinction per voxel length of a value is `σ(v) = −ln(1 − a)`
+///    (emission) or `a·density` (density), at most 32 (opacity 1), zero outside the window; the segment's mean
+///    extinction is `σ̄ = ∫σ dv / (v_b − v_a)` over [v_a, v_b] (`σ(v_b)` where they coincide) and its colour the
+///    extinction-weighted mean `c̄ = ∫σ·rgb dv / ∫σ dv`. Its opacity: emission `α = 1 − e^(−σ̄·s)`, density
+///    `α = min(1, σ̄·s)`. A segment with a NaN end adds nothing. A constant value thus gives rule 4's opacity
+///    corrected to the segment's length, `1 − (1 − a)^s`. The GPU integrates the 4096-entry table and uses its
+///    slope where |v_b − v_a| is under one entry (`preintegrate`).
+/// 7. **Compositing.** Emission/density, front to back, segment by segment: `C += (1 − A)·α·c̄`, `A += (1 − A)·α`;
+///    stop once `A ≥ early_termination`. MIP/MinIP/average: m = max/min/mean of the visible samples' v; none: background;
 ///    else `C` = the colour of m, `A = 1`. Isosurface: the first sample k with `v_k ≥ iso_value`; k = 0 hits at
 ///    `t_0`; otherwise 8 bisection steps on [t_{k−1}, t_k] keeping `v(lo) < iso ≤ v(hi)`, hit at the final
 ///    midpoint; `C` = the colour of `iso_value` clamped into the window, shaded (rule 5, with `shading` or its

@@ -254,39 +254,6 @@ pub enum Classification {
     Function(TransferFunction),
 }
 
-/// The opacity-corrected, premultiplied table for a march step of `steps` voxel lengths: for each entry of
-/// `lut` (from [`bake`]), the step's opacity a = 1 − (1 − alpha)^steps (emission–absorption, rule 6) or
-/// a = min(1, alpha · density · steps) (the density model), and the colour it adds, a · rgb. The unshaded march
-/// reads this instead of computing a power per sample; interpolating it differs from correcting the
-/// interpolated entry only inside one of the 4095 intervals where the table jumps.
-pub fn step_table(lut: &[[f32; 4]], steps: f32, density: Option<f32>) -> Vec<[f32; 4]> {
-    lut.iter()
-        .map(|&[r, g, b, alpha]| {
-            let a = match density {
-                Some(d) => (alpha * d * steps).min(1.0),
-                None => 1.0 - (1.0 - alpha).powf(steps),
-            };
-            [a * r, a * g, a * b, a]
-        })
-        .collect()
-}
-
-/// `table` with each entry paired with its successor (the last with itself) as half floats, packed for GLSL's
-/// `unpackHalf2x16`: `[rg_i, ba_i, rg_i+1, ba_i+1]`. The march interpolates between the pair from one load.
-/// f16 keeps 11 significant bits: a relative error of at most 2⁻¹¹ per entry, well under 1/255 on the image.
-pub fn half_pairs(table: &[[f32; 4]]) -> Vec<[u32; 4]> {
-    let pack = |a: f32, b: f32| {
-        u32::from(half::f16::from_f32(a).to_bits()) | u32::from(half::f16::from_f32(b).to_bits()) << 16
-    };
-    (0..table.len())
-        .map(|i| {
-            let [r, g, b, a] = table[i];
-            let [r1, g1, b1, a1] = table[(i + 1).min(table.len() - 1)];
-            [pack(r, g), pack(b, a), pack(r1, g1), pack(b1, a1)]
-        })
-        .collect()
-}
-
 /// Bakes `classification` for data with value range `range` and the value window `window` (normalised) into
 /// [`LUT_SIZE`] entries of `[r, g, b, alpha]`, colours in linear light. Entry i is the value v = i / (N − 1).
 /// Entries outside the window hold the classification at the window's nearer edge: the march never classifies
@@ -344,40 +311,6 @@ pub fn lookup(lut: &[[f32; 4]], v: f32) -> [f32; 4] {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn half_pairs_hold_each_entry_and_its_successor() {
-        let t = [[0.5, 0.25, 1.0, 0.0123], [0.0, 1.0, 0.75, 0.5]];
-        let p = half_pairs(&t);
-        let unpack = |w: u32| {
-            [
-                half::f16::from_bits(w as u16).to_f32(),
-                half::f16::from_bits((w >> 16) as u16).to_f32(),
-            ]
-        };
-        assert_eq!(unpack(p[0][0]), [0.5, 0.25]);
-        assert_eq!(unpack(p[0][2]), [0.0, 1.0]);
-        assert_eq!(unpack(p[0][3]), [0.75, 0.5]);
-        let a = unpack(p[0][1])[1];
-        assert!((a - 0.0123).abs() <= 0.0123 / 2048.0, "{a}");
-        assert_eq!(p[1][2], p[1][0], "the last entry pairs with itself");
-    }
-
-    #[test]
-    fn step_table_corrects_opacity_and_premultiplies() {
-        let lut = [[0.5, 0.25, 1.0, 0.2], [1.0, 1.0, 1.0, 0.0], [0.2, 0.4, 0.6, 1.0]];
-        let t = step_table(&lut, 2.0, None);
-        // 1 - 0.8^2 = 0.36
-        assert!((t[0][3] - 0.36).abs() < 1e-6);
-        assert!((t[0][0] - 0.18).abs() < 1e-6 && (t[0][2] - 0.36).abs() < 1e-6);
-        assert_eq!(t[1], [0.0; 4]);
-        assert_eq!(t[2][3], 1.0);
-        let half = step_table(&lut, 0.5, None);
-        assert!((half[0][3] - (1.0 - 0.8f32.sqrt())).abs() < 1e-6);
-        let d = step_table(&lut, 2.0, Some(1.5));
-        assert!((d[0][3] - 0.6).abs() < 1e-6);
-        assert_eq!(d[2][3], 1.0, "density opacity is clamped to 1");
-    }
 
     #[test]
     fn srgb_round_trip_and_known_values() {

@@ -2,8 +2,10 @@
 //!
 //! Most cases use a 16³ volume on a unit cube, looked at head-on along -z through the centre pixel of an odd-sized
 //! image: that ray crosses the box over exactly L = 1 = 16 voxels, so with step length `s` it takes
-//! n = #{k : (k + o)·s < 16} samples (o = 0.5 without jitter) and, with opacity α per voxel, reaches
-//! A = 1 - (1 - α)^(n·s). Colours are composited in linear light and encoded to sRGB once (rule 8).
+//! n = #{k : (k + o)·s < 16} samples (o = 0.5 without jitter). Emission and density composite the n + 1 segments
+//! between the ray's start, its samples and its end (rule 6, pre-integrated), so with opacity α per voxel a
+//! constant volume reaches A = 1 - (1 - α)^16 at every step length. Colours are composited in linear light and
+//! encoded to sRGB once (rule 8).
 
 mod common;
 
@@ -119,6 +121,16 @@ fn expected_samples_at(distance_in_voxels: f64, step_length: f64, offset: f64) -
         .count() as u32
 }
 
+/// Rule 6's segment lengths (in steps' units of voxels) of a ray `distance` voxels long at step length `step` with
+/// start offset `offset`: from the start to the first sample, between samples, from the last sample to the end.
+fn segment_lengths(distance: f64, step: f64, offset: f64) -> Vec<f64> {
+    let samples = expected_samples_at(distance, step, offset);
+    let mut points = vec![0.0];
+    points.extend((0..samples).map(|k| (f64::from(k) + offset) * step));
+    points.push(distance);
+    points.windows(2).map(|w| w[1] - w[0]).collect()
+}
+
 fn assert_near(what: &str, actual: f64, expected: f64, tolerance: f64) {
     assert!(
         (actual - expected).abs() <= tolerance,
@@ -149,7 +161,7 @@ fn constant_volume_head_on_matches_closed_form() {
     let segment = trace.segment.expect("the centre ray hits the box");
     assert_near("segment start", segment.t_start, 2.5, 1e-12);
     assert_near("segment end", segment.t_end, 3.5, 1e-12);
-    assert_eq!((trace.samples, trace.composited), (16, 16));
+    assert_eq!((trace.samples, trace.composited), (16, 17), "16 samples, 17 segments");
 
     let alpha = 1.0 - keep().powi(16);
     assert_near("opacity", trace.alpha, alpha, 1e-12);
@@ -165,12 +177,14 @@ fn constant_volume_head_on_matches_closed_form() {
     let expected = quantise(DVec3::new(srgb(linear_out.x), srgb(linear_out.y), srgb(linear_out.z)));
     assert_eq!(*image.get_pixel(CENTRE, CENTRE), expected);
 
-    // Off-centre rays cross more or less of the box, but a constant volume keeps every pixel's hue: C = rgb·A.
+    // Off-centre rays cross more or less of the box, but a constant volume keeps every pixel's hue: C = rgb·A,
+    // with A from the ray's length through the box (16 voxels per unit).
     let (tracer, rgb) = (reference.tracer(&s), table_rgb(&volume, &s, 0.5));
     for y in 0..SIZE {
         for x in 0..SIZE {
             let t = tracer.trace(x, y);
-            let closed = rgb * (1.0 - keep().powi(t.samples as i32));
+            let length = t.segment.map_or(0.0, |seg| seg.length()) * 16.0;
+            let closed = rgb * (1.0 - keep().powf(length));
             assert_near3(&format!("pixel ({x}, {y})"), t.color, closed, 1e-7);
         }
     }
@@ -188,7 +202,7 @@ fn window_excluding_every_value_gives_the_background() {
     // or v > hi).
     s.window = [0.5, 1.0];
     let trace = Reference::new(&volume).trace(&s, CENTRE, CENTRE);
-    assert_eq!(trace.composited, 16);
+    assert_eq!(trace.composited, 17);
     let a = f64::from(STEP_ALPHA);
     assert_near(
         "opacity at the window's edge",
@@ -272,19 +286,12 @@ fn opacity_correction_keeps_opacity_per_distance() {
         let sl = f64::from(step_length);
         let n = expected_samples(16.0, sl);
         assert_eq!(trace.samples, n, "step length {step_length}");
-        let closed = 1.0 - keep().powf(f64::from(n) * sl);
+        // The segments cover the whole ray, whatever the step: the opacity of 16 voxels exactly.
         assert_near(
             &format!("opacity at step length {step_length}"),
             trace.alpha,
-            closed,
-            1e-12,
-        );
-        // Only the rounding of 16 voxels to whole steps changes the opacity.
-        assert_near(
-            &format!("opacity drift at step length {step_length}"),
-            trace.alpha,
             at_one_voxel,
-            0.01,
+            1e-12,
         );
     }
 }
@@ -295,11 +302,12 @@ fn early_termination_caps_opacity() {
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, SIZE);
     s.step_alpha = 0.5;
-    for (threshold, samples) in [(0.9f32, 4), (0.99, 7), (0.5, 1), (1.0, 16)] {
+    // After sample j (from 1) the ray has crossed j − 0.5 voxels; without termination all 16.
+    for (threshold, samples, depth) in [(0.9f32, 4, 3.5), (0.99, 8, 7.5), (0.5, 2, 1.5), (1.0, 16, 16.0)] {
         s.early_termination = threshold;
         let trace = reference.trace(&s, CENTRE, CENTRE);
         assert_eq!(trace.samples, samples, "termination at {threshold}");
-        assert_near("opacity", trace.alpha, 1.0 - 0.5f64.powi(samples as i32), 1e-12);
+        assert_near("opacity", trace.alpha, 1.0 - 0.5f64.powf(depth), 1e-12);
         assert_eq!(trace.terminated_early, threshold < 1.0);
         assert_near3("colour", trace.color, table_rgb(&volume, &s, 0.5) * trace.alpha, 1e-7);
     }
@@ -323,11 +331,12 @@ fn multiplied_alpha_scales_opacity_by_the_windowed_value() {
 #[test]
 fn nan_samples_are_transparent() {
     // The far half (z texels 0..8) is NaN: the 8 samples in the near half see only finite texels (texel 8 is the
-    // lowest they touch), the other 8 each touch a NaN texel with non-zero weight.
+    // lowest they touch), the other 8 and the ray's end each touch a NaN texel with non-zero weight. The segments
+    // from the start to the 8th sample (7.5 voxels) count; every segment with a NaN end adds nothing.
     let volume = volume_from(|_, _, z| if z < N / 2 { f32::NAN } else { 1.0 });
     let trace = Reference::new(&volume).trace(&head_on(&volume, SIZE), CENTRE, CENTRE);
     assert_eq!((trace.samples, trace.composited), (16, 8));
-    assert_near("opacity", trace.alpha, 1.0 - keep().powi(8), 1e-12);
+    assert_near("opacity", trace.alpha, 1.0 - keep().powf(7.5), 1e-12);
 }
 
 #[test]
@@ -753,11 +762,10 @@ fn jittered_mean_converges_to_the_integral() {
     let integral = 16.0 / 0.3 * ((1.0 - u_end) * (1.0 - u_end).ln() + u_end) - 0.5 * (1.0 - u_end).ln();
 
     let depth = |s: &RenderSettings| -(1.0 - reference.trace(s, 0, 0).alpha).ln();
+    // Pre-integrated segments cover the whole ray and follow a linear ramp exactly: midpoint samples already
+    // give the integral (up to the two segments holding the ramp's kinks).
     let midpoint = depth(&s);
-    assert!(
-        (midpoint - integral).abs() > 0.08,
-        "midpoint samples cover 15.6 of 16 voxels: {midpoint} vs {integral}"
-    );
+    assert_near("midpoint optical depth", midpoint, integral, 0.015);
     let seeds = 1024;
     let (mut sum, mut offset_sum) = (0.0, 0.0);
     for seed in 0..seeds {
@@ -934,7 +942,9 @@ fn gradient_opacity_scales_alpha_by_the_gradient() {
             s.gradient_opacity = Some(r);
             s.shading = shading;
             let trace = reference.trace(&s, CENTRE, CENTRE);
-            let alpha = 1.0 - (1.0 - a * scale).powi(trace.samples as i32);
+            // The extinction is scaled: (1 − a)^scale per voxel, over the segment's 32 voxels per unit.
+            let voxels = trace.segment.expect("hit").length() * 32.0;
+            let alpha = 1.0 - (1.0 - a).powf(scale * voxels);
             assert_near(
                 &format!("opacity with r = {r}, shading {shading:?}"),
                 trace.alpha,
@@ -958,16 +968,17 @@ fn density_mode_opacity_is_linear_in_density() {
     let mut s = head_on(&volume, SIZE);
     s.mode = CompositeMode::Density;
     let a = f64::from(STEP_ALPHA);
-    // One sample: the pixel's opacity is the step's.
+    // One voxel, one sample: two half-voxel segments, each of opacity a·d/2.
     s.set_slab(2, 0.5, 1.0 / 16.0);
     for density in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
         s.density = density;
         let trace = reference.trace(&s, CENTRE, CENTRE);
         assert_eq!(trace.samples, 1);
+        let half = a * f64::from(density) * 0.5;
         assert_near(
             &format!("density {density}"),
             trace.alpha,
-            a * f64::from(density),
+            1.0 - (1.0 - half) * (1.0 - half),
             1e-12,
         );
     }
@@ -981,13 +992,16 @@ fn density_mode_opacity_is_linear_in_density() {
         (s.density, s.step_length) = (density, step_length);
         let sl = f64::from(step_length);
         let n = expected_samples(16.0, sl);
-        let step = (a * f64::from(density) * sl).min(1.0);
+        let keep: f64 = segment_lengths(16.0, sl, 0.5)
+            .iter()
+            .map(|length| 1.0 - (a * f64::from(density) * length).min(1.0))
+            .product();
         let trace = reference.trace(&s, CENTRE, CENTRE);
         assert_eq!(trace.samples, n);
         assert_near(
             &format!("density {density}, step {step_length}"),
             trace.alpha,
-            1.0 - (1.0 - step).powi(n as i32),
+            1.0 - keep,
             1e-12,
         );
     }

@@ -1,5 +1,6 @@
 //! Counting the march's samples on the CPU by replaying its rules, so the march shader is left untouched.
 
+use crate::preintegrate;
 use crate::render::skip::{self, BrickGrid};
 use crate::render::{FrameUniforms, VolumeInfo};
 use crate::settings::{self, CompositeMode, RenderSettings};
@@ -10,10 +11,11 @@ use glam::{Mat3, Mat4, Vec3};
 /// Counts the samples the march takes by replaying its rules on the CPU (settings.rs rules 1–7) in the shader's
 /// f32 arithmetic: the analytic ray setup built from the camera basis as `FrameUniforms::new` builds it, samples at
 /// `(k + o)·h` (jitter included), trilinear values, the window, the baked classification table, the compositing
-/// mode and early termination. Two counts per pixel:
+/// mode, pre-integration and early termination. Two counts per pixel:
 /// - *segment*: sample positions on the ray segment, before early termination (an upper bound);
-/// - *taken*: 3D-texture samples the march actually takes: one per step until the ray ends, plus six per step
-///   that computes a gradient (shading or gradient opacity, on steps with opacity > 0) and, in isosurface mode,
+/// - *taken*: 3D-texture samples the march actually takes: one per step until the ray ends, one more where the
+///   emission/density march resumes after a leap (its first segment's start), plus six per step that computes a
+///   gradient (shading or gradient opacity, on steps with opacity > 0) and, in isosurface mode,
 ///   the bisection's eight and the hit's gradient.
 ///
 /// Approximations, all small: the entry/exit method finds the same segments to float precision (README, "Two ray
@@ -52,10 +54,10 @@ struct RayFrame {
     max_steps: u64,
     viewport: [f32; 2],
     window: [f32; 2],
-    lut: Vec<[f32; 4]>,
+    /// The pre-integration table the emission/density march reads.
+    integrals: Vec<[f32; 4]>,
     step_length: f32,
     mode: CompositeMode,
-    density: f32,
     iso_value: f32,
     gradients: bool,
     jitter: Option<u32>,
@@ -155,10 +157,9 @@ impl SampleCounter {
             occupancy: s
                 .skip_empty
                 .then(|| self.bricks.classify(&lut, s.mode, s.window, s.iso_value, false)),
-            lut,
+            integrals: preintegrate::integral_table(&lut, (s.mode == CompositeMode::Density).then_some(s.density)),
             step_length: s.step_length,
             mode: s.mode,
-            density: s.density,
             iso_value: s.iso_value,
             gradients: s.shading.is_some() || s.gradient_opacity.is_some(),
             jitter: s.jitter,
@@ -185,21 +186,44 @@ impl SampleCounter {
         let len = (f.to_world * d).length();
         let o = f.jitter.map_or(0.5, |seed| settings::jitter_offset(x, y, seed));
         let segment = ((len / f.h - o).ceil().max(0.0) as u64).min(f.max_steps);
-        let [win_lo, win_hi] = f.window;
         let mut opacity = 0f32;
         let mut taken = 0u64;
+        // The emission/density march composites segments between the ray's start, its samples and its end.
+        let absorbing = matches!(f.mode, CompositeMode::Emission | CompositeMode::Density);
+        // The previous point (the segment's start), where it is, and whether the march took it.
+        let (mut previous, mut t_prev, mut previous_taken, mut previous_occupied) = (self.sample(a), 0f32, true, true);
+        if absorbing {
+            taken += 1;
+        }
+        let mut reached_end = false;
         for k in 0..f.max_steps {
             let t = (k as f32 + o) * f.h;
             if t >= len {
+                reached_end = true;
                 break;
             }
             let p = a + d * (t / len);
-            if !self.in_occupied_brick(f, p) {
+            let occupied = self.in_occupied_brick(f, p);
+            // The emission/density march takes the first sample past occupied bricks (its segment), then leaps.
+            let exit_sample = absorbing && previous_taken && previous_occupied;
+            if !(occupied || exit_sample) {
                 // Leapt over: nothing there can be visible (nor reach the iso value), so the replay goes on.
+                previous_taken = false;
                 continue;
             }
+            previous_occupied = occupied;
             taken += 1;
             let v = self.sample(p);
+            // The emission/density march samples the segment's start again where it leapt to this sample.
+            if !previous_taken {
+                t_prev = if k == 0 { 0.0 } else { (k as f32 - 1.0 + o) * f.h };
+                previous = self.sample(a + d * (t_prev / len));
+                if absorbing {
+                    taken += 1;
+                }
+            }
+            let (vp, length) = (previous, f.step_length * (t - t_prev) / f.h);
+            (previous, t_prev, previous_taken) = (v, t, true);
             match f.mode {
                 CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => continue,
                 CompositeMode::Isosurface => {
@@ -211,25 +235,22 @@ impl SampleCounter {
                 }
                 CompositeMode::Emission | CompositeMode::Density => {}
             }
-            if v.is_nan() || v < win_lo || v > win_hi {
-                continue;
-            }
-            let alpha = tf::lookup(&f.lut, v)[3];
-            if alpha <= 0.0 {
+            let mean = preintegrate::segment_mean(&f.integrals, f.window, vp, v);
+            if v.is_nan() || vp.is_nan() || mean[3] <= 0.0 {
                 continue;
             }
             if f.gradients {
                 taken += GRADIENT_SAMPLES;
             }
-            let a_step = if f.mode == CompositeMode::Density {
-                (alpha * f.density * f.step_length).min(1.0)
-            } else {
-                1.0 - (1.0 - alpha).powf(f.step_length)
-            };
+            let (_, a_step) = preintegrate::segment(mean, length, f.mode == CompositeMode::Density);
             opacity += (1.0 - opacity) * a_step;
             if opacity >= f.early_termination {
-                break;
+                return (segment, taken);
             }
+        }
+        // The last segment, to the ray's end.
+        if absorbing && reached_end && previous_taken {
+            taken += 1;
         }
         (segment, taken)
     }
@@ -276,7 +297,8 @@ mod tests {
 
     #[test]
     fn counter_counts_the_segment_of_an_axis_aligned_ray() {
-        // A ray straight down the box's axis crosses 64 voxels of a 64³ volume: 64 samples at 1-voxel steps.
+        // A ray straight down the box's axis crosses 64 voxels of a 64³ volume: 64 samples at 1-voxel steps, and the
+        // emission march also reads the ray's start and end (its first and last segments' outer ends).
         let v = volume::builtin("box", Some(64)).unwrap();
         let mut s = RenderSettings::new(1, 1, v.extent());
         s.camera = Camera::orbit(0.0, 0.0, 3.0, Vec3::ZERO);
@@ -285,17 +307,17 @@ mod tests {
         let counter = SampleCounter::new(&v);
         let c = counter.count(&s);
         assert_eq!(c.segment_per_pixel, 64.0);
-        assert_eq!(c.taken_per_pixel, 64.0, "nothing is opaque, so no ray ends early");
+        assert_eq!(c.taken_per_pixel, 66.0, "nothing is opaque, so no ray ends early");
         s.skip_empty = true;
         let c = counter.count(&s);
         assert_eq!(c.segment_per_pixel, 64.0);
         assert_eq!(
-            c.taken_per_pixel, 0.0,
-            "nothing is visible: skipping leaps over every brick"
+            c.taken_per_pixel, 2.0,
+            "nothing is visible: the start and the first sample (its segment), then a leap over every brick"
         );
         s.step_alpha = 1.0;
         s.window = [0.0, 1.0];
         let c = counter.count(&s);
-        assert_eq!(c.taken_per_pixel, 1.0, "an opaque first sample ends the ray");
+        assert_eq!(c.taken_per_pixel, 2.0, "an opaque first segment ends the ray");
     }
 }

@@ -10,6 +10,9 @@ use crate::tf::LUT_SIZE;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
+/// The pre-integration table's size: [`LUT_SIZE`] vec4 of f32, 64 KiB.
+const INTEGRALS_BYTES: u64 = (LUT_SIZE * std::mem::size_of::<[f32; 4]>()) as u64;
+
 fn set_layout(
     gpu: &Gpu,
     bindings: &[(vk::DescriptorType, vk::ShaderStageFlags)],
@@ -56,6 +59,12 @@ impl Renderer {
     pub fn new(gpu: &Gpu, output_format: vk::Format, frames_in_flight: usize) -> Result<Renderer, GpuError> {
         let all = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
         let frag = vk::ShaderStageFlags::FRAGMENT | vk::ShaderStageFlags::COMPUTE;
+        let uniform_range = gpu.properties.limits.max_uniform_buffer_range;
+        if u64::from(uniform_range) < INTEGRALS_BYTES {
+            return Err(GpuError::NoDevice(format!(
+                "the device's uniform buffers hold {uniform_range} bytes; the march needs {INTEGRALS_BYTES}"
+            )));
+        }
         let lut = Buffer::new(
             gpu,
             (LUT_ROWS * LUT_SIZE * std::mem::size_of::<[f32; 4]>()) as u64,
@@ -63,6 +72,19 @@ impl Renderer {
             MemoryLocation::CpuToGpu,
             "transfer function table",
         )?;
+        let integrals = match Buffer::new(
+            gpu,
+            INTEGRALS_BYTES,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+            "pre-integration table",
+        ) {
+            Ok(b) => b,
+            Err(e) => {
+                lut.destroy(gpu);
+                return Err(e);
+            }
+        };
         let mut r = Renderer {
             output_format,
             frame_set_layout: vk::DescriptorSetLayout::null(),
@@ -82,6 +104,7 @@ impl Renderer {
             linear_sampler: vk::Sampler::null(),
             point_sampler: vk::Sampler::null(),
             lut,
+            integrals,
             baked: None,
             lut_table: Vec::new(),
             volume: None,
@@ -116,6 +139,7 @@ impl Renderer {
                 (D::SAMPLED_IMAGE, frag),
                 (D::SAMPLED_IMAGE, frag),
                 (D::STORAGE_BUFFER, frag),
+                (D::UNIFORM_BUFFER, frag),
             ],
         )?;
         self.positions_set_layout = set_layout(
@@ -162,7 +186,7 @@ impl Renderer {
         let sizes = [
             vk::DescriptorPoolSize {
                 ty: D::UNIFORM_BUFFER,
-                descriptor_count: n,
+                descriptor_count: n + 1,
             },
             vk::DescriptorPoolSize {
                 ty: D::SAMPLED_IMAGE,

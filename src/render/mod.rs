@@ -17,8 +17,9 @@ use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, Graphics
 use crate::gpu::resources::{Buffer, Image, ImageDesc};
 pub use crate::gpu::TexelPolicy;
 use crate::gpu::{Gpu, GpuError};
+use crate::preintegrate::integral_table;
 use crate::settings::{PositionFormat, RaySetup, RenderSettings};
-use crate::tf::{bake, half_pairs, step_table, Classification};
+use crate::tf::{bake, Classification};
 use crate::volume::Volume;
 use ash::vk;
 
@@ -84,24 +85,20 @@ impl PositionTargets {
     }
 }
 
-/// Rows of the table buffer: 0 the baked classification (opacity per voxel-length step, f32 RGBA); 1 and 2 the
-/// same corrected for one and for two march steps and premultiplied (`tf::step_table`), which the unshaded
-/// emission/density march reads instead of computing a power per sample (2: faint bricks, adaptive step),
-/// stored as `tf::half_pairs` (each entry with its successor, as f16: one load per sample).
-const LUT_ROWS: usize = 3;
+/// Rows of the table buffer: the baked classification (opacity per voxel-length step, f32 RGBA), which the
+/// projection and isosurface marches read.
+const LUT_ROWS: usize = 1;
 
-/// What rows 1 and 2 of the table depend on beyond the classification: the step length in voxels and, for the
-/// density model, its density factor.
+/// What the integral table (`preintegrate::integral_table`) depends on beyond the classification and window:
+/// for the density model, its density factor (the emission model's extinction does not depend on the step).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct StepRule {
-    steps: f32,
     density: Option<f32>,
 }
 
 impl StepRule {
     fn of(s: &RenderSettings) -> StepRule {
         StepRule {
-            steps: s.step_length,
             density: (s.mode == crate::settings::CompositeMode::Density).then_some(s.density),
         }
     }
@@ -165,6 +162,8 @@ pub struct Renderer {
     point_sampler: vk::Sampler,
     /// The baked table (shaders/march.glsl `Lut`): [`LUT_ROWS`] rows of [`LUT_SIZE`] entries.
     lut: Buffer,
+    /// Its integral functions (shaders/march.glsl `Integrals`, a uniform buffer of [`LUT_SIZE`] vec4).
+    integrals: Buffer,
     /// What the table holds: classification, window, data range and step rule it was baked for, and row 0
     /// itself (the brick occupancy is computed from it).
     baked: Option<(Classification, [f32; 2], [f64; 2], StepRule)>,
@@ -195,10 +194,10 @@ impl Renderer {
         let classification = s.classification();
         let rule = StepRule::of(s);
         let lut = bake(&classification, s.window, range);
-        let mut rows: Vec<[u32; 4]> = lut.iter().map(|e| e.map(f32::to_bits)).collect();
-        rows.extend(half_pairs(&step_table(&lut, rule.steps, rule.density)));
-        rows.extend(half_pairs(&step_table(&lut, 2.0 * rule.steps, rule.density)));
+        let rows: Vec<[u32; 4]> = lut.iter().map(|e| e.map(f32::to_bits)).collect();
         self.lut.write(bytemuck::cast_slice(&rows))?;
+        let integrals = integral_table(&lut, rule.density);
+        self.integrals.write(bytemuck::cast_slice(&integrals))?;
         self.baked = Some((classification, s.window, range, rule));
         self.lut_table = lut;
         Ok(())
@@ -215,6 +214,11 @@ impl Renderer {
         let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.linear_sampler)];
         let lut_info = [vk::DescriptorBufferInfo {
             buffer: self.lut.raw,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }];
+        let integrals_info = [vk::DescriptorBufferInfo {
+            buffer: self.integrals.raw,
             offset: 0,
             range: vk::WHOLE_SIZE,
         }];
@@ -262,6 +266,11 @@ impl Renderer {
                 .dst_binding(5)
                 .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                 .buffer_info(&corners_info),
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.volume_set)
+                .dst_binding(6)
+                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                .buffer_info(&integrals_info),
         ];
         // SAFETY: callers only update descriptors while no submitted work uses them (headless waits per frame).
         unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
@@ -532,6 +541,7 @@ impl Renderer {
             d.destroy_sampler(self.linear_sampler, None);
             d.destroy_sampler(self.point_sampler, None);
         }
+        self.integrals.destroy(gpu);
         self.lut.destroy(gpu);
     }
 }

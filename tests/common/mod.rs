@@ -10,6 +10,7 @@ pub mod compare;
 pub mod gpu;
 pub mod rays;
 pub mod reference;
+pub mod segments;
 pub mod x11;
 pub mod xdnd;
 

@@ -16,13 +16,15 @@
 //! filtering, gradients (central differences of the interpolant, or the grid gradients of `gradient_texture`),
 //! the classification (classify.rs: window position, colormap interpolation, control points, data units, sRGB),
 //! the jitter hash, opacity correction, every compositing mode, the isosurface bisection and the output encoding.
-//! Where the GPU works in f32, through a 4096-entry table or with half floats, the two differ by rounding; the
-//! tests' bounds (tests/common/compare.rs) say by how much.
+//! Pre-integration's segment integrals are the reference's own (segments.rs: the exact classification integrated
+//! numerically). Where the GPU works in f32 or through a 4096-entry table, the two differ by rounding; the tests'
+//! bounds (tests/common/bounds.rs) say by how much.
 
 #![allow(dead_code)]
 
 use super::classify::{encode, jitter_offset, linear, Classifier};
 use super::rays::{ray_segment, CameraBasis};
+use super::segments::Segments;
 use glam::{DMat3, DMat4, DVec3};
 use image::{Rgba, RgbaImage};
 use volcast::settings::{CompositeMode, RenderSettings, Shading};
@@ -388,6 +390,8 @@ struct Frame<'a> {
     box_hi: DVec3,
     step: f64,
     classifier: Classifier,
+    /// Rule 6's segment integrals (emission and density modes).
+    segments: Option<Segments>,
     window: [f64; 2],
     /// Exponent of rule 6's opacity correction (and factor of the density model).
     step_length: f64,
@@ -427,6 +431,15 @@ impl<'a> Frame<'a> {
             box_lo: s.slab_lo.as_dvec3(),
             box_hi: s.slab_hi.as_dvec3(),
             classifier: volume.classifier(s),
+            segments: match s.mode {
+                CompositeMode::Emission => Some(Segments::new(volume.classifier(s), s.window.map(f64::from), None)),
+                CompositeMode::Density => Some(Segments::new(
+                    volume.classifier(s),
+                    s.window.map(f64::from),
+                    Some(f64::from(s.density)),
+                )),
+                _ => None,
+            },
             window: s.window.map(f64::from),
             step_length: f64::from(s.step_length),
             mode: s.mode,
@@ -508,30 +521,45 @@ impl<'a> Frame<'a> {
         self.placement.to_tex(segment.at(segment.t_start + t))
     }
 
-    /// Rules 5–7 for emission–absorption and the density model.
+    /// Rules 5–7 for emission–absorption and the density model: the ray is composited segment by segment
+    /// between consecutive points — its start, the samples, its end — each segment pre-integrated (segments.rs).
     fn absorb(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
+        let segments = self.segments.as_ref().expect("segments for emission and density");
         let (mut color, mut alpha) = (DVec3::ZERO, 0.0f64);
         let light = -segment.dir;
-        for t in self.sample_offsets(segment, trace.offset) {
-            trace.samples += 1;
+        let (mut t_prev, mut v_prev) = (0.0, self.volume.sample(self.tex_at(segment, 0.0)));
+        let samples: Vec<f64> = self.sample_offsets(segment, trace.offset).collect();
+        let ends = samples
+            .iter()
+            .map(|&t| (t, true))
+            .chain(std::iter::once((segment.length(), false)));
+        for (t, is_sample) in ends {
+            if is_sample {
+                trace.samples += 1;
+            }
             let tex = self.tex_at(segment, t);
             let v = self.volume.sample(tex);
-            if !self.visible(v) {
+            let (vp, length) = (v_prev, (t - t_prev) / self.step * self.step_length);
+            (t_prev, v_prev) = (t, v);
+            if v.is_nan() || vp.is_nan() {
                 continue;
             }
-            let (mut rgb, mut a) = self.classifier.at(v);
+            let (mut sigma, mut rgb) = segments.mean(vp, v);
+            if sigma <= 0.0 {
+                continue;
+            }
             if self.shading.is_some() || self.gradient_opacity.is_some() {
                 let grad = self.gradient(tex);
                 if let Some(reference) = self.gradient_opacity {
-                    a *= (grad.length() / reference).min(1.0);
+                    sigma *= (grad.length() / reference).min(1.0);
                 }
                 if let Some(shading) = &self.shading {
                     rgb = shade(rgb, self.placement.normal(grad), light, shading);
                 }
             }
             let a_step = match self.mode {
-                CompositeMode::Density => (a * self.density * self.step_length).min(1.0),
-                _ => 1.0 - (1.0 - a).powf(self.step_length),
+                CompositeMode::Density => (sigma * length).min(1.0),
+                _ => 1.0 - (-sigma * length).exp(),
             };
             color += (1.0 - alpha) * a_step * rgb;
             alpha += (1.0 - alpha) * a_step;
