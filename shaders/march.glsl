@@ -224,7 +224,7 @@ vec4 output_pixel(vec4 colour, uint taken) {
 }
 
 // A pre-integrated segment (rule 6) over `seg_steps` voxel lengths, from its mean (extinction x colour,
-// extinction): colour (not premultiplied) and opacity. With shading, lit by the gradient at its end `p`.
+// extinction): colour (not premultiplied) and opacity. With shading, lit by the gradient at its midpoint `p`.
 vec4 segment_sample(vec4 mean, float seg_steps, vec3 p, vec3 light, bool density_model) {
     float sigma = max(mean.a, 0.0);
 #if defined(SHADED)
@@ -404,8 +404,8 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             float v = sample_value(p);
             vec4 slope;
             vec4 iv = integral_at(v, slope);
-            vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), step_length * (t - t_prev) / h, p,
-                                    light, density_model);
+            vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), step_length * (t - t_prev) / h,
+                                    a + dir * (0.5 * (t + t_prev)), light, density_model);
             v_prev = v;
             i_prev = iv;
             t_prev = t;
@@ -426,8 +426,8 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
         float v = sample_value(p);
         vec4 slope;
         vec4 iv = integral_at(v, slope);
-        vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), step_length * (len - t_prev) / h, p,
-                                light, density_model);
+        vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), step_length * (len - t_prev) / h,
+                                a + dir * (0.5 * (len + t_prev)), light, density_model);
         color += (1.0 - opacity) * c.a * c.rgb;
         opacity += (1.0 - opacity) * c.a;
     }

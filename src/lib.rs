@@ -10,6 +10,7 @@ pub mod headless;
 pub mod info;
 pub mod playback;
 pub mod preintegrate;
+pub mod quality;
 pub mod render;
 pub mod settings;
 pub mod tf;

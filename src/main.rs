@@ -10,6 +10,7 @@ use volcast::camera::{Camera, ViewPreset};
 use volcast::compare;
 use volcast::gpu::{Gpu, GpuError, GpuOptions};
 use volcast::headless::Headless;
+use volcast::quality::Quality;
 use volcast::settings::CompositeMode;
 use volcast::settings::{PositionFormat, RaySetup, RenderSettings};
 use volcast::tf::TransferFunction;
@@ -274,8 +275,11 @@ struct BenchArgs {
     /// of 24³ at 64²); each step is uploaded and rendered, the two timed apart.
     #[arg(long, conflicts_with_all = ["sample_only", "scenes"])]
     playback: bool,
-    /// Force this step length (in voxels) on every scene instead of its own; each frame's error is still taken
-    /// against the scene's converged image (1/8-voxel steps).
+    /// Sampling quality of every scene, as `render --quality`: draft, normal, high or converged.
+    #[arg(long, default_value = "normal")]
+    quality: String,
+    /// Force this step length (in voxels) on every scene instead of its quality's; each frame's error is still
+    /// taken against the scene's converged image (1/8-voxel steps).
     #[arg(long)]
     step_length: Option<f32>,
     /// Print the results as JSON on stdout (progress still goes to stderr).
@@ -383,9 +387,13 @@ struct FrameArgs {
     /// Opacity of one voxel-length step.
     #[arg(long, default_value_t = volcast::settings::DEFAULT_STEP_ALPHA)]
     step_alpha: f32,
-    /// Step length in voxels (opacity is corrected for it).
-    #[arg(long, default_value_t = 1.0)]
-    step_length: f32,
+    /// Sampling quality: draft, normal, high or converged (base steps 2, 1, 1/2, 1/8 voxel, shortened where the
+    /// transfer function is strong; draft adds adaptive steps).
+    #[arg(long, default_value = "normal")]
+    quality: String,
+    /// Step length in voxels, overriding the quality's (opacity is corrected for it).
+    #[arg(long)]
+    step_length: Option<f32>,
     /// Opacity = windowed value × step alpha.
     #[arg(long)]
     multiplied_alpha: bool,
@@ -522,10 +530,8 @@ impl FrameArgs {
         s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
         s.camera.ortho = self.ortho;
         s.skip_empty = !self.no_skip;
-        s.adaptive_step = self.adaptive_step;
         s.gradient_texture = self.gradient_texture;
         s.step_alpha = self.step_alpha;
-        s.step_length = self.step_length;
         s.multiplied_alpha = self.multiplied_alpha;
         s.early_termination = self.early_termination;
         s.background = self.background;
@@ -537,6 +543,16 @@ impl FrameArgs {
         } else {
             PositionFormat::Rgba32f
         };
+        // The quality's step depends on the classification, so it is resolved last.
+        let quality = Quality::parse(&self.quality).with_context(|| {
+            let names: Vec<&str> = Quality::ALL.iter().map(|q| q.name()).collect();
+            format!("unknown quality '{}'; choose one of {}", self.quality, names.join(", "))
+        })?;
+        quality.apply(&mut s, volume.range);
+        s.adaptive_step |= self.adaptive_step;
+        if let Some(step) = self.step_length {
+            s.step_length = step;
+        }
         s.validate().map_err(anyhow::Error::msg)?;
         Ok(s)
     }
@@ -752,6 +768,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
         shadings: args.shadings.clone(),
         methods: args.methods.clone(),
         sample_only: args.sample_only,
+        quality: Quality::parse(&args.quality).with_context(|| format!("unknown quality '{}'", args.quality))?,
         step_length: args.step_length,
     };
     if args.playback {

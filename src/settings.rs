@@ -135,7 +135,7 @@ impl Default for Shading {
 ///    voxel); world normal `n = normalize(M⁻ᵀ·g)` with M the world step of one voxel along each index axis (rule
 ///    0); headlight `L = −ray direction`;
 ///    `rgb ← rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` (white, two-sided). `|g| = 0`: rgb kept.
-///    In emission/density modes a segment (rule 6) is lit by the gradient at its far end.
+///    In emission/density modes a segment (rule 6) is lit by the gradient at its midpoint.
 ///    With `gradient_opacity = Some(r)`: the segment's extinction `σ̄ ← σ̄·min(1, |g|/r)`. With `gradient_texture` (emission/density modes),
 ///    `g` is instead the grid's central differences `(v[i + e] − v[i − e])/2` per voxel (indices clamped to the
 ///    edge, NaN voxels read as 0) filtered trilinearly like the values.

@@ -14,6 +14,7 @@ use image::RgbaImage;
 use std::path::PathBuf;
 use std::process::Command;
 use volcast::camera::Camera;
+use volcast::quality::Quality;
 use volcast::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::tf::TransferFunction;
 use volcast::transfer::Colormap;
@@ -62,9 +63,12 @@ fn helix() -> Volume {
     volume::builtin("helix", Some(48)).expect("helix")
 }
 
-/// The settings `volcast render` uses without options, for a volume with box `extent`.
+/// The settings `volcast render` uses without options, for a volume with box `extent`: the normal quality's
+/// 0.4-voxel step, which the helix's default opacity (0.1 per voxel) does not shorten.
 fn defaults(extent: Vec3) -> RenderSettings {
-    RenderSettings::new(W, H, extent)
+    let mut s = RenderSettings::new(W, H, extent);
+    s.step_length = 0.4;
+    s
 }
 
 /// One option: its arguments and the settings it stands for.
@@ -82,6 +86,19 @@ fn rule(args: &'static [&'static str], settings: fn(&mut RenderSettings, Vec3)) 
     }
 }
 
+/// What `render` does last: the step of `--quality` (default normal) for the classification, unless
+/// `--step-length` gives one; `--adaptive-step` adds to the quality's.
+fn resolve_quality(s: &mut RenderSettings, args: &[&str], range: [f64; 2]) {
+    let value = |flag: &str| args.iter().position(|a| *a == flag).map(|i| args[i + 1]);
+    let quality = value("--quality").map_or(Quality::Normal, |q| Quality::parse(q).expect("a quality"));
+    let adaptive = s.adaptive_step;
+    quality.apply(s, range);
+    s.adaptive_step |= adaptive;
+    if let Some(step) = value("--step-length") {
+        s.step_length = step.parse().expect("a step length");
+    }
+}
+
 /// Renders each rule through the binary and checks it against the reference of its settings, and that it
 /// differs from the image without the option.
 fn check_rules(rules: Vec<Rule>) {
@@ -94,6 +111,15 @@ fn check_rules(rules: Vec<Rule>) {
         let (actual, _) = render(HELIX, r.args, &name);
         let mut s = defaults(v.extent());
         (r.settings)(&mut s, v.extent());
+        // The step each rule states is the one `render` resolves (the quality rule, src/quality.rs).
+        let stated = (s.step_length, s.adaptive_step);
+        resolve_quality(&mut s, r.args, v.range);
+        if (s.step_length - stated.0).abs() > 1e-6 || s.adaptive_step != stated.1 {
+            failures.push(format!(
+                "{:?}: the quality rule gives step {} (adaptive {}), the test states {stated:?}",
+                r.args, s.step_length, s.adaptive_step
+            ));
+        }
         let expected = reference.render_full(&s);
         let d = against_reference(&actual, &expected, s.background);
         eprintln!("{:?}: {d}", r.args);
@@ -153,6 +179,22 @@ fn classification_options_take_effect() {
         rule(&["--window", "0.3,0.8"], |s, _| s.window = [0.3, 0.8]),
         rule(&["--step-alpha", "0.4"], |s, _| s.step_alpha = 0.4),
         rule(&["--step-length", "2.5"], |s, _| s.step_length = 2.5),
+        // The helix's default opacity (0.1 per voxel) keeps each level's base step.
+        rule(&["--quality", "fast"], |s, _| s.step_length = 1.0),
+        rule(&["--quality", "converged"], |s, _| s.step_length = 0.125),
+        Rule {
+            args: &["--quality", "draft"],
+            settings: |s, _| {
+                s.step_length = 2.0;
+                s.adaptive_step = true;
+            },
+            bounds: ADAPTIVE,
+        },
+        // A strong opacity shortens the step below the normal 0.4: to 0.25 / −ln(1 − 0.6) of a voxel.
+        rule(&["--step-alpha", "0.6"], |s, _| {
+            s.step_alpha = 0.6;
+            s.step_length = (0.25 / -(0.4f64).ln()) as f32;
+        }),
         rule(&["--multiplied-alpha"], |s, _| s.multiplied_alpha = true),
         rule(&["--preset", "mr-default"], |s, _| {
             s.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());

@@ -185,6 +185,7 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
             for &size in &sizes {
                 let mut base = RenderSettings::new(size, size, volume.extent());
                 (scene.configure)(&mut base, &volume);
+                opts.quality.apply(&mut base, volume.range);
                 if let Some(step) = opts.step_length {
                     base.step_length = step;
                 }

@@ -28,7 +28,9 @@ pub struct BenchOptions {
     pub methods: Vec<String>,
     /// Only the sample-only micro-benchmark.
     pub sample_only: bool,
-    /// A step length (voxels) forced on every scene.
+    /// The sampling quality of every scene (`--quality`), as `render` applies it.
+    pub quality: crate::quality::Quality,
+    /// A step length (voxels) forced on every scene, overriding the quality's.
     pub step_length: Option<f32>,
 }
 

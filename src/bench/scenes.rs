@@ -97,8 +97,8 @@ pub fn scenes() -> Vec<Scene> {
         },
         Scene {
             name: "ct-head",
-            about: "CT head 256×256×108 int16 at 0.96×0.96×1.5 mm, window 0.33–0.9, plasma, step alpha 0.6, \
-                    half-voxel steps (the README's picture)",
+            about: "CT head 256×256×108 int16 at 0.96×0.96×1.5 mm, window 0.33–0.9, plasma, step alpha 0.6 (the \
+                    README's picture)",
             source: Source::DataFile {
                 file: "cranium_ct_256x256x108_int16.raw",
                 spacing: [0.957031, 0.957031, 1.5],
@@ -107,7 +107,6 @@ pub fn scenes() -> Vec<Scene> {
                 s.window = [0.33, 0.9];
                 s.colormap = Colormap::Plasma;
                 s.step_alpha = 0.6;
-                s.step_length = 0.5;
                 let d = Camera::fit_distance(v.extent().length() * 0.5, s.camera.fov_y_deg);
                 s.camera = Camera::orbit(25.0, 10.0, d, Vec3::ZERO);
             },
@@ -171,7 +170,6 @@ pub fn configure_vtk_helix(s: &mut RenderSettings, v: &Volume) {
     s.window = [0.08, 1.0];
     s.multiplied_alpha = true;
     s.step_alpha = 0.2;
-    s.step_length = 1.0;
     s.background = Vec3::ZERO;
     let spacing = v.spacing();
     let world_per_unit = v.extent().x / (v.dims[0] as f32 * spacing[0]);

@@ -539,7 +539,7 @@ impl<'a> Frame<'a> {
             }
             let tex = self.tex_at(segment, t);
             let v = self.volume.sample(tex);
-            let (vp, length) = (v_prev, (t - t_prev) / self.step * self.step_length);
+            let (vp, t_mid_prev, length) = (v_prev, t_prev, (t - t_prev) / self.step * self.step_length);
             (t_prev, v_prev) = (t, v);
             if v.is_nan() || vp.is_nan() {
                 continue;
@@ -549,7 +549,7 @@ impl<'a> Frame<'a> {
                 continue;
             }
             if self.shading.is_some() || self.gradient_opacity.is_some() {
-                let grad = self.gradient(tex);
+                let grad = self.gradient(self.tex_at(segment, 0.5 * (t + t_mid_prev)));
                 if let Some(reference) = self.gradient_opacity {
                     sigma *= (grad.length() / reference).min(1.0);
                 }
