@@ -543,7 +543,8 @@ impl FrameArgs {
         } else {
             PositionFormat::Rgba32f
         };
-        // The quality's step depends on the classification, so it is resolved last.
+        // The quality's step depends on the classification, so it is resolved last, from valid settings.
+        s.validate().map_err(anyhow::Error::msg)?;
         let quality = Quality::parse(&self.quality).with_context(|| {
             let names: Vec<&str> = Quality::ALL.iter().map(|q| q.name()).collect();
             format!("unknown quality '{}'; choose one of {}", self.quality, names.join(", "))

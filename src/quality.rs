@@ -69,7 +69,9 @@ impl Quality {
     /// `Converged` is always 1/8 voxel.
     pub fn step_length(self, s: &RenderSettings, range: [f64; 2]) -> f32 {
         let base = self.base_step();
-        if self == Quality::Converged || !matches!(s.mode, CompositeMode::Emission | CompositeMode::Density) {
+        let absorbing = matches!(s.mode, CompositeMode::Emission | CompositeMode::Density);
+        // (An invalid window is refused by `RenderSettings::validate`; it must not get as far as the table.)
+        if self == Quality::Converged || !absorbing || !(s.window[0] < s.window[1]) {
             return base;
         }
         let density = (s.mode == CompositeMode::Density).then_some(f64::from(s.density));
