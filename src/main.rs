@@ -387,8 +387,8 @@ struct FrameArgs {
     /// Opacity of one voxel-length step.
     #[arg(long, default_value_t = volcast::settings::DEFAULT_STEP_ALPHA)]
     step_alpha: f32,
-    /// Sampling quality: draft, normal, high or converged (base steps 2, 1, 1/2, 1/8 voxel, shortened where the
-    /// transfer function is strong; draft adds adaptive steps).
+    /// Sampling quality: draft, fast, normal or converged (base steps 2, 1, 0.4, 1/8 voxel, shortened where the
+    /// transfer function is strong).
     #[arg(long, default_value = "normal")]
     quality: String,
     /// Step length in voxels, overriding the quality's (opacity is corrected for it).
@@ -550,7 +550,7 @@ impl FrameArgs {
             format!("unknown quality '{}'; choose one of {}", self.quality, names.join(", "))
         })?;
         quality.apply(&mut s, volume.range);
-        s.adaptive_step |= self.adaptive_step;
+        s.adaptive_step = self.adaptive_step;
         if let Some(step) = self.step_length {
             s.step_length = step;
         }

@@ -87,13 +87,11 @@ fn rule(args: &'static [&'static str], settings: fn(&mut RenderSettings, Vec3)) 
 }
 
 /// What `render` does last: the step of `--quality` (default normal) for the classification, unless
-/// `--step-length` gives one; `--adaptive-step` adds to the quality's.
+/// `--step-length` gives one.
 fn resolve_quality(s: &mut RenderSettings, args: &[&str], range: [f64; 2]) {
     let value = |flag: &str| args.iter().position(|a| *a == flag).map(|i| args[i + 1]);
     let quality = value("--quality").map_or(Quality::Normal, |q| Quality::parse(q).expect("a quality"));
-    let adaptive = s.adaptive_step;
     quality.apply(s, range);
-    s.adaptive_step |= adaptive;
     if let Some(step) = value("--step-length") {
         s.step_length = step.parse().expect("a step length");
     }
@@ -182,14 +180,7 @@ fn classification_options_take_effect() {
         // The helix's default opacity (0.1 per voxel) keeps each level's base step.
         rule(&["--quality", "fast"], |s, _| s.step_length = 1.0),
         rule(&["--quality", "converged"], |s, _| s.step_length = 0.125),
-        Rule {
-            args: &["--quality", "draft"],
-            settings: |s, _| {
-                s.step_length = 2.0;
-                s.adaptive_step = true;
-            },
-            bounds: ADAPTIVE,
-        },
+        rule(&["--quality", "draft"], |s, _| s.step_length = 2.0),
         // A strong opacity shortens the step below the normal 0.4: to 0.25 / −ln(1 − 0.6) of a voxel.
         rule(&["--step-alpha", "0.6"], |s, _| {
             s.step_alpha = 0.6;
