@@ -280,3 +280,37 @@ fn jitter_averages_towards_the_finely_sampled_image() {
         "jittered mean {e_jittered:.3} should beat unjittered {e_unjittered:.3} clearly"
     );
 }
+
+/// Pre-integrated segments cover each ray from its start to its end (rule 6), so a constant volume shows the same
+/// image at any step length, jittered or not: the opacity of the ray's length through the box, 1 − (1 − a)^L. A
+/// march that took its first or last segment (or a double step) as one step long would change with the step.
+#[test]
+fn a_constant_volume_looks_the_same_at_every_step() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let data = vec![1.0f32; 24 * 24 * 24];
+    let mut v = Volume::new("constant", [24; 3], [1.0; 3], VoxelType::F32, volume::VoxelData::F32(data))
+        .expect("a valid volume");
+    v.range = [0.0, 2.0];
+    headless.set_volume(&gpu, &v).expect("upload");
+    let reference = Reference::new(&v);
+    let mut judge = Judge::default();
+    let mut base = RenderSettings::new(64, 64, v.extent());
+    base.step_alpha = 0.15;
+    let mut images = Vec::new();
+    for (step, jitter) in [(1.0f32, None), (0.7, Some(3)), (1.3, None), (2.5, Some(7)), (3.7, None)] {
+        let mut s = base.clone();
+        s.step_length = step;
+        s.jitter = jitter;
+        let actual = headless.render(&gpu, &s).expect("render").image;
+        let expected = reference.render_full(&s);
+        judge.against("reference", format!("constant-step-{step}"), &actual, &expected, &s, REFERENCE);
+        images.push((step, actual));
+    }
+    close(gpu, headless);
+    judge.assert_all();
+    for (step, image) in &images[1..] {
+        let d = diff(image, &images[0].1);
+        assert!(d.max <= 1.0, "step {step} against step 1: {d}");
+    }
+}
