@@ -289,8 +289,14 @@ fn a_constant_volume_looks_the_same_at_every_step() {
     let gpu = validated_gpu();
     let mut headless = Headless::new(&gpu).expect("renderer");
     let data = vec![1.0f32; 24 * 24 * 24];
-    let mut v = Volume::new("constant", [24; 3], [1.0; 3], VoxelType::F32, volume::VoxelData::F32(data))
-        .expect("a valid volume");
+    let mut v = Volume::new(
+        "constant",
+        [24; 3],
+        [1.0; 3],
+        VoxelType::F32,
+        volume::VoxelData::F32(data),
+    )
+    .expect("a valid volume");
     v.range = [0.0, 2.0];
     headless.set_volume(&gpu, &v).expect("upload");
     let reference = Reference::new(&v);
@@ -304,7 +310,14 @@ fn a_constant_volume_looks_the_same_at_every_step() {
         s.jitter = jitter;
         let actual = headless.render(&gpu, &s).expect("render").image;
         let expected = reference.render_full(&s);
-        judge.against("reference", format!("constant-step-{step}"), &actual, &expected, &s, REFERENCE);
+        judge.against(
+            "reference",
+            format!("constant-step-{step}"),
+            &actual,
+            &expected,
+            &s,
+            REFERENCE,
+        );
         images.push((step, actual));
     }
     close(gpu, headless);
