@@ -248,6 +248,22 @@ vec4 segment_sample(vec4 mean, float seg_steps, vec3 p, vec3 light, bool density
     return vec4(rgb, alpha);
 }
 
+// The segment from the previous point (t_prev, its value v_prev and integrals i_prev) to the point at `t` on
+// the ray a + dir * t: samples the value there and returns the segment's colour and opacity (segment_sample);
+// the point at `t` becomes the previous one.
+vec4 segment_to(vec3 a, vec3 dir, float t, float h, vec3 light, bool density_model,
+                inout float t_prev, inout float v_prev, inout vec4 i_prev) {
+    float v = sample_value(a + dir * t);
+    vec4 slope;
+    vec4 iv = integral_at(v, slope);
+    vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), frame.alpha.y * (t - t_prev) / h,
+                            a + dir * (0.5 * (t + t_prev)), light, density_model);
+    t_prev = t;
+    v_prev = v;
+    i_prev = iv;
+    return c;
+}
+
 // The march is compiled in variants (build.rs defines one of FAMILY_PROJECTION / FAMILY_ISOSURFACE, or neither
 // for emission/density, and SHADED), because lavapipe executes an `if` holding texture samples at full cost
 // even when no pixel takes it: unused shading code made the plain march 4x slower.
@@ -400,15 +416,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
                 break;
             }
             taken += 1u;
-            vec3 p = a + dir * t;
-            float v = sample_value(p);
-            vec4 slope;
-            vec4 iv = integral_at(v, slope);
-            vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), step_length * (t - t_prev) / h,
-                                    a + dir * (0.5 * (t + t_prev)), light, density_model);
-            v_prev = v;
-            i_prev = iv;
-            t_prev = t;
+            vec4 c = segment_to(a, dir, t, h, light, density_model, t_prev, v_prev, i_prev);
             k_prev = k;
             k_occupied = exiting ? k_occupied : k;
             color += (1.0 - opacity) * c.a * c.rgb;
@@ -422,12 +430,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     // The last segment, from the last sample to the ray's end, where the march got there (not by early
     // termination, nor by leaping over the last samples).
     if (reached_end && opacity < frame.alpha.z && len - t_prev <= h * 1.001) {
-        vec3 p = a + dir * len;
-        float v = sample_value(p);
-        vec4 slope;
-        vec4 iv = integral_at(v, slope);
-        vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), step_length * (len - t_prev) / h,
-                                a + dir * (0.5 * (len + t_prev)), light, density_model);
+        vec4 c = segment_to(a, dir, len, h, light, density_model, t_prev, v_prev, i_prev);
         color += (1.0 - opacity) * c.a * c.rgb;
         opacity += (1.0 - opacity) * c.a;
     }
