@@ -275,11 +275,8 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     float h = frame.extent.w;
     float o = frame.flags.y != 0u ? jitter_offset(uvec2(frag), frame.flags.z) : 0.5;
     uint mode = frame.flags.x;
-    bool shading_on = frame.flags.w != 0u;
-    float grad_ref = frame.voxel_world.w;
     vec3 light = -normalize(d_world);
     int max_steps = int(frame.viewport.z);
-    float step_length = frame.alpha.y;
     vec3 dir = d / len;
     ivec3 bricks = textureSize(sampler3D(occupancy_tex, linear_smp), 0);
     uint taken = 0u;
