@@ -275,9 +275,9 @@ struct BenchArgs {
     /// of 24³ at 64²); each step is uploaded and rendered, the two timed apart.
     #[arg(long, conflicts_with_all = ["sample_only", "scenes"])]
     playback: bool,
-    /// Sampling quality of every scene, as `render --quality`: draft, normal, high or converged.
-    #[arg(long, default_value = "normal")]
-    quality: String,
+    /// Sampling quality of every scene, as `render --quality`: draft, fast, normal or converged.
+    #[arg(long, default_value = "normal", value_parser = parse_quality)]
+    quality: Quality,
     /// Force this step length (in voxels) on every scene instead of its quality's; each frame's error is still
     /// taken against the scene's converged image (1/8-voxel steps).
     #[arg(long)]
@@ -389,8 +389,8 @@ struct FrameArgs {
     step_alpha: f32,
     /// Sampling quality: draft, fast, normal or converged (base steps 2, 1, 0.4, 1/8 voxel, shortened where the
     /// transfer function is strong).
-    #[arg(long, default_value = "normal")]
-    quality: String,
+    #[arg(long, default_value = "normal", value_parser = parse_quality)]
+    quality: Quality,
     /// Step length in voxels, overriding the quality's (opacity is corrected for it).
     #[arg(long)]
     step_length: Option<f32>,
@@ -530,6 +530,7 @@ impl FrameArgs {
         s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
         s.camera.ortho = self.ortho;
         s.skip_empty = !self.no_skip;
+        s.adaptive_step = self.adaptive_step;
         s.gradient_texture = self.gradient_texture;
         s.step_alpha = self.step_alpha;
         s.multiplied_alpha = self.multiplied_alpha;
@@ -545,18 +546,21 @@ impl FrameArgs {
         };
         // The quality's step depends on the classification, so it is resolved last, from valid settings.
         s.validate().map_err(anyhow::Error::msg)?;
-        let quality = Quality::parse(&self.quality).with_context(|| {
-            let names: Vec<&str> = Quality::ALL.iter().map(|q| q.name()).collect();
-            format!("unknown quality '{}'; choose one of {}", self.quality, names.join(", "))
-        })?;
-        quality.apply(&mut s, volume.range);
-        s.adaptive_step = self.adaptive_step;
+        self.quality.apply(&mut s, volume.range);
         if let Some(step) = self.step_length {
             s.step_length = step;
         }
         s.validate().map_err(anyhow::Error::msg)?;
         Ok(s)
     }
+}
+
+/// `--quality`'s value, for render and bench alike.
+fn parse_quality(s: &str) -> Result<Quality, String> {
+    Quality::parse(s).ok_or_else(|| {
+        let names: Vec<&str> = Quality::ALL.iter().map(|q| q.name()).collect();
+        format!("unknown quality '{s}'; choose one of {}", names.join(", "))
+    })
 }
 
 /// Runs `body` with a GPU and reports validation messages at the end; any validation error or warning fails the
@@ -769,7 +773,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
         shadings: args.shadings.clone(),
         methods: args.methods.clone(),
         sample_only: args.sample_only,
-        quality: Quality::parse(&args.quality).with_context(|| format!("unknown quality '{}'", args.quality))?,
+        quality: args.quality,
         step_length: args.step_length,
     };
     if args.playback {
