@@ -136,7 +136,7 @@ impl Info {
                     "on CPU devices (lavapipe), --texture auto: corners{}, {:.1} MiB, while under 1 GiB (else \
                      R32_SFLOAT, {:.1} MiB)",
                     8 * v.gpu_texel_size(),
-                    mib(v.voxel_count() * 8 * v.gpu_texel_size()),
+                    mib(v.voxel_count() * 4 * v.gpu_texel_size()),
                     mib(v.voxel_count() * 4)
                 ),
             );

@@ -174,8 +174,8 @@ struct GpuArgs {
     #[arg(long)]
     device: Option<String>,
     /// How volumes are stored on the GPU: auto (on CPU devices such as lavapipe the fastest layout within 1 GiB:
-    /// corner buffers for 8/16-bit data, else a float texture; the data's own format on GPUs), native (least
-    /// memory), float (4 bytes per voxel) or corners (8 or 16 bytes per voxel for 8/16-bit data).
+    /// corner textures for 8/16-bit data, else a float texture; the data's own format on GPUs), native (least
+    /// memory), float (4 bytes per voxel) or corners (4 or 8 bytes per voxel for 8/16-bit data).
     #[arg(long, default_value = "auto", value_parser = ["auto", "native", "float", "corners"])]
     texture: String,
 }

@@ -112,7 +112,7 @@ fn compute_march_matches_the_reference() {
 }
 
 /// Every voxel type, made synthetically on non-cubic voxels (1 × 1.2 × 0.8), through each layout its data can go
-/// to the GPU in — the native texture (R8/R16_UNORM or R32F), a float texture and a corner buffer (8/16-bit
+/// to the GPU in — the native texture (R8/R16_UNORM or R32F), a float texture and a corner texture (8/16-bit
 /// data) — from the standard viewpoints, and shaded, iso-surfaced and gradient-modulated on its default layout.
 #[test]
 fn every_data_type_matches_the_reference() {

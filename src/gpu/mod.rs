@@ -14,7 +14,7 @@ use ash::vk;
 /// How a volume's voxels are stored on the GPU (`--texture`; see `render::VolumeLayout`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum TexelPolicy {
-    /// On CPU devices (lavapipe) the fastest layout that fits in [`crate::render::AUTO_LIMIT`]: a corner buffer
+    /// On CPU devices (lavapipe) the fastest layout that fits in [`crate::render::AUTO_LIMIT`]: a corner texture
     /// for 8/16-bit data, else a float texture, else native; on GPUs the native texture.
     #[default]
     Auto,
@@ -22,7 +22,7 @@ pub enum TexelPolicy {
     Native,
     /// An R32_SFLOAT texture (4 bytes per voxel).
     Float,
-    /// A corner buffer for 8- and 16-bit data (8 or 16 bytes per voxel); float data keeps its texture.
+    /// A corner texture for 8- and 16-bit data (4 or 8 bytes per voxel); float data keeps its texture.
     Corners,
 }
 

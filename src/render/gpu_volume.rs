@@ -1,19 +1,18 @@
-//! The volume on the device: the layout the march reads it in (a 3D texture or a corner buffer, chosen per device
+//! The volume on the device: the layout the march reads it in (a 3D texture or a corner texture, chosen per device
 //! and policy), its upload, brick grid and occupancy texture. A [`GpuVolume`] is made whole before it replaces the
 //! shown one, so the next step of a series can be uploaded ahead of display (`Renderer::prepare_volume`).
 
 use super::{skip, OccupancyKey, VolumeInfo};
-use crate::gpu::resources::{upload_image, upload_image_with, Buffer, Image, ImageDesc};
+use crate::gpu::resources::{upload_image, upload_image_with, Image, ImageDesc};
 use crate::gpu::TexelPolicy;
 use crate::gpu::{Gpu, GpuError};
 use crate::volume::{Volume, VoxelData};
 use ash::vk;
-use gpu_allocator::MemoryLocation;
 use rayon::prelude::*;
 
 pub(super) struct GpuVolume {
     pub(super) layout: VolumeLayout,
-    /// The 3D texture (`VolumeLayout::Texture`), or the corner buffer (the other layouts).
+    /// The 3D texture (`VolumeLayout::Texture`).
     pub(super) image: Option<Image>,
     pub(super) info: VolumeInfo,
     pub(super) bricks: skip::BrickGrid,
@@ -23,7 +22,8 @@ pub(super) struct GpuVolume {
     pub(super) occupancy_key: Option<OccupancyKey>,
     /// Precomputed gradients (RGBA16 SNORM), made on first use by a frame with `gradient_texture`.
     pub(super) gradient: Option<Image>,
-    pub(super) corners: Option<Buffer>,
+    /// The corner texture (`VolumeLayout::Corners8`/`Corners16`).
+    pub(super) corners: Option<Image>,
 }
 
 /// A 3D image of `dims` (a depth of 1 gets a duplicated second slice: a depth-1 image would be 2D).
@@ -45,10 +45,11 @@ pub const AUTO_LIMIT: u64 = 1 << 30;
 pub enum VolumeLayout {
     /// A 3D texture of this format, filtered by the sampler.
     Texture(vk::Format),
-    /// 8-bit data as a storage buffer of corner cells: per voxel the eight values of the 2×2×2 cell it starts
-    /// (neighbours clamped to the edge), 8 bytes per voxel, so a trilinear sample is one load and seven lerps.
+    /// 8-bit data as a corner texture (R32_UINT): per voxel the four values of the 2×2 square its cell starts in
+    /// x and y (neighbours clamped to the edge), 4 bytes per voxel, so a trilinear sample is two `texelFetch`
+    /// (z and z + 1) and seven lerps.
     Corners8,
-    /// 16-bit data the same way, 16 bytes per voxel.
+    /// 16-bit data the same way (RG32_UINT), 8 bytes per voxel.
     Corners16,
 }
 
@@ -67,8 +68,8 @@ impl VolumeLayout {
             VolumeLayout::Texture(vk::Format::R8_UNORM) => 1,
             VolumeLayout::Texture(vk::Format::R16_UNORM) => 2,
             VolumeLayout::Texture(_) => 4,
-            VolumeLayout::Corners8 => 8,
-            VolumeLayout::Corners16 => 16,
+            VolumeLayout::Corners8 => 4,
+            VolumeLayout::Corners16 => 8,
         }
     }
 
@@ -85,16 +86,14 @@ impl VolumeLayout {
 
 /// The layout `policy` gives `volume` on `gpu`. GPUs filter every format in hardware, so `Auto` keeps the
 /// native texture there. On a CPU device (lavapipe) the sampler is the march's main cost: measured on the
-/// vtk-helix scene, a corner buffer is ~18% faster than an R32_SFLOAT texture, which is ~30% faster than
+/// vtk-helix scene, a corner layout is ~18% faster than an R32_SFLOAT texture, which is ~30% faster than
 /// R8_UNORM (and exact, where lavapipe filters R8 with 8-bit weights); `Auto` takes the fastest of these that
 /// stays under [`AUTO_LIMIT`] and a quarter of the device's memory.
-///
-/// A corner buffer must also fit one storage-buffer binding (`maxStorageBufferRange`: 128 MiB on lavapipe, so
-/// 16.7 M voxels of 8-bit data); `Auto` passes over it when it does not, a forced `Corners` is refused.
-fn choose_layout(dev: DeviceFacts, policy: TexelPolicy, data: &VoxelData, voxels: u64) -> Result<VolumeLayout, String> {
-    let bytes = |layout: VolumeLayout| voxels * layout.bytes_per_voxel();
-    let fits = |layout: VolumeLayout| bytes(layout) <= AUTO_LIMIT && bytes(layout) <= dev.memory / 4;
-    let bindable = |layout: VolumeLayout| bytes(layout) <= dev.max_storage_buffer;
+fn choose_layout(dev: DeviceFacts, policy: TexelPolicy, data: &VoxelData, voxels: u64) -> VolumeLayout {
+    let fits = |layout: VolumeLayout| {
+        let bytes = voxels * layout.bytes_per_voxel();
+        bytes <= AUTO_LIMIT && bytes <= dev.memory / 4
+    };
     let float = VolumeLayout::Texture(vk::Format::R32_SFLOAT);
     let (native, corners) = match data {
         VoxelData::U8(_) => (
@@ -107,29 +106,17 @@ fn choose_layout(dev: DeviceFacts, policy: TexelPolicy, data: &VoxelData, voxels
         ),
         VoxelData::F32(_) => (float, None),
     };
-    Ok(match policy {
+    match policy {
         TexelPolicy::Native => native,
         TexelPolicy::Float => float,
-        TexelPolicy::Corners => match corners {
-            Some(c) if !bindable(c) => {
-                return Err(format!(
-                    "a {} buffer of this volume takes {} MiB, more than this device binds as one storage buffer \
-                     ({} MiB); use --texture auto, native or float",
-                    c.name(),
-                    bytes(c) >> 20,
-                    dev.max_storage_buffer >> 20
-                ))
-            }
-            Some(c) => c,
-            None => native,
-        },
+        TexelPolicy::Corners => corners.unwrap_or(native),
         TexelPolicy::Auto if dev.cpu => match corners {
-            Some(c) if fits(c) && bindable(c) => c,
+            Some(c) if fits(c) => c,
             _ if fits(float) => float,
             _ => native,
         },
         TexelPolicy::Auto => native,
-    })
+    }
 }
 
 /// What [`choose_layout`] needs to know of the device.
@@ -139,8 +126,6 @@ struct DeviceFacts {
     cpu: bool,
     /// The largest device-local heap.
     memory: u64,
-    /// `maxStorageBufferRange`.
-    max_storage_buffer: u64,
 }
 
 impl DeviceFacts {
@@ -148,88 +133,79 @@ impl DeviceFacts {
         DeviceFacts {
             cpu: gpu.properties.device_type == vk::PhysicalDeviceType::CPU,
             memory: gpu.device_local_bytes,
-            max_storage_buffer: u64::from(gpu.properties.limits.max_storage_buffer_range),
         }
     }
 }
 
-/// Builds `volume`'s corner buffer (`layout` Corners8 or Corners16) straight in host-visible memory.
-fn upload_corners(gpu: &Gpu, volume: &Volume, layout: VolumeLayout) -> Result<Buffer, GpuError> {
-    let n = volume.voxel_count();
-    let mut buffer = Buffer::new(
-        gpu,
-        n as u64 * layout.bytes_per_voxel(),
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryLocation::CpuToGpu,
-        "volume corners",
-    )?;
-    let [nx, ny, nz] = volume.dims.map(|d| d as usize);
-    let filled = match (buffer.mapped_mut(), &volume.data, layout) {
-        (Some(dst), VoxelData::U8(v), VolumeLayout::Corners8) => {
-            let dst: &mut [[u32; 2]] = bytemuck::cast_slice_mut(dst);
-            fill_corners(
-                dst,
-                [nx, ny, nz],
-                |i| u32::from(v[i]),
-                |c| {
-                    [
-                        c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24,
-                        c[4] | c[5] << 8 | c[6] << 16 | c[7] << 24,
-                    ]
-                },
-            );
-            true
-        }
-        (Some(dst), VoxelData::U16(v), VolumeLayout::Corners16) => {
-            let dst: &mut [[u32; 4]] = bytemuck::cast_slice_mut(dst);
-            fill_corners(
-                dst,
-                [nx, ny, nz],
-                |i| u32::from(v[i]),
-                |c| {
-                    [
-                        c[0] | c[1] << 16,
-                        c[2] | c[3] << 16,
-                        c[4] | c[5] << 16,
-                        c[6] | c[7] << 16,
-                    ]
-                },
-            );
-            true
-        }
-        _ => false,
+/// Builds `volume`'s corner texture (`layout` Corners8 or Corners16): per voxel the four values of the 2×2 square
+/// of the cell it starts in x and y (neighbours clamped to the edge), packed in one texel; the march fetches it at
+/// z and z + 1. Filled slab by slab straight into the staging buffer, rows on every core.
+fn upload_corners(gpu: &Gpu, volume: &Volume, layout: VolumeLayout) -> Result<Image, GpuError> {
+    let format = match layout {
+        VolumeLayout::Corners8 => vk::Format::R32_UINT,
+        _ => vk::Format::R32G32_UINT,
     };
-    if !filled {
-        buffer.destroy(gpu);
-        return Err(GpuError::Lost(
-            "corner buffer: not host-visible, or data and layout disagree",
-        ));
+    let image = image_3d(gpu, format, volume.dims, "volume corners")?;
+    let n = volume.voxel_count();
+    let texel = layout.bytes_per_voxel() as usize;
+    // A depth-1 volume is uploaded twice (image_3d makes two slices).
+    let copies = if volume.dims[2] == 1 { 2 } else { 1 };
+    let [nx, ny, _] = volume.dims.map(|d| d as usize);
+    let uploaded = upload_image_with(gpu, &image, (n * texel * copies) as u64, |range, dst| {
+        let first = range.start / texel;
+        let rows = dst.par_chunks_mut(nx * texel).enumerate();
+        match &volume.data {
+            VoxelData::U8(v) => rows.for_each(|(r, row)| {
+                let row: &mut [u32] = bytemuck::cast_slice_mut(row);
+                corner_row(
+                    row,
+                    (first / nx + r) % (ny * volume.dims[2] as usize),
+                    [nx, ny],
+                    |i| u32::from(v[i]),
+                    |c| c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24,
+                )
+            }),
+            VoxelData::U16(v) => rows.for_each(|(r, row)| {
+                let row: &mut [[u32; 2]] = bytemuck::cast_slice_mut(row);
+                corner_row(
+                    row,
+                    (first / nx + r) % (ny * volume.dims[2] as usize),
+                    [nx, ny],
+                    |i| u32::from(v[i]),
+                    |c| [c[0] | c[1] << 16, c[2] | c[3] << 16],
+                )
+            }),
+            VoxelData::F32(_) => {}
+        }
+    });
+    match uploaded {
+        Ok(()) if !matches!(volume.data, VoxelData::F32(_)) => Ok(image),
+        Ok(()) => {
+            image.destroy(gpu);
+            Err(GpuError::Lost("corner texture: float data has no corner layout"))
+        }
+        Err(e) => {
+            image.destroy(gpu);
+            Err(e)
+        }
     }
-    Ok(buffer)
 }
 
-/// For each voxel (x fastest) the cell values in the order x0y0z0, x1y0z0, x0y1z0, x1y1z0, then the same at z1
-/// (neighbours past the last voxel clamped to it), packed by `pack`.
-fn fill_corners<T>(dst: &mut [T], [nx, ny, nz]: [usize; 3], at: impl Fn(usize) -> u32, pack: impl Fn([u32; 8]) -> T) {
-    for z in 0..nz {
-        let z1 = (z + 1).min(nz - 1);
-        for y in 0..ny {
-            let y1 = (y + 1).min(ny - 1);
-            for x in 0..nx {
-                let x1 = (x + 1).min(nx - 1);
-                let i = |x: usize, y: usize, z: usize| at(x + nx * (y + ny * z));
-                dst[x + nx * (y + ny * z)] = pack([
-                    i(x, y, z),
-                    i(x1, y, z),
-                    i(x, y1, z),
-                    i(x1, y1, z),
-                    i(x, y, z1),
-                    i(x1, y, z1),
-                    i(x, y1, z1),
-                    i(x1, y1, z1),
-                ]);
-            }
-        }
+/// Row `row` (y + ny·z) of a corner texture: for each voxel (x fastest) the values x0y0, x1y0, x0y1, x1y1 of its
+/// cell's square at its own z (neighbours past the last voxel clamped to it), packed by `pack`.
+fn corner_row<T>(
+    dst: &mut [T],
+    row: usize,
+    [nx, ny]: [usize; 2],
+    at: impl Fn(usize) -> u32,
+    pack: impl Fn([u32; 4]) -> T,
+) {
+    let (y, z) = (row % ny, row / ny);
+    let y1 = (y + 1).min(ny - 1);
+    let (r0, r1) = (nx * (y + ny * z), nx * (y1 + ny * z));
+    for (x, d) in dst.iter_mut().enumerate() {
+        let x1 = (x + 1).min(nx - 1);
+        *d = pack([at(r0 + x), at(r0 + x1), at(r1 + x), at(r1 + x1)]);
     }
 }
 
@@ -288,7 +264,7 @@ impl GpuVolume {
             )));
         }
         let voxels = volume.voxel_count() as u64;
-        let layout = choose_layout(DeviceFacts::of(gpu), policy, &volume.data, voxels).map_err(GpuError::TooLarge)?;
+        let layout = choose_layout(DeviceFacts::of(gpu), policy, &volume.data, voxels);
         let needed = volume.voxel_count() as u64 * layout.bytes_per_voxel();
         // Half the heap: the upload needs a staging copy of the same size alongside.
         if needed > gpu.device_local_bytes / 2 {
@@ -325,7 +301,7 @@ impl GpuVolume {
             }
             VolumeLayout::Corners8 | VolumeLayout::Corners16 => (None, Some(upload_corners(gpu, volume, layout)?)),
         };
-        let destroy_volume = |gpu: &Gpu, image: Option<Image>, corners: Option<Buffer>| {
+        let destroy_volume = |gpu: &Gpu, image: Option<Image>, corners: Option<Image>| {
             if let Some(i) = image {
                 i.destroy(gpu);
             }
@@ -391,25 +367,26 @@ mod tests {
         let lavapipe = DeviceFacts {
             cpu: true,
             memory: 16 << 30,
-            max_storage_buffer: 128 << 20,
         };
         let gpu = DeviceFacts { cpu: false, ..lavapipe };
         let u8s = VoxelData::U8(Vec::new());
         let u16s = VoxelData::U16(Vec::new());
         let f32s = VoxelData::F32(Vec::new());
         let n256 = 256u64 * 256 * 256;
-        let layout = |dev, policy, data: &VoxelData, voxels| choose_layout(dev, policy, data, voxels).unwrap();
+        let layout = choose_layout;
         use TexelPolicy::*;
         use VolumeLayout::*;
-        // lavapipe: the 256³ helix just fits one binding as corners (128 MiB); one slice more does not.
+        // lavapipe: corners while they stay within 1 GiB (4 bytes per voxel for 8-bit data, 8 for 16-bit).
         assert_eq!(layout(lavapipe, Auto, &u8s, n256), Corners8);
+        assert_eq!(layout(lavapipe, Auto, &u8s, 1024 * 1024 * 256), Corners8);
+        assert_eq!(layout(lavapipe, Auto, &u16s, 1024 * 1024 * 128), Corners16);
+        // Over 1 GiB as corners, still within it as float: float (16-bit data, 4 bytes per voxel).
         assert_eq!(
-            layout(lavapipe, Auto, &u8s, n256 + 65536),
+            layout(lavapipe, Auto, &u16s, 1024 * 1024 * 256),
             Texture(vk::Format::R32_SFLOAT)
         );
-        assert_eq!(layout(lavapipe, Auto, &u16s, 256 * 256 * 108), Corners16);
         assert_eq!(layout(lavapipe, Auto, &f32s, n256), Texture(vk::Format::R32_SFLOAT));
-        // Over 1 GiB as float: the native texture.
+        // Over 1 GiB in both: the native texture.
         assert_eq!(
             layout(lavapipe, Auto, &u8s, 1024 * 1024 * 512),
             Texture(vk::Format::R8_UNORM)
@@ -426,7 +403,5 @@ mod tests {
         assert_eq!(layout(gpu, Corners, &u8s, n256), Corners8);
         assert_eq!(layout(lavapipe, Native, &u8s, n256), Texture(vk::Format::R8_UNORM));
         assert_eq!(layout(lavapipe, Corners, &f32s, n256), Texture(vk::Format::R32_SFLOAT));
-        let e = choose_layout(lavapipe, Corners, &u8s, n256 * 2).unwrap_err();
-        assert!(e.contains("256 MiB") && e.contains("128 MiB"), "{e}");
     }
 }

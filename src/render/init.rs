@@ -138,7 +138,7 @@ impl Renderer {
                 (D::STORAGE_BUFFER, frag),
                 (D::SAMPLED_IMAGE, frag),
                 (D::SAMPLED_IMAGE, frag),
-                (D::STORAGE_BUFFER, frag),
+                (D::SAMPLED_IMAGE, frag),
                 (D::UNIFORM_BUFFER, frag),
             ],
         )?;
@@ -190,7 +190,7 @@ impl Renderer {
             },
             vk::DescriptorPoolSize {
                 ty: D::SAMPLED_IMAGE,
-                descriptor_count: 6,
+                descriptor_count: 7,
             },
             vk::DescriptorPoolSize {
                 ty: D::SAMPLER,
@@ -202,7 +202,7 @@ impl Renderer {
             },
             vk::DescriptorPoolSize {
                 ty: D::STORAGE_BUFFER,
-                descriptor_count: 2,
+                descriptor_count: 1,
             },
         ];
         let pool_info = vk::DescriptorPoolCreateInfo::default()

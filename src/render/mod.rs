@@ -205,7 +205,7 @@ impl Renderer {
 
     fn write_volume_set(&self, gpu: &Gpu) {
         let Some(vol) = &self.volume else { return };
-        // With a corner buffer there is no volume texture; the occupancy texture holds the binding (the corner
+        // With a corner texture there is no volume texture; the occupancy texture holds the binding (the corner
         // variants never read it).
         let volume_view = vol.image.as_ref().map_or(vol.occupancy.view, |i| i.view);
         let volume_info = [vk::DescriptorImageInfo::default()
@@ -222,12 +222,10 @@ impl Renderer {
             offset: 0,
             range: vk::WHOLE_SIZE,
         }];
-        // Without a corner buffer the binding holds the table: only the corner variants read it.
-        let corners_info = [vk::DescriptorBufferInfo {
-            buffer: vol.corners.as_ref().map_or(self.lut.raw, |c| c.raw),
-            offset: 0,
-            range: vk::WHOLE_SIZE,
-        }];
+        // Without a corner texture the binding holds the volume: only the corner variants read it.
+        let corners_info = [vk::DescriptorImageInfo::default()
+            .image_view(vol.corners.as_ref().map_or(volume_view, |c| c.view))
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let occupancy_info = [vk::DescriptorImageInfo::default()
             .image_view(vol.occupancy.view)
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
@@ -264,8 +262,8 @@ impl Renderer {
             vk::WriteDescriptorSet::default()
                 .dst_set(self.volume_set)
                 .dst_binding(5)
-                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                .buffer_info(&corners_info),
+                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                .image_info(&corners_info),
             vk::WriteDescriptorSet::default()
                 .dst_set(self.volume_set)
                 .dst_binding(6)
@@ -349,10 +347,10 @@ impl Renderer {
         self.volume.as_ref().map(|v| v.layout)
     }
 
-    /// Bytes the volume (texture or corner buffer) takes on the device.
+    /// Bytes the volume (texture or corner texture) takes on the device.
     pub fn volume_bytes(&self) -> u64 {
         self.volume.as_ref().map_or(0, |v| {
-            v.image.as_ref().map_or(0, |i| i.allocated_bytes()) + v.corners.as_ref().map_or(0, |c| c.size)
+            v.image.as_ref().map_or(0, |i| i.allocated_bytes()) + v.corners.as_ref().map_or(0, |c| c.allocated_bytes())
         })
     }
 

@@ -23,7 +23,7 @@ pub const REFERENCE: Bounds = Bounds {
 /// R8_UNORM textures (`--texture native` on 8-bit data): lavapipe filters 8-bit UNORM textures with 8-bit
 /// fixed-point weights, so a trilinear sample can be off by up to ~1/256 of the value range; where the data is
 /// steep that moves samples across the window's edge and the error compounds along the ray. The same data as
-/// R16_UNORM, float textures or corner buffers meet [`REFERENCE`].
+/// R16_UNORM, float textures or corner textures meet [`REFERENCE`].
 /// Measured (uint8 and int8 Marschner–Lobb, the 48³ helix through `--texture native`): worst mean 0.884, p99 23
 /// (the helix's few hundred object pixels make its p99 its fourth-worst pixel), max 89; at most 10 pixels above
 /// 16/255. Catches: a steady error of 2/255 over the object, or any region of more than 16 pixels off by more
