@@ -157,37 +157,44 @@ pub fn encode_reach(levels: &[u8], bricks: [u32; 3]) -> Vec<u8> {
     let cap = (bx.max(by).max(bz) - 1).clamp(0, i64::from(MAX_REACH)) as u8;
     for r in 1..=cap {
         let prev = reach.clone();
-        let mut grew = false;
-        for z in 0..bz {
-            for y in 0..by {
-                for x in 0..bx {
-                    let i = index(x, y, z);
-                    if prev[i] != r - 1 {
-                        continue;
-                    }
-                    let mut ok = true;
-                    'n: for dz in -1..=1i64 {
-                        for dy in -1..=1i64 {
-                            for dx in -1..=1i64 {
-                                let (nx, ny, nz) = (x + dx, y + dy, z + dz);
-                                if nx < 0 || ny < 0 || nz < 0 || nx >= bx || ny >= by || nz >= bz {
-                                    continue;
-                                }
-                                let j = index(nx, ny, nz);
-                                if classes[j] != classes[i] || prev[j] < r - 1 {
-                                    ok = false;
-                                    break 'n;
+        // Each layer of bricks reads only `prev` and `classes`: the layers grow on every core.
+        let grew = reach
+            .par_chunks_mut((bx * by) as usize)
+            .enumerate()
+            .map(|(z, layer)| {
+                let z = z as i64;
+                let mut grew = false;
+                for y in 0..by {
+                    for x in 0..bx {
+                        let i = index(x, y, z);
+                        if prev[i] != r - 1 {
+                            continue;
+                        }
+                        let mut ok = true;
+                        'n: for dz in -1..=1i64 {
+                            for dy in -1..=1i64 {
+                                for dx in -1..=1i64 {
+                                    let (nx, ny, nz) = (x + dx, y + dy, z + dz);
+                                    if nx < 0 || ny < 0 || nz < 0 || nx >= bx || ny >= by || nz >= bz {
+                                        continue;
+                                    }
+                                    let j = index(nx, ny, nz);
+                                    if classes[j] != classes[i] || prev[j] < r - 1 {
+                                        ok = false;
+                                        break 'n;
+                                    }
                                 }
                             }
                         }
-                    }
-                    if ok {
-                        reach[i] = r;
-                        grew = true;
+                        if ok {
+                            layer[(x + bx * y) as usize] = r;
+                            grew = true;
+                        }
                     }
                 }
-            }
-        }
+                grew
+            })
+            .reduce(|| false, |a, b| a || b);
         if !grew {
             break;
         }
