@@ -232,6 +232,10 @@ struct ViewArgs {
     /// Initial window size WxH.
     #[arg(long, default_value = "1280x800", value_parser = parse_size)]
     size: (u32, u32),
+    /// Sampling quality of still frames, as `render --quality`: draft, fast, normal or converged (moving frames
+    /// use draft's step; the panel and the Q key change it).
+    #[arg(long, default_value = "normal", value_parser = parse_quality)]
+    quality: Quality,
     /// Drive the window with a script (for tests), e.g. "frames:3;resize:320x240;screenshot:a.png;exit".
     #[arg(long, hide = true)]
     script: Option<String>,
@@ -686,6 +690,7 @@ fn view(args: &ViewArgs) -> Result<()> {
         size: args.size,
         script,
         time: args.volume.time,
+        quality: args.quality,
     };
     let log = viewer::run(opts)?;
     if args.gpu.options().validation {
@@ -849,6 +854,7 @@ fn main() -> ExitCode {
                 texture: "auto".into(),
             },
             size: (1280, 800),
+            quality: Quality::Normal,
             script: None,
         }),
         Some(Command::View(a)) => view(a),

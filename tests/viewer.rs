@@ -25,6 +25,7 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 use volcast::gpu::{Gpu, GpuOptions};
 use volcast::headless::Headless;
+use volcast::quality::Quality;
 use volcast::settings::RenderSettings;
 
 /// Which pixels of the view (`view` in window pixels; 1 pixel per point under Xvfb) show the volume alone, and
@@ -190,6 +191,19 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
     let view_panel = egui::Rect::from_min_size(egui::pos2((640 - w) as f32, 0.0), egui::vec2(w as f32, h as f32));
     let mask_panel = volume_only(&settings_panel, helix.extent(), view_panel);
     let window_panel = capture_view(&x.display, window, view_panel, &shot_panel, &mask_panel);
+    // The viewer starts at `render`'s default quality; Q lowers it one level, and the next frame takes that
+    // level's step (resolved from the transfer function, as `render --quality fast` resolves it).
+    let normal = Quality::Normal.step_length(&settings_panel, helix.range);
+    assert_eq!(
+        settings_panel.step_length, normal,
+        "the viewer's default quality is normal"
+    );
+    type_keys(&x.display, window, &["q", "F12"]);
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    let (_, settings_fast) = read_screenshot(&dir, &saved);
+    let fast = Quality::Fast.step_length(&settings_fast, helix.range);
+    assert!(fast > normal, "fast {fast} against normal {normal}");
+    assert_eq!(settings_fast.step_length, fast, "Q: normal → fast");
 
     // Tab hides the panel. Escape then works around a known bug: Tab also moves egui's keyboard focus to a widget,
     // and `ui::shortcuts` ignores every key (F12, Space, R, Tab) while any widget has focus, until Escape.

@@ -121,6 +121,8 @@ pub struct ViewerOptions {
     pub script: Vec<ScriptStep>,
     /// The step of a time series to show first (`--time`).
     pub time: Option<u32>,
+    /// Sampling quality of still frames (`--quality`; the panel and Q change it).
+    pub quality: crate::quality::Quality,
 }
 
 /// Opens the viewer and runs until the window closes. Returns the validation log for the caller to report.
@@ -387,7 +389,10 @@ impl Running {
             egui_ctx,
             egui_state,
             egui_renderer: None,
-            state: ViewerState::new(glam::Vec3::ONE, "loading…".into()),
+            state: ViewerState {
+                quality: Some(opts.quality),
+                ..ViewerState::new(glam::Vec3::ONE, "loading…".into())
+            },
             loading: None,
             pending_screenshot: None,
             zero_size: false,

@@ -5,6 +5,7 @@
 use super::controls::{gizmo_axes, look_along, pick_axis, OrbitView, RotationAnimation};
 use super::time_control::TimeControl;
 use crate::camera::{edge_labels, Camera, ViewPreset};
+use crate::quality::Quality;
 use crate::render::PassTimings;
 use crate::settings::{CompositeMode, PositionFormat, RaySetup, RenderSettings, Shading};
 use crate::transfer::Colormap;
@@ -50,7 +51,11 @@ pub struct ViewerState {
     pub range: [f64; 2],
     pub tf_dragging: Option<usize>,
     pub ortho: bool,
-    /// Interactive level of detail: while the view moves, half resolution and double step, then a full frame.
+    /// Sampling quality of still frames, as `render --quality` (the step resolved per frame from the transfer
+    /// function); `None`: the step slider's step.
+    pub quality: Option<Quality>,
+    /// Interactive level of detail: while the view moves, lower resolution and the draft quality's step (with a
+    /// custom step, double it), then a full frame.
     pub lod: bool,
     /// The user moved the view in this UI pass (drag or wheel).
     pub interacting: bool,
@@ -104,6 +109,7 @@ impl ViewerState {
             range: [0.0, 1.0],
             tf_dragging: None,
             ortho: false,
+            quality: Some(Quality::Normal),
             lod: true,
             interacting: false,
             full_frame_ms: None,
@@ -170,19 +176,25 @@ impl ViewerState {
             s.window[1] = (s.window[0] + 1e-3).min(1.0);
             s.window[0] = s.window[1] - 1e-3;
         }
+        if let Some(q) = self.quality {
+            q.apply(&mut s, self.range);
+        }
         s
     }
 
     /// What a frame of `width`×`height` renders: full quality, or — while the view moves, with `lod` on — a
-    /// fraction of the resolution (upscaled when shown; see [`ViewerState::lod_divisor`]), twice the step and
-    /// adaptive steps.
+    /// fraction of the resolution (upscaled when shown; see [`ViewerState::lod_divisor`]), the draft quality's
+    /// step (at least the still frame's; with a custom step, twice it) and adaptive steps.
     pub fn frame_settings(&self, width: u32, height: u32, moving: bool) -> RenderSettings {
         let mut s = self.render_settings(width, height);
         if self.lod && moving {
             let f = self.lod_divisor();
             s.width = width.div_ceil(f).max(1);
             s.height = height.div_ceil(f).max(1);
-            s.step_length = (s.step_length * 2.0).min(64.0);
+            s.step_length = match self.quality {
+                Some(_) => s.step_length.max(Quality::Draft.step_length(&s, self.range)),
+                None => (s.step_length * 2.0).min(64.0),
+            };
             s.adaptive_step = true;
         }
         s
@@ -366,8 +378,17 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
                 ui.add(egui::Slider::new(&mut look.step_alpha, 0.0..=1.0).text("step alpha"));
                 ui.checkbox(&mut look.multiplied_alpha, "multiplied alpha");
             }
-            ui.add(
-                egui::Slider::new(&mut look.step_length, 0.1..=4.0)
+            let name = |q: Option<Quality>| q.map_or("custom step", Quality::name);
+            egui::ComboBox::from_label("quality (Q)")
+                .selected_text(name(state.quality))
+                .show_ui(ui, |ui| {
+                    for q in Quality::ALL.into_iter().map(Some).chain([None]) {
+                        ui.selectable_value(&mut state.quality, q, name(q));
+                    }
+                });
+            ui.add_enabled(
+                state.quality.is_none(),
+                egui::Slider::new(&mut state.look.step_length, 0.1..=4.0)
                     .logarithmic(true)
                     .text("step length (voxels)"),
             );
@@ -743,8 +764,21 @@ pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> 
         if i.key_pressed(egui::Key::P) {
             state.time.toggle_play();
         }
+        if i.key_pressed(egui::Key::Q) {
+            state.quality = Some(next_lower(state.quality));
+        }
     });
     actions
+}
+
+/// The Q key's cycle: one level lower, from draft to converged (a custom step goes to normal).
+pub fn next_lower(q: Option<Quality>) -> Quality {
+    match q {
+        Some(Quality::Converged) | None => Quality::Normal,
+        Some(Quality::Normal) => Quality::Fast,
+        Some(Quality::Fast) => Quality::Draft,
+        Some(Quality::Draft) => Quality::Converged,
+    }
 }
 
 #[cfg(test)]
@@ -763,6 +797,8 @@ mod tests {
             "same view matrix"
         );
         cli.camera = viewer.camera;
+        // `render`'s default quality, resolved on the same value range.
+        Quality::Normal.apply(&mut cli, state.range);
         assert_eq!(viewer, cli);
     }
 
@@ -779,8 +815,42 @@ mod tests {
     }
 
     #[test]
+    fn quality_sets_the_still_step_and_draft_the_moving_one() {
+        let mut state = ViewerState::new(Vec3::ONE, "x".into());
+        state.full_frame_ms = Some(40.0);
+        let plain = state.render_settings(401, 300);
+        let mut cli = state.render_settings(401, 300);
+        for q in Quality::ALL {
+            state.quality = Some(q);
+            Quality::apply(q, &mut cli, state.range);
+            assert_eq!(
+                state.frame_settings(401, 300, false).step_length,
+                cli.step_length,
+                "{q:?}"
+            );
+            let moving = state.frame_settings(401, 300, true).step_length;
+            assert_eq!(moving, cli.step_length.max(2.0), "{q:?} while moving: draft's 2 voxels");
+        }
+        // Strong opacity shortens every level's step, the draft's while moving too (to a quarter at most).
+        state.look.step_alpha = 1.0;
+        state.quality = Some(Quality::Normal);
+        let moving = state.frame_settings(401, 300, true).step_length;
+        assert!((0.5..2.0).contains(&moving), "{moving}");
+        assert!(state.frame_settings(401, 300, false).step_length < 0.4);
+        // Q walks down the levels and wraps; a custom step keeps the slider's.
+        assert_eq!(next_lower(Some(Quality::Normal)), Quality::Fast);
+        assert_eq!(next_lower(Some(Quality::Draft)), Quality::Converged);
+        assert_eq!(next_lower(None), Quality::Normal);
+        state.quality = None;
+        state.look.step_length = 0.7;
+        assert_eq!(state.frame_settings(401, 300, false).step_length, 0.7);
+        assert_eq!(plain.step_length, Quality::Normal.step_length(&plain, [0.0, 1.0]));
+    }
+
+    #[test]
     fn level_of_detail_while_moving() {
         let mut state = ViewerState::new(Vec3::ONE, "x".into());
+        state.quality = None;
         let still = state.frame_settings(401, 300, false);
         assert_eq!((still.width, still.height, still.step_length), (401, 300, 1.0));
         state.full_frame_ms = Some(40.0);
