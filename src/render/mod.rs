@@ -22,6 +22,7 @@ use crate::settings::{PositionFormat, RaySetup, RenderSettings};
 use crate::tf::{bake, Classification};
 use crate::volume::Volume;
 use ash::vk;
+use rayon::prelude::*;
 
 /// GPU time per pass of the last frame, from timestamp queries.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -317,21 +318,25 @@ impl Renderer {
                 v
             }
         };
-        let mut texels: Vec<i16> = Vec::with_capacity(volume.voxel_count() * 4);
-        for z in 0..d as i64 {
-            for y in 0..h as i64 {
-                for x in 0..w as i64 {
+        // Slice by slice on every core.
+        let mut texels = vec![[0i16; 4]; volume.voxel_count()];
+        texels
+            .par_chunks_mut((w * h) as usize)
+            .enumerate()
+            .for_each(|(z, slice)| {
+                let z = z as i64;
+                for (i, t) in slice.iter_mut().enumerate() {
+                    let (x, y) = ((i % w as usize) as i64, (i / w as usize) as i64);
                     // Stored as 2g so the range of g, [-0.5, 0.5], fills SNORM's [-1, 1].
                     let g = [
                         at(x + 1, y, z) - at(x - 1, y, z),
                         at(x, y + 1, z) - at(x, y - 1, z),
                         at(x, y, z + 1) - at(x, y, z - 1),
                     ];
-                    texels.extend(g.map(|v| (v.clamp(-1.0, 1.0) * 32767.0).round() as i16));
-                    texels.push(0);
+                    let [gx, gy, gz] = g.map(|v| (v.clamp(-1.0, 1.0) * 32767.0).round() as i16);
+                    *t = [gx, gy, gz, 0];
                 }
-            }
-        }
+            });
         let image = image_3d(gpu, vk::Format::R16G16B16A16_SNORM, volume.dims, "gradients")?;
         if let Err(e) = upload_3d(gpu, &image, bytemuck::cast_slice(&texels), d) {
             image.destroy(gpu);
