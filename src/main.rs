@@ -10,7 +10,7 @@ use volcast::camera::{Camera, ViewPreset};
 use volcast::compare;
 use volcast::gpu::{Gpu, GpuError, GpuOptions};
 use volcast::headless::Headless;
-use volcast::quality::Quality;
+use volcast::quality::{Gradients, Quality};
 use volcast::settings::CompositeMode;
 use volcast::settings::{PositionFormat, RaySetup, RenderSettings};
 use volcast::tf::TransferFunction;
@@ -282,6 +282,9 @@ struct BenchArgs {
     /// Sampling quality of every scene, as `render --quality`: draft, fast, normal or converged.
     #[arg(long, default_value = "normal", value_parser = parse_quality)]
     quality: Quality,
+    /// Where shaded scenes take gradients, as `render --gradients`: auto, texture or samples.
+    #[arg(long, default_value = "auto", value_parser = parse_gradients)]
+    gradients: Gradients,
     /// Force this step length (in voxels) on every scene instead of its quality's; each frame's error is still
     /// taken against the scene's converged image (1/8-voxel steps).
     #[arg(long)]
@@ -385,8 +388,12 @@ struct FrameArgs {
     /// Adaptive step: every other sample in bricks of faint opacity (approximate; emission and density modes).
     #[arg(long)]
     adaptive_step: bool,
-    /// Shade from a precomputed gradient texture instead of six extra samples (8 bytes per voxel).
-    #[arg(long)]
+    /// Where shaded frames take gradients: auto (the texture while it stays within 1 GiB), texture (precomputed
+    /// central differences on the grid, 8 bytes per voxel, one fetch) or samples (six samples of the interpolant).
+    #[arg(long, default_value = "auto", value_parser = parse_gradients)]
+    gradients: Gradients,
+    /// The same as --gradients texture.
+    #[arg(long, conflicts_with = "gradients")]
     gradient_texture: bool,
     /// Opacity of one voxel-length step.
     #[arg(long, default_value_t = volcast::settings::DEFAULT_STEP_ALPHA)]
@@ -535,7 +542,6 @@ impl FrameArgs {
         s.camera.ortho = self.ortho;
         s.skip_empty = !self.no_skip;
         s.adaptive_step = self.adaptive_step;
-        s.gradient_texture = self.gradient_texture;
         s.step_alpha = self.step_alpha;
         s.multiplied_alpha = self.multiplied_alpha;
         s.early_termination = self.early_termination;
@@ -554,9 +560,23 @@ impl FrameArgs {
         if let Some(step) = self.step_length {
             s.step_length = step;
         }
+        let gradients = if self.gradient_texture {
+            Gradients::Texture
+        } else {
+            self.gradients
+        };
+        gradients.apply(&mut s, volume.voxel_count() as u64);
         s.validate().map_err(anyhow::Error::msg)?;
         Ok(s)
     }
+}
+
+/// `--gradients`' value, for render and bench alike.
+fn parse_gradients(s: &str) -> Result<Gradients, String> {
+    Gradients::parse(s).ok_or_else(|| {
+        let names: Vec<&str> = Gradients::ALL.iter().map(|g| g.name()).collect();
+        format!("unknown gradient source '{s}'; choose one of {}", names.join(", "))
+    })
 }
 
 /// `--quality`'s value, for render and bench alike.
@@ -779,6 +799,7 @@ fn bench(args: &BenchArgs) -> Result<()> {
         methods: args.methods.clone(),
         sample_only: args.sample_only,
         quality: args.quality,
+        gradients: args.gradients,
         step_length: args.step_length,
     };
     if args.playback {

@@ -176,12 +176,22 @@ fn quick_playback_times_every_step_without_validation_errors() {
     assert!((fps - 1e3 / json["frame_ms"]["median"].as_f64().unwrap()).abs() < 1e-6);
 }
 
-/// The error column measures what it says: at `--step-length 0.125` a frame is rendered exactly as the converged
-/// image is (same settings), so its error is 0; at 4-voxel steps it is larger than at the default 1-voxel steps.
+/// The error column measures what it says: at `--step-length 0.125` with gradients from samples a frame is
+/// rendered exactly as the converged image is (same settings), so its error is 0; at 4-voxel steps it is larger
+/// than at 1-voxel steps.
 #[test]
 fn bench_errors_are_against_the_converged_image_at_the_forced_step() {
     let mean_error = |step: &str| -> Vec<(String, f64, f64)> {
-        let out = bench(&["--quick", "--method", "faces", "--step-length", step, "--json"]);
+        let out = bench(&[
+            "--quick",
+            "--method",
+            "faces",
+            "--gradients",
+            "samples",
+            "--step-length",
+            step,
+            "--json",
+        ]);
         let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
         assert!(out.status.success(), "exit {:?}\nstderr:\n{stderr}", out.status);
         let json: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");

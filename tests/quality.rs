@@ -1,5 +1,6 @@
-//! The default quality is visually converged: the GPU image at `--quality normal` (what `render` does without
-//! options) against the CPU reference at `--quality converged` (1/8-voxel steps, no adaptive rule), over the
+//! The default quality is visually converged: the GPU image at `--quality normal` and `--gradients auto` (what
+//! `render` does without options: shaded frames take the gradient texture) against the CPU reference at
+//! `--quality converged` (1/8-voxel steps, gradients from samples of the interpolant, no adaptive rule), over the
 //! object pixels, within the fidelity issue's bound: mean ≤ 0.5/255, p99 ≤ 4/255. Under validation.
 //!
 //! Cases: the built-in helix (unshaded and shaded) and Marschner–Lobb volumes with their default classification,
@@ -16,7 +17,7 @@ use common::reference::Reference;
 use glam::Vec3;
 use volcast::camera::Camera;
 use volcast::headless::Headless;
-use volcast::quality::Quality;
+use volcast::quality::{Gradients, Quality};
 use volcast::settings::{RenderSettings, Shading};
 use volcast::transfer::Colormap;
 use volcast::volume::{self, Volume};
@@ -99,9 +100,22 @@ fn the_default_quality_is_within_the_bound_of_the_converged_image() {
         let range = c.volume.range;
         let mut normal = c.settings.clone();
         Quality::Normal.apply(&mut normal, range);
+        Gradients::Auto.apply(&mut normal, c.volume.voxel_count() as u64);
+        assert_eq!(
+            normal.gradient_texture,
+            normal.shading.is_some(),
+            "{}: the default's gradients",
+            c.label
+        );
         let mut converged = c.settings.clone();
         Quality::Converged.apply(&mut converged, range);
         headless.set_volume(&gpu, &c.volume).expect("upload");
+        if normal.gradient_texture {
+            headless
+                .renderer
+                .enable_gradient_texture(&gpu, &c.volume)
+                .expect("gradients");
+        }
         let actual = headless.render(&gpu, &normal).expect("render").image;
         let expected = Reference::new(&c.volume).render_full(&converged);
         let d = against_reference(&actual, &expected, normal.background);

@@ -196,6 +196,10 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                 for &shading in shadings {
                     let mut s = base.clone();
                     shading.apply(&mut s);
+                    opts.gradients.apply(&mut s, volume.voxel_count() as u64);
+                    if s.gradient_texture {
+                        headless.renderer.enable_gradient_texture(gpu, &volume)?;
+                    }
                     // Counted before timing, so the count's CPU work never overlaps a timed frame.
                     let count = counter.count(&s);
                     log(&format!(

@@ -30,6 +30,8 @@ pub struct BenchOptions {
     pub sample_only: bool,
     /// The sampling quality of every scene (`--quality`), as `render` applies it.
     pub quality: crate::quality::Quality,
+    /// Where shaded scenes take gradients (`--gradients`), as `render` applies it.
+    pub gradients: crate::quality::Gradients,
     /// A step length (voxels) forced on every scene, overriding the quality's.
     pub step_length: Option<f32>,
 }
