@@ -204,6 +204,19 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
     let fast = Quality::Fast.step_length(&settings_fast, helix.range);
     assert!(fast > normal, "fast {fast} against normal {normal}");
     assert_eq!(settings_fast.step_length, fast, "Q: normal → fast");
+    // S shades, with gradients from the texture (`render --gradients auto`): the window must show what the
+    // headless renderer makes of those settings. S again turns shading off for the rest.
+    type_keys(&x.display, window, &["s", "F12"]);
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    let (shot_shaded, settings_shaded) = read_screenshot(&dir, &saved);
+    assert!(settings_shaded.shading.is_some(), "S: shading on");
+    assert!(
+        settings_shaded.gradient_texture,
+        "shaded frames take the gradient texture"
+    );
+    let mask_shaded = volume_only(&settings_shaded, helix.extent(), view_panel);
+    let window_shaded = capture_view(&x.display, window, view_panel, &shot_shaded, &mask_shaded);
+    type_keys(&x.display, window, &["s"]);
 
     // Tab hides the panel. Escape then works around a known bug: Tab also moves egui's keyboard focus to a widget,
     // and `ui::shortcuts` ignores every key (F12, Space, R, Tab) while any widget has focus, until Escape.
@@ -234,6 +247,11 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
     headless.set_volume(&gpu, &helix).unwrap();
     let expected_panel = headless.render(&gpu, &settings_panel).expect("render").image;
     let expected_full = headless.render(&gpu, &settings_full).expect("render").image;
+    headless
+        .renderer
+        .enable_gradient_texture(&gpu, &helix)
+        .expect("gradients");
+    let expected_shaded = headless.render(&gpu, &settings_shaded).expect("render").image;
     headless.destroy(&gpu);
     let log = gpu.log.clone();
     drop(gpu);
@@ -241,6 +259,7 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
 
     assert_window_shows("with-panel", &window_panel, &shot_panel, &expected_panel, &mask_panel);
     assert_window_shows("panel-hidden", &window_full, &shot_full, &expected_full, &mask_full);
+    assert_window_shows("shaded", &window_shaded, &shot_shaded, &expected_shaded, &mask_shaded);
     let defaults = RenderSettings::new(640, 480, helix.extent());
     assert!(
         (settings_full.camera.eye - defaults.camera.eye).length() < 1e-4,

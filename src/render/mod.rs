@@ -347,6 +347,11 @@ impl Renderer {
         Ok(())
     }
 
+    /// Whether the loaded volume's gradient texture is made (`enable_gradient_texture`).
+    pub fn has_gradient_texture(&self) -> bool {
+        self.volume.as_ref().is_some_and(|v| v.gradient.is_some())
+    }
+
     /// How the loaded volume is stored on the GPU (None: no volume).
     pub fn volume_layout(&self) -> Option<VolumeLayout> {
         self.volume.as_ref().map(|v| v.layout)

@@ -287,6 +287,10 @@ struct Running {
     dialog: Option<Receiver<Option<PathBuf>>>,
     /// A time series' every step, kept to upload the one the time controls ask for; `None` for a 3-D volume.
     series: Option<Volume>,
+    /// A 3-D volume kept for its gradient texture, made on the first frame that reads gradients
+    /// (`ViewerState::gradient_texture`); `None` for a series or a volume whose texture would exceed
+    /// `quality::GRADIENT_LIMIT`.
+    kept: Option<Volume>,
     /// The step after the shown one while playing, uploaded ahead of display (see `upload_ahead`).
     ahead: Option<(u32, PreparedVolume)>,
 }
@@ -413,6 +417,7 @@ impl Running {
             drag_frames: Vec::new(),
             slot_reduced: [false; FRAMES_IN_FLIGHT],
             series: None,
+            kept: None,
             ahead: None,
             dialog: None,
         };
@@ -516,7 +521,15 @@ impl Running {
         self.state.histogram = histogram;
         self.state.range = v.range;
         self.state.time = time_control::TimeControl::new(v.timesteps(), v.shown_step());
-        self.series = (v.timesteps() > 1).then_some(v);
+        let keep = v.timesteps() == 1 && (v.voxel_count() as u64).saturating_mul(8) <= crate::quality::GRADIENT_LIMIT;
+        self.state.gradient_texture = keep;
+        self.kept = None;
+        if v.timesteps() > 1 {
+            self.series = Some(v);
+        } else {
+            self.series = None;
+            self.kept = keep.then_some(v);
+        }
         self.has_volume = true;
         Ok(())
     }
@@ -1129,6 +1142,16 @@ impl Running {
             .view_image
             .as_ref()
             .is_some_and(|v| (v.desc.extent.width, v.desc.extent.height) == (settings.width, settings.height));
+        let renderer = self.renderer.as_ref().ok_or(GpuError::Lost("renderer"))?;
+        if settings.gradient_texture && !renderer.has_gradient_texture() {
+            let volume = self
+                .kept
+                .as_ref()
+                .ok_or(GpuError::Lost("no volume kept for gradients"))?;
+            self.wait_idle()?;
+            let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
+            renderer.enable_gradient_texture(&self.gpu, volume)?;
+        }
         let renderer = self.renderer.as_ref().ok_or(GpuError::Lost("renderer"))?;
         if view_fits && !renderer.needs_prepare(settings) {
             return Ok(());

@@ -5,7 +5,7 @@
 use super::controls::{gizmo_axes, look_along, pick_axis, OrbitView, RotationAnimation};
 use super::time_control::TimeControl;
 use crate::camera::{edge_labels, Camera, ViewPreset};
-use crate::quality::Quality;
+use crate::quality::{Gradients, Quality};
 use crate::render::PassTimings;
 use crate::settings::{CompositeMode, PositionFormat, RaySetup, RenderSettings, Shading};
 use crate::transfer::Colormap;
@@ -54,6 +54,9 @@ pub struct ViewerState {
     /// Sampling quality of still frames, as `render --quality` (the step resolved per frame from the transfer
     /// function); `None`: the step slider's step.
     pub quality: Option<Quality>,
+    /// Shaded frames may take the volume's gradient texture (`render --gradients auto`): the viewer kept the
+    /// volume to make it. Not for series, whose steps would each need one.
+    pub gradient_texture: bool,
     /// Interactive level of detail: while the view moves, lower resolution and the draft quality's step (with a
     /// custom step, double it), then a full frame.
     pub lod: bool,
@@ -110,6 +113,7 @@ impl ViewerState {
             tf_dragging: None,
             ortho: false,
             quality: Some(Quality::Normal),
+            gradient_texture: false,
             lod: true,
             interacting: false,
             full_frame_ms: None,
@@ -179,6 +183,12 @@ impl ViewerState {
         if let Some(q) = self.quality {
             q.apply(&mut s, self.range);
         }
+        let gradients = if self.gradient_texture {
+            Gradients::Auto
+        } else {
+            Gradients::Samples
+        };
+        gradients.apply(&mut s, self.dims.iter().map(|&d| u64::from(d)).product());
         s
     }
 
@@ -415,7 +425,7 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
                 _ => {}
             }
             let mut shading = look.shading.is_some();
-            if ui.checkbox(&mut shading, "gradient shading").changed() {
+            if ui.checkbox(&mut shading, "gradient shading (S)").changed() {
                 look.shading = shading.then(Shading::default);
             }
             if let Some(sh) = &mut look.shading {
@@ -767,6 +777,12 @@ pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> 
         if i.key_pressed(egui::Key::Q) {
             state.quality = Some(next_lower(state.quality));
         }
+        if i.key_pressed(egui::Key::S) {
+            state.look.shading = match state.look.shading {
+                Some(_) => None,
+                None => Some(Shading::default()),
+            };
+        }
     });
     actions
 }
@@ -845,6 +861,16 @@ mod tests {
         state.look.step_length = 0.7;
         assert_eq!(state.frame_settings(401, 300, false).step_length, 0.7);
         assert_eq!(plain.step_length, Quality::Normal.step_length(&plain, [0.0, 1.0]));
+        // Shaded frames take the gradient texture where the viewer kept the volume for it.
+        state.look.shading = Some(crate::settings::Shading::default());
+        assert!(!state.render_settings(8, 8).gradient_texture);
+        state.gradient_texture = true;
+        assert!(state.render_settings(8, 8).gradient_texture);
+        state.look.shading = None;
+        assert!(
+            !state.render_settings(8, 8).gradient_texture,
+            "unshaded frames read no gradient"
+        );
     }
 
     #[test]
