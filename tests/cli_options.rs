@@ -234,16 +234,30 @@ fn mode_and_shading_options_take_effect() {
             s.mode = CompositeMode::Density;
             s.density = 3.0;
         }),
-        rule(&["--shading"], |s, _| s.shading = Some(Shading::default())),
+        // Shaded and gradient-opacity frames take the gradient texture by default (`--gradients auto`).
+        rule(&["--shading"], |s, _| {
+            s.shading = Some(Shading::default());
+            s.gradient_texture = true;
+        }),
+        rule(&["--shading", "--gradients", "samples"], |s, _| {
+            s.shading = Some(Shading::default())
+        }),
         rule(&["--shading", "--lighting", "0.1,0.5,0.8,40"], |s, _| {
             s.shading = Some(Shading {
                 ambient: 0.1,
                 diffuse: 0.5,
                 specular: 0.8,
                 shininess: 40.0,
-            })
+            });
+            s.gradient_texture = true;
         }),
-        rule(&["--gradient-opacity", "0.05"], |s, _| s.gradient_opacity = Some(0.05)),
+        rule(&["--gradient-opacity", "0.05"], |s, _| {
+            s.gradient_opacity = Some(0.05);
+            s.gradient_texture = true;
+        }),
+        rule(&["--gradient-opacity", "0.05", "--gradients", "samples"], |s, _| {
+            s.gradient_opacity = Some(0.05)
+        }),
         rule(&["--shading", "--gradient-texture"], |s, _| {
             s.shading = Some(Shading::default());
             s.gradient_texture = true;
