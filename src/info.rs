@@ -141,6 +141,22 @@ impl Info {
                 ),
             );
         }
+        let gradient_bytes = v.voxel_count() as u64 * 8;
+        line(
+            "",
+            if gradient_bytes <= crate::quality::GRADIENT_LIMIT {
+                format!(
+                    "shaded frames, --gradients auto: + gradient texture (RGBA16 SNORM), {:.1} MiB",
+                    mib(gradient_bytes as usize)
+                )
+            } else {
+                format!(
+                    "shaded frames, --gradients auto: six samples per gradient (a gradient texture would take \
+                     {:.1} MiB, over 1 GiB)",
+                    mib(gradient_bytes as usize)
+                )
+            },
+        );
         for (i, a) in self.arrays.iter().enumerate() {
             let loaded = if a.loaded { " (loaded)" } else { "" };
             line(
