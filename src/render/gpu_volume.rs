@@ -141,49 +141,54 @@ impl DeviceFacts {
 /// of the cell it starts in x and y (neighbours clamped to the edge), packed in one texel; the march fetches it at
 /// z and z + 1. Filled slab by slab straight into the staging buffer, rows on every core.
 fn upload_corners(gpu: &Gpu, volume: &Volume, layout: VolumeLayout) -> Result<Image, GpuError> {
+    if matches!(volume.data, VoxelData::F32(_)) {
+        return Err(GpuError::Lost("corner texture: float data has no corner layout"));
+    }
     let format = match layout {
         VolumeLayout::Corners8 => vk::Format::R32_UINT,
         _ => vk::Format::R32G32_UINT,
     };
     let image = image_3d(gpu, format, volume.dims, "volume corners")?;
-    let n = volume.voxel_count();
     let texel = layout.bytes_per_voxel() as usize;
     // A depth-1 volume is uploaded twice (image_3d makes two slices).
     let copies = if volume.dims[2] == 1 { 2 } else { 1 };
-    let [nx, ny, _] = volume.dims.map(|d| d as usize);
-    let uploaded = upload_image_with(gpu, &image, (n * texel * copies) as u64, |range, dst| {
-        let first = range.start / texel;
-        let rows = dst.par_chunks_mut(nx * texel).enumerate();
-        match &volume.data {
-            VoxelData::U8(v) => rows.for_each(|(r, row)| {
-                let row: &mut [u32] = bytemuck::cast_slice_mut(row);
-                corner_row(
-                    row,
-                    (first / nx + r) % (ny * volume.dims[2] as usize),
-                    [nx, ny],
-                    |i| u32::from(v[i]),
-                    |c| c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24,
-                )
-            }),
-            VoxelData::U16(v) => rows.for_each(|(r, row)| {
-                let row: &mut [[u32; 2]] = bytemuck::cast_slice_mut(row);
-                corner_row(
-                    row,
-                    (first / nx + r) % (ny * volume.dims[2] as usize),
-                    [nx, ny],
-                    |i| u32::from(v[i]),
-                    |c| [c[0] | c[1] << 16, c[2] | c[3] << 16],
-                )
-            }),
-            VoxelData::F32(_) => {}
-        }
-    });
+    let [nx, ny, nz] = volume.dims.map(|d| d as usize);
+    let uploaded = upload_image_with(
+        gpu,
+        &image,
+        (volume.voxel_count() * texel * copies) as u64,
+        |range, dst| {
+            // The slab is whole rows; its rows are numbered within the volume (wrapping into the second copy).
+            let first = range.start / texel / nx;
+            let rows = dst.par_chunks_mut(nx * texel).enumerate();
+            let row_of = |r: usize| (first + r) % (ny * nz);
+            match &volume.data {
+                VoxelData::U8(v) => rows.for_each(|(r, row)| {
+                    let pack = |c: [u32; 4]| c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24;
+                    corner_row(
+                        bytemuck::cast_slice_mut(row),
+                        row_of(r),
+                        [nx, ny],
+                        |i| u32::from(v[i]),
+                        pack,
+                    )
+                }),
+                VoxelData::U16(v) => rows.for_each(|(r, row)| {
+                    let pack = |c: [u32; 4]| [c[0] | c[1] << 16, c[2] | c[3] << 16];
+                    corner_row(
+                        bytemuck::cast_slice_mut(row),
+                        row_of(r),
+                        [nx, ny],
+                        |i| u32::from(v[i]),
+                        pack,
+                    )
+                }),
+                VoxelData::F32(_) => {}
+            }
+        },
+    );
     match uploaded {
-        Ok(()) if !matches!(volume.data, VoxelData::F32(_)) => Ok(image),
-        Ok(()) => {
-            image.destroy(gpu);
-            Err(GpuError::Lost("corner texture: float data has no corner layout"))
-        }
+        Ok(()) => Ok(image),
         Err(e) => {
             image.destroy(gpu);
             Err(e)

@@ -157,36 +157,33 @@ pub fn encode_reach(levels: &[u8], bricks: [u32; 3]) -> Vec<u8> {
     let cap = (bx.max(by).max(bz) - 1).clamp(0, i64::from(MAX_REACH)) as u8;
     for r in 1..=cap {
         let prev = reach.clone();
+        // Brick (x, y, z), at reach r − 1, grows to r when all its neighbours inside the grid share its class and
+        // reach at least r − 1.
+        let grows = |x: i64, y: i64, z: i64| {
+            let i = index(x, y, z);
+            prev[i] == r - 1
+                && (-1..=1i64).all(|dz| {
+                    (-1..=1i64).all(|dy| {
+                        (-1..=1i64).all(|dx| {
+                            let (nx, ny, nz) = (x + dx, y + dy, z + dz);
+                            let outside = nx < 0 || ny < 0 || nz < 0 || nx >= bx || ny >= by || nz >= bz;
+                            outside || {
+                                let j = index(nx, ny, nz);
+                                classes[j] == classes[i] && prev[j] >= r - 1
+                            }
+                        })
+                    })
+                })
+        };
         // Each layer of bricks reads only `prev` and `classes`: the layers grow on every core.
         let grew = reach
             .par_chunks_mut((bx * by) as usize)
             .enumerate()
             .map(|(z, layer)| {
-                let z = z as i64;
                 let mut grew = false;
                 for y in 0..by {
                     for x in 0..bx {
-                        let i = index(x, y, z);
-                        if prev[i] != r - 1 {
-                            continue;
-                        }
-                        let mut ok = true;
-                        'n: for dz in -1..=1i64 {
-                            for dy in -1..=1i64 {
-                                for dx in -1..=1i64 {
-                                    let (nx, ny, nz) = (x + dx, y + dy, z + dz);
-                                    if nx < 0 || ny < 0 || nz < 0 || nx >= bx || ny >= by || nz >= bz {
-                                        continue;
-                                    }
-                                    let j = index(nx, ny, nz);
-                                    if classes[j] != classes[i] || prev[j] < r - 1 {
-                                        ok = false;
-                                        break 'n;
-                                    }
-                                }
-                            }
-                        }
-                        if ok {
+                        if grows(x, y, z as i64) {
                             layer[(x + bx * y) as usize] = r;
                             grew = true;
                         }
