@@ -1,5 +1,6 @@
 //! What `volcast info` says about a volume, in words and as JSON. Pure formatting of a loaded [`Volume`].
 
+use crate::quality::Gradients;
 use crate::volume::geometry::Handedness;
 use crate::volume::Volume;
 use serde::Serialize;
@@ -141,10 +142,11 @@ impl Info {
                 ),
             );
         }
-        let gradient_bytes = v.voxel_count() as u64 * 8;
+        let voxels = v.voxel_count() as u64;
+        let gradient_bytes = Gradients::texture_bytes(voxels);
         line(
             "",
-            if gradient_bytes <= crate::quality::GRADIENT_LIMIT {
+            if Gradients::texture_fits(voxels) {
                 format!(
                     "shaded frames, --gradients auto: + gradient texture (RGBA16 SNORM), {:.1} MiB",
                     mib(gradient_bytes as usize)

@@ -571,20 +571,28 @@ impl FrameArgs {
     }
 }
 
-/// `--gradients`' value, for render and bench alike.
-fn parse_gradients(s: &str) -> Result<Gradients, String> {
-    Gradients::parse(s).ok_or_else(|| {
-        let names: Vec<&str> = Gradients::ALL.iter().map(|g| g.name()).collect();
-        format!("unknown gradient source '{s}'; choose one of {}", names.join(", "))
+/// `parse(s)`, or an error listing the names of `all` (`what` says what the value is).
+fn parse_named<T: Copy>(
+    s: &str,
+    parse: fn(&str) -> Option<T>,
+    all: &[T],
+    name: fn(T) -> &'static str,
+    what: &str,
+) -> Result<T, String> {
+    parse(s).ok_or_else(|| {
+        let names: Vec<&str> = all.iter().map(|&v| name(v)).collect();
+        format!("unknown {what} '{s}'; choose one of {}", names.join(", "))
     })
 }
 
-/// `--quality`'s value, for render and bench alike.
+/// `--gradients`' value, for render and bench alike.
+fn parse_gradients(s: &str) -> Result<Gradients, String> {
+    parse_named(s, Gradients::parse, &Gradients::ALL, Gradients::name, "gradient source")
+}
+
+/// `--quality`'s value, for render, view and bench alike.
 fn parse_quality(s: &str) -> Result<Quality, String> {
-    Quality::parse(s).ok_or_else(|| {
-        let names: Vec<&str> = Quality::ALL.iter().map(|q| q.name()).collect();
-        format!("unknown quality '{s}'; choose one of {}", names.join(", "))
-    })
+    parse_named(s, Quality::parse, &Quality::ALL, Quality::name, "quality")
 }
 
 /// Runs `body` with a GPU and reports validation messages at the end; any validation error or warning fails the

@@ -132,6 +132,16 @@ impl Gradients {
             .find(|g| g.name() == s.trim().to_ascii_lowercase())
     }
 
+    /// The gradient texture's size for a volume of `voxels` (8 bytes per voxel).
+    pub fn texture_bytes(voxels: u64) -> u64 {
+        voxels.saturating_mul(8)
+    }
+
+    /// Whether `Auto` takes the texture for a volume of `voxels`: it stays within [`GRADIENT_LIMIT`].
+    pub fn texture_fits(voxels: u64) -> bool {
+        Gradients::texture_bytes(voxels) <= GRADIENT_LIMIT
+    }
+
     /// Sets `s.gradient_texture` for a volume of `voxels`: only frames that read gradients (emission or density
     /// with shading or gradient opacity) take the texture, so no other frame pays for making it.
     pub fn apply(self, s: &mut RenderSettings, voxels: u64) {
@@ -139,7 +149,7 @@ impl Gradients {
             && (s.shading.is_some() || s.gradient_opacity.is_some());
         s.gradient_texture = reads
             && match self {
-                Gradients::Auto => voxels.saturating_mul(8) <= GRADIENT_LIMIT,
+                Gradients::Auto => Gradients::texture_fits(voxels),
                 Gradients::Texture => true,
                 Gradients::Samples => false,
             };

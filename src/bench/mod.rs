@@ -158,7 +158,7 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
             };
             headless.set_volume(gpu, &volume)?;
             // The layout the renderer chose (TexelPolicy::Auto: corner or float textures on CPU devices).
-            // Corner buffers bypass the sampler; their rate is stated against the fastest texture format's.
+            // Corner textures bypass the sampler; their rate is stated against the fastest texture format's.
             let layout = headless.renderer.volume_layout();
             let format = layout.map_or("none", |l| l.name());
             let raw_format = match layout {

@@ -521,15 +521,13 @@ impl Running {
         self.state.histogram = histogram;
         self.state.range = v.range;
         self.state.time = time_control::TimeControl::new(v.timesteps(), v.shown_step());
-        let keep = v.timesteps() == 1 && (v.voxel_count() as u64).saturating_mul(8) <= crate::quality::GRADIENT_LIMIT;
+        let keep = v.timesteps() == 1 && crate::quality::Gradients::texture_fits(v.voxel_count() as u64);
         self.state.gradient_texture = keep;
-        self.kept = None;
-        if v.timesteps() > 1 {
-            self.series = Some(v);
+        (self.series, self.kept) = if v.timesteps() > 1 {
+            (Some(v), None)
         } else {
-            self.series = None;
-            self.kept = keep.then_some(v);
-        }
+            (None, keep.then_some(v))
+        };
         self.has_volume = true;
         Ok(())
     }
@@ -1142,8 +1140,8 @@ impl Running {
             .view_image
             .as_ref()
             .is_some_and(|v| (v.desc.extent.width, v.desc.extent.height) == (settings.width, settings.height));
-        let renderer = self.renderer.as_ref().ok_or(GpuError::Lost("renderer"))?;
-        if settings.gradient_texture && !renderer.has_gradient_texture() {
+        // The gradient texture on the first frame that reads gradients (the volume was kept for it).
+        if settings.gradient_texture && self.renderer.as_ref().is_some_and(|r| !r.has_gradient_texture()) {
             let volume = self
                 .kept
                 .as_ref()
