@@ -23,7 +23,7 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 texel;           // xyz: 1 / dims (one voxel in texture space)
     vec4 voxel_world;     // w: gradient-opacity reference (0: off)
     vec4 shading;         // ambient, diffuse, specular, shininess
-    vec4 mode_params;     // x: iso value; y: density factor; z: 1 = skip empty bricks
+    vec4 mode_params;     // x: iso value; y: density factor; z: 1 = look up bricks (skip, stride)
     uvec4 flags;          // x: composite mode (CompositeMode::index); y: jitter on; z: jitter seed; w: shading on
     vec4 brick;           // xyz: a brick's size in texture space (8 / dims)
     vec4 dims;            // xyz: the volume's size in voxels

@@ -157,19 +157,20 @@ vec3 shade(vec3 rgb, vec3 g, vec3 light) {
     return rgb * (s.x + s.y * ndl) + vec3(s.z * pow(ndl, s.w));
 }
 
-// Empty-space skipping. The ray is walked span by span: `brick_span` looks up the 8^3 brick holding the
-// sample at `t` and returns the index of the first sample past the cube of bricks around it that share its
-// class (x) and that class (y). The march leaps over empty bricks without leaving its sample grid, and in occupied ones
-// pays only a comparison per sample. With skipping off, the whole ray is one span.
+// Empty-space skipping and brick strides (rule 2). The ray is walked span by span: `brick_span` looks up the 8^3
+// brick holding the sample at `t` and returns the index of the first sample past the cube of bricks around it
+// that share its class (x) and that class (y). The march leaps over empty bricks without leaving its sample grid,
+// and in the others takes the samples of the class's stride without further lookups. With lookups off (no
+// skipping, no strides), the whole ray is one span at stride 1.
 ivec2 brick_span(vec3 a, vec3 dir, float t, float h, float o, ivec3 bricks) {
     if (frame.mode_params.z < 0.5) {
-        return ivec2(2147483647, 2);
+        return ivec2(2147483647, 3);
     }
     vec3 p = a + dir * t;
     ivec3 b = clamp(ivec3(floor(p / frame.brick.xyz)), ivec3(0), bricks - 1);
-    // skip::encode_reach: bits 0-1 the class (0 empty; 1 only faint opacity, where adaptive stepping may take
-    // every other sample; 2 occupied), bits 2-7 the reach r: every brick within r bricks has the same class, so
-    // the ray is walked to where it leaves that cube of bricks as one span.
+    // skip::encode_reach: bits 0-1 the class (0 empty; 1, 2, 3 strides 4, 2, 1), bits 2-7 the reach r: every
+    // brick within r bricks has the same class, so the ray is walked to where it leaves that cube of bricks as
+    // one span.
     int code = int(texelFetch(sampler3D(occupancy_tex, linear_smp), b, 0).r * 255.0 + 0.5);
     int level = code & 3;
     int reach = code >> 2;
@@ -367,13 +368,13 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     int k = 0;
     bool done = false;
     bool reached_end = false;
-    // The segment's start: index -1 is the ray's start.
-    int k_prev = -1;
+    // The segment's start (rule 6): the ray's start, then each point taken.
     float t_prev = 0.0;
     float v_prev = sample_value(a);
     vec4 unused;
     vec4 i_prev = integral_at(v_prev, unused);
-    int k_occupied = -1;   // the last point taken in an occupied span
+    // Whether the last span walked held something (its points were taken), or was leapt over.
+    bool walked = true;
     while (k < max_steps && !done) {
         float t0 = (float(k) + o) * h;
         if (t0 >= len) {
@@ -382,26 +383,26 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
         }
         ivec2 span = brick_span(a, dir, t0, h, o, bricks);
         int end = max(span.x, k + 1);
-        // Leaving occupied bricks, the segment from the last sample there to the first one beyond still spans the
-        // values between theirs: that one sample is taken before the leap.
-        bool exiting = span.y == 0 && k_prev == k_occupied && k_prev >= k - 2;
+        // Leaving bricks that hold something, the segment from the last point there to the first sample beyond
+        // still spans the values between theirs: that one sample is taken before the leap. (One loop serves both:
+        // lavapipe would run a second copy of the segment code under a mask on every leap.)
+        bool exiting = span.y == 0 && walked;
         if (span.y == 0 && !exiting) {
             k = end;
             continue;
         }
-        // Faint bricks (adaptive stepping): every other sample of the same grid, segments two steps long.
-        int stride = exiting ? k - k_prev : (span.y == 1 ? 2 : 1);
-        end = exiting ? k + 1 : end;
-        // The segment ending at this span's first sample starts at the point `stride` before it: taken already
-        // unless a skipped span lies before.
-        if (k_prev != k - stride) {
-            k_prev = max(k - stride, -1);
-            t_prev = k_prev < 0 ? 0.0 : (float(k_prev) + o) * h;
+        // After a leap, the segment starts at the last sample leapt over (nothing there is visible).
+        if (!walked && k > 0) {
+            t_prev = (float(k - 1) + o) * h;
             v_prev = sample_value(a + dir * t_prev);
             i_prev = integral_at(v_prev, unused);
         }
-        for (; k < end; k += stride) {
-            float t = (float(k) + o) * h;
+        walked = !exiting;
+        // The span's stride s (rule 2): the samples whose index is a multiple of s.
+        int stride = exiting ? 1 : 1 << (3 - span.y);
+        int stop = exiting ? k + 1 : end;
+        for (int j = (k + stride - 1) & ~(stride - 1); j < stop; j += stride) {
+            float t = (float(j) + o) * h;
             if (t >= len) {
                 reached_end = true;
                 done = true;
@@ -409,8 +410,6 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             }
             taken += 1u;
             vec4 c = segment_to(a, dir, t, h, light, density_model, t_prev, v_prev, i_prev);
-            k_prev = k;
-            k_occupied = exiting ? k_occupied : k;
             color += (1.0 - opacity) * c.a * c.rgb;
             opacity += (1.0 - opacity) * c.a;
             if (opacity >= frame.alpha.z) {
@@ -418,10 +417,11 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
                 break;
             }
         }
+        k = end;
     }
-    // The last segment, from the last sample to the ray's end, where the march got there (not by early
-    // termination, nor by leaping over the last samples).
-    if (reached_end && opacity < frame.alpha.z && len - t_prev <= h * 1.001) {
+    // The last segment, from the last point to the ray's end, where the march got there through bricks that hold
+    // something (not by early termination; past a leap everything left is invisible).
+    if (reached_end && walked && opacity < frame.alpha.z) {
         vec4 c = segment_to(a, dir, len, h, light, density_model, t_prev, v_prev, i_prev);
         color += (1.0 - opacity) * c.a * c.rgb;
         opacity += (1.0 - opacity) * c.a;

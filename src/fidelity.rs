@@ -1,6 +1,6 @@
 //! Image fidelity as `bench` measures it: a frame's error against the same scene rendered converged, the way
 //! the issue on fidelity and speed defines it. Converged is 1/8-voxel steps with every approximation off
-//! (adaptive steps, the gradient texture); camera, transfer function, mode, shading and jitter stay the frame's.
+//! (brick strides, the gradient texture); camera, transfer function, mode, shading and jitter stay the frame's.
 //! The error is taken over object pixels (where either image shows the volume, `compare::diff_stats`), so a
 //! small object on a large background cannot dilute it.
 
@@ -15,7 +15,7 @@ pub const CONVERGED_STEP: f32 = 0.125;
 pub fn converged(s: &RenderSettings) -> RenderSettings {
     let mut c = s.clone();
     c.step_length = CONVERGED_STEP;
-    c.adaptive_step = false;
+    c.max_stride = 1;
     c.gradient_texture = false;
     c
 }
@@ -52,14 +52,11 @@ mod tests {
     fn converged_settings_keep_the_view_and_drop_the_approximations() {
         let mut s = RenderSettings::new(8, 8, glam::Vec3::ONE);
         s.step_length = 2.0;
-        s.adaptive_step = true;
+        s.max_stride = 4;
         s.gradient_texture = true;
         s.jitter = Some(7);
         let c = converged(&s);
-        assert_eq!(
-            (c.step_length, c.adaptive_step, c.gradient_texture),
-            (0.125, false, false)
-        );
+        assert_eq!((c.step_length, c.max_stride, c.gradient_texture), (0.125, 1, false));
         assert_eq!((c.jitter, c.camera.eye, c.window), (s.jitter, s.camera.eye, s.window));
     }
 

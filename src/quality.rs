@@ -4,8 +4,9 @@
 //! unless that would take the step below a quarter of the base. A segment that opaque hides where inside it a
 //! surface lies, and the image moves with the sample grid; fainter segments average that out.
 //!
-//! The level resolves to an ordinary `RenderSettings::step_length` before a frame is rendered, so the GPU and the
-//! CPU reference render the same rule. Measured errors against the converged image per level and scene are in the
+//! Within that step, faint bricks take longer strides (rule 2 of `RenderSettings`: segments of at most
+//! `STRIDE_DEPTH`). The level resolves to an ordinary `RenderSettings::step_length` and `max_stride` before a
+//! frame is rendered, so the GPU and the CPU reference render the same rule. Measured errors against the converged image per level and scene are in the
 //! README (Fidelity).
 
 use crate::fidelity::CONVERGED_STEP;
@@ -91,11 +92,20 @@ impl Quality {
         (f64::from(base) * (SEGMENT_DEPTH / depth).max(MIN_SCALE)) as f32
     }
 
-    /// Applies the level to `s` (data of value range `range`): its step length. (Adaptive steps in faint bricks,
-    /// `--adaptive-step`, stay separate: an approximation the reference does not follow, and measured slower than
-    /// plain 1-voxel steps on vtk-helix, where span changes cost more than the samples they save.)
+    /// The longest brick stride (rule 2 of `RenderSettings`) the level allows: faint bricks take every second
+    /// or fourth sample, so the step is fine only where the classification is strong.
+    pub fn max_stride(self) -> u32 {
+        match self {
+            Quality::Draft | Quality::Fast => 2,
+            Quality::Normal => 4,
+            Quality::Converged => 1,
+        }
+    }
+
+    /// Applies the level to `s` (data of value range `range`): its step length and brick strides.
     pub fn apply(self, s: &mut RenderSettings, range: [f64; 2]) {
         s.step_length = self.step_length(s, range);
+        s.max_stride = self.max_stride();
     }
 }
 

@@ -188,6 +188,7 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                 opts.quality.apply(&mut base, volume.range);
                 if let Some(step) = opts.step_length {
                     base.step_length = step;
+                    base.max_stride = 1;
                 }
                 let shadings = scene
                     .shadings
@@ -267,6 +268,7 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                             gpu_allocated_bytes: allocated,
                             load: load_average(),
                             step_length: s.step_length,
+                            max_stride: s.max_stride,
                             error: Fidelity::of(&last.ok_or(GpuError::Lost("no frames timed"))?, &converged_image, &s),
                         });
                     }

@@ -103,6 +103,8 @@ pub struct SceneResult {
     pub load: Option<[f64; 3]>,
     /// The step length the frames were rendered with, in voxels.
     pub step_length: f32,
+    /// The longest brick stride allowed (rule 2; 1: every sample).
+    pub max_stride: u32,
     /// The last timed frame against the scene's converged image (`fidelity`), in 1/255.
     pub error: Fidelity,
 }
@@ -129,7 +131,7 @@ pub struct BenchReport {
 }
 
 /// The columns of [`BenchReport::text`]'s table, in order (tests parse the table by these).
-pub const TABLE_COLUMNS: [&str; 21] = [
+pub const TABLE_COLUMNS: [&str; 22] = [
     "scene",
     "size",
     "method",
@@ -148,6 +150,7 @@ pub const TABLE_COLUMNS: [&str; 21] = [
     "Gsamples/s",
     "of_raw",
     "step",
+    "stride",
     "err_mean",
     "err_p99",
     "err_max",
@@ -190,10 +193,10 @@ impl BenchReport {
             out += "\nms per frame (wall: render + readback; gpu: timestamps, entry + exit + march); \
                     seg_spp: samples on the ray segments per pixel, before early termination; spp: 3D-texture \
                     samples taken per pixel, gradients included (CPU replay of the march rules); Gsamples/s: spp x pixels / gpu_med; of_raw: that / \
-                    sample-only rate of the volume's format; step: in voxels; err_mean/p99/max: the last frame \
+                    sample-only rate of the volume's format; step: in voxels; stride: the longest brick stride; err_mean/p99/max: the last frame \
                     against the same scene converged (1/8-voxel steps, approximations off), in 1/255 over object \
                     pixels\n";
-            let widths = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7, 6, 8, 7, 7];
+            let widths = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7, 6, 6, 8, 7, 7];
             let row = |cells: Vec<String>| -> String {
                 let mut line = String::new();
                 for (c, w) in cells.iter().zip(widths) {
@@ -224,6 +227,7 @@ impl BenchReport {
                     format!("{:.4}", r.effective_gsamples_per_s),
                     opt(r.fraction_of_raw, 3),
                     format!("{}", r.step_length),
+                    format!("{}", r.max_stride),
                     format!("{:.3}", r.error.mean),
                     format!("{:.0}", r.error.p99),
                     format!("{:.0}", r.error.max),

@@ -51,7 +51,9 @@ struct OccupancyKey {
     window: [f32; 2],
     mode: crate::settings::CompositeMode,
     iso: f32,
-    adaptive: bool,
+    skip_empty: bool,
+    /// Rule 2's strides: the step and the longest stride (1 where strides do not apply), and the density factor.
+    strides: (u32, u32, u32),
 }
 
 impl OccupancyKey {
@@ -61,7 +63,12 @@ impl OccupancyKey {
             window: s.window,
             mode: s.mode,
             iso: s.iso_value,
-            adaptive: s.adaptive_step,
+            skip_empty: s.skip_empty,
+            strides: if s.max_stride > 1 {
+                (s.max_stride, s.step_length.to_bits(), s.density.to_bits())
+            } else {
+                (1, 0, 0)
+            },
         }
     }
 }
@@ -382,7 +389,8 @@ impl Renderer {
     }
 
     fn occupancy_is_current(&self, s: &RenderSettings) -> bool {
-        !s.skip_empty
+        // The march reads the occupancy to skip and to stride (`FrameUniforms`' mode_params.z).
+        !(s.skip_empty || s.max_stride > 1)
             || self
                 .volume
                 .as_ref()
@@ -446,9 +454,7 @@ impl Renderer {
         if !self.occupancy_is_current(s) {
             // The table is current now (above), so the occupancy follows from it.
             if let Some(vol) = &mut self.volume {
-                let levels = vol
-                    .bricks
-                    .classify(&self.lut_table, s.mode, s.window, s.iso_value, s.adaptive_step);
+                let levels = vol.bricks.classify(&self.lut_table, s);
                 let occupancy = skip::encode_reach(&levels, vol.bricks.bricks);
                 upload_3d(gpu, &vol.occupancy, &occupancy, vol.bricks.bricks[2])?;
                 vol.occupancy_key = Some(OccupancyKey::of(s));

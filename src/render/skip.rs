@@ -1,17 +1,15 @@
-//! Empty-space skipping: a grid of 8³-voxel bricks with the min/max of the values their samples can see, and per
-//! transfer function an occupancy bit per brick. The march leaps over unoccupied bricks without moving its
-//! sample grid, so skipping changes which samples are *taken*, never what they would have contributed. Pure code.
+//! Empty-space skipping and brick strides: a grid of 8³-voxel bricks with the min/max of the values their samples
+//! can see, and per frame a class per brick: empty, or the stride rule 2 of `RenderSettings` gives it. The march
+//! leaps over empty bricks without moving its sample grid, so skipping changes which samples are *taken*, never
+//! what they would have contributed; strides take every second or fourth sample of that grid. Pure code.
 
-use crate::settings::CompositeMode;
+use crate::preintegrate::extinction;
+use crate::settings::{CompositeMode, RenderSettings, STRIDES, STRIDE_SPREAD};
 use crate::volume::{Volume, VoxelData};
 use rayon::prelude::*;
 
 /// Brick edge in voxels.
 pub const BRICK: u32 = 8;
-
-/// Adaptive stepping doubles the step in bricks whose opacity per voxel step stays below this, varies by at most
-/// a tenth of it, and whose colour varies by at most 0.05 (linear) per channel.
-pub const LOW_OPACITY: f32 = 0.05;
 
 /// Per-brick value range (normalised), over every voxel a trilinear sample inside the brick reads: the brick's
 /// own voxels plus a one-voxel apron. NaN is ignored; a brick of only NaN has min > max (never visible).
@@ -50,102 +48,127 @@ impl BrickGrid {
         BrickGrid { bricks, min, max }
     }
 
-    /// One byte per brick (x fastest): 255 where a sample inside could be visible for this classification, 0
-    /// where none can.
+    /// One byte per brick (x fastest): 0 where no sample inside can be visible for frame `s` (whose baked table
+    /// is `lut`), else the brick's stride (rule 2 of `RenderSettings`: 1, 2 or 4; 1 wherever strides do not
+    /// apply). With `s.skip_empty` off no brick is empty.
     ///
-    /// - emission/density: some table entry the brick's value range can interpolate has opacity > 0;
+    /// - emission/density: some table entry the brick's value range can interpolate has opacity > 0; the
+    ///   stride follows from the largest extinction among those entries;
     /// - MIP/MinIP/average: the value range overlaps the window;
     /// - isosurface: the brick reaches the iso value (a crossing or a first sample ≥ iso can only lie there).
-    pub fn occupancy(&self, lut: &[[f32; 4]], mode: CompositeMode, window: [f32; 2], iso: f32) -> Vec<u8> {
-        self.classify(lut, mode, window, iso, false)
-    }
-
-    /// [`BrickGrid::occupancy`], and with `adaptive` (emission/density only) a third level: 128 marks bricks
-    /// whose most opaque reachable table entry is below [`LOW_OPACITY`], where the march may take every other
-    /// sample (with the opacity corrected for the double step).
-    pub fn classify(
-        &self,
-        lut: &[[f32; 4]],
-        mode: CompositeMode,
-        window: [f32; 2],
-        iso: f32,
-        adaptive: bool,
-    ) -> Vec<u8> {
-        // Faint and smooth: taking every other sample loses little where opacity is low and neither it nor the
-        // colour varies much over the values the brick holds. The scan stops at the first entry that breaks it.
-        let faint = |i: usize, j: usize| {
-            let (mut lo, mut hi) = ([f32::INFINITY; 4], [f32::NEG_INFINITY; 4]);
-            for e in &lut[i..=j] {
-                for c in 0..4 {
-                    lo[c] = lo[c].min(e[c]);
-                    hi[c] = hi[c].max(e[c]);
-                }
-                let colour_spread = (0..3).map(|c| hi[c] - lo[c]).fold(0.0, f32::max);
-                if hi[3] >= LOW_OPACITY || hi[3] - lo[3] > LOW_OPACITY * 0.1 || colour_spread > 0.05 {
-                    return false;
-                }
-            }
-            true
+    pub fn classify(&self, lut: &[[f32; 4]], s: &RenderSettings) -> Vec<u8> {
+        let window = s.window;
+        let absorbing = matches!(s.mode, CompositeMode::Emission | CompositeMode::Density);
+        let density = (s.mode == CompositeMode::Density).then_some(f64::from(s.density));
+        let sigma: Vec<f64> = lut.iter().map(|e| extinction(f64::from(e[3]), density)).collect();
+        let sigma_max = RangeMax::new(sigma.clone());
+        let sigma_min = RangeMax::new(sigma.iter().map(|v| -v).collect());
+        // The longest stride whose segments stay within the frame's depth at extinction `sigma_b` and within
+        // STRIDE_SPREAD of depth between the brick's faintest and strongest values (`spread_b`).
+        let depth = s.stride_depth();
+        let stride = |sigma_b: f64, spread_b: f64| {
+            STRIDES
+                .into_iter()
+                .filter(|&k| {
+                    let length = f64::from(k) * f64::from(s.step_length);
+                    k <= s.max_stride && sigma_b * length <= depth && spread_b * length <= STRIDE_SPREAD
+                })
+                .max()
+                .unwrap_or(1) as u8
         };
-        // Prefix counts of visible table entries: "any visible entry in [i, j]" in O(1) per brick.
-        let mut visible_before = Vec::with_capacity(lut.len() + 1);
-        visible_before.push(0u32);
-        for e in lut {
-            let last = *visible_before.last().unwrap_or(&0);
-            visible_before.push(last + (e[3] > 0.0) as u32);
-        }
+        let strided = absorbing && s.max_stride > 1;
         let last = lut.len().saturating_sub(1) as f32;
+        let empty = if s.skip_empty { 0 } else { 1 };
         self.min
             .iter()
             .zip(&self.max)
             .map(|(&lo, &hi)| {
                 if lo > hi {
-                    return 0;
+                    return empty;
                 }
-                let occupied = match mode {
+                match s.mode {
                     CompositeMode::Emission | CompositeMode::Density => {
                         // Only values inside the window are classified (the table's entries outside it repeat
-                        // its edges for interpolation).
+                        // its edges for interpolation); values beyond it have no extinction.
+                        let beyond = lo < window[0] || hi > window[1];
                         let (lo, hi) = (lo.max(window[0]), hi.min(window[1]));
                         if lo > hi {
-                            return 0;
+                            return empty;
                         }
                         let i = (lo.clamp(0.0, 1.0) * last).floor() as usize;
                         let j = ((hi.clamp(0.0, 1.0) * last).ceil() as usize).min(lut.len() - 1);
-                        let visible = visible_before[j + 1] > visible_before[i];
-                        if visible && adaptive && faint(i, j) {
-                            return 128;
+                        let sigma_b = sigma_max.max(i, j);
+                        let faintest = if beyond { 0.0 } else { -sigma_min.max(i, j) };
+                        if sigma_b <= 0.0 {
+                            empty
+                        } else if strided {
+                            stride(sigma_b, sigma_b - faintest)
+                        } else {
+                            1
                         }
-                        visible
                     }
                     CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => {
-                        hi >= window[0] && lo <= window[1]
+                        if hi >= window[0] && lo <= window[1] {
+                            1
+                        } else {
+                            empty
+                        }
                     }
-                    CompositeMode::Isosurface => hi >= iso,
-                };
-                if occupied {
-                    255
-                } else {
-                    0
+                    CompositeMode::Isosurface => {
+                        if hi >= s.iso_value {
+                            1
+                        } else {
+                            empty
+                        }
+                    }
                 }
             })
             .collect()
     }
 }
 
+/// Largest element of any index range in O(1): a sparse table (levels of maxima over 2^l entries).
+struct RangeMax {
+    levels: Vec<Vec<f64>>,
+}
+
+impl RangeMax {
+    fn new(values: Vec<f64>) -> RangeMax {
+        let mut levels = vec![values];
+        let mut width = 1;
+        while 2 * width <= levels[0].len() {
+            let prev = &levels[levels.len() - 1];
+            let next = (0..prev.len() - width).map(|i| prev[i].max(prev[i + width])).collect();
+            levels.push(next);
+            width *= 2;
+        }
+        RangeMax { levels }
+    }
+
+    /// The largest of elements i..=j (i ≤ j).
+    fn max(&self, i: usize, j: usize) -> f64 {
+        let level = (usize::BITS - 1 - (j - i + 1).leading_zeros()) as usize;
+        let row = &self.levels[level];
+        row[i].max(row[j + 1 - (1 << level)])
+    }
+}
+
 /// The largest reach [`encode_reach`] stores (6 bits).
 pub const MAX_REACH: u8 = 63;
 
-/// The occupancy texture's bytes: `levels` from [`BrickGrid::classify`] (0 empty, 128 faint, 255 occupied) as a
-/// 2-bit class (0, 1, 2) plus, in the upper 6 bits, the brick's *reach*: the largest r ≤ [`MAX_REACH`] such
-/// that every brick within Chebyshev distance r (in bricks; those outside the grid ignored) has the same class.
-/// (capped where the cube already covers the grid). The march then walks the cube of (2r + 1)³ bricks around the one it is in as one span — a leap over empty
-/// space, or a run of samples without lookups through occupied space — instead of brick by brick.
+/// The occupancy texture's bytes: `levels` from [`BrickGrid::classify`] (0 empty, else the stride 1, 2 or 4) as
+/// a 2-bit class (0 empty; strides 4, 2, 1 as 1, 2, 3) plus, in the upper 6 bits, the brick's *reach*: the
+/// largest r ≤ [`MAX_REACH`] such that every brick within Chebyshev distance r (in bricks; those outside the
+/// grid ignored) has the same class (capped where the cube already covers the grid). The march then walks the
+/// cube of (2r + 1)³ bricks around the one it is in as one span — a leap over empty space, or a run of samples
+/// at one stride without lookups — instead of brick by brick.
 pub fn encode_reach(levels: &[u8], bricks: [u32; 3]) -> Vec<u8> {
+    // Empty is class 0; a stride s is class 3 − log2(s), which the march turns back into 1 << (3 − class).
     let class = |l: u8| match l {
         0 => 0u8,
-        1..=191 => 1,
-        _ => 2,
+        1 => 3,
+        2 => 2,
+        _ => 1,
     };
     let classes: Vec<u8> = levels.iter().map(|&l| class(l)).collect();
     let [bx, by, bz] = bricks.map(|b| b as i64);
@@ -332,12 +355,12 @@ mod tests {
 
     #[test]
     fn reach_is_the_chebyshev_distance_to_another_class_minus_one() {
-        // 9×7×5 bricks, occupied except one empty brick at (6, 2, 1) and a faint one at (0, 0, 0).
+        // 9×7×5 bricks at stride 1 except one empty brick at (6, 2, 1) and one at stride 4 at (0, 0, 0).
         let bricks = [9u32, 7, 5];
         let at = |x: u32, y: u32, z: u32| (x + 9 * (y + 7 * z)) as usize;
-        let mut levels = vec![255u8; 9 * 7 * 5];
+        let mut levels = vec![1u8; 9 * 7 * 5];
         levels[at(6, 2, 1)] = 0;
-        levels[at(0, 0, 0)] = 128;
+        levels[at(0, 0, 0)] = 4;
         let code = encode_reach(&levels, bricks);
         let class = |i: usize| code[i] & 3;
         let reach = |i: usize| code[i] >> 2;
@@ -347,12 +370,12 @@ mod tests {
             for y in 0..7u32 {
                 for x in 0..9u32 {
                     let i = at(x, y, z);
-                    if levels[i] != 255 {
+                    if levels[i] != 1 {
                         continue;
                     }
                     let cheb = |(a, b, c): (u32, u32, u32)| x.abs_diff(a).max(y.abs_diff(b)).max(z.abs_diff(c));
                     let expected = cheb((6, 2, 1)).min(cheb((0, 0, 0))) - 1;
-                    assert_eq!((class(i), u32::from(reach(i))), (2, expected), "brick ({x}, {y}, {z})");
+                    assert_eq!((class(i), u32::from(reach(i))), (3, expected), "brick ({x}, {y}, {z})");
                 }
             }
         }
@@ -362,37 +385,73 @@ mod tests {
     }
 
     #[test]
-    fn occupancy_follows_the_classification() {
+    fn classes_follow_the_classification_and_the_stride_rule() {
         let g = BrickGrid::new(&spike());
+        let mut s = RenderSettings::new(8, 8, glam::Vec3::ONE);
         let mut lut = vec![[0.0f32; 4]; 4096];
         for e in &mut lut[4000..] {
             e[3] = 0.5;
         }
-        let occ = g.occupancy(&lut, CompositeMode::Emission, [0.0, 1.0], 0.5);
+        let occ = g.classify(&lut, &s);
         assert_eq!(occ.iter().filter(|&&o| o > 0).count(), 1, "{occ:?}");
-        assert_eq!(occ[2], 255);
-        let none = g.occupancy(&vec![[0.0; 4]; 4096], CompositeMode::Emission, [0.0, 1.0], 0.5);
-        assert!(none.iter().all(|&o| o == 0));
-        let mip = g.occupancy(&lut, CompositeMode::Mip, [0.0, 0.1], 0.5);
-        assert!(mip.iter().all(|&o| o == 255), "every brick has zeros inside the window");
-        let iso = g.occupancy(&lut, CompositeMode::Isosurface, [0.0, 1.0], 0.9);
-        assert_eq!(iso.iter().filter(|&&o| o > 0).count(), 1);
-        // Adaptive: a faint table makes the occupied brick "low opacity"; an opaque one keeps it normal.
-        let faint = vec![[0.2, 0.2, 0.2, 0.01f32]; 4096];
-        let adaptive = g.classify(&faint, CompositeMode::Emission, [0.0, 1.0], 0.5, true);
-        assert!(adaptive.iter().all(|&o| o == 128), "{adaptive:?}");
-        let mut ramp = faint.clone();
-        for (i, e) in ramp.iter_mut().enumerate() {
-            e[0] = i as f32 / 4095.0;
-        }
-        let coloured = g.classify(&ramp, CompositeMode::Emission, [0.0, 1.0], 0.5, true);
-        assert_eq!(coloured[2], 255, "the spike's brick spans the whole colour ramp");
-        assert_eq!(coloured[0], 128, "a brick of zeros sees one colour");
-        assert_eq!(g.classify(&lut, CompositeMode::Emission, [0.0, 1.0], 0.5, true)[2], 255);
-        assert_eq!(
-            g.classify(&faint, CompositeMode::Mip, [0.0, 1.0], 0.5, true)[2],
-            255,
-            "projections never"
+        assert_eq!(occ[2], 1);
+        assert!(g.classify(&vec![[0.0; 4]; 4096], &s).iter().all(|&o| o == 0));
+        s.skip_empty = false;
+        assert!(
+            g.classify(&vec![[0.0; 4]; 4096], &s).iter().all(|&o| o == 1),
+            "nothing leapt"
         );
+        s.skip_empty = true;
+        s.mode = CompositeMode::Mip;
+        s.window = [0.0, 0.1];
+        assert!(
+            g.classify(&lut, &s).iter().all(|&o| o == 1),
+            "every brick has zeros inside the window"
+        );
+        s.mode = CompositeMode::Isosurface;
+        s.window = [0.0, 1.0];
+        s.iso_value = 0.9;
+        assert_eq!(g.classify(&lut, &s).iter().filter(|&&o| o > 0).count(), 1);
+        // Strides: opacity 0.01 per voxel is extinction 0.01005; at 0.4-voxel steps four steps carry 0.016 ≤ 0.05.
+        s.mode = CompositeMode::Emission;
+        s.step_length = 0.4;
+        s.max_stride = 4;
+        let faint = vec![[0.2, 0.2, 0.2, 0.01f32]; 4096];
+        assert!(g.classify(&faint, &s).iter().all(|&o| o == 4));
+        s.max_stride = 2;
+        assert!(
+            g.classify(&faint, &s).iter().all(|&o| o == 2),
+            "no more than the longest stride"
+        );
+        s.max_stride = 4;
+        // Only the spike's brick reaches the opaque entries (extinction 0.69: stride 1); the others stay faint.
+        let mut mixed = faint.clone();
+        for e in &mut mixed[4000..] {
+            e[3] = 0.5;
+        }
+        let classes = g.classify(&mixed, &s);
+        assert_eq!((classes[2], classes[0]), (1, 4), "{classes:?}");
+        // Opacity 0.05: extinction 0.0513; 0.4 × 2 × 0.0513 = 0.041 ≤ 0.05 < 0.082: stride 2. Lit frames halve
+        // the bound: stride 1.
+        let light = vec![[0.2, 0.2, 0.2, 0.05f32]; 4096];
+        assert!(g.classify(&light, &s).iter().all(|&o| o == 2));
+        s.shading = Some(crate::settings::Shading::default());
+        assert!(g.classify(&light, &s).iter().all(|&o| o == 1));
+        s.shading = None;
+        s.mode = CompositeMode::Mip;
+        assert!(
+            g.classify(&faint, &s).iter().all(|&o| o == 1),
+            "projections never stride"
+        );
+    }
+
+    #[test]
+    fn range_maxima_match_a_scan() {
+        let values: Vec<f64> = (0..300).map(|i| ((i * 7919) % 101) as f64).collect();
+        let table = RangeMax::new(values.clone());
+        for (i, j) in [(0, 0), (0, 299), (5, 6), (17, 200), (299, 299), (64, 191)] {
+            let scan = values[i..=j].iter().copied().fold(f64::MIN, f64::max);
+            assert_eq!(table.max(i, j), scan, "{i}..={j}");
+        }
     }
 }

@@ -194,7 +194,7 @@ impl ViewerState {
 
     /// What a frame of `width`×`height` renders: full quality, or — while the view moves, with `lod` on — a
     /// fraction of the resolution (upscaled when shown; see [`ViewerState::lod_divisor`]), the draft quality's
-    /// step (at least the still frame's; with a custom step, twice it) and adaptive steps.
+    /// step (at least the still frame's; with a custom step, twice it) and at least its brick strides.
     pub fn frame_settings(&self, width: u32, height: u32, moving: bool) -> RenderSettings {
         let mut s = self.render_settings(width, height);
         if self.lod && moving {
@@ -205,7 +205,7 @@ impl ViewerState {
                 Some(_) => s.step_length.max(Quality::Draft.step_length(&s, self.range)),
                 None => (s.step_length * 2.0).min(64.0),
             };
-            s.adaptive_step = true;
+            s.max_stride = s.max_stride.max(Quality::Draft.max_stride());
         }
         s
     }

@@ -11,6 +11,7 @@ pub mod gpu;
 pub mod rays;
 pub mod reference;
 pub mod segments;
+pub mod strides;
 pub mod x11;
 pub mod xdnd;
 

@@ -17,7 +17,7 @@
 //! the classification (classify.rs: window position, colormap interpolation, control points, data units, sRGB),
 //! the jitter hash, opacity correction, every compositing mode, the isosurface bisection and the output encoding.
 //! Pre-integration's segment integrals are the reference's own (segments.rs: the exact classification integrated
-//! numerically). Where the GPU works in f32 or through a 4096-entry table, the two differ by rounding; the tests'
+//! numerically), and so are rule 2's brick strides (strides.rs: brick value ranges and the stride rule). Where the GPU works in f32 or through a 4096-entry table, the two differ by rounding; the tests'
 //! bounds (tests/common/bounds.rs) say by how much.
 
 #![allow(dead_code)]
@@ -25,6 +25,7 @@
 use super::classify::{encode, jitter_offset, linear, Classifier};
 use super::rays::{ray_segment, CameraBasis};
 use super::segments::Segments;
+use super::strides::{BrickRanges, Strides};
 use glam::{DMat3, DMat4, DVec3};
 use image::{Rgba, RgbaImage};
 use volcast::settings::{CompositeMode, RenderSettings, Shading};
@@ -166,6 +167,8 @@ pub struct Reference {
     /// `gradient_texture`'s rule, made on first use: per voxel `G_i = v(x + e_i) − v(x − e_i)` on the grid,
     /// indices clamped to the edge, NaN voxels read as 0.
     grid_gradients: std::sync::OnceLock<Vec<DVec3>>,
+    /// Rule 2's brick value ranges, made on first use by a frame with strides.
+    brick_ranges: std::sync::OnceLock<BrickRanges>,
 }
 
 impl Reference {
@@ -195,6 +198,7 @@ impl Reference {
             affine: volume.geometry.affine,
             range: volume.range,
             grid_gradients: std::sync::OnceLock::new(),
+            brick_ranges: std::sync::OnceLock::new(),
         }
     }
 
@@ -405,6 +409,8 @@ struct Frame<'a> {
     /// `gradient_texture`: shade from the grid gradients instead of central differences of the interpolant.
     grid_gradients: bool,
     jitter: Option<u32>,
+    /// Rule 2's brick strides (None: every sample).
+    strides: Option<Strides>,
     early_termination: f64,
     /// Linear light.
     background: DVec3,
@@ -423,6 +429,21 @@ impl<'a> Frame<'a> {
             CompositeMode::Isosurface => Some(s.shading.unwrap_or_default()),
             _ => s.shading,
         };
+        let segments = match s.mode {
+            CompositeMode::Emission => Some(Segments::new(volume.classifier(s), s.window.map(f64::from), None)),
+            CompositeMode::Density => Some(Segments::new(
+                volume.classifier(s),
+                s.window.map(f64::from),
+                Some(f64::from(s.density)),
+            )),
+            _ => None,
+        };
+        let strides = segments.as_ref().and_then(|segments| {
+            let ranges = volume
+                .brick_ranges
+                .get_or_init(|| BrickRanges::new(&volume.values, volume.dims));
+            Strides::new(ranges, volume.dims, s, segments)
+        });
         Frame {
             volume,
             camera: CameraBasis::new(s),
@@ -431,15 +452,7 @@ impl<'a> Frame<'a> {
             box_lo: s.slab_lo.as_dvec3(),
             box_hi: s.slab_hi.as_dvec3(),
             classifier: volume.classifier(s),
-            segments: match s.mode {
-                CompositeMode::Emission => Some(Segments::new(volume.classifier(s), s.window.map(f64::from), None)),
-                CompositeMode::Density => Some(Segments::new(
-                    volume.classifier(s),
-                    s.window.map(f64::from),
-                    Some(f64::from(s.density)),
-                )),
-                _ => None,
-            },
+            segments,
             window: s.window.map(f64::from),
             step_length: f64::from(s.step_length),
             mode: s.mode,
@@ -449,6 +462,7 @@ impl<'a> Frame<'a> {
             gradient_opacity: s.gradient_opacity.map(f64::from),
             grid_gradients: s.gradient_texture && matches!(s.mode, CompositeMode::Emission | CompositeMode::Density),
             jitter: s.jitter,
+            strides,
             early_termination: f64::from(s.early_termination),
             background: linear(s.background.as_dvec3()),
         }
@@ -528,7 +542,17 @@ impl<'a> Frame<'a> {
         let (mut color, mut alpha) = (DVec3::ZERO, 0.0f64);
         let light = -segment.dir;
         let (mut t_prev, mut v_prev) = (0.0, self.volume.sample(self.tex_at(segment, 0.0)));
-        let samples: Vec<f64> = self.sample_offsets(segment, trace.offset).collect();
+        // Rule 2's strides: sample k only where k is a multiple of its brick's stride.
+        let samples: Vec<f64> = self
+            .sample_offsets(segment, trace.offset)
+            .enumerate()
+            .filter(|&(k, t)| {
+                self.strides
+                    .as_ref()
+                    .is_none_or(|b| (k as u64).is_multiple_of(b.at(self.tex_at(segment, t))))
+            })
+            .map(|(_, t)| t)
+            .collect();
         let ends = samples
             .iter()
             .map(|&t| (t, true))

@@ -1,0 +1,119 @@
+//! Rule 2's brick strides, written from the definition in `RenderSettings`' docs: per 8³-voxel brick the range of
+//! its values and a one-voxel apron, the largest extinction of the classification over the table entries that
+//! range reaches inside the window, and from it the longest stride whose segments stay within the frame's depth
+//! bound. No code shared with `render::skip` (the GPU's brick grid and classes).
+
+use super::segments::Segments;
+use glam::DVec3;
+use volcast::settings::{CompositeMode, RenderSettings, STRIDES, STRIDE_SPREAD};
+
+/// Brick edge in voxels (rule 2).
+const BRICK: usize = 8;
+/// The classification table's entries (rule 4).
+const ENTRIES: usize = 4096;
+
+/// Per brick (x fastest) the smallest and largest normalised value over its voxels and a one-voxel apron, NaN
+/// ignored (None: only NaN).
+pub struct BrickRanges {
+    bricks: [usize; 3],
+    ranges: Vec<Option<(f64, f64)>>,
+}
+
+impl BrickRanges {
+    pub fn new(values: &[f64], dims: [usize; 3]) -> BrickRanges {
+        let bricks = dims.map(|d| d.div_ceil(BRICK));
+        let mut ranges = Vec::with_capacity(bricks.iter().product());
+        // The voxels a brick's samples read along one axis: its own and one either side, inside the grid.
+        let reach = |b: usize, n: usize| (b * BRICK).saturating_sub(1)..=((b + 1) * BRICK).min(n - 1);
+        for bz in 0..bricks[2] {
+            for by in 0..bricks[1] {
+                for bx in 0..bricks[0] {
+                    let mut range: Option<(f64, f64)> = None;
+                    for z in reach(bz, dims[2]) {
+                        for y in reach(by, dims[1]) {
+                            for x in reach(bx, dims[0]) {
+                                let v = values[x + dims[0] * (y + dims[1] * z)];
+                                if v.is_nan() {
+                                    continue;
+                                }
+                                range = Some(range.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));
+                            }
+                        }
+                    }
+                    ranges.push(range);
+                }
+            }
+        }
+        BrickRanges { bricks, ranges }
+    }
+}
+
+/// The stride of every brick for one frame.
+pub struct Strides {
+    dims: [usize; 3],
+    bricks: [usize; 3],
+    stride: Vec<u64>,
+}
+
+impl Strides {
+    /// Rule 2's strides for frame `s`, or None where the rule does not apply (every sample is taken).
+    pub fn new(ranges: &BrickRanges, dims: [usize; 3], s: &RenderSettings, segments: &Segments) -> Option<Strides> {
+        if !matches!(s.mode, CompositeMode::Emission | CompositeMode::Density) || s.max_stride <= 1 {
+            return None;
+        }
+        let window = s.window.map(f64::from);
+        let last = (ENTRIES - 1) as f64;
+        // Extinction of the classification at each entry's value, clamped into the window (the table's entries
+        // beyond it repeat its edges).
+        let sigma: Vec<f64> = (0..ENTRIES)
+            .map(|e| segments.point((e as f64 / last).clamp(window[0], window[1])).1)
+            .collect();
+        let (step, depth) = (f64::from(s.step_length), s.stride_depth());
+        let stride = ranges
+            .ranges
+            .iter()
+            .map(|range| {
+                let Some((lo, hi)) = *range else {
+                    return 1;
+                };
+                let beyond = lo < window[0] || hi > window[1];
+                let (lo, hi) = (lo.max(window[0]), hi.min(window[1]));
+                if lo > hi {
+                    return 1;
+                }
+                let i = (lo.clamp(0.0, 1.0) * last).floor() as usize;
+                let j = ((hi.clamp(0.0, 1.0) * last).ceil() as usize).min(ENTRIES - 1);
+                let sigma_b = sigma[i..=j].iter().copied().fold(0.0, f64::max);
+                let sigma_min = if beyond {
+                    0.0
+                } else {
+                    sigma[i..=j].iter().copied().fold(f64::INFINITY, f64::min)
+                };
+                STRIDES
+                    .into_iter()
+                    .filter(|&k| {
+                        let length = f64::from(k) * step;
+                        k <= s.max_stride
+                            && sigma_b * length <= depth
+                            && (sigma_b - sigma_min) * length <= STRIDE_SPREAD
+                    })
+                    .max()
+                    .map_or(1, u64::from)
+            })
+            .collect();
+        Some(Strides {
+            dims,
+            bricks: ranges.bricks,
+            stride,
+        })
+    }
+
+    /// The stride of the brick holding texture point `tex` (1 in empty bricks, whose samples add nothing).
+    pub fn at(&self, tex: DVec3) -> u64 {
+        let brick = |a: usize| {
+            let b = (tex[a] * self.dims[a] as f64 / BRICK as f64).floor();
+            b.clamp(0.0, (self.bricks[a] - 1) as f64) as usize
+        };
+        self.stride[brick(0) + self.bricks[0] * (brick(1) + self.bricks[1] * brick(2))]
+    }
+}
