@@ -334,6 +334,11 @@ impl RenderSettings {
     }
 
     /// Checks the values a user can set; the message names the offending setting.
+    /// Whether the march looks up the brick grid: to leap over empty bricks, or for rule 2's strides.
+    pub fn looks_up_bricks(&self) -> bool {
+        self.skip_empty || self.max_stride > 1
+    }
+
     /// Rule 2's depth bound `D` for strided segments.
     pub fn stride_depth(&self) -> f64 {
         if self.shading.is_some() || self.gradient_opacity.is_some() {

@@ -185,6 +185,15 @@ fn brick_strides_follow_the_reference_rule() {
             );
             eprintln!("{}: {taken} of {every} samples", case.name);
         }
+        // The same classification unlit, then lit: lighting halves the depth bound, so the renderer must classify
+        // its bricks again (a kept occupancy would stride as for the unlit frame).
+        let mut s = with(v, 112, "faint-lit", |_| {}).settings;
+        (s.step_length, s.max_stride, s.step_alpha) = (0.4, 4, 0.03);
+        headless.render(&gpu, &s).unwrap();
+        s.shading = Some(Shading::default());
+        let lit = headless.render(&gpu, &s).unwrap().image;
+        let label = format!("{}-faint-lit-after-unlit", v.name).to_lowercase();
+        judge.against("reference", label, &lit, &reference.render_full(&s), &s, REFERENCE);
         eprintln!("{}: strides take {strided_samples} of {full_samples} samples", v.name);
         if strided_samples >= full_samples {
             failures.push(format!(

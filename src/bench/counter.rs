@@ -154,7 +154,7 @@ impl SampleCounter {
             max_steps: u.viewport[2] as u64,
             viewport: [s.width as f32, s.height as f32],
             window: s.window,
-            classes: (s.skip_empty || s.max_stride > 1).then(|| self.bricks.classify(&lut, s)),
+            classes: s.looks_up_bricks().then(|| self.bricks.classify(&lut, s)),
             integrals: preintegrate::integral_table(&lut, (s.mode == CompositeMode::Density).then_some(s.density)),
             step_length: s.step_length,
             mode: s.mode,

@@ -52,8 +52,9 @@ struct OccupancyKey {
     mode: crate::settings::CompositeMode,
     iso: f32,
     skip_empty: bool,
-    /// Rule 2's strides: the step and the longest stride (1 where strides do not apply), and the density factor.
-    strides: (u32, u32, u32),
+    /// Rule 2's strides: the longest stride (1 where strides do not apply), the step, the density factor and the
+    /// depth bound (which shading changes).
+    strides: (u32, u32, u32, u64),
 }
 
 impl OccupancyKey {
@@ -65,9 +66,14 @@ impl OccupancyKey {
             iso: s.iso_value,
             skip_empty: s.skip_empty,
             strides: if s.max_stride > 1 {
-                (s.max_stride, s.step_length.to_bits(), s.density.to_bits())
+                (
+                    s.max_stride,
+                    s.step_length.to_bits(),
+                    s.density.to_bits(),
+                    s.stride_depth().to_bits(),
+                )
             } else {
-                (1, 0, 0)
+                (1, 0, 0, 0)
             },
         }
     }
@@ -389,8 +395,7 @@ impl Renderer {
     }
 
     fn occupancy_is_current(&self, s: &RenderSettings) -> bool {
-        // The march reads the occupancy to skip and to stride (`FrameUniforms`' mode_params.z).
-        !(s.skip_empty || s.max_stride > 1)
+        !s.looks_up_bricks()
             || self
                 .volume
                 .as_ref()

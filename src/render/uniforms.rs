@@ -137,12 +137,7 @@ impl FrameUniforms {
             texel: v4(1.0 / dims, 0.0),
             voxel_world: [0.0, 0.0, 0.0, s.gradient_opacity.unwrap_or(0.0)],
             shading: [shading.ambient, shading.diffuse, shading.specular, shading.shininess],
-            mode_params: [
-                s.iso_value,
-                s.density,
-                (s.skip_empty || s.max_stride > 1) as u32 as f32,
-                0.0,
-            ],
+            mode_params: [s.iso_value, s.density, s.looks_up_bricks() as u32 as f32, 0.0],
             brick: v4(DVec3::splat(f64::from(skip::BRICK)) / dims, 0.0),
             dims: [v.dims[0] as f32, v.dims[1] as f32, v.dims[2] as f32, 0.0],
             flags: [
