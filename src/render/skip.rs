@@ -171,99 +171,152 @@ pub fn encode_reach(levels: &[u8], bricks: [u32; 3]) -> Vec<u8> {
         _ => 1,
     };
     let classes: Vec<u8> = levels.iter().map(|&l| class(l)).collect();
-    let [bx, by, bz] = bricks.map(|b| b as i64);
-    let index = |x: i64, y: i64, z: i64| (x + bx * (y + by * z)) as usize;
-    // reach ≥ r exactly when every neighbour (26, inside the grid) has the same class and reach ≥ r − 1: any brick
-    // within distance r lies within r − 1 of some neighbour.
-    let mut reach = vec![0u8; levels.len()];
+    let [bx, by, bz] = bricks.map(|b| b as usize);
     // Beyond the grid's largest side less one, a larger reach covers no more bricks.
-    let cap = (bx.max(by).max(bz) - 1).clamp(0, i64::from(MAX_REACH)) as u8;
-    for r in 1..=cap {
-        let prev = reach.clone();
-        // Brick (x, y, z), at reach r − 1, grows to r when all its neighbours inside the grid share its class and
-        // reach at least r − 1.
-        let grows = |x: i64, y: i64, z: i64| {
-            let i = index(x, y, z);
-            prev[i] == r - 1
-                && (-1..=1i64).all(|dz| {
-                    (-1..=1i64).all(|dy| {
-                        (-1..=1i64).all(|dx| {
-                            let (nx, ny, nz) = (x + dx, y + dy, z + dz);
-                            let outside = nx < 0 || ny < 0 || nz < 0 || nx >= bx || ny >= by || nz >= bz;
-                            outside || {
-                                let j = index(nx, ny, nz);
-                                classes[j] == classes[i] && prev[j] >= r - 1
-                            }
-                        })
-                    })
-                })
-        };
-        // Each layer of bricks reads only `prev` and `classes`: the layers grow on every core.
-        let grew = reach
-            .par_chunks_mut((bx * by) as usize)
-            .enumerate()
-            .map(|(z, layer)| {
-                let mut grew = false;
-                for y in 0..by {
-                    for x in 0..bx {
-                        if grows(x, y, z as i64) {
-                            layer[(x + bx * y) as usize] = r;
-                            grew = true;
-                        }
-                    }
-                }
-                grew
-            })
-            .reduce(|| false, |a, b| a || b);
-        if !grew {
-            break;
+    let cap = (bx.max(by).max(bz).saturating_sub(1)).min(usize::from(MAX_REACH)) as u8;
+    // The reach is the Chebyshev distance to the nearest brick of another class (inside the grid) less one, capped.
+    // Per class present, that distance comes from a separable transform: the Chebyshev distance to a set is
+    // min over z' of max(|dz|, min over y' of max(|dy|, min over x' of |dx|)), so three passes along the axes.
+    // Distances are held capped at `far`, which reads as "no other class within reach".
+    let far = cap + 1;
+    let mut reach = vec![0u8; levels.len()];
+    for c in 0..4u8 {
+        if !classes.contains(&c) {
+            continue;
+        }
+        let mut dist: Vec<u8> = classes.iter().map(|&k| if k == c { far } else { 0 }).collect();
+        for (line, stride) in [(bx, 1), (by, bx), (bz, bx * by)] {
+            dist = chebyshev_pass(&dist, line, stride, far);
+        }
+        for ((r, &k), &d) in reach.iter_mut().zip(&classes).zip(&dist) {
+            if k == c {
+                *r = d - 1;
+            }
         }
     }
     classes.iter().zip(&reach).map(|(&c, &r)| (r << 2) | c).collect()
 }
 
+/// One pass of [`encode_reach`]'s distance transform along an axis whose lines are `line` bricks long, `stride`
+/// apart in `dist`: each brick gets min over the bricks b' of its line of max(|b − b'|, dist[b']) (bricks past
+/// the grid's edge ignored). Line by line on every core; within a line, one vectorisable sweep per distance d
+/// over all its bricks, until d reaches the largest distance left (at most 64).
+fn chebyshev_pass(dist: &[u8], line: usize, stride: usize, far: u8) -> Vec<u8> {
+    let pad = usize::from(far);
+    // Brick a + stride·(k + line·c) is element k of line (a, c).
+    let starts: Vec<usize> = (0..dist.len() / (stride * line))
+        .flat_map(|c| (0..stride).map(move |a| a + stride * line * c))
+        .collect();
+    let lines: Vec<Vec<u8>> = starts
+        .par_iter()
+        .map(|&first| {
+            // The line with `pad` ignored bricks (u8::MAX, never the minimum) on either side.
+            let mut padded = vec![u8::MAX; line + 2 * pad];
+            for (k, p) in padded[pad..pad + line].iter_mut().enumerate() {
+                *p = dist[first + k * stride];
+            }
+            let mut best = padded[pad..pad + line].to_vec();
+            let mut d = 1;
+            while d < pad && best.iter().any(|&b| usize::from(b) > d) {
+                let (before, after) = (&padded[pad - d..pad - d + line], &padded[pad + d..pad + d + line]);
+                for ((b, &x), &y) in best.iter_mut().zip(before).zip(after) {
+                    *b = (*b).min(x.min(y).max(d as u8));
+                }
+                d += 1;
+            }
+            best
+        })
+        .collect();
+    let mut out = vec![0u8; dist.len()];
+    for (first, values) in starts.iter().zip(lines) {
+        for (k, v) in values.into_iter().enumerate() {
+            out[first + k * stride] = v;
+        }
+    }
+    out
+}
+
+/// An element type as volumes store it, with the values that start a running minimum and maximum.
+trait Element: Copy + PartialOrd + Into<f64> + Send + Sync {
+    /// Not below any value (a running minimum starts here).
+    const HIGHEST: Self;
+    /// Not above any value.
+    const LOWEST: Self;
+}
+
+impl Element for u8 {
+    const HIGHEST: u8 = u8::MAX;
+    const LOWEST: u8 = 0;
+}
+
+impl Element for u16 {
+    const HIGHEST: u16 = u16::MAX;
+    const LOWEST: u16 = 0;
+}
+
+impl Element for f32 {
+    const HIGHEST: f32 = f32::INFINITY;
+    const LOWEST: f32 = f32::NEG_INFINITY;
+}
+
+/// `lo` takes the element-wise minimum with `values`. NaN compares false, so it never replaces anything.
+/// Written as plain selects so that it vectorises.
+fn merge_min<T: Element>(lo: &mut [T], values: &[T]) {
+    for (l, &v) in lo.iter_mut().zip(values) {
+        *l = if v < *l { v } else { *l };
+    }
+}
+
+/// `hi` takes the element-wise maximum with `values`, as [`merge_min`].
+fn merge_max<T: Element>(hi: &mut [T], values: &[T]) {
+    for (h, &v) in hi.iter_mut().zip(values) {
+        *h = if v > *h { v } else { *h };
+    }
+}
+
 /// Per brick, the smallest and largest element over its voxels and a one-voxel apron (NaN ignored; `None` for
-/// a brick of only NaN), walking the volume row by row.
-fn brick_extremes<T: Copy + PartialOrd + Into<f64> + Send + Sync>(
-    data: &[T],
-    dims: [u32; 3],
-    bricks: [u32; 3],
-) -> Vec<Option<(f64, f64)>> {
+/// a brick of only NaN). Per layer of bricks: the planes of the layer's z-span reduced element-wise to one plane
+/// of minima and one of maxima, then their rows of each brick row's y-span to one row, then each brick's x-span:
+/// every step a vectorisable sweep over contiguous elements (a per-voxel walk brick by brick took a fifth of
+/// loading a 1 GiB volume).
+fn brick_extremes<T: Element>(data: &[T], dims: [u32; 3], bricks: [u32; 3]) -> Vec<Option<(f64, f64)>> {
     let [w, h, d] = dims.map(|v| v as usize);
     let [bx, by, bz] = bricks.map(|v| v as usize);
     let b = BRICK as usize;
     let span = |k: usize, n: usize| ((k * b).saturating_sub(1), ((k + 1) * b).min(n - 1));
-    let mut out: Vec<Option<(T, T)>> = vec![None; bx * by * bz];
+    let plane = w * h;
+    let mut out: Vec<Option<(f64, f64)>> = vec![None; bx * by * bz];
     // Each layer of bricks (k) on its own core: the layers only read the data they share at their seams.
     out.par_chunks_mut(bx * by).enumerate().for_each(|(k, layer)| {
         let (z0, z1) = span(k, d);
+        let (mut lo, mut hi) = (vec![T::HIGHEST; plane], vec![T::LOWEST; plane]);
+        for z in z0..=z1 {
+            let slice = &data[z * plane..][..plane];
+            merge_min(&mut lo, slice);
+            merge_max(&mut hi, slice);
+        }
+        let (mut row_lo, mut row_hi) = (vec![T::HIGHEST; w], vec![T::LOWEST; w]);
         for j in 0..by {
             let (y0, y1) = span(j, h);
-            for z in z0..=z1 {
-                for y in y0..=y1 {
-                    let row = &data[(y + h * z) * w..][..w];
-                    for i in 0..bx {
-                        let (x0, x1) = span(i, w);
-                        let slot = &mut layer[i + bx * j];
-                        for &v in &row[x0..=x1] {
-                            #[allow(clippy::eq_op)] // NaN is the only value unequal to itself.
-                            let is_nan = v != v;
-                            if is_nan {
-                                continue;
-                            }
-                            *slot = Some(match *slot {
-                                None => (v, v),
-                                Some((lo, hi)) => (if v < lo { v } else { lo }, if v > hi { v } else { hi }),
-                            });
-                        }
-                    }
+            row_lo.fill(T::HIGHEST);
+            row_hi.fill(T::LOWEST);
+            for y in y0..=y1 {
+                merge_min(&mut row_lo, &lo[y * w..][..w]);
+                merge_max(&mut row_hi, &hi[y * w..][..w]);
+            }
+            for i in 0..bx {
+                let (x0, x1) = span(i, w);
+                let (mut a, mut c) = (T::HIGHEST, T::LOWEST);
+                for x in x0..=x1 {
+                    a = if row_lo[x] < a { row_lo[x] } else { a };
+                    c = if row_hi[x] > c { row_hi[x] } else { c };
                 }
+                // Only NaN leaves the minimum above the maximum (a value equal to a start value sets both).
+                layer[i + bx * j] = (a <= c).then(|| (a.into(), c.into()));
             }
         }
     });
-    out.into_iter()
-        .map(|e| e.map(|(lo, hi)| (lo.into(), hi.into())))
-        .collect()
+    out
 }
 
 #[cfg(test)]
@@ -382,6 +435,56 @@ mod tests {
         // One class everywhere: a reach of 3 spans a 4³ grid from any brick, and is where it stops.
         let all = encode_reach(&[0u8; 4 * 4 * 4], [4, 4, 4]);
         assert!(all.iter().all(|&c| c == 3 << 2), "{all:?}");
+    }
+
+    #[test]
+    fn reach_matches_its_definition_on_random_grids() {
+        // The definition checked brick by brick: the largest r ≤ the cap with every brick within Chebyshev
+        // distance r (inside the grid) of the same class. Grids of blobs (runs of one class) and of noise.
+        let mut state = 12345u32;
+        let mut next = move || {
+            state = state.wrapping_mul(1664525).wrapping_add(1013904223);
+            state >> 8
+        };
+        for (bricks, run) in [
+            ([13u32, 6, 9], 1u32),
+            ([17, 11, 7], 40),
+            ([1, 1, 1], 1),
+            ([70, 3, 2], 300),
+        ] {
+            let n = (bricks[0] * bricks[1] * bricks[2]) as usize;
+            let mut levels = Vec::with_capacity(n);
+            while levels.len() < n {
+                let level = [0u8, 1, 2, 4][(next() % 4) as usize];
+                let len = 1 + next() % run;
+                levels.extend(std::iter::repeat_n(level, len as usize));
+            }
+            levels.truncate(n);
+            let code = encode_reach(&levels, bricks);
+            let [bx, by, bz] = bricks.map(|b| b as i64);
+            let cap = (bx.max(by).max(bz) - 1).min(i64::from(MAX_REACH));
+            let index = |x: i64, y: i64, z: i64| (x + bx * (y + by * z)) as usize;
+            for z in 0..bz {
+                for y in 0..by {
+                    for x in 0..bx {
+                        let own = levels[index(x, y, z)];
+                        let same_within = |r: i64| {
+                            (z - r..=z + r).all(|k| {
+                                (y - r..=y + r).all(|j| {
+                                    (x - r..=x + r).all(|i| {
+                                        let inside = i >= 0 && j >= 0 && k >= 0 && i < bx && j < by && k < bz;
+                                        !inside || levels[index(i, j, k)] == own
+                                    })
+                                })
+                            })
+                        };
+                        let expected = (0..=cap).take_while(|&r| same_within(r)).last().unwrap();
+                        let got = i64::from(code[index(x, y, z)] >> 2);
+                        assert_eq!(got, expected, "brick ({x}, {y}, {z}) of {bricks:?}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]
