@@ -310,7 +310,7 @@ pub(crate) fn load(
             let len = bytes.len() as u64;
             let start = data_start(&header, file, *offset, len, needed)?;
             let mut rest = &bytes[start as usize..];
-            decode_stream(&header, file, &mut rest, len - start, count, needed, progress)?
+            decode_stream(&header, file, &mut rest, None, len - start, count, needed, progress)?
         }
         (DataLocation::Detached { .. }, Source::Bytes(_)) => {
             return Err(header_error(
@@ -372,7 +372,17 @@ fn read_file_data(
     let start = data_start(header, file, offset, len, needed)?;
     let mut f = File::open(path).map_err(io)?;
     f.seek(SeekFrom::Start(start)).map_err(io)?;
-    decode_stream(header, file, &mut f, len - start, count, needed, progress)
+    let at = f.try_clone().ok();
+    decode_stream(
+        header,
+        file,
+        &mut f,
+        at.as_ref().map(|a| (a, start)),
+        len - start,
+        count,
+        needed,
+        progress,
+    )
 }
 
 /// Refuses a compressed stream of `available` bytes that claims to inflate to more than deflate can produce.
@@ -390,11 +400,15 @@ pub(crate) fn check_compressed(header: &Header, file: &str, available: u64, need
     Ok(())
 }
 
-/// Decodes `count` voxels from `reader`, which holds `available` bytes, checking the claim first.
+/// Decodes `count` voxels from `reader`, which holds `available` bytes, checking the claim first. Raw data that is
+/// `file_at` (the file and the data's offset) is read in parallel where its layout allows
+/// (`decode::read_native_at`).
+#[allow(clippy::too_many_arguments)] // The header's claim, the two ways to the bytes and the progress.
 pub(crate) fn decode_stream(
     header: &Header,
     file: &str,
     reader: &mut dyn Read,
+    file_at: Option<(&File, u64)>,
     available: u64,
     count: usize,
     needed: u64,
@@ -414,7 +428,10 @@ pub(crate) fn decode_stream(
             if available < needed {
                 return Err(truncated(available));
             }
-            decode::read_binary(reader, t, e, count, chunk, progress)
+            match file_at.and_then(|(f, at)| decode::read_native_at(f, at, t, e, count, progress)) {
+                Some(read) => read,
+                None => decode::read_binary(reader, t, e, count, chunk, progress),
+            }
         }
         Encoding::Gzip | Encoding::Zlib => {
             check_compressed(header, file, available, needed)?;

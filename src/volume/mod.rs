@@ -53,6 +53,7 @@ pub mod from_bytes {
 
 pub use geometry::Geometry;
 
+use rayon::prelude::*;
 use std::fmt;
 use std::path::PathBuf;
 
@@ -482,12 +483,16 @@ fn compute_range(source_type: VoxelType, data: &VoxelData) -> [f64; 2] {
 
 /// The data's min/max as source values (NaN/Inf ignored); `None` if no voxel is finite.
 fn compute_range_of(source_type: VoxelType, data: &VoxelData) -> Option<[f64; 2]> {
-    fn min_max<T: Copy + PartialOrd>(values: &[T]) -> Option<(T, T)> {
-        let mut iter = values.iter().copied();
-        let first = iter.next()?;
-        Some(iter.fold((first, first), |(lo, hi), v| {
-            (if v < lo { v } else { lo }, if v > hi { v } else { hi })
-        }))
+    // In blocks on every core (a 1 GiB volume is read once more here), each block a vectorisable fold.
+    fn min_max<T: Copy + PartialOrd + Send + Sync>(values: &[T]) -> Option<(T, T)> {
+        let pick = |(lo, hi): (T, T), (a, b): (T, T)| (if a < lo { a } else { lo }, if b > hi { b } else { hi });
+        values
+            .par_chunks(1 << 20)
+            .map(|block| {
+                let first = block[0];
+                block.iter().fold((first, first), |acc, &v| pick(acc, (v, v)))
+            })
+            .reduce_with(pick)
     }
     let found = match data {
         VoxelData::U8(v) => {
@@ -498,13 +503,15 @@ fn compute_range_of(source_type: VoxelType, data: &VoxelData) -> Option<[f64; 2]
             let offset = stored_offset(source_type);
             min_max(v).map(|(lo, hi)| (f64::from(lo) - offset, f64::from(hi) - offset))
         }
-        VoxelData::F32(v) => {
-            let mut finite = v.iter().copied().filter(|x| x.is_finite());
-            finite.next().map(|first| {
-                let (lo, hi) = finite.fold((first, first), |(lo, hi), x| (lo.min(x), hi.max(x)));
-                (f64::from(lo), f64::from(hi))
+        VoxelData::F32(v) => v
+            .par_chunks(1 << 20)
+            .filter_map(|block| {
+                let mut finite = block.iter().copied().filter(|x| x.is_finite());
+                let first = finite.next()?;
+                Some(finite.fold((first, first), |(lo, hi), x| (lo.min(x), hi.max(x))))
             })
-        }
+            .reduce_with(|(a, b), (c, d)| (a.min(c), b.max(d)))
+            .map(|(lo, hi)| (f64::from(lo), f64::from(hi))),
     };
     found.map(|(lo, hi)| [lo, hi])
 }

@@ -161,15 +161,23 @@ pub(crate) fn load_raw_with_progress(
     }
 
     let mut file = File::open(path).map_err(io_error)?;
-    file.seek(SeekFrom::Start(extras.header_bytes)).map_err(io_error)?;
-    let data = decode::read_binary(
-        &mut file,
-        voxel_type,
-        extras.endian,
-        count_usize,
-        decode::CHUNK_BYTES,
-        progress,
-    )
+    let (offset, endian) = (extras.header_bytes, extras.endian);
+    let data = match decode::read_native_at(&file, offset, voxel_type, endian, count_usize, progress) {
+        Some(read) => read,
+        None => file
+            .seek(SeekFrom::Start(offset))
+            .map_err(DecodeError::Io)
+            .and_then(|_| {
+                decode::read_binary(
+                    &mut file,
+                    voxel_type,
+                    endian,
+                    count_usize,
+                    decode::CHUNK_BYTES,
+                    progress,
+                )
+            }),
+    }
     .map_err(|e| match e {
         DecodeError::Io(source) => io_error(source),
         DecodeError::OutOfMemory => VolumeError::OutOfMemory { dims, bytes: expected },
