@@ -633,13 +633,17 @@ fn render(args: &RenderArgs) -> Result<()> {
         RaySetup::Analytic
     };
     s.compute = args.method == "compute";
+    let t_device = Instant::now();
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
+        let device_ms = t_device.elapsed().as_secs_f64() * 1e3;
         let result = (|| -> Result<()> {
+            let t_upload = Instant::now();
             headless.set_volume(gpu, &volume)?;
             if s.gradient_texture {
                 headless.renderer.enable_gradient_texture(gpu, &volume)?;
             }
+            let upload_ms = t_upload.elapsed().as_secs_f64() * 1e3;
             let t0 = Instant::now();
             let mut frame = headless.render(gpu, &s)?;
             let first_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -692,7 +696,10 @@ fn render(args: &RenderArgs) -> Result<()> {
                 gpu.device_name,
                 args.output.display()
             );
-            println!("load {load_ms:.0} ms; first frame {first_ms:.0} ms (includes shader compilation on lavapipe)");
+            println!(
+                "load {load_ms:.0} ms; device {device_ms:.0} ms; upload {upload_ms:.0} ms; first frame {first_ms:.0} \
+                 ms (includes shader compilation on lavapipe)"
+            );
             if !timing_line.is_empty() {
                 println!("{timing_line}");
             }

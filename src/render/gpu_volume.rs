@@ -257,6 +257,35 @@ fn upload_float(gpu: &Gpu, image: &Image, volume: &Volume) -> Result<(), GpuErro
     })
 }
 
+/// Uploads `volume` in `layout`: the 3D texture or the corner texture.
+fn upload_layout(gpu: &Gpu, layout: VolumeLayout, volume: &Volume) -> Result<(Option<Image>, Option<Image>), GpuError> {
+    match layout {
+        VolumeLayout::Texture(format) => {
+            // SAFETY: plain query on a live physical device.
+            let features = unsafe { gpu.instance.get_physical_device_format_properties(gpu.physical, format) };
+            let filter = vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
+            if !features.optimal_tiling_features.contains(filter) {
+                return Err(GpuError::TooLarge(format!(
+                    "this device cannot filter {format:?} 3D textures linearly"
+                )));
+            }
+            let image = image_3d(gpu, format, volume.dims, "volume")?;
+            // Widened to float from 8 or 16 bits, or uploaded as stored.
+            let uploaded = if volume.gpu_texel_size() < 4 && format == vk::Format::R32_SFLOAT {
+                upload_float(gpu, &image, volume)
+            } else {
+                upload_3d(gpu, &image, volume.gpu_bytes(), volume.dims[2])
+            };
+            if let Err(e) = uploaded {
+                image.destroy(gpu);
+                return Err(e);
+            }
+            Ok((Some(image), None))
+        }
+        VolumeLayout::Corners8 | VolumeLayout::Corners16 => Ok((None, Some(upload_corners(gpu, volume, layout)?))),
+    }
+}
+
 impl GpuVolume {
     /// Uploads `volume` in the layout `policy` gives it on `gpu`. The size is checked against the device's 3D
     /// image limit and memory before anything is allocated.
@@ -280,32 +309,10 @@ impl GpuVolume {
                 gpu.device_local_bytes >> 20
             )));
         }
-        let (image, corners) = match layout {
-            VolumeLayout::Texture(format) => {
-                // SAFETY: plain query on a live physical device.
-                let features = unsafe { gpu.instance.get_physical_device_format_properties(gpu.physical, format) };
-                let filter =
-                    vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
-                if !features.optimal_tiling_features.contains(filter) {
-                    return Err(GpuError::TooLarge(format!(
-                        "this device cannot filter {format:?} 3D textures linearly"
-                    )));
-                }
-                let image = image_3d(gpu, format, volume.dims, "volume")?;
-                // Widened to float from 8 or 16 bits, or uploaded as stored.
-                let uploaded = if volume.gpu_texel_size() < 4 && format == vk::Format::R32_SFLOAT {
-                    upload_float(gpu, &image, volume)
-                } else {
-                    upload_3d(gpu, &image, volume.gpu_bytes(), volume.dims[2])
-                };
-                if let Err(e) = uploaded {
-                    image.destroy(gpu);
-                    return Err(e);
-                }
-                (Some(image), None)
-            }
-            VolumeLayout::Corners8 | VolumeLayout::Corners16 => (None, Some(upload_corners(gpu, volume, layout)?)),
-        };
+        // The brick statistics on the cores the upload leaves idle (on lavapipe, it fills the staging buffer on
+        // one thread, then waits while the device's queue thread copies it into the image).
+        let (uploaded, bricks) = rayon::join(|| upload_layout(gpu, layout, volume), || skip::BrickGrid::new(volume));
+        let (image, corners) = uploaded?;
         let destroy_volume = |gpu: &Gpu, image: Option<Image>, corners: Option<Image>| {
             if let Some(i) = image {
                 i.destroy(gpu);
@@ -314,7 +321,6 @@ impl GpuVolume {
                 c.destroy(gpu);
             }
         };
-        let bricks = skip::BrickGrid::new(volume);
         // Everything occupied until prepare() computes the real occupancy for the settings.
         let occupancy = match image_3d(gpu, vk::Format::R8_UNORM, bricks.bricks, "brick occupancy").and_then(|o| {
             let all = vec![255u8; bricks.min.len()];
