@@ -152,6 +152,11 @@ fn brick_strides_follow_the_reference_rule() {
                 strided(s);
                 s.step_alpha = 0.03;
             }),
+            with(v, 112, "faint-lit", |s| {
+                strided(s);
+                s.step_alpha = 0.03;
+                s.shading = Some(Shading::default());
+            }),
             with(v, 112, "mr-default-shaded", |s| {
                 strided(s);
                 s.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
