@@ -7,6 +7,7 @@ pub mod compare;
 pub mod fidelity;
 pub mod gpu;
 pub mod headless;
+pub mod huge_pages;
 pub mod info;
 pub mod playback;
 pub mod preintegrate;
