@@ -7,8 +7,8 @@ mod common;
 
 use common::bounds::{REFERENCE, REFERENCE_R8};
 use common::cases::{
-    gradient_cases, marschner_lobb_as, mask_as, mirrored, oblique, quality_cases, settings_cases, sheared,
-    standard_cases, with,
+    gradient_cases, marschner_lobb_as, marschner_lobb_sized, mask_as, mirrored, oblique, quality_cases, settings_cases,
+    sheared, standard_cases, with,
 };
 use common::compare::Bounds;
 use common::gpu::{finish, validated_gpu, Judge, METHODS};
@@ -131,6 +131,27 @@ fn every_data_type_matches_the_reference() {
             let mut v = v.clone();
             v.name = format!("{}-{policy:?}", v.name);
             run(&mut judge, &gpu, &mut headless, &v, standard_cases(&v, 72), METHODS);
+        }
+        // On CPU devices volumes are written in place (Image::new_host_written): 33 × 29 voxels through the padded
+        // rows and slices lavapipe gives linear images, 64 × 32 packed as tightly as the data. Each layout again
+        // at that size, and on a CPU device both must have been written in place.
+        let tight = marschner_lobb_sized(ty, [64, 32, 25]);
+        for &policy in policies {
+            headless.renderer.texel_policy = policy;
+            let mut w = tight.clone();
+            w.name = format!("{}-64x32-{policy:?}", w.name);
+            let cases = standard_cases(&w, 64).into_iter().take(2).collect();
+            run(&mut judge, &gpu, &mut headless, &w, cases, METHODS);
+            if gpu.properties.device_type == ash::vk::PhysicalDeviceType::CPU {
+                for volume in [&v, &w] {
+                    headless.set_volume(&gpu, volume).unwrap();
+                    assert!(
+                        headless.renderer.volume_is_host_written(),
+                        "{}: staged on a CPU device",
+                        volume.name
+                    );
+                }
+            }
         }
         headless.renderer.texel_policy = TexelPolicy::Auto;
         run(&mut judge, &gpu, &mut headless, &v, gradient_cases(&v, 72), METHODS);

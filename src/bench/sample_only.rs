@@ -2,8 +2,9 @@
 
 use super::Stats;
 use crate::gpu::pipeline::{graphics_pipeline, shader, GraphicsDesc};
-use crate::gpu::resources::{upload_image, Buffer, Image, ImageDesc};
+use crate::gpu::resources::{Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
+use crate::gpu::upload::upload_image;
 use crate::gpu::{Gpu, GpuError, VkContext};
 use ash::vk;
 use glam::Vec3;
@@ -426,9 +427,9 @@ pub fn sample_only(
                 },
                 usage: vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
             };
-            let texture = Image::new(gpu, desc, "sample-only texture")?;
+            let mut texture = Image::new(gpu, desc, "sample-only texture")?;
             let measured = (|| -> Result<SampleRate, GpuError> {
-                upload_image(gpu, &texture, &format.test_texels(n))?;
+                upload_image(gpu, &mut texture, &format.test_texels(n))?;
                 pass.bind(gpu, &texture)?;
                 let (mut gpu_ms, mut wall_ms) = (Vec::new(), Vec::new());
                 for i in 0..cfg.warmup + cfg.frames.max(1) {

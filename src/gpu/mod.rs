@@ -6,6 +6,7 @@ pub mod pipeline;
 pub mod resources;
 pub mod swapchain;
 pub mod sync;
+pub mod upload;
 
 pub use context::{list_devices, DeviceInfo, Gpu, GpuOptions, ValidationLog, ValidationMessage};
 

@@ -119,10 +119,59 @@ pub struct Image {
     pub view: vk::ImageView,
     pub desc: ImageDesc,
     allocation: Option<Allocation>,
+    /// Where the texels lie in the mapped memory of an image made by [`Image::new_host_written`], until it is
+    /// written (`upload::upload_image_with`).
+    pub host: Option<vk::SubresourceLayout>,
+    /// Made by [`Image::new_host_written`].
+    pub host_written: bool,
 }
 
 impl Image {
+    /// A device image (optimal tiling, device-local memory), filled by transfers.
     pub fn new(gpu: &Gpu, desc: ImageDesc, name: &str) -> Result<Image, GpuError> {
+        Image::create(gpu, desc, name, false)
+    }
+
+    /// An image the host writes directly: linear tiling in host-visible memory, created PREINITIALIZED, for
+    /// sampling only. `None` where the device cannot sample such an image of this format and size (most GPUs:
+    /// there an upload goes through a staging buffer). On lavapipe, where device memory is host memory, this saves
+    /// the staging copy and the device's single-threaded copy into the image (`upload::upload_image_with`).
+    pub fn new_host_written(gpu: &Gpu, desc: ImageDesc, name: &str) -> Result<Option<Image>, GpuError> {
+        let image_type = if desc.is_3d() {
+            vk::ImageType::TYPE_3D
+        } else {
+            vk::ImageType::TYPE_2D
+        };
+        // SAFETY: plain queries on a live physical device.
+        let (limits, features) = unsafe {
+            (
+                gpu.instance.get_physical_device_image_format_properties(
+                    gpu.physical,
+                    desc.format,
+                    image_type,
+                    vk::ImageTiling::LINEAR,
+                    desc.usage,
+                    vk::ImageCreateFlags::empty(),
+                ),
+                gpu.instance
+                    .get_physical_device_format_properties(gpu.physical, desc.format),
+            )
+        };
+        // Sampled, and filtered wherever a device image of the format would be (integer formats never are).
+        let filter = vk::FormatFeatureFlags::SAMPLED_IMAGE
+            | (features.optimal_tiling_features & vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
+        let fits = limits.is_ok_and(|l| {
+            let e = desc.extent;
+            e.width <= l.max_extent.width && e.height <= l.max_extent.height && e.depth <= l.max_extent.depth
+        });
+        if !fits || !features.linear_tiling_features.contains(filter) {
+            return Ok(None);
+        }
+        let image = Image::create(gpu, desc, name, true)?;
+        Ok(Some(image))
+    }
+
+    fn create(gpu: &Gpu, desc: ImageDesc, name: &str, host: bool) -> Result<Image, GpuError> {
         let (image_type, view_type) = if desc.is_3d() {
             (vk::ImageType::TYPE_3D, vk::ImageViewType::TYPE_3D)
         } else {
@@ -135,9 +184,17 @@ impl Image {
             .mip_levels(1)
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(vk::ImageTiling::OPTIMAL)
+            .tiling(if host {
+                vk::ImageTiling::LINEAR
+            } else {
+                vk::ImageTiling::OPTIMAL
+            })
             .usage(desc.usage)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
+            .initial_layout(if host {
+                vk::ImageLayout::PREINITIALIZED
+            } else {
+                vk::ImageLayout::UNDEFINED
+            });
         // SAFETY: valid create info on a live device.
         let raw = unsafe { gpu.device.create_image(&info, None) }.ctx("vkCreateImage")?;
         // SAFETY: `raw` was just created on this device.
@@ -146,8 +203,12 @@ impl Image {
             a.allocate(&AllocationCreateDesc {
                 name,
                 requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
+                location: if host {
+                    MemoryLocation::CpuToGpu
+                } else {
+                    MemoryLocation::GpuOnly
+                },
+                linear: host,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
             .map_err(GpuError::from)
@@ -160,12 +221,27 @@ impl Image {
                 return Err(e);
             }
         };
+        let layout = host.then(|| {
+            let color = vk::ImageSubresource {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                array_layer: 0,
+            };
+            // SAFETY: a linear image on this device; the subresource exists.
+            unsafe { gpu.device.get_image_subresource_layout(raw, color) }
+        });
         let mut image = Image {
             raw,
             view: vk::ImageView::null(),
             desc,
             allocation: Some(allocation),
+            host: layout,
+            host_written: host,
         };
+        if host && image.allocation.as_ref().and_then(|a| a.mapped_ptr()).is_none() {
+            image.destroy(gpu);
+            return Err(GpuError::Lost("host-written image memory is not mapped"));
+        }
         let alloc = image.allocation.as_ref().ok_or(GpuError::Lost("image allocation"))?;
         // SAFETY: the allocation satisfies the image's requirements and is not bound elsewhere.
         if let Err(e) = unsafe { gpu.device.bind_image_memory(raw, alloc.memory(), alloc.offset()) } {
@@ -201,111 +277,16 @@ impl Image {
         }
     }
 
+    /// The mapped memory of an image made by [`Image::new_host_written`] (texels at `host`'s offsets).
+    pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
+        let _layout = self.host?;
+        self.allocation.as_mut()?.mapped_slice_mut()
+    }
+
     /// Bytes the allocation takes on the device.
     pub fn allocated_bytes(&self) -> u64 {
         self.allocation.as_ref().map(|a| a.size()).unwrap_or(0)
     }
-}
-
-/// Most bytes staged at once. Larger images are uploaded in slabs of whole slices through one staging buffer of
-/// this size, so an upload never needs a second copy of a large volume in memory (on lavapipe a 1 GiB volume
-/// took 1 GiB of staging that the kernel had to zero first).
-pub const STAGING_CHUNK: u64 = 64 << 20;
-
-/// Fills `image` with `bytes` (tightly packed texels) through a staging buffer and leaves it ready for sampling
-/// in fragment shaders.
-pub fn upload_image(gpu: &Gpu, image: &Image, bytes: &[u8]) -> Result<(), GpuError> {
-    upload_image_with(gpu, image, bytes.len() as u64, |range, dst| {
-        dst.copy_from_slice(&bytes[range])
-    })
-}
-
-/// Like [`upload_image`], but `fill(range, dst)` writes bytes `range` of the `len` bytes of tightly packed texels
-/// straight into the staging buffer (conversions need no second copy of the data). It is called once per slab of
-/// whole slices, in order.
-pub fn upload_image_with(
-    gpu: &Gpu,
-    image: &Image,
-    len: u64,
-    mut fill: impl FnMut(std::ops::Range<usize>, &mut [u8]),
-) -> Result<(), GpuError> {
-    let extent = image.desc.extent;
-    let depth = u64::from(extent.depth.max(1));
-    let slice = len / depth;
-    if slice == 0 || slice * depth != len {
-        return Err(GpuError::Lost("upload size is not a whole number of slices"));
-    }
-    let per_chunk = (STAGING_CHUNK / slice).clamp(1, depth);
-    let mut staging = Buffer::new(
-        gpu,
-        per_chunk * slice,
-        vk::BufferUsageFlags::TRANSFER_SRC,
-        MemoryLocation::CpuToGpu,
-        "staging upload",
-    )?;
-    let mut result = Ok(());
-    let mut z = 0;
-    while z < depth && result.is_ok() {
-        let n = per_chunk.min(depth - z);
-        let bytes = (n * slice) as usize;
-        let start = (z * slice) as usize;
-        result = match staging.mapped_mut() {
-            Some(dst) => {
-                fill(start..start + bytes, &mut dst[..bytes]);
-                Ok(())
-            }
-            None => Err(GpuError::Lost("staging buffer is not host-visible")),
-        };
-        let (first, last) = (z == 0, z + n == depth);
-        result = result.and_then(|_| {
-            gpu.submit_and_wait(|cb| {
-                let from = if first {
-                    Access::Undefined
-                } else {
-                    Access::TransferWrite
-                };
-                image_barrier(&gpu.device, cb, image.raw, from, Access::TransferWrite);
-                let region = vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    })
-                    .image_offset(vk::Offset3D {
-                        x: 0,
-                        y: 0,
-                        z: z as i32,
-                    })
-                    .image_extent(vk::Extent3D {
-                        depth: n as u32,
-                        ..extent
-                    });
-                // SAFETY: the buffer holds exactly these slices' texels; the image is in TRANSFER_DST layout.
-                unsafe {
-                    gpu.device.cmd_copy_buffer_to_image(
-                        cb,
-                        staging.raw,
-                        image.raw,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        &[region],
-                    )
-                };
-                if last {
-                    image_barrier(
-                        &gpu.device,
-                        cb,
-                        image.raw,
-                        Access::TransferWrite,
-                        Access::FragmentSampled,
-                    );
-                }
-            })
-        });
-        z += n;
-    }
-    staging.destroy(gpu);
-    result
 }
 
 /// Records a copy of a 2D colour image (in `from` state) into a host-visible buffer and makes it readable by

@@ -20,6 +20,8 @@ pub enum Access {
     ComputeWrite,
     Present,
     HostRead,
+    /// Written by the host before submission (a host-written image, PREINITIALIZED).
+    HostWrite,
 }
 
 impl Access {
@@ -33,7 +35,7 @@ impl Access {
             Access::ComputeWrite => vk::PipelineStageFlags2::COMPUTE_SHADER,
             // Presentation is ordered by semaphores; the barrier needs no later stage.
             Access::Present => vk::PipelineStageFlags2::NONE,
-            Access::HostRead => vk::PipelineStageFlags2::HOST,
+            Access::HostRead | Access::HostWrite => vk::PipelineStageFlags2::HOST,
         }
     }
 
@@ -48,6 +50,7 @@ impl Access {
             Access::FragmentSampled => vk::AccessFlags2::SHADER_READ,
             Access::ComputeWrite => vk::AccessFlags2::SHADER_STORAGE_WRITE,
             Access::HostRead => vk::AccessFlags2::HOST_READ,
+            Access::HostWrite => vk::AccessFlags2::HOST_WRITE,
         }
     }
 
@@ -60,6 +63,7 @@ impl Access {
             Access::FragmentSampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Access::Present => vk::ImageLayout::PRESENT_SRC_KHR,
             Access::HostRead | Access::ComputeWrite => vk::ImageLayout::GENERAL,
+            Access::HostWrite => vk::ImageLayout::PREINITIALIZED,
         }
     }
 }

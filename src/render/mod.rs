@@ -10,7 +10,7 @@ mod uniforms;
 
 pub use uniforms::{mirrors, FrameUniforms, VolumeInfo};
 
-use gpu_volume::{image_3d, upload_3d, GpuVolume};
+use gpu_volume::{image_3d_once, upload_3d, GpuVolume};
 pub use gpu_volume::{VolumeLayout, AUTO_LIMIT};
 
 use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, GraphicsDesc, ShaderCode};
@@ -350,8 +350,8 @@ impl Renderer {
                     *t = [gx, gy, gz, 0];
                 }
             });
-        let image = image_3d(gpu, vk::Format::R16G16B16A16_SNORM, volume.dims, "gradients")?;
-        if let Err(e) = upload_3d(gpu, &image, bytemuck::cast_slice(&texels), d) {
+        let mut image = image_3d_once(gpu, vk::Format::R16G16B16A16_SNORM, volume.dims, "gradients")?;
+        if let Err(e) = upload_3d(gpu, &mut image, bytemuck::cast_slice(&texels), d) {
             image.destroy(gpu);
             return Err(e);
         }
@@ -368,6 +368,15 @@ impl Renderer {
     /// How the loaded volume is stored on the GPU (None: no volume).
     pub fn volume_layout(&self) -> Option<VolumeLayout> {
         self.volume.as_ref().map(|v| v.layout)
+    }
+
+    /// Whether the volume's texture (or corner texture) was written in place by the host rather than uploaded
+    /// through a staging buffer (`gpu_volume::image_3d_once`).
+    pub fn volume_is_host_written(&self) -> bool {
+        self.volume
+            .as_ref()
+            .and_then(|v| v.image.as_ref().or(v.corners.as_ref()))
+            .is_some_and(|i| i.host_written)
     }
 
     /// Bytes the volume (texture or corner texture) takes on the device.
@@ -461,7 +470,7 @@ impl Renderer {
             if let Some(vol) = &mut self.volume {
                 let levels = vol.bricks.classify(&self.lut_table, s);
                 let occupancy = skip::encode_reach(&levels, vol.bricks.bricks);
-                upload_3d(gpu, &vol.occupancy, &occupancy, vol.bricks.bricks[2])?;
+                upload_3d(gpu, &mut vol.occupancy, &occupancy, vol.bricks.bricks[2])?;
                 vol.occupancy_key = Some(OccupancyKey::of(s));
             }
         }

@@ -189,13 +189,17 @@ pub fn gradient_cases(v: &Volume, size: u32) -> Vec<Case> {
 /// of 1 × 1.2 × 0.8 (neither the grid nor the voxels cubic), stored as `ty` over a range typical of that type
 /// (signed types straddle zero, as CT data do).
 pub fn marschner_lobb_as(ty: VoxelType) -> Volume {
-    const DIMS: [u32; 3] = [33, 29, 25];
+    marschner_lobb_sized(ty, [33, 29, 25])
+}
+
+/// [`marschner_lobb_as`] on a grid of `dims`.
+pub fn marschner_lobb_sized(ty: VoxelType, dims: [u32; 3]) -> Volume {
     let coord = |i: u32, n: u32| -1.0 + 2.0 * f64::from(i) / f64::from(n - 1);
-    let mut values = Vec::with_capacity(33 * 29 * 25);
-    for k in 0..DIMS[2] {
-        for j in 0..DIMS[1] {
-            for i in 0..DIMS[0] {
-                let (x, y, z) = (coord(i, DIMS[0]), coord(j, DIMS[1]), coord(k, DIMS[2]));
+    let mut values = Vec::with_capacity((dims[0] * dims[1] * dims[2]) as usize);
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let (x, y, z) = (coord(i, dims[0]), coord(j, dims[1]), coord(k, dims[2]));
                 let rho_r = (2.0 * PI * 6.0 * (0.5 * PI * x.hypot(y)).cos()).cos();
                 values.push((1.0 - (0.5 * PI * z).sin() + 0.25 * (1.0 + rho_r)) / 2.5);
             }
@@ -214,7 +218,7 @@ pub fn marschner_lobb_as(ty: VoxelType) -> Volume {
         VoxelType::F64 => VoxelData::F32(values.iter().map(|v| (v * 1.0e3 - 250.0) as f32).collect()),
         VoxelType::F32 => VoxelData::F32(values.iter().map(|&v| v as f32).collect()),
     };
-    Volume::new(format!("ml-{}", ty.name()), DIMS, [1.0, 1.2, 0.8], ty, data).expect("valid volume")
+    Volume::new(format!("ml-{}", ty.name()), dims, [1.0, 1.2, 0.8], ty, data).expect("valid volume")
 }
 
 /// `v` placed obliquely: turned 25° about z and 12° about x, voxels 1.0 × 1.3 × 0.8, shifted off the origin (a
