@@ -162,12 +162,30 @@ vec3 shade(vec3 rgb, vec3 g, vec3 light) {
 // that share its class (x) and that class (y). The march leaps over empty bricks without leaving its sample grid,
 // and in the others takes the samples of the class's stride without further lookups. With lookups off (no
 // skipping, no strides), the whole ray is one span at stride 1.
-ivec2 brick_span(vec3 a, vec3 dir, float t, float h, float o, ivec3 bricks) {
+// What brick_span needs of the ray, computed once per pixel (lavapipe's LLVM passes hoist nothing out of loops).
+struct BrickWalk {
+    vec3 a;
+    vec3 dir;
+    // 1 / dir, with zero components taking the far side (a huge, ignored exit instead of 0/0).
+    vec3 inv_dir;
+    // Per axis, whether the ray leaves a cube of bricks through its upper face.
+    bvec3 up;
+    vec3 inv_brick;
+    float inv_h;
+    ivec3 bricks;
+};
+
+BrickWalk brick_walk(vec3 a, vec3 dir, float h, ivec3 bricks) {
+    vec3 safe = mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
+    return BrickWalk(a, dir, 1.0 / safe, greaterThanEqual(dir, vec3(0.0)), 1.0 / frame.brick.xyz, 1.0 / h, bricks);
+}
+
+ivec2 brick_span(BrickWalk w, float t, float h, float o) {
     if (frame.mode_params.z < 0.5) {
         return ivec2(2147483647, 3);
     }
-    vec3 p = a + dir * t;
-    ivec3 b = clamp(ivec3(floor(p / frame.brick.xyz)), ivec3(0), bricks - 1);
+    vec3 p = w.a + w.dir * t;
+    ivec3 b = clamp(ivec3(floor(p * w.inv_brick)), ivec3(0), w.bricks - 1);
     // skip::encode_reach: bits 0-1 the class (0 empty; 1, 2, 3 strides 4, 2, 1), bits 2-7 the reach r: every
     // brick within r bricks has the same class, so the ray is walked to where it leaves that cube of bricks as
     // one span.
@@ -176,13 +194,10 @@ ivec2 brick_span(vec3 a, vec3 dir, float t, float h, float o, ivec3 bricks) {
     int reach = code >> 2;
     vec3 lo = vec3(b - ivec3(reach)) * frame.brick.xyz;
     vec3 hi = vec3(b + ivec3(reach + 1)) * frame.brick.xyz;
-    // Zero components take the far side, giving a huge (ignored) exit instead of 0/0.
-    vec3 toward = mix(lo, hi, greaterThanEqual(dir, vec3(0.0)));
-    vec3 safe = mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
-    vec3 exits = (toward - a) / safe;
+    vec3 exits = (mix(lo, hi, w.up) - w.a) * w.inv_dir;
     // A little short of the exit: rounding must never leap over a sample of the next brick.
     float t_exit = min(exits.x, min(exits.y, exits.z)) - 1e-4 * h;
-    return ivec2(int(ceil(t_exit / h - o)), level);
+    return ivec2(int(ceil(t_exit * w.inv_h - o)), level);
 }
 
 // The per-pixel start offset of jittered rays: must equal settings::jitter_offset.
@@ -274,7 +289,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     vec3 light = -normalize(d_world);
     int max_steps = int(frame.viewport.z);
     vec3 dir = d / len;
-    ivec3 bricks = textureSize(sampler3D(occupancy_tex, linear_smp), 0);
+    BrickWalk walk = brick_walk(a, dir, h, textureSize(sampler3D(occupancy_tex, linear_smp), 0));
     uint taken = 0u;
 
 #if defined(FAMILY_PROJECTION)
@@ -287,7 +302,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
         if (t0 >= len) {
             break;
         }
-        ivec2 span = brick_span(a, dir, t0, h, o, bricks);
+        ivec2 span = brick_span(walk, t0, h, o);
         int end = max(span.x, k + 1);
         if (span.y == 0) {
             k = end;
@@ -321,7 +336,7 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
         if (t0 >= len) {
             break;
         }
-        ivec2 span = brick_span(a, dir, t0, h, o, bricks);
+        ivec2 span = brick_span(walk, t0, h, o);
         int end = max(span.x, k + 1);
         if (span.y == 0) {
             k = end;
@@ -365,9 +380,8 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     vec3 color = vec3(0.0);
     float opacity = 0.0;
     bool density_model = mode == MODE_DENSITY;
-    int k = 0;
-    bool done = false;
     bool reached_end = false;
+    bool done = false;
     // The segment's start (rule 6): the ray's start, then each point taken.
     float t_prev = 0.0;
     float v_prev = sample_value(a);
@@ -375,49 +389,72 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     vec4 i_prev = integral_at(v_prev, unused);
     // Whether the last span walked held something (its points were taken), or was leapt over.
     bool walked = true;
-    while (k < max_steps && !done) {
-        float t0 = (float(k) + o) * h;
-        if (t0 >= len) {
+    // One sample per iteration (lavapipe runs a loop until its slowest lane ends, and nested loops at the pace of
+    // the slowest lane of each): the span [k, stop) being walked at `stride`, looked up when k reaches `stop`.
+    int k = 0;
+    int span_end = 0;
+    int stop = 0;
+    int stride = 1;
+    bool resample = false;
+    int resample_at = 0;
+    for (;;) {
+        if (k >= stop && !resample) {
+            k = span_end;
+            if (k >= max_steps) {
+                break;
+            }
+            float t0 = (float(k) + o) * h;
+            if (t0 >= len) {
+                reached_end = true;
+                break;
+            }
+            ivec2 span = brick_span(walk, t0, h, o);
+            span_end = max(span.x, k + 1);
+            // Leaving bricks that hold something, the segment from the last point there to the first sample beyond
+            // still spans the values between theirs: that one sample is taken before the leap.
+            bool exiting = span.y == 0 && walked;
+            if (span.y == 0 && !exiting) {
+                stop = k;
+                continue;
+            }
+            // After a leap, the segment starts at the last sample leapt over (nothing there is visible).
+            resample = !walked && k > 0;
+            resample_at = k - 1;
+            walked = !exiting;
+            // The span's stride s (rule 2): the samples whose index is a multiple of s.
+            stride = exiting ? 1 : 1 << (3 - span.y);
+            stop = exiting ? k + 1 : span_end;
+            k = (k + stride - 1) & ~(stride - 1);
+            if (k >= stop && !resample) {
+                continue;
+            }
+        }
+        int j = resample ? resample_at : k;
+        float t = (float(j) + o) * h;
+        if (!resample && t >= len) {
             reached_end = true;
             break;
         }
-        ivec2 span = brick_span(a, dir, t0, h, o, bricks);
-        int end = max(span.x, k + 1);
-        // Leaving bricks that hold something, the segment from the last point there to the first sample beyond
-        // still spans the values between theirs: that one sample is taken before the leap. (One loop serves both:
-        // lavapipe would run a second copy of the segment code under a mask on every leap.)
-        bool exiting = span.y == 0 && walked;
-        if (span.y == 0 && !exiting) {
-            k = end;
-            continue;
-        }
-        // After a leap, the segment starts at the last sample leapt over (nothing there is visible).
-        if (!walked && k > 0) {
-            t_prev = (float(k - 1) + o) * h;
-            v_prev = sample_value(a + dir * t_prev);
-            i_prev = integral_at(v_prev, unused);
-        }
-        walked = !exiting;
-        // The span's stride s (rule 2): the samples whose index is a multiple of s.
-        int stride = exiting ? 1 : 1 << (3 - span.y);
-        int stop = exiting ? k + 1 : end;
-        for (int j = (k + stride - 1) & ~(stride - 1); j < stop; j += stride) {
-            float t = (float(j) + o) * h;
-            if (t >= len) {
-                reached_end = true;
-                done = true;
-                break;
-            }
+        float v = sample_value(a + dir * t);
+        vec4 slope;
+        vec4 iv = integral_at(v, slope);
+        if (resample) {
+            resample = false;
+        } else {
             taken += 1u;
-            vec4 c = segment_to(a, dir, t, h, light, density_model, t_prev, v_prev, i_prev);
+            vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), frame.alpha.y * (t - t_prev) / h,
+                                    a + dir * (0.5 * (t + t_prev)), light, density_model);
             color += (1.0 - opacity) * c.a * c.rgb;
             opacity += (1.0 - opacity) * c.a;
-            if (opacity >= frame.alpha.z) {
-                done = true;
-                break;
-            }
+            k = j + stride;
         }
-        k = end;
+        t_prev = t;
+        v_prev = v;
+        i_prev = iv;
+        if (opacity >= frame.alpha.z) {
+            done = true;
+            break;
+        }
     }
     // The last segment, from the last point to the ray's end, where the march got there through bricks that hold
     // something (not by early termination; past a leap everything left is invisible).
