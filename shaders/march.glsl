@@ -296,32 +296,38 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     float m = mode == MODE_MIP ? -1e30 : 1e30;
     float sum = 0.0;
     float count = 0.0;
+    // One sample per iteration, as the emission walk below: the span [k, stop) is looked up when k reaches it.
     int k = 0;
-    while (k < max_steps) {
-        float t0 = (float(k) + o) * h;
-        if (t0 >= len) {
-            break;
-        }
-        ivec2 span = brick_span(walk, t0, h, o);
-        int end = max(span.x, k + 1);
-        if (span.y == 0) {
-            k = end;
-            continue;
-        }
-        for (; k < end; k++) {
-            float t = (float(k) + o) * h;
-            if (t >= len) {
+    int span_end = 0;
+    int stop = 0;
+    for (;;) {
+        if (k >= stop) {
+            k = span_end;
+            float t0 = (float(k) + o) * h;
+            if (k >= max_steps || t0 >= len) {
                 break;
             }
-            taken += 1u;
-            float v = sample_value(a + dir * t);
-            if (!visible(v)) {
+            ivec2 span = brick_span(walk, t0, h, o);
+            span_end = max(span.x, k + 1);
+            // Leapt over, or walked sample by sample.
+            stop = span.y == 0 ? k : span_end;
+            if (span.y == 0) {
                 continue;
             }
-            m = mode == MODE_MIP ? max(m, v) : min(m, v);
-            sum += v;
-            count += 1.0;
         }
+        float t = (float(k) + o) * h;
+        if (t >= len) {
+            break;
+        }
+        k += 1;
+        taken += 1u;
+        float v = sample_value(a + dir * t);
+        if (!visible(v)) {
+            continue;
+        }
+        m = mode == MODE_MIP ? max(m, v) : min(m, v);
+        sum += v;
+        count += 1.0;
     }
     if (count == 0.0) {
         return output_pixel(background_pixel(), taken);
@@ -330,44 +336,49 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
 #elif defined(FAMILY_ISOSURFACE)
     float iso = frame.mode_params.x;
     float t_hit = -1.0;
+    // One sample per iteration, as the emission walk below.
     int k = 0;
-    while (k < max_steps && t_hit < 0.0) {
-        float t0 = (float(k) + o) * h;
-        if (t0 >= len) {
+    int span_end = 0;
+    int stop = 0;
+    for (;;) {
+        if (k >= stop) {
+            k = span_end;
+            float t0 = (float(k) + o) * h;
+            if (k >= max_steps || t0 >= len) {
+                break;
+            }
+            ivec2 span = brick_span(walk, t0, h, o);
+            span_end = max(span.x, k + 1);
+            stop = span.y == 0 ? k : span_end;
+            if (span.y == 0) {
+                continue;
+            }
+        }
+        float t = (float(k) + o) * h;
+        if (t >= len) {
             break;
         }
-        ivec2 span = brick_span(walk, t0, h, o);
-        int end = max(span.x, k + 1);
-        if (span.y == 0) {
-            k = end;
-            continue;
-        }
-        for (; k < end; k++) {
-            float t = (float(k) + o) * h;
-            if (t >= len) {
-                break;
-            }
-            taken += 1u;
-            float v = sample_value(a + dir * t);
-            if (!isnan(v) && v >= iso) {
-                t_hit = t;
-                if (k > 0) {
-                    // The previous grid sample (possibly in a skipped brick, where every value is below iso).
-                    float lo = t - h;
-                    float hi = t;
-                    for (int i = 0; i < 8; i++) {
-                        float mid = 0.5 * (lo + hi);
-                        float vm = sample_value(a + dir * mid);
-                        if (!isnan(vm) && vm >= iso) {
-                            hi = mid;
-                        } else {
-                            lo = mid;
-                        }
+        k += 1;
+        taken += 1u;
+        float v = sample_value(a + dir * t);
+        if (!isnan(v) && v >= iso) {
+            t_hit = t;
+            if (k > 1) {
+                // The previous grid sample (possibly in a skipped brick, where every value is below iso).
+                float lo = t - h;
+                float hi = t;
+                for (int i = 0; i < 8; i++) {
+                    float mid = 0.5 * (lo + hi);
+                    float vm = sample_value(a + dir * mid);
+                    if (!isnan(vm) && vm >= iso) {
+                        hi = mid;
+                    } else {
+                        lo = mid;
                     }
-                    t_hit = 0.5 * (lo + hi);
                 }
-                break;
+                t_hit = 0.5 * (lo + hi);
             }
+            break;
         }
     }
     if (t_hit < 0.0) {
