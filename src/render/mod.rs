@@ -3,6 +3,7 @@
 //! the march alone. The same code serves headless rendering and (later) the window.
 
 mod gpu_volume;
+mod gradients;
 mod init;
 mod record;
 pub mod skip;
@@ -22,7 +23,6 @@ use crate::settings::{PositionFormat, RaySetup, RenderSettings};
 use crate::tf::{bake, Classification};
 use crate::volume::Volume;
 use ash::vk;
-use rayon::prelude::*;
 
 /// GPU time per pass of the last frame, from timestamp queries.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -321,35 +321,8 @@ impl Renderer {
         if vol.gradient.is_some() {
             return Ok(());
         }
-        let [w, h, d] = volume.dims;
-        let at = |x: i64, y: i64, z: i64| {
-            let c = |v: i64, n: u32| v.clamp(0, n as i64 - 1) as u32;
-            let v = volume.normalized(c(x, w), c(y, h), c(z, d));
-            if v.is_nan() {
-                0.0
-            } else {
-                v
-            }
-        };
-        // Slice by slice on every core.
-        let mut texels = vec![[0i16; 4]; volume.voxel_count()];
-        texels
-            .par_chunks_mut((w * h) as usize)
-            .enumerate()
-            .for_each(|(z, slice)| {
-                let z = z as i64;
-                for (i, t) in slice.iter_mut().enumerate() {
-                    let (x, y) = ((i % w as usize) as i64, (i / w as usize) as i64);
-                    // Stored as 2g so the range of g, [-0.5, 0.5], fills SNORM's [-1, 1].
-                    let g = [
-                        at(x + 1, y, z) - at(x - 1, y, z),
-                        at(x, y + 1, z) - at(x, y - 1, z),
-                        at(x, y, z + 1) - at(x, y, z - 1),
-                    ];
-                    let [gx, gy, gz] = g.map(|v| (v.clamp(-1.0, 1.0) * 32767.0).round() as i16);
-                    *t = [gx, gy, gz, 0];
-                }
-            });
+        let texels = gradients::gradient_texels(volume);
+        let d = volume.dims[2];
         let mut image = image_3d_once(gpu, vk::Format::R16G16B16A16_SNORM, volume.dims, "gradients")?;
         if let Err(e) = upload_3d(gpu, &mut image, bytemuck::cast_slice(&texels), d) {
             image.destroy(gpu);
