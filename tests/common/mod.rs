@@ -8,6 +8,8 @@ pub mod cases;
 pub mod classify;
 pub mod compare;
 pub mod gpu;
+pub mod march;
+pub mod placement;
 pub mod rays;
 pub mod reference;
 pub mod segments;

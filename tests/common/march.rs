@@ -1,0 +1,304 @@
+//! The reference's march of one pixel (rules 1–8 of `RenderSettings`): its ray, the samples along it, and each
+//! compositing mode (emission/density with pre-integrated segments and brick strides, MIP/MinIP/average, the
+//! isosurface with its bisection), in f64. `Reference` (reference.rs) holds the volume it samples.
+
+#![allow(dead_code)]
+
+use super::classify::{encode, jitter_offset, linear, Classifier};
+use super::rays::{ray_segment, CameraBasis};
+use super::reference::{shade, PixelTrace, Placement, Reference, Segment};
+use super::segments::Segments;
+use super::strides::{BrickRanges, Strides};
+use glam::DVec3;
+use volcast::settings::{CompositeMode, RenderSettings, Shading};
+
+/// Everything per-frame that `trace` needs, computed once.
+pub(crate) struct Frame<'a> {
+    volume: &'a Reference,
+    camera: CameraBasis,
+    placement: Placement,
+    /// The slab box, texture space.
+    box_lo: DVec3,
+    box_hi: DVec3,
+    step: f64,
+    classifier: Classifier,
+    /// Rule 6's segment integrals (emission and density modes).
+    segments: Option<Segments>,
+    window: [f64; 2],
+    /// Exponent of rule 6's opacity correction (and factor of the density model).
+    step_length: f64,
+    mode: CompositeMode,
+    iso_value: f64,
+    density: f64,
+    /// Rule 5's lighting where it applies: `shading` in emission/density modes, `shading` or its defaults in
+    /// isosurface mode.
+    shading: Option<Shading>,
+    gradient_opacity: Option<f64>,
+    /// `gradient_texture`: shade from the grid gradients instead of central differences of the interpolant.
+    grid_gradients: bool,
+    jitter: Option<u32>,
+    /// Rule 2's brick strides (None: every sample).
+    strides: Option<Strides>,
+    early_termination: f64,
+    /// Linear light.
+    background: DVec3,
+}
+
+/// The result of one mode's march: colour and opacity before rule 8.
+struct Composite {
+    color: DVec3,
+    alpha: f64,
+}
+
+impl<'a> Frame<'a> {
+    pub(crate) fn new(volume: &'a Reference, s: &RenderSettings) -> Frame<'a> {
+        let placement = volume.placement(s);
+        let shading = match s.mode {
+            CompositeMode::Isosurface => Some(s.shading.unwrap_or_default()),
+            _ => s.shading,
+        };
+        let segments = match s.mode {
+            CompositeMode::Emission => Some(Segments::new(volume.classifier(s), s.window.map(f64::from), None)),
+            CompositeMode::Density => Some(Segments::new(
+                volume.classifier(s),
+                s.window.map(f64::from),
+                Some(f64::from(s.density)),
+            )),
+            _ => None,
+        };
+        let strides = segments.as_ref().and_then(|segments| {
+            let ranges = volume
+                .brick_ranges
+                .get_or_init(|| BrickRanges::new(&volume.values, volume.dims));
+            Strides::new(ranges, volume.dims, s, segments)
+        });
+        Frame {
+            volume,
+            camera: CameraBasis::new(s),
+            step: f64::from(s.step_length) * placement.voxel_sides().min_element(),
+            placement,
+            box_lo: s.slab_lo.as_dvec3(),
+            box_hi: s.slab_hi.as_dvec3(),
+            classifier: volume.classifier(s),
+            segments,
+            window: s.window.map(f64::from),
+            step_length: f64::from(s.step_length),
+            mode: s.mode,
+            iso_value: f64::from(s.iso_value),
+            density: f64::from(s.density),
+            shading,
+            gradient_opacity: s.gradient_opacity.map(f64::from),
+            grid_gradients: s.gradient_texture && matches!(s.mode, CompositeMode::Emission | CompositeMode::Density),
+            jitter: s.jitter,
+            strides,
+            early_termination: f64::from(s.early_termination),
+            background: linear(s.background.as_dvec3()),
+        }
+    }
+
+    /// Rule 3's visibility test (every mode but isosurface).
+    fn visible(&self, v: f64) -> bool {
+        !v.is_nan() && v >= self.window[0] && v <= self.window[1]
+    }
+
+    fn gradient(&self, tex: DVec3) -> DVec3 {
+        if self.grid_gradients {
+            self.volume.grid_gradient(tex)
+        } else {
+            self.volume.gradient(tex)
+        }
+    }
+
+    pub(crate) fn trace(&self, x: u32, y: u32) -> PixelTrace {
+        let (origin, dir, t_near) = self.camera.ray(x, y);
+        let offset = self.jitter.map_or(0.5, |seed| jitter_offset(x, y, seed));
+        let background = self.background.clamp(DVec3::ZERO, DVec3::ONE);
+        let mut trace = PixelTrace {
+            segment: None,
+            offset,
+            samples: 0,
+            composited: 0,
+            value: None,
+            hit: None,
+            color: DVec3::ZERO,
+            alpha: 0.0,
+            terminated_early: false,
+            linear: background,
+            output: encode(background),
+        };
+        // The slab box is a box in texture space: intersect there, with t still in world units along `dir`.
+        let (origin_tex, dir_tex) = (self.placement.to_tex(origin), self.placement.dir_to_tex(dir));
+        let Some((t_start, t_end)) = ray_segment(origin_tex, dir_tex, self.box_lo, self.box_hi, t_near) else {
+            return trace;
+        };
+        let segment = Segment {
+            origin,
+            dir,
+            t_start,
+            t_end,
+        };
+        trace.segment = Some(segment);
+        let result = match self.mode {
+            CompositeMode::Emission | CompositeMode::Density => self.absorb(&segment, &mut trace),
+            CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => self.extremum(&segment, &mut trace),
+            CompositeMode::Isosurface => self.isosurface(&segment, &mut trace),
+        };
+        trace.color = result.color;
+        trace.alpha = result.alpha;
+        trace.linear = (result.color + (1.0 - result.alpha) * self.background).clamp(DVec3::ZERO, DVec3::ONE);
+        trace.output = encode(trace.linear);
+        trace
+    }
+
+    /// Rule 2's sample distances from the segment's start: `(k + o)·h` while below the segment's length.
+    fn sample_offsets(&self, segment: &Segment, offset: f64) -> impl Iterator<Item = f64> + '_ {
+        let (length, step) = (segment.length(), self.step);
+        (0u32..)
+            .map(move |k| (f64::from(k) + offset) * step)
+            .take_while(move |&t| t < length)
+    }
+
+    /// Texture coordinate of the point at distance `t` from the segment's start.
+    fn tex_at(&self, segment: &Segment, t: f64) -> DVec3 {
+        self.placement.to_tex(segment.at(segment.t_start + t))
+    }
+
+    /// Rules 5–7 for emission–absorption and the density model: the ray is composited segment by segment
+    /// between consecutive points — its start, the samples, its end — each segment pre-integrated (segments.rs).
+    fn absorb(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
+        let segments = self.segments.as_ref().expect("segments for emission and density");
+        let (mut color, mut alpha) = (DVec3::ZERO, 0.0f64);
+        let light = -segment.dir;
+        let (mut t_prev, mut v_prev) = (0.0, self.volume.sample(self.tex_at(segment, 0.0)));
+        // Rule 2's strides: sample k only where k is a multiple of its brick's stride.
+        let samples: Vec<f64> = self
+            .sample_offsets(segment, trace.offset)
+            .enumerate()
+            .filter(|&(k, t)| {
+                self.strides
+                    .as_ref()
+                    .is_none_or(|b| (k as u64).is_multiple_of(b.at(self.tex_at(segment, t))))
+            })
+            .map(|(_, t)| t)
+            .collect();
+        let ends = samples
+            .iter()
+            .map(|&t| (t, true))
+            .chain(std::iter::once((segment.length(), false)));
+        for (t, is_sample) in ends {
+            if is_sample {
+                trace.samples += 1;
+            }
+            let tex = self.tex_at(segment, t);
+            let v = self.volume.sample(tex);
+            let (vp, t_mid_prev, length) = (v_prev, t_prev, (t - t_prev) / self.step * self.step_length);
+            (t_prev, v_prev) = (t, v);
+            if v.is_nan() || vp.is_nan() {
+                continue;
+            }
+            let (mut sigma, mut rgb) = segments.mean(vp, v);
+            if sigma <= 0.0 {
+                continue;
+            }
+            if self.shading.is_some() || self.gradient_opacity.is_some() {
+                let grad = self.gradient(self.tex_at(segment, 0.5 * (t + t_mid_prev)));
+                if let Some(reference) = self.gradient_opacity {
+                    sigma *= (grad.length() / reference).min(1.0);
+                }
+                if let Some(shading) = &self.shading {
+                    rgb = shade(rgb, self.placement.normal(grad), light, shading);
+                }
+            }
+            let a_step = match self.mode {
+                CompositeMode::Density => (sigma * length).min(1.0),
+                _ => 1.0 - (-sigma * length).exp(),
+            };
+            color += (1.0 - alpha) * a_step * rgb;
+            alpha += (1.0 - alpha) * a_step;
+            trace.composited += 1;
+            if alpha >= self.early_termination {
+                trace.terminated_early = true;
+                break;
+            }
+        }
+        Composite { color, alpha }
+    }
+
+    /// Rule 7 for MIP, MinIP and average: the colour of the max/min/mean of the visible samples.
+    fn extremum(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
+        let mut visible = Vec::new();
+        for t in self.sample_offsets(segment, trace.offset) {
+            trace.samples += 1;
+            let v = self.volume.sample(self.tex_at(segment, t));
+            if self.visible(v) {
+                visible.push(v);
+            }
+        }
+        trace.composited = visible.len() as u32;
+        if visible.is_empty() {
+            return Composite {
+                color: DVec3::ZERO,
+                alpha: 0.0,
+            };
+        }
+        let m = match self.mode {
+            CompositeMode::Mip => visible.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            CompositeMode::MinIp => visible.iter().copied().fold(f64::INFINITY, f64::min),
+            _ => visible.iter().sum::<f64>() / visible.len() as f64,
+        };
+        trace.value = Some(m);
+        Composite {
+            color: self.classifier.rgb(m),
+            alpha: 1.0,
+        }
+    }
+
+    /// Rule 7 for the isosurface: the first sample at or above the iso value (window ignored, NaN never counts),
+    /// refined by 8 bisection steps on the step before it, coloured by the classification at the iso value
+    /// clamped into the window, and shaded.
+    fn isosurface(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
+        let iso = self.iso_value;
+        let reaches = |t: f64| {
+            let v = self.volume.sample(self.tex_at(segment, t));
+            !v.is_nan() && v >= iso
+        };
+        let mut previous: Option<f64> = None;
+        for t in self.sample_offsets(segment, trace.offset) {
+            trace.samples += 1;
+            if !reaches(t) {
+                previous = Some(t);
+                continue;
+            }
+            let t_hit = match previous {
+                None => t,
+                Some(t_prev) => {
+                    let (mut lo, mut hi) = (t_prev, t);
+                    for _ in 0..8 {
+                        let mid = (lo + hi) / 2.0;
+                        if reaches(mid) {
+                            hi = mid;
+                        } else {
+                            lo = mid;
+                        }
+                    }
+                    (lo + hi) / 2.0
+                }
+            };
+            trace.composited = 1;
+            trace.hit = Some(segment.t_start + t_hit);
+            let shading = self.shading.unwrap_or_default();
+            let grad = self.gradient(self.tex_at(segment, t_hit));
+            let color = shade(
+                self.classifier.iso_rgb(iso),
+                self.placement.normal(grad),
+                -segment.dir,
+                &shading,
+            );
+            return Composite { color, alpha: 1.0 };
+        }
+        Composite {
+            color: DVec3::ZERO,
+            alpha: 0.0,
+        }
+    }
+}
