@@ -200,6 +200,35 @@ ivec2 brick_span(BrickWalk w, float t, float h, float o) {
     return ivec2(int(ceil(t_exit * w.inv_h - o)), level);
 }
 
+// The walk of the projection and isosurface families, one sample index per iteration (see the emission walk
+// below): `k` is the next sample index and [.., stop) the span being walked, looked up when k reaches it. Returns
+// 0 where the ray ends, 1 after a leap (no sample this iteration), 2 with sample k's position in `t` (k then
+// advanced past it).
+int walk_next(BrickWalk walk, inout int k, inout int span_end, inout int stop, float h, float o, float len,
+              int max_steps, out float t) {
+    t = 0.0;
+    if (k >= stop) {
+        k = span_end;
+        float t0 = (float(k) + o) * h;
+        if (k >= max_steps || t0 >= len) {
+            return 0;
+        }
+        ivec2 span = brick_span(walk, t0, h, o);
+        span_end = max(span.x, k + 1);
+        // Leapt over, or walked sample by sample.
+        stop = span.y == 0 ? k : span_end;
+        if (span.y == 0) {
+            return 1;
+        }
+    }
+    t = (float(k) + o) * h;
+    if (t >= len) {
+        return 0;
+    }
+    k += 1;
+    return 2;
+}
+
 // The per-pixel start offset of jittered rays: must equal settings::jitter_offset.
 float jitter_offset(uvec2 px, uint seed) {
     uint v = (px.x * 1973u + px.y * 9277u + seed * 26699u) | 1u;
@@ -296,30 +325,18 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     float m = mode == MODE_MIP ? -1e30 : 1e30;
     float sum = 0.0;
     float count = 0.0;
-    // One sample per iteration, as the emission walk below: the span [k, stop) is looked up when k reaches it.
     int k = 0;
     int span_end = 0;
     int stop = 0;
     for (;;) {
-        if (k >= stop) {
-            k = span_end;
-            float t0 = (float(k) + o) * h;
-            if (k >= max_steps || t0 >= len) {
-                break;
-            }
-            ivec2 span = brick_span(walk, t0, h, o);
-            span_end = max(span.x, k + 1);
-            // Leapt over, or walked sample by sample.
-            stop = span.y == 0 ? k : span_end;
-            if (span.y == 0) {
-                continue;
-            }
-        }
-        float t = (float(k) + o) * h;
-        if (t >= len) {
+        float t;
+        int step = walk_next(walk, k, span_end, stop, h, o, len, max_steps, t);
+        if (step == 0) {
             break;
         }
-        k += 1;
+        if (step == 1) {
+            continue;
+        }
         taken += 1u;
         float v = sample_value(a + dir * t);
         if (!visible(v)) {
@@ -336,29 +353,18 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
 #elif defined(FAMILY_ISOSURFACE)
     float iso = frame.mode_params.x;
     float t_hit = -1.0;
-    // One sample per iteration, as the emission walk below.
     int k = 0;
     int span_end = 0;
     int stop = 0;
     for (;;) {
-        if (k >= stop) {
-            k = span_end;
-            float t0 = (float(k) + o) * h;
-            if (k >= max_steps || t0 >= len) {
-                break;
-            }
-            ivec2 span = brick_span(walk, t0, h, o);
-            span_end = max(span.x, k + 1);
-            stop = span.y == 0 ? k : span_end;
-            if (span.y == 0) {
-                continue;
-            }
-        }
-        float t = (float(k) + o) * h;
-        if (t >= len) {
+        float t;
+        int step = walk_next(walk, k, span_end, stop, h, o, len, max_steps, t);
+        if (step == 0) {
             break;
         }
-        k += 1;
+        if (step == 1) {
+            continue;
+        }
         taken += 1u;
         float v = sample_value(a + dir * t);
         if (!isnan(v) && v >= iso) {
