@@ -1,6 +1,6 @@
 //! Buffers and images: `raw` handle + `desc` + `allocation`, destroyed explicitly with `destroy(self, gpu)`.
 
-use super::sync::{image_barrier, memory_barrier, Access, COLOR_RANGE};
+use super::sync::{image_barrier, memory_barrier, Access, COLOR_LAYERS, COLOR_RANGE};
 use super::{Gpu, GpuError, VkContext};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
@@ -112,6 +112,15 @@ impl ImageDesc {
     pub fn is_3d(&self) -> bool {
         self.extent.depth > 1
     }
+
+    /// The image and view types its extent calls for.
+    fn types(&self) -> (vk::ImageType, vk::ImageViewType) {
+        if self.is_3d() {
+            (vk::ImageType::TYPE_3D, vk::ImageViewType::TYPE_3D)
+        } else {
+            (vk::ImageType::TYPE_2D, vk::ImageViewType::TYPE_2D)
+        }
+    }
 }
 
 pub struct Image {
@@ -119,11 +128,20 @@ pub struct Image {
     pub view: vk::ImageView,
     pub desc: ImageDesc,
     allocation: Option<Allocation>,
-    /// Where the texels lie in the mapped memory of an image made by [`Image::new_host_written`], until it is
-    /// written (`upload::upload_image_with`).
-    pub host: Option<vk::SubresourceLayout>,
-    /// Made by [`Image::new_host_written`].
-    pub host_written: bool,
+    /// How its texels get there.
+    pub filling: Filling,
+}
+
+/// How an image's texels are filled (`upload::upload_image_with`).
+#[derive(Clone, Copy, Debug)]
+pub enum Filling {
+    /// By transfers from a staging buffer, as often as needed ([`Image::new`]).
+    Transfer,
+    /// By the host, in place, once ([`Image::new_host_written`]): not yet written; the texels lie at this layout
+    /// in the mapped memory.
+    HostPending(vk::SubresourceLayout),
+    /// By the host, and written: from here on only the device reads it.
+    HostWritten,
 }
 
 impl Image {
@@ -137,11 +155,7 @@ impl Image {
     /// there an upload goes through a staging buffer). On lavapipe, where device memory is host memory, this saves
     /// the staging copy and the device's single-threaded copy into the image (`upload::upload_image_with`).
     pub fn new_host_written(gpu: &Gpu, desc: ImageDesc, name: &str) -> Result<Option<Image>, GpuError> {
-        let image_type = if desc.is_3d() {
-            vk::ImageType::TYPE_3D
-        } else {
-            vk::ImageType::TYPE_2D
-        };
+        let (image_type, _) = desc.types();
         // SAFETY: plain queries on a live physical device.
         let (limits, features) = unsafe {
             (
@@ -172,11 +186,7 @@ impl Image {
     }
 
     fn create(gpu: &Gpu, desc: ImageDesc, name: &str, host: bool) -> Result<Image, GpuError> {
-        let (image_type, view_type) = if desc.is_3d() {
-            (vk::ImageType::TYPE_3D, vk::ImageViewType::TYPE_3D)
-        } else {
-            (vk::ImageType::TYPE_2D, vk::ImageViewType::TYPE_2D)
-        };
+        let (image_type, view_type) = desc.types();
         let info = vk::ImageCreateInfo::default()
             .image_type(image_type)
             .format(desc.format)
@@ -221,22 +231,23 @@ impl Image {
                 return Err(e);
             }
         };
-        let layout = host.then(|| {
+        let filling = if host {
             let color = vk::ImageSubresource {
                 aspect_mask: vk::ImageAspectFlags::COLOR,
                 mip_level: 0,
                 array_layer: 0,
             };
             // SAFETY: a linear image on this device; the subresource exists.
-            unsafe { gpu.device.get_image_subresource_layout(raw, color) }
-        });
+            Filling::HostPending(unsafe { gpu.device.get_image_subresource_layout(raw, color) })
+        } else {
+            Filling::Transfer
+        };
         let mut image = Image {
             raw,
             view: vk::ImageView::null(),
             desc,
             allocation: Some(allocation),
-            host: layout,
-            host_written: host,
+            filling,
         };
         if host && image.allocation.as_ref().and_then(|a| a.mapped_ptr()).is_none() {
             image.destroy(gpu);
@@ -277,10 +288,12 @@ impl Image {
         }
     }
 
-    /// The mapped memory of an image made by [`Image::new_host_written`] (texels at `host`'s offsets).
+    /// The mapped memory of a host-written image not yet written (texels at its `Filling::HostPending` layout).
     pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
-        let _layout = self.host?;
-        self.allocation.as_mut()?.mapped_slice_mut()
+        match self.filling {
+            Filling::HostPending(_) => self.allocation.as_mut()?.mapped_slice_mut(),
+            _ => None,
+        }
     }
 
     /// Bytes the allocation takes on the device.
@@ -294,12 +307,7 @@ impl Image {
 pub fn record_readback(gpu: &Gpu, cb: vk::CommandBuffer, image: &Image, from: Access, buffer: &Buffer) {
     image_barrier(&gpu.device, cb, image.raw, from, Access::TransferRead);
     let region = vk::BufferImageCopy::default()
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        })
+        .image_subresource(COLOR_LAYERS)
         .image_extent(image.desc.extent);
     // SAFETY: the image is in TRANSFER_SRC layout and the buffer is large enough for its texels.
     unsafe {

@@ -1,8 +1,8 @@
 //! Filling sampled images: through a staging buffer in slabs (device images), or written in place (images made
 //! by `Image::new_host_written`, on lavapipe). Either way the image ends ready for sampling in shaders.
 
-use super::resources::{Buffer, Image};
-use super::sync::{image_barrier, Access};
+use super::resources::{Buffer, Filling, Image};
+use super::sync::{image_barrier, Access, COLOR_LAYERS};
 use super::{Gpu, GpuError};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -25,9 +25,9 @@ pub fn upload_image(gpu: &Gpu, image: &mut Image, bytes: &[u8]) -> Result<(), Gp
 }
 
 /// Like [`upload_image`], but `fill(range, dst)` writes bytes `range` of the `len` bytes of tightly packed texels
-/// straight into the staging buffer, or into the image itself where it is host-written with tightly packed rows
-/// and slices (conversions need no second copy of the data). It is called once per slab of whole slices, in
-/// order.
+/// straight into the staging buffer, or into a host-written image itself where it packs its rows and slices as
+/// tightly (else through a scratch slab); conversions need no second copy of the data. It is called once per slab
+/// of whole slices, in order, with `dst` aligned for any texel type.
 pub fn upload_image_with(
     gpu: &Gpu,
     image: &mut Image,
@@ -40,12 +40,13 @@ pub fn upload_image_with(
     if slice == 0 || slice * depth != len {
         return Err(GpuError::Lost("upload size is not a whole number of slices"));
     }
-    if let Some(layout) = image.host {
-        let row = slice / u64::from(extent.height.max(1));
-        return write_in_place(gpu, image, layout, [row, slice, len], fill);
-    }
-    if !image.desc.usage.contains(vk::ImageUsageFlags::TRANSFER_DST) {
-        return Err(GpuError::Lost("a host-written image is filled once"));
+    match image.filling {
+        Filling::Transfer => {}
+        Filling::HostPending(layout) => {
+            let row = slice / u64::from(extent.height.max(1));
+            return write_in_place(gpu, image, layout, [row, slice, len], fill);
+        }
+        Filling::HostWritten => return Err(GpuError::Lost("a host-written image is filled once")),
     }
     let per_chunk = (STAGING_CHUNK / slice).clamp(1, depth);
     let mut staging = Buffer::new(
@@ -78,12 +79,7 @@ pub fn upload_image_with(
                 };
                 image_barrier(&gpu.device, cb, image.raw, from, Access::TransferWrite);
                 let region = vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    })
+                    .image_subresource(COLOR_LAYERS)
                     .image_offset(vk::Offset3D {
                         x: 0,
                         y: 0,
@@ -153,7 +149,9 @@ fn write_in_place(
         let [row, slice, depth, row_pitch, depth_pitch] =
             [row, slice, depth, row_pitch, depth_pitch].map(|v| v as usize);
         let per_slab = (STAGING_CHUNK as usize / slice).clamp(1, depth);
-        let mut scratch = vec![0u8; per_slab * slice];
+        // u64s, so that `fill` may view the slab as any texel type.
+        let mut words = vec![0u64; (per_slab * slice).div_ceil(8)];
+        let scratch: &mut [u8] = bytemuck::cast_slice_mut(&mut words);
         for first in (0..depth).step_by(per_slab) {
             let n = per_slab.min(depth - first);
             let src = &mut scratch[..n * slice];
@@ -171,7 +169,7 @@ fn write_in_place(
         }
     }
     // Written once: from here on the device reads the image, so the host must not write it again.
-    image.host = None;
+    image.filling = Filling::HostWritten;
     // Host writes before a submission are visible to it; the barrier only changes the layout.
     gpu.submit_and_wait(|cb| image_barrier(&gpu.device, cb, raw, Access::HostWrite, Access::FragmentSampled))
 }

@@ -339,8 +339,8 @@ impl GpuVolume {
                 gpu.device_local_bytes >> 20
             )));
         }
-        // The brick statistics on the cores the upload leaves idle (on lavapipe, it fills the staging buffer on
-        // one thread, then waits while the device's queue thread copies it into the image).
+        // The brick statistics beside the upload, on the cores it leaves idle (its fills are parallel, but it
+        // waits on the device and, through a staging buffer, on lavapipe's single-threaded copy).
         let (uploaded, bricks) = rayon::join(|| upload_layout(gpu, layout, volume), || skip::BrickGrid::new(volume));
         let (image, corners) = uploaded?;
         let destroy_volume = |gpu: &Gpu, image: Option<Image>, corners: Option<Image>| {

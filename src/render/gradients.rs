@@ -4,15 +4,17 @@
 use crate::volume::{Volume, VoxelData};
 use rayon::prelude::*;
 
-/// Per voxel (x fastest) the central differences (x, y, z) of [`Volume::normalized`] one voxel apart, as
-/// RGBA16 SNORM texels of 2g (the range of g, [−0.5, 0.5], fills SNORM's [−1, 1]); alpha 0. Slice by slice on every
-/// core, each slice from the normalised planes before, at and after it (a per-voxel `normalized` call for each of
-/// six neighbours took 0.6 s for a 256³ volume).
-pub(super) fn gradient_texels(volume: &Volume) -> Vec<[i16; 4]> {
+/// Fills `dst` with the texels of consecutive slices from `first` on (slice numbers past the last wrap to the
+/// first: a depth-1 volume's texture holds its slice twice): per voxel (x fastest) the central differences
+/// (x, y, z) of [`Volume::normalized`] one voxel apart, as RGBA16 SNORM texels of 2g (the range of g, [−0.5, 0.5],
+/// fills SNORM's [−1, 1]); alpha 0. Slice by slice on every core, each from the normalised planes before, at and
+/// after it (a per-voxel `normalized` call for each of six neighbours took 0.6 s for a 256³ volume). Written
+/// straight into the upload's destination, so no copy of the texture is held on the heap.
+pub(super) fn fill_gradient_slices(volume: &Volume, first: usize, dst: &mut [[i16; 4]]) {
     let [w, h, d] = volume.dims.map(|v| v as usize);
     let plane = w * h;
-    let mut texels = vec![[0i16; 4]; volume.voxel_count()];
-    texels.par_chunks_mut(plane).enumerate().for_each(|(z, slice)| {
+    dst.par_chunks_mut(plane).enumerate().for_each(|(k, slice)| {
+        let z = (first + k) % d;
         let (below, here, above) = (
             normalized_plane(volume, z.saturating_sub(1)),
             normalized_plane(volume, z),
@@ -33,7 +35,6 @@ pub(super) fn gradient_texels(volume: &Volume) -> Vec<[i16; 4]> {
             }
         }
     });
-    texels
 }
 
 /// Slice `z` of the volume, each voxel's [`Volume::normalized`] value (NaN as 0), from its stored elements
@@ -79,7 +80,11 @@ mod tests {
             .collect();
         let f32v = Volume::new("f32", dims, [1.0; 3], VoxelType::F32, VoxelData::F32(floats)).unwrap();
         for v in [i16v, f32v] {
-            let texels = gradient_texels(&v);
+            let mut texels = vec![[0i16; 4]; v.voxel_count()];
+            // In two calls, as an upload's slabs come.
+            let (head, tail) = texels.split_at_mut(2 * 7 * 5);
+            fill_gradient_slices(&v, 0, head);
+            fill_gradient_slices(&v, 2, tail);
             let at = |x: i64, y: i64, z: i64| {
                 let c = |a: i64, n: u32| a.clamp(0, i64::from(n) - 1) as u32;
                 let n = v.normalized(c(x, dims[0]), c(y, dims[1]), c(z, dims[2]));

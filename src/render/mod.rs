@@ -11,11 +11,12 @@ mod uniforms;
 
 pub use uniforms::{mirrors, FrameUniforms, VolumeInfo};
 
+use crate::gpu::upload::upload_image_with;
 use gpu_volume::{image_3d_once, upload_3d, GpuVolume};
 pub use gpu_volume::{VolumeLayout, AUTO_LIMIT};
 
 use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, GraphicsDesc, ShaderCode};
-use crate::gpu::resources::{Buffer, Image, ImageDesc};
+use crate::gpu::resources::{Buffer, Filling, Image, ImageDesc};
 pub use crate::gpu::TexelPolicy;
 use crate::gpu::{Gpu, GpuError};
 use crate::preintegrate::integral_table;
@@ -321,10 +322,15 @@ impl Renderer {
         if vol.gradient.is_some() {
             return Ok(());
         }
-        let texels = gradients::gradient_texels(volume);
-        let d = volume.dims[2];
         let mut image = image_3d_once(gpu, vk::Format::R16G16B16A16_SNORM, volume.dims, "gradients")?;
-        if let Err(e) = upload_3d(gpu, &mut image, bytemuck::cast_slice(&texels), d) {
+        // A depth-1 volume is uploaded twice (image_3d makes two slices).
+        let copies = if volume.dims[2] == 1 { 2 } else { 1 };
+        let slice_bytes = volume.dims[0] as usize * volume.dims[1] as usize * 8;
+        let len = (volume.voxel_count() * 8 * copies) as u64;
+        let filled = upload_image_with(gpu, &mut image, len, |range, dst| {
+            gradients::fill_gradient_slices(volume, range.start / slice_bytes, bytemuck::cast_slice_mut(dst))
+        });
+        if let Err(e) = filled {
             image.destroy(gpu);
             return Err(e);
         }
@@ -349,7 +355,7 @@ impl Renderer {
         self.volume
             .as_ref()
             .and_then(|v| v.image.as_ref().or(v.corners.as_ref()))
-            .is_some_and(|i| i.host_written)
+            .is_some_and(|i| !matches!(i.filling, Filling::Transfer))
     }
 
     /// Bytes the volume (texture or corner texture) takes on the device.
