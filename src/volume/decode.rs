@@ -273,6 +273,26 @@ pub(crate) fn read_native_at(
     })
 }
 
+/// Reads `count` samples of `voxel_type` at byte `offset` of `file`: in parallel where the layout is native
+/// ([`read_native_at`]), else streamed through [`read_binary`] from `offset`.
+pub(crate) fn read_file_at(
+    file: &std::fs::File,
+    offset: u64,
+    voxel_type: VoxelType,
+    endian: Endian,
+    count: usize,
+    progress: &mut Progress,
+) -> Result<VoxelData, DecodeError> {
+    use std::io::{Seek, SeekFrom};
+    if let Some(read) = read_native_at(file, offset, voxel_type, endian, count, progress) {
+        return read;
+    }
+    // `&File` reads and seeks the file itself.
+    let mut reader = file;
+    reader.seek(SeekFrom::Start(offset))?;
+    read_binary(&mut reader, voxel_type, endian, count, CHUNK_BYTES, progress)
+}
+
 /// Fills `bytes` from `file` at `offset`, batch by batch (progress after each), each batch's pieces on every core.
 fn read_pieces_at(
     file: &std::fs::File,

@@ -370,14 +370,15 @@ fn read_file_data(
     }
     let len = metadata.len();
     let start = data_start(header, file, offset, len, needed)?;
-    let mut f = File::open(path).map_err(io)?;
-    f.seek(SeekFrom::Start(start)).map_err(io)?;
-    let at = f.try_clone().ok();
+    let f = File::open(path).map_err(io)?;
+    // `&File` reads and seeks the file itself, so the raw case can also read it in parallel at `start`.
+    let mut reader = &f;
+    reader.seek(SeekFrom::Start(start)).map_err(io)?;
     decode_stream(
         header,
         file,
-        &mut f,
-        at.as_ref().map(|a| (a, start)),
+        &mut reader,
+        Some((&f, start)),
         len - start,
         count,
         needed,
@@ -402,7 +403,7 @@ pub(crate) fn check_compressed(header: &Header, file: &str, available: u64, need
 
 /// Decodes `count` voxels from `reader`, which holds `available` bytes, checking the claim first. Raw data that is
 /// `file_at` (the file and the data's offset) is read in parallel where its layout allows
-/// (`decode::read_native_at`).
+/// (`decode::read_file_at`).
 #[allow(clippy::too_many_arguments)] // The header's claim, the two ways to the bytes and the progress.
 pub(crate) fn decode_stream(
     header: &Header,
@@ -428,8 +429,8 @@ pub(crate) fn decode_stream(
             if available < needed {
                 return Err(truncated(available));
             }
-            match file_at.and_then(|(f, at)| decode::read_native_at(f, at, t, e, count, progress)) {
-                Some(read) => read,
+            match file_at {
+                Some((f, at)) => decode::read_file_at(f, at, t, e, count, progress),
                 None => decode::read_binary(reader, t, e, count, chunk, progress),
             }
         }

@@ -4,7 +4,6 @@
 use super::decode::{self, DecodeError, Endian, Progress};
 use super::{check_dims, check_spacing, Volume, VolumeError, VoxelType};
 use std::fs::File;
-use std::io::{Seek, SeekFrom};
 use std::path::Path;
 
 /// Layout a user gives explicitly; anything left `None` comes from the file name.
@@ -160,25 +159,9 @@ pub(crate) fn load_raw_with_progress(
         });
     }
 
-    let mut file = File::open(path).map_err(io_error)?;
+    let file = File::open(path).map_err(io_error)?;
     let (offset, endian) = (extras.header_bytes, extras.endian);
-    let data = match decode::read_native_at(&file, offset, voxel_type, endian, count_usize, progress) {
-        Some(read) => read,
-        None => file
-            .seek(SeekFrom::Start(offset))
-            .map_err(DecodeError::Io)
-            .and_then(|_| {
-                decode::read_binary(
-                    &mut file,
-                    voxel_type,
-                    endian,
-                    count_usize,
-                    decode::CHUNK_BYTES,
-                    progress,
-                )
-            }),
-    }
-    .map_err(|e| match e {
+    let data = decode::read_file_at(&file, offset, voxel_type, endian, count_usize, progress).map_err(|e| match e {
         DecodeError::Io(source) => io_error(source),
         DecodeError::OutOfMemory => VolumeError::OutOfMemory { dims, bytes: expected },
         // The size was checked, so only a file that shrank while being read gets here.
