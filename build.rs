@@ -40,6 +40,7 @@ const MARCH_VARIANTS: &[(&str, &[&str])] = &[
     ("proj", &["FAMILY_PROJECTION"]),
     ("iso", &["FAMILY_ISOSURFACE"]),
     ("ea_shaded_tex", &["SHADED", "GRADIENT_TEXTURE"]),
+    ("iso_tex", &["FAMILY_ISOSURFACE", "GRADIENT_TEXTURE"]),
 ];
 
 /// How the march reads the volume, in the order of `render::VolumeLayout::index`: a 3D texture, or the corner
@@ -155,9 +156,10 @@ fn main() {
         }
     }
     // The table of march shaders the renderer indexes by [setup][variant][sampling].
-    let mut table = String::from(
+    let mut table = format!(
         "/// March SPIR-V by [`setup_index`][`march_variant`][`VolumeLayout::index`] (written by build.rs).\n\
-         pub(crate) const MARCH_SHADERS: [[[ShaderCode; 3]; 5]; 3] = [\n",
+         pub(crate) const MARCH_SHADERS: [[[ShaderCode; 3]; {}]; 3] = [\n",
+        MARCH_VARIANTS.len()
     );
     for file in MARCH_FILES {
         table.push_str("    [\n");

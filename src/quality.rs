@@ -152,11 +152,12 @@ impl Gradients {
         Gradients::texture_bytes(voxels) <= GRADIENT_LIMIT
     }
 
-    /// Sets `s.gradient_texture` for a volume of `voxels`: only frames that read gradients (emission or density
-    /// with shading or gradient opacity) take the texture, so no other frame pays for making it.
+    /// Sets `s.gradient_texture` for a volume of `voxels`: only frames that read gradients (iso-surfaces, and
+    /// emission or density with shading or gradient opacity) take the texture, so no other frame pays for making it.
     pub fn apply(self, s: &mut RenderSettings, voxels: u64) {
-        let reads = matches!(s.mode, CompositeMode::Emission | CompositeMode::Density)
-            && (s.shading.is_some() || s.gradient_opacity.is_some());
+        let reads = s.mode == CompositeMode::Isosurface
+            || (matches!(s.mode, CompositeMode::Emission | CompositeMode::Density)
+                && (s.shading.is_some() || s.gradient_opacity.is_some()));
         s.gradient_texture = reads
             && match self {
                 Gradients::Auto => Gradients::texture_fits(voxels),

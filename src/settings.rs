@@ -166,9 +166,13 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    0); headlight `L = −ray direction`;
 ///    `rgb ← rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` (white, two-sided). `|g| = 0`: rgb kept.
 ///    In emission/density modes a segment (rule 6) is lit by the gradient at its midpoint.
-///    With `gradient_opacity = Some(r)`: the segment's extinction `σ̄ ← σ̄·min(1, |g|/r)`. With `gradient_texture` (emission/density modes),
-///    `g` is instead the grid's central differences `(v[i + e] − v[i − e])/2` per voxel (indices clamped to the
-///    edge, NaN voxels read as 0) filtered trilinearly like the values.
+///    With `gradient_opacity = Some(r)`: the segment's extinction `σ̄ ← σ̄·min(1, |g|/r)`. With `gradient_texture`
+///    (every mode that reads gradients), `g` is instead the grid's filtered gradient, interpolated trilinearly like
+///    the values: per voxel the derivative along axis i by weights `d_k` over the neighbours k = −R..=R along i,
+///    smoothed by weights `w_k` along each other axis (indices clamped to the edge, NaN voxels read as 0). Float
+///    data: Sobel, `w = [1, 2, 1]/4`, `d = [−1, 0, 1]/2`. Integer data (quantised: terraces): a Gaussian of
+///    σ = 1.5 voxels, k = −5..=5, `w_k ∝ e^(−k²/2σ²)` with Σw = 1 and `d_k = k·w_k/Σ j²w_j`
+///    (`render::gradients::GradientFilter`).
 /// 6. **Segments, pre-integrated** (emission/density; Engel, Kraus and Ertl 2001). The ray is cut at its start
 ///    (t = 0), its samples and its end (t = L); each segment between consecutive points, of length `s` voxels
 ///    (`s = step_length` between samples), is taken as a value varying linearly from the value at its near end
@@ -228,8 +232,9 @@ pub struct RenderSettings {
     /// Rule 2's brick strides: the longest stride (1, 2 or 4 steps) a brick of faint opacity may take. 1 takes
     /// every sample; the quality levels set it (`Quality::apply`).
     pub max_stride: u32,
-    /// Shade from a precomputed gradient texture (one sample instead of six; 8 bytes per voxel; gradients of the
-    /// voxel grid rather than of the interpolant, so not what rule 5 specifies — a measured alternative).
+    /// Shade from a precomputed gradient texture (one sample instead of six; 8 bytes per voxel): rule 5's filtered
+    /// grid gradients, smoothed for integer data. `Gradients::Auto` takes it for every frame that reads gradients
+    /// while it stays within 1 GiB.
     pub gradient_texture: bool,
     /// March in a compute pass instead of a fullscreen fragment pass (analytic ray setup only; the output image
     /// must allow storage). The same rays and rules: a measured alternative for lavapipe (README, Performance).

@@ -215,10 +215,12 @@ fn brick_strides_follow_the_reference_rule() {
     assert!(log.problems().is_empty(), "{:#?}", log.problems());
 }
 
-/// The precomputed gradient texture shades with the grid's central differences, filtered trilinearly
-/// (`RenderSettings::gradient_texture`); the reference implements that rule too. The GPU must match it within the
-/// common bound — and on Marschner–Lobb (sampled near its Nyquist limit) the rule visibly differs from central
-/// differences of the interpolant, so an unused texture would fail.
+/// The precomputed gradient texture shades with the grid's filtered gradients (Sobel for float data, a Gaussian
+/// derivative for integer data), interpolated trilinearly (`RenderSettings::gradient_texture`, rule 5); the
+/// reference implements that rule too. The GPU must match it within the common bound, in emission and on
+/// iso-surfaces — and on Marschner–Lobb (sampled near its Nyquist limit) the rule visibly differs from central
+/// differences of the interpolant, so an unused texture would fail; on its 16-bit copy Sobel and the Gaussian
+/// differ, so the wrong filter would fail.
 #[test]
 fn gradient_texture_matches_the_reference_rule() {
     let gpu = validated_gpu();
@@ -255,6 +257,14 @@ fn gradient_texture_matches_the_reference_rule() {
         let textured = headless.render(&gpu, &g).unwrap().image;
         let label = format!("{}-gradient-texture-opacity", v.name).to_lowercase();
         judge.against("reference", label, &textured, &expected, &g, REFERENCE);
+        // Iso-surface normals from the same texture.
+        let mut iso = s.clone();
+        iso.mode = CompositeMode::Isosurface;
+        iso.iso_value = 0.45;
+        let expected_iso = reference.render_full(&iso);
+        let textured = headless.render(&gpu, &iso).unwrap().image;
+        let label = format!("{}-gradient-texture-iso", v.name).to_lowercase();
+        judge.against("reference", label, &textured, &expected_iso, &iso, REFERENCE);
         differs.push((
             v.name.clone(),
             against_reference(&expected.image, &central, s.background),
@@ -357,4 +367,77 @@ fn a_constant_volume_looks_the_same_at_every_step() {
         let d = diff(image, &images[0].1);
         assert!(d.max <= 1.0, "step {step} against step 1: {d}");
     }
+}
+
+/// Three Gaussian blobs: a smooth field, as float32 and stored in 100 levels as uint8 (like an 8-bit MRI).
+fn blobs(n: u32, quantised: bool) -> Volume {
+    let c = [(0.38, 0.5, 0.5, 0.16), (0.64, 0.5, 0.5, 0.2), (0.45, 0.42, 0.62, 0.1)];
+    let mut f = Vec::with_capacity((n * n * n) as usize);
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let p = [x, y, z].map(|i| (f64::from(i) + 0.5) / f64::from(n));
+                let v: f64 = c
+                    .iter()
+                    .map(|(cx, cy, cz, r)| {
+                        let d2 = (p[0] - cx).powi(2) + (p[1] - cy).powi(2) + (p[2] - cz).powi(2);
+                        (-d2 / (2.0 * r * r)).exp()
+                    })
+                    .sum::<f64>()
+                    .min(1.0);
+                f.push(v);
+            }
+        }
+    }
+    let dims = [n; 3];
+    if quantised {
+        let q = f.iter().map(|v| (v * 99.0).round() as u8).collect();
+        Volume::new("blobs-u8", dims, [1.0; 3], VoxelType::U8, volume::VoxelData::U8(q)).unwrap()
+    } else {
+        let q = f.iter().map(|v| *v as f32).collect();
+        Volume::new("blobs-f32", dims, [1.0; 3], VoxelType::F32, volume::VoxelData::F32(q)).unwrap()
+    }
+}
+
+/// Rule 5's filter reconstructs a quantised field's smooth gradient: the 100-level uint8 copy's iso-surface and
+/// shaded emission stay close to its float32 original (README, Lighting; the goal is a mean of 1/255 and p99
+/// 8/255 over object pixels), where central differences shade every terrace.
+#[test]
+fn a_quantised_field_shades_like_its_float_original() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let (float, quantised) = (blobs(96, false), blobs(96, true));
+    let mut iso = RenderSettings::new(240, 240, float.extent());
+    iso.mode = CompositeMode::Isosurface;
+    iso.iso_value = 0.3;
+    let mut emission = RenderSettings::new(240, 240, float.extent());
+    emission.shading = Some(Shading::default());
+    emission.window = [0.2, 1.0];
+    emission.step_alpha = 0.3;
+    let mut failures = Vec::new();
+    for (label, s) in [("iso", iso), ("emission", emission)] {
+        let mut images = Vec::new();
+        for (v, texture) in [(&float, true), (&quantised, true), (&quantised, false)] {
+            headless.set_volume(&gpu, v).unwrap();
+            let mut s = s.clone();
+            volcast::quality::Quality::Normal.apply(&mut s, v.range);
+            s.gradient_texture = texture;
+            if texture {
+                headless.renderer.enable_gradient_texture(&gpu, v).unwrap();
+            }
+            images.push(headless.render(&gpu, &s).unwrap().image);
+        }
+        let bg = volcast::compare::background_u8(&s);
+        let smoothed = volcast::compare::diff_stats(&images[1], &images[0], bg);
+        let central = volcast::compare::diff_stats(&images[2], &images[0], bg);
+        eprintln!("{label}: uint8 vs float32, filtered {smoothed:?}; central differences {central:?}");
+        if smoothed.mean > 1.0 || smoothed.p99 > 8.0 {
+            failures.push(format!("{label}: filtered gradients {smoothed:?}"));
+        }
+        if central.mean < 2.0 * smoothed.mean {
+            failures.push(format!("{label}: central differences {central:?} should be far off"));
+        }
+    }
+    close(gpu, headless);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

@@ -96,7 +96,7 @@ impl Renderer {
             storage_set_layout: vk::DescriptorSetLayout::null(),
             march_compute_layout: vk::PipelineLayout::null(),
             position_pipelines: [[vk::Pipeline::null(); 2]; 2],
-            march_pipelines: [[[vk::Pipeline::null(); 3]; 5]; 3],
+            march_pipelines: [[[vk::Pipeline::null(); 3]; 6]; 3],
             descriptor_pool: vk::DescriptorPool::null(),
             volume_set: vk::DescriptorSet::null(),
             positions_set: vk::DescriptorSet::null(),

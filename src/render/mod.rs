@@ -3,7 +3,7 @@
 //! the march alone. The same code serves headless rendering and (later) the window.
 
 mod gpu_volume;
-mod gradients;
+pub mod gradients;
 mod init;
 mod record;
 pub mod skip;
@@ -129,8 +129,8 @@ fn setup_index(s: &RenderSettings) -> usize {
 }
 
 /// Which compiled variant of the march `s` needs (build.rs MARCH_VARIANTS): 0 emission/density, 1 the same with
-/// gradients (shading or gradient-modulated opacity), 2 MIP/MinIP/average, 3 isosurface, 4 gradients from the
-/// gradient texture.
+/// gradients (shading or gradient-modulated opacity), 2 MIP/MinIP/average, 3 isosurface, 4 emission/density with
+/// gradients from the gradient texture, 5 isosurface with the gradient texture.
 pub fn march_variant(s: &RenderSettings) -> usize {
     use crate::settings::CompositeMode as M;
     match s.mode {
@@ -138,6 +138,7 @@ pub fn march_variant(s: &RenderSettings) -> usize {
         M::Emission | M::Density if s.shading.is_some() || s.gradient_opacity.is_some() => 1,
         M::Emission | M::Density => 0,
         M::Mip | M::MinIp | M::Average => 2,
+        M::Isosurface if s.gradient_texture => 5,
         M::Isosurface => 3,
     }
 }
@@ -168,7 +169,7 @@ pub struct Renderer {
     position_pipelines: [[vk::Pipeline; 2]; 2],
     /// March pipelines per `setup_index` × shader variant × volume layout, created when first needed (see
     /// `march_variant`, `VolumeLayout::index`).
-    march_pipelines: [[[vk::Pipeline; 3]; 5]; 3],
+    march_pipelines: [[[vk::Pipeline; 3]; 6]; 3],
     descriptor_pool: vk::DescriptorPool,
     volume_set: vk::DescriptorSet,
     positions_set: vk::DescriptorSet,
@@ -312,9 +313,9 @@ impl Renderer {
         self.write_volume_set(gpu);
     }
 
-    /// Precomputes `volume`'s gradients (central differences on the voxel grid, RGBA16 SNORM, 8 bytes per voxel)
-    /// for frames with `gradient_texture`: the alternative to six extra samples per shaded sample. `volume` must
-    /// be the one last given to `set_volume`.
+    /// Precomputes `volume`'s gradients (its [`gradients::GradientFilter`] on the voxel grid, RGBA16 SNORM, 8 bytes
+    /// per voxel) for frames with `gradient_texture`: the alternative to six extra samples per gradient, and the
+    /// smoothed gradient rule 5 prefers. `volume` must be the one last given to `set_volume`.
     pub fn enable_gradient_texture(&mut self, gpu: &Gpu, volume: &Volume) -> Result<(), GpuError> {
         let Some(vol) = &mut self.volume else {
             return Err(GpuError::Lost("no volume loaded"));
@@ -328,7 +329,8 @@ impl Renderer {
         let slice_bytes = volume.dims[0] as usize * volume.dims[1] as usize * 8;
         let len = (volume.voxel_count() * 8 * copies) as u64;
         let filled = upload_image_with(gpu, &mut image, len, |range, dst| {
-            gradients::fill_gradient_slices(volume, range.start / slice_bytes, bytemuck::cast_slice_mut(dst))
+            let filter = gradients::GradientFilter::for_volume(volume);
+            gradients::fill_gradient_slices(volume, filter, range.start / slice_bytes, bytemuck::cast_slice_mut(dst))
         });
         if let Err(e) = filled {
             image.destroy(gpu);

@@ -88,7 +88,7 @@ impl<'a> Frame<'a> {
             density: f64::from(s.density),
             shading,
             gradient_opacity: s.gradient_opacity.map(f64::from),
-            grid_gradients: s.gradient_texture && matches!(s.mode, CompositeMode::Emission | CompositeMode::Density),
+            grid_gradients: s.gradient_texture,
             jitter: s.jitter,
             strides,
             early_termination: f64::from(s.early_termination),

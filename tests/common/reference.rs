@@ -30,7 +30,7 @@ use super::strides::BrickRanges;
 use glam::{DMat4, DVec3};
 use image::{Rgba, RgbaImage};
 use volcast::settings::{RenderSettings, Shading};
-use volcast::volume::Volume;
+use volcast::volume::{Volume, VoxelType};
 
 /// A ray segment inside the slab box, in world units along the unit direction `dir` from `origin` (the eye for a
 /// perspective camera; for an orthographic one the pixel's point on the plane through the eye perpendicular to
@@ -165,8 +165,10 @@ pub struct Reference {
     /// Voxel index to millimetres, as the file places it.
     affine: DMat4,
     range: [f64; 2],
-    /// `gradient_texture`'s rule, made on first use: per voxel `G_i = v(x + e_i) − v(x − e_i)` on the grid,
-    /// indices clamped to the edge, NaN voxels read as 0.
+    /// Whether the data are integers (rule 5: the gradient texture's wider filter).
+    quantised: bool,
+    /// `gradient_texture`'s rule, made on first use: per voxel the filtered derivatives `2g` (see
+    /// [`Reference::make_grid_gradients`]).
     grid_gradients: std::sync::OnceLock<Vec<DVec3>>,
     /// Rule 2's brick value ranges, made on first use by a frame with strides.
     pub(crate) brick_ranges: std::sync::OnceLock<BrickRanges>,
@@ -198,6 +200,7 @@ impl Reference {
             values,
             affine: volume.geometry.affine,
             range: volume.range,
+            quantised: !matches!(volume.source_type, VoxelType::F32 | VoxelType::F64),
             grid_gradients: std::sync::OnceLock::new(),
             brick_ranges: std::sync::OnceLock::new(),
         }
@@ -275,30 +278,60 @@ impl Reference {
         c00.lerp(c10, w[1]).lerp(c01.lerp(c11, w[1]), w[2]) / 2.0
     }
 
+    /// Rule 5's grid filter, 1-D (smoothing, derivative) weights over offsets −R..=R: integer data a Gaussian of
+    /// σ = 1.5 voxels over −5..=5 (weights e^(−k²/2σ²) summing to 1; derivative k·w_k/Σj²w_j), float data Sobel
+    /// ([1, 2, 1]/4 and [−1, 0, 1]/2).
+    fn grid_filter(&self) -> (Vec<f64>, Vec<f64>) {
+        if !self.quantised {
+            return (vec![0.25, 0.5, 0.25], vec![-0.5, 0.0, 0.5]);
+        }
+        let sigma = 1.5f64;
+        let gauss: Vec<f64> = (-5..=5)
+            .map(|k| (-f64::from(k * k) / (2.0 * sigma * sigma)).exp())
+            .collect();
+        let total: f64 = gauss.iter().sum();
+        let smooth: Vec<f64> = gauss.iter().map(|w| w / total).collect();
+        let second: f64 = (-5..=5).zip(&smooth).map(|(k, w)| f64::from(k * k) * w).sum();
+        let deriv = (-5..=5).zip(&smooth).map(|(k, w)| f64::from(k) * w / second).collect();
+        (smooth, deriv)
+    }
+
+    /// Per voxel `2g`: g_i the derivative along axis i (weights `deriv`) smoothed along the other two (`smooth`),
+    /// indices clamped to the edge, NaN voxels read as 0; three 1-D passes over the whole grid per component.
     fn make_grid_gradients(&self) -> Vec<DVec3> {
         let [nx, ny, nz] = self.dims;
-        let value = |x: i64, y: i64, z: i64| {
-            let c = |i: i64, n: usize| i.clamp(0, n as i64 - 1) as usize;
-            let v = self.at(c(x, nx), c(y, ny), c(z, nz));
-            if v.is_nan() {
-                0.0
-            } else {
-                v
-            }
-        };
-        let mut out = Vec::with_capacity(self.values.len());
-        for z in 0..nz as i64 {
-            for y in 0..ny as i64 {
-                for x in 0..nx as i64 {
-                    out.push(DVec3::new(
-                        value(x + 1, y, z) - value(x - 1, y, z),
-                        value(x, y + 1, z) - value(x, y - 1, z),
-                        value(x, y, z + 1) - value(x, y, z - 1),
-                    ));
+        let (smooth, deriv) = self.grid_filter();
+        let r = (smooth.len() / 2) as i64;
+        let base: Vec<f64> = self.values.iter().map(|v| if v.is_nan() { 0.0 } else { *v }).collect();
+        let index = |x: usize, y: usize, z: usize| x + nx * (y + ny * z);
+        // One pass along `axis` with `weights`.
+        let pass = |src: &[f64], axis: usize, weights: &[f64]| -> Vec<f64> {
+            let mut out = vec![0.0; src.len()];
+            for z in 0..nz {
+                for y in 0..ny {
+                    for x in 0..nx {
+                        let p = [x, y, z];
+                        let mut acc = 0.0;
+                        for (k, w) in weights.iter().enumerate() {
+                            let mut q = p;
+                            q[axis] = (p[axis] as i64 + k as i64 - r).clamp(0, self.dims[axis] as i64 - 1) as usize;
+                            acc += w * src[index(q[0], q[1], q[2])];
+                        }
+                        out[index(x, y, z)] = acc;
+                    }
                 }
             }
-        }
-        out
+            out
+        };
+        let component = |axis: usize| {
+            let mut v = base.clone();
+            for a in 0..3 {
+                v = pass(&v, a, if a == axis { &deriv } else { &smooth });
+            }
+            v
+        };
+        let [gx, gy, gz] = [0, 1, 2].map(component);
+        (0..base.len()).map(|i| 2.0 * DVec3::new(gx[i], gy[i], gz[i])).collect()
     }
 
     pub fn render(&self, s: &RenderSettings) -> RgbaImage {
