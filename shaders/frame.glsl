@@ -23,8 +23,12 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 texel;           // xyz: 1 / dims (one voxel in texture space)
     vec4 voxel_world;     // w: gradient-opacity reference (0: off)
     vec4 shading;         // ambient, diffuse, specular, shininess
-    vec4 mode_params;     // x: iso value; y: density factor; z: 1 = look up bricks (skip, stride)
+    vec4 mode_params;     // x: iso value; y: density factor; z: 1 = look up bricks (skip, stride); w: iso-surfaces
     uvec4 flags;          // x: composite mode (CompositeMode::index); y: jitter on; z: jitter seed; w: shading on
     vec4 brick;           // xyz: a brick's size in texture space (8 / dims)
     vec4 dims;            // xyz: the volume's size in voxels
+    vec4 iso_values;      // rule 7's surfaces, by value (mode_params.w of them)
+    vec4 iso_colors[4];   // per surface: linear rgb (r < 0: the classification's colour) and opacity
+    vec4 light_dir;       // xyz: unit direction towards the light (world); w: 1 directional, 0 headlight
+    vec4 light_color;     // rgb: linear colour x intensity
 } frame;

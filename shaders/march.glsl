@@ -145,16 +145,25 @@ vec3 gradient(vec3 p) {
 }
 #endif
 
-// Blinn-Phong with a headlight (two-sided): `light` is the unit direction towards the eye, in world space.
-vec3 shade(vec3 rgb, vec3 g, vec3 light) {
+// Blinn-Phong (rule 5), two-sided: `view` is the unit direction towards the eye, in world space; the light is
+// frame.light_dir, or a headlight along `view`.
+vec3 shade(vec3 rgb, vec3 g, vec3 view) {
     vec3 gw = mat3(frame.gradient_to_world) * g;
     float len = length(gw);
     if (len < 1e-8) {
         return rgb;
     }
-    float ndl = abs(dot(gw / len, light));
+    vec3 n = gw / len;
+    n = dot(n, view) < 0.0 ? -n : n;
+    vec3 l = frame.light_dir.w > 0.5 ? frame.light_dir.xyz : view;
+    float ndl = max(dot(n, l), 0.0);
+    vec3 half_sum = l + view;
+    float hl = length(half_sum);
+    float ndh = hl > 1e-6 ? max(dot(n, half_sum / hl), 0.0) : 0.0;
     vec4 s = frame.shading;
-    return rgb * (s.x + s.y * ndl) + vec3(s.z * pow(ndl, s.w));
+    float spec = ndl > 0.0 ? pow(ndh, s.w) : 0.0;
+    vec3 c = frame.light_color.rgb;
+    return rgb * (s.x + s.y * ndl * c) + s.z * spec * c;
 }
 
 // Empty-space skipping and brick strides (rule 2). The ray is walked span by span: `brick_span` looks up the 8^3
@@ -351,8 +360,14 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
     }
     return output_pixel(finish(classify(mode == MODE_AVERAGE ? sum / count : m).rgb, 1.0), taken);
 #elif defined(FAMILY_ISOSURFACE)
-    float iso = frame.mode_params.x;
-    float t_hit = -1.0;
+    // Rule 7: the surfaces (by value) where the samples cross them, composited front to back. A NaN sample, and a
+    // sample leapt over (its brick holds nothing at or above the lowest surface), count as below every surface.
+    int count = int(frame.mode_params.w);
+    vec3 color = vec3(0.0);
+    float opacity = 0.0;
+    float v_prev = -1e30;
+    float t_prev = 0.0;
+    bool has_prev = false;
     int k = 0;
     int span_end = 0;
     int stop = 0;
@@ -363,34 +378,58 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             break;
         }
         if (step == 1) {
+            // The samples leapt over are below every surface; the bisection may start at the last of them.
+            v_prev = -1e30;
+            t_prev = (float(k) - 1.0 + o) * h;
+            has_prev = k > 0;
             continue;
         }
         taken += 1u;
         float v = sample_value(a + dir * t);
-        if (!isnan(v) && v >= iso) {
-            t_hit = t;
-            if (k > 1) {
-                // The previous grid sample (possibly in a skipped brick, where every value is below iso).
-                float lo = t - h;
+        v = isnan(v) ? -1e30 : v;
+        // The first sample meets every surface at or below its value, highest first (the innermost material where
+        // the ray starts: a cut face shows what is there).
+        bool rising = has_prev && v >= v_prev;
+        for (int j = 0; j < count; j++) {
+            int i = rising ? j : count - 1 - j;
+            float iso = frame.iso_values[i];
+            bool below_before = v_prev < iso;
+            if (below_before == (v < iso)) {
+                continue;
+            }
+            float t_hit = t;
+            if (has_prev) {
+                float lo = t_prev;
                 float hi = t;
-                for (int i = 0; i < 8; i++) {
+                for (int b = 0; b < 8; b++) {
                     float mid = 0.5 * (lo + hi);
                     float vm = sample_value(a + dir * mid);
-                    if (!isnan(vm) && vm >= iso) {
-                        hi = mid;
-                    } else {
+                    bool below = isnan(vm) || vm < iso;
+                    if (below == below_before) {
                         lo = mid;
+                    } else {
+                        hi = mid;
                     }
                 }
                 t_hit = 0.5 * (lo + hi);
             }
+            vec4 material = frame.iso_colors[i];
+            vec3 rgb = material.r < 0.0 ? classify(clamp(iso, frame.value_map.z, frame.value_map.w)).rgb : material.rgb;
+            vec3 lit = shade(rgb, gradient(a + dir * t_hit), light);
+            color += (1.0 - opacity) * material.a * lit;
+            opacity += (1.0 - opacity) * material.a;
+            if (opacity >= frame.alpha.z) {
+                break;
+            }
+        }
+        if (opacity >= frame.alpha.z) {
             break;
         }
+        v_prev = v;
+        t_prev = t;
+        has_prev = true;
     }
-    if (t_hit < 0.0) {
-        return output_pixel(background_pixel(), taken);
-    }
-    return output_pixel(finish(shade(classify(iso).rgb, gradient(a + dir * t_hit), light), 1.0), taken);
+    return output_pixel(finish(color, opacity), taken);
 #else
     // Emission-absorption and the density-factor model, pre-integrated (rule 6): the ray from its start to its
     // end is composited segment by segment between consecutive points: the start, the samples, the end.

@@ -9,6 +9,7 @@ pub mod gpu;
 pub mod headless;
 pub mod huge_pages;
 pub mod info;
+pub mod lighting;
 pub mod playback;
 pub mod preintegrate;
 pub mod quality;

@@ -361,10 +361,32 @@ struct FrameArgs {
     /// Iso value for --mode iso, in [0,1] of the data range.
     #[arg(long, default_value_t = 0.5)]
     iso: f32,
+    /// The iso-surface's colour R,G,B in [0,1] (sRGB), or "colormap" for the colour the colormap or transfer
+    /// function gives its value (default: a light neutral).
+    #[arg(long, value_parser = parse_iso_color)]
+    iso_color: Option<IsoColor>,
+    /// The iso-surface's opacity in (0,1]: below 1 the surfaces behind show through.
+    #[arg(long, default_value_t = 1.0)]
+    iso_opacity: f32,
+    /// A further iso-surface VALUE[,R,G,B][,OPACITY] or VALUE,colormap[,OPACITY] (repeatable, 4 surfaces in all);
+    /// surfaces are composited in the order a ray meets them. E.g. translucent skin over bone:
+    /// --mode iso --iso 0.45 --surface 0.2,0.9,0.6,0.5,0.3.
+    #[arg(long = "surface", value_parser = parse_surface)]
+    surfaces: Vec<volcast::lighting::IsoSurface>,
+    /// The light: "head" (a headlight, the default) or the direction X,Y,Z towards a light fixed to the volume, in
+    /// world coordinates (RAS for anatomical volumes). Turns shading on.
+    #[arg(long, value_parser = parse_light, allow_hyphen_values = true)]
+    light: Option<LightDirection>,
+    /// The light's colour R,G,B in [0,1] (sRGB). Turns shading on.
+    #[arg(long, value_parser = parse_vec3)]
+    light_color: Option<Vec3>,
+    /// The light's intensity (scales its diffuse and specular terms). Turns shading on.
+    #[arg(long)]
+    light_intensity: Option<f32>,
     /// Density factor for --mode density (the OSG article's model).
     #[arg(long, default_value_t = 1.0)]
     density: f32,
-    /// Gradient shading (Blinn-Phong headlight).
+    /// Gradient shading (Blinn-Phong; a headlight unless --light says otherwise).
     #[arg(long)]
     shading: bool,
     /// Shading coefficients AMBIENT,DIFFUSE,SPECULAR,SHININESS.
@@ -445,6 +467,35 @@ fn parse_floats(s: &str, n: usize, what: &str) -> Result<Vec<f32>, String> {
 
 fn parse_vec3(s: &str) -> Result<Vec3, String> {
     parse_floats(s, 3, "X,Y,Z").map(|v| Vec3::new(v[0], v[1], v[2]))
+}
+
+/// `--iso-color`: a colour or the classification's.
+#[derive(Clone, Copy, Debug)]
+enum IsoColor {
+    Colormap,
+    Rgb(Vec3),
+}
+
+fn parse_iso_color(s: &str) -> Result<IsoColor, String> {
+    if s.trim().eq_ignore_ascii_case("colormap") {
+        return Ok(IsoColor::Colormap);
+    }
+    parse_floats(s, 3, "R,G,B or colormap").map(|v| IsoColor::Rgb(Vec3::new(v[0], v[1], v[2])))
+}
+
+fn parse_surface(s: &str) -> Result<volcast::lighting::IsoSurface, String> {
+    volcast::lighting::IsoSurface::parse(s)
+}
+
+/// `--light`: a headlight (None) or a direction towards the light.
+#[derive(Clone, Copy, Debug)]
+struct LightDirection(Option<Vec3>);
+
+fn parse_light(s: &str) -> Result<LightDirection, String> {
+    if s.trim().eq_ignore_ascii_case("head") {
+        return Ok(LightDirection(None));
+    }
+    parse_vec3(s).map(|d| LightDirection(Some(d)))
 }
 
 fn parse_pair(s: &str) -> Result<(f32, f32), String> {
@@ -536,8 +587,21 @@ impl FrameArgs {
             format!("unknown mode '{}'; choose one of {}", self.mode, names.join(", "))
         })?;
         s.iso_value = self.iso;
+        match self.iso_color {
+            Some(IsoColor::Colormap) => s.iso_color = None,
+            Some(IsoColor::Rgb(c)) => s.iso_color = Some(c),
+            None => {}
+        }
+        s.iso_opacity = self.iso_opacity;
+        s.extra_isosurfaces = self.surfaces.clone();
         s.density = self.density;
-        s.shading = self.shading.then_some(self.lighting);
+        let lit = self.light.is_some() || self.light_color.is_some() || self.light_intensity.is_some();
+        s.shading = (self.shading || lit).then_some(self.lighting);
+        s.light = volcast::lighting::Light {
+            direction: self.light.and_then(|l| l.0),
+            color: self.light_color.unwrap_or(Vec3::ONE),
+            intensity: self.light_intensity.unwrap_or(1.0),
+        };
         s.gradient_opacity = self.gradient_opacity;
         s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
         s.camera.ortho = self.ortho;

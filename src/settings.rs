@@ -3,6 +3,7 @@
 //! implemented twice: by the GPU passes (`shaders/`) and by the independent CPU reference (`tests/common`).
 
 use crate::camera::{Camera, ViewPreset};
+use crate::lighting::{self, IsoSurface, Light, MAX_ISOSURFACES, NEUTRAL};
 use crate::tf::{Classification, TransferFunction};
 use crate::transfer::Colormap;
 use crate::volume::Volume;
@@ -163,8 +164,11 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 /// 5. **Shading** (with `shading`, in emission/density modes; always in isosurface mode): gradient `g` by central
 ///    differences of v one voxel apart along each texture axis, `g_i = (v(p + e_i) − v(p − e_i))/2` (value per
 ///    voxel); world normal `n = normalize(M⁻ᵀ·g)` with M the world step of one voxel along each index axis (rule
-///    0); headlight `L = −ray direction`;
-///    `rgb ← rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` (white, two-sided). `|g| = 0`: rgb kept.
+///    0), turned towards the viewer (`n ← −n` where `n·V < 0`, V = −ray direction: two-sided); `L` = `light`'s
+///    direction, or V for a headlight; `H = normalize(L + V)` (0 where L = −V); light colour `c` = linear(colour)
+///    × intensity; `rgb ← rgb·(ambient + diffuse·c·max(n·L, 0)) + specular·c·max(n·H, 0)^shininess` (specular
+///    0 where n·L ≤ 0). `|g| = 0`: rgb kept. (A white headlight of intensity 1 gives
+///    `rgb·(ambient + diffuse·|n·V|) + specular·|n·V|^shininess`.)
 ///    In emission/density modes a segment (rule 6) is lit by the gradient at its midpoint.
 ///    With `gradient_opacity = Some(r)`: the segment's extinction `σ̄ ← σ̄·min(1, |g|/r)`. With `gradient_texture`
 ///    (every mode that reads gradients), `g` is instead the grid's filtered gradient, interpolated trilinearly like
@@ -185,10 +189,15 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    slope where |v_b − v_a| is under one entry (`preintegrate`).
 /// 7. **Compositing.** Emission/density, front to back, segment by segment: `C += (1 − A)·α·c̄`, `A += (1 − A)·α`;
 ///    stop once `A ≥ early_termination`. MIP/MinIP/average: m = max/min/mean of the visible samples' v; none: background;
-///    else `C` = the colour of m, `A = 1`. Isosurface: the first sample k with `v_k ≥ iso_value`; k = 0 hits at
-///    `t_0`; otherwise 8 bisection steps on [t_{k−1}, t_k] keeping `v(lo) < iso ≤ v(hi)`, hit at the final
-///    midpoint; `C` = the colour of `iso_value` clamped into the window, shaded (rule 5, with `shading` or its
-///    defaults) at the hit, `A = 1`.
+///    else `C` = the colour of m, `A = 1`. Isosurface: the surfaces ([`RenderSettings::isosurfaces`], by value;
+///    a NaN sample counts as below every one) are met where the samples cross them: for sample k > 0 with
+///    values `v_{k−1}`, `v_k`, every surface `v_{k−1} < iso ≤ v_k` (rising, lowest first) or `v_k < iso ≤ v_{k−1}`
+///    (falling, highest first); for k = 0 every surface `iso ≤ v_0`, highest first, met at `t_0`. A crossing at k > 0 is placed
+///    by 8 bisection steps on [t_{k−1}, t_k] keeping the side of `t_{k−1}` at lo (`v ≥ iso` there or not), at the
+///    final midpoint. Each is composited front to back like a segment, `C += (1 − A)·α·c`, `A += (1 − A)·α`,
+///    with α its opacity and c its colour (sRGB decoded, or the classification's colour at the value clamped
+///    into the window) shaded (rule 5, with `shading` or its defaults) at the crossing; stop once
+///    `A ≥ early_termination`.
 /// 8. **Output**: `C + (1 − A)·linear(background)` (background given in sRGB), encoded to sRGB once, stored as
 ///    8-bit unsigned normalised (rounded). Compositing happens in linear light (gamma-correct).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -210,8 +219,16 @@ pub struct RenderSettings {
     /// A transfer function replaces the simple model when given.
     pub transfer_function: Option<TransferFunction>,
     pub mode: CompositeMode,
-    /// Normalised iso value for the isosurface mode.
+    /// Normalised iso value of the isosurface mode's first surface (`--iso`, the viewer's slider).
     pub iso_value: f32,
+    /// The first surface's material: sRGB, or `None` for the classification's colour at the value.
+    pub iso_color: Option<Vec3>,
+    /// The first surface's opacity in (0,1].
+    pub iso_opacity: f32,
+    /// Further surfaces (at most `MAX_ISOSURFACES` in all): [`RenderSettings::isosurfaces`] is the whole list.
+    pub extra_isosurfaces: Vec<IsoSurface>,
+    /// Rule 5's light.
+    pub light: Light,
     /// Density factor of the density mode.
     pub density: f32,
     pub shading: Option<Shading>,
@@ -294,6 +311,10 @@ impl RenderSettings {
             transfer_function: None,
             mode: CompositeMode::Emission,
             iso_value: 0.5,
+            iso_color: Some(NEUTRAL),
+            iso_opacity: 1.0,
+            extra_isosurfaces: Vec::new(),
+            light: Light::default(),
             density: 1.0,
             shading: None,
             gradient_opacity: None,
@@ -342,9 +363,26 @@ impl RenderSettings {
     }
 
     /// Checks the values a user can set; the message names the offending setting.
-    /// Whether the march looks up the brick grid: to leap over empty bricks, or for rule 2's strides.
+    /// Rule 7's iso-surfaces: the first (`iso_value`, `iso_color`, `iso_opacity`) and the extra ones, by value.
+    pub fn isosurfaces(&self) -> Vec<IsoSurface> {
+        let first = IsoSurface {
+            value: self.iso_value,
+            color: self.iso_color,
+            opacity: self.iso_opacity,
+        };
+        lighting::sorted(&[&[first][..], &self.extra_isosurfaces].concat())
+    }
+
+    /// An isosurface frame that can see past a surface (several, or a translucent one): a ray may cross a surface
+    /// downwards, leaving bricks above it for bricks below every surface, which leaping would miss.
+    pub fn layered_isosurfaces(&self) -> bool {
+        self.mode == CompositeMode::Isosurface && (!self.extra_isosurfaces.is_empty() || self.iso_opacity < 1.0)
+    }
+
+    /// Whether the march looks up the brick grid: to leap over empty bricks, or for rule 2's strides. Layered
+    /// iso-surfaces march every sample.
     pub fn looks_up_bricks(&self) -> bool {
-        self.skip_empty || self.max_stride > 1
+        (self.skip_empty || self.max_stride > 1) && !self.layered_isosurfaces()
     }
 
     /// Rule 2's depth bound `D` for strided segments.
@@ -393,9 +431,13 @@ impl RenderSettings {
                 ));
             }
         }
-        if !(0.0..=1.0).contains(&self.iso_value) {
-            return Err(format!("iso value {} must be in [0,1]", self.iso_value));
+        if self.extra_isosurfaces.len() + 1 > MAX_ISOSURFACES {
+            return Err(format!("at most {MAX_ISOSURFACES} iso-surfaces at once"));
         }
+        for surface in self.isosurfaces() {
+            surface.validate()?;
+        }
+        self.light.validate()?;
         if !(self.density.is_finite() && self.density >= 0.0) {
             return Err(format!("density factor {} must be a non-negative number", self.density));
         }

@@ -246,10 +246,85 @@ fn mode_and_shading_options_take_effect() {
         rule(&["--mode", "mip"], |s, _| s.mode = CompositeMode::Mip),
         rule(&["--mode", "minip"], |s, _| s.mode = CompositeMode::MinIp),
         rule(&["--mode", "average"], |s, _| s.mode = CompositeMode::Average),
-        rule(&["--mode", "iso"], |s, _| s.mode = CompositeMode::Isosurface),
+        // Iso-surfaces read gradients: the texture by default.
+        rule(&["--mode", "iso"], |s, _| {
+            s.mode = CompositeMode::Isosurface;
+            s.gradient_texture = true;
+        }),
         rule(&["--mode", "iso", "--iso", "0.3"], |s, _| {
             s.mode = CompositeMode::Isosurface;
             s.iso_value = 0.3;
+            s.gradient_texture = true;
+        }),
+        rule(
+            &[
+                "--mode",
+                "iso",
+                "--iso",
+                "0.6",
+                "--iso-color",
+                "colormap",
+                "--iso-opacity",
+                "0.7",
+            ],
+            |s, _| {
+                s.mode = CompositeMode::Isosurface;
+                (s.iso_value, s.iso_color, s.iso_opacity) = (0.6, None, 0.7);
+                s.gradient_texture = true;
+            },
+        ),
+        rule(
+            &[
+                "--mode",
+                "iso",
+                "--iso-color",
+                "0.2,0.8,0.4",
+                "--surface",
+                "0.3,1,0,0,0.4",
+                "--surface",
+                "0.7",
+            ],
+            |s, _| {
+                s.mode = CompositeMode::Isosurface;
+                s.iso_color = Some(glam::Vec3::new(0.2, 0.8, 0.4));
+                s.extra_isosurfaces = vec![
+                    volcast::lighting::IsoSurface {
+                        value: 0.3,
+                        color: Some(glam::Vec3::X),
+                        opacity: 0.4,
+                    },
+                    volcast::lighting::IsoSurface {
+                        value: 0.7,
+                        ..Default::default()
+                    },
+                ];
+                s.gradient_texture = true;
+            },
+        ),
+        // Light options turn shading on.
+        rule(
+            &[
+                "--light",
+                "1,-2,0.5",
+                "--light-color",
+                "1,0.5,0.2",
+                "--light-intensity",
+                "1.5",
+            ],
+            |s, _| {
+                s.shading = Some(Shading::default());
+                s.light = volcast::lighting::Light {
+                    direction: Some(glam::Vec3::new(1.0, -2.0, 0.5)),
+                    color: glam::Vec3::new(1.0, 0.5, 0.2),
+                    intensity: 1.5,
+                };
+                s.gradient_texture = true;
+            },
+        ),
+        rule(&["--mode", "iso", "--light", "head"], |s, _| {
+            s.mode = CompositeMode::Isosurface;
+            s.shading = Some(Shading::default());
+            s.gradient_texture = true;
         }),
         // At one voxel per step and density 1 the density model's opacity a·1·1 equals emission's 1 − (1 − a)¹.
         rule(&["--mode", "density", "--step-length", "2"], |s, _| {

@@ -200,6 +200,28 @@ fn real_volumes_match_the_reference() {
                 s.mode = CompositeMode::Isosurface;
                 s.iso_value = 0.45;
             }));
+            // Rule 7's layers (translucent skin over bone, met in order, also falling out of the head) under rule
+            // 5's directional, coloured light.
+            cases.push(with(&v, 96, "iso-skin-over-bone-lit", |s| {
+                s.mode = CompositeMode::Isosurface;
+                s.iso_value = 0.45;
+                s.extra_isosurfaces = vec![volcast::lighting::IsoSurface {
+                    value: 0.2,
+                    color: Some(glam::Vec3::new(0.9, 0.6, 0.5)),
+                    opacity: 0.3,
+                }];
+                s.light = volcast::lighting::Light {
+                    direction: Some(glam::Vec3::new(0.6, -0.3, 0.74)),
+                    color: glam::Vec3::new(1.0, 0.9, 0.8),
+                    intensity: 1.3,
+                };
+            }));
+            cases.push(with(&v, 96, "ct-bone-directional", |s| {
+                s.transfer_function = Some(TransferFunction::preset("ct-bone").unwrap());
+                s.window = [0.0, 1.0];
+                s.shading = Some(Shading::default());
+                s.light = volcast::lighting::Light::from_angles(-60.0, 40.0);
+            }));
         }
         if v.name.starts_with("motor") {
             // The fMRI activation map: MIP shows the blobs.

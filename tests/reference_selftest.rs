@@ -796,6 +796,8 @@ fn isosurface_hits_the_analytic_crossing() {
     s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO);
     s.mode = CompositeMode::Isosurface;
     s.transfer_function = Some(grey_ramp_tf(0.3));
+    // The surface coloured by the classification (the default is a light neutral, below).
+    s.iso_color = None;
     for step_length in [0.5f32, 1.0, 1.7, 3.0] {
         for jitter in [None, Some(3), Some(99)] {
             for iso in [0.1f32, 0.37, 0.5, 0.8] {
@@ -819,6 +821,16 @@ fn isosurface_hits_the_analytic_crossing() {
             }
         }
     }
+    // The default material: a light neutral, whatever the classification says.
+    s.iso_color = Some(volcast::lighting::NEUTRAL);
+    s.iso_value = 0.37;
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    assert_near3(
+        "neutral",
+        trace.color,
+        linear(volcast::lighting::NEUTRAL) * 0.9 + DVec3::splat(0.3),
+        1e-6,
+    );
     // The first sample already at or above the value: the hit is that sample, exactly.
     s.iso_value = 0.0;
     for jitter in [None, Some(5)] {
@@ -1013,4 +1025,78 @@ fn density_mode_opacity_is_linear_in_density() {
         1.0 - keep().powf(16.0),
         1e-12,
     );
+}
+
+/// Rule 7 with several surfaces: on the z ramp (values rising away from the eye) a translucent red surface at 0.3
+/// and an opaque white one at 0.6 are met in that order; the pixel is the first over the second. Seen from the
+/// other side (values falling along the ray), the order reverses. Rule 5's directional light: its angle θ to the
+/// surface normal gives `rgb·(ambient + diffuse·c·cos θ) + specular·c·cos(θ/2)^shininess`.
+#[test]
+fn layered_isosurfaces_and_a_directional_light_follow_the_closed_form() {
+    let volume = z_ramp();
+    let reference = Reference::new(&volume);
+    let mut s = head_on(&volume, SIZE);
+    s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO);
+    s.mode = CompositeMode::Isosurface;
+    s.jitter = None;
+    let red = Vec3::new(1.0, 0.0, 0.0);
+    (s.iso_value, s.iso_color, s.iso_opacity) = (0.6, Some(Vec3::ONE), 1.0);
+    s.extra_isosurfaces = vec![volcast::lighting::IsoSurface {
+        value: 0.3,
+        color: Some(red),
+        opacity: 0.4,
+    }];
+    let lit = |rgb: DVec3| rgb * 0.9 + DVec3::splat(0.3);
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    assert_eq!(trace.composited, 2);
+    assert_near(
+        "first hit",
+        trace.hit.unwrap(),
+        2.5 + 0.3 + 1.0 / 32.0,
+        1.0 / 16.0 / 256.0,
+    );
+    let expected = 0.4 * lit(linear(red)) + 0.6 * lit(DVec3::ONE);
+    assert_near3("red over white", trace.color, expected, 1e-6);
+    assert_near("opacity", trace.alpha, 1.0, 1e-12);
+    // From the far side the values fall along the ray: white (0.6) is met first and hides red.
+    s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO);
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    assert_eq!(trace.composited, 1);
+    assert_near3("white in front", trace.color, lit(DVec3::ONE), 1e-6);
+    // Made translucent, white lets the rest through: the ray starts inside both (white, the innermost, first),
+    // then leaves through white and red again as the values fall.
+    s.iso_opacity = 0.5;
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    assert_eq!(trace.composited, 4);
+    let (mut c, mut a) = (DVec3::ZERO, 0.0);
+    for (rgb, alpha) in [
+        (DVec3::ONE, 0.5),
+        (linear(red), 0.4),
+        (DVec3::ONE, 0.5),
+        (linear(red), 0.4),
+    ] {
+        c += (1.0 - a) * alpha * lit(rgb);
+        a += (1.0 - a) * alpha;
+    }
+    assert_near3("white, red, white, red", trace.color, c, 1e-6);
+    assert_near("opacity", trace.alpha, a, 1e-7);
+    // A directional light at θ = 40° from the normal (the normal faces the eye at −z), coloured and brighter.
+    s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO);
+    s.extra_isosurfaces.clear();
+    s.iso_opacity = 1.0;
+    let theta = 40f64.to_radians();
+    let colour = Vec3::new(1.0, 0.5, 0.25);
+    s.light = volcast::lighting::Light {
+        direction: Some(Vec3::new(theta.sin() as f32, 0.0, -theta.cos() as f32)),
+        color: colour,
+        intensity: 2.0,
+    };
+    let c = linear(colour) * 2.0;
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    let expected = DVec3::ONE * (DVec3::splat(0.2) + 0.7 * theta.cos() * c) + 0.3 * (theta / 2.0).cos().powf(20.0) * c;
+    assert_near3("directional light", trace.color, expected, 1e-5);
+    // Behind the surface the light leaves only the ambient term.
+    s.light.direction = Some(Vec3::new(0.0, 0.0, 1.0));
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    assert_near3("back-lit", trace.color, DVec3::splat(0.2), 1e-7);
 }

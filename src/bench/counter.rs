@@ -58,7 +58,8 @@ struct RayFrame {
     integrals: Vec<[f32; 4]>,
     step_length: f32,
     mode: CompositeMode,
-    iso_value: f32,
+    /// Rule 7's surfaces by value: (value, opacity).
+    surfaces: Vec<(f32, f32)>,
     gradients: bool,
     jitter: Option<u32>,
     early_termination: f32,
@@ -158,7 +159,7 @@ impl SampleCounter {
             integrals: preintegrate::integral_table(&lut, (s.mode == CompositeMode::Density).then_some(s.density)),
             step_length: s.step_length,
             mode: s.mode,
-            iso_value: s.iso_value,
+            surfaces: s.isosurfaces().iter().map(|x| (x.value, x.opacity)).collect(),
             gradients: s.shading.is_some() || s.gradient_opacity.is_some(),
             jitter: s.jitter,
             early_termination: s.early_termination,
@@ -234,13 +235,23 @@ impl SampleCounter {
                 }
             }
             let (vp, length) = (previous, f.step_length * (t - t_prev) / f.h);
+            let had_previous = previous_taken && k > 0;
             (previous, t_prev, previous_taken) = (v, t, true);
             match f.mode {
                 CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => continue,
                 CompositeMode::Isosurface => {
-                    if !v.is_nan() && v >= f.iso_value {
-                        let bisection = if k > 0 { ISO_BISECTIONS } else { 0 };
-                        return (segment, taken + bisection + GRADIENT_SAMPLES);
+                    // Every surface crossed (NaN, and samples leapt over, below all) costs its bisection and
+                    // gradient, and adds its opacity.
+                    let below = |v: f32| if v.is_nan() { f32::NEG_INFINITY } else { v };
+                    let (vp, v) = (if had_previous { below(vp) } else { f32::NEG_INFINITY }, below(v));
+                    for &(iso, alpha) in &f.surfaces {
+                        if (vp < iso) != (v < iso) {
+                            taken += if k > 0 { ISO_BISECTIONS } else { 0 } + GRADIENT_SAMPLES;
+                            opacity += (1.0 - opacity) * alpha;
+                        }
+                    }
+                    if opacity >= f.early_termination {
+                        return (segment, taken);
                     }
                     continue;
                 }

@@ -35,6 +35,14 @@ pub struct FrameUniforms {
     pub flags: [u32; 4],
     pub brick: [f32; 4],
     pub dims: [f32; 4],
+    /// Rule 7's surfaces by value (`mode_params.w` of them).
+    pub iso_values: [f32; 4],
+    /// Per surface: linear rgb (r < 0: the classification's colour at the value) and opacity.
+    pub iso_colors: [[f32; 4]; 4],
+    /// xyz: unit direction towards the light (world); w: 1 directional, 0 headlight.
+    pub light_dir: [f32; 4],
+    /// rgb: the light's linear colour × intensity.
+    pub light_color: [f32; 4],
 }
 
 /// GPU facts about the loaded volume that the uniforms need.
@@ -101,6 +109,20 @@ impl FrameUniforms {
         let v4 = |a: DVec3, w: f32| [a.x as f32, a.y as f32, a.z as f32, w];
         let m4 = |m: DMat4| m.as_mat4().to_cols_array();
         let shading = s.shading.unwrap_or_default();
+        let surfaces = s.isosurfaces();
+        let mut iso_values = [0.0; 4];
+        let mut iso_colors = [[0.0; 4]; 4];
+        for (i, surface) in surfaces.iter().take(4).enumerate() {
+            iso_values[i] = surface.value;
+            let rgb = surface.color.map_or([-1.0; 3], |c| [c.x, c.y, c.z].map(srgb_to_linear));
+            iso_colors[i] = [rgb[0], rgb[1], rgb[2], surface.opacity];
+        }
+        let light_dir = s.light.direction.map_or([0.0; 4], |d| {
+            let d = d.normalize();
+            [d.x, d.y, d.z, 1.0]
+        });
+        let c = s.light.color;
+        let light_color = [c.x, c.y, c.z].map(|v| srgb_to_linear(v) * s.light.intensity);
         FrameUniforms {
             tex_to_clip: m4(tex_to_clip),
             tex_to_world: m4(model),
@@ -137,7 +159,12 @@ impl FrameUniforms {
             texel: v4(1.0 / dims, 0.0),
             voxel_world: [0.0, 0.0, 0.0, s.gradient_opacity.unwrap_or(0.0)],
             shading: [shading.ambient, shading.diffuse, shading.specular, shading.shininess],
-            mode_params: [s.iso_value, s.density, s.looks_up_bricks() as u32 as f32, 0.0],
+            mode_params: [
+                s.iso_value,
+                s.density,
+                s.looks_up_bricks() as u32 as f32,
+                surfaces.len().min(4) as f32,
+            ],
             brick: v4(DVec3::splat(f64::from(skip::BRICK)) / dims, 0.0),
             dims: [v.dims[0] as f32, v.dims[1] as f32, v.dims[2] as f32, 0.0],
             flags: [
@@ -146,6 +173,10 @@ impl FrameUniforms {
                 s.jitter.unwrap_or(0),
                 s.shading.is_some() as u32,
             ],
+            iso_values,
+            iso_colors,
+            light_dir,
+            light_color: [light_color[0], light_color[1], light_color[2], 0.0],
         }
     }
 }

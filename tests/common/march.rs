@@ -6,7 +6,7 @@
 
 use super::classify::{encode, jitter_offset, linear, Classifier};
 use super::rays::{ray_segment, CameraBasis};
-use super::reference::{shade, PixelTrace, Placement, Reference, Segment};
+use super::reference::{shade, Lamp, PixelTrace, Placement, Reference, Segment};
 use super::segments::Segments;
 use super::strides::{BrickRanges, Strides};
 use glam::DVec3;
@@ -28,7 +28,9 @@ pub(crate) struct Frame<'a> {
     /// Exponent of rule 6's opacity correction (and factor of the density model).
     step_length: f64,
     mode: CompositeMode,
-    iso_value: f64,
+    /// Rule 7's surfaces by value: value, linear colour (None: the classification's), opacity.
+    surfaces: Vec<(f64, Option<DVec3>, f64)>,
+    lamp: Lamp,
     density: f64,
     /// Rule 5's lighting where it applies: `shading` in emission/density modes, `shading` or its defaults in
     /// isosurface mode.
@@ -84,7 +86,21 @@ impl<'a> Frame<'a> {
             window: s.window.map(f64::from),
             step_length: f64::from(s.step_length),
             mode: s.mode,
-            iso_value: f64::from(s.iso_value),
+            surfaces: {
+                let mut v: Vec<(f64, Option<DVec3>, f64)> = std::iter::once((s.iso_value, s.iso_color, s.iso_opacity))
+                    .chain(s.extra_isosurfaces.iter().map(|x| (x.value, x.color, x.opacity)))
+                    .map(|(value, color, opacity)| {
+                        (
+                            f64::from(value),
+                            color.map(|c| linear(c.as_dvec3())),
+                            f64::from(opacity),
+                        )
+                    })
+                    .collect();
+                v.sort_by(|a, b| a.0.total_cmp(&b.0));
+                v
+            },
+            lamp: Lamp::new(&s.light),
             density: f64::from(s.density),
             shading,
             gradient_opacity: s.gradient_opacity.map(f64::from),
@@ -206,7 +222,7 @@ impl<'a> Frame<'a> {
                     sigma *= (grad.length() / reference).min(1.0);
                 }
                 if let Some(shading) = &self.shading {
-                    rgb = shade(rgb, self.placement.normal(grad), light, shading);
+                    rgb = shade(rgb, self.placement.normal(grad), light, shading, &self.lamp);
                 }
             }
             let a_step = match self.mode {
@@ -253,52 +269,66 @@ impl<'a> Frame<'a> {
         }
     }
 
-    /// Rule 7 for the isosurface: the first sample at or above the iso value (window ignored, NaN never counts),
-    /// refined by 8 bisection steps on the step before it, coloured by the classification at the iso value
-    /// clamped into the window, and shaded.
+    /// Rule 7 for iso-surfaces: where the samples cross the surfaces (a NaN sample below every one), each crossing
+    /// placed by 8 bisection steps, coloured, shaded and composited front to back in the order met.
     fn isosurface(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
-        let iso = self.iso_value;
-        let reaches = |t: f64| {
+        let value_at = |t: f64| {
             let v = self.volume.sample(self.tex_at(segment, t));
-            !v.is_nan() && v >= iso
+            if v.is_nan() {
+                f64::NEG_INFINITY
+            } else {
+                v
+            }
         };
-        let mut previous: Option<f64> = None;
+        let shading = self.shading.unwrap_or_default();
+        let (mut color, mut alpha) = (DVec3::ZERO, 0.0);
+        let mut previous: Option<(f64, f64)> = None;
         for t in self.sample_offsets(segment, trace.offset) {
             trace.samples += 1;
-            if !reaches(t) {
-                previous = Some(t);
-                continue;
+            let v = value_at(t);
+            let v_prev = previous.map_or(f64::NEG_INFINITY, |p| p.1);
+            let mut met: Vec<&(f64, Option<DVec3>, f64)> = self
+                .surfaces
+                .iter()
+                .filter(|(iso, _, _)| (v_prev < *iso) != (v < *iso))
+                .collect();
+            if previous.is_none() || v < v_prev {
+                met.reverse();
             }
-            let t_hit = match previous {
-                None => t,
-                Some(t_prev) => {
-                    let (mut lo, mut hi) = (t_prev, t);
-                    for _ in 0..8 {
-                        let mid = (lo + hi) / 2.0;
-                        if reaches(mid) {
-                            hi = mid;
-                        } else {
-                            lo = mid;
+            for (iso, material, opacity) in met {
+                let t_hit = match previous {
+                    None => t,
+                    Some((t_prev, _)) => {
+                        let below_before = v_prev < *iso;
+                        let (mut lo, mut hi) = (t_prev, t);
+                        for _ in 0..8 {
+                            let mid = (lo + hi) / 2.0;
+                            if (value_at(mid) < *iso) == below_before {
+                                lo = mid;
+                            } else {
+                                hi = mid;
+                            }
                         }
+                        (lo + hi) / 2.0
                     }
-                    (lo + hi) / 2.0
+                };
+                trace.composited += 1;
+                trace.hit.get_or_insert(segment.t_start + t_hit);
+                let grad = self.gradient(self.tex_at(segment, t_hit));
+                let rgb = material.unwrap_or_else(|| self.classifier.iso_rgb(*iso));
+                let lit = shade(rgb, self.placement.normal(grad), -segment.dir, &shading, &self.lamp);
+                color += (1.0 - alpha) * opacity * lit;
+                alpha += (1.0 - alpha) * opacity;
+                if alpha >= self.early_termination {
+                    break;
                 }
-            };
-            trace.composited = 1;
-            trace.hit = Some(segment.t_start + t_hit);
-            let shading = self.shading.unwrap_or_default();
-            let grad = self.gradient(self.tex_at(segment, t_hit));
-            let color = shade(
-                self.classifier.iso_rgb(iso),
-                self.placement.normal(grad),
-                -segment.dir,
-                &shading,
-            );
-            return Composite { color, alpha: 1.0 };
+            }
+            if alpha >= self.early_termination {
+                trace.terminated_early = alpha < 1.0;
+                break;
+            }
+            previous = Some((t, v));
         }
-        Composite {
-            color: DVec3::ZERO,
-            alpha: 0.0,
-        }
+        Composite { color, alpha }
     }
 }

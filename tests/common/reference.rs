@@ -29,6 +29,7 @@ pub use super::placement::Placement;
 use super::strides::BrickRanges;
 use glam::{DMat4, DVec3};
 use image::{Rgba, RgbaImage};
+use volcast::lighting::Light;
 use volcast::settings::{RenderSettings, Shading};
 use volcast::volume::{Volume, VoxelType};
 
@@ -123,17 +124,52 @@ pub struct Rendered {
     pub stats: RenderStats,
 }
 
-/// Rule 5's lighting: `rgb·(ambient + diffuse·|n·L|) + specular·|n·L|^shininess` with `n` the normalised world
-/// gradient and `light` the unit vector towards the eye; `rgb` unchanged where the world gradient vanishes.
-pub fn shade(rgb: DVec3, world_gradient: DVec3, light: DVec3, shading: &Shading) -> DVec3 {
+/// Rule 5's light, prepared: the unit direction towards it (None: a headlight) and its linear colour × intensity.
+#[derive(Clone, Copy, Debug)]
+pub struct Lamp {
+    pub direction: Option<DVec3>,
+    pub color: DVec3,
+}
+
+impl Lamp {
+    pub fn new(light: &Light) -> Lamp {
+        Lamp {
+            direction: light.direction.map(|d| d.as_dvec3().normalize()),
+            color: linear(light.color.as_dvec3()) * f64::from(light.intensity),
+        }
+    }
+
+    /// A white headlight of intensity 1.
+    pub fn headlight() -> Lamp {
+        Lamp::new(&Light::default())
+    }
+}
+
+/// Rule 5's lighting, two-sided Blinn–Phong: `n` the normalised world gradient turned towards `view` (the unit
+/// vector towards the eye), `l` the lamp's direction or `view`, `h = normalize(l + view)`;
+/// `rgb·(ambient + diffuse·c·max(n·l, 0)) + specular·c·max(n·h, 0)^shininess` (no specular where n·l ≤ 0);
+/// `rgb` unchanged where the world gradient vanishes.
+pub fn shade(rgb: DVec3, world_gradient: DVec3, view: DVec3, shading: &Shading, lamp: &Lamp) -> DVec3 {
     let len = world_gradient.length();
     if len < 1e-8 {
         return rgb;
     }
-    let ndl = (world_gradient / len).dot(light).abs();
+    let mut n = world_gradient / len;
+    if n.dot(view) < 0.0 {
+        n = -n;
+    }
+    let l = lamp.direction.unwrap_or(view);
+    let ndl = n.dot(l).max(0.0);
+    let half = l + view;
+    let ndh = if half.length() > 1e-6 {
+        n.dot(half.normalize()).max(0.0)
+    } else {
+        0.0
+    };
     let [ambient, diffuse, specular, shininess] =
         [shading.ambient, shading.diffuse, shading.specular, shading.shininess].map(f64::from);
-    rgb * (ambient + diffuse * ndl) + DVec3::splat(specular * ndl.powf(shininess))
+    let spec = if ndl > 0.0 { ndh.powf(shininess) } else { 0.0 };
+    rgb * (DVec3::splat(ambient) + diffuse * ndl * lamp.color) + specular * spec * lamp.color
 }
 
 /// Renders `volume` with `s` by the CPU reference. Prefer [`Reference`] to render one volume several times.
