@@ -41,6 +41,10 @@ const MARCH_VARIANTS: &[(&str, &[&str])] = &[
     ("iso", &["FAMILY_ISOSURFACE"]),
     ("ea_shaded_tex", &["SHADED", "GRADIENT_TEXTURE"]),
     ("iso_tex", &["FAMILY_ISOSURFACE", "GRADIENT_TEXTURE"]),
+    ("ea_shaded_lv", &["SHADED", "LIGHT_VOLUME"]),
+    ("ea_shaded_tex_lv", &["SHADED", "GRADIENT_TEXTURE", "LIGHT_VOLUME"]),
+    ("iso_lv", &["FAMILY_ISOSURFACE", "LIGHT_VOLUME"]),
+    ("iso_tex_lv", &["FAMILY_ISOSURFACE", "GRADIENT_TEXTURE", "LIGHT_VOLUME"]),
 ];
 
 /// How the march reads the volume, in the order of `render::VolumeLayout::index`: a 3D texture, or the corner
@@ -131,7 +135,13 @@ fn main() {
             .and_then(|n| n.to_str())
             .expect("utf-8 shader name")
             .to_string();
-        let variants: Vec<(String, Vec<&str>)> = if name.starts_with("march_") {
+        let variants: Vec<(String, Vec<&str>)> = if name == "light.comp" {
+            // Rule 9's light grid reads the volume as the march does, in every layout.
+            SAMPLINGS
+                .iter()
+                .map(|(sampling, defines)| (format!("light.comp{sampling}"), defines.to_vec()))
+                .collect()
+        } else if name.starts_with("march_") {
             let name = &name;
             MARCH_VARIANTS
                 .iter()

@@ -31,4 +31,5 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 iso_colors[4];   // per surface: linear rgb (r < 0: the classification's colour) and opacity
     vec4 light_dir;       // xyz: unit direction towards the light (world); w: 1 directional, 0 headlight
     vec4 light_color;     // rgb: linear colour x intensity
+    vec4 light_grid;      // rule 9: xyz the shadow read's offset towards the light (texture space); w: 1 shadows + 2 occlusion
 } frame;

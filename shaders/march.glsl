@@ -145,9 +145,15 @@ vec3 gradient(vec3 p) {
 }
 #endif
 
-// Blinn-Phong (rule 5), two-sided: `view` is the unit direction towards the eye, in world space; the light is
-// frame.light_dir, or a headlight along `view`.
-vec3 shade(vec3 rgb, vec3 g, vec3 view) {
+#if defined(LIGHT_VOLUME)
+// Rule 9's light grid (src/render/light_volume.rs): x the light's transmittance, y the ambient occlusion.
+layout(set = 1, binding = 7) uniform texture3D light_tex;
+#endif
+
+// Blinn-Phong (rule 5), two-sided, at texture position p: `view` is the unit direction towards the eye, in world
+// space; the light is frame.light_dir, or a headlight along `view`. With the light grid (rule 9) the light is
+// shadowed by T and the ambient term occluded by O.
+vec3 shade(vec3 rgb, vec3 g, vec3 view, vec3 p) {
     vec3 gw = mat3(frame.gradient_to_world) * g;
     float len = length(gw);
     if (len < 1e-8) {
@@ -163,7 +169,17 @@ vec3 shade(vec3 rgb, vec3 g, vec3 view) {
     vec4 s = frame.shading;
     float spec = ndl > 0.0 ? pow(ndh, s.w) : 0.0;
     vec3 c = frame.light_color.rgb;
-    return rgb * (s.x + s.y * ndl * c) + s.z * spec * c;
+    float ambient = s.x;
+#if defined(LIGHT_VOLUME)
+    uint grid = uint(frame.light_grid.w);
+    if ((grid & 1u) != 0u) {
+        c *= textureLod(sampler3D(light_tex, linear_smp), p + frame.light_grid.xyz, 0.0).x;
+    }
+    if ((grid & 2u) != 0u) {
+        ambient *= textureLod(sampler3D(light_tex, linear_smp), p, 0.0).y;
+    }
+#endif
+    return rgb * (ambient + s.y * ndl * c) + s.z * spec * c;
 }
 
 // Empty-space skipping and brick strides (rule 2). The ray is walked span by span: `brick_span` looks up the 8^3
@@ -288,7 +304,7 @@ vec4 segment_sample(vec4 mean, float seg_steps, vec3 p, vec3 light, bool density
         sigma *= min(1.0, length(g) / grad_ref);
     }
     if (frame.flags.w != 0u) {
-        rgb = shade(rgb, g, light);
+        rgb = shade(rgb, g, light, p);
     }
 #else
     vec3 rgb = sigma > 0.0 ? clamp(mean.rgb / sigma, 0.0, 1.0) : vec3(0.0);
@@ -415,7 +431,8 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
             }
             vec4 material = frame.iso_colors[i];
             vec3 rgb = material.r < 0.0 ? classify(clamp(iso, frame.value_map.z, frame.value_map.w)).rgb : material.rgb;
-            vec3 lit = shade(rgb, gradient(a + dir * t_hit), light);
+            vec3 p_hit = a + dir * t_hit;
+            vec3 lit = shade(rgb, gradient(p_hit), light, p_hit);
             color += (1.0 - opacity) * material.a * lit;
             opacity += (1.0 - opacity) * material.a;
             if (opacity >= frame.alpha.z) {

@@ -383,6 +383,15 @@ struct FrameArgs {
     /// The light's intensity (scales its diffuse and specular terms). Turns shading on.
     #[arg(long)]
     light_intensity: Option<f32>,
+    /// Shadows: light attenuated through the volume on its way to each point (a light grid computed on the GPU;
+    /// with a headlight, a key light up and left of the view casts them). Turns shading on; not in MIP, MinIP or
+    /// average.
+    #[arg(long)]
+    shadows: bool,
+    /// Ambient occlusion: the ambient light dimmed where the surroundings are dense. Turns shading on; not in MIP,
+    /// MinIP or average.
+    #[arg(long)]
+    ambient_occlusion: bool,
     /// Density factor for --mode density (the OSG article's model).
     #[arg(long, default_value_t = 1.0)]
     density: f32,
@@ -595,7 +604,13 @@ impl FrameArgs {
         s.iso_opacity = self.iso_opacity;
         s.extra_isosurfaces = self.surfaces.clone();
         s.density = self.density;
-        let lit = self.light.is_some() || self.light_color.is_some() || self.light_intensity.is_some();
+        let lit = self.light.is_some()
+            || self.light_color.is_some()
+            || self.light_intensity.is_some()
+            || self.shadows
+            || self.ambient_occlusion;
+        s.shadows = self.shadows;
+        s.ambient_occlusion = self.ambient_occlusion;
         s.shading = (self.shading || lit).then_some(self.lighting);
         s.light = volcast::lighting::Light {
             direction: self.light.and_then(|l| l.0),

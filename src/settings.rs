@@ -122,6 +122,10 @@ pub const STRIDE_DEPTH_LIT: f64 = 0.0125;
 /// and the depth it misses must stay small (1%: about 2.5/255 of colour).
 pub const STRIDE_SPREAD: f64 = 0.01;
 
+/// Rule 9's key light, used for shadows under a headlight: towards the eye, offset this much (per unit of the
+/// view vector) up and to the left: about 40° off the view axis.
+pub const KEY_LIGHT_OFFSET: f32 = 0.6;
+
 /// The strides rule 2 allows.
 pub const STRIDES: [u32; 3] = [1, 2, 4];
 
@@ -200,6 +204,24 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    `A ≥ early_termination`.
 /// 8. **Output**: `C + (1 − A)·linear(background)` (background given in sRGB), encoded to sRGB once, stored as
 ///    8-bit unsigned normalised (rounded). Compositing happens in linear light (gamma-correct).
+/// 9. **Shadows and ambient occlusion** (`shadows`, `ambient_occlusion`; lit frames only,
+///    [`RenderSettings::uses_light_volume`]) come from a *light grid* of `n_i = ceil(dims_i / f)` cells,
+///    `f = max(1, ceil(max dims / 128))`, cell c centred at texture coordinate `(c + 0.5)/n`. Extinction per voxel
+///    length `σ(v)`: emission `−ln(1 − a(v))`, density `a(v)·density` (rule 6, at most 32); iso-surfaces 32 where
+///    `v ≥` the lowest opaque (opacity 1) surface, else 0 (translucent surfaces cast nothing); NaN 0. A cell's
+///    σ is that of rule 3's value at its centre. The light's direction in cell units is
+///    `d = diag(n)·M⁻¹·L` (L: [`RenderSettings::light_direction`], M the linear part of the placement); the sweep
+///    axis a is the largest |d_i| (the first on ties) and the step `Δ = d/|d_a|`.
+///    **Shadow** `T`: cells whose a-index is nearest the light (n_a − 1 where d_a > 0, else 0) have T = 1; any
+///    other cell c takes `T(c) = T(c + Δ)·e^(−σ_c·ℓ)`, T(c + Δ) bilinear in the previous slice over the other two
+///    axes with cells beyond the grid reading 1, and ℓ the world length of Δ (one cell is `1/n_i` of texture
+///    space) in voxels (of the smallest voxel side). **Ambient occlusion** `O`: the mean over the 14 directions u
+///    (±x, ±y, ±z and the 8 diagonals normalised, in cell units) of `e^(−Σ_{k=1..4} σ(v(c + k·u))·ℓ_u)`, v
+///    trilinear in the volume (rule 3) at those cell positions, σ = 0 outside the box, ℓ_u the world length of u
+///    in voxels. At a lit point p the grid is interpolated trilinearly (rule 3's filter over cell centres): O at
+///    p, and T at `p + 1.5·Δ` (cells, towards the light: a surface does not shadow itself); rule 5 becomes
+///    `rgb·(ambient·O + diffuse·c·T·max(n·L, 0)) + specular·c·T·max(n·H, 0)^shininess` (O = 1 without
+///    occlusion, T = 1 without shadows).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct RenderSettings {
@@ -229,6 +251,10 @@ pub struct RenderSettings {
     pub extra_isosurfaces: Vec<IsoSurface>,
     /// Rule 5's light.
     pub light: Light,
+    /// Rule 9's shadows: light attenuated on its way through the volume (lit frames; not MIP/MinIP/average).
+    pub shadows: bool,
+    /// Rule 9's ambient occlusion: the ambient term scaled by how open each point's surroundings are.
+    pub ambient_occlusion: bool,
     /// Density factor of the density mode.
     pub density: f32,
     pub shading: Option<Shading>,
@@ -315,6 +341,8 @@ impl RenderSettings {
             iso_opacity: 1.0,
             extra_isosurfaces: Vec::new(),
             light: Light::default(),
+            shadows: false,
+            ambient_occlusion: false,
             density: 1.0,
             shading: None,
             gradient_opacity: None,
@@ -377,6 +405,33 @@ impl RenderSettings {
     /// downwards, leaving bricks above it for bricks below every surface, which leaping would miss.
     pub fn layered_isosurfaces(&self) -> bool {
         self.mode == CompositeMode::Isosurface && (!self.extra_isosurfaces.is_empty() || self.iso_opacity < 1.0)
+    }
+
+    /// Whether rule 9's light volume applies: shadows or ambient occlusion on a lit frame (emission or density
+    /// with shading, or iso-surfaces). MIP, MinIP and average are never lit.
+    pub fn uses_light_volume(&self) -> bool {
+        let lit = match self.mode {
+            CompositeMode::Isosurface => true,
+            CompositeMode::Emission | CompositeMode::Density => self.shading.is_some(),
+            _ => false,
+        };
+        lit && (self.shadows || self.ambient_occlusion)
+    }
+
+    /// Rule 5's light direction (unit, world, towards the light) as the frame uses it: the light's own, or with
+    /// shadows and a headlight the key light (rule 9: up and to the left of the view, following the camera);
+    /// `None`: a headlight.
+    pub fn light_direction(&self) -> Option<Vec3> {
+        if let Some(d) = self.light.direction {
+            return Some(d.normalize());
+        }
+        if !(self.shadows && self.uses_light_volume()) {
+            return None;
+        }
+        let view = (self.camera.eye - self.camera.target).normalize();
+        let right = (-view).cross(self.camera.up).normalize();
+        let up = right.cross(-view);
+        Some((view + KEY_LIGHT_OFFSET * (up - right)).normalize())
     }
 
     /// Whether the march looks up the brick grid: to leap over empty bricks, or for rule 2's strides. Layered

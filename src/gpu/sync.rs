@@ -18,6 +18,8 @@ pub enum Access {
     FragmentSampled,
     /// Written by a compute shader as a storage image (GENERAL layout).
     ComputeWrite,
+    /// Read and written by a compute shader as a storage image (GENERAL layout): a pass reading an earlier one's.
+    ComputeReadWrite,
     Present,
     HostRead,
     /// Written by the host before submission (a host-written image, PREINITIALIZED).
@@ -32,7 +34,7 @@ impl Access {
             Access::TransferWrite | Access::TransferRead => vk::PipelineStageFlags2::TRANSFER,
             Access::ColorAttachmentWrite => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
             Access::FragmentSampled => vk::PipelineStageFlags2::FRAGMENT_SHADER,
-            Access::ComputeWrite => vk::PipelineStageFlags2::COMPUTE_SHADER,
+            Access::ComputeWrite | Access::ComputeReadWrite => vk::PipelineStageFlags2::COMPUTE_SHADER,
             // Presentation is ordered by semaphores; the barrier needs no later stage.
             Access::Present => vk::PipelineStageFlags2::NONE,
             Access::HostRead | Access::HostWrite => vk::PipelineStageFlags2::HOST,
@@ -49,6 +51,7 @@ impl Access {
             // latter with SHADER_READ_ONLY_OPTIMAL (a false positive), and SHADER_READ covers it.
             Access::FragmentSampled => vk::AccessFlags2::SHADER_READ,
             Access::ComputeWrite => vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            Access::ComputeReadWrite => vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
             Access::HostRead => vk::AccessFlags2::HOST_READ,
             Access::HostWrite => vk::AccessFlags2::HOST_WRITE,
         }
@@ -62,7 +65,7 @@ impl Access {
             Access::ColorAttachmentWrite => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
             Access::FragmentSampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Access::Present => vk::ImageLayout::PRESENT_SRC_KHR,
-            Access::HostRead | Access::ComputeWrite => vk::ImageLayout::GENERAL,
+            Access::HostRead | Access::ComputeWrite | Access::ComputeReadWrite => vk::ImageLayout::GENERAL,
             Access::HostWrite => vk::ImageLayout::PREINITIALIZED,
         }
     }

@@ -25,6 +25,8 @@ pub(super) struct GpuVolume {
     pub(super) gradient: Option<Image>,
     /// The corner texture (`VolumeLayout::Corners8`/`Corners16`).
     pub(super) corners: Option<Image>,
+    /// Rule 9's light grid, made by the first frame with shadows or occlusion.
+    pub(super) light: Option<super::light_volume::LightImage>,
 }
 
 /// A 3D image of `dims` (a depth of 1 gets a duplicated second slice: a depth-1 image would be 2D), filled by
@@ -382,11 +384,15 @@ impl GpuVolume {
             occupancy_key: None,
             gradient: None,
             corners,
+            light: None,
         })
     }
 
     pub(super) fn destroy(self, gpu: &Gpu) {
         self.occupancy.destroy(gpu);
+        if let Some(l) = self.light {
+            l.image.destroy(gpu);
+        }
         if let Some(g) = self.gradient {
             g.destroy(gpu);
         }

@@ -96,7 +96,8 @@ impl Renderer {
             storage_set_layout: vk::DescriptorSetLayout::null(),
             march_compute_layout: vk::PipelineLayout::null(),
             position_pipelines: [[vk::Pipeline::null(); 2]; 2],
-            march_pipelines: [[[vk::Pipeline::null(); 3]; 6]; 3],
+            march_pipelines: [[[vk::Pipeline::null(); 3]; 10]; 3],
+            light_pass: None,
             descriptor_pool: vk::DescriptorPool::null(),
             volume_set: vk::DescriptorSet::null(),
             positions_set: vk::DescriptorSet::null(),
@@ -140,6 +141,7 @@ impl Renderer {
                 (D::SAMPLED_IMAGE, frag),
                 (D::SAMPLED_IMAGE, frag),
                 (D::UNIFORM_BUFFER, frag),
+                (D::SAMPLED_IMAGE, frag),
             ],
         )?;
         self.positions_set_layout = set_layout(
@@ -157,6 +159,9 @@ impl Renderer {
             gpu,
             &[self.frame_set_layout, self.volume_set_layout, self.storage_set_layout],
         )?;
+        let light_pass = super::light_volume::LightPass::new(gpu, self.frame_set_layout, self.volume_set_layout)?;
+        let light_set_layout = light_pass.set_layout();
+        self.light_pass = Some(light_pass);
         self.linear_sampler = sampler(gpu, vk::Filter::LINEAR)?;
         self.point_sampler = sampler(gpu, vk::Filter::NEAREST)?;
 
@@ -190,7 +195,7 @@ impl Renderer {
             },
             vk::DescriptorPoolSize {
                 ty: D::SAMPLED_IMAGE,
-                descriptor_count: 7,
+                descriptor_count: 8,
             },
             vk::DescriptorPoolSize {
                 ty: D::SAMPLER,
@@ -198,20 +203,20 @@ impl Renderer {
             },
             vk::DescriptorPoolSize {
                 ty: D::STORAGE_IMAGE,
-                descriptor_count: n,
+                descriptor_count: n + 1,
             },
             vk::DescriptorPoolSize {
                 ty: D::STORAGE_BUFFER,
-                descriptor_count: 1,
+                descriptor_count: 2,
             },
         ];
         let pool_info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(2 + 2 * n)
+            .max_sets(3 + 2 * n)
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a live device.
         self.descriptor_pool =
             unsafe { gpu.device.create_descriptor_pool(&pool_info, None) }.ctx("vkCreateDescriptorPool")?;
-        let mut layouts = vec![self.volume_set_layout, self.positions_set_layout];
+        let mut layouts = vec![self.volume_set_layout, self.positions_set_layout, light_set_layout];
         layouts.extend(std::iter::repeat_n(self.frame_set_layout, slots));
         layouts.extend(std::iter::repeat_n(self.storage_set_layout, slots));
         let alloc = vk::DescriptorSetAllocateInfo::default()
@@ -220,7 +225,10 @@ impl Renderer {
         // SAFETY: the pool has room for exactly these sets.
         let sets = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
         (self.volume_set, self.positions_set) = (sets[0], sets[1]);
-        for (&set, &storage_set) in sets[2..2 + slots].iter().zip(&sets[2 + slots..]) {
+        if let Some(pass) = &mut self.light_pass {
+            pass.set = sets[2];
+        }
+        for (&set, &storage_set) in sets[3..3 + slots].iter().zip(&sets[3 + slots..]) {
             let uniforms = Buffer::new(
                 gpu,
                 std::mem::size_of::<FrameUniforms>() as u64,

@@ -5,6 +5,7 @@
 mod gpu_volume;
 pub mod gradients;
 mod init;
+pub mod light_volume;
 mod record;
 pub mod skip;
 mod uniforms;
@@ -130,16 +131,25 @@ fn setup_index(s: &RenderSettings) -> usize {
 
 /// Which compiled variant of the march `s` needs (build.rs MARCH_VARIANTS): 0 emission/density, 1 the same with
 /// gradients (shading or gradient-modulated opacity), 2 MIP/MinIP/average, 3 isosurface, 4 emission/density with
-/// gradients from the gradient texture, 5 isosurface with the gradient texture.
+/// gradients from the gradient texture, 5 isosurface with the gradient texture; 6–9 variants 1, 4, 3, 5 reading
+/// rule 9's light grid.
 pub fn march_variant(s: &RenderSettings) -> usize {
     use crate::settings::CompositeMode as M;
-    match s.mode {
+    let base = match s.mode {
         M::Emission | M::Density if (s.shading.is_some() || s.gradient_opacity.is_some()) && s.gradient_texture => 4,
         M::Emission | M::Density if s.shading.is_some() || s.gradient_opacity.is_some() => 1,
         M::Emission | M::Density => 0,
         M::Mip | M::MinIp | M::Average => 2,
         M::Isosurface if s.gradient_texture => 5,
         M::Isosurface => 3,
+    };
+    // The same with rule 9's light grid.
+    match (base, s.uses_light_volume()) {
+        (1, true) => 6,
+        (4, true) => 7,
+        (3, true) => 8,
+        (5, true) => 9,
+        _ => base,
     }
 }
 
@@ -169,7 +179,9 @@ pub struct Renderer {
     position_pipelines: [[vk::Pipeline; 2]; 2],
     /// March pipelines per `setup_index` × shader variant × volume layout, created when first needed (see
     /// `march_variant`, `VolumeLayout::index`).
-    march_pipelines: [[[vk::Pipeline; 3]; 6]; 3],
+    march_pipelines: [[[vk::Pipeline; 3]; 10]; 3],
+    /// Rule 9's light grid pass (None only while the renderer is being made).
+    light_pass: Option<light_volume::LightPass>,
     descriptor_pool: vk::DescriptorPool,
     volume_set: vk::DescriptorSet,
     positions_set: vk::DescriptorSet,
@@ -249,6 +261,10 @@ impl Renderer {
         let gradient_info = [vk::DescriptorImageInfo::default()
             .image_view(vol.gradient.as_ref().map_or(volume_view, |g| g.view))
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        // Likewise the light grid: only the light-grid variants read it.
+        let light_info = [vk::DescriptorImageInfo::default()
+            .image_view(vol.light.as_ref().map_or(volume_view, |l| l.image.view))
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let writes = [
             vk::WriteDescriptorSet::default()
                 .dst_set(self.volume_set)
@@ -285,6 +301,11 @@ impl Renderer {
                 .dst_binding(6)
                 .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
                 .buffer_info(&integrals_info),
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.volume_set)
+                .dst_binding(7)
+                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                .image_info(&light_info),
         ];
         // SAFETY: callers only update descriptors while no submitted work uses them (headless waits per frame).
         unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
@@ -382,6 +403,65 @@ impl Renderer {
             || !self.lut_is_current(s)
             || !self.occupancy_is_current(s)
             || self.march_pipelines[setup_index(s)][march_variant(s)][self.layout_index()] == vk::Pipeline::null()
+            || !self.light_is_current(s)
+    }
+
+    fn light_is_current(&self, s: &RenderSettings) -> bool {
+        !s.uses_light_volume()
+            || self
+                .volume
+                .as_ref()
+                .is_none_or(|v| v.light.as_ref().is_some_and(|l| l.key == light_volume::LightKey::of(s)))
+    }
+
+    /// Fills rule 9's light grid for `s` where it does not hold `s`'s yet (the table must be current). The
+    /// frame's uniforms go to the first slot's buffer, which no frame in flight reads (prepare's contract).
+    fn prepare_light(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
+        if self.light_is_current(s) {
+            return Ok(());
+        }
+        let li = self.layout_index();
+        let (Some(vol), Some(pass), Some(slot)) = (&mut self.volume, &mut self.light_pass, self.slots.first_mut())
+        else {
+            return Ok(());
+        };
+        let grid = light_volume::grid_for(s, &vol.info);
+        if vol.light.as_ref().is_some_and(|l| {
+            let e = l.image.desc.extent;
+            [e.width, e.height, e.depth] != grid.cells
+        }) {
+            if let Some(old) = vol.light.take() {
+                old.image.destroy(gpu);
+            }
+        }
+        let image = match vol.light.take() {
+            Some(l) => l.image,
+            None => light_volume::light_image(gpu, &grid)?,
+        };
+        slot.uniforms
+            .write(bytemuck::bytes_of(&FrameUniforms::new(s, &vol.info)))?;
+        let voxel = light_volume::voxel_world(s, &vol.info);
+        let filled = pass.fill(
+            gpu,
+            li,
+            s,
+            &self.lut_table,
+            &grid,
+            voxel,
+            &image,
+            [slot.set, self.volume_set],
+        );
+        if let Err(e) = filled {
+            image.destroy(gpu);
+            self.write_volume_set(gpu);
+            return Err(e);
+        }
+        vol.light = Some(light_volume::LightImage {
+            image,
+            key: light_volume::LightKey::of(s),
+        });
+        self.write_volume_set(gpu);
+        Ok(())
     }
 
     fn occupancy_is_current(&self, s: &RenderSettings) -> bool {
@@ -454,6 +534,9 @@ impl Renderer {
                 upload_3d(gpu, &mut vol.occupancy, &occupancy, vol.bricks.bricks[2])?;
                 vol.occupancy_key = Some(OccupancyKey::of(s));
             }
+        }
+        if s.uses_light_volume() {
+            self.prepare_light(gpu, s)?;
         }
         if s.ray_setup == RaySetup::Faces {
             if !self.positions_fit(s) {
@@ -538,6 +621,9 @@ impl Renderer {
             }
             for p in self.march_pipelines.iter().flatten().flatten() {
                 d.destroy_pipeline(*p, None);
+            }
+            if let Some(pass) = self.light_pass.take() {
+                pass.destroy(gpu);
             }
             d.destroy_pipeline_layout(self.march_compute_layout, None);
             d.destroy_descriptor_set_layout(self.storage_set_layout, None);

@@ -43,6 +43,8 @@ pub struct FrameUniforms {
     pub light_dir: [f32; 4],
     /// rgb: the light's linear colour × intensity.
     pub light_color: [f32; 4],
+    /// Rule 9: xyz the shadow read's offset (texture space); w: 1 shadows + 2 occlusion.
+    pub light_grid: [f32; 4],
 }
 
 /// GPU facts about the loaded volume that the uniforms need.
@@ -117,7 +119,7 @@ impl FrameUniforms {
             let rgb = surface.color.map_or([-1.0; 3], |c| [c.x, c.y, c.z].map(srgb_to_linear));
             iso_colors[i] = [rgb[0], rgb[1], rgb[2], surface.opacity];
         }
-        let light_dir = s.light.direction.map_or([0.0; 4], |d| {
+        let light_dir = s.light_direction().map_or([0.0; 4], |d| {
             let d = d.normalize();
             [d.x, d.y, d.z, 1.0]
         });
@@ -177,6 +179,13 @@ impl FrameUniforms {
             iso_colors,
             light_dir,
             light_color: [light_color[0], light_color[1], light_color[2], 0.0],
+            light_grid: if s.uses_light_volume() {
+                let offset = super::light_volume::grid_for(s, v).read_offset();
+                let bits = u32::from(s.shadows) + 2 * u32::from(s.ambient_occlusion);
+                v4(offset, bits as f32)
+            } else {
+                [0.0; 4]
+            },
         }
     }
 }

@@ -31,6 +31,8 @@ pub(crate) struct Frame<'a> {
     /// Rule 7's surfaces by value: value, linear colour (None: the classification's), opacity.
     surfaces: Vec<(f64, Option<DVec3>, f64)>,
     lamp: Lamp,
+    /// Rule 9's light grid, where it applies.
+    light_grid: Option<super::light::LightGridRef>,
     density: f64,
     /// Rule 5's lighting where it applies: `shading` in emission/density modes, `shading` or its defaults in
     /// isosurface mode.
@@ -55,6 +57,7 @@ struct Composite {
 impl<'a> Frame<'a> {
     pub(crate) fn new(volume: &'a Reference, s: &RenderSettings) -> Frame<'a> {
         let placement = volume.placement(s);
+        let placement_for_light = volume.placement(s);
         let shading = match s.mode {
             CompositeMode::Isosurface => Some(s.shading.unwrap_or_default()),
             _ => s.shading,
@@ -100,7 +103,9 @@ impl<'a> Frame<'a> {
                 v.sort_by(|a, b| a.0.total_cmp(&b.0));
                 v
             },
-            lamp: Lamp::new(&s.light),
+            lamp: Lamp::new(&s.light, super::light::light_direction(s)),
+            light_grid: super::light::applies(s)
+                .then(|| super::light::LightGridRef::new(volume, s, &volume.classifier(s), &placement_for_light)),
             density: f64::from(s.density),
             shading,
             gradient_opacity: s.gradient_opacity.map(f64::from),
@@ -109,6 +114,14 @@ impl<'a> Frame<'a> {
             strides,
             early_termination: f64::from(s.early_termination),
             background: linear(s.background.as_dvec3()),
+        }
+    }
+
+    /// The lamp at texture point `p`: rule 9's shadow and occlusion applied.
+    fn lamp_at(&self, p: DVec3) -> Lamp {
+        match &self.light_grid {
+            Some(g) => self.lamp.at(g.shadow(p), g.occlusion(p)),
+            None => self.lamp,
         }
     }
 
@@ -222,7 +235,8 @@ impl<'a> Frame<'a> {
                     sigma *= (grad.length() / reference).min(1.0);
                 }
                 if let Some(shading) = &self.shading {
-                    rgb = shade(rgb, self.placement.normal(grad), light, shading, &self.lamp);
+                    let p = self.tex_at(segment, 0.5 * (t + t_mid_prev));
+                    rgb = shade(rgb, self.placement.normal(grad), light, shading, &self.lamp_at(p));
                 }
             }
             let a_step = match self.mode {
@@ -316,7 +330,14 @@ impl<'a> Frame<'a> {
                 trace.hit.get_or_insert(segment.t_start + t_hit);
                 let grad = self.gradient(self.tex_at(segment, t_hit));
                 let rgb = material.unwrap_or_else(|| self.classifier.iso_rgb(*iso));
-                let lit = shade(rgb, self.placement.normal(grad), -segment.dir, &shading, &self.lamp);
+                let p = self.tex_at(segment, t_hit);
+                let lit = shade(
+                    rgb,
+                    self.placement.normal(grad),
+                    -segment.dir,
+                    &shading,
+                    &self.lamp_at(p),
+                );
                 color += (1.0 - alpha) * opacity * lit;
                 alpha += (1.0 - alpha) * opacity;
                 if alpha >= self.early_termination {

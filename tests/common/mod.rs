@@ -8,6 +8,7 @@ pub mod cases;
 pub mod classify;
 pub mod compare;
 pub mod gpu;
+pub mod light;
 pub mod march;
 pub mod placement;
 pub mod rays;

@@ -124,24 +124,37 @@ pub struct Rendered {
     pub stats: RenderStats,
 }
 
-/// Rule 5's light, prepared: the unit direction towards it (None: a headlight) and its linear colour × intensity.
+/// Rule 5's light at one point, prepared: the unit direction towards it (None: a headlight), its linear colour ×
+/// intensity, and rule 9's shadow T (scales the light) and occlusion O (scales the ambient term) there.
 #[derive(Clone, Copy, Debug)]
 pub struct Lamp {
     pub direction: Option<DVec3>,
     pub color: DVec3,
+    pub occlusion: f64,
 }
 
 impl Lamp {
-    pub fn new(light: &Light) -> Lamp {
+    /// `light` from `direction` (rule 9's resolution of it: see light.rs), unshadowed.
+    pub fn new(light: &Light, direction: Option<DVec3>) -> Lamp {
         Lamp {
-            direction: light.direction.map(|d| d.as_dvec3().normalize()),
+            direction,
             color: linear(light.color.as_dvec3()) * f64::from(light.intensity),
+            occlusion: 1.0,
         }
     }
 
     /// A white headlight of intensity 1.
     pub fn headlight() -> Lamp {
-        Lamp::new(&Light::default())
+        Lamp::new(&Light::default(), None)
+    }
+
+    /// This lamp at a point with shadow `t` and occlusion `o`.
+    pub fn at(&self, t: f64, o: f64) -> Lamp {
+        Lamp {
+            color: self.color * t,
+            occlusion: o,
+            ..*self
+        }
     }
 }
 
@@ -169,7 +182,7 @@ pub fn shade(rgb: DVec3, world_gradient: DVec3, view: DVec3, shading: &Shading, 
     let [ambient, diffuse, specular, shininess] =
         [shading.ambient, shading.diffuse, shading.specular, shading.shininess].map(f64::from);
     let spec = if ndl > 0.0 { ndh.powf(shininess) } else { 0.0 };
-    rgb * (DVec3::splat(ambient) + diffuse * ndl * lamp.color) + specular * spec * lamp.color
+    rgb * (DVec3::splat(ambient * lamp.occlusion) + diffuse * ndl * lamp.color) + specular * spec * lamp.color
 }
 
 /// Renders `volume` with `s` by the CPU reference. Prefer [`Reference`] to render one volume several times.
