@@ -263,7 +263,8 @@ struct BenchArgs {
     /// Only these image sizes (repeatable), e.g. --size 512.
     #[arg(long = "size")]
     sizes: Vec<u32>,
-    /// Only these shading variants (repeatable): off, on.
+    /// Only these shading variants (repeatable): off, on, shadows (shading with shadows and ambient occlusion;
+    /// the helix and CT head scenes).
     #[arg(long = "shading")]
     shadings: Vec<String>,
     /// Only these methods (repeatable): faces, analytic, compute (the analytic ray setup in a compute pass).
@@ -781,6 +782,9 @@ fn render(args: &RenderArgs) -> Result<()> {
             );
             if !timing_line.is_empty() {
                 println!("{timing_line}");
+            }
+            if let Some(ms) = headless.renderer.light_grid_ms() {
+                println!("light grid (shadows, occlusion): {ms:.0} ms");
             }
             if args.memory {
                 println!("{}", volcast::bench::memory_line(gpu, &headless, &s)?);

@@ -111,9 +111,9 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
     if let Some(bad) = opts
         .shadings
         .iter()
-        .find(|w| !SHADINGS.iter().any(|v| v.name() == w.as_str()))
+        .find(|w| !Shading::ALL.iter().any(|v| v.name() == w.as_str()))
     {
-        return Err(BenchError::Usage(format!("unknown shading '{bad}'; use off or on")));
+        return Err(BenchError::Usage(format!("unknown shading '{bad}'; use off, on or shadows")));
     }
     let mut report = BenchReport {
         device: gpu.device_name.clone(),

@@ -22,7 +22,7 @@ pub struct BenchOptions {
     pub scenes: Vec<String>,
     /// Image sizes to keep (square); empty = each scene's own.
     pub sizes: Vec<u32>,
-    /// Shading variants to keep ("off", "on"); empty = each scene's own.
+    /// Shading variants to keep ("off", "on", "shadows"); empty = each scene's own.
     pub shadings: Vec<String>,
     /// Methods to keep ("faces", "analytic", "compute"); empty = all three.
     pub methods: Vec<String>,

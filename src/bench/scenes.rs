@@ -24,29 +24,38 @@ pub enum Source {
     VtkHelix,
 }
 
-/// Shading variants every scene is timed with: off, and Blinn–Phong with VTK's coefficients (ambient 0.2,
-/// diffuse 0.7, specular 0.3, power 20: `settings::Shading::default()`, as ../shared/tools/vtk_bench.py uses).
+/// Shading variants scenes are timed with: off, Blinn–Phong with VTK's coefficients (ambient 0.2, diffuse 0.7,
+/// specular 0.3, power 20: `settings::Shading::default()`, as ../shared/tools/vtk_bench.py uses), and the same
+/// with rule 9's shadows and ambient occlusion (the key light; the grid is made before the timed frames).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Shading {
     Off,
     On,
+    Shadows,
 }
 
 pub const SHADINGS: &[Shading] = &[Shading::Off, Shading::On];
 
+/// The variants of the scenes that also time shadows and occlusion.
+pub const LIT_SHADINGS: &[Shading] = &[Shading::Off, Shading::On, Shading::Shadows];
+
 impl Shading {
+    pub const ALL: [Shading; 3] = [Shading::Off, Shading::On, Shading::Shadows];
+
     pub fn apply(self, s: &mut RenderSettings) {
         s.shading = match self {
             Shading::Off => None,
-            Shading::On => Some(settings::Shading::default()),
+            Shading::On | Shading::Shadows => Some(settings::Shading::default()),
         };
+        (s.shadows, s.ambient_occlusion) = (self == Shading::Shadows, self == Shading::Shadows);
     }
 
     pub fn name(self) -> &'static str {
         match self {
             Shading::Off => "off",
             Shading::On => "on",
+            Shading::Shadows => "shadows",
         }
     }
 }
@@ -78,7 +87,7 @@ pub fn scenes() -> Vec<Scene> {
             },
             configure: |_, _| {},
             sizes: FULL_SIZES,
-            shadings: SHADINGS,
+            shadings: LIT_SHADINGS,
         },
         Scene {
             name: "dense",
@@ -111,7 +120,7 @@ pub fn scenes() -> Vec<Scene> {
                 s.camera = Camera::orbit(25.0, 10.0, d, Vec3::ZERO);
             },
             sizes: FULL_SIZES,
-            shadings: SHADINGS,
+            shadings: LIT_SHADINGS,
         },
         Scene {
             name: "mri-brain",

@@ -98,6 +98,7 @@ impl Renderer {
             position_pipelines: [[vk::Pipeline::null(); 2]; 2],
             march_pipelines: [[[vk::Pipeline::null(); 3]; 10]; 3],
             light_pass: None,
+            light_ms: None,
             descriptor_pool: vk::DescriptorPool::null(),
             volume_set: vk::DescriptorSet::null(),
             positions_set: vk::DescriptorSet::null(),

@@ -182,6 +182,8 @@ pub struct Renderer {
     march_pipelines: [[[vk::Pipeline; 3]; 10]; 3],
     /// Rule 9's light grid pass (None only while the renderer is being made).
     light_pass: Option<light_volume::LightPass>,
+    /// How long the last light grid took to fill (wall clock, submission to completion).
+    light_ms: Option<f64>,
     descriptor_pool: vk::DescriptorPool,
     volume_set: vk::DescriptorSet,
     positions_set: vk::DescriptorSet,
@@ -362,6 +364,11 @@ impl Renderer {
         Ok(())
     }
 
+    /// How long the last light grid (rule 9) took to fill, in ms; None before the first.
+    pub fn light_grid_ms(&self) -> Option<f64> {
+        self.light_ms
+    }
+
     /// Whether the loaded volume's gradient texture is made (`enable_gradient_texture`).
     pub fn has_gradient_texture(&self) -> bool {
         self.volume.as_ref().is_some_and(|v| v.gradient.is_some())
@@ -441,6 +448,7 @@ impl Renderer {
         slot.uniforms
             .write(bytemuck::bytes_of(&FrameUniforms::new(s, &vol.info)))?;
         let voxel = light_volume::voxel_world(s, &vol.info);
+        let started = std::time::Instant::now();
         let filled = pass.fill(
             gpu,
             li,
@@ -451,6 +459,7 @@ impl Renderer {
             &image,
             [slot.set, self.volume_set],
         );
+        self.light_ms = Some(started.elapsed().as_secs_f64() * 1e3);
         if let Err(e) = filled {
             image.destroy(gpu);
             self.write_volume_set(gpu);
@@ -496,7 +505,8 @@ impl Renderer {
     /// Must be called while no submitted frame is in flight.
     pub fn prepare(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
         let (si, vi) = (setup_index(s), march_variant(s));
-        if vi == 4 && self.volume.as_ref().is_some_and(|v| v.gradient.is_none()) {
+        // The variants that read the gradient texture (build.rs MARCH_VARIANTS).
+        if [4, 5, 7, 9].contains(&vi) && self.volume.as_ref().is_some_and(|v| v.gradient.is_none()) {
             return Err(GpuError::InvalidSettings(
                 "gradient_texture needs enable_gradient_texture() first".into(),
             ));
