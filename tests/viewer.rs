@@ -30,7 +30,8 @@ use volcast::settings::RenderSettings;
 
 /// Which pixels of the view (`view` in window pixels; 1 pixel per point under Xvfb) show the volume alone, and
 /// not egui's overlay (`ui::view_overlay`): the bounding box's 1-point lines (plus anti-aliasing feather, hence
-/// 3 px) and the gizmo's disc of radius 52 centred 60 px from the bottom-right corner. The box is projected as
+/// 3 px), the gizmo's disc of radius 52 centred 60 px from the bottom-right corner and the light gizmo's from the
+/// top-right. The box is projected as
 /// the overlay projects it, from the frame's own camera.
 fn volume_only(settings: &RenderSettings, extent: glam::Vec3, view: egui::Rect) -> Vec<bool> {
     let cam = &settings.camera;
@@ -60,11 +61,13 @@ fn volume_only(settings: &RenderSettings, extent: glam::Vec3, view: egui::Rect) 
         (p - (a + t * ab)).length()
     };
     let gizmo = egui::pos2(view.right() - 60.0, view.bottom() - 60.0);
+    // The light gizmo (`light_gizmo`, shown on lit frames): a disc of radius 36 in the top-right corner.
+    let light = egui::pos2(view.right() - 60.0, view.top() + 60.0);
     let (w, h) = (view.width() as u32, view.height() as u32);
     (0..w * h)
         .map(|i| {
             let p = egui::pos2(view.left() + (i % w) as f32 + 0.5, view.top() + (i / w) as f32 + 0.5);
-            (p - gizmo).length() > 55.0 && edges.iter().all(|&e| distance(p, e) > 3.0)
+            (p - gizmo).length() > 55.0 && (p - light).length() > 52.0 && edges.iter().all(|&e| distance(p, e) > 3.0)
         })
         .collect()
 }

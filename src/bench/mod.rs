@@ -113,7 +113,9 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
         .iter()
         .find(|w| !Shading::ALL.iter().any(|v| v.name() == w.as_str()))
     {
-        return Err(BenchError::Usage(format!("unknown shading '{bad}'; use off, on or shadows")));
+        return Err(BenchError::Usage(format!(
+            "unknown shading '{bad}'; use off, on or shadows"
+        )));
     }
     let mut report = BenchReport {
         device: gpu.device_name.clone(),

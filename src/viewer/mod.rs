@@ -7,6 +7,8 @@
 //! changed, so an idle viewer sleeps in the event loop.
 
 pub mod controls;
+pub mod light_gizmo;
+pub mod lighting_panel;
 pub mod tf_editor;
 pub mod time_control;
 pub mod ui;

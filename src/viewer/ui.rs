@@ -464,6 +464,8 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
             });
         });
 
+    super::lighting_panel::lighting_section(ui, &mut state.look);
+
     egui::CollapsingHeader::new("Slicing")
         .default_open(true)
         .show(ui, |ui| {
@@ -646,11 +648,13 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
     let gizmo_center = Vec2::new(rect.right() - 60.0, rect.bottom() - 60.0);
     let gizmo_radius = 40.0;
     state.interacting = response.dragged();
+    // A drag that starts on the light gizmo moves the light, not the camera.
+    let moving_light = super::light_gizmo::light_gizmo(ui, state, rect, &response);
 
     if let Some(pos) = response.interact_pointer_pos() {
         let p = Vec2::new(pos.x - rect.left(), pos.y - rect.top());
         let d = response.drag_delta();
-        if response.dragged_by(egui::PointerButton::Primary) && d != egui::Vec2::ZERO {
+        if response.dragged_by(egui::PointerButton::Primary) && d != egui::Vec2::ZERO && !moving_light {
             state.animation = None;
             state.orbit.arcball(p - Vec2::new(d.x, d.y), p, viewport);
         }
