@@ -2,16 +2,26 @@
 # Renders the README's gallery into docs/gallery/ with the commands the README lists (needs ../shared/data).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-v="cargo run --release -q -- render"
+cargo build --release -q
+v="target/release/volcast render"
 ct=../shared/data/raw/cranium_ct_256x256x108_int16.raw
-common=(--spacing 0.957031 0.957031 1.5 --azimuth 25 --elevation 10 --size 220x220)
+brain=../shared/data/native/colin27_t1/ch2.nii.gz
+common=(--spacing 0.957031 0.957031 1.5 --azimuth 25 --elevation 10 --distance 1.85 --size 256x256)
 out=docs/gallery
+mkdir -p $out
+# Lighting (README, Lighting): shadows and ambient occlusion, layered iso-surfaces, the terracing fix.
+$v "$ct" "${common[@]}" --preset ct-bone --shadows --ambient-occlusion -o $out/ct-bone-shadows-ao.png
 $v "$ct" "${common[@]}" --preset ct-bone --shading -o $out/ct-bone-shaded.png
+$v "$ct" "${common[@]}" --mode iso --iso 0.45 --surface 0.2,0.95,0.72,0.62,0.3 --shadows --ambient-occlusion \
+  -o $out/ct-skin-over-bone.png
+$v "$brain" --mode iso --iso 0.45 --surface 0.12,0.95,0.75,0.65,0.35 --slice z:0.35:0.7 --azimuth 0 \
+  --elevation 40 --light -1,1,1 --distance 2.0 --size 256x256 -o $out/brain-skin-over-cortex.png
+$v "$brain" --mode iso --iso 0.35 --gradients samples --distance 2.0 --size 256x256 -o $out/brain-iso-central-differences.png
+$v "$brain" --mode iso --iso 0.35 --distance 2.0 --size 256x256 -o $out/brain-iso-filtered.png
+# Transfer functions and modes.
 $v "$ct" "${common[@]}" --preset ct-soft-tissue --shading -o $out/ct-soft-tissue-shaded.png
 $v "$ct" "${common[@]}" --preset ct-lung -o $out/ct-lung.png
-$v "$ct" "${common[@]}" --preset qt-example -o $out/qt-example.png
 $v "$ct" "${common[@]}" --mode mip --window 0.3,1 --colormap grayscale -o $out/ct-mip.png
-$v "$ct" "${common[@]}" --mode iso --iso 0.33 --colormap grayscale --window 0,1 -o $out/ct-iso.png
 $v "$ct" "${common[@]}" --mode density --preset ct-bone --density 3 -o $out/ct-density.png
 $v ../shared/data/raw/motor_zmap_53x63x46_float32.raw --spacing 3 3 3 --mode mip --window 0.55,1 \
-  --colormap plasma --elevation 90 --size 220x220 -o $out/fmri-mip.png
+  --colormap plasma --elevation 90 --size 256x256 -o $out/fmri-mip.png
