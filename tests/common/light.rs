@@ -201,6 +201,21 @@ impl LightGridRef {
         lerp(c0, c1, w[2])
     }
 
+    /// T of cell `c`.
+    pub fn t_cell(&self, c: [usize; 3]) -> f64 {
+        self.t[c[0] + self.n[0] * (c[1] + self.n[1] * c[2])]
+    }
+
+    /// O of cell `c`.
+    pub fn o_cell(&self, c: [usize; 3]) -> f64 {
+        self.o[c[0] + self.n[0] * (c[1] + self.n[1] * c[2])]
+    }
+
+    /// The grid's size in cells.
+    pub fn cells(&self) -> [usize; 3] {
+        self.n
+    }
+
     /// T read 1.5 steps towards the light from `tex`.
     pub fn shadow(&self, tex: DVec3) -> f64 {
         self.filter(&self.t, tex + self.read_offset)
