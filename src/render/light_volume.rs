@@ -3,7 +3,7 @@
 //! by shaders/light.comp when the transfer function, the light or the volume changes, and read by the march with
 //! one filtered fetch per lit sample (two with occlusion).
 
-use super::VolumeInfo;
+use super::{FrameUniforms, Renderer, VolumeInfo};
 use crate::gpu::pipeline::{compute_pipeline, ShaderCode};
 use crate::gpu::resources::{Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barrier, memory_barrier, Access};
@@ -389,4 +389,72 @@ pub fn voxel_world(s: &RenderSettings, v: &VolumeInfo) -> f64 {
         .map(|i| index_to_world.col(i).length())
         .into_iter()
         .fold(f64::INFINITY, f64::min)
+}
+
+impl Renderer {
+    /// How long the last light grid (rule 9) took to fill, in ms; None before the first.
+    pub fn light_grid_ms(&self) -> Option<f64> {
+        self.light_ms
+    }
+
+    pub(super) fn light_is_current(&self, s: &RenderSettings) -> bool {
+        !s.uses_light_volume()
+            || self
+                .volume
+                .as_ref()
+                .is_none_or(|v| v.light.as_ref().is_some_and(|l| l.key == LightKey::of(s)))
+    }
+
+    /// Fills rule 9's light grid for `s` where it does not hold `s`'s yet (the table must be current). The
+    /// frame's uniforms go to the first slot's buffer, which no frame in flight reads (prepare's contract).
+    pub(super) fn prepare_light(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
+        if self.light_is_current(s) {
+            return Ok(());
+        }
+        let li = self.layout_index();
+        let (Some(vol), Some(pass), Some(slot)) = (&mut self.volume, &mut self.light_pass, self.slots.first_mut())
+        else {
+            return Ok(());
+        };
+        let grid = grid_for(s, &vol.info);
+        // Before any image is taken out of the volume, so that an error leaves nothing unowned.
+        slot.uniforms
+            .write(bytemuck::bytes_of(&FrameUniforms::new(s, &vol.info)))?;
+        if vol.light.as_ref().is_some_and(|l| {
+            let e = l.image.desc.extent;
+            [e.width, e.height, e.depth] != grid.cells
+        }) {
+            if let Some(old) = vol.light.take() {
+                old.image.destroy(gpu);
+            }
+        }
+        let image = match vol.light.take() {
+            Some(l) => l.image,
+            None => light_image(gpu, &grid)?,
+        };
+        let voxel = voxel_world(s, &vol.info);
+        let started = std::time::Instant::now();
+        let filled = pass.fill(
+            gpu,
+            li,
+            s,
+            &self.lut_table,
+            &grid,
+            voxel,
+            &image,
+            [slot.set, self.volume_set],
+        );
+        self.light_ms = Some(started.elapsed().as_secs_f64() * 1e3);
+        if let Err(e) = filled {
+            image.destroy(gpu);
+            self.write_volume_set(gpu);
+            return Err(e);
+        }
+        vol.light = Some(LightImage {
+            image,
+            key: LightKey::of(s),
+        });
+        self.write_volume_set(gpu);
+        Ok(())
+    }
 }

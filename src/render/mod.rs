@@ -364,11 +364,6 @@ impl Renderer {
         Ok(())
     }
 
-    /// How long the last light grid (rule 9) took to fill, in ms; None before the first.
-    pub fn light_grid_ms(&self) -> Option<f64> {
-        self.light_ms
-    }
-
     /// Whether the loaded volume's gradient texture is made (`enable_gradient_texture`).
     pub fn has_gradient_texture(&self) -> bool {
         self.volume.as_ref().is_some_and(|v| v.gradient.is_some())
@@ -411,66 +406,6 @@ impl Renderer {
             || !self.occupancy_is_current(s)
             || self.march_pipelines[setup_index(s)][march_variant(s)][self.layout_index()] == vk::Pipeline::null()
             || !self.light_is_current(s)
-    }
-
-    fn light_is_current(&self, s: &RenderSettings) -> bool {
-        !s.uses_light_volume()
-            || self
-                .volume
-                .as_ref()
-                .is_none_or(|v| v.light.as_ref().is_some_and(|l| l.key == light_volume::LightKey::of(s)))
-    }
-
-    /// Fills rule 9's light grid for `s` where it does not hold `s`'s yet (the table must be current). The
-    /// frame's uniforms go to the first slot's buffer, which no frame in flight reads (prepare's contract).
-    fn prepare_light(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
-        if self.light_is_current(s) {
-            return Ok(());
-        }
-        let li = self.layout_index();
-        let (Some(vol), Some(pass), Some(slot)) = (&mut self.volume, &mut self.light_pass, self.slots.first_mut())
-        else {
-            return Ok(());
-        };
-        let grid = light_volume::grid_for(s, &vol.info);
-        if vol.light.as_ref().is_some_and(|l| {
-            let e = l.image.desc.extent;
-            [e.width, e.height, e.depth] != grid.cells
-        }) {
-            if let Some(old) = vol.light.take() {
-                old.image.destroy(gpu);
-            }
-        }
-        let image = match vol.light.take() {
-            Some(l) => l.image,
-            None => light_volume::light_image(gpu, &grid)?,
-        };
-        slot.uniforms
-            .write(bytemuck::bytes_of(&FrameUniforms::new(s, &vol.info)))?;
-        let voxel = light_volume::voxel_world(s, &vol.info);
-        let started = std::time::Instant::now();
-        let filled = pass.fill(
-            gpu,
-            li,
-            s,
-            &self.lut_table,
-            &grid,
-            voxel,
-            &image,
-            [slot.set, self.volume_set],
-        );
-        self.light_ms = Some(started.elapsed().as_secs_f64() * 1e3);
-        if let Err(e) = filled {
-            image.destroy(gpu);
-            self.write_volume_set(gpu);
-            return Err(e);
-        }
-        vol.light = Some(light_volume::LightImage {
-            image,
-            key: light_volume::LightKey::of(s),
-        });
-        self.write_volume_set(gpu);
-        Ok(())
     }
 
     fn occupancy_is_current(&self, s: &RenderSettings) -> bool {
