@@ -612,6 +612,17 @@ impl FrameArgs {
             || self.ambient_occlusion;
         s.shadows = self.shadows;
         s.ambient_occlusion = self.ambient_occlusion;
+        if (s.shadows || s.ambient_occlusion)
+            && matches!(
+                s.mode,
+                CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average
+            )
+        {
+            eprintln!(
+                "note: {} is not lit: shadows and ambient occlusion do not apply",
+                s.mode.name()
+            );
+        }
         s.shading = (self.shading || lit).then_some(self.lighting);
         s.light = volcast::lighting::Light {
             direction: self.light.and_then(|l| l.0),

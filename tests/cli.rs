@@ -216,6 +216,52 @@ fn bad_settings_give_clear_errors() {
         ],
         "image size",
     );
+    // The lighting options: each bad value is named.
+    let small = ["render", "--builtin", "colormap", "--builtin-size", "8"];
+    for (extra, needle) in [
+        (&["--light", "0,0,0"][..], "light direction"),
+        (&["--light-color", "2,0,0"][..], "light colour"),
+        (&["--light-intensity", "99"][..], "light intensity"),
+        (&["--mode", "iso", "--iso-opacity", "0"][..], "opacity"),
+        (
+            &[
+                "--mode",
+                "iso",
+                "--surface",
+                "0.1",
+                "--surface",
+                "0.2",
+                "--surface",
+                "0.3",
+                "--surface",
+                "0.4",
+            ][..],
+            "at most 4 iso-surfaces",
+        ),
+    ] {
+        let args: Vec<&str> = small.iter().chain(extra).copied().collect();
+        assert_fails_with(&args, needle);
+    }
+}
+
+/// Shadows and occlusion asked of a projection render it unlit, with a note saying so.
+#[test]
+fn shadows_in_mip_render_with_a_note() {
+    let out = scratch("mip-shadows.png");
+    let o = volcast(&[
+        "render",
+        "--builtin",
+        "colormap",
+        "--builtin-size",
+        "8",
+        "--mode",
+        "mip",
+        "--shadows",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("mip is not lit"), "{}", stderr(&o));
 }
 
 #[test]
@@ -225,6 +271,9 @@ fn clap_rejects_malformed_arguments() {
         &["render", "--builtin", "helix", "--slice", "w:0.5:0.1"],
         &["render", "--builtin", "helix", "--eye", "1,2"],
         &["render", "--builtin", "helix", "--method", "magic"],
+        &["render", "--builtin", "helix", "--surface", "0.3,0.5"],
+        &["render", "--builtin", "helix", "--iso-color", "pink"],
+        &["render", "--builtin", "helix", "--light", "up"],
     ] {
         let o = volcast(args);
         assert_eq!(o.status.code(), Some(2), "{args:?}: clap usage errors exit 2");
