@@ -211,6 +211,15 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                         shading.name()
                     ));
                     let converged_image = headless.render(gpu, &converged(&s))?.image;
+                    // The converged frame made rule 9's light grid (the step is not part of it): its cost, once per
+                    // transfer function, light or volume.
+                    let light_grid_ms = s
+                        .uses_light_volume()
+                        .then(|| headless.renderer.light_grid_ms())
+                        .flatten();
+                    if let Some(ms) = light_grid_ms {
+                        log(&format!("{} {size}x{size}: light grid {ms:.0} ms", scene.name));
+                    }
                     let methods = Method::ALL
                         .into_iter()
                         .filter(|m| opts.methods.is_empty() || opts.methods.iter().any(|n| n == m.name()));
@@ -271,6 +280,7 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
                             load: load_average(),
                             step_length: s.step_length,
                             max_stride: s.max_stride,
+                            light_grid_ms,
                             error: Fidelity::of(&last.ok_or(GpuError::Lost("no frames timed"))?, &converged_image, &s),
                         });
                     }

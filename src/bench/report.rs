@@ -105,6 +105,8 @@ pub struct SceneResult {
     pub step_length: f32,
     /// The longest brick stride allowed (rule 2; 1: every sample).
     pub max_stride: u32,
+    /// Shadows and occlusion: how long the light grid took to fill (once per transfer function, light or volume).
+    pub light_grid_ms: Option<f64>,
     /// The last timed frame against the scene's converged image (`fidelity`), in 1/255.
     pub error: Fidelity,
 }
