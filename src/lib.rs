@@ -8,6 +8,7 @@ pub mod fidelity;
 pub mod gpu;
 pub mod headless;
 pub mod huge_pages;
+pub mod image_out;
 pub mod info;
 pub mod lighting;
 pub mod playback;

@@ -714,6 +714,7 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 fn render(args: &RenderArgs) -> Result<()> {
+    volcast::image_out::check_name(&args.output).map_err(anyhow::Error::msg)?;
     let t_load = Instant::now();
     let volume = args.volume.load()?;
     let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
@@ -763,10 +764,7 @@ fn render(args: &RenderArgs) -> Result<()> {
                     }
                 }
             }
-            frame
-                .image
-                .save(&args.output)
-                .with_context(|| format!("writing {}", args.output.display()))?;
+            volcast::image_out::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
             println!(
                 "rendered {} ({}x{}x{} {}, spacing {}x{}x{}) at {}x{} with {} ray setup on {} -> {}",
                 volume.name,
@@ -857,7 +855,7 @@ fn compare(args: &CompareArgs) -> Result<()> {
                 let diff = compare::amplified_diff(&c.faces.image, &c.analytic.image, 10);
                 let save = |suffix: &str, img: &image::RgbaImage| -> Result<()> {
                     let path = args.out.join(format!("{}-{suffix}.png", view.name));
-                    img.save(&path).with_context(|| format!("writing {}", path.display()))
+                    volcast::image_out::save(img, &path).map_err(anyhow::Error::msg)
                 };
                 save("faces", &c.faces.image)?;
                 save("analytic", &c.analytic.image)?;

@@ -244,6 +244,46 @@ fn bad_settings_give_clear_errors() {
     }
 }
 
+/// A render that fails writes nothing: a name volcast cannot write is refused before rendering, and no empty file
+/// is left behind (a `.jpg` name used to leave one).
+#[test]
+fn a_failed_render_leaves_no_file() {
+    for name in ["failed.jpg", "failed"] {
+        let out = scratch(name);
+        let _ = std::fs::remove_file(&out);
+        assert_fails_with(
+            &[
+                "render",
+                "--builtin",
+                "colormap",
+                "--builtin-size",
+                "8",
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            "volcast writes PNG images",
+        );
+        assert!(!out.exists(), "{name} was left behind");
+    }
+    let out = scratch("failed-size.png");
+    let _ = std::fs::remove_file(&out);
+    assert_fails_with(
+        &[
+            "render",
+            "--builtin",
+            "colormap",
+            "--builtin-size",
+            "8",
+            "--size",
+            "0x4",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "image size",
+    );
+    assert!(!out.exists());
+}
+
 /// Shadows and occlusion asked of a projection render it unlit, with a note saying so.
 #[test]
 fn shadows_in_mip_render_with_a_note() {

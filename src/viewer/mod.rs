@@ -1251,8 +1251,7 @@ fn save_screenshot(
         .to_vec();
     let img = image::RgbaImage::from_raw(settings.width, settings.height, pixels)
         .ok_or_else(|| ViewerError::Other("screenshot size mismatch".into()))?;
-    img.save(path)
-        .map_err(|e| ViewerError::Other(format!("writing {}: {e}", path.display())))?;
+    crate::image_out::save(&img, path).map_err(ViewerError::Other)?;
     let json = serde_json::to_string_pretty(settings).map_err(|e| ViewerError::Other(e.to_string()))?;
     std::fs::write(path.with_extension("json"), json)
         .map_err(|e| ViewerError::Other(format!("writing {}: {e}", path.with_extension("json").display())))?;
