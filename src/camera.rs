@@ -28,11 +28,17 @@ pub const DEFAULT_FAR: f32 = 100.0;
 
 impl Camera {
     /// A camera on a sphere around `target`. Azimuth turns about +z starting on the +y axis (VTK's convention:
-    /// positive azimuth is counter-clockwise seen from above); elevation lifts towards +z.
+    /// positive azimuth is counter-clockwise seen from above); elevation lifts towards +z. Up is the direction of
+    /// rising elevation: +z as seen from the side, and at ±90° (straight above or below, where +z is the view
+    /// axis) the limit of that, so the azimuth still turns the image and nothing jumps there.
     pub fn orbit(azimuth_deg: f32, elevation_deg: f32, distance: f32, target: Vec3) -> Camera {
         let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
         let dir = Vec3::new(-az.sin() * el.cos(), az.cos() * el.cos(), el.sin());
-        Camera::looking_at(target + dir * distance, target)
+        let mut c = Camera::looking_at(target + dir * distance, target);
+        // (Rounding noise snapped to zero, so that presets' up vectors are exact.)
+        let up = Vec3::new(az.sin() * el.sin(), -az.cos() * el.sin(), el.cos());
+        c.up = Vec3::select(up.abs().cmplt(Vec3::splat(1e-6)), Vec3::ZERO, up).normalize();
+        c
     }
 
     /// A camera at `eye` looking at `target`, +z up unless the view is (nearly) along z, then +y.
@@ -163,7 +169,9 @@ impl ViewPreset {
             ViewPreset::Posterior => (180.0, 0.0),
             ViewPreset::Left => (90.0, 0.0),
             ViewPreset::Right => (-90.0, 0.0),
-            ViewPreset::Superior => (0.0, 90.0),
+            // From above, anterior up: the pole reached from the posterior side (orbit's up at the pole continues
+            // the approach).
+            ViewPreset::Superior => (180.0, 90.0),
             ViewPreset::Inferior => (0.0, -90.0),
         }
     }
@@ -185,6 +193,25 @@ mod tests {
     }
 
     #[test]
+    fn orbit_turns_smoothly_through_the_poles() {
+        // The image's right vector just below the pole and at it: the same, for every azimuth (it used to ignore
+        // the azimuth at exactly 90° and turn the image by up to 180°).
+        let right = |c: &Camera| c.forward().cross(c.up).normalize();
+        for az in [0.0, 35.0, 90.0, 145.0, -120.0] {
+            for pole in [90.0, -90.0] {
+                let near = Camera::orbit(az, pole - 0.01f32.copysign(pole), 3.0, Vec3::ZERO);
+                let at = Camera::orbit(az, pole, 3.0, Vec3::ZERO);
+                assert!(right(&near).dot(right(&at)) > 0.9999, "azimuth {az}, elevation {pole}");
+                assert!(at.up.dot(at.forward()).abs() < 1e-6);
+            }
+        }
+        // Away from the poles the camera is the one looking_at gives (+z up).
+        let c = Camera::orbit(35.0, 25.0, 3.0, Vec3::ZERO);
+        let l = Camera::looking_at(c.eye, c.target);
+        assert!(right(&c).dot(right(&l)) > 0.99999);
+    }
+
+    #[test]
     fn orbit_starts_on_plus_y_and_turns_counter_clockwise() {
         let c = Camera::orbit(0.0, 0.0, 2.0, Vec3::ZERO);
         assert!((c.eye - Vec3::new(0.0, 2.0, 0.0)).length() < 1e-6);
@@ -192,7 +219,8 @@ mod tests {
         assert!((c.eye - Vec3::new(-2.0, 0.0, 0.0)).length() < 1e-5);
         let c = Camera::orbit(0.0, 90.0, 2.0, Vec3::ZERO);
         assert!((c.eye - Vec3::new(0.0, 0.0, 2.0)).length() < 1e-5);
-        assert_eq!(c.up, Vec3::Y, "looking straight down falls back to +y up");
+        // Straight down, reached from the +y side: the image continues the approach (+y at the bottom).
+        assert!((c.up + Vec3::Y).length() < 1e-6, "{}", c.up);
     }
 
     #[test]

@@ -327,9 +327,16 @@ struct FrameArgs {
     #[arg(long)]
     distance: Option<f32>,
     /// Camera position X,Y,Z (world units: RAS for anatomical volumes, centred, the box's longest side 1),
-    /// looking at the centre.
-    #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "distance", "view"], allow_hyphen_values = true)]
+    /// looking at --look-at (default the centre).
+    #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "distance", "view", "view_dir"], allow_hyphen_values = true)]
     eye: Option<Vec3>,
+    /// The point the camera looks at, X,Y,Z in world units (default the volume's centre, 0,0,0); the orbit, --view
+    /// and --view-dir cameras turn about it.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    look_at: Option<Vec3>,
+    /// Look along direction X,Y,Z (world units) at --look-at from --distance (default: fitting the volume).
+    #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "view"], allow_hyphen_values = true)]
+    view_dir: Option<Vec3>,
     /// View from a side of the patient: anterior, posterior, left, right, superior or inferior (head up; from
     /// above and below anterior up). An anatomical volume is seen from anterior unless told otherwise.
     #[arg(long)]
@@ -559,14 +566,21 @@ impl FrameArgs {
             None if anatomical && self.azimuth.is_none() && self.elevation.is_none() => Some(ViewPreset::Anterior),
             None => None,
         };
-        s.camera = match (self.eye, view) {
-            (Some(eye), _) => Camera::looking_at(eye, Vec3::ZERO),
-            (None, Some(view)) => view.camera(distance, Vec3::ZERO),
-            (None, None) => Camera::orbit(
+        let target = self.look_at.unwrap_or(Vec3::ZERO);
+        s.camera = match (self.eye, self.view_dir, view) {
+            (Some(eye), _, _) => Camera::looking_at(eye, target),
+            (None, Some(dir), _) => {
+                if !(dir.is_finite() && dir.length() > 1e-6) {
+                    bail!("--view-dir {dir} must be a non-zero direction");
+                }
+                Camera::looking_at(target - dir.normalize() * distance, target)
+            }
+            (None, None, Some(view)) => view.camera(distance, target),
+            (None, None, None) => Camera::orbit(
                 self.azimuth.unwrap_or(if anatomical { 0.0 } else { 35.0 }),
                 self.elevation.unwrap_or(if anatomical { 0.0 } else { 25.0 }),
                 distance,
-                Vec3::ZERO,
+                target,
             ),
         };
         s.camera.fov_y_deg = self.fov;

@@ -517,8 +517,14 @@ impl RenderSettings {
             return Err("the compute march uses the analytic ray setup (--method compute)".into());
         }
         let c = &self.camera;
-        if !(c.eye - c.target).length().is_normal() || !(1.0..=170.0).contains(&c.fov_y_deg) {
-            return Err("camera eye must differ from its target and the field of view be in 1..170 degrees".into());
+        if !(c.eye - c.target).length().is_normal() {
+            return Err(format!(
+                "the camera's eye {} must differ from the point it looks at",
+                c.eye
+            ));
+        }
+        if !(1.0..=170.0).contains(&c.fov_y_deg) {
+            return Err(format!("field of view {}° must be in 1..170 degrees", c.fov_y_deg));
         }
         Ok(())
     }

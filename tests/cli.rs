@@ -216,6 +216,37 @@ fn bad_settings_give_clear_errors() {
         ],
         "image size",
     );
+    // One message per condition.
+    assert_fails_with(
+        &[
+            "render",
+            "--builtin",
+            "colormap",
+            "--builtin-size",
+            "8",
+            "--eye",
+            "0.2,0,0",
+            "--look-at",
+            "0.2,0,0",
+        ],
+        "must differ from the point it looks at",
+    );
+    assert_fails_with(
+        &["render", "--builtin", "colormap", "--builtin-size", "8", "--fov", "200"],
+        "field of view 200° must be in 1..170 degrees",
+    );
+    assert_fails_with(
+        &[
+            "render",
+            "--builtin",
+            "colormap",
+            "--builtin-size",
+            "8",
+            "--view-dir",
+            "0,0,0",
+        ],
+        "non-zero direction",
+    );
     // The lighting options: each bad value is named.
     let small = ["render", "--builtin", "colormap", "--builtin-size", "8"];
     for (extra, needle) in [

@@ -153,6 +153,21 @@ fn camera_options_take_effect() {
         rule(&["--eye", "0.9,-1.1,0.6"], |s, _| {
             s.camera = Camera::looking_at(Vec3::new(0.9, -1.1, 0.6), Vec3::ZERO)
         }),
+        // A look-at point for the eye, the orbit and a view direction.
+        rule(&["--eye", "0.9,-1.1,0.6", "--look-at", "0.15,0,-0.1"], |s, _| {
+            s.camera = Camera::looking_at(Vec3::new(0.9, -1.1, 0.6), Vec3::new(0.15, 0.0, -0.1))
+        }),
+        rule(&["--look-at", "0,0.2,0.1"], |s, _| {
+            s.camera = Camera::orbit(35.0, 25.0, s.camera.eye.length(), Vec3::new(0.0, 0.2, 0.1))
+        }),
+        rule(&["--view-dir", "-1,0.5,-0.3", "--distance", "1.6"], |s, _| {
+            let dir = Vec3::new(-1.0, 0.5, -0.3).normalize();
+            s.camera = Camera::looking_at(-dir * 1.6, Vec3::ZERO)
+        }),
+        // Through the pole without a jump: the azimuth still turns the image at 90° elevation.
+        rule(&["--azimuth", "140", "--elevation", "90"], |s, _| {
+            s.camera = Camera::orbit(140.0, 90.0, s.camera.eye.length(), Vec3::ZERO)
+        }),
         rule(&["--fov", "50"], |s, e| {
             s.camera = Camera::orbit(35.0, 25.0, Camera::fit_distance(e.length() * 0.5, 50.0), Vec3::ZERO);
             s.camera.fov_y_deg = 50.0;
