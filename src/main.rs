@@ -722,6 +722,24 @@ fn with_gpu<T>(args: &GpuArgs, body: impl FnOnce(&Gpu) -> Result<T>) -> Result<T
     result
 }
 
+/// The exit status of a malformed command line.
+const USAGE_EXIT: u8 = 64;
+
+/// `e` and its causes, each cause added only where the text so far does not already say it (errors that embed
+/// their source in their own message would otherwise print it twice: "…(os error 2): …(os error 2)").
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let part = cause.to_string();
+        if text.is_empty() {
+            text = part;
+        } else if !text.contains(&part) {
+            text = format!("{text}: {part}");
+        }
+    }
+    text
+}
+
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
@@ -977,7 +995,14 @@ fn devices() -> Result<()> {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // Usage errors exit 64 (sysexits' EX_USAGE), not clap's 2: 2 says "no usable Vulkan".
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { USAGE_EXIT } else { 0 });
+        }
+    };
     let result = match &cli.command {
         None => view(&ViewArgs {
             volume: VolumeArgs {
@@ -1013,7 +1038,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_text(&e));
             let unavailable = e.downcast_ref::<GpuError>().is_some_and(|g| g.is_unavailable())
                 || e.downcast_ref::<ViewerError>().is_some_and(|v| match v {
                     ViewerError::NoDisplay(_) => true,

@@ -162,6 +162,16 @@ fn bad_volumes_give_clear_errors() {
         &["info", "/nonexistent/vol_8x8x8_uint8.raw"],
         "/nonexistent/vol_8x8x8_uint8.raw",
     );
+    // The cause once, not twice ("…(os error 2): …(os error 2)").
+    let o = volcast(&["info", "/nonexistent/vol_8x8x8_uint8.raw"]);
+    assert_eq!(stderr(&o).matches("(os error 2)").count(), 1, "{}", stderr(&o));
+    // A size limit names the file (it is found before anything is read).
+    let huge = scratch("huge_3000x3000x3000_uint16.raw");
+    std::fs::write(&huge, vec![0u8; 16]).unwrap();
+    assert_fails_with(
+        &["info", huge.to_str().unwrap()],
+        "huge_3000x3000x3000_uint16.raw: dimensions 3000x3000x3000",
+    );
     assert_fails_with(&["info", "--builtin", "teapot"], "helix");
     assert_fails_with(&["render"], "no volume given");
 }
@@ -347,7 +357,11 @@ fn clap_rejects_malformed_arguments() {
         &["render", "--builtin", "helix", "--light", "up"],
     ] {
         let o = volcast(args);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: clap usage errors exit 2");
+        assert_eq!(
+            o.status.code(),
+            Some(64),
+            "{args:?}: usage errors exit 64 (2 is no Vulkan)"
+        );
         assert!(!stderr(&o).contains("panicked"));
     }
 }

@@ -166,12 +166,31 @@ pub fn open(path: &Path, opts: &OpenOptions) -> Result<Volume, VolumeError> {
     open_with_progress(path, opts, &mut |_| {})
 }
 
-/// [`open`], reporting the fraction of voxel data read so far (0 to 1) as it goes.
+/// [`open`], reporting the fraction of voxel data read so far (0 to 1) as it goes. Every error names the file:
+/// one that does not (a size limit found before anything was read, say) is prefixed with it.
 pub fn open_with_progress(
     path: &Path,
     opts: &OpenOptions,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Volume, VolumeError> {
+    open_unnamed(path, opts, progress).map_err(|e| {
+        let text = e.to_string();
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if name.is_empty() || text.contains(&name) {
+            e
+        } else {
+            VolumeError::Header {
+                file: path.display().to_string(),
+                problem: text,
+            }
+        }
+    })
+}
+
+fn open_unnamed(path: &Path, opts: &OpenOptions, progress: &mut dyn FnMut(f32)) -> Result<Volume, VolumeError> {
     let mut progress = Progress::new(Some(progress));
     // A file of a format volcast does not read can still be read as raw when the layout is given explicitly.
     let explicit_raw = opts.raw.dims.is_some() && opts.raw.voxel_type.is_some();
