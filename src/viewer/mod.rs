@@ -840,8 +840,12 @@ impl Running {
     fn redraw(&mut self) -> Result<Flow, ViewerError> {
         let now = Instant::now();
         let frame_s = now.duration_since(self.last_frame).as_secs_f64();
+        // Animation steps are capped (a slow frame must not throw the view); the frame time shown is not.
         let dt = (frame_s as f32).min(0.1);
         self.last_frame = now;
+        // The interval since the last frame is the frame time while frames follow each other; after an idle
+        // pause it is the pause, so the last frame's GPU time stands in.
+        let follows = self.wants_continuous_redraw() || self.refine_pending;
         self.poll_loading()?;
         if let Some(rx) = &self.dialog {
             match rx.try_recv() {
@@ -931,7 +935,7 @@ impl Running {
             }
         }
         self.slot_reduced[slot] = settings.width < view_size.width;
-        self.state.frame_ms = dt as f64 * 1e3;
+        self.state.frame_ms = frame_time_ms(frame_s, follows, self.state.gpu.map(|t| t.total_ms));
 
         let swapchain = self.swapchain.as_ref().ok_or(GpuError::Lost("swapchain"))?;
         // SAFETY: the semaphore is unsignalled (its last wait completed with the slot's fence).
@@ -1237,6 +1241,15 @@ fn view_pixels(rect: Option<egui::Rect>, pixels_per_point: f32, extent: vk::Exte
     )
 }
 
+/// The frame time shown: the interval since the last frame when it followed directly (never capped: a 256 ms
+/// frame shows 256), else the frame's GPU time (the interval would be the idle pause before it).
+fn frame_time_ms(interval_s: f64, follows: bool, gpu_ms: Option<f64>) -> f64 {
+    match (follows, gpu_ms) {
+        (false, Some(gpu)) => gpu,
+        _ => interval_s * 1e3,
+    }
+}
+
 /// Writes the view image's pixels (RGBA8, exactly what the view shows without the panel) and the settings; a
 /// series' shown step is logged after the file name.
 fn save_screenshot(
@@ -1265,6 +1278,15 @@ fn save_screenshot(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_frame_time_is_not_capped_and_ignores_idle_pauses() {
+        // A 256 ms frame following another shows 256 ms (it was capped at 100).
+        assert_eq!(frame_time_ms(0.256, true, Some(250.0)), 256.0);
+        // After a 7 s idle pause the GPU time stands in.
+        assert_eq!(frame_time_ms(7.0, false, Some(250.0)), 250.0);
+        assert_eq!(frame_time_ms(0.03, false, None), 30.0);
+    }
 
     #[test]
     fn scripts_parse_and_reject_nonsense() {

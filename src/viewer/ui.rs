@@ -66,6 +66,9 @@ pub struct ViewerState {
     pub full_frame_ms: Option<f64>,
     /// A series' step slider and playback.
     pub time: TimeControl,
+    /// Keep the transfer function and value window when another volume loads (else they reset: a CT's
+    /// Hounsfield-unit function would leave an MRI invisible).
+    pub tf_locked: bool,
 }
 
 /// What the panel asks the viewer to do.
@@ -118,6 +121,7 @@ impl ViewerState {
             interacting: false,
             full_frame_ms: None,
             time: TimeControl::new(1, 0),
+            tf_locked: false,
         }
     }
 
@@ -147,8 +151,13 @@ impl ViewerState {
         self.animation = None;
     }
 
-    /// A new volume: its box, placement and a default view; transfer function and slicing stay.
+    /// A new volume: its box, placement and a default view; the classification (transfer function and value
+    /// window) resets to the simple model unless locked; slicing stays.
     pub fn set_volume(&mut self, extent: Vec3, geometry: Geometry, dims: [u32; 3], label: String) {
+        if !self.tf_locked {
+            self.look.transfer_function = None;
+            self.look.window = crate::settings::DEFAULT_WINDOW;
+        }
         self.extent = extent;
         self.geometry = geometry;
         self.dims = dims;
@@ -351,6 +360,8 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
                         }
                     }
                 });
+            ui.checkbox(&mut state.tf_locked, "keep when another volume loads");
+            let look = &mut state.look;
             ui.label("Visible value range");
             ui.add(egui::Slider::new(&mut look.window[0], 0.0..=1.0).text("min"));
             ui.add(egui::Slider::new(&mut look.window[1], 0.0..=1.0).text("max"));
@@ -932,6 +943,22 @@ mod tests {
             let p = project(vp, c, rect).expect("in front of the camera");
             assert!(rect.contains(p), "{p:?}");
         }
+    }
+
+    #[test]
+    fn a_new_volume_resets_the_classification_unless_locked() {
+        // A CT's Hounsfield-unit function left a newly loaded MRI invisible.
+        let mut state = ViewerState::new(Vec3::ONE, "x".into());
+        let g = Geometry::from_spacing([1.0; 3]);
+        state.look.transfer_function = crate::tf::TransferFunction::preset("ct-bone").ok();
+        state.look.window = [0.0, 1.0];
+        state.set_volume(Vec3::ONE, g, [10, 10, 10], "mri".into());
+        assert!(state.look.transfer_function.is_none());
+        assert_eq!(state.look.window, crate::settings::DEFAULT_WINDOW);
+        state.look.transfer_function = crate::tf::TransferFunction::preset("ct-bone").ok();
+        state.tf_locked = true;
+        state.set_volume(Vec3::ONE, g, [10, 10, 10], "ct".into());
+        assert!(state.look.transfer_function.is_some(), "locked: kept");
     }
 
     #[test]
