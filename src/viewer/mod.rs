@@ -871,10 +871,20 @@ impl Running {
         }
 
         // The UI runs first: it may change what this frame shows.
-        let raw_input = self.egui_state.take_egui_input(&self.window);
+        let mut raw_input = self.egui_state.take_egui_input(&self.window);
+        // Tab belongs to the panel, not to egui's focus traversal: egui would move the focus into a text field,
+        // which then swallowed every shortcut (Tab included) once the panel was hidden.
+        let tabs = ui::take_tab_presses(&mut raw_input);
         let state = &mut self.state;
         let mut actions = Vec::new();
         let full = self.egui_ctx.run_ui(raw_input, |ui| {
+            if tabs % 2 == 1 {
+                state.panel_visible = !state.panel_visible;
+            }
+            if !state.panel_visible {
+                // Nothing hidden may keep the keyboard.
+                ui.ctx().memory_mut(|m| m.stop_text_input());
+            }
             actions.extend(ui::shortcuts(ui.ctx(), state));
             if state.panel_visible {
                 egui::Panel::left("settings")

@@ -767,7 +767,32 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
     }
 }
 
-/// Keyboard shortcuts: R reset, Space auto-rotate, Tab panel, F12 screenshot.
+/// Removes the presses of Tab (without modifiers) from `input` and returns how many there were: the viewer handles
+/// Tab itself (panel on/off) and egui must not move its focus with it.
+pub fn take_tab_presses(input: &mut egui::RawInput) -> usize {
+    let is_tab =
+        |e: &egui::Event| matches!(e, egui::Event::Key { key: egui::Key::Tab, modifiers, .. } if modifiers.is_none());
+    let presses = input
+        .events
+        .iter()
+        .filter(|e| {
+            is_tab(e)
+                && matches!(
+                    e,
+                    egui::Event::Key {
+                        pressed: true,
+                        repeat: false,
+                        ..
+                    }
+                )
+        })
+        .count();
+    input.events.retain(|e| !is_tab(e));
+    presses
+}
+
+/// Keyboard shortcuts: R reset, Space auto-rotate, Tab panel (scripted keys; a real Tab is taken before egui,
+/// `take_tab_presses`), F12 screenshot.
 pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> {
     let mut actions = Vec::new();
     if ctx.egui_wants_keyboard_input() {
@@ -943,6 +968,25 @@ mod tests {
             let p = project(vp, c, rect).expect("in front of the camera");
             assert!(rect.contains(p), "{p:?}");
         }
+    }
+
+    #[test]
+    fn tab_presses_are_taken_from_egui() {
+        let key = |key, pressed| egui::Event::Key {
+            key,
+            physical_key: None,
+            pressed,
+            repeat: false,
+            modifiers: Default::default(),
+        };
+        let mut input = egui::RawInput::default();
+        input.events = vec![
+            key(egui::Key::Tab, true),
+            key(egui::Key::Tab, false),
+            key(egui::Key::R, true),
+        ];
+        assert_eq!(take_tab_presses(&mut input), 1);
+        assert_eq!(input.events.len(), 1, "R stays for the shortcuts");
     }
 
     #[test]
