@@ -979,12 +979,14 @@ mod tests {
             repeat: false,
             modifiers: Default::default(),
         };
-        let mut input = egui::RawInput::default();
-        input.events = vec![
-            key(egui::Key::Tab, true),
-            key(egui::Key::Tab, false),
-            key(egui::Key::R, true),
-        ];
+        let mut input = egui::RawInput {
+            events: vec![
+                key(egui::Key::Tab, true),
+                key(egui::Key::Tab, false),
+                key(egui::Key::R, true),
+            ],
+            ..Default::default()
+        };
         assert_eq!(take_tab_presses(&mut input), 1);
         assert_eq!(input.events.len(), 1, "R stays for the shortcuts");
     }
