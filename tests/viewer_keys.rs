@@ -57,7 +57,6 @@ fn shortcuts_keep_working_after_tab_hides_the_panel() {
         s0.shading.is_some(),
         "S with the panel back"
     );
-    drop(shot);
 
     let status = viewer.finish();
     assert!(status.success(), "viewer exit: {status}\n{}", viewer.stderr);
