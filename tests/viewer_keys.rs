@@ -67,3 +67,43 @@ fn shortcuts_keep_working_after_tab_hides_the_panel() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A file named on the command line loads behind an open window (the background loader, with its progress in the
+/// panel; a 1 GiB volume used to keep the window away for 20 s): the loader's "loaded" line comes, the script waits
+/// for it, and F12 then shows the file's volume. A file that cannot be read still ends the session with its error.
+#[test]
+fn a_file_from_the_command_line_loads_behind_the_window() {
+    if !(have("xdotool", "version") && have("xwd", "-help")) {
+        common::skip("xdotool or xwd missing (apt install xdotool x11-apps)");
+        return;
+    }
+    let Some(ct) = common::shared_data("raw/cranium_ct_256x256x108_int16.raw") else {
+        return;
+    };
+    let Some(x) = xvfb() else { return };
+    let dir = std::env::temp_dir().join(format!("volcast-viewer-cli-load-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let script = format!("frames:2;wait:{WAIT_MS};exit");
+    let ct = ct.to_str().unwrap();
+    let mut viewer = Viewer::start(&x.display, &dir, &[ct], &script);
+    let loaded = viewer.wait_for("loaded ", Duration::from_secs(180));
+    assert!(loaded.contains("cranium_ct"), "{loaded}");
+    viewer.wait_for("script: Wait(", Duration::from_secs(60));
+    let window = &viewer.window(&x.display);
+    type_keys(&x.display, window, &["F12"]);
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    let (shot, _) = read_screenshot(&dir, &saved);
+    assert!(
+        shot.pixels().filter(|p| p.0[..3] != [0, 0, 0]).count() > 1000,
+        "the CT shows once loaded"
+    );
+    let status = viewer.finish();
+    assert!(status.success(), "{}", viewer.stderr);
+
+    let mut missing = Viewer::start(&x.display, &dir, &["/nonexistent/scan.nrrd"], "frames:2;exit");
+    let status = missing.finish();
+    assert_eq!(status.code(), Some(1), "{}", missing.stderr);
+    assert!(missing.stderr.contains("/nonexistent/scan.nrrd"), "{}", missing.stderr);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -279,6 +279,9 @@ struct Running {
     repaint_at: Option<Instant>,
     script: Option<Script>,
     has_volume: bool,
+    /// The volume named on the command line is loading in the background: its failure ends the session (there is
+    /// nothing else to show), and `--time` applies once it is there.
+    initial_load: Option<Option<u32>>,
     /// The last frame was a reduced-detail one: draw again at full quality once the view is still.
     refine_pending: bool,
     /// Frame times (ms) of scripted drags, reported when the script ends.
@@ -415,6 +418,7 @@ impl Running {
                 started: Instant::now(),
             }),
             has_volume: false,
+            initial_load: None,
             refine_pending: false,
             drag_frames: Vec::new(),
             slot_reduced: [false; FRAMES_IN_FLIGHT],
@@ -487,12 +491,37 @@ impl Running {
         )
         .map_err(|e| ViewerError::Other(format!("egui renderer: {e}")))?;
         self.egui_renderer = Some(egui_renderer);
-        // The first volume loads synchronously: there is nothing to show until it is there.
         let max_dim = self.gpu.properties.limits.max_image_dimension3_d;
+        if let VolumeSource::File(..) = &opts.source {
+            // A file loads in the background, so the window shows its progress at once (a 1 GiB volume took 20 s
+            // with no window at all). Until it is there an empty placeholder (all below the value window) stands
+            // in, and a script waits for it.
+            let placeholder = Volume::new(
+                "loading",
+                [2; 3],
+                [1.0; 3],
+                crate::volume::VoxelType::U8,
+                crate::volume::VoxelData::U8(vec![0; 8]),
+            )
+            .map_err(|e| ViewerError::Other(e.to_string()))?;
+            self.install_volume(placeholder, Vec::new())?;
+            self.state.volume_label = "loading…".into();
+            self.start_load(opts.source.clone());
+            self.initial_load = Some(opts.time);
+            if let Some(script) = &mut self.script {
+                script.waiting_for_load = true;
+            }
+            return Ok(());
+        }
         let first = open_source(&opts.source, max_dim, &mut |_| {}).map_err(ViewerError::Other)?;
         let histogram = value_histogram(&first);
         self.install_volume(first, histogram)?;
-        if let Some(t) = opts.time {
+        self.apply_time(opts.time)
+    }
+
+    /// `--time`: the step to show first; an error where the volume has no such step.
+    fn apply_time(&mut self, time: Option<u32>) -> Result<(), ViewerError> {
+        if let Some(t) = time {
             let steps = self.state.time.steps;
             if t >= steps {
                 return Err(ViewerError::Other(format!(
@@ -692,7 +721,7 @@ impl Running {
     }
 
     /// Takes a finished background load, keeping the old volume on error.
-    fn poll_loading(&mut self) -> Result<(), GpuError> {
+    fn poll_loading(&mut self) -> Result<(), ViewerError> {
         let Some(loading) = &self.loading else { return Ok(()) };
         match loading.rx.try_recv() {
             Ok(Ok((volume, histogram))) => {
@@ -703,12 +732,22 @@ impl Running {
                 if let Err(e) = self.install_volume(volume, histogram) {
                     eprintln!("could not show {label}: {e}");
                     self.state.error = Some(format!("{label}: {e}"));
+                    if self.initial_load.take().is_some() {
+                        return Err(e.into());
+                    }
                 } else {
                     eprintln!("loaded {label}");
                     self.state.status = Some(format!("loaded {label}"));
+                    if let Some(time) = self.initial_load.take() {
+                        self.apply_time(time)?;
+                    }
                 }
             }
             Ok(Err(e)) => {
+                if self.initial_load.take().is_some() {
+                    // The command line's volume: nothing else to show, so the session ends with its error.
+                    return Err(ViewerError::Other(e));
+                }
                 eprintln!("could not load {}: {e}", loading.label);
                 self.state.error = Some(format!("{}: {e}", loading.label));
                 self.loading = None;
