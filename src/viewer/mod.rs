@@ -548,7 +548,7 @@ impl Running {
             v.name, v.dims[0], v.dims[1], v.dims[2], v.source_type, spacing[0], spacing[1], spacing[2]
         );
         self.state.set_volume(v.extent(), v.geometry, v.dims, label);
-        self.state.raw_spacing = spacing;
+        self.state.describe_raw(v.dims, v.source_type, spacing);
         self.state.histogram = histogram;
         self.state.range = v.range;
         self.state.time = time_control::TimeControl::new(v.timesteps(), v.shown_step());

@@ -151,6 +151,13 @@ impl ViewerState {
         self.animation = None;
     }
 
+    /// The raw fields (dims, type, scale) describe the volume shown, so a raw reload starts from them.
+    pub fn describe_raw(&mut self, dims: [u32; 3], voxel_type: VoxelType, spacing: [f32; 3]) {
+        self.raw_dims = dims;
+        self.raw_type = voxel_type;
+        self.raw_spacing = spacing;
+    }
+
     /// A new volume: its box, placement and a default view; the classification (transfer function and value
     /// window) resets to the simple model unless locked; slicing stays.
     pub fn set_volume(&mut self, extent: Vec3, geometry: Geometry, dims: [u32; 3], label: String) {
@@ -555,7 +562,10 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
             }
             ui.label("or a path (or drop a file on the window):");
         });
-        if ui.text_edit_singleline(&mut state.load_path).changed() {
+        // A fixed width: a long path scrolls inside the field instead of widening the panel for good.
+        let path_field =
+            egui::TextEdit::singleline(&mut state.load_path).desired_width(ui.available_width().min(250.0));
+        if ui.add(path_field).changed() {
             state.take_dims_from_name();
         }
         egui::Grid::new("raw").num_columns(2).show(ui, |ui| {
@@ -593,6 +603,10 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
                 opts.voxel_type = Some(state.raw_type);
             }
             actions.push(UiAction::LoadFile(path.clone(), raw_only(&path, opts)));
+        }
+        // A load's error beside the button that caused it (it also shows at the top of the panel).
+        if let Some(err) = &state.error {
+            ui.colored_label(Color32::from_rgb(255, 110, 110), err);
         }
     });
 
