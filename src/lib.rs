@@ -18,5 +18,6 @@ pub mod render;
 pub mod settings;
 pub mod tf;
 pub mod transfer;
+pub mod view_state;
 pub mod viewer;
 pub mod volume;

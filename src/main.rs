@@ -89,6 +89,22 @@ struct VolumeArgs {
 }
 
 impl VolumeArgs {
+    /// These arguments with the volume of a view state where none is given here.
+    fn or_from(&self, r: &volcast::view_state::VolumeRef) -> VolumeArgs {
+        let mut a = self.clone();
+        if a.file.is_some() || a.builtin.is_some() {
+            return a;
+        }
+        a.builtin = r.builtin.clone();
+        a.builtin_size = r.builtin_size;
+        a.file = r.path.clone();
+        a.dims = a.dims.or(r.raw_dims.map(|d| d.to_vec()));
+        a.voxel_type = a.voxel_type.or(r.raw_type.clone());
+        a.spacing = a.spacing.or(r.raw_spacing.map(|s| s.to_vec()));
+        a.time = a.time.or((r.time > 0).then_some(r.time));
+        a
+    }
+
     fn load(&self) -> Result<Volume> {
         if let Some(name) = &self.builtin {
             let mut v = volume::builtin(name, self.builtin_size)?;
@@ -221,6 +237,11 @@ struct RenderArgs {
     /// Frames to time with --timings (the median is reported).
     #[arg(long, default_value_t = 5)]
     frames: u32,
+    /// Render a view the viewer saved (F12's JSON beside its screenshot): its settings, and its volume unless a
+    /// FILE or --builtin is given. The view options (camera, transfer function, mode, size, method) come from the
+    /// file.
+    #[arg(long, value_name = "FILE.json")]
+    state: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]
@@ -747,16 +768,36 @@ fn median(v: &mut [f64]) -> f64 {
 
 fn render(args: &RenderArgs) -> Result<()> {
     volcast::image_out::check_name(&args.output).map_err(anyhow::Error::msg)?;
-    let t_load = Instant::now();
-    let volume = args.volume.load()?;
-    let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
-    let mut s = args.frame.settings(&volume)?;
-    s.ray_setup = if args.method == "faces" {
-        RaySetup::Faces
-    } else {
-        RaySetup::Analytic
+    let state = match &args.state {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            Some(
+                volcast::view_state::ViewState::from_json(&text, &path.display().to_string())
+                    .map_err(anyhow::Error::msg)?,
+            )
+        }
+        None => None,
     };
-    s.compute = args.method == "compute";
+    let t_load = Instant::now();
+    let volume = match &state {
+        Some(st) => args.volume.or_from(&st.volume).load()?,
+        None => args.volume.load()?,
+    };
+    let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
+    let s = match state {
+        // The saved view as it was (its method included).
+        Some(st) => st.settings,
+        None => {
+            let mut s = args.frame.settings(&volume)?;
+            s.ray_setup = if args.method == "faces" {
+                RaySetup::Faces
+            } else {
+                RaySetup::Analytic
+            };
+            s.compute = args.method == "compute";
+            s
+        }
+    };
     let t_device = Instant::now();
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;

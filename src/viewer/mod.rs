@@ -241,6 +241,8 @@ struct FrameSync {
 
 struct Loading {
     label: String,
+    /// What is loading (recorded for the view state once shown).
+    source: VolumeSource,
     progress: Arc<AtomicU32>,
     rx: Receiver<Result<(Volume, Vec<u64>), String>>,
 }
@@ -282,6 +284,8 @@ struct Running {
     /// The volume named on the command line is loading in the background: its failure ends the session (there is
     /// nothing else to show), and `--time` applies once it is there.
     initial_load: Option<Option<u32>>,
+    /// Where the shown volume came from (for F12's view state).
+    shown_source: Option<VolumeSource>,
     /// The last frame was a reduced-detail one: draw again at full quality once the view is still.
     refine_pending: bool,
     /// Frame times (ms) of scripted drags, reported when the script ends.
@@ -331,6 +335,7 @@ fn load_in_background(source: VolumeSource, max_dim: u32) -> Loading {
     let progress = Arc::new(AtomicU32::new(0));
     let (tx, rx) = std::sync::mpsc::channel();
     let p = progress.clone();
+    let recorded = source.clone();
     std::thread::spawn(move || {
         // Reading is 90% of the bar, the histogram the rest.
         let result = open_source(&source, max_dim, &mut |f| {
@@ -344,7 +349,12 @@ fn load_in_background(source: VolumeSource, max_dim: u32) -> Loading {
         p.store(1.0f32.to_bits(), Ordering::Relaxed);
         let _ = tx.send(analysed);
     });
-    Loading { label, progress, rx }
+    Loading {
+        label,
+        source: recorded,
+        progress,
+        rx,
+    }
 }
 
 impl Running {
@@ -419,6 +429,7 @@ impl Running {
             }),
             has_volume: false,
             initial_load: None,
+            shown_source: None,
             refine_pending: false,
             drag_frames: Vec::new(),
             slot_reduced: [false; FRAMES_IN_FLIGHT],
@@ -516,6 +527,7 @@ impl Running {
         let first = open_source(&opts.source, max_dim, &mut |_| {}).map_err(ViewerError::Other)?;
         let histogram = value_histogram(&first);
         self.install_volume(first, histogram)?;
+        self.shown_source = Some(opts.source.clone());
         self.apply_time(opts.time)
     }
 
@@ -726,6 +738,7 @@ impl Running {
         match loading.rx.try_recv() {
             Ok(Ok((volume, histogram))) => {
                 let label = loading.label.clone();
+                let source = loading.source.clone();
                 self.loading = None;
                 self.state.loading = None;
                 // Logged too: a load from the panel or a drop has no other trace outside the window.
@@ -738,6 +751,7 @@ impl Running {
                 } else {
                     eprintln!("loaded {label}");
                     self.state.status = Some(format!("loaded {label}"));
+                    self.shown_source = Some(source);
                     if let Some(time) = self.initial_load.take() {
                         self.apply_time(time)?;
                     }
@@ -1166,10 +1180,11 @@ impl Running {
         self.upload_ahead()?;
 
         if let Some((path, buffer)) = screenshot {
-            let saved = self
-                .wait_idle()
-                .map_err(ViewerError::from)
-                .and_then(|_| save_screenshot(&path, &buffer, &settings, self.series.as_ref().map(Volume::shown_step)));
+            let saved = self.wait_idle().map_err(ViewerError::from).and_then(|_| {
+                let step = self.series.as_ref().map(Volume::shown_step);
+                let volume = volume_ref(self.shown_source.as_ref(), self.state.raw_spacing, step.unwrap_or(0));
+                save_screenshot(&path, &buffer, &settings, volume, step)
+            });
             buffer.destroy(&self.gpu);
             match saved {
                 Ok(()) => self.state.status = Some(format!("saved {}", path.display())),
@@ -1290,6 +1305,26 @@ fn view_pixels(rect: Option<egui::Rect>, pixels_per_point: f32, extent: vk::Exte
     )
 }
 
+/// The view state's record of where the shown volume came from.
+fn volume_ref(source: Option<&VolumeSource>, spacing: [f32; 3], time: u32) -> crate::view_state::VolumeRef {
+    let mut r = crate::view_state::VolumeRef {
+        spacing,
+        time,
+        ..Default::default()
+    };
+    match source {
+        Some(VolumeSource::Builtin(name, size)) => (r.builtin, r.builtin_size) = (Some(name.clone()), *size),
+        Some(VolumeSource::File(path, raw)) => {
+            r.path = Some(std::fs::canonicalize(path).unwrap_or_else(|_| path.clone()));
+            r.raw_dims = raw.dims;
+            r.raw_type = raw.voxel_type.map(|t| t.name().to_string());
+            r.raw_spacing = raw.spacing;
+        }
+        None => {}
+    }
+    r
+}
+
 /// The frame time shown: the interval since the last frame when it followed directly (never capped: a 256 ms
 /// frame shows 256), else the frame's GPU time (the interval would be the idle pause before it).
 fn frame_time_ms(interval_s: f64, follows: bool, gpu_ms: Option<f64>) -> f64 {
@@ -1305,6 +1340,7 @@ fn save_screenshot(
     path: &std::path::Path,
     buffer: &Buffer,
     settings: &RenderSettings,
+    volume: crate::view_state::VolumeRef,
     step: Option<u32>,
 ) -> Result<(), ViewerError> {
     let pixels = buffer
@@ -1314,7 +1350,13 @@ fn save_screenshot(
     let img = image::RgbaImage::from_raw(settings.width, settings.height, pixels)
         .ok_or_else(|| ViewerError::Other("screenshot size mismatch".into()))?;
     crate::image_out::save(&img, path).map_err(ViewerError::Other)?;
-    let json = serde_json::to_string_pretty(settings).map_err(|e| ViewerError::Other(e.to_string()))?;
+    // The view state: the settings (still readable as plain `RenderSettings`) and the volume's origin, so that
+    // `volcast render --state` renders this view again.
+    let json = crate::view_state::ViewState {
+        volume,
+        settings: settings.clone(),
+    }
+    .to_json();
     std::fs::write(path.with_extension("json"), json)
         .map_err(|e| ViewerError::Other(format!("writing {}: {e}", path.with_extension("json").display())))?;
     match step {
