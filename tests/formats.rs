@@ -281,10 +281,14 @@ fn max_dim_downsamples_or_refuses() {
         },
     )
     .unwrap_err();
+    // The error names the file (every open error does).
     assert_eq!(
         e.to_string(),
-        "8x2x1 exceeds the maximum dimension 4 and downsampling is off (--no-downsample); raise --max-dim or allow \
-         downsampling"
+        format!(
+            "{}: 8x2x1 exceeds the maximum dimension 4 and downsampling is off (--no-downsample); raise --max-dim \
+             or allow downsampling",
+            p.display()
+        )
     );
 }
 
