@@ -36,6 +36,14 @@ fn scratch(name: &str) -> PathBuf {
     dir.join(name)
 }
 
+/// `render` of an 8³ built-in with `extra` arguments.
+fn tiny_render<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+    ["render", "--builtin", "colormap", "--builtin-size", "8"]
+        .into_iter()
+        .chain(extra.iter().copied())
+        .collect()
+}
+
 fn assert_fails_with(args: &[&str], needle: &str) {
     let o = volcast(args);
     let err = stderr(&o);
@@ -178,87 +186,21 @@ fn bad_volumes_give_clear_errors() {
 
 #[test]
 fn bad_settings_give_clear_errors() {
-    assert_fails_with(
-        &[
-            "render",
-            "--builtin",
-            "colormap",
-            "--builtin-size",
-            "8",
-            "--window",
-            "0.8,0.2",
-        ],
-        "window",
-    );
-    assert_fails_with(
-        &[
-            "render",
-            "--builtin",
-            "colormap",
-            "--builtin-size",
-            "8",
-            "--colormap",
-            "jet",
-        ],
-        "viridis",
-    );
-    assert_fails_with(
-        &[
-            "render",
-            "--builtin",
-            "colormap",
-            "--builtin-size",
-            "8",
-            "--step-length",
-            "0",
-        ],
-        "step length",
-    );
-    assert_fails_with(
-        &[
-            "render",
-            "--builtin",
-            "colormap",
-            "--builtin-size",
-            "8",
-            "--size",
-            "0x10",
-        ],
-        "image size",
-    );
+    assert_fails_with(&tiny_render(&["--window", "0.8,0.2"]), "window");
+    assert_fails_with(&tiny_render(&["--colormap", "jet"]), "viridis");
+    assert_fails_with(&tiny_render(&["--step-length", "0"]), "step length");
+    assert_fails_with(&tiny_render(&["--size", "0x10"]), "image size");
     // One message per condition.
     assert_fails_with(
-        &[
-            "render",
-            "--builtin",
-            "colormap",
-            "--builtin-size",
-            "8",
-            "--eye",
-            "0.2,0,0",
-            "--look-at",
-            "0.2,0,0",
-        ],
+        &tiny_render(&["--eye", "0.2,0,0", "--look-at", "0.2,0,0"]),
         "must differ from the point it looks at",
     );
     assert_fails_with(
-        &["render", "--builtin", "colormap", "--builtin-size", "8", "--fov", "200"],
+        &tiny_render(&["--fov", "200"]),
         "field of view 200° must be in 1..170 degrees",
     );
-    assert_fails_with(
-        &[
-            "render",
-            "--builtin",
-            "colormap",
-            "--builtin-size",
-            "8",
-            "--view-dir",
-            "0,0,0",
-        ],
-        "non-zero direction",
-    );
+    assert_fails_with(&tiny_render(&["--view-dir", "0,0,0"]), "non-zero direction");
     // The lighting options: each bad value is named.
-    let small = ["render", "--builtin", "colormap", "--builtin-size", "8"];
     for (extra, needle) in [
         (&["--light", "0,0,0"][..], "light direction"),
         (&["--light-color", "2,0,0"][..], "light colour"),
@@ -280,8 +222,7 @@ fn bad_settings_give_clear_errors() {
             "at most 4 iso-surfaces",
         ),
     ] {
-        let args: Vec<&str> = small.iter().chain(extra).copied().collect();
-        assert_fails_with(&args, needle);
+        assert_fails_with(&tiny_render(extra), needle);
     }
 }
 
@@ -293,15 +234,7 @@ fn a_failed_render_leaves_no_file() {
         let out = scratch(name);
         let _ = std::fs::remove_file(&out);
         assert_fails_with(
-            &[
-                "render",
-                "--builtin",
-                "colormap",
-                "--builtin-size",
-                "8",
-                "-o",
-                out.to_str().unwrap(),
-            ],
+            &tiny_render(&["-o", out.to_str().unwrap()]),
             "volcast writes PNG images",
         );
         assert!(!out.exists(), "{name} was left behind");
@@ -309,17 +242,7 @@ fn a_failed_render_leaves_no_file() {
     let out = scratch("failed-size.png");
     let _ = std::fs::remove_file(&out);
     assert_fails_with(
-        &[
-            "render",
-            "--builtin",
-            "colormap",
-            "--builtin-size",
-            "8",
-            "--size",
-            "0x4",
-            "-o",
-            out.to_str().unwrap(),
-        ],
+        &tiny_render(&["--size", "0x4", "-o", out.to_str().unwrap()]),
         "image size",
     );
     assert!(!out.exists());
@@ -329,18 +252,13 @@ fn a_failed_render_leaves_no_file() {
 #[test]
 fn shadows_in_mip_render_with_a_note() {
     let out = scratch("mip-shadows.png");
-    let o = volcast(&[
-        "render",
-        "--builtin",
-        "colormap",
-        "--builtin-size",
-        "8",
+    let o = volcast(&tiny_render(&[
         "--mode",
         "mip",
         "--shadows",
         "-o",
         out.to_str().unwrap(),
-    ]);
+    ]));
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("mip is not lit"), "{}", stderr(&o));
 }

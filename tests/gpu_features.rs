@@ -7,7 +7,7 @@
 mod common;
 
 use common::bounds::{REFERENCE, STRIDES};
-use common::cases::{marschner_lobb_as, mirrored, oblique, quality_cases, standard_cases, with};
+use common::cases::{ct_head, marschner_lobb_as, mirrored, oblique, quality_cases, standard_cases, with};
 use common::compare::{against_reference, diff, write_failure_images};
 use common::gpu::{close, gpu_sample_counts, validated_gpu, Judge};
 use common::reference::Reference;
@@ -16,15 +16,6 @@ use volcast::settings::{CompositeMode, RaySetup, RenderSettings, Shading};
 use volcast::tf::TransferFunction;
 use volcast::transfer::Colormap;
 use volcast::volume::{self, Volume, VoxelType};
-
-fn ct_head() -> Option<Volume> {
-    let path = common::shared_data("raw/cranium_ct_256x256x108_int16.raw")?;
-    let opts = volume::RawOptions {
-        spacing: Some([0.957031, 0.957031, 1.5]),
-        ..Default::default()
-    };
-    Some(volume::load_raw(&path, &opts).expect("CT head"))
-}
 
 fn total(counts: &[u32]) -> u64 {
     counts.iter().map(|&c| u64::from(c)).sum()

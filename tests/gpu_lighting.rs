@@ -4,6 +4,7 @@
 mod common;
 
 use common::bounds::REFERENCE;
+use common::cases::ct_head;
 use common::compare::against_reference;
 use common::gpu::{close, validated_gpu, Judge};
 use common::reference::Reference;
@@ -12,15 +13,6 @@ use volcast::lighting::{IsoSurface, Light};
 use volcast::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::tf::TransferFunction;
 use volcast::volume::{self, Volume};
-
-fn ct_head() -> Option<Volume> {
-    let path = common::shared_data("raw/cranium_ct_256x256x108_int16.raw")?;
-    let opts = volume::RawOptions {
-        spacing: Some([0.957031, 0.957031, 1.5]),
-        ..Default::default()
-    };
-    Some(volume::load_raw(&path, &opts).expect("CT head"))
-}
 
 /// The frames: emission lit by a directional light with shadows and occlusion, the same under the key light
 /// (a headlight with shadows), density with occlusion only, and skin over bone with shadows.

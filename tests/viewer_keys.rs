@@ -5,19 +5,14 @@
 
 mod common;
 
-use common::x11::{have, read_screenshot, type_keys, xvfb, Viewer, WAIT_MS};
+use common::x11::{read_screenshot, type_keys, x_session, Viewer, WAIT_MS};
 use std::time::Duration;
 
 #[test]
 fn shortcuts_keep_working_after_tab_hides_the_panel() {
-    if !(have("xdotool", "version") && have("xwd", "-help")) {
-        common::skip("xdotool or xwd missing (apt install xdotool x11-apps)");
+    let Some((x, dir)) = x_session("viewer-keys") else {
         return;
-    }
-    let Some(x) = xvfb() else { return };
-    let dir = std::env::temp_dir().join(format!("volcast-viewer-keys-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    };
     let script = format!("frames:3;wait:{WAIT_MS};exit");
     let mut viewer = Viewer::start(
         &x.display,
@@ -73,17 +68,12 @@ fn shortcuts_keep_working_after_tab_hides_the_panel() {
 /// for it, and F12 then shows the file's volume. A file that cannot be read still ends the session with its error.
 #[test]
 fn a_file_from_the_command_line_loads_behind_the_window() {
-    if !(have("xdotool", "version") && have("xwd", "-help")) {
-        common::skip("xdotool or xwd missing (apt install xdotool x11-apps)");
-        return;
-    }
     let Some(ct) = common::shared_data("raw/cranium_ct_256x256x108_int16.raw") else {
         return;
     };
-    let Some(x) = xvfb() else { return };
-    let dir = std::env::temp_dir().join(format!("volcast-viewer-cli-load-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let Some((x, dir)) = x_session("viewer-cli-load") else {
+        return;
+    };
     let script = format!("frames:2;wait:{WAIT_MS};exit");
     let ct = ct.to_str().unwrap();
     let mut viewer = Viewer::start(&x.display, &dir, &[ct], &script);

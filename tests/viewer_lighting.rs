@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::x11::{capture, have, read_screenshot, type_keys, x_client, xvfb, Viewer, WAIT_MS};
+use common::x11::{capture, read_screenshot, type_keys, x_client, x_session, Viewer, WAIT_MS};
 use glam::Vec2;
 use std::time::Duration;
 use volcast::viewer::controls::OrbitView;
@@ -24,14 +24,9 @@ fn button(display: &str, action: &str) {
 
 #[test]
 fn dragging_the_light_gizmo_places_a_directional_light() {
-    if !(have("xdotool", "version") && have("xwd", "-help")) {
-        common::skip("xdotool or xwd missing (apt install xdotool x11-apps)");
+    let Some((x, dir)) = x_session("viewer-light") else {
         return;
-    }
-    let Some(x) = xvfb() else { return };
-    let dir = std::env::temp_dir().join(format!("volcast-viewer-light-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    };
     let script = format!("frames:3;wait:{WAIT_MS};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "helix"], &script);
     viewer.wait_for("script: Wait(", Duration::from_secs(180));
@@ -100,6 +95,4 @@ fn dragging_the_light_gizmo_places_a_directional_light() {
         viewer.stderr
     );
     let _ = std::fs::remove_dir_all(&dir);
-    drop(x);
-    let _ = h;
 }

@@ -188,6 +188,16 @@ pub fn gradient_cases(v: &Volume, size: u32) -> Vec<Case> {
 /// Marschner & Lobb's test function (1994; f_M = 6, α = 0.25) over [−1, 1]³, sampled on 33 × 29 × 25 voxels
 /// of 1 × 1.2 × 0.8 (neither the grid nor the voxels cubic), stored as `ty` over a range typical of that type
 /// (signed types straddle zero, as CT data do).
+/// The CT head from `../shared/data` at its true spacing (None after a skip where the file is missing).
+pub fn ct_head() -> Option<Volume> {
+    let path = super::shared_data("raw/cranium_ct_256x256x108_int16.raw")?;
+    let opts = volcast::volume::RawOptions {
+        spacing: Some([0.957031, 0.957031, 1.5]),
+        ..Default::default()
+    };
+    Some(volcast::volume::load_raw(&path, &opts).expect("CT head"))
+}
+
 pub fn marschner_lobb_as(ty: VoxelType) -> Volume {
     marschner_lobb_sized(ty, [33, 29, 25])
 }

@@ -70,6 +70,20 @@ pub fn xvfb() -> Option<Xvfb> {
     })
 }
 
+/// What a viewer test driven by xdotool needs: xdotool and xwd, a fresh Xvfb, and an empty working folder
+/// named after the test (None after a skip where a tool is missing).
+pub fn x_session(name: &str) -> Option<(Xvfb, std::path::PathBuf)> {
+    if !(have("xdotool", "version") && have("xwd", "-help")) {
+        super::skip("xdotool or xwd missing (apt install xdotool x11-apps)");
+        return None;
+    }
+    let x = xvfb()?;
+    let dir = std::env::temp_dir().join(format!("volcast-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    Some((x, dir))
+}
+
 /// Whether `program` can be started at all (its exit status does not matter).
 pub fn have(program: &str, arg: &str) -> bool {
     Command::new(program)
