@@ -57,7 +57,6 @@ struct Composite {
 impl<'a> Frame<'a> {
     pub(crate) fn new(volume: &'a Reference, s: &RenderSettings) -> Frame<'a> {
         let placement = volume.placement(s);
-        let placement_for_light = volume.placement(s);
         let shading = match s.mode {
             CompositeMode::Isosurface => Some(s.shading.unwrap_or_default()),
             _ => s.shading,
@@ -77,7 +76,7 @@ impl<'a> Frame<'a> {
                 .get_or_init(|| BrickRanges::new(&volume.values, volume.dims));
             Strides::new(ranges, volume.dims, s, segments)
         });
-        Frame {
+        let mut frame = Frame {
             volume,
             camera: CameraBasis::new(s),
             step: f64::from(s.step_length) * placement.voxel_sides().min_element(),
@@ -104,8 +103,8 @@ impl<'a> Frame<'a> {
                 v
             },
             lamp: Lamp::new(&s.light, super::light::light_direction(s)),
-            light_grid: super::light::applies(s)
-                .then(|| super::light::LightGridRef::new(volume, s, &volume.classifier(s), &placement_for_light)),
+            // Made below, from the frame's own classifier and placement.
+            light_grid: None,
             density: f64::from(s.density),
             shading,
             gradient_opacity: s.gradient_opacity.map(f64::from),
@@ -114,7 +113,16 @@ impl<'a> Frame<'a> {
             strides,
             early_termination: f64::from(s.early_termination),
             background: linear(s.background.as_dvec3()),
+        };
+        if super::light::applies(s) {
+            frame.light_grid = Some(super::light::LightGridRef::new(
+                volume,
+                s,
+                &frame.classifier,
+                &frame.placement,
+            ));
         }
+        frame
     }
 
     /// The lamp at texture point `p`: rule 9's shadow and occlusion applied.
