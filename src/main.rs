@@ -647,12 +647,7 @@ impl FrameArgs {
             || self.ambient_occlusion;
         s.shadows = self.shadows;
         s.ambient_occlusion = self.ambient_occlusion;
-        if (s.shadows || s.ambient_occlusion)
-            && matches!(
-                s.mode,
-                CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average
-            )
-        {
+        if (s.shadows || s.ambient_occlusion) && s.mode.is_projection() {
             eprintln!(
                 "note: {} is not lit: shadows and ambient occlusion do not apply",
                 s.mode.name()

@@ -78,6 +78,11 @@ impl CompositeMode {
             .find(|m| m.name() == s.trim().to_ascii_lowercase())
     }
 
+    /// MIP, MinIP and average: projections of values, never lit (no shading, shadows or occlusion).
+    pub fn is_projection(self) -> bool {
+        matches!(self, CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average)
+    }
+
     /// The index the shader switches on (`frame.mode.x`).
     pub fn index(self) -> u32 {
         CompositeMode::ALL.iter().position(|m| *m == self).unwrap_or(0) as u32

@@ -30,12 +30,18 @@ pub struct LightGrid {
     pub delta: DVec3,
     /// The step's world length in voxels.
     pub step_voxels: f64,
+    /// The smallest voxel side in world units (lengths in voxels are of it).
+    pub voxel: f64,
+    /// Whether the sweep runs (a light to cast shadows from) and whether the occlusion is computed.
+    pub shadows: bool,
+    pub occlusion: bool,
 }
 
 impl LightGrid {
     /// The grid for a volume of `dims` placed by `linear` (texture space to world) with smallest voxel side
-    /// `voxel` (world units), lit from unit world direction `light` (None: occlusion only, no sweep).
-    pub fn new(dims: [u32; 3], linear: DMat3, voxel: f64, light: Option<DVec3>) -> LightGrid {
+    /// `voxel` (world units), lit from unit world direction `light` (None: no shadow sweep), with occlusion or
+    /// without.
+    pub fn new(dims: [u32; 3], linear: DMat3, voxel: f64, light: Option<DVec3>, occlusion: bool) -> LightGrid {
         let largest = dims.iter().copied().max().unwrap_or(1);
         let f = largest.div_ceil(MAX_CELLS).max(1);
         let cells = dims.map(|d| d.div_ceil(f).max(2));
@@ -46,6 +52,9 @@ impl LightGrid {
                 axis: 0,
                 delta: DVec3::ZERO,
                 step_voxels: 0.0,
+                voxel,
+                shadows: false,
+                occlusion,
             };
         };
         let d = n * (linear.inverse() * light);
@@ -63,6 +72,9 @@ impl LightGrid {
             axis,
             delta,
             step_voxels: (linear * (delta / n)).length() / voxel,
+            voxel,
+            shadows: true,
+            occlusion,
         }
     }
 
@@ -118,6 +130,11 @@ pub fn extinction_table(s: &RenderSettings, lut: &[[f32; 4]]) -> Vec<f32> {
     }
 }
 
+/// The light the shadow sweep runs from (None without shadows: occlusion needs no direction).
+fn sweep_light(s: &RenderSettings) -> Option<glam::Vec3> {
+    s.light_direction().filter(|_| s.shadows)
+}
+
 /// What a light grid was computed for: it is recomputed when any of this changes.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) struct LightKey {
@@ -143,7 +160,7 @@ impl LightKey {
             } else {
                 Vec::new()
             },
-            light: s.light_direction().filter(|_| s.shadows).map(|d| d.to_array()),
+            light: sweep_light(s).map(|d| d.to_array()),
             shadows: s.shadows,
             occlusion: s.ambient_occlusion,
         }
@@ -240,25 +257,22 @@ impl LightPass {
         self.set_layout
     }
 
-    /// Fills `image` (the grid `grid`, in GENERAL layout afterwards ready for sampling) for `s`: pass 0 writes
-    /// (1, O) everywhere, then with shadows one pass per slice sweeps T away from the light. `frame_set` holds
-    /// the frame's uniforms for `s`, `volume_set` the volume.
-    #[allow(clippy::too_many_arguments)]
+    /// Fills `image` with the grid `grid` (ready for sampling afterwards) from the table `extinction`
+    /// ([`extinction_table`]): pass 0 writes (1, O) everywhere, then with shadows one pass per slice sweeps T away
+    /// from the light. `sets` are the frame's (its uniforms) and the volume's.
     pub(super) fn fill(
         &mut self,
         gpu: &Gpu,
         layout_index: usize,
-        s: &RenderSettings,
-        lut: &[[f32; 4]],
+        extinction: &[f32],
         grid: &LightGrid,
-        voxel: f64,
         image: &Image,
         sets: [vk::DescriptorSet; 2],
     ) -> Result<(), GpuError> {
         if self.pipelines[layout_index] == vk::Pipeline::null() {
             self.pipelines[layout_index] = compute_pipeline(gpu, &SHADERS[layout_index], self.layout)?;
         }
-        self.extinction.write(bytemuck::cast_slice(&extinction_table(s, lut)))?;
+        self.extinction.write(bytemuck::cast_slice(extinction))?;
         let image_info = [vk::DescriptorImageInfo::default()
             .image_view(image.view)
             .image_layout(vk::ImageLayout::GENERAL)];
@@ -282,7 +296,7 @@ impl LightPass {
         // SAFETY: no submitted work uses the set (Renderer::prepare's contract).
         unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
         let n = grid.cells;
-        let grid_push = [n[0] as f32, n[1] as f32, n[2] as f32, voxel as f32];
+        let grid_push = [n[0] as f32, n[1] as f32, n[2] as f32, grid.voxel as f32];
         let delta = [
             grid.delta.x as f32,
             grid.delta.y as f32,
@@ -319,14 +333,14 @@ impl LightPass {
             push(
                 cb,
                 Push {
-                    info: [0, 0, 0, i32::from(s.ambient_occlusion)],
+                    info: [0, 0, 0, i32::from(grid.occlusion)],
                     delta,
                     grid: grid_push,
                 },
             );
             // SAFETY: as above; the shader bounds-checks the rounded-up groups.
             unsafe { d.cmd_dispatch(cb, n[0].div_ceil(8), n[1].div_ceil(8), n[2]) };
-            if s.shadows {
+            if grid.shadows {
                 for (i, slice) in grid.slices().into_iter().enumerate() {
                     memory_barrier(d, cb, Access::ComputeReadWrite, Access::ComputeReadWrite);
                     push(
@@ -376,19 +390,8 @@ pub(super) fn light_image(gpu: &Gpu, grid: &LightGrid) -> Result<Image, GpuError
 /// The grid for frame `s` on volume `v`.
 pub fn grid_for(s: &RenderSettings, v: &VolumeInfo) -> LightGrid {
     let linear = DMat3::from_mat4(v.tex_to_world(s));
-    let light = s.light_direction().filter(|_| s.shadows).map(|d| d.as_dvec3());
-    LightGrid::new(v.dims, linear, voxel_world(s, v), light)
-}
-
-/// The smallest voxel side of `v` in world units for `s`.
-pub fn voxel_world(s: &RenderSettings, v: &VolumeInfo) -> f64 {
-    let linear = DMat3::from_mat4(v.tex_to_world(s));
-    let dims = DVec3::from_array(v.dims.map(f64::from));
-    let index_to_world = linear * DMat3::from_diagonal(1.0 / dims);
-    [0, 1, 2]
-        .map(|i| index_to_world.col(i).length())
-        .into_iter()
-        .fold(f64::INFINITY, f64::min)
+    let light = sweep_light(s).map(|d| d.as_dvec3());
+    LightGrid::new(v.dims, linear, v.smallest_voxel(s), light, s.ambient_occlusion)
 }
 
 impl Renderer {
@@ -432,18 +435,9 @@ impl Renderer {
             Some(l) => l.image,
             None => light_image(gpu, &grid)?,
         };
-        let voxel = voxel_world(s, &vol.info);
+        let extinction = extinction_table(s, &self.lut_table);
         let started = std::time::Instant::now();
-        let filled = pass.fill(
-            gpu,
-            li,
-            s,
-            &self.lut_table,
-            &grid,
-            voxel,
-            &image,
-            [slot.set, self.volume_set],
-        );
+        let filled = pass.fill(gpu, li, &extinction, &grid, &image, [slot.set, self.volume_set]);
         self.light_ms = Some(started.elapsed().as_secs_f64() * 1e3);
         if let Err(e) = filled {
             image.destroy(gpu);

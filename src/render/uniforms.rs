@@ -63,6 +63,22 @@ impl VolumeInfo {
     pub fn tex_to_world(&self, s: &RenderSettings) -> DMat4 {
         self.geometry.tex_to_world(self.dims, s.voxel_axes)
     }
+
+    /// A voxel's step along each index axis in the render world: the columns of `L·diag(1/dims)`, L the linear
+    /// part of [`VolumeInfo::tex_to_world`].
+    pub fn index_to_world(&self, s: &RenderSettings) -> DMat3 {
+        let dims = DVec3::from_array(self.dims.map(f64::from));
+        DMat3::from_mat4(self.tex_to_world(s)) * DMat3::from_diagonal(1.0 / dims)
+    }
+
+    /// The smallest voxel side in world units (rule 2's and rule 9's voxel).
+    pub fn smallest_voxel(&self, s: &RenderSettings) -> f64 {
+        let m = self.index_to_world(s);
+        [m.x_axis, m.y_axis, m.z_axis]
+            .iter()
+            .map(|c| c.length())
+            .fold(f64::INFINITY, f64::min)
+    }
 }
 
 /// Whether a texture-to-world transform mirrors: its box's faces then wind the other way on screen, so the
@@ -93,10 +109,8 @@ impl FrameUniforms {
         };
         let aspect = f64::from(aspect);
         let dims = DVec3::from_array(v.dims.map(f64::from));
-        // A voxel's step along each index axis, in world units: the columns of L·diag(1/dims).
-        let index_to_world = linear * DMat3::from_diagonal(1.0 / dims);
-        let voxel = [0, 1, 2].map(|i| index_to_world.col(i).length());
-        let h = s.step_length * voxel.iter().copied().fold(f64::INFINITY, f64::min) as f32;
+        let index_to_world = v.index_to_world(s);
+        let h = s.step_length * v.smallest_voxel(s) as f32;
         // The longest path through the box: its longest diagonal.
         let diagonal = [
             DVec3::ONE,

@@ -11,11 +11,21 @@ pub fn angles(d: Vec3) -> (f32, f32) {
     ((-d.x).atan2(d.y).to_degrees(), d.z.clamp(-1.0, 1.0).asin().to_degrees())
 }
 
-fn color_edit(ui: &mut egui::Ui, color: &mut Vec3) -> bool {
+fn color_edit(ui: &mut egui::Ui, color: &mut Vec3) {
     let mut rgb = color.to_array();
-    let changed = ui.color_edit_button_rgb(&mut rgb).changed();
+    ui.color_edit_button_rgb(&mut rgb);
     *color = Vec3::from_array(rgb);
-    changed
+}
+
+/// A surface's material: the colormap's colour at its value (None), or a colour of its own.
+fn material_edit(ui: &mut egui::Ui, color: &mut Option<Vec3>) {
+    let mut by_colormap = color.is_none();
+    if ui.checkbox(&mut by_colormap, "colormap colour").changed() {
+        *color = (!by_colormap).then_some(NEUTRAL);
+    }
+    if let Some(c) = color {
+        color_edit(ui, c);
+    }
 }
 
 /// The lighting section for `look`.
@@ -47,10 +57,7 @@ pub fn lighting_section(ui: &mut egui::Ui, look: &mut RenderSettings) {
                 color_edit(ui, &mut look.light.color);
                 ui.add(egui::Slider::new(&mut look.light.intensity, 0.0..=4.0).text("light intensity"));
             });
-            let projection = matches!(
-                look.mode,
-                CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average
-            );
+            let projection = look.mode.is_projection();
             ui.add_enabled_ui(!projection, |ui| {
                 ui.checkbox(&mut look.shadows, "shadows")
                     .on_hover_text("Light attenuated through the volume; a headlight casts them from a key light");
@@ -69,28 +76,14 @@ pub fn lighting_section(ui: &mut egui::Ui, look: &mut RenderSettings) {
 /// The first surface's material and the extra layers.
 fn iso_surfaces(ui: &mut egui::Ui, look: &mut RenderSettings) {
     ui.label("Iso-surfaces (composited in the order a ray meets them)");
-    ui.horizontal(|ui| {
-        let mut by_colormap = look.iso_color.is_none();
-        if ui.checkbox(&mut by_colormap, "colormap colour").changed() {
-            look.iso_color = (!by_colormap).then_some(NEUTRAL);
-        }
-        if let Some(c) = &mut look.iso_color {
-            color_edit(ui, c);
-        }
-    });
+    ui.horizontal(|ui| material_edit(ui, &mut look.iso_color));
     ui.add(egui::Slider::new(&mut look.iso_opacity, 0.01..=1.0).text("opacity"));
     let mut remove = None;
     for (i, extra) in look.extra_isosurfaces.iter_mut().enumerate() {
         ui.separator();
         ui.add(egui::Slider::new(&mut extra.value, 0.0..=1.0).text(format!("surface {} value", i + 2)));
         ui.horizontal(|ui| {
-            let mut by_colormap = extra.color.is_none();
-            if ui.checkbox(&mut by_colormap, "colormap colour").changed() {
-                extra.color = (!by_colormap).then_some(NEUTRAL);
-            }
-            if let Some(c) = &mut extra.color {
-                color_edit(ui, c);
-            }
+            material_edit(ui, &mut extra.color);
             if ui.button("remove").clicked() {
                 remove = Some(i);
             }
