@@ -69,13 +69,19 @@ pub fn fill_gradient_slices(volume: &Volume, filter: GradientFilter, first: usiz
     let plane = w * h;
     let (smooth, deriv) = filter.kernels();
     let reach = (smooth.len() / 2) as i64;
-    dst.par_chunks_mut(plane).enumerate().for_each(|(k, slice)| {
-        let z = ((first + k) % d) as i64;
+    let clamp_z = |z: i64| z.clamp(0, d as i64 - 1) as usize;
+    // The normalised planes every slice here reaches, made once (each slice reads 2R + 1 of them).
+    let slices = dst.len() / plane;
+    let zs: Vec<usize> = (0..slices).map(|k| (first + k) % d).collect();
+    let lo = clamp_z(zs.iter().copied().min().unwrap_or(0) as i64 - reach);
+    let hi = clamp_z(zs.iter().copied().max().unwrap_or(0) as i64 + reach);
+    let planes: Vec<Vec<f64>> = (lo..=hi).into_par_iter().map(|z| normalized_plane(volume, z)).collect();
+    dst.par_chunks_mut(plane).zip(zs).for_each(|(slice, z)| {
         let mut along_z_smooth = vec![0.0; plane];
         let mut along_z_deriv = vec![0.0; plane];
         for (j, (ws, wd)) in smooth.iter().zip(&deriv).enumerate() {
-            let p = normalized_plane(volume, (z + j as i64 - reach).clamp(0, d as i64 - 1) as usize);
-            for ((s, dz), v) in along_z_smooth.iter_mut().zip(along_z_deriv.iter_mut()).zip(&p) {
+            let p = &planes[clamp_z(z as i64 + j as i64 - reach) - lo];
+            for ((s, dz), v) in along_z_smooth.iter_mut().zip(along_z_deriv.iter_mut()).zip(p) {
                 *s += ws * v;
                 *dz += wd * v;
             }
@@ -90,18 +96,19 @@ pub fn fill_gradient_slices(volume: &Volume, filter: GradientFilter, first: usiz
     });
 }
 
-/// `plane` (w × h, x fastest) filtered along x by `kernel` (centred), neighbours clamped to the edge.
+/// `plane` (w × h, x fastest) filtered along x by `kernel` (centred), neighbours clamped to the edge: each row is
+/// padded with its edge values once, so the taps need no clamping.
 fn filter_x(plane: &[f64], w: usize, h: usize, kernel: &[f64]) -> Vec<f64> {
-    let reach = (kernel.len() / 2) as i64;
+    let reach = kernel.len() / 2;
     let mut out = vec![0.0; w * h];
+    let mut padded = vec![0.0; w + 2 * reach];
     for y in 0..h {
         let row = &plane[y * w..(y + 1) * w];
-        for (x, o) in out[y * w..(y + 1) * w].iter_mut().enumerate() {
-            *o = kernel
-                .iter()
-                .enumerate()
-                .map(|(j, k)| k * row[(x as i64 + j as i64 - reach).clamp(0, w as i64 - 1) as usize])
-                .sum();
+        padded[..reach].fill(row[0]);
+        padded[reach..reach + w].copy_from_slice(row);
+        padded[reach + w..].fill(row[w - 1]);
+        for (o, window) in out[y * w..(y + 1) * w].iter_mut().zip(padded.windows(kernel.len())) {
+            *o = kernel.iter().zip(window).map(|(k, v)| k * v).sum();
         }
     }
     out
