@@ -1,0 +1,13 @@
+//! The viewer's state and its egui user interface: the state (plain data), the settings panel, the overlay and
+//! input of the 3D view, and the keyboard shortcuts.
+
+mod keys;
+mod overlay;
+mod panel;
+mod state;
+mod tf_panel;
+
+pub use keys::{next_lower, shortcuts, take_tab_presses};
+pub use overlay::{box_corners, project, view_overlay};
+pub use panel::settings_panel;
+pub use state::{UiAction, ViewerState, AUTO_ROTATE_DEG_PER_S};
