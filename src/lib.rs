@@ -16,6 +16,7 @@ pub mod preintegrate;
 pub mod quality;
 pub mod render;
 pub mod settings;
+pub mod slice;
 pub mod tf;
 pub mod transfer;
 pub mod view_state;
