@@ -260,6 +260,13 @@ struct ViewArgs {
     /// Drive the window with a script (for tests), e.g. "frames:3;resize:320x240;screenshot:a.png;exit".
     #[arg(long, hide = true)]
     script: Option<String>,
+    /// Start with the three slice views beside the 3D view (four-up; L toggles it).
+    #[arg(long)]
+    slices: bool,
+    /// Restore a session (Ctrl+S's or F12's JSON): its volume, unless a FILE or --builtin is given here, and its
+    /// view (transfer function, camera, slabs, clip plane, mode, lighting, time step, slice views).
+    #[arg(long, value_name = "FILE.json")]
+    state: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]
@@ -874,10 +881,16 @@ fn render(args: &RenderArgs) -> Result<()> {
 }
 
 fn view(args: &ViewArgs) -> Result<()> {
-    let source = match (&args.volume.builtin, &args.volume.file) {
-        (Some(name), _) => VolumeSource::Builtin(name.clone(), args.volume.builtin_size),
-        (None, Some(path)) => VolumeSource::File(path.clone(), args.volume.raw_options()?),
-        (None, None) => VolumeSource::Builtin("helix".into(), None),
+    let restore = match &args.state {
+        Some(path) => Some(viewer::session::read(path).map_err(anyhow::Error::msg)?),
+        None => None,
+    };
+    let from_session = restore.as_ref().and_then(|s| viewer::session::source_of(&s.volume));
+    let source = match (&args.volume.builtin, &args.volume.file, from_session) {
+        (Some(name), _, _) => VolumeSource::Builtin(name.clone(), args.volume.builtin_size),
+        (None, Some(path), _) => VolumeSource::File(path.clone(), args.volume.raw_options()?),
+        (None, None, Some(source)) => source,
+        (None, None, None) => VolumeSource::Builtin("helix".into(), None),
     };
     let script = match &args.script {
         Some(s) => viewer::parse_script(s).map_err(anyhow::Error::msg)?,
@@ -888,8 +901,10 @@ fn view(args: &ViewArgs) -> Result<()> {
         gpu: args.gpu.options(),
         size: args.size,
         script,
-        time: args.volume.time,
+        time: args.volume.time.or(restore.as_ref().map(|s| s.volume.time)),
         quality: args.quality,
+        slices: args.slices,
+        restore,
     };
     let log = viewer::run(opts)?;
     if args.gpu.options().validation {
@@ -1063,6 +1078,8 @@ fn main() -> ExitCode {
             size: (1280, 800),
             quality: Quality::Normal,
             script: None,
+            slices: false,
+            state: None,
         }),
         Some(Command::View(a)) => view(a),
         Some(Command::Render(a)) => render(a),

@@ -23,13 +23,49 @@ pub struct VolumeRef {
     pub time: u32,
 }
 
-/// One view: the volume and the settings (flattened: the file is also a valid `RenderSettings` JSON).
+/// What the viewer shows beyond the rendered view, for a session to restore it (`render` ignores it).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct ViewerSession {
+    /// The four-up layout with the slice views.
+    pub slice_views: bool,
+    /// The slice views' crosshair, in continuous voxel index coordinates.
+    pub crosshair: [f64; 3],
+    /// The slice views' window and level in data units.
+    pub window_level: Option<crate::slice::WindowLevel>,
+    /// The quality level (None: the settings' own step length).
+    pub quality: Option<crate::quality::Quality>,
+    /// Lower detail while moving.
+    pub lod: bool,
+    /// Keep the transfer function when another volume loads.
+    pub tf_locked: bool,
+    pub panel_visible: bool,
+}
+
+impl Default for ViewerSession {
+    fn default() -> ViewerSession {
+        ViewerSession {
+            slice_views: false,
+            crosshair: [0.0; 3],
+            window_level: None,
+            quality: Some(crate::quality::Quality::Normal),
+            lod: true,
+            tf_locked: false,
+            panel_visible: true,
+        }
+    }
+}
+
+/// One view: the volume and the settings (flattened: the file is also a valid `RenderSettings` JSON), and the
+/// viewer's own state when the viewer wrote it (a session).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ViewState {
     #[serde(default)]
     pub volume: VolumeRef,
     #[serde(flatten)]
     pub settings: RenderSettings,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub viewer: Option<ViewerSession>,
 }
 
 impl ViewState {
@@ -59,6 +95,11 @@ mod tests {
                 ..VolumeRef::default()
             },
             settings: settings.clone(),
+            viewer: Some(ViewerSession {
+                slice_views: true,
+                crosshair: [1.5, 2.0, 3.25],
+                ..ViewerSession::default()
+            }),
         };
         let json = state.to_json();
         assert_eq!(ViewState::from_json(&json, "x.json").unwrap(), state);

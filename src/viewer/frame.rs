@@ -1,13 +1,14 @@
 //! One frame: the UI pass, then the march into the view image, its blit into the swapchain image and egui over
 //! it, submitted and presented; and what a frame must create first (`prepare`).
 
-use super::screenshot::{save_screenshot, volume_ref};
-use super::{ui, Flow, Running, ViewerError, FRAMES_IN_FLIGHT};
+use super::screenshot::{save_screenshot, write_session};
+use super::{slice_views, ui, Flow, Running, ViewerError, FRAMES_IN_FLIGHT};
 use crate::gpu::resources::{record_readback, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barrier, Access};
 use crate::gpu::{GpuError, VkContext};
 use crate::headless::OUTPUT_FORMAT;
 use crate::settings::RenderSettings;
+use crate::slice::SliceView;
 use crate::volume::Volume;
 use ash::vk;
 use std::sync::mpsc::TryRecvError;
@@ -53,6 +54,8 @@ impl Running {
         // which then swallowed every shortcut (Tab included) once the panel was hidden.
         let tabs = ui::take_tab_presses(&mut raw_input);
         let state = &mut self.state;
+        // What the slice views resample: the shown step of a series, or the kept volume.
+        let volume = self.series.as_ref().or(self.kept.as_ref());
         let mut actions = Vec::new();
         let full = self.egui_ctx.run_ui(raw_input, |ui| {
             if tabs % 2 == 1 {
@@ -71,7 +74,22 @@ impl Running {
                         egui::ScrollArea::vertical().show(ui, |ui| actions.extend(ui::settings_panel(ui, state)));
                     });
             }
-            egui::CentralPanel::no_frame().show(ui, |ui| ui::view_overlay(ui, state));
+            egui::CentralPanel::no_frame().show(ui, |ui| {
+                if state.slices.shown {
+                    let [axial, three_d, sagittal, coronal] = slice_views::four_up(ui.max_rect());
+                    for (view, rect) in [
+                        (SliceView::Axial, axial),
+                        (SliceView::Sagittal, sagittal),
+                        (SliceView::Coronal, coronal),
+                    ] {
+                        slice_views::slice_view(ui, rect, state, view, volume);
+                    }
+                    let mut view_ui = ui.new_child(egui::UiBuilder::new().max_rect(three_d));
+                    ui::view_overlay(&mut view_ui, state);
+                } else {
+                    ui::view_overlay(ui, state);
+                }
+            });
         });
         self.apply(actions);
         self.show_wanted_step()?;
@@ -108,6 +126,17 @@ impl Running {
             && self.pending_screenshot.is_none();
         let settings = self.state.frame_settings(view_size.width, view_size.height, moving);
         self.refine_pending = moving && self.state.lod;
+        if let Some(path) = self.pending_session.take() {
+            // The session holds the still frame's settings, whether or not this frame is a reduced one.
+            let still = self.state.render_settings(view_size.width, view_size.height);
+            match write_session(&path, &self.session_state(&still)) {
+                Ok(()) => {
+                    eprintln!("saved session {}", path.display());
+                    self.state.status = Some(format!("saved session {}", path.display()));
+                }
+                Err(e) => self.state.error = Some(e),
+            }
+        }
         self.prepare(&settings)?;
 
         let slot = self.frame_index % FRAMES_IN_FLIGHT;
@@ -306,8 +335,7 @@ impl Running {
         if let Some((path, buffer)) = screenshot {
             let saved = self.wait_idle().map_err(ViewerError::from).and_then(|_| {
                 let step = self.series.as_ref().map(Volume::shown_step);
-                let volume = volume_ref(self.shown_source.as_ref(), self.state.raw_spacing, step.unwrap_or(0));
-                save_screenshot(&path, &buffer, &settings, volume, step)
+                save_screenshot(&path, &buffer, &self.session_state(&settings), step)
             });
             buffer.destroy(&self.gpu);
             match saved {

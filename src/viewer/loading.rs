@@ -105,6 +105,7 @@ impl Running {
         );
         self.state.set_volume(v.extent(), v.geometry, v.dims, label);
         self.state.describe_raw(v.dims, v.source_type, spacing);
+        self.state.slices.reset(v.dims, &histogram, v.range);
         self.state.histogram = histogram;
         self.state.range = v.range;
         self.state.time = time_control::TimeControl::new(v.timesteps(), v.shown_step());
@@ -113,7 +114,8 @@ impl Running {
         (self.series, self.kept) = if v.timesteps() > 1 {
             (Some(v), None)
         } else {
-            (None, keep.then_some(v))
+            // Kept whatever its size: the slice views resample it (and the gradient texture is made from it).
+            (None, Some(v))
         };
         self.has_volume = true;
         Ok(())
@@ -128,6 +130,7 @@ impl Running {
         if series.show_step(wanted).is_err() {
             return Ok(());
         }
+        self.state.slices.generation += 1;
         // SAFETY: plain wait on a live device; the volume replaced is one that in-flight frames use.
         unsafe { self.gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")?;
         let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
@@ -210,9 +213,13 @@ impl Running {
                     if let Some(time) = self.initial_load.take() {
                         self.apply_time(time)?;
                     }
+                    if let Some(session) = self.pending_restore.take() {
+                        self.state.restore(&session);
+                    }
                 }
             }
             Ok(Err(e)) => {
+                self.pending_restore = None;
                 if self.initial_load.take().is_some() {
                     // The command line's volume: nothing else to show, so the session ends with its error.
                     return Err(ViewerError::Other(e));

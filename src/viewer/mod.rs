@@ -13,6 +13,8 @@ pub mod lighting_panel;
 mod loading;
 mod screenshot;
 mod script;
+pub mod session;
+pub mod slice_views;
 pub mod tf_editor;
 pub mod time_control;
 pub mod ui;
@@ -68,6 +70,10 @@ pub struct ViewerOptions {
     pub time: Option<u32>,
     /// Sampling quality of still frames (`--quality`; the panel and Q change it).
     pub quality: crate::quality::Quality,
+    /// Start in the four-up layout with the slice views (`--slices`; L toggles it).
+    pub slices: bool,
+    /// A session to restore once its volume (`source`) is shown (`--state`).
+    pub restore: Option<crate::view_state::ViewState>,
 }
 
 /// Opens the viewer and runs until the window closes. Returns the validation log for the caller to report.
@@ -205,6 +211,10 @@ struct Running {
     repaint_at: Option<Instant>,
     script: Option<Script>,
     has_volume: bool,
+    /// A session to restore once its volume is shown.
+    pending_restore: Option<crate::view_state::ViewState>,
+    /// Save the session to this file with the next frame's settings.
+    pending_session: Option<PathBuf>,
     /// The volume named on the command line is loading in the background: its failure ends the session (there is
     /// nothing else to show), and `--time` applies once it is there.
     initial_load: Option<Option<u32>>,
@@ -299,6 +309,8 @@ impl Running {
                 started: Instant::now(),
             }),
             has_volume: false,
+            pending_restore: opts.restore.clone(),
+            pending_session: None,
             initial_load: None,
             shown_source: None,
             refine_pending: false,
@@ -309,6 +321,7 @@ impl Running {
             ahead: None,
             dialog: None,
         };
+        r.state.slices.shown = opts.slices;
         // On error `r` is torn down properly before the error is returned.
         match r.init(opts) {
             Ok(()) => Ok(r),
@@ -399,7 +412,11 @@ impl Running {
         let histogram = value_histogram(&first);
         self.install_volume(first, histogram)?;
         self.shown_source = Some(opts.source.clone());
-        self.apply_time(opts.time)
+        self.apply_time(opts.time)?;
+        if let Some(session) = self.pending_restore.take() {
+            self.state.restore(&session);
+        }
+        Ok(())
     }
 
     fn wait_idle(&self) -> Result<(), GpuError> {
@@ -462,6 +479,8 @@ impl Running {
                     self.pending_screenshot = Some(PathBuf::from(format!("volcast-{stamp}.png")));
                 }
                 UiAction::VsyncChanged => self.recreate_swapchain = true,
+                UiAction::SaveSession => self.pending_session = Some(PathBuf::from(self.state.session_path.trim())),
+                UiAction::OpenSession(path) => self.open_session(&path),
                 UiAction::OpenDialog if self.dialog.is_none() => {
                     // The dialog blocks until the user answers, so it runs on its own thread.
                     let (tx, rx) = std::sync::mpsc::channel();

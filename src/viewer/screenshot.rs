@@ -4,7 +4,7 @@
 use super::{ViewerError, VolumeSource};
 use crate::gpu::resources::Buffer;
 use crate::gpu::GpuError;
-use crate::settings::RenderSettings;
+use crate::view_state::ViewState;
 
 /// The view state's record of where the shown volume came from.
 pub(super) fn volume_ref(source: Option<&VolumeSource>, spacing: [f32; 3], time: u32) -> crate::view_state::VolumeRef {
@@ -31,10 +31,10 @@ pub(super) fn volume_ref(source: Option<&VolumeSource>, spacing: [f32; 3], time:
 pub(super) fn save_screenshot(
     path: &std::path::Path,
     buffer: &Buffer,
-    settings: &RenderSettings,
-    volume: crate::view_state::VolumeRef,
+    state: &ViewState,
     step: Option<u32>,
 ) -> Result<(), ViewerError> {
+    let settings = &state.settings;
     let pixels = buffer
         .mapped()
         .ok_or(GpuError::Lost("screenshot buffer is not mapped"))?
@@ -42,18 +42,23 @@ pub(super) fn save_screenshot(
     let img = image::RgbaImage::from_raw(settings.width, settings.height, pixels)
         .ok_or_else(|| ViewerError::Other("screenshot size mismatch".into()))?;
     crate::image_out::save(&img, path).map_err(ViewerError::Other)?;
-    // The view state: the settings (still readable as plain `RenderSettings`) and the volume's origin, so that
-    // `volcast render --state` renders this view again.
-    let json = crate::view_state::ViewState {
-        volume,
-        settings: settings.clone(),
-    }
-    .to_json();
-    std::fs::write(path.with_extension("json"), json)
-        .map_err(|e| ViewerError::Other(format!("writing {}: {e}", path.with_extension("json").display())))?;
+    // The view state: the settings (still readable as plain `RenderSettings`), the volume's origin and the
+    // viewer's own state, so that `volcast render --state` renders this view again and `view --state` restores it.
+    write_session(&path.with_extension("json"), state).map_err(ViewerError::Other)?;
     match step {
         Some(t) => eprintln!("saved screenshot {} (time step {t})", path.display()),
         None => eprintln!("saved screenshot {}", path.display()),
     }
     Ok(())
+}
+
+/// Writes a session file whole or not at all (a temporary file renamed over it).
+pub(super) fn write_session(path: &std::path::Path, state: &ViewState) -> Result<(), String> {
+    let tmp = path.with_extension("json.part");
+    std::fs::write(&tmp, state.to_json())
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            format!("writing {}: {e}", path.display())
+        })
 }

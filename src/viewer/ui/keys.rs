@@ -28,7 +28,7 @@ pub fn take_tab_presses(input: &mut egui::RawInput) -> usize {
     presses
 }
 
-/// Keyboard shortcuts: R reset, Space auto-rotate, Tab panel (scripted keys; a real Tab is taken before egui,
+/// Keyboard shortcuts: R reset, Space auto-rotate, L slice views, Tab panel (scripted keys; a real Tab is taken before egui,
 /// `take_tab_presses`), F12 screenshot.
 pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> {
     let mut actions = Vec::new();
@@ -48,13 +48,18 @@ pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> 
         if i.key_pressed(egui::Key::F12) {
             actions.push(UiAction::Screenshot);
         }
+        if i.key_pressed(egui::Key::L) {
+            state.slices.shown = !state.slices.shown;
+        }
         if i.key_pressed(egui::Key::P) {
             state.time.toggle_play();
         }
         if i.key_pressed(egui::Key::Q) {
             state.quality = Some(next_lower(state.quality));
         }
-        if i.key_pressed(egui::Key::S) {
+        if i.key_pressed(egui::Key::S) && i.modifiers.command {
+            actions.push(UiAction::SaveSession);
+        } else if i.key_pressed(egui::Key::S) {
             state.look.shading = match state.look.shading {
                 Some(_) => None,
                 None => Some(Shading::default()),

@@ -102,6 +102,24 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
         if s.slab_lo != Vec3::ZERO || s.slab_hi != Vec3::ONE {
             draw_box(s.slab_lo, s.slab_hi, Color32::from_rgb(255, 200, 60));
         }
+        if state.slices.shown {
+            // The slice views' crosshair: a short segment along each world axis, in its view's colour.
+            let d = glam::DVec3::new(
+                f64::from(state.dims[0]),
+                f64::from(state.dims[1]),
+                f64::from(state.dims[2]),
+            );
+            let tex = ((state.slices.crosshair + 0.5) / d).as_vec3();
+            let centre = model.transform_point3(tex);
+            for view in crate::slice::SliceView::ALL {
+                let mut axis = Vec3::ZERO;
+                axis[view.normal_axis()] = 0.04;
+                if let (Some(a), Some(b)) = (project(vp, centre - axis, rect), project(vp, centre + axis, rect)) {
+                    let color = crate::viewer::slice_views::view_color(view);
+                    painter.line_segment([a, b], Stroke::new(2.0, color));
+                }
+            }
+        }
     }
 
     let colors = [

@@ -38,6 +38,7 @@ pub fn settings_panel(ui: &mut egui::Ui, state: &mut ViewerState) -> Vec<UiActio
     slicing_section(ui, state);
     view_section(ui, state, &mut actions);
     volume_section(ui, state, &mut actions);
+    session_section(ui, state, &mut actions);
     performance_section(ui, state);
     actions
 }
@@ -146,6 +147,7 @@ fn view_section(ui: &mut egui::Ui, state: &mut ViewerState, actions: &mut Vec<Ui
                 state.reset_view();
             }
         }
+        ui.checkbox(&mut state.slices.shown, "slice views, four-up (L)");
         ui.checkbox(&mut state.show_boxes, "draw bounding box");
         ui.checkbox(&mut state.auto_rotate, "auto-rotate (Space)");
         if ui.checkbox(&mut state.vsync, "vsync").changed() {
@@ -256,5 +258,28 @@ fn performance_section(ui: &mut egui::Ui, state: &mut ViewerState) {
                     }
                 }
             }
+        });
+}
+
+/// Save and open sessions (the whole viewer state as JSON).
+fn session_section(ui: &mut egui::Ui, state: &mut ViewerState, actions: &mut Vec<UiAction>) {
+    egui::CollapsingHeader::new("Session")
+        .default_open(true)
+        .show(ui, |ui| {
+            let field =
+                egui::TextEdit::singleline(&mut state.session_path).desired_width(ui.available_width().min(250.0));
+            ui.add(field);
+            ui.horizontal(|ui| {
+                let named = !state.session_path.trim().is_empty();
+                if ui
+                    .add_enabled(named, egui::Button::new("Save session (Ctrl+S)"))
+                    .clicked()
+                {
+                    actions.push(UiAction::SaveSession);
+                }
+                if ui.add_enabled(named, egui::Button::new("Open session")).clicked() {
+                    actions.push(UiAction::OpenSession(PathBuf::from(state.session_path.trim())));
+                }
+            });
         });
 }

@@ -6,6 +6,7 @@ use crate::quality::{Gradients, Quality};
 use crate::render::PassTimings;
 use crate::settings::RenderSettings;
 use crate::viewer::controls::{OrbitView, RotationAnimation};
+use crate::viewer::slice_views::SliceViews;
 use crate::viewer::time_control::TimeControl;
 use crate::volume::{parse_scivis_name, Geometry, RawOptions, VoxelType};
 use glam::{Mat4, Vec3};
@@ -65,6 +66,12 @@ pub struct ViewerState {
     /// Keep the transfer function and value window when another volume loads (else they reset: a CT's
     /// Hounsfield-unit function would leave an MRI invisible).
     pub tf_locked: bool,
+    /// The three slice views (four-up layout), their crosshair and window/level.
+    pub slices: SliceViews,
+    /// The unit of the volume's values, for the probe and the colour bar ("HU" for CT; empty when unknown).
+    pub value_unit: String,
+    /// Where Ctrl+S and "Save session" write, and "Open session" reads.
+    pub session_path: String,
 }
 
 /// What the panel asks the viewer to do.
@@ -72,6 +79,10 @@ pub struct ViewerState {
 pub enum UiAction {
     LoadFile(PathBuf, RawOptions),
     LoadBuiltin(String),
+    /// Write the session to `ViewerState::session_path`.
+    SaveSession,
+    /// Restore a session file (loading its volume if another is shown).
+    OpenSession(PathBuf),
     Screenshot,
     VsyncChanged,
     /// Show the platform's file dialog (off the render thread).
@@ -118,6 +129,9 @@ impl ViewerState {
             full_frame_ms: None,
             time: TimeControl::new(1, 0),
             tf_locked: false,
+            slices: SliceViews::default(),
+            value_unit: String::new(),
+            session_path: "volcast-session.json".into(),
         }
     }
 
@@ -266,6 +280,9 @@ impl ViewerState {
 
     /// A load of `path` with dims/type from its name when it matches, else from the panel's fields.
     pub fn load_action(&mut self, path: PathBuf) -> UiAction {
+        if crate::viewer::session::is_session_file(&path) {
+            return UiAction::OpenSession(path);
+        }
         self.load_path = path.display().to_string();
         let named = parse_scivis_name(&self.load_path).is_some();
         self.take_dims_from_name();
