@@ -224,7 +224,8 @@ pub fn slice_view(
         }
     }
     if response.hovered() {
-        // Wheel notches as events (not egui's smoothed scroll): one notch, one voxel's depth along the normal.
+        // Wheel events (not egui's smoothed scroll), one voxel's depth along the normal per frame that has any: X11
+        // delivers each notch twice (measured under Xvfb: two MouseWheel events of one line for one `click 4`).
         let notches: f32 = ui.input(|i| {
             i.events
                 .iter()
@@ -232,8 +233,9 @@ pub fn slice_view(
                     egui::Event::MouseWheel { delta, .. } if delta.y != 0.0 => Some(delta.y.signum()),
                     _ => None,
                 })
-                .sum()
+                .sum::<f32>()
         });
+        let notches = if notches == 0.0 { 0.0 } else { notches.signum() };
         if notches != 0.0 {
             let step = frame.normal() * frame.pixel.min(smallest_spacing(mm)) * f64::from(notches);
             let moved = mm.transform_point3(state.slices.crosshair) + step;

@@ -57,9 +57,18 @@ pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> 
         if i.key_pressed(egui::Key::Q) {
             state.quality = Some(next_lower(state.quality));
         }
-        if i.key_pressed(egui::Key::S) && i.modifiers.command {
+        // Each press's own modifiers: a quick Ctrl+S arrives whole within one frame, so the frame's modifier
+        // state (read after it) no longer has Ctrl down.
+        let s_presses = |command: bool| {
+            i.events.iter().any(|e| {
+                matches!(e, egui::Event::Key { key: egui::Key::S, pressed: true, repeat: false, modifiers, .. }
+                    if modifiers.command == command)
+            })
+        };
+        if s_presses(true) {
             actions.push(UiAction::SaveSession);
-        } else if i.key_pressed(egui::Key::S) {
+        }
+        if s_presses(false) {
             state.look.shading = match state.look.shading {
                 Some(_) => None,
                 None => Some(Shading::default()),

@@ -1,0 +1,208 @@
+//! The slice views and sessions through real X input (xdotool under Xvfb), on an anatomical phantom stored LIP
+//! (`tests/data/world/nifti_coronal.nii.gz`): a click in the axial view moves the shared crosshair to the patient
+//! point under the pointer (the other two views follow), the wheel steps the axial slice one voxel superior, a
+//! right drag in the sagittal view changes window and level, Ctrl+S writes the session, and a second viewer
+//! started with `--state` on it shows the same view (F12 equal to 1/255) with the same crosshair. Validation
+//! reports 0 messages in both.
+
+mod common;
+
+use common::x11::{capture, type_keys, x_client, x_session, Viewer, WAIT_MS};
+use glam::{DVec2, DVec3};
+use image::RgbaImage;
+use std::path::Path;
+use std::time::Duration;
+use volcast::slice::SliceView;
+use volcast::view_state::ViewState;
+use volcast::viewer::slice_views;
+use volcast::viewer::ui::ViewerState;
+
+const SIZE: (f32, f32) = (900.0, 600.0);
+
+fn read_state(path: &Path) -> ViewState {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    ViewState::from_json(&text, &path.display().to_string()).expect("a view state")
+}
+
+fn pointer(display: &str, window: &str, p: egui::Pos2) {
+    let (x, y) = (format!("{}", p.x.round()), format!("{}", p.y.round()));
+    x_client(display, "xdotool", &["mousemove", "--window", window, &x, &y]);
+    std::thread::sleep(Duration::from_millis(120));
+}
+
+fn button(display: &str, action: &str, button: &str) {
+    x_client(display, "xdotool", &[action, button]);
+    std::thread::sleep(Duration::from_millis(200));
+}
+
+/// Saves the session (Ctrl+S) and reads it back.
+fn save_session(viewer: &mut Viewer, display: &str, window: &str, dir: &Path) -> ViewState {
+    type_keys(display, window, &["ctrl+s"]);
+    viewer.wait_for("saved session ", Duration::from_secs(60));
+    read_state(&dir.join("volcast-session.json"))
+}
+
+fn region(img: &RgbaImage, r: egui::Rect) -> Vec<u8> {
+    let mut out = Vec::new();
+    for y in r.top() as u32 + 2..r.bottom() as u32 - 2 {
+        for x in r.left() as u32 + 2..r.right() as u32 - 2 {
+            out.extend_from_slice(&img.get_pixel(x, y).0[..3]);
+        }
+    }
+    out
+}
+
+#[test]
+fn slice_views_follow_the_crosshair_and_sessions_restore() {
+    let phantom = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/world/nifti_coronal.nii.gz");
+    let volume = volcast::volume::open(&phantom, &Default::default()).expect("phantom");
+    let Some((x, dir)) = x_session("viewer-slices") else {
+        return;
+    };
+    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let path = phantom.to_str().unwrap();
+    let mut viewer = Viewer::start(&x.display, &dir, &[path, "--slices"], &script);
+    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    let window = &viewer.window(&x.display);
+
+    // Where the views are: the 3D view (F12's image) is the top-right quadrant of the area right of the panel.
+    let before = save_session(&mut viewer, &x.display, window, &dir);
+    let session = before.viewer.clone().expect("the viewer's part");
+    assert!(session.slice_views, "--slices: four-up");
+    type_keys(&x.display, window, &["F12"]);
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    let (shot, _) = common::x11::read_screenshot(&dir, &saved);
+    let panel_right = (0..SIZE.0 as i32)
+        .map(|p| p as f32)
+        .find(|&left| {
+            let area = egui::Rect::from_min_max(egui::pos2(left, 0.0), egui::pos2(SIZE.0, SIZE.1));
+            (slice_views::four_up(area)[1].width().round() - shot.width() as f32).abs() <= 0.5
+        })
+        .expect("a layout that gives F12's width");
+    let area = egui::Rect::from_min_max(egui::pos2(panel_right, 0.0), egui::pos2(SIZE.0, SIZE.1));
+    let [axial_rect, _, sagittal_rect, coronal_rect] = slice_views::four_up(area);
+
+    // The viewer's state for the same volume, to say where a click lands in patient space.
+    let mut state = ViewerState::new(volume.extent(), "phantom".into());
+    state.set_volume(volume.extent(), volume.geometry, volume.dims, "phantom".into());
+    state.slices.crosshair = DVec3::from_array(session.crosshair);
+    let frame = slice_views::frame_of(&state, SliceView::Axial, axial_rect, 1.0);
+    let shown = slice_views::image_rect(&frame, axial_rect);
+    let click = shown.lerp_inside(egui::vec2(0.3, 0.65));
+
+    let window_before = capture(&x.display, window);
+    pointer(&x.display, window, click);
+    button(&x.display, "click", "1");
+    let moved = save_session(&mut viewer, &x.display, window, &dir);
+    let crosshair = DVec3::from_array(moved.viewer.clone().unwrap().crosshair);
+    let scale = f64::from(shown.width()) / f64::from(frame.width);
+    let image_point = DVec2::new(
+        f64::from(click.x.round() - shown.left()) / scale,
+        f64::from(click.y.round() - shown.top()) / scale,
+    );
+    let expected = volume
+        .geometry
+        .affine
+        .inverse()
+        .transform_point3(frame.world(image_point));
+    assert!(
+        crosshair.distance(expected) < 1.0,
+        "the click put the crosshair at voxel {crosshair}, expected {expected}"
+    );
+    // The axial slice itself stays (the click is in its plane); the coronal and sagittal views follow.
+    let mm = volume.geometry.affine;
+    let height = |c: DVec3| mm.transform_point3(c).z;
+    assert!((height(crosshair) - height(DVec3::from_array(session.crosshair))).abs() < 1e-6);
+    let window_after = capture(&x.display, window);
+    for (name, r) in [("coronal", coronal_rect), ("sagittal", sagittal_rect)] {
+        assert_ne!(
+            region(&window_before, r),
+            region(&window_after, r),
+            "the {name} view follows the crosshair"
+        );
+    }
+
+    // One wheel notch up over the axial view: one voxel superior (the phantom's smallest voxel side).
+    button(&x.display, "click", "4");
+    let stepped = DVec3::from_array(
+        save_session(&mut viewer, &x.display, window, &dir)
+            .viewer
+            .unwrap()
+            .crosshair,
+    );
+    let smallest = volume.geometry.spacing().into_iter().fold(f64::MAX, f64::min);
+    let rise = height(stepped) - height(crosshair);
+    assert!(
+        (rise - smallest.min(frame.pixel)).abs() < 1e-6,
+        "a notch moved the axial slice {rise} mm"
+    );
+
+    // A right drag in the sagittal view: right widens the window, up lowers the level.
+    let wl0 = moved.viewer.unwrap().window_level.expect("window/level");
+    let start = sagittal_rect.center();
+    pointer(&x.display, window, start);
+    button(&x.display, "mousedown", "3");
+    for k in 1..=5 {
+        pointer(&x.display, window, start + egui::vec2(8.0 * k as f32, -4.0 * k as f32));
+    }
+    button(&x.display, "mouseup", "3");
+    let dragged = save_session(&mut viewer, &x.display, window, &dir);
+    let wl1 = dragged.viewer.clone().unwrap().window_level.unwrap();
+    let per_pixel = (volume.range[1] - volume.range[0]) / 500.0;
+    assert!(
+        (wl1.window - wl0.window - 40.0 * per_pixel).abs() < 2.0 * per_pixel,
+        "window {} -> {}",
+        wl0.window,
+        wl1.window
+    );
+    assert!(
+        (wl1.level - wl0.level + 20.0 * per_pixel).abs() < 2.0 * per_pixel,
+        "level {} -> {}",
+        wl0.level,
+        wl1.level
+    );
+
+    type_keys(&x.display, window, &["F12"]);
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    let (final_shot, _) = common::x11::read_screenshot(&dir, &saved);
+    let status = viewer.finish();
+    assert!(status.success(), "viewer exit: {status}\n{}", viewer.stderr);
+    assert!(
+        viewer.stderr.contains("validation: 0 errors, 0 warnings"),
+        "{}",
+        viewer.stderr
+    );
+
+    // A second viewer restores the session: the same 3D view and the same slice state.
+    let session_file = dir.join("volcast-session.json");
+    let mut again = Viewer::start(
+        &x.display,
+        &dir,
+        &["--state", session_file.to_str().unwrap()],
+        &format!("frames:3;wait:{WAIT_MS};exit"),
+    );
+    again.wait_for("script: Wait(", Duration::from_secs(180));
+    let window = &again.window(&x.display);
+    type_keys(&x.display, window, &["F12"]);
+    let saved = again.wait_for("saved screenshot ", Duration::from_secs(60));
+    let (restored_shot, _) = common::x11::read_screenshot(&dir, &saved);
+    let name = saved.split_once("saved screenshot ").unwrap().1.trim();
+    let restored = read_state(&dir.join(name).with_extension("json"));
+    assert_eq!(restored.viewer, dragged.viewer, "the viewer's state comes back");
+    assert_eq!(restored_shot.dimensions(), final_shot.dimensions());
+    let worst = restored_shot
+        .pixels()
+        .zip(final_shot.pixels())
+        .map(|(a, b)| (0..3).map(|c| a.0[c].abs_diff(b.0[c])).max().unwrap_or(0))
+        .max()
+        .unwrap_or(0);
+    assert!(worst <= 1, "the restored view differs by up to {worst}/255");
+    let status = again.finish();
+    assert!(status.success(), "viewer exit: {status}\n{}", again.stderr);
+    assert!(
+        again.stderr.contains("validation: 0 errors, 0 warnings"),
+        "{}",
+        again.stderr
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
