@@ -189,6 +189,9 @@ mod tests {
         let e = serde_json::from_str::<ClipPlane>(r#"{"normal": [0, 0, 0], "offset": 1}"#).unwrap_err();
         assert!(e.to_string().contains("non-zero"), "{e}");
         assert!(serde_json::from_str::<ClipPlane>(r#"{"offset": 1}"#).is_err());
+        // Settings written before planes existed load without one.
+        let old: crate::settings::RenderSettings = serde_json::from_str(r#"{"width": 64}"#).unwrap();
+        assert_eq!(old.clip_plane, None);
     }
 
     #[test]
