@@ -228,14 +228,14 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    `rgb·(ambient·O + diffuse·c·T·max(n·L, 0)) + specular·c·T·max(n·H, 0)^shininess` (O = 1 without
 ///    occlusion, T = 1 without shadows).
 /// 10. **Clipping plane** (`clip_plane`, [`crate::clip::ClipPlane`]): a unit normal n and an offset d in mm, in
-///    the millimetre world the box is placed in by rule 0 (with `voxel_axes` the voxel box), before centring and
-///    scaling. A point p is kept where `(p − c)·n ≥ d`, c the box's centre there; n points into what stays. Rule
-///    1's segment is cut to the kept part exactly (the ray's first sample, rule 2, counts from where the plane
-///    cuts it), with the slab box and the near plane. Unlike the slab box's faces, the plane *cuts*
-///    iso-surfaces rather than capping them: where the plane starts a ray, sample 0 meets no surface (rule 7's
-///    k = 0 case) and only serves as `v_{k−1}` for sample 1, so a cut surface shows its inside (a mesh cut
-///    open), not a lid. Rule 9's light grid ignores the plane, as it ignores the slab box: material clipped away
-///    still casts shadows and occludes.
+///     the millimetre world the box is placed in by rule 0 (with `voxel_axes` the voxel box), before centring and
+///     scaling. A point p is kept where `(p − c)·n ≥ d`, c the box's centre there; n points into what stays. Rule
+///     1's segment is cut to the kept part exactly (the ray's first sample, rule 2, counts from where the plane
+///     cuts it), with the slab box and the near plane. Unlike the slab box's faces, the plane *cuts*
+///     iso-surfaces rather than capping them: where the plane starts a ray, sample 0 meets no surface (rule 7's
+///     k = 0 case) and only serves as `v_{k−1}` for sample 1, so a cut surface shows its inside (a mesh cut
+///     open), not a lid. Rule 9's light grid ignores the plane, as it ignores the slab box: material clipped away
+///     still casts shadows and occludes.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct RenderSettings {

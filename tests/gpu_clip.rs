@@ -30,9 +30,12 @@ fn oblique_plane() -> Option<ClipPlane> {
     plane([0.6, -0.5, 0.4], 4.0)
 }
 
+/// How a case sets its plane (and what goes with it).
+type SetPlane = Box<dyn Fn(&mut RenderSettings)>;
+
 /// The planes, each in emission, iso-surface and MIP frames.
 fn plane_cases(v: &Volume) -> Vec<Case> {
-    let planes: Vec<(&str, Box<dyn Fn(&mut RenderSettings)>)> = vec![
+    let planes: Vec<(&str, SetPlane)> = vec![
         ("oblique", Box::new(|s| s.clip_plane = oblique_plane())),
         ("axis-z", Box::new(|s| s.clip_plane = plane([0.0, 0.0, -1.0], 4.0))),
         (
