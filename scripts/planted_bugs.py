@@ -124,6 +124,11 @@ BUGS = [
        "gradient_to_world: m4(DMat4::from_mat3(index_to_world)),")]),
     ("uneven-not-resampled", "an unevenly spaced DICOM series is not resampled (slices past a gap misplaced)",
      [("src/volume/dicom_geometry.rs", "const UNEVEN_TOLERANCE: f64 = 0.05;", "const UNEVEN_TOLERANCE: f64 = 50.0;")]),
+    ("clip-plane-caps-iso", "the clipping plane caps iso-surfaces (the first sample meets them) instead of cutting them open",
+     [("shaders/march.glsl", "int meets = (cut_start && !has_prev) ? 0 : count;", "int meets = count;")]),
+    ("clip-normal-not-transposed", "the clipping plane's normal goes to texture space by the placement, not its transpose",
+     [("src/clip.rs", "let m = DMat3::from_mat4(tex_to_world).transpose() * n;",
+       "let m = DMat3::from_mat4(tex_to_world) * n;")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -32,4 +32,5 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 light_dir;       // xyz: unit direction towards the light (world); w: 1 directional, 0 headlight
     vec4 light_color;     // rgb: linear colour x intensity
     vec4 light_grid;      // rule 9: xyz the shadow read's offset towards the light (texture space); w: 1 shadows + 2 occlusion
+    vec4 clip_plane;      // rule 10, texture space: p is kept where dot(xyz, p) + w >= 0 (0,0,0,1 keeps everything)
 } frame;

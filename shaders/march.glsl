@@ -13,6 +13,7 @@ layout(std140, set = 1, binding = 6) uniform Integrals {
     vec4 cumulative[4096];
 } integrals;
 layout(set = 1, binding = 3) uniform texture3D occupancy_tex;   // one texel per 8^3 brick: class and reach
+#include "clip.glsl"
 
 const uint MODE_EMISSION = 0u;
 const uint MODE_MIP = 1u;
@@ -333,6 +334,11 @@ vec4 segment_to(vec3 a, vec3 dir, float t, float h, vec3 light, bool density_mod
 // for emission/density, and SHADED), because lavapipe executes an `if` holding texture samples at full cost
 // even when no pixel takes it: unused shading code made the plain march 4x slower.
 vec4 march(vec3 a, vec3 b, vec2 frag) {
+    // Rule 10: where the clipping plane starts the ray, iso-surfaces are cut open, not capped (see below).
+    bool cut_start;
+    if (!clip_segment(a, b, cut_start)) {
+        return output_pixel(background_pixel(), 0u);
+    }
     vec3 d = b - a;
     // World length and direction: the placement may scale, rotate, shear or mirror the box.
     vec3 d_world = mat3(frame.tex_to_world) * d;
@@ -404,9 +410,11 @@ vec4 march(vec3 a, vec3 b, vec2 frag) {
         float v = sample_value(a + dir * t);
         v = isnan(v) ? -1e30 : v;
         // The first sample meets every surface at or below its value, highest first (the innermost material where
-        // the ray starts: a cut face shows what is there).
+        // the ray starts: a cut face shows what is there) -- except on the clipping plane, which cuts surfaces open:
+        // there the first sample meets none and only starts the next crossing's interval.
         bool rising = has_prev && v >= v_prev;
-        for (int j = 0; j < count; j++) {
+        int meets = (cut_start && !has_prev) ? 0 : count;
+        for (int j = 0; j < meets; j++) {
             int i = rising ? j : count - 1 - j;
             float iso = frame.iso_values[i];
             bool below_before = v_prev < iso;

@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod camera;
+pub mod clip;
 pub mod compare;
 pub mod fidelity;
 pub mod gpu;

@@ -485,6 +485,10 @@ struct FrameArgs {
     /// Slab slicing AXIS:POSITION:WIDTH in [0,1], e.g. x:0.5:0.2 (repeatable, one per axis).
     #[arg(long = "slice", value_parser = parse_slice)]
     slices: Vec<(usize, f32, f32)>,
+    /// Clipping plane NX,NY,NZ[,OFFSET]: keeps the points p (world mm: RAS for anatomical volumes) with
+    /// (p − centre)·N ≥ OFFSET, centre the volume box's centre; N points into what stays (default offset 0).
+    #[arg(long, value_name = "NX,NY,NZ[,OFFSET]", allow_hyphen_values = true, value_parser = parse_clip_plane)]
+    clip_plane: Option<volcast::clip::ClipPlane>,
     /// Entry/exit position target format: rgba32f or rgba16f.
     #[arg(long, default_value = "rgba32f", value_parser = ["rgba32f", "rgba16f"])]
     positions: String,
@@ -555,6 +559,10 @@ fn parse_shading(s: &str) -> Result<volcast::settings::Shading, String> {
         specular: v[2],
         shininess: v[3],
     })
+}
+
+fn parse_clip_plane(s: &str) -> Result<volcast::clip::ClipPlane, String> {
+    volcast::clip::ClipPlane::parse(s).map_err(|e| e.to_string())
 }
 
 fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {
@@ -677,6 +685,7 @@ impl FrameArgs {
         for &(axis, pos, width) in &self.slices {
             s.set_slab(axis, pos, width);
         }
+        s.clip_plane = self.clip_plane;
         s.position_format = if self.positions == "rgba16f" {
             PositionFormat::Rgba16f
         } else {

@@ -145,7 +145,7 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    Perspective: from the eye through the pixel. Orthographic (`camera.ortho`): parallel to the view direction,
 ///    starting on the plane through the eye perpendicular to it, the view `2·d·tan(fov/2)` high (d = |eye −
 ///    target|). The segment used is the part inside the *slab box* (texture-space `[slab_lo, slab_hi]` ⊆ [0,1]³)
-///    and at view depth ≥ `camera.near`. No segment: background.
+///    and at view depth ≥ `camera.near`, and kept by the clipping plane (rule 10). No segment: background.
 /// 2. **Samples.** World segment length `L`, step `h = step_length × voxel` (`voxel` = the smallest voxel side in
 ///    world units, the shortest column of M); samples at `t = (k + o)·h`, k = 0, 1, … while `t < L`. `o = 0.5`, or with `jitter = Some(seed)`
 ///    `o = jitter_offset(x, y, seed)` ∈ [0, 1).
@@ -201,7 +201,7 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    else `C` = the colour of m, `A = 1`. Isosurface: the surfaces ([`RenderSettings::isosurfaces`], by value;
 ///    a NaN sample counts as below every one) are met where the samples cross them: for sample k > 0 with
 ///    values `v_{k−1}`, `v_k`, every surface `v_{k−1} < iso ≤ v_k` (rising, lowest first) or `v_k < iso ≤ v_{k−1}`
-///    (falling, highest first); for k = 0 every surface `iso ≤ v_0`, highest first, met at `t_0`. A crossing at k > 0 is placed
+///    (falling, highest first); for k = 0 every surface `iso ≤ v_0`, highest first, met at `t_0` (not where the clipping plane starts the ray, rule 10). A crossing at k > 0 is placed
 ///    by 8 bisection steps on [t_{k−1}, t_k] keeping the side of `t_{k−1}` at lo (`v ≥ iso` there or not), at the
 ///    final midpoint. Each is composited front to back like a segment, `C += (1 − A)·α·c`, `A += (1 − A)·α`,
 ///    with α its opacity and c its colour (sRGB decoded, or the classification's colour at the value clamped
@@ -227,6 +227,15 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    p, and T at `p + 1.5·Δ` (cells, towards the light: a surface does not shadow itself); rule 5 becomes
 ///    `rgb·(ambient·O + diffuse·c·T·max(n·L, 0)) + specular·c·T·max(n·H, 0)^shininess` (O = 1 without
 ///    occlusion, T = 1 without shadows).
+/// 10. **Clipping plane** (`clip_plane`, [`crate::clip::ClipPlane`]): a unit normal n and an offset d in mm, in
+///     the millimetre world the box is placed in by rule 0 (with `voxel_axes` the voxel box), before centring and
+///     scaling. A point p is kept where `(p − c)·n ≥ d`, c the box's centre there; n points into what stays. Rule
+///     1's segment is cut to the kept part exactly (the ray's first sample, rule 2, counts from where the plane
+///     cuts it), with the slab box and the near plane. Unlike the slab box's faces, the plane *cuts*
+///     iso-surfaces rather than capping them: where the plane starts a ray, sample 0 meets no surface (rule 7's
+///     k = 0 case) and only serves as `v_{k−1}` for sample 1, so a cut surface shows its inside (a mesh cut
+///     open), not a lid. Rule 9's light grid ignores the plane, as it ignores the slab box: material clipped away
+///     still casts shadows and occludes.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct RenderSettings {
@@ -290,6 +299,8 @@ pub struct RenderSettings {
     /// Render in voxel index space: the box along the world's axes by its voxel sizes, ignoring the file's
     /// orientation (what volcast showed before it read orientations; `--voxel-axes`).
     pub voxel_axes: bool,
+    /// Rule 10's clipping plane (None: keep everything).
+    pub clip_plane: Option<crate::clip::ClipPlane>,
     /// Output, instead of each pixel's colour, the number of sample positions its ray visited (rule 2's samples
     /// actually taken: those that empty-space skipping leaps over, gradient and bisection samples not counted),
     /// as a 24-bit integer in the R, G, B bytes. For tests and measurement; see [`decode_sample_count`].
@@ -363,6 +374,7 @@ impl RenderSettings {
             gradient_texture: false,
             compute: false,
             voxel_axes: false,
+            clip_plane: None,
             count_samples: false,
         }
     }

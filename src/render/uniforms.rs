@@ -45,6 +45,8 @@ pub struct FrameUniforms {
     pub light_color: [f32; 4],
     /// Rule 9: xyz the shadow read's offset (texture space); w: 1 shadows + 2 occlusion.
     pub light_grid: [f32; 4],
+    /// Rule 10's clipping plane in texture space: p is kept where `xyz·p + w ≥ 0` (`clip::KEEP_ALL` without one).
+    pub clip_plane: [f32; 4],
 }
 
 /// GPU facts about the loaded volume that the uniforms need.
@@ -62,6 +64,12 @@ impl VolumeInfo {
     /// Texture space to the render world for `s` (the volume's placement, or its voxel axes).
     pub fn tex_to_world(&self, s: &RenderSettings) -> DMat4 {
         self.geometry.tex_to_world(self.dims, s.voxel_axes)
+    }
+
+    /// Rule 10's clipping plane of `s` in texture space, as the uniforms carry it.
+    pub fn clip_plane(&self, s: &RenderSettings) -> [f32; 4] {
+        let world_per_mm = self.geometry.world_per_mm(self.dims);
+        crate::clip::texture_plane_or_all(s.clip_plane.as_ref(), self.tex_to_world(s), world_per_mm)
     }
 
     /// A voxel's step along each index axis in the render world: the columns of `L·diag(1/dims)`, L the linear
@@ -200,6 +208,7 @@ impl FrameUniforms {
             } else {
                 [0.0; 4]
             },
+            clip_plane: v.clip_plane(s),
         }
     }
 }

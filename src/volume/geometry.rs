@@ -146,6 +146,13 @@ impl Geometry {
         }
     }
 
+    /// The render world's scale (rule 0): one over the box's longest side in millimetres (voxels × voxel size),
+    /// the same with or without `voxel_axes`.
+    pub fn world_per_mm(&self, dims: [u32; 3]) -> f64 {
+        let d = DVec3::new(f64::from(dims[0]), f64::from(dims[1]), f64::from(dims[2]));
+        1.0 / (d * DVec3::from_array(self.spacing())).max_element()
+    }
+
     /// Texture space [0, 1]³ of a `dims` grid to volcast's render world: voxel centres at (i + 0.5)/dims, placed
     /// by the affine (or, with `voxel_axes`, along the world's axes by the voxel sizes alone), then centred on the
     /// origin and scaled so the box's longest side is 1. For a volume along the axes that is `(tex − ½)·extent`.
@@ -159,8 +166,7 @@ impl Geometry {
             self.affine
         };
         let centre = mm_from_index.transform_point3((d - 1.0) * 0.5);
-        let longest = (d * spacing).max_element();
-        DMat4::from_scale(DVec3::splat(1.0 / longest))
+        DMat4::from_scale(DVec3::splat(self.world_per_mm(dims)))
             * DMat4::from_translation(-centre)
             * mm_from_index
             * index_from_tex

@@ -17,6 +17,9 @@ pub(crate) struct Frame<'a> {
     volume: &'a Reference,
     camera: CameraBasis,
     placement: Placement,
+    /// Rule 10's clipping plane in the world: unit normal n and offset, kept where `p·n ≥ offset` (the world's
+    /// origin is the box's centre, and its scale uniform, so the millimetre offset just scales).
+    clip: Option<(DVec3, f64)>,
     /// The slab box, texture space.
     box_lo: DVec3,
     box_hi: DVec3,
@@ -57,6 +60,7 @@ struct Composite {
 impl<'a> Frame<'a> {
     pub(crate) fn new(volume: &'a Reference, s: &RenderSettings) -> Frame<'a> {
         let placement = volume.placement(s);
+        let world_per_mm = placement.world_per_mm();
         let shading = match s.mode {
             CompositeMode::Isosurface => Some(s.shading.unwrap_or_default()),
             _ => s.shading,
@@ -81,6 +85,9 @@ impl<'a> Frame<'a> {
             camera: CameraBasis::new(s),
             step: f64::from(s.step_length) * placement.voxel_sides().min_element(),
             placement,
+            clip: s
+                .clip_plane
+                .map(|p| (p.normal().as_dvec3().normalize(), f64::from(p.offset()) * world_per_mm)),
             box_lo: s.slab_lo.as_dvec3(),
             box_hi: s.slab_hi.as_dvec3(),
             classifier: volume.classifier(s),
@@ -168,11 +175,15 @@ impl<'a> Frame<'a> {
         let Some((t_start, t_end)) = ray_segment(origin_tex, dir_tex, self.box_lo, self.box_hi, t_near) else {
             return trace;
         };
+        let Some((t_start, t_end, clipped_start)) = self.clip_to_plane(origin, dir, t_start, t_end) else {
+            return trace;
+        };
         let segment = Segment {
             origin,
             dir,
             t_start,
             t_end,
+            clipped_start,
         };
         trace.segment = Some(segment);
         let result = match self.mode {
@@ -185,6 +196,30 @@ impl<'a> Frame<'a> {
         trace.linear = (result.color + (1.0 - result.alpha) * self.background).clamp(DVec3::ZERO, DVec3::ONE);
         trace.output = encode(trace.linear);
         trace
+    }
+
+    /// Rule 10: the part of `[t_start, t_end]` of the ray `origin + t·dir` (world) that the clipping plane keeps,
+    /// and whether the plane moved its start; None when nothing (or one point) is left.
+    fn clip_to_plane(&self, origin: DVec3, dir: DVec3, t_start: f64, t_end: f64) -> Option<(f64, f64, bool)> {
+        let Some((n, offset)) = self.clip else {
+            return Some((t_start, t_end, false));
+        };
+        // (origin + t·dir)·n − offset = f0 + t·slope ≥ 0.
+        let (f0, slope) = (origin.dot(n) - offset, dir.dot(n));
+        let (mut t0, mut t1, mut moved) = (t_start, t_end, false);
+        if slope == 0.0 {
+            if f0 < 0.0 {
+                return None;
+            }
+        } else {
+            let t = -f0 / slope;
+            if slope > 0.0 && t > t0 {
+                (t0, moved) = (t, true);
+            } else if slope < 0.0 {
+                t1 = t1.min(t);
+            }
+        }
+        (t0 < t1).then_some((t0, t1, moved))
     }
 
     /// Rule 2's sample distances from the segment's start: `(k + o)·h` while below the segment's length.
@@ -316,6 +351,10 @@ impl<'a> Frame<'a> {
                 .collect();
             if previous.is_none() || v < v_prev {
                 met.reverse();
+            }
+            // Rule 10: on the clipping plane the first sample meets nothing (surfaces are cut, not capped).
+            if previous.is_none() && segment.clipped_start {
+                met.clear();
             }
             for (iso, material, opacity) in met {
                 let t_hit = match previous {

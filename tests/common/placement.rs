@@ -11,6 +11,8 @@ pub struct Placement {
     to_tex: DMat4,
     /// Voxel index steps in world units (the columns: one voxel along i, j, k).
     index_to_world: DMat3,
+    /// World units per millimetre: one over the box's longest side.
+    world_per_mm: f64,
 }
 
 impl Placement {
@@ -33,6 +35,7 @@ impl Placement {
             to_tex: to_world.inverse(),
             to_world,
             index_to_world: a * scale,
+            world_per_mm: scale,
         }
     }
 
@@ -47,6 +50,12 @@ impl Placement {
     /// A world direction (per world unit) in texture space.
     pub fn dir_to_tex(&self, dir: DVec3) -> DVec3 {
         self.to_tex.transform_vector3(dir)
+    }
+
+    /// World units per millimetre (the box's centre is the world's origin, so a point c + x mm from the centre is
+    /// at `x·world_per_mm`).
+    pub fn world_per_mm(&self) -> f64 {
+        self.world_per_mm
     }
 
     /// A voxel's side along each index axis, in world units.

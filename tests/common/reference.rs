@@ -42,6 +42,8 @@ pub struct Segment {
     pub dir: DVec3,
     pub t_start: f64,
     pub t_end: f64,
+    /// Whether rule 10's clipping plane moved the start (iso-surfaces are cut open there, not capped).
+    pub clipped_start: bool,
 }
 
 impl Segment {
