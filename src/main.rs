@@ -831,7 +831,13 @@ fn movie(args: &RenderArgs) -> Result<()> {
         let frames = args.turntable.unwrap_or(1);
         MovieFiles::new(&args.output, frames)?;
         let (volume, base) = render_view(args)?;
-        (volume, Plan::Turntable { base, frames })
+        (
+            volume,
+            Plan::Turntable {
+                base: Box::new(base),
+                frames,
+            },
+        )
     } else {
         let frames = args
             .frames

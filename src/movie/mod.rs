@@ -55,7 +55,7 @@ pub fn check_frames(n: u32, min: u32, option: &str) -> Result<(), MovieError> {
 /// What a movie's frames are.
 pub enum Plan {
     /// `frames` frames turning `base` once around the vertical axis ([`path::turntable_frame`]).
-    Turntable { base: RenderSettings, frames: u32 },
+    Turntable { base: Box<RenderSettings>, frames: u32 },
     /// `frames` frames along the path through `keys` ([`path::keyframe_frame`]).
     Keyframes { keys: Vec<RenderSettings>, frames: u32 },
 }

@@ -243,14 +243,25 @@ mod tests {
     fn azimuth_wraps_the_short_way() {
         let a = orbit_settings(350.0, 25.0, 2.0);
         let b = orbit_settings(10.0, 25.0, 2.0);
-        let keys = [a, b];
-        let mid = keyframe_frame(&keys, 2, 5);
+        let mid = keyframe_frame(&[a, b], 2, 5);
         let az = azimuth(&mid.camera);
         assert!(az.abs() < 1e-3, "halfway from 350° to 10° is 0°, got {az}");
-        for k in 0..5 {
-            let az = azimuth(&keyframe_frame(&keys, k, 5).camera);
-            let from_zero = if az > 180.0 { az - 360.0 } else { az };
-            assert!(from_zero.abs() <= 10.0 + 1e-3, "frame {k} at {az}° leaves the 20° arc");
+        // Every 20° arc around the circle, whichever sign each orientation's quaternion happens to take.
+        for centre in (0..360).step_by(15) {
+            let centre = centre as f32;
+            // (The second azimuth a full turn further on: the same view, so the same short way.)
+            let keys = [
+                orbit_settings(centre - 10.0, 25.0, 2.0),
+                orbit_settings(centre + 10.0 + 360.0, 25.0, 2.0),
+            ];
+            for k in 0..5 {
+                let az = azimuth(&keyframe_frame(&keys, k, 5).camera);
+                let off = (az - f64::from(centre) + 540.0).rem_euclid(360.0) - 180.0;
+                assert!(
+                    off.abs() <= 10.0 + 1e-3,
+                    "{centre}° ± 10°: frame {k} at {az}° leaves the 20° arc"
+                );
+            }
         }
     }
 
