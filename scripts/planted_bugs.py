@@ -129,6 +129,16 @@ BUGS = [
     ("clip-normal-not-transposed", "the clipping plane's normal goes to texture space by the placement, not its transpose",
      [("src/clip.rs", "let m = DMat3::from_mat4(tex_to_world).transpose() * n;",
        "let m = DMat3::from_mat4(tex_to_world) * n;")]),
+    ("turntable-short-turn", "a turntable's frames turn by 360°/(N + 1) instead of 360°/N (the loop does not close)",
+     [("src/movie/path.rs", "let angle = std::f64::consts::TAU * f64::from(k) / f64::from(n);",
+       "let angle = std::f64::consts::TAU * f64::from(k) / f64::from(n + 1);")]),
+    ("keyframe-long-way", "keyframed cameras may turn the long way round (slerp without the shorter-arc sign flip)",
+     [("src/movie/path.rs", "let q = qa.slerp(qb, t);", "let q = qa.slerp_long(qb, t);")]),
+    ("keyframe-last-missed", "a keyframed path's frames spread over N instead of N − 1 steps (it never reaches its last state)",
+     [("src/movie/path.rs", "let u = f64::from(k.min(n - 1)) * segments as f64 / f64::from(n - 1);",
+       "let u = f64::from(k.min(n - 1)) * segments as f64 / f64::from(n);")]),
+    ("gif-plays-once", "the movie's GIF plays once instead of looping",
+     [("src/movie/gif.rs", "e.set_repeat(::gif::Repeat::Infinite)?;", "e.set_repeat(::gif::Repeat::Finite(0))?;")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -12,6 +12,7 @@ pub mod huge_pages;
 pub mod image_out;
 pub mod info;
 pub mod lighting;
+pub mod movie;
 pub mod playback;
 pub mod preintegrate;
 pub mod quality;

@@ -234,14 +234,26 @@ struct RenderArgs {
     /// Print peak resident memory and the GPU memory allocated (volume, targets, buffers).
     #[arg(long)]
     memory: bool,
-    /// Frames to time with --timings (the median is reported).
-    #[arg(long, default_value_t = 5)]
-    frames: u32,
+    /// Frames to time with --timings (the median is reported; default 5); with --keyframes, the movie's frame
+    /// count (2 to 3600).
+    #[arg(long)]
+    frames: Option<u32>,
     /// Render a view the viewer saved (F12's JSON beside its screenshot): its settings, and its volume unless a
     /// FILE or --builtin is given. The view options (camera, transfer function, mode, size, method) come from the
     /// file.
     #[arg(long, value_name = "FILE.json")]
     state: Option<PathBuf>,
+    /// A turntable movie of N frames (1 to 3600) once around the vertical axis (+z through the point looked at),
+    /// starting at the view given: `-o NAME.png` writes NAME-0000.png … and a looping NAME.gif (README, Movies).
+    #[arg(long, value_name = "N", value_parser = parse_turntable, group = "movie", conflicts_with = "timings")]
+    turntable: Option<u32>,
+    /// A movie along a camera path through view states (F12's JSON), --frames N in all: the first frame is the
+    /// first state, the last the last; the volume is the first state's. Written like --turntable.
+    #[arg(long, num_args = 2.., value_name = "STATE.json", group = "movie", conflicts_with_all = ["state", "timings"])]
+    keyframes: Vec<PathBuf>,
+    /// Frames per second of a movie's GIF (0.1 to 50).
+    #[arg(long, value_name = "F", default_value_t = volcast::movie::gif::DEFAULT_FPS, value_parser = parse_fps, requires = "movie")]
+    fps: f32,
 }
 
 #[derive(Args, Clone)]
@@ -726,6 +738,24 @@ fn parse_named<T: Copy>(
     })
 }
 
+/// `--turntable`'s frame count.
+fn parse_turntable(s: &str) -> Result<u32, String> {
+    let max = volcast::movie::MAX_FRAMES;
+    match s.trim().parse::<u32>() {
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
+        _ => Err(format!("a turntable has 1 to {max} frames")),
+    }
+}
+
+/// `--fps`: a GIF's frame rate.
+fn parse_fps(s: &str) -> Result<f32, String> {
+    let fps = s
+        .trim()
+        .parse::<f32>()
+        .map_err(|_| format!("'{s}' is not a number of frames per second"))?;
+    volcast::movie::gif::check_fps(fps).map(|()| fps)
+}
+
 /// `--gradients`' value, for render and bench alike.
 fn parse_gradients(s: &str) -> Result<Gradients, String> {
     parse_named(s, Gradients::parse, &Gradients::ALL, Gradients::name, "gradient source")
@@ -777,8 +807,8 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-fn render(args: &RenderArgs) -> Result<()> {
-    volcast::image_out::check_name(&args.output).map_err(anyhow::Error::msg)?;
+/// The volume and settings `render` shows: a saved view's, or the options'.
+fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
     let state = match &args.state {
         Some(path) => {
             let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
@@ -789,12 +819,10 @@ fn render(args: &RenderArgs) -> Result<()> {
         }
         None => None,
     };
-    let t_load = Instant::now();
     let volume = match &state {
         Some(st) => args.volume.or_from(&st.volume).load()?,
         None => args.volume.load()?,
     };
-    let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
     let s = match state {
         // The saved view as it was (its method included).
         Some(st) => st.settings,
@@ -809,6 +837,61 @@ fn render(args: &RenderArgs) -> Result<()> {
             s
         }
     };
+    Ok((volume, s))
+}
+
+/// `render --turntable` and `render --keyframes`: the frames of `volcast::movie`, as PNGs and a GIF.
+fn movie(args: &RenderArgs) -> Result<()> {
+    use volcast::movie::{MovieError, MovieFiles, Plan};
+    let (volume, plan) = if args.keyframes.is_empty() {
+        let frames = args.turntable.unwrap_or(1);
+        MovieFiles::new(&args.output, frames)?;
+        let (volume, base) = render_view(args)?;
+        (
+            volume,
+            Plan::Turntable {
+                base: Box::new(base),
+                frames,
+            },
+        )
+    } else {
+        let frames = args
+            .frames
+            .ok_or_else(|| MovieError::Usage("--keyframes needs --frames N, the movie's length in frames".into()))?;
+        volcast::movie::check_frames(frames, 2, "--frames")?;
+        MovieFiles::new(&args.output, frames)?;
+        let states = volcast::movie::read_keyframes(&args.keyframes)?;
+        let volume = args.volume.or_from(&states[0].volume).load()?;
+        let keys = states.into_iter().map(|st| st.settings).collect();
+        (volume, Plan::Keyframes { keys, frames })
+    };
+    let files = MovieFiles::new(&args.output, plan.frame_count())?;
+    let label = if args.keyframes.is_empty() {
+        "turntable"
+    } else {
+        "keyframes"
+    };
+    with_gpu(&args.gpu, |gpu| {
+        let mut headless = Headless::new(gpu)?;
+        let mut progress = volcast::movie::Progress::stderr(label, plan.frame_count());
+        let done = volcast::movie::record(gpu, &mut headless, &volume, &plan, &files, args.fps, &mut |k| {
+            progress.update(k)
+        });
+        headless.destroy(gpu);
+        done?;
+        println!("{}", files.summary(args.fps));
+        Ok(())
+    })
+}
+
+fn render(args: &RenderArgs) -> Result<()> {
+    if args.turntable.is_some() || !args.keyframes.is_empty() {
+        return movie(args);
+    }
+    volcast::image_out::check_name(&args.output).map_err(anyhow::Error::msg)?;
+    let t_load = Instant::now();
+    let (volume, s) = render_view(args)?;
+    let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
     let t_device = Instant::now();
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
@@ -826,7 +909,7 @@ fn render(args: &RenderArgs) -> Result<()> {
             let mut timing_line = String::new();
             if args.timings {
                 let (mut wall, mut march, mut entry, mut exit, mut total) = (vec![], vec![], vec![], vec![], vec![]);
-                for _ in 0..args.frames.max(1) {
+                for _ in 0..args.frames.unwrap_or(5).max(1) {
                     let t = Instant::now();
                     frame = headless.render(gpu, &s)?;
                     wall.push(t.elapsed().as_secs_f64() * 1e3);
@@ -1107,7 +1190,16 @@ fn main() -> ExitCode {
                     ViewerError::Gpu(g) => g.is_unavailable(),
                     ViewerError::Other(_) => false,
                 });
-            ExitCode::from(if unavailable { 2 } else { 1 })
+            let usage = e
+                .downcast_ref::<volcast::movie::MovieError>()
+                .is_some_and(|m| matches!(m, volcast::movie::MovieError::Usage(_)));
+            ExitCode::from(if unavailable {
+                2
+            } else if usage {
+                USAGE_EXIT
+            } else {
+                1
+            })
         }
     }
 }
