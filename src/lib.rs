@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod camera;
+pub mod colorbar;
 pub mod compare;
 pub mod fidelity;
 pub mod gpu;
@@ -17,6 +18,7 @@ pub mod quality;
 pub mod render;
 pub mod settings;
 pub mod tf;
+pub mod tf_auto;
 pub mod transfer;
 pub mod view_state;
 pub mod viewer;
