@@ -124,6 +124,12 @@ BUGS = [
        "gradient_to_world: m4(DMat4::from_mat3(index_to_world)),")]),
     ("uneven-not-resampled", "an unevenly spaced DICOM series is not resampled (slices past a gap misplaced)",
      [("src/volume/dicom_geometry.rs", "const UNEVEN_TOLERANCE: f64 = 0.05;", "const UNEVEN_TOLERANCE: f64 = 50.0;")]),
+    ("colorbar-upside-down", "the colour bar puts the window's lower end at the top",
+     [("src/colorbar.rs", "        hi - t * (hi - lo)\n", "        lo + t * (hi - lo)\n")]),
+    ("colorbar-unit-dropped", "render --colorbar labels a CT's ticks without HU",
+     [("src/main.rs", "unit: volcast::tf_auto::VolumeFacts::of(volume).kind().unit(),", "unit: None,")]),
+    ("auto-ct-needs-huge-max", "the auto preset misses CT without a modality tag (bone threshold 10x too high)",
+     [("src/tf_auto.rs", "max >= 1000.0", "max >= 10000.0")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -60,7 +60,7 @@ impl Layout {
     /// The bar row whose centre is nearest the data value `v` (None outside the window).
     pub fn row_of(&self, spec: &ColorbarSpec, v: f64) -> Option<u32> {
         let [lo, hi] = Layout::data_window(spec);
-        if !(hi > lo) || v < lo || v > hi {
+        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) || v < lo || v > hi {
             return None;
         }
         let rows = f64::from(self.bar_y[1] - self.bar_y[0]);

@@ -116,10 +116,10 @@ mod tests {
     fn inserting_keeps_the_colour_and_the_order() {
         let range = [-1000.0, 3000.0];
         let mut t = tf(TfUnits::Data, vec![[0.0, 0.0, 0.0, 0.0], [2000.0, 1.0, 0.5, 0.0]]);
-        // u = 0.5 is 1000 data units: half way between the points.
-        let i = insert_color_point(&mut t, 0.5, [0.0, 1.0], range);
+        // u = 0.375 is 500 data units: a quarter of the way between the points.
+        let i = insert_color_point(&mut t, 0.375, [0.0, 1.0], range);
         assert_eq!(i, 1);
-        assert_eq!(t.colors[1], [1000.0, 0.5, 0.25, 0.0]);
+        assert_eq!(t.colors[1], [500.0, 0.25, 0.125, 0.0]);
         move_color_point(&mut t, 1, 0.99, range);
         assert_eq!(t.colors[1][0], 2000.0, "stopped at the right neighbour");
         move_color_point(&mut t, 1, 0.0, range);
