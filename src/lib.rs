@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod camera;
 pub mod clip;
+pub mod colorbar;
 pub mod compare;
 pub mod fidelity;
 pub mod gpu;
@@ -20,6 +21,7 @@ pub mod render;
 pub mod settings;
 pub mod slice;
 pub mod tf;
+pub mod tf_auto;
 pub mod transfer;
 pub mod view_state;
 pub mod viewer;

@@ -234,6 +234,10 @@ struct RenderArgs {
     /// Print peak resident memory and the GPU memory allocated (volume, targets, buffers).
     #[arg(long)]
     memory: bool,
+    /// Append a colour bar (the transfer function's colours and opacity over the window, ticks in data units) as
+    /// a strip at the right: the image grows by its width.
+    #[arg(long)]
+    colorbar: bool,
     /// Frames to time with --timings (the median is reported; default 5); with --keyframes, the movie's frame
     /// count (2 to 3600).
     #[arg(long)]
@@ -394,7 +398,8 @@ struct FrameArgs {
     /// (default 0.1,1; with a transfer function 0,1).
     #[arg(long, value_parser = parse_pair)]
     window: Option<(f32, f32)>,
-    /// A transfer-function preset: ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example.
+    /// A transfer-function preset: ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example, or auto (by
+    /// modality: CT gets ct-bone, anything else a grey ramp over its histogram's percentiles).
     #[arg(long, conflicts_with = "tf")]
     preset: Option<String>,
     /// A transfer function from a JSON file (see README).
@@ -641,6 +646,7 @@ impl FrameArgs {
             )
         })?;
         let tf = match (&self.preset, &self.tf) {
+            (Some(name), _) if name == "auto" => Some(volcast::tf_auto::auto_for_volume(volume)),
             (Some(name), _) => Some(TransferFunction::preset(name)?),
             (None, Some(path)) => Some(TransferFunction::load(path)?),
             (None, None) => None,
@@ -931,6 +937,9 @@ fn render(args: &RenderArgs) -> Result<()> {
                     }
                 }
             }
+            if args.colorbar {
+                frame.image = with_colorbar(&frame.image, &s, &volume);
+            }
             volcast::image_out::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
             println!(
                 "rendered {} ({}x{}x{} {}, spacing {}x{}x{}) at {}x{} with {} ray setup on {} -> {}",
@@ -970,6 +979,20 @@ fn render(args: &RenderArgs) -> Result<()> {
         headless.destroy(gpu);
         result
     })
+}
+
+/// `image` with the colour bar of `s`'s classification appended (unit "HU" for CT).
+fn with_colorbar(image: &image::RgbaImage, s: &RenderSettings, volume: &Volume) -> image::RgbaImage {
+    let classification = s.classification();
+    let to_u8 = |c: f32| (c.clamp(0.0, 1.0) * 255.0).round() as u8;
+    let spec = volcast::colorbar::ColorbarSpec {
+        classification: &classification,
+        window: s.window,
+        range: volume.range,
+        unit: volcast::tf_auto::VolumeFacts::of(volume).kind().unit(),
+        background: [to_u8(s.background.x), to_u8(s.background.y), to_u8(s.background.z)],
+    };
+    volcast::colorbar::append_colorbar(image, &spec)
 }
 
 fn view(args: &ViewArgs) -> Result<()> {

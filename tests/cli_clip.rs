@@ -126,6 +126,7 @@ fn a_view_state_carries_the_plane() {
             ..VolumeRef::default()
         },
         settings,
+        viewer: None,
     };
     let json = state.to_json();
     assert!(json.contains("\"clip_plane\""), "{json}");

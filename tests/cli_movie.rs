@@ -177,6 +177,7 @@ fn write_state(dir: &Path, name: &str, builtin: &str, azimuth: f32, elevation: f
             ..VolumeRef::default()
         },
         settings,
+        viewer: None,
     };
     let path = dir.join(name);
     std::fs::write(&path, state.to_json()).expect("write a state");

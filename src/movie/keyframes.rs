@@ -84,6 +84,7 @@ mod tests {
                 ..VolumeRef::default()
             },
             settings: RenderSettings::new(size.0, size.1, glam::Vec3::ONE),
+            viewer: None,
         };
         let path = dir.join(name);
         std::fs::write(&path, state.to_json()).unwrap();

@@ -90,7 +90,7 @@ impl Running {
         Ok(())
     }
 
-    pub(super) fn install_volume(&mut self, v: Volume, histogram: Vec<u64>) -> Result<(), GpuError> {
+    pub(super) fn install_volume(&mut self, v: Volume, histogram: Vec<u64>, from_file: bool) -> Result<(), GpuError> {
         // SAFETY: plain wait on a live device; set_volume rewrites descriptors that in-flight frames use.
         unsafe { self.gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")?;
         if let Some((_, old)) = self.ahead.take() {
@@ -108,6 +108,16 @@ impl Running {
         self.state.slices.reset(v.dims, &histogram, v.range);
         self.state.histogram = histogram;
         self.state.range = v.range;
+        self.state.tf_editor.set_volume(&v, &self.state.histogram);
+        self.state.value_unit = self.state.tf_editor.unit().unwrap_or_default().to_string();
+        // A file's volume gets the transfer function its modality calls for (CT in HU, others by percentiles)
+        // unless the user locked theirs; the built-ins (synthetic, no modality) keep the simple model.
+        if !self.state.tf_locked && from_file {
+            if let Some(tf) = self.state.tf_editor.auto() {
+                self.state.look.transfer_function = Some(tf);
+                self.state.look.window = [0.0, 1.0];
+            }
+        }
         self.state.time = time_control::TimeControl::new(v.timesteps(), v.shown_step());
         let keep = v.timesteps() == 1 && crate::quality::Gradients::texture_fits(v.voxel_count() as u64);
         self.state.gradient_texture = keep;
@@ -200,7 +210,8 @@ impl Running {
                 self.loading = None;
                 self.state.loading = None;
                 // Logged too: a load from the panel or a drop has no other trace outside the window.
-                if let Err(e) = self.install_volume(volume, histogram) {
+                let from_file = matches!(source, VolumeSource::File(..));
+                if let Err(e) = self.install_volume(volume, histogram, from_file) {
                     eprintln!("could not show {label}: {e}");
                     self.state.error = Some(format!("{label}: {e}"));
                     if self.initial_load.take().is_some() {

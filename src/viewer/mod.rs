@@ -399,7 +399,7 @@ impl Running {
                 crate::volume::VoxelData::U8(vec![0; 8]),
             )
             .map_err(|e| ViewerError::Other(e.to_string()))?;
-            self.install_volume(placeholder, Vec::new())?;
+            self.install_volume(placeholder, Vec::new(), false)?;
             self.state.volume_label = "loading…".into();
             self.start_load(opts.source.clone());
             self.initial_load = Some(opts.time);
@@ -410,7 +410,8 @@ impl Running {
         }
         let first = open_source(&opts.source, max_dim, &mut |_| {}).map_err(ViewerError::Other)?;
         let histogram = value_histogram(&first);
-        self.install_volume(first, histogram)?;
+        let from_file = matches!(opts.source, VolumeSource::File(..));
+        self.install_volume(first, histogram, from_file)?;
         self.shown_source = Some(opts.source.clone());
         self.apply_time(opts.time)?;
         if let Some(session) = self.pending_restore.take() {

@@ -40,6 +40,7 @@ const RESCALE_SLOPE: Tag = Tag(0x0028, 0x1053);
 const IMAGE_POSITION: Tag = Tag(0x0020, 0x0032);
 const IMAGE_ORIENTATION: Tag = Tag(0x0020, 0x0037);
 const SERIES_UID: Tag = Tag(0x0020, 0x000E);
+const MODALITY: Tag = Tag(0x0008, 0x0060);
 const INSTANCE_NUMBER: Tag = Tag(0x0020, 0x0013);
 const SLICE_THICKNESS: Tag = Tag(0x0018, 0x0050);
 const SPACING_BETWEEN_SLICES: Tag = Tag(0x0018, 0x0088);
@@ -74,6 +75,8 @@ struct Slice {
     position: Option<[f64; 3]>,
     orientation: Option<[f64; 6]>,
     series: String,
+    /// Modality (0008,0060): "CT", "MR", ...; empty when absent.
+    modality: String,
     instance: i64,
     slice_step: Option<f64>,
     /// Implicit or explicit VR little endian: pixel bytes in the file are the values, little-endian.
@@ -209,6 +212,12 @@ fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Sl
         .flatten()
         .and_then(|e| e.to_str().ok().map(|s| s.trim().to_string()))
         .unwrap_or_default();
+    let modality = obj
+        .element_opt(MODALITY)
+        .ok()
+        .flatten()
+        .and_then(|e| e.to_str().ok().map(|s| s.trim().to_ascii_uppercase()))
+        .unwrap_or_default();
     Ok(Slice {
         source,
         rows: dims[1],
@@ -225,6 +234,7 @@ fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Sl
             .or_else(|| floats(obj, IMAGE_POSITION).and_then(three)),
         orientation: orientation.and_then(six),
         series,
+        modality,
         instance: int(obj, INSTANCE_NUMBER).unwrap_or(0),
         temporal: int(obj, TEMPORAL_POSITION),
         native_little_endian: matches!(
@@ -248,6 +258,7 @@ struct Plan {
     frame_order: Vec<usize>,
     voxel_type: VoxelType,
     scaling: Scaling,
+    modality: String,
     notes: Vec<String>,
 }
 
@@ -350,6 +361,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
         frame_order,
         voxel_type,
         scaling: first.scaling,
+        modality: first.modality.clone(),
         notes,
     })
 }
@@ -365,6 +377,7 @@ fn finish(name: String, plan: Plan, data: VoxelData) -> Result<Volume, VolumeErr
         .with_scaling(plan.scaling)?
         .with_geometry(plan.geometry)?;
     v.format = FORMAT.into();
+    v.modality = Some(plan.modality).filter(|m| !m.is_empty());
     v.notes = plan.notes;
     Ok(v)
 }
@@ -515,6 +528,7 @@ mod tests {
             position: Some([0.0, 0.0, pos]),
             orientation: Some([1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
             series: "1".into(),
+            modality: "CT".into(),
             instance,
             slice_step: Some(9.0),
             native_little_endian: true,

@@ -255,6 +255,8 @@ pub struct Volume {
     pub scaling: Scaling,
     /// Where the volume came from: "raw", "VTK legacy", "NRRD", "NIfTI-1", "MetaImage", "DICOM", "TIFF", "built-in".
     pub format: String,
+    /// The acquisition's modality as the file names it ("CT", "MR", ... from DICOM's Modality), if it does.
+    pub modality: Option<String>,
     /// Things the user should know that are not errors: orientation ignored, 4-D reduced, downsampled, ...
     pub notes: Vec<String>,
     /// Every point-data array the file holds (VTK files can hold several); empty for single-array formats.
@@ -311,6 +313,7 @@ impl Volume {
             stored_range: range,
             scaling: Scaling::IDENTITY,
             format: "memory".into(),
+            modality: None,
             notes: Vec::new(),
             arrays: Vec::new(),
             time: TimeSteps::default(),

@@ -122,6 +122,21 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
         }
     }
 
+    if state.show_colorbar {
+        // The transfer function's colour bar with data-unit ticks, top left of the view.
+        let height = (rect.height() - 40.0).clamp(60.0, 220.0);
+        let bar = egui::Rect::from_min_size(rect.left_top() + egui::vec2(8.0, 28.0), egui::vec2(78.0, height));
+        let unit = (!state.value_unit.is_empty()).then_some(state.value_unit.as_str());
+        crate::viewer::tf_editor::paint_colorbar(
+            &painter,
+            bar,
+            &state.look.classification(),
+            state.look.window,
+            state.range,
+            unit,
+        );
+    }
+
     let colors = [
         Color32::from_rgb(230, 70, 70),
         Color32::from_rgb(90, 200, 90),

@@ -149,6 +149,7 @@ fn view_section(ui: &mut egui::Ui, state: &mut ViewerState, actions: &mut Vec<Ui
         }
         ui.checkbox(&mut state.slices.shown, "slice views, four-up (L)");
         ui.checkbox(&mut state.show_boxes, "draw bounding box");
+        ui.checkbox(&mut state.show_colorbar, "colour bar (data units)");
         ui.checkbox(&mut state.auto_rotate, "auto-rotate (Space)");
         if ui.checkbox(&mut state.vsync, "vsync").changed() {
             actions.push(UiAction::VsyncChanged);

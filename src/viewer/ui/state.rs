@@ -46,7 +46,10 @@ pub struct ViewerState {
     /// Value histogram of the volume (256 bins over the normalised range) and its data range, for the editor.
     pub histogram: Vec<u64>,
     pub range: [f64; 2],
-    pub tf_dragging: Option<usize>,
+    /// The transfer-function editor's own state (drag, save/load path, the volume's facts for "auto").
+    pub tf_editor: crate::viewer::tf_editor::TfEditorState,
+    /// Draw the colour bar over the 3D view.
+    pub show_colorbar: bool,
     pub ortho: bool,
     /// Sampling quality of still frames, as `render --quality` (the step resolved per frame from the transfer
     /// function); `None`: the step slider's step.
@@ -120,7 +123,8 @@ impl ViewerState {
             view_rect: None,
             histogram: Vec::new(),
             range: [0.0, 1.0],
-            tf_dragging: None,
+            tf_editor: Default::default(),
+            show_colorbar: false,
             ortho: false,
             quality: Some(Quality::Normal),
             gradient_texture: false,

@@ -41,28 +41,14 @@ pub(super) fn transfer_function_section(ui: &mut egui::Ui, state: &mut ViewerSta
         .default_open(true)
         .show(ui, |ui| {
             let look = &mut state.look;
-            let current = look
-                .transfer_function
-                .as_ref()
-                .map(|t| t.name.clone())
-                .unwrap_or_else(|| "simple (Qt)".into());
-            egui::ComboBox::from_label("preset")
-                .selected_text(&current)
-                .show_ui(ui, |ui| {
-                    if ui
-                        .selectable_label(look.transfer_function.is_none(), "simple (Qt)")
-                        .clicked()
-                    {
-                        look.transfer_function = None;
-                        look.window = crate::settings::DEFAULT_WINDOW;
-                    }
-                    for name in crate::tf::PRESET_NAMES {
-                        if ui.selectable_label(current == *name, *name).clicked() {
-                            look.transfer_function = crate::tf::TransferFunction::preset(name).ok();
-                            look.window = [0.0, 1.0];
-                        }
-                    }
-                });
+            crate::viewer::tf_editor::panel(
+                ui,
+                &mut look.transfer_function,
+                &mut look.window,
+                state.range,
+                &state.histogram,
+                &mut state.tf_editor,
+            );
             ui.checkbox(&mut state.tf_locked, "keep when another volume loads");
             let look = &mut state.look;
             ui.label("Visible value range");
@@ -71,26 +57,7 @@ pub(super) fn transfer_function_section(ui: &mut egui::Ui, state: &mut ViewerSta
             if look.window[0] > look.window[1] {
                 look.window.swap(0, 1);
             }
-            if let Some(tf) = &mut look.transfer_function {
-                ui.label("Opacity (click: add, drag: move, right-click: delete)");
-                crate::viewer::tf_editor::editor(
-                    ui,
-                    tf,
-                    look.window,
-                    state.range,
-                    &state.histogram,
-                    &mut state.tf_dragging,
-                );
-                if tf.colors.is_empty() {
-                    egui::ComboBox::from_label("Colormap")
-                        .selected_text(tf.colormap.name())
-                        .show_ui(ui, |ui| {
-                            for c in Colormap::ALL {
-                                ui.selectable_value(&mut tf.colormap, c, c.name());
-                            }
-                        });
-                }
-            } else {
+            if look.transfer_function.is_none() {
                 colormap_strip(ui, look.colormap, look.window);
                 egui::ComboBox::from_label("Colormap")
                     .selected_text(look.colormap.name())

@@ -1,0 +1,270 @@
+//! The transfer function a volume gets when it opens ("auto (by modality)"): CT in Hounsfield units gets the
+//! `ct-bone` preset; anything else (MR, microscopy, simulation output) a grey opacity ramp placed by percentiles
+//! of its non-background histogram. Pure code.
+//!
+//! Which volumes are CT:
+//! - a modality tag says so (DICOM's Modality (0008,0060) "CT"); any other tag ("MR", "PT", ...) means not CT;
+//! - without a tag, the values must look like Hounsfield units: integer data (after the file's rescale) whose
+//!   minimum lies in [−3072, −900] (air is −1000; scanners pad outside the field of view with −1024, −2048 or
+//!   −3024) and whose maximum is at least 1000 (bone reaches 1000–3000 HU; an MR or a float map that happens to
+//!   dip to −1000 rarely also spans 2000+ units).
+//!
+//! Everything else: a histogram of the values (any bin count) without its background, the voxels at or below
+//! FSL BET's threshold `p2 + 0.1·(p98 − p2)` (the percentiles over all voxels; MR background is noise near the
+//! minimum). Over the rest the opacity rises linearly from 0 at its 55th percentile to [`RAMP_ALPHA`] at its
+//! 99th, constant above; the colour goes from dark grey to white over the same span. Grey because MR intensities
+//! carry no physical scale a colormap would suggest (napari and Slicer open MR in grey too), and the ramp starts
+//! near the median so the bulk of the tissue stays translucent: the brighter half (white matter on T1, grey
+//! matter and fluid on PD/T2) gives the picture, the rest adds faint context.
+
+use crate::tf::{TfUnits, TransferFunction};
+use crate::transfer::Colormap;
+use crate::volume::{Volume, VoxelType};
+
+/// Opacity per voxel-length step at the ramp's top. Low, because in a whole-head MR the scalp is as bright as
+/// the brain (a 1-D function cannot tell them apart): at 0.25 the scalp hid the brain of the real T1 and PD
+/// heads; at 0.08 the head is translucent and the brain's vessels and white matter show through (README).
+pub const RAMP_ALPHA: f32 = 0.08;
+/// Percentiles of the non-background values where the ramp starts and ends.
+pub const RAMP_PERCENTILES: [f64; 2] = [0.55, 0.99];
+/// The preset CT volumes get.
+pub const CT_PRESET: &str = "ct-bone";
+
+/// What kind of data a volume holds, as far as choosing its transfer function goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DataKind {
+    /// Computed tomography: values in Hounsfield units.
+    Ct,
+    /// Anything else (MR, PET, microscopy, simulations): values in arbitrary units.
+    Other,
+}
+
+impl DataKind {
+    /// The unit of the values, for axis and colour-bar labels.
+    pub fn unit(self) -> Option<&'static str> {
+        match self {
+            DataKind::Ct => Some("HU"),
+            DataKind::Other => None,
+        }
+    }
+}
+
+/// The facts about a volume the choice depends on (taken from a [`Volume`] by [`VolumeFacts::of`], or made up
+/// in tests).
+#[derive(Clone, Debug, PartialEq)]
+pub struct VolumeFacts {
+    /// Data range after the file's rescale.
+    pub range: [f64; 2],
+    /// Whether the values are integers (integer voxels under an integer rescale).
+    pub integer: bool,
+    /// The modality the file names, upper case ("CT", "MR"), if any.
+    pub modality: Option<String>,
+}
+
+impl VolumeFacts {
+    pub fn of(volume: &Volume) -> VolumeFacts {
+        let integer_type = !matches!(volume.source_type, VoxelType::F32 | VoxelType::F64);
+        let s = volume.scaling;
+        let integer_scale = s.slope.fract() == 0.0 && s.intercept.fract() == 0.0;
+        VolumeFacts {
+            range: volume.range,
+            integer: integer_type && integer_scale,
+            modality: volume.modality.as_ref().map(|m| m.trim().to_ascii_uppercase()),
+        }
+    }
+
+    /// CT or not, by the rule in the module's docs.
+    pub fn kind(&self) -> DataKind {
+        match self.modality.as_deref() {
+            Some("CT") => DataKind::Ct,
+            Some(_) => DataKind::Other,
+            None => {
+                let [min, max] = self.range;
+                if self.integer && (-3072.0..=-900.0).contains(&min) && max >= 1000.0 {
+                    DataKind::Ct
+                } else {
+                    DataKind::Other
+                }
+            }
+        }
+    }
+}
+
+/// Counts of normalised values in `bins` equal bins over [0, 1], every voxel of the shown step (NaN skipped).
+pub fn value_histogram(volume: &Volume, bins: usize) -> Vec<u64> {
+    let bins = bins.max(1);
+    let mut h = vec![0u64; bins];
+    let [w, hgt, d] = volume.dims;
+    for z in 0..d {
+        for y in 0..hgt {
+            for x in 0..w {
+                let v = volume.normalized(x, y, z);
+                if v.is_finite() {
+                    h[((v.clamp(0.0, 1.0) * bins as f64) as usize).min(bins - 1)] += 1;
+                }
+            }
+        }
+    }
+    h
+}
+
+/// The normalised value below which fraction `p` of the counts in `histogram[from..]` lie, interpolated
+/// linearly inside the bin that holds it (bins spread evenly over [0, 1]). 0 for an empty histogram.
+pub fn percentile(histogram: &[u64], from: usize, p: f64) -> f64 {
+    let n = histogram.len().max(1) as f64;
+    let total: u64 = histogram.iter().skip(from).sum();
+    if total == 0 {
+        return from as f64 / n;
+    }
+    let target = p.clamp(0.0, 1.0) * total as f64;
+    let mut below = 0.0;
+    for (i, &c) in histogram.iter().enumerate().skip(from) {
+        let c = c as f64;
+        if c > 0.0 && below + c >= target {
+            return (i as f64 + (target - below) / c) / n;
+        }
+        below += c;
+    }
+    1.0
+}
+
+/// The first bin above the background: FSL BET's threshold `p2 + 0.1·(p98 − p2)` over all voxels.
+pub fn background_end(histogram: &[u64]) -> usize {
+    let p2 = percentile(histogram, 0, 0.02);
+    let p98 = percentile(histogram, 0, 0.98);
+    let t = p2 + 0.1 * (p98 - p2);
+    let bin = (t * histogram.len() as f64).ceil() as usize;
+    bin.min(histogram.len().saturating_sub(1))
+}
+
+/// The transfer function a volume with `facts` and value `histogram` (normalised values, any bin count) opens
+/// with; see the module's docs. Always valid.
+pub fn auto_transfer_function(facts: &VolumeFacts, histogram: &[u64]) -> TransferFunction {
+    if facts.kind() == DataKind::Ct {
+        let mut tf = TransferFunction::preset(CT_PRESET).unwrap_or_else(|_| ramp(facts, [0.5, 1.0]));
+        tf.name = format!("auto: {CT_PRESET}");
+        return tf;
+    }
+    let from = background_end(histogram);
+    let lo = percentile(histogram, from, RAMP_PERCENTILES[0]);
+    let hi = percentile(histogram, from, RAMP_PERCENTILES[1]);
+    ramp(facts, [lo, hi])
+}
+
+/// Grey ramp between normalised `lo` and `hi`, written in data units.
+fn ramp(facts: &VolumeFacts, [lo, hi]: [f64; 2]) -> TransferFunction {
+    let [min, max] = facts.range;
+    let to_data = |u: f64| (min + u.clamp(0.0, 1.0) * (max - min)) as f32;
+    let (mut a, mut b) = (to_data(lo), to_data(hi));
+    if b <= a {
+        // A volume of (nearly) one value: a ramp over its whole range still shows it.
+        (a, b) = (min as f32, max as f32);
+    }
+    TransferFunction {
+        name: "auto: percentile ramp".into(),
+        units: TfUnits::Data,
+        colors: vec![[a, 0.3, 0.3, 0.3], [b, 1.0, 1.0, 1.0]],
+        colormap: Colormap::Grayscale,
+        opacity: vec![[a, 0.0], [b, RAMP_ALPHA]],
+    }
+}
+
+/// [`auto_transfer_function`] for a loaded volume (its histogram computed here, 1024 bins).
+pub fn auto_for_volume(volume: &Volume) -> TransferFunction {
+    auto_transfer_function(&VolumeFacts::of(volume), &value_histogram(volume, 1024))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::VoxelData;
+
+    fn facts(range: [f64; 2], integer: bool, modality: Option<&str>) -> VolumeFacts {
+        VolumeFacts {
+            range,
+            integer,
+            modality: modality.map(str::to_string),
+        }
+    }
+
+    #[test]
+    fn ct_by_tag_or_by_hounsfield_range() {
+        assert_eq!(facts([-1024.0, 2986.0], true, None).kind(), DataKind::Ct);
+        assert_eq!(facts([-1000.0, 1500.0], true, None).kind(), DataKind::Ct);
+        assert_eq!(facts([-3024.0, 3071.0], true, None).kind(), DataKind::Ct);
+        assert_eq!(
+            facts([-1024.0, 2986.0], true, Some("MR")).kind(),
+            DataKind::Other,
+            "the tag wins"
+        );
+        assert_eq!(
+            facts([0.0, 4095.0], true, Some("CT")).kind(),
+            DataKind::Ct,
+            "the tag wins"
+        );
+        assert_eq!(
+            facts([0.0, 4095.0], true, None).kind(),
+            DataKind::Other,
+            "unsigned: MR-like"
+        );
+        assert_eq!(facts([-1024.0, 400.0], true, None).kind(), DataKind::Other, "no bone");
+        assert_eq!(facts([-117.8, 2121.1], false, None).kind(), DataKind::Other);
+        assert_eq!(
+            facts([-1024.0, 2986.0], false, None).kind(),
+            DataKind::Other,
+            "float maps are not HU"
+        );
+        assert_eq!(facts([-32768.0, 32767.0], true, None).kind(), DataKind::Other);
+        assert_eq!(DataKind::Ct.unit(), Some("HU"));
+    }
+
+    #[test]
+    fn percentiles_interpolate_inside_bins() {
+        let h = [0, 10, 10, 0];
+        assert!((percentile(&h, 0, 0.5) - 0.5).abs() < 1e-12);
+        assert!((percentile(&h, 0, 0.25) - 0.375).abs() < 1e-12);
+        assert!((percentile(&h, 2, 0.5) - 0.625).abs() < 1e-12, "from bin 2 on");
+        assert_eq!(percentile(&[0, 0], 0, 0.5), 0.0);
+    }
+
+    #[test]
+    fn synthetic_mr_gets_a_ramp_over_its_foreground() {
+        // 60% background noise in the lowest 5% of the range, tissue spread evenly over 0.3..0.7, a few bright
+        // voxels at 0.95.
+        let mut h = vec![0u64; 100];
+        for c in h.iter_mut().take(5) {
+            *c = 1200;
+        }
+        for c in h.iter_mut().take(70).skip(30) {
+            *c = 95;
+        }
+        h[95] = 200;
+        let f = facts([0.0, 1000.0], true, None);
+        let tf = auto_transfer_function(&f, &h);
+        tf.validate().unwrap();
+        assert_eq!(tf.units, TfUnits::Data);
+        let (lo, hi) = (tf.opacity[0][0], tf.opacity[1][0]);
+        // Foreground: 3800 tissue + 200 bright; p55 = 2200 counts in = 0.3 + 2200/95/100.
+        assert!((lo - (300.0 + 2200.0 / 95.0 * 10.0)).abs() < 1.0, "{lo}");
+        // p99 = 3960 counts: inside the bright bin (at 95..96 of 100): 0.95 + 160/200/100.
+        assert!((hi - 958.0).abs() < 1.0, "{hi}");
+        assert_eq!(tf.opacity[1][1], RAMP_ALPHA);
+        assert_eq!(tf.opacity[0][1], 0.0);
+    }
+
+    #[test]
+    fn ct_volume_gets_the_ct_preset_and_a_flat_volume_a_valid_ramp() {
+        let data: Vec<u16> = (0..64u32).map(|i| (32768 - 1024 + i * 60) as u16).collect();
+        let v = Volume::new("ct", [4, 4, 4], [1.0; 3], VoxelType::I16, VoxelData::U16(data)).unwrap();
+        let tf = auto_for_volume(&v);
+        assert_eq!(tf.opacity, TransferFunction::preset(CT_PRESET).unwrap().opacity);
+        assert!(tf.name.contains(CT_PRESET));
+        let mut mr = v.clone();
+        mr.modality = Some("mr".into());
+        assert!(auto_for_volume(&mr).name.contains("ramp"), "a tag other than CT: ramp");
+
+        let flat = Volume::new("flat", [2, 2, 2], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![7; 8])).unwrap();
+        let tf = auto_for_volume(&flat);
+        tf.validate().unwrap();
+    }
+}
