@@ -84,6 +84,22 @@ pub fn box_corners_mm(mm_from_index: DMat4, dims: [u32; 3]) -> [DVec3; 8] {
     })
 }
 
+/// The 12 edges of a box whose corners are ordered as [`box_corners_mm`].
+pub const BOX_EDGES: [(usize, usize); 12] = [
+    (0, 1),
+    (2, 3),
+    (4, 5),
+    (6, 7),
+    (0, 2),
+    (1, 3),
+    (4, 6),
+    (5, 7),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+];
+
 /// The pixel grid of one slice image in the world.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SliceFrame {
@@ -174,24 +190,10 @@ impl SliceFrame {
     /// The outline, in image coordinates, of where this slice cuts the parallelepiped with `corners` (ordered as
     /// [`box_corners_mm`]); empty when it misses.
     pub fn section(&self, corners: &[DVec3; 8]) -> Vec<DVec2> {
-        const EDGES: [(usize, usize); 12] = [
-            (0, 1),
-            (2, 3),
-            (4, 5),
-            (6, 7),
-            (0, 2),
-            (1, 3),
-            (4, 6),
-            (5, 7),
-            (0, 4),
-            (1, 5),
-            (2, 6),
-            (3, 7),
-        ];
         let n = self.normal();
         let depth = |p: DVec3| (p - self.corner).dot(n);
         let mut points: Vec<DVec2> = Vec::new();
-        for (a, b) in EDGES {
+        for (a, b) in BOX_EDGES {
             let (da, db) = (depth(corners[a]), depth(corners[b]));
             if (da <= 0.0 && db >= 0.0) || (da >= 0.0 && db <= 0.0) {
                 let t = if (db - da).abs() < 1e-12 { 0.0 } else { da / (da - db) };

@@ -328,22 +328,7 @@ fn draw_labels(painter: &egui::Painter, rect: egui::Rect, state: &ViewerState, v
         view_color(view),
     );
     if anatomical {
-        let [left, right, top, bottom] = view.edge_labels();
-        let font = egui::FontId::proportional(14.0);
-        let color = Color32::from_rgb(255, 220, 120);
-        let mid = rect.center();
-        for (text, pos, align) in [
-            (left, Pos2::new(rect.left() + 6.0, mid.y), egui::Align2::LEFT_CENTER),
-            (right, Pos2::new(rect.right() - 6.0, mid.y), egui::Align2::RIGHT_CENTER),
-            (top, Pos2::new(mid.x, rect.top() + 22.0), egui::Align2::CENTER_TOP),
-            (
-                bottom,
-                Pos2::new(mid.x, rect.bottom() - 22.0),
-                egui::Align2::CENTER_BOTTOM,
-            ),
-        ] {
-            painter.text(pos, align, text, font.clone(), color);
-        }
+        super::ui::side_labels(painter, rect, view.edge_labels(), 14.0, egui::vec2(6.0, 22.0));
     }
 }
 

@@ -8,6 +8,6 @@ mod state;
 mod tf_panel;
 
 pub use keys::{next_lower, shortcuts, take_tab_presses};
-pub use overlay::{box_corners, project, view_overlay};
+pub use overlay::{box_corners, project, side_labels, view_overlay};
 pub use panel::settings_panel;
 pub use state::{UiAction, ViewerState, AUTO_ROTATE_DEG_PER_S};

@@ -14,20 +14,7 @@ pub fn box_corners(tex_to_world: Mat4, lo: Vec3, hi: Vec3) -> [Vec3; 8] {
     })
 }
 
-const BOX_EDGES: [(usize, usize); 12] = [
-    (0, 1),
-    (2, 3),
-    (4, 5),
-    (6, 7),
-    (0, 2),
-    (1, 3),
-    (4, 6),
-    (5, 7),
-    (0, 4),
-    (1, 5),
-    (2, 6),
-    (3, 7),
-];
+use crate::slice::BOX_EDGES;
 
 /// Screen position (points) of a world point, or None behind the near plane.
 pub fn project(view_proj: Mat4, p: Vec3, rect: egui::Rect) -> Option<Pos2> {
@@ -173,22 +160,51 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
     }
     if state.anatomical() {
         // Which side of the patient each edge of the view faces.
-        let [left, right, top, bottom] = edge_labels(&state.orbit.camera());
-        let font = egui::FontId::proportional(16.0);
-        let color = Color32::from_rgb(255, 220, 120);
-        let mid = rect.center();
-        for (text, pos, align) in [
-            (left, Pos2::new(rect.left() + 8.0, mid.y), egui::Align2::LEFT_CENTER),
-            (right, Pos2::new(rect.right() - 8.0, mid.y), egui::Align2::RIGHT_CENTER),
-            (top, Pos2::new(mid.x, rect.top() + 8.0), egui::Align2::CENTER_TOP),
-            (
-                bottom,
-                Pos2::new(mid.x, rect.bottom() - 8.0),
-                egui::Align2::CENTER_BOTTOM,
-            ),
-        ] {
-            painter.text(pos, align, text, font.clone(), color);
-        }
+        side_labels(
+            &painter,
+            rect,
+            edge_labels(&state.orbit.camera()),
+            16.0,
+            egui::vec2(8.0, 8.0),
+        );
+    }
+}
+
+/// The patient's sides at a view's left, right, top and bottom edges, `inset` in from them.
+pub fn side_labels(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    labels: [impl ToString; 4],
+    size: f32,
+    inset: egui::Vec2,
+) {
+    let [left, right, top, bottom] = labels;
+    let font = egui::FontId::proportional(size);
+    let color = Color32::from_rgb(255, 220, 120);
+    let mid = rect.center();
+    for (text, pos, align) in [
+        (
+            left.to_string(),
+            Pos2::new(rect.left() + inset.x, mid.y),
+            egui::Align2::LEFT_CENTER,
+        ),
+        (
+            right.to_string(),
+            Pos2::new(rect.right() - inset.x, mid.y),
+            egui::Align2::RIGHT_CENTER,
+        ),
+        (
+            top.to_string(),
+            Pos2::new(mid.x, rect.top() + inset.y),
+            egui::Align2::CENTER_TOP,
+        ),
+        (
+            bottom.to_string(),
+            Pos2::new(mid.x, rect.bottom() - inset.y),
+            egui::Align2::CENTER_BOTTOM,
+        ),
+    ] {
+        painter.text(pos, align, text, font.clone(), color);
     }
 }
 
