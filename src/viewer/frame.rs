@@ -69,7 +69,8 @@ impl Running {
             if state.panel_visible {
                 egui::Panel::left("settings")
                     .resizable(false)
-                    .default_size(270.0)
+                    // A fixed width: a panel that grew with a long status line moved the views under the cursor.
+                    .exact_size(270.0)
                     .show(ui, |ui| {
                         egui::ScrollArea::vertical().show(ui, |ui| actions.extend(ui::settings_panel(ui, state)));
                     });
