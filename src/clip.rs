@@ -2,7 +2,7 @@
 //! placed in, kept beside the axis-aligned slab box. Pure data and maths; the shaders clip each ray's segment by
 //! the texture-space plane [`ClipPlane::texture_plane`] gives, and the CPU reference re-derives it from the rule.
 
-use glam::{DMat3, DMat4, Vec3};
+use glam::{DMat3, DMat4, DVec3, Vec3};
 
 /// What is wrong with a clipping plane a user gave.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -118,13 +118,30 @@ impl ClipPlane {
     /// `world_per_mm` its scale (`Geometry::world_per_mm`): the render world is the millimetre world moved to the
     /// box's centre and scaled uniformly, so the normal keeps its direction and the offset scales.
     pub fn texture_plane(&self, tex_to_world: DMat4, world_per_mm: f64) -> [f32; 4] {
-        let n = self.normal.as_dvec3();
-        let m = DMat3::from_mat4(tex_to_world).transpose() * n;
-        let w = n.dot(tex_to_world.w_axis.truncate()) - f64::from(self.offset) * world_per_mm;
+        let (m, d) = self.equation_in(tex_to_world, world_per_mm);
         // Scaled to a unit texture-space normal: the shader's f32 sums then stay near the box's size.
         let scale = 1.0 / m.length().max(f64::MIN_POSITIVE);
         let m = m * scale;
-        [m.x as f32, m.y as f32, m.z as f32, (w * scale) as f32]
+        [m.x as f32, m.y as f32, m.z as f32, (-d * scale) as f32]
+    }
+
+    /// The plane in another frame whose points `to_world` maps into the render world (the millimetre world moved
+    /// to the box's centre and scaled by `world_per_mm`, as in [`ClipPlane::texture_plane`]): `(m, d)` such that
+    /// a point p of that frame is kept when `m·p ≥ d`.
+    pub fn equation_in(&self, to_world: DMat4, world_per_mm: f64) -> (DVec3, f64) {
+        let n = self.normal.as_dvec3();
+        let m = DMat3::from_mat4(to_world).transpose() * n;
+        (
+            m,
+            f64::from(self.offset) * world_per_mm - n.dot(to_world.w_axis.truncate()),
+        )
+    }
+
+    /// A point of the plane and its normal (into the kept half, not unit) in the frame of [`ClipPlane::equation_in`]:
+    /// how a slice view draws the plane's line.
+    pub fn point_normal_in(&self, to_world: DMat4, world_per_mm: f64) -> (DVec3, DVec3) {
+        let (m, d) = self.equation_in(to_world, world_per_mm);
+        (m * (d / m.length_squared().max(f64::MIN_POSITIVE)), m)
     }
 }
 
@@ -139,7 +156,6 @@ pub fn texture_plane_or_all(plane: Option<&ClipPlane>, tex_to_world: DMat4, worl
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DVec3;
 
     #[test]
     fn parse_normalises_and_names_bad_input() {
@@ -214,5 +230,24 @@ mod tests {
             }
         }
         assert_eq!(texture_plane_or_all(None, tex_to_world, world_per_mm), KEEP_ALL);
+    }
+
+    #[test]
+    fn the_plane_in_another_frame_keeps_the_same_points() {
+        // A frame (say a slice view's millimetres) mapped into the render world by a rotation, a scale and a shift.
+        let to_world = DMat4::from_scale_rotation_translation(
+            DVec3::splat(1.0 / 50.0),
+            glam::DQuat::from_rotation_y(0.6),
+            DVec3::new(-0.2, 0.1, 0.3),
+        );
+        let world_per_mm = 1.0 / 50.0;
+        let plane = ClipPlane::new(Vec3::new(1.0, 2.0, -0.5), 6.0).unwrap();
+        let (point, normal) = plane.point_normal_in(to_world, world_per_mm);
+        // The point lies on the plane, and a step along the normal is kept.
+        let mm_of = |p: DVec3| (to_world.transform_point3(p) / world_per_mm).as_vec3();
+        let on = mm_of(point).dot(plane.normal()) - plane.offset();
+        assert!(on.abs() < 1e-3, "{on}");
+        assert!(plane.keeps(mm_of(point + normal.normalize())));
+        assert!(!plane.keeps(mm_of(point - normal.normalize())));
     }
 }

@@ -84,6 +84,39 @@ pub fn box_corners_mm(mm_from_index: DMat4, dims: [u32; 3]) -> [DVec3; 8] {
     })
 }
 
+/// Where the plane `{x : normal·x = d}` cuts the parallelepiped with `corners` (ordered as [`box_corners_mm`]):
+/// the polygon's corners in order around it, or nothing when it misses (or only touches an edge or a corner).
+/// Used for a slice's outline of the slab box and for the clipping plane's outline in the 3D view.
+pub fn plane_section(corners: &[DVec3; 8], normal: DVec3, d: f64) -> Vec<DVec3> {
+    let depth = |p: DVec3| p.dot(normal) - d;
+    let mut points: Vec<DVec3> = Vec::new();
+    for (a, b) in BOX_EDGES {
+        let (da, db) = (depth(corners[a]), depth(corners[b]));
+        if (da <= 0.0 && db >= 0.0) || (da >= 0.0 && db <= 0.0) {
+            let t = if (db - da).abs() < 1e-12 { 0.0 } else { da / (da - db) };
+            points.push(corners[a] + (corners[b] - corners[a]) * t);
+        }
+    }
+    if points.len() < 3 {
+        return Vec::new();
+    }
+    // Ordered by angle about their centre, in a basis of the plane.
+    let centre = points.iter().copied().sum::<DVec3>() / points.len() as f64;
+    let unit = normal.normalize();
+    let u = unit.any_orthonormal_vector();
+    let v = unit.cross(u);
+    let angle = |p: DVec3| (p - centre).dot(v).atan2((p - centre).dot(u));
+    points.sort_by(|p, q| angle(*p).total_cmp(&angle(*q)));
+    points.dedup_by(|p, q| p.distance(*q) < 1e-9);
+    if points.len() > 2 && points[0].distance(points[points.len() - 1]) < 1e-9 {
+        points.pop();
+    }
+    if points.len() < 3 {
+        return Vec::new();
+    }
+    points
+}
+
 /// The 12 edges of a box whose corners are ordered as [`box_corners_mm`].
 pub const BOX_EDGES: [(usize, usize); 12] = [
     (0, 1),
@@ -191,25 +224,10 @@ impl SliceFrame {
     /// [`box_corners_mm`]); empty when it misses.
     pub fn section(&self, corners: &[DVec3; 8]) -> Vec<DVec2> {
         let n = self.normal();
-        let depth = |p: DVec3| (p - self.corner).dot(n);
-        let mut points: Vec<DVec2> = Vec::new();
-        for (a, b) in BOX_EDGES {
-            let (da, db) = (depth(corners[a]), depth(corners[b]));
-            if (da <= 0.0 && db >= 0.0) || (da >= 0.0 && db <= 0.0) {
-                let t = if (db - da).abs() < 1e-12 { 0.0 } else { da / (da - db) };
-                points.push(self.image(corners[a] + (corners[b] - corners[a]) * t));
-            }
-        }
-        if points.len() < 3 {
-            return Vec::new();
-        }
-        let centre = points.iter().copied().sum::<DVec2>() / points.len() as f64;
-        points.sort_by(|p, q| {
-            let (a, b) = ((*p - centre).to_angle(), (*q - centre).to_angle());
-            a.total_cmp(&b)
-        });
-        points.dedup_by(|p, q| p.distance(*q) < 1e-6);
-        points
+        plane_section(corners, n, n.dot(self.corner))
+            .into_iter()
+            .map(|p| self.image(p))
+            .collect()
     }
 }
 

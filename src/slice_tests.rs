@@ -177,3 +177,29 @@ fn rendered_slices_show_the_window_and_nothing_outside() {
     let outside = SliceFrame::new(SliceView::Axial, true, affine, v.dims, centre + DVec3::Z * 100.0, 512);
     assert!(render(&v, affine, &outside, wl).iter().all(|&b| b == 0));
 }
+
+#[test]
+fn a_plane_cuts_a_box_in_an_ordered_polygon() {
+    let corners: [DVec3; 8] =
+        std::array::from_fn(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64));
+    // z = 0.5: the unit square, its corners in order (each next to the last).
+    let square = plane_section(&corners, DVec3::Z, 0.5);
+    assert_eq!(square.len(), 4);
+    for (k, p) in square.iter().enumerate() {
+        assert!((p.z - 0.5).abs() < 1e-12);
+        assert!((p.distance(square[(k + 1) % 4]) - 1.0).abs() < 1e-12, "{square:?}");
+    }
+    // x + y + z = 1.5: a regular hexagon of side √2/2.
+    let hexagon = plane_section(&corners, DVec3::ONE, 1.5);
+    assert_eq!(hexagon.len(), 6);
+    for (k, p) in hexagon.iter().enumerate() {
+        assert!((p.element_sum() - 1.5).abs() < 1e-12);
+        assert!(
+            (p.distance(hexagon[(k + 1) % 6]) - 0.5f64.sqrt()).abs() < 1e-12,
+            "{hexagon:?}"
+        );
+    }
+    // Missing the box, or touching only a corner: nothing.
+    assert!(plane_section(&corners, DVec3::Z, 2.0).is_empty());
+    assert!(plane_section(&corners, DVec3::ONE, 3.0).is_empty());
+}

@@ -90,20 +90,18 @@ impl VolumeFacts {
     }
 }
 
-/// Counts of normalised values in `bins` equal bins over [0, 1], every voxel of the shown step (NaN skipped).
+/// Counts of normalised values in `bins` equal bins over [0, 1], every voxel of every time step (NaN skipped):
+/// a series gets one transfer function that suits all its steps, as it has one range.
 pub fn value_histogram(volume: &Volume, bins: usize) -> Vec<u64> {
+    histogram(volume.normalized_values(), bins)
+}
+
+/// Counts of normalised values in `bins` equal bins over [0, 1] (NaN skipped).
+pub fn histogram(values: impl Iterator<Item = f64>, bins: usize) -> Vec<u64> {
     let bins = bins.max(1);
     let mut h = vec![0u64; bins];
-    let [w, hgt, d] = volume.dims;
-    for z in 0..d {
-        for y in 0..hgt {
-            for x in 0..w {
-                let v = volume.normalized(x, y, z);
-                if v.is_finite() {
-                    h[((v.clamp(0.0, 1.0) * bins as f64) as usize).min(bins - 1)] += 1;
-                }
-            }
-        }
+    for v in values.filter(|v| v.is_finite()) {
+        h[((v.clamp(0.0, 1.0) * bins as f64) as usize).min(bins - 1)] += 1;
     }
     h
 }

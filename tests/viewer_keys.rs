@@ -91,27 +91,9 @@ fn a_file_from_the_command_line_loads_behind_the_window() {
     // F12's JSON is a view state: `render --state` renders the same view again, volume included.
     let name = saved.split_once("saved screenshot ").unwrap().1.trim();
     let json = dir.join(name).with_extension("json");
-    let again = dir.join("again.png");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .args([
-            "render",
-            "--validate",
-            "--state",
-            json.to_str().unwrap(),
-            "-o",
-            again.to_str().unwrap(),
-        ])
-        .output()
-        .expect("run volcast render --state");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let again = image::open(&again).unwrap().to_rgba8();
+    let again = common::x11::render_state(&dir, &json);
     assert_eq!(again.dimensions(), shot.dimensions());
-    let worst = again
-        .pixels()
-        .zip(shot.pixels())
-        .map(|(a, b)| (0..3).map(|c| a.0[c].abs_diff(b.0[c])).max().unwrap_or(0))
-        .max()
-        .unwrap_or(0);
+    let worst = common::x11::worst_channel_diff(&again, &shot);
     assert!(
         worst <= 1,
         "render --state differs from the F12 screenshot by up to {worst}/255"

@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::x11::{capture, type_keys, x_client, x_session, Viewer, WAIT_MS};
+use common::x11::{button, capture, four_up_rects, pointer, type_keys, x_session, Viewer, WAIT_MS};
 use glam::{DVec2, DVec3};
 use image::RgbaImage;
 use std::path::Path;
@@ -22,17 +22,6 @@ const SIZE: (f32, f32) = (900.0, 600.0);
 fn read_state(path: &Path) -> ViewState {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     ViewState::from_json(&text, &path.display().to_string()).expect("a view state")
-}
-
-fn pointer(display: &str, window: &str, p: egui::Pos2) {
-    let (x, y) = (format!("{}", p.x.round()), format!("{}", p.y.round()));
-    x_client(display, "xdotool", &["mousemove", "--window", window, &x, &y]);
-    std::thread::sleep(Duration::from_millis(120));
-}
-
-fn button(display: &str, action: &str, button: &str) {
-    x_client(display, "xdotool", &[action, button]);
-    std::thread::sleep(Duration::from_millis(200));
 }
 
 /// Saves the session (Ctrl+S) and reads it back.
@@ -72,15 +61,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     type_keys(&x.display, window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (shot, _) = common::x11::read_screenshot(&dir, &saved);
-    let panel_right = (0..SIZE.0 as i32)
-        .map(|p| p as f32)
-        .find(|&left| {
-            let area = egui::Rect::from_min_max(egui::pos2(left, 0.0), egui::pos2(SIZE.0, SIZE.1));
-            (slice_views::four_up(area)[1].width().round() - shot.width() as f32).abs() <= 0.5
-        })
-        .expect("a layout that gives F12's width");
-    let area = egui::Rect::from_min_max(egui::pos2(panel_right, 0.0), egui::pos2(SIZE.0, SIZE.1));
-    let [axial_rect, _, sagittal_rect, coronal_rect] = slice_views::four_up(area);
+    let [axial_rect, _, sagittal_rect, coronal_rect] = four_up_rects(SIZE, shot.width());
 
     // The viewer's state for the same volume, to say where a click lands in patient space.
     let mut state = ViewerState::new(volume.extent(), "phantom".into());
@@ -139,13 +120,14 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
 
     // A right drag in the sagittal view: right widens the window, up lowers the level.
     let wl0 = moved.viewer.unwrap().window_level.expect("window/level");
-    let start = sagittal_rect.center();
-    pointer(&x.display, window, start);
-    button(&x.display, "mousedown", "3");
-    for k in 1..=5 {
-        pointer(&x.display, window, start + egui::vec2(8.0 * k as f32, -4.0 * k as f32));
-    }
-    button(&x.display, "mouseup", "3");
+    common::x11::drag(
+        &x.display,
+        window,
+        "3",
+        sagittal_rect.center(),
+        egui::vec2(8.0, -4.0),
+        5,
+    );
     let dragged = save_session(&mut viewer, &x.display, window, &dir);
     let wl1 = dragged.viewer.clone().unwrap().window_level.unwrap();
     let per_pixel = (volume.range[1] - volume.range[0]) / 500.0;
@@ -190,12 +172,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     let restored = read_state(&dir.join(name).with_extension("json"));
     assert_eq!(restored.viewer, dragged.viewer, "the viewer's state comes back");
     assert_eq!(restored_shot.dimensions(), final_shot.dimensions());
-    let worst = restored_shot
-        .pixels()
-        .zip(final_shot.pixels())
-        .map(|(a, b)| (0..3).map(|c| a.0[c].abs_diff(b.0[c])).max().unwrap_or(0))
-        .max()
-        .unwrap_or(0);
+    let worst = common::x11::worst_channel_diff(&restored_shot, &final_shot);
     assert!(worst <= 1, "the restored view differs by up to {worst}/255");
     let status = again.finish();
     assert!(status.success(), "viewer exit: {status}\n{}", again.stderr);

@@ -97,6 +97,12 @@ impl GifWriter {
     /// Appends one frame: `rgba` holds `width`×`height` RGBA8 pixels, rows top first (what the renderer reads
     /// back). Alpha 0 is transparent, any other alpha opaque.
     pub fn push_rgba(&mut self, width: u32, height: u32, rgba: &[u8]) -> Result<(), MovieError> {
+        self.push_rgba_for(width, height, rgba, frame_delay(self.frames, self.fps))
+    }
+
+    /// Appends one frame shown for `delay` hundredths of a second (the viewer's recording: each frame as long as
+    /// it was on screen), instead of the writer's frame rate.
+    pub fn push_rgba_for(&mut self, width: u32, height: u32, rgba: &[u8], delay: u16) -> Result<(), MovieError> {
         let (w, h) = (self.width, self.height);
         if (width, height) != (u32::from(w), u32::from(h)) || rgba.len() != usize::from(w) * usize::from(h) * 4 {
             return Err(MovieError::Usage(format!(
@@ -108,7 +114,7 @@ impl GifWriter {
         self.scratch.clear();
         self.scratch.extend_from_slice(rgba);
         let mut frame = ::gif::Frame::from_rgba_speed(w, h, &mut self.scratch, QUANTISER_SPEED);
-        frame.delay = frame_delay(self.frames, self.fps);
+        frame.delay = delay;
         let encoder = self
             .encoder
             .as_mut()

@@ -123,8 +123,10 @@ impl Running {
         if dragging {
             self.drag_frames.push(frame_s * 1e3);
         }
+        // Screenshots and recorded frames are full frames.
         let moving = (self.state.interacting || self.state.animation.is_some() || self.state.auto_rotate || dragging)
-            && self.pending_screenshot.is_none();
+            && self.pending_screenshot.is_none()
+            && self.recorder.is_none();
         let settings = self.state.frame_settings(view_size.width, view_size.height, moving);
         self.refine_pending = moving && self.state.lod;
         if let Some(path) = self.pending_session.take() {
@@ -301,6 +303,20 @@ impl Running {
             }
             None => None,
         };
+        let recorded = match self.recorder {
+            Some(_) => {
+                let buffer = Buffer::new(
+                    &self.gpu,
+                    view_size.width as u64 * view_size.height as u64 * 4,
+                    vk::BufferUsageFlags::TRANSFER_DST,
+                    gpu_allocator::MemoryLocation::GpuToCpu,
+                    "recorded frame",
+                )?;
+                record_readback(&self.gpu, cb, view, Access::TransferRead, &buffer);
+                Some(buffer)
+            }
+            None => None,
+        };
         // SAFETY: `cb` is recording.
         unsafe { dev.end_command_buffer(cb) }.ctx("vkEndCommandBuffer")?;
 
@@ -333,6 +349,25 @@ impl Running {
         self.frame_index += 1;
         self.upload_ahead()?;
 
+        if let Some(buffer) = recorded {
+            let pixels = self.wait_idle().map_err(ViewerError::from).and_then(|_| {
+                buffer
+                    .mapped()
+                    .map(<[u8]>::to_vec)
+                    .ok_or(GpuError::Lost("recording buffer is not mapped").into())
+            });
+            buffer.destroy(&self.gpu);
+            let pushed = pixels.map_err(|e| e.to_string()).and_then(|p| {
+                let r = self.recorder.as_mut().ok_or("no recording")?;
+                r.push(view_size.width, view_size.height, p, now)
+            });
+            if let Err(e) = pushed {
+                self.state.error = Some(format!("recording: {e}"));
+                if let Some(r) = self.recorder.take() {
+                    self.stop_recording(r);
+                }
+            }
+        }
         if let Some((path, buffer)) = screenshot {
             let saved = self.wait_idle().map_err(ViewerError::from).and_then(|_| {
                 let step = self.series.as_ref().map(Volume::shown_step);

@@ -17,11 +17,9 @@ pub(super) struct Loading {
     pub(super) rx: Receiver<Result<(Volume, Vec<u64>), String>>,
 }
 
-/// The editor's histogram: 256 bins of normalised values.
+/// The editor's histogram: 256 bins of normalised values, over every step of a series (as its range is).
 pub(super) fn value_histogram(v: &Volume) -> Vec<u64> {
-    let [w, h, d] = v.dims;
-    let values = (0..d).flat_map(move |z| (0..h).flat_map(move |y| (0..w).map(move |x| (x, y, z))));
-    tf_editor::histogram(values.map(|(x, y, z)| v.normalized(x, y, z)), 256)
+    tf_editor::histogram(v.normalized_values(), 256)
 }
 
 /// Loads any format `volume::open` reads (raw with the given options); a volume larger than `max_dim` (the

@@ -6,11 +6,13 @@
 //! image → blit to the swapchain image → egui over it] → submit → present. Redraws happen only when something
 //! changed, so an idle viewer sleeps in the event loop.
 
+pub mod clip_widget;
 pub mod controls;
 mod frame;
 pub mod light_gizmo;
 pub mod lighting_panel;
 mod loading;
+pub mod recording;
 mod screenshot;
 mod script;
 pub mod session;
@@ -205,6 +207,8 @@ struct Running {
     state: ViewerState,
     loading: Option<Loading>,
     pending_screenshot: Option<PathBuf>,
+    /// The GIF being recorded (F9).
+    recorder: Option<recording::Recorder>,
     zero_size: bool,
     recreate_swapchain: bool,
     last_frame: Instant,
@@ -295,6 +299,7 @@ impl Running {
             },
             loading: None,
             pending_screenshot: None,
+            recorder: None,
             zero_size: false,
             recreate_swapchain: true,
             last_frame: Instant::now(),
@@ -473,12 +478,17 @@ impl Running {
                 UiAction::LoadFile(path, opts) => self.start_load(VolumeSource::File(path, opts)),
                 UiAction::LoadBuiltin(name) => self.start_load(VolumeSource::Builtin(name, None)),
                 UiAction::Screenshot => {
-                    let stamp = std::time::SystemTime::now()
-                        .duration_since(std::time::UNIX_EPOCH)
-                        .map(|d| d.as_secs())
-                        .unwrap_or(0);
-                    self.pending_screenshot = Some(PathBuf::from(format!("volcast-{stamp}.png")));
+                    self.pending_screenshot = Some(PathBuf::from(format!("volcast-{}.png", time_stamp())));
                 }
+                UiAction::ToggleRecording => match self.recorder.take() {
+                    Some(r) => self.stop_recording(r),
+                    None => {
+                        let path = PathBuf::from(format!("volcast-{}.gif", time_stamp()));
+                        eprintln!("recording {}", path.display());
+                        self.state.recording = Some(path.display().to_string());
+                        self.recorder = Some(recording::Recorder::new(path));
+                    }
+                },
                 UiAction::VsyncChanged => self.recreate_swapchain = true,
                 UiAction::SaveSession => self.pending_session = Some(PathBuf::from(self.state.session_path.trim())),
                 UiAction::OpenSession(path) => self.open_session(&path),
@@ -495,7 +505,27 @@ impl Running {
         }
     }
 
+    /// Ends a recording: writes its GIF (or says why not).
+    fn stop_recording(&mut self, r: recording::Recorder) {
+        let path = r.path().display().to_string();
+        self.state.recording = None;
+        match r.finish(Instant::now()) {
+            Ok(frames) => {
+                eprintln!("saved recording {path} ({frames} frames)");
+                self.state.status = Some(format!("saved {path} ({frames} frames)"));
+            }
+            Err(e) => {
+                eprintln!("recording: {e}");
+                self.state.error = Some(format!("recording: {e}"));
+            }
+        }
+    }
+
     fn destroy(mut self) {
+        // A recording still running is written, as if stopped.
+        if let Some(r) = self.recorder.take() {
+            self.stop_recording(r);
+        }
         let _ = self.wait_idle();
         // egui's renderer holds a clone of the allocator: drop it before the Gpu drops the allocator.
         drop(self.egui_renderer.take());
@@ -527,4 +557,12 @@ impl Running {
         }
         // The Gpu drops here, after everything made from it.
     }
+}
+
+/// Seconds since 1970, for the names of screenshots and recordings.
+fn time_stamp() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0)
 }

@@ -209,6 +209,16 @@ pub fn slice_view(
             ));
         }
     }
+    // The clipping plane where it cuts this slice.
+    if let Some(plane) = state.look.clip_plane {
+        let (point, normal) = super::clip_widget::plane_in_slices(state, &plane, mm);
+        if let Some((a, b)) = frame.line_of_plane(point, normal) {
+            painter.line_segment(
+                [to_screen(a), to_screen(b)],
+                Stroke::new(1.5, super::clip_widget::COLOR),
+            );
+        }
+    }
     draw_labels(&painter, rect, state, view, through);
 
     let response = ui.interact(rect, ui.id().with(("slice view", slot)), egui::Sense::click_and_drag());

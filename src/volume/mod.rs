@@ -390,7 +390,11 @@ impl Volume {
 
     /// `(value - min) / (max - min)`; 0.0 if max == min; NaN stays NaN (the renderer treats it as transparent).
     pub fn normalized(&self, x: u32, y: u32, z: u32) -> f64 {
-        let v = self.value(x, y, z);
+        self.normalize_value(self.value(x, y, z))
+    }
+
+    /// A value (after scaling) normalised to the range, as [`Volume::normalized`].
+    fn normalize_value(&self, v: f64) -> f64 {
         let [min, max] = self.range;
         if v.is_nan() {
             f64::NAN
@@ -405,15 +409,7 @@ impl Volume {
     /// the extremes of a block of elements map to the extremes of its normalised values (swapped for a negative
     /// slope).
     pub fn normalize_element(&self, element: f64) -> f64 {
-        let v = self.scaling.apply(element - stored_offset(self.source_type));
-        let [min, max] = self.range;
-        if v.is_nan() {
-            f64::NAN
-        } else if max == min {
-            0.0
-        } else {
-            (v - min) / (max - min)
-        }
+        self.normalize_value(self.scaling.apply(element - stored_offset(self.source_type)))
     }
 
     /// Physical box, dims × spacing, scaled so the largest side is 1.

@@ -79,6 +79,18 @@ impl Volume {
         self.time.steps.len().max(1) as u32
     }
 
+    /// Every voxel's normalised value in every step (the shown step first, then the others in order): a series'
+    /// histogram, like its range, covers the whole series, so an automatic transfer function suits every step.
+    pub fn normalized_values(&self) -> impl Iterator<Item = f64> + '_ {
+        std::iter::once(&self.data)
+            .chain(self.time.steps.iter().flatten())
+            .flat_map(move |data| {
+                (0..data.len()).map(move |i| {
+                    self.normalize_value(self.scaling.apply(super::stored_value(self.source_type, data, i)))
+                })
+            })
+    }
+
     /// The step in [`Volume::data`].
     pub fn shown_step(&self) -> u32 {
         self.time.shown as u32

@@ -286,3 +286,67 @@ pub fn read_screenshot(dir: &Path, saved_line: &str) -> (RgbaImage, RenderSettin
     let json = std::fs::read_to_string(png.with_extension("json")).expect("settings beside the screenshot");
     (image, serde_json::from_str(&json).expect("settings JSON"))
 }
+
+/// Moves the pointer to `p` (window points) and lets the viewer see it.
+pub fn pointer(display: &str, window: &str, p: egui::Pos2) {
+    let (x, y) = (format!("{}", p.x.round()), format!("{}", p.y.round()));
+    x_client(display, "xdotool", &["mousemove", "--window", window, &x, &y]);
+    std::thread::sleep(Duration::from_millis(120));
+}
+
+/// An xdotool button action ("click", "mousedown", "mouseup") on button "1".."5".
+pub fn button(display: &str, action: &str, button: &str) {
+    x_client(display, "xdotool", &[action, button]);
+    std::thread::sleep(Duration::from_millis(200));
+}
+
+/// A drag with `button` from `from` through `steps` moves of `step` points each (steps above egui's 6-point click
+/// distance, so no motion is lost before the drag starts).
+pub fn drag(display: &str, window: &str, button_name: &str, from: egui::Pos2, step: egui::Vec2, steps: u32) {
+    pointer(display, window, from);
+    button(display, "mousedown", button_name);
+    for k in 1..=steps {
+        pointer(display, window, from + step * k as f32);
+    }
+    button(display, "mouseup", button_name);
+}
+
+/// The four-up quadrants (axial, 3D, sagittal, coronal) of a `size` window whose F12 image is `shot_width` wide: the
+/// area right of the panel, found as the one whose 3D quadrant has that width.
+pub fn four_up_rects(size: (f32, f32), shot_width: u32) -> [egui::Rect; 4] {
+    let panel_right = (0..size.0 as i32)
+        .map(|p| p as f32)
+        .find(|&left| {
+            let area = egui::Rect::from_min_max(egui::pos2(left, 0.0), egui::pos2(size.0, size.1));
+            (volcast::viewer::slice_views::four_up(area)[1].width().round() - shot_width as f32).abs() <= 0.5
+        })
+        .expect("a layout that gives F12's width");
+    let area = egui::Rect::from_min_max(egui::pos2(panel_right, 0.0), egui::pos2(size.0, size.1));
+    volcast::viewer::slice_views::four_up(area)
+}
+
+/// The largest difference of any colour channel between two images of one size, in 1/255.
+pub fn worst_channel_diff(a: &RgbaImage, b: &RgbaImage) -> u8 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    a.pixels()
+        .zip(b.pixels())
+        .map(|(p, q)| (0..3).map(|c| p.0[c].abs_diff(q.0[c])).max().unwrap_or(0))
+        .max()
+        .unwrap_or(0)
+}
+
+/// `volcast render --validate --state JSON` into `dir`: the image a view state renders headless.
+pub fn render_state(dir: &Path, json: &Path) -> RgbaImage {
+    let out = dir.join("render-state.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
+        .args(["render", "--validate", "--state"])
+        .arg(json)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .expect("run volcast render --state");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    image::open(&out)
+        .unwrap_or_else(|e| panic!("{}: {e}", out.display()))
+        .to_rgba8()
+}

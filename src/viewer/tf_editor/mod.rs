@@ -18,17 +18,7 @@ pub use panel::{panel, TfEditorState};
 use crate::tf::{bake, linear_to_srgb, lookup, Classification, TfUnits, TransferFunction};
 use egui::{Color32, Pos2, Rect, Sense, Stroke};
 
-/// Counts of normalised values in `bins` equal bins over [0, 1] (NaN skipped).
-pub fn histogram(values: impl Iterator<Item = f64>, bins: usize) -> Vec<u64> {
-    let mut h = vec![0u64; bins.max(1)];
-    for v in values {
-        if v.is_finite() {
-            let i = ((v.clamp(0.0, 1.0) * bins as f64) as usize).min(bins - 1);
-            h[i] += 1;
-        }
-    }
-    h
-}
+pub use crate::tf_auto::histogram;
 
 /// A control point's x in normalised units for display, and back.
 pub fn to_normalized(tf: &TransferFunction, x: f32, range: [f64; 2]) -> f32 {

@@ -29,7 +29,8 @@ pub fn take_tab_presses(input: &mut egui::RawInput) -> usize {
 }
 
 /// Keyboard shortcuts: R reset, Space auto-rotate, L slice views, Tab panel (scripted keys; a real Tab is taken before egui,
-/// `take_tab_presses`), F12 screenshot.
+/// `take_tab_presses`), F12 screenshot, F9 record, C clipping plane, F flip it, P play, Q quality, S shading,
+/// Ctrl+S session.
 pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> {
     let mut actions = Vec::new();
     if ctx.egui_wants_keyboard_input() {
@@ -53,6 +54,18 @@ pub fn shortcuts(ctx: &egui::Context, state: &mut ViewerState) -> Vec<UiAction> 
         }
         if i.key_pressed(egui::Key::P) {
             state.time.toggle_play();
+        }
+        if i.key_pressed(egui::Key::C) {
+            state.look.clip_plane = match state.look.clip_plane {
+                Some(_) => None,
+                None => Some(crate::viewer::clip_widget::facing_away(state)),
+            };
+        }
+        if i.key_pressed(egui::Key::F) {
+            state.look.clip_plane = state.look.clip_plane.map(|p| p.flipped());
+        }
+        if i.key_pressed(egui::Key::F9) {
+            actions.push(UiAction::ToggleRecording);
         }
         if i.key_pressed(egui::Key::Q) {
             state.quality = Some(next_lower(state.quality));

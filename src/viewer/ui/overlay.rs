@@ -40,11 +40,14 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
     state.interacting = response.dragged();
     // A drag that starts on the light gizmo moves the light, not the camera.
     let moving_light = crate::viewer::light_gizmo::light_gizmo(ui, state, rect, &response);
+    // So does one that starts on the clipping plane's handle or ring.
+    let moving_plane = crate::viewer::clip_widget::clip_widget(ui, state, rect, &response);
 
     if let Some(pos) = response.interact_pointer_pos() {
         let p = Vec2::new(pos.x - rect.left(), pos.y - rect.top());
         let d = response.drag_delta();
-        if response.dragged_by(egui::PointerButton::Primary) && d != egui::Vec2::ZERO && !moving_light {
+        if response.dragged_by(egui::PointerButton::Primary) && d != egui::Vec2::ZERO && !moving_light && !moving_plane
+        {
             state.animation = None;
             state.orbit.arcball(p - Vec2::new(d.x, d.y), p, viewport);
         }

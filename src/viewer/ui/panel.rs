@@ -4,7 +4,9 @@
 use super::state::{raw_only, UiAction, ViewerState};
 use super::tf_panel::transfer_function_section;
 use crate::camera::ViewPreset;
+use crate::clip::ClipPlane;
 use crate::settings::{CompositeMode, PositionFormat, RaySetup, Shading};
+use crate::viewer::clip_widget;
 use crate::viewer::controls::{look_along, RotationAnimation};
 use crate::volume::geometry::index_axis_names;
 use crate::volume::{parse_scivis_name, VoxelType, BUILTIN_NAMES};
@@ -124,7 +126,41 @@ fn slicing_section(ui: &mut egui::Ui, state: &mut ViewerState) {
             if ui.button("Reset slices").clicked() {
                 state.slabs = [(0.5, 1.0); 3];
             }
+            ui.separator();
+            clip_plane_controls(ui, state);
         });
+}
+
+/// The arbitrary clipping plane: on/off, offset, flip, face the camera (dragged in the 3D view).
+fn clip_plane_controls(ui: &mut egui::Ui, state: &mut ViewerState) {
+    let mut on = state.look.clip_plane.is_some();
+    if ui.checkbox(&mut on, "clip plane (C)").changed() {
+        state.look.clip_plane = on.then(|| clip_widget::facing_away(state));
+    }
+    let Some(plane) = state.look.clip_plane else {
+        return;
+    };
+    let reach = clip_widget::half_diagonal_mm(state);
+    let mut offset = plane.offset();
+    if ui
+        .add(egui::Slider::new(&mut offset, -reach..=reach).text("offset (mm)"))
+        .changed()
+    {
+        state.look.clip_plane = plane.with_offset(offset).ok().or(Some(plane));
+    }
+    ui.horizontal(|ui| {
+        if ui.button("Flip (F)").clicked() {
+            state.look.clip_plane = Some(plane.flipped());
+        }
+        if ui.button("Face the camera").clicked() {
+            let forward = state.orbit.rotation * -glam::Vec3::Z;
+            state.look.clip_plane = ClipPlane::through(forward, plane.point()).ok().or(Some(plane));
+        }
+    });
+    let n = plane.normal();
+    let frame = if state.anatomical() { "RAS" } else { "xyz" };
+    ui.label(format!("normal {frame} {:.2} {:.2} {:.2}", n.x, n.y, n.z));
+    ui.weak("Drag its handle to slide it, its ring to turn it.");
 }
 
 /// View presets, boxes, ray setup, reset and screenshot.
@@ -174,6 +210,17 @@ fn view_section(ui: &mut egui::Ui, state: &mut ViewerState, actions: &mut Vec<Ui
                 actions.push(UiAction::Screenshot);
             }
         });
+        let record = if state.recording.is_some() {
+            "Stop recording (F9)"
+        } else {
+            "Record GIF (F9)"
+        };
+        if ui.button(record).clicked() {
+            actions.push(UiAction::ToggleRecording);
+        }
+        if let Some(path) = &state.recording {
+            ui.colored_label(Color32::from_rgb(255, 110, 110), format!("recording {path}"));
+        }
         ui.label("Hide this panel: Tab");
     });
 }

@@ -75,6 +75,10 @@ pub struct ViewerState {
     pub value_unit: String,
     /// Where Ctrl+S and "Save session" write, and "Open session" reads.
     pub session_path: String,
+    /// What a drag on the clipping plane's widget does, while one lasts.
+    pub clip_grab: Option<crate::viewer::clip_widget::ClipGrab>,
+    /// The GIF being recorded (F9 or the panel's Record), shown in the panel.
+    pub recording: Option<String>,
 }
 
 /// What the panel asks the viewer to do.
@@ -87,6 +91,8 @@ pub enum UiAction {
     /// Restore a session file (loading its volume if another is shown).
     OpenSession(PathBuf),
     Screenshot,
+    /// Start recording the 3D view into a GIF, or stop and write it.
+    ToggleRecording,
     VsyncChanged,
     /// Show the platform's file dialog (off the render thread).
     OpenDialog,
@@ -136,6 +142,8 @@ impl ViewerState {
             slices: SliceViews::default(),
             value_unit: String::new(),
             session_path: "volcast-session.json".into(),
+            clip_grab: None,
+            recording: None,
         }
     }
 
