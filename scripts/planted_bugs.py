@@ -142,7 +142,7 @@ BUGS = [
     ("colorbar-upside-down", "the colour bar puts the window's lower end at the top",
      [("src/colorbar.rs", "        hi - t * (hi - lo)\n", "        lo + t * (hi - lo)\n")]),
     ("colorbar-unit-dropped", "render --colorbar labels a CT's ticks without HU",
-     [("src/main.rs", "unit: volcast::tf_auto::VolumeFacts::of(volume).kind().unit(),", "unit: None,")]),
+     [("src/cli/render.rs", "unit: volcast::tf_auto::VolumeFacts::of(volume).kind().unit(),", "unit: None,")]),
     ("auto-ct-needs-huge-max", "the auto preset misses CT without a modality tag (bone threshold 10x too high)",
      [("src/tf_auto.rs", "max >= 1000.0", "max >= 10000.0")]),
 ]

@@ -1,5 +1,5 @@
-//! volcast: a volume ray caster on raw Vulkan. The binary (`src/main.rs`) and the tests drive this library, so
-//! both exercise one render path.
+//! volcast: a volume ray caster on raw Vulkan. The binary (`src/main.rs`, `src/cli/`) and the tests drive this
+//! library, so both exercise one render path.
 
 pub mod bench;
 pub mod camera;

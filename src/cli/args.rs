@@ -1,0 +1,319 @@
+//! The subcommands' arguments (clap structs) and the option groups they share: which volume to load and how,
+//! and which GPU to run on.
+
+use super::frame::FrameArgs;
+use super::parse::{parse_fps, parse_gradients, parse_quality, parse_size, parse_turntable};
+use anyhow::{bail, Result};
+use clap::Args;
+use std::path::PathBuf;
+use volcast::gpu::GpuOptions;
+use volcast::quality::{Gradients, Quality};
+use volcast::volume::{self, RawOptions, Volume, VoxelType};
+
+#[derive(Args, Clone)]
+pub(crate) struct VolumeArgs {
+    /// A volume file: raw, VTK (.vtk, .vti), NRRD (.nrrd/.nhdr), NIfTI-1 (.nii/.nii.gz), MetaImage (.mha/.mhd), DICOM
+    /// (a folder of slices or one file). Raw files take dims and type from --dims/--type or a NAME_WxHxD_TYPE name.
+    pub(crate) file: Option<PathBuf>,
+    /// A built-in volume: helix, box, colormap or marschner-lobb.
+    #[arg(long, conflicts_with = "file")]
+    pub(crate) builtin: Option<String>,
+    /// Edge length of the built-in volume (default 256; 41 for marschner-lobb).
+    #[arg(long, requires = "builtin")]
+    pub(crate) builtin_size: Option<u32>,
+    /// Dimensions of a raw file: W H D.
+    #[arg(long, num_args = 3, value_names = ["W", "H", "D"])]
+    pub(crate) dims: Option<Vec<u32>>,
+    /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
+    #[arg(long = "type")]
+    pub(crate) voxel_type: Option<String>,
+    /// Voxel spacing: SX SY SZ (default: from the file's header; 1 1 1 for raw files). Overrides the header.
+    #[arg(long, num_args = 3, value_names = ["SX", "SY", "SZ"])]
+    pub(crate) spacing: Option<Vec<f32>>,
+    /// Byte order of a raw file's voxels.
+    #[arg(long, value_parser = ["little", "big"])]
+    pub(crate) endian: Option<String>,
+    /// Bytes to skip at the start of a raw file (a header volcast does not read).
+    #[arg(long, value_name = "N")]
+    pub(crate) header_bytes: Option<u64>,
+    /// Largest dimension: a larger volume is downsampled 2x per axis until it fits (with a warning).
+    #[arg(long, value_name = "N", default_value_t = 2048)]
+    pub(crate) max_dim: u32,
+    /// Refuse a volume larger than --max-dim instead of downsampling it.
+    #[arg(long)]
+    pub(crate) no_downsample: bool,
+    /// The point array to load from a VTK file holding several (default: its active scalars, else the first
+    /// one-component array); `volcast info` lists them.
+    #[arg(long, value_name = "NAME")]
+    pub(crate) array: Option<String>,
+    /// The time step of a 4-D series to show, from 0 (default 0); the value range stays the whole series'.
+    #[arg(long, value_name = "N")]
+    pub(crate) time: Option<u32>,
+}
+
+impl VolumeArgs {
+    /// These arguments with the volume of a view state where none is given here.
+    pub(crate) fn or_from(&self, r: &volcast::view_state::VolumeRef) -> VolumeArgs {
+        let mut a = self.clone();
+        if a.file.is_some() || a.builtin.is_some() {
+            return a;
+        }
+        a.builtin = r.builtin.clone();
+        a.builtin_size = r.builtin_size;
+        a.file = r.path.clone();
+        a.dims = a.dims.or(r.raw_dims.map(|d| d.to_vec()));
+        a.voxel_type = a.voxel_type.or(r.raw_type.clone());
+        a.spacing = a.spacing.or(r.raw_spacing.map(|s| s.to_vec()));
+        a.time = a.time.or((r.time > 0).then_some(r.time));
+        a
+    }
+
+    pub(crate) fn load(&self) -> Result<Volume> {
+        if let Some(name) = &self.builtin {
+            let mut v = volume::builtin(name, self.builtin_size)?;
+            // --spacing overrides every volume's own, the built-ins' included.
+            if let Some(s) = &self.spacing {
+                v = v.with_spacing([s[0], s[1], s[2]])?;
+            }
+            if let Some(t) = self.time {
+                v.show_step(t)?;
+            }
+            return Ok(v);
+        }
+        let Some(path) = &self.file else {
+            bail!(
+                "no volume given: pass a FILE or --builtin NAME ({})",
+                volume::BUILTIN_NAMES.join(", ")
+            );
+        };
+        let opts = volume::OpenOptions {
+            raw: self.raw_options()?,
+            endian: match self.endian.as_deref() {
+                Some("big") => volume::Endian::Big,
+                _ => volume::Endian::Little,
+            },
+            header_bytes: self.header_bytes.unwrap_or(0),
+            max_dim: Some(self.max_dim),
+            no_downsample: self.no_downsample,
+            array: self.array.clone(),
+        };
+        // A progress bar only where loading takes long enough to watch (files over 8 MiB).
+        let big = std::fs::metadata(path).is_ok_and(|m| m.len() > 8 << 20);
+        let bar = indicatif::ProgressBar::new(1000);
+        if !big {
+            bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+        }
+        // indicatif's default style draws no message: the label needs a template that has one.
+        if let Ok(style) = indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed}") {
+            bar.set_style(style.progress_chars("=> "));
+        }
+        bar.set_message(format!("loading {}", path.display()));
+        let loaded = volume::open_with_progress(path, &opts, &mut |f| bar.set_position((f * 1000.0) as u64));
+        bar.finish_and_clear();
+        let mut v = loaded?;
+        for note in &v.notes {
+            eprintln!("note: {note}");
+        }
+        if let Some(t) = self.time {
+            v.show_step(t)?;
+        }
+        Ok(v)
+    }
+
+    pub(crate) fn raw_options(&self) -> Result<RawOptions> {
+        let voxel_type = match &self.voxel_type {
+            Some(t) => Some(t.parse::<VoxelType>()?),
+            None => None,
+        };
+        Ok(RawOptions {
+            dims: self.dims.as_ref().map(|d| [d[0], d[1], d[2]]),
+            voxel_type,
+            spacing: self.spacing.as_ref().map(|s| [s[0], s[1], s[2]]),
+        })
+    }
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct InfoArgs {
+    #[command(flatten)]
+    pub(crate) volume: VolumeArgs,
+    /// Print one JSON object (format, dims, type, spacing, value_range, timesteps, affine_ras, axes,
+    /// handedness, ...) instead of text.
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct GpuArgs {
+    /// Run under the Khronos validation layer with synchronization validation (also VOLCAST_VALIDATION=1);
+    /// exits non-zero if it reports an error.
+    #[arg(long)]
+    pub(crate) validate: bool,
+    /// Device index or part of its name (see `volcast devices`).
+    #[arg(long)]
+    pub(crate) device: Option<String>,
+    /// How volumes are stored on the GPU: auto (on CPU devices such as lavapipe the fastest layout within 1 GiB:
+    /// corner textures for 8/16-bit data, else a float texture; the data's own format on GPUs), native (least
+    /// memory), float (4 bytes per voxel) or corners (4 or 8 bytes per voxel for 8/16-bit data).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "native", "float", "corners"])]
+    pub(crate) texture: String,
+}
+
+impl GpuArgs {
+    pub(crate) fn options(&self) -> GpuOptions {
+        let env = std::env::var("VOLCAST_VALIDATION").is_ok_and(|v| !v.is_empty() && v != "0");
+        GpuOptions {
+            validation: self.validate || env,
+            device: self.device.clone(),
+            texel_policy: match self.texture.as_str() {
+                "native" => volcast::gpu::TexelPolicy::Native,
+                "float" => volcast::gpu::TexelPolicy::Float,
+                "corners" => volcast::gpu::TexelPolicy::Corners,
+                _ => volcast::gpu::TexelPolicy::Auto,
+            },
+            ..Default::default()
+        }
+    }
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct RenderArgs {
+    #[command(flatten)]
+    pub(crate) volume: VolumeArgs,
+    #[command(flatten)]
+    pub(crate) gpu: GpuArgs,
+    #[command(flatten)]
+    pub(crate) frame: FrameArgs,
+    /// Output PNG.
+    #[arg(short, long, default_value = "volcast.png")]
+    pub(crate) output: PathBuf,
+    /// Ray setup: faces (entry/exit textures), analytic (ray/box intersection) or compute (analytic, marched in a
+    /// compute pass instead of a fragment pass).
+    #[arg(long, default_value = "faces", value_parser = ["faces", "analytic", "compute"])]
+    pub(crate) method: String,
+    /// Print GPU time per pass (after a warm-up frame; lavapipe compiles shaders on first use).
+    #[arg(long)]
+    pub(crate) timings: bool,
+    /// Print peak resident memory and the GPU memory allocated (volume, targets, buffers).
+    #[arg(long)]
+    pub(crate) memory: bool,
+    /// Append a colour bar (the transfer function's colours and opacity over the window, ticks in data units) as
+    /// a strip at the right: the image grows by its width.
+    #[arg(long)]
+    pub(crate) colorbar: bool,
+    /// Frames to time with --timings (the median is reported; default 5); with --keyframes, the movie's frame
+    /// count (2 to 3600).
+    #[arg(long)]
+    pub(crate) frames: Option<u32>,
+    /// Render a view the viewer saved (F12's JSON beside its screenshot): its settings, and its volume unless a
+    /// FILE or --builtin is given. The view options (camera, transfer function, mode, size, method) come from the
+    /// file.
+    #[arg(long, value_name = "FILE.json")]
+    pub(crate) state: Option<PathBuf>,
+    /// A turntable movie of N frames (1 to 3600) once around the vertical axis (+z through the point looked at),
+    /// starting at the view given: `-o NAME.png` writes NAME-0000.png … and a looping NAME.gif (README, Movies).
+    #[arg(long, value_name = "N", value_parser = parse_turntable, group = "movie", conflicts_with = "timings")]
+    pub(crate) turntable: Option<u32>,
+    /// A movie along a camera path through view states (F12's JSON), --frames N in all: the first frame is the
+    /// first state, the last the last; the volume is the first state's. Written like --turntable.
+    #[arg(long, num_args = 2.., value_name = "STATE.json", group = "movie", conflicts_with_all = ["state", "timings"])]
+    pub(crate) keyframes: Vec<PathBuf>,
+    /// Frames per second of a movie's GIF (0.1 to 50).
+    #[arg(long, value_name = "F", default_value_t = volcast::movie::gif::DEFAULT_FPS, value_parser = parse_fps, requires = "movie")]
+    pub(crate) fps: f32,
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct ViewArgs {
+    #[command(flatten)]
+    pub(crate) volume: VolumeArgs,
+    #[command(flatten)]
+    pub(crate) gpu: GpuArgs,
+    /// Initial window size WxH.
+    #[arg(long, default_value = "1280x800", value_parser = parse_size)]
+    pub(crate) size: (u32, u32),
+    /// Sampling quality of still frames, as `render --quality`: draft, fast, normal or converged (moving frames
+    /// use draft's step; the panel and the Q key change it).
+    #[arg(long, default_value = "normal", value_parser = parse_quality)]
+    pub(crate) quality: Quality,
+    /// Drive the window with a script (for tests), e.g. "frames:3;resize:320x240;screenshot:a.png;exit".
+    #[arg(long, hide = true)]
+    pub(crate) script: Option<String>,
+    /// Start with the three slice views beside the 3D view (four-up; L toggles it).
+    #[arg(long)]
+    pub(crate) slices: bool,
+    /// Restore a session (Ctrl+S's or F12's JSON): its volume, unless a FILE or --builtin is given here, and its
+    /// view (transfer function, camera, slabs, clip plane, mode, lighting, time step, slice views).
+    #[arg(long, value_name = "FILE.json")]
+    pub(crate) state: Option<PathBuf>,
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct BenchArgs {
+    #[command(flatten)]
+    pub(crate) gpu: GpuArgs,
+    /// Timed frames per configuration (median, min and max are reported).
+    #[arg(long, default_value_t = 10)]
+    pub(crate) frames: u32,
+    /// Untimed frames first (lavapipe compiles shaders on first use).
+    #[arg(long, default_value_t = 2)]
+    pub(crate) warmup: u32,
+    /// Folder with the CT head and MRI brain raw files (scenes whose file is missing are skipped).
+    #[arg(long, default_value = "../shared/data/raw")]
+    pub(crate) data: PathBuf,
+    /// make_volume.py's helix_256x256x256_uint8.raw for the vtk-helix scene (default: the same field generated).
+    #[arg(long)]
+    pub(crate) vtk_raw: Option<PathBuf>,
+    /// Only these scenes (repeatable): helix, dense, ct-head, mri-brain, vtk-helix, quick-helix.
+    #[arg(long = "scene")]
+    pub(crate) scenes: Vec<String>,
+    /// Only these image sizes (repeatable), e.g. --size 512.
+    #[arg(long = "size")]
+    pub(crate) sizes: Vec<u32>,
+    /// Only these shading variants (repeatable): off, on, shadows (shading with shadows and ambient occlusion;
+    /// the helix and CT head scenes).
+    #[arg(long = "shading")]
+    pub(crate) shadings: Vec<String>,
+    /// Only these methods (repeatable): faces, analytic, compute (the analytic ray setup in a compute pass).
+    #[arg(long = "method", value_parser = ["faces", "analytic", "compute"])]
+    pub(crate) methods: Vec<String>,
+    /// CI smoke mode: a 64³ helix at 64x64, all three methods, shading off and on, tiny sample-only run.
+    #[arg(long)]
+    pub(crate) quick: bool,
+    /// Only the sample-only micro-benchmark (all three texel formats).
+    #[arg(long)]
+    pub(crate) sample_only: bool,
+    /// Only time-series playback as the viewer plays it: 64 steps of 128³ float32 at 512² (with --quick 6 steps
+    /// of 24³ at 64²); each step is uploaded and rendered, the two timed apart.
+    #[arg(long, conflicts_with_all = ["sample_only", "scenes"])]
+    pub(crate) playback: bool,
+    /// Sampling quality of every scene, as `render --quality`: draft, fast, normal or converged.
+    #[arg(long, default_value = "normal", value_parser = parse_quality)]
+    pub(crate) quality: Quality,
+    /// Where shaded scenes take gradients, as `render --gradients`: auto, texture or samples.
+    #[arg(long, default_value = "auto", value_parser = parse_gradients)]
+    pub(crate) gradients: Gradients,
+    /// Force this step length (in voxels) on every scene instead of its quality's; each frame's error is still
+    /// taken against the scene's converged image (1/8-voxel steps).
+    #[arg(long)]
+    pub(crate) step_length: Option<f32>,
+    /// Print the results as JSON on stdout (progress still goes to stderr).
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct CompareArgs {
+    #[command(flatten)]
+    pub(crate) volume: VolumeArgs,
+    #[command(flatten)]
+    pub(crate) gpu: GpuArgs,
+    #[command(flatten)]
+    pub(crate) frame: FrameArgs,
+    /// Folder for the images and the tables (created if missing).
+    #[arg(long, default_value = "cmp")]
+    pub(crate) out: PathBuf,
+    /// Timed frames per method and view after a warm-up frame (medians are reported).
+    #[arg(long, default_value_t = 3)]
+    pub(crate) frames: u32,
+}

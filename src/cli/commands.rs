@@ -1,0 +1,174 @@
+//! The other subcommands' bodies: `view`, `compare`, `bench`, `info` and `devices`.
+
+use super::args::{BenchArgs, CompareArgs, InfoArgs, ViewArgs};
+use super::with_gpu;
+use anyhow::{bail, Context, Result};
+use volcast::compare;
+use volcast::gpu::GpuError;
+use volcast::headless::Headless;
+use volcast::viewer::{self, ViewerOptions, VolumeSource};
+
+pub(crate) fn view(args: &ViewArgs) -> Result<()> {
+    let restore = match &args.state {
+        Some(path) => Some(viewer::session::read(path).map_err(anyhow::Error::msg)?),
+        None => None,
+    };
+    let from_session = restore.as_ref().and_then(|s| viewer::session::source_of(&s.volume));
+    let source = match (&args.volume.builtin, &args.volume.file, from_session) {
+        (Some(name), _, _) => VolumeSource::Builtin(name.clone(), args.volume.builtin_size),
+        (None, Some(path), _) => VolumeSource::File(path.clone(), args.volume.raw_options()?),
+        (None, None, Some(source)) => source,
+        (None, None, None) => VolumeSource::Builtin("helix".into(), None),
+    };
+    let script = match &args.script {
+        Some(s) => viewer::parse_script(s).map_err(anyhow::Error::msg)?,
+        None => Vec::new(),
+    };
+    let opts = ViewerOptions {
+        source,
+        gpu: args.gpu.options(),
+        size: args.size,
+        script,
+        time: args.volume.time.or(restore.as_ref().map(|s| s.volume.time)),
+        quality: args.quality,
+        slices: args.slices,
+        restore,
+    };
+    let log = viewer::run(opts)?;
+    if args.gpu.options().validation {
+        let (errors, warnings) = (log.error_count(), log.warning_count());
+        eprintln!("validation: {errors} errors, {warnings} warnings");
+        if errors + warnings > 0 {
+            bail!("the validation layer reported {errors} error(s) and {warnings} warning(s)");
+        }
+    }
+    Ok(())
+}
+
+pub(crate) fn compare(args: &CompareArgs) -> Result<()> {
+    let volume = args.volume.load()?;
+    let base = args.frame.settings(&volume)?;
+    let mut views = compare::builtin_views(&base, volume.extent());
+    if args.frame.eye.is_some() {
+        views.push(compare::View {
+            name: "eye".into(),
+            settings: base.clone(),
+        });
+    }
+    std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    with_gpu(&args.gpu, |gpu| {
+        let mut headless = Headless::new(gpu)?;
+        let result = (|| -> Result<Vec<compare::Row>> {
+            headless.set_volume(gpu, &volume)?;
+            let mut rows = Vec::new();
+            for view in &views {
+                let c = compare::compare_view(gpu, &mut headless, view, args.frames)?;
+                let diff = compare::amplified_diff(&c.faces.image, &c.analytic.image, 10);
+                let save = |suffix: &str, img: &image::RgbaImage| -> Result<()> {
+                    let path = args.out.join(format!("{}-{suffix}.png", view.name));
+                    volcast::image_out::save(img, &path).map_err(anyhow::Error::msg)
+                };
+                save("faces", &c.faces.image)?;
+                save("analytic", &c.analytic.image)?;
+                save("diff", &diff)?;
+                save(
+                    "side-by-side",
+                    &compare::side_by_side(&[&c.faces.image, &c.analytic.image, &diff]),
+                )?;
+                println!("{:>15}: {}", view.name, c.verdict());
+                rows.push(compare::Row::from(&c));
+            }
+            Ok(rows)
+        })();
+        headless.destroy(gpu);
+        let rows = result?;
+        let table = compare::markdown_table(&rows);
+        println!(
+            "\n{} ({}x{}x{} {}) at {}x{} on {}; images are faces | analytic | difference x10\n\n{table}",
+            volume.name,
+            volume.dims[0],
+            volume.dims[1],
+            volume.dims[2],
+            volume.source_type,
+            base.width,
+            base.height,
+            gpu.device_name
+        );
+        std::fs::write(args.out.join("compare.md"), &table)?;
+        std::fs::write(args.out.join("compare.json"), serde_json::to_string_pretty(&rows)?)?;
+        println!(
+            "wrote {}/compare.md, compare.json and 4 images per view",
+            args.out.display()
+        );
+        let differing = rows.iter().filter(|r| !r.agree).count();
+        if differing > 0 {
+            println!("{differing} view(s) differ beyond the bound");
+        }
+        Ok(())
+    })
+}
+
+pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
+    let opts = volcast::bench::BenchOptions {
+        frames: if args.quick { args.frames.min(2) } else { args.frames },
+        warmup: if args.quick { args.warmup.min(1) } else { args.warmup },
+        data_dir: args.data.clone(),
+        vtk_raw: args.vtk_raw.clone(),
+        quick: args.quick,
+        scenes: args.scenes.clone(),
+        sizes: args.sizes.clone(),
+        shadings: args.shadings.clone(),
+        methods: args.methods.clone(),
+        sample_only: args.sample_only,
+        quality: args.quality,
+        gradients: args.gradients,
+        step_length: args.step_length,
+    };
+    if args.playback {
+        let play = if args.quick {
+            volcast::playback::PlaybackOptions::QUICK
+        } else {
+            volcast::playback::PlaybackOptions::FULL
+        };
+        return with_gpu(&args.gpu, |gpu| {
+            let report = volcast::playback::run(gpu, &play, &mut |line| eprintln!("{line}"))?;
+            if args.json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.text());
+            }
+            Ok(())
+        });
+    }
+    with_gpu(&args.gpu, |gpu| {
+        let report = volcast::bench::run(gpu, &opts, &mut |line| eprintln!("{line}"))?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&report)?);
+        } else {
+            print!("{}", report.text());
+        }
+        Ok(())
+    })
+}
+
+pub(crate) fn info(args: &InfoArgs) -> Result<()> {
+    let v = args.volume.load()?;
+    let info = volcast::info::Info::of(&v);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&info)?);
+    } else {
+        print!("{}", info.text(&v));
+    }
+    Ok(())
+}
+
+pub(crate) fn devices() -> Result<()> {
+    let list = volcast::gpu::list_devices()?;
+    if list.is_empty() {
+        return Err(GpuError::NoDevice("the Vulkan loader found no physical device".into()).into());
+    }
+    for d in &list {
+        println!("{d}");
+    }
+    Ok(())
+}

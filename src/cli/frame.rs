@@ -1,0 +1,302 @@
+//! `FrameArgs`: the options that say what a frame shows (camera, transfer function, compositing, lighting,
+//! sampling, slicing), and how they become `RenderSettings`. Shared by `render` and `compare`.
+
+use super::parse::{
+    parse_clip_plane, parse_gradients, parse_iso_color, parse_light, parse_pair, parse_quality, parse_shading,
+    parse_size, parse_slice, parse_surface, parse_vec3, IsoColor, LightDirection,
+};
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use glam::Vec3;
+use std::path::PathBuf;
+use volcast::camera::{Camera, ViewPreset};
+use volcast::quality::{Gradients, Quality};
+use volcast::settings::CompositeMode;
+use volcast::settings::{PositionFormat, RenderSettings};
+use volcast::tf::TransferFunction;
+use volcast::transfer::Colormap;
+use volcast::volume::Volume;
+
+/// What a frame shows: camera, transfer function, slicing. Shared by `render` and `compare`.
+#[derive(Args, Clone)]
+pub(crate) struct FrameArgs {
+    /// Image size WxH.
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    pub(crate) size: (u32, u32),
+    /// Camera azimuth in degrees (about +z, from +y) [default: 35, or 0 for an anatomical volume].
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "view")]
+    pub(crate) azimuth: Option<f32>,
+    /// Camera elevation in degrees [default: 25, or 0 for an anatomical volume].
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "view")]
+    pub(crate) elevation: Option<f32>,
+    /// Camera distance from the volume centre (the box's longest side is 1); default fits the volume.
+    #[arg(long)]
+    pub(crate) distance: Option<f32>,
+    /// Camera position X,Y,Z (world units: RAS for anatomical volumes, centred, the box's longest side 1),
+    /// looking at --look-at (default the centre).
+    #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "distance", "view", "view_dir"], allow_hyphen_values = true)]
+    pub(crate) eye: Option<Vec3>,
+    /// The point the camera looks at, X,Y,Z in world units (default the volume's centre, 0,0,0); the orbit, --view
+    /// and --view-dir cameras turn about it.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub(crate) look_at: Option<Vec3>,
+    /// Look along direction X,Y,Z (world units) at --look-at from --distance (default: fitting the volume).
+    #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "view"], allow_hyphen_values = true)]
+    pub(crate) view_dir: Option<Vec3>,
+    /// View from a side of the patient: anterior, posterior, left, right, superior or inferior (head up; from
+    /// above and below anterior up). An anatomical volume is seen from anterior unless told otherwise.
+    #[arg(long)]
+    pub(crate) view: Option<String>,
+    /// Render in voxel index space (the box along the world's axes, the file's orientation ignored).
+    #[arg(long)]
+    pub(crate) voxel_axes: bool,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = volcast::camera::DEFAULT_FOV_Y_DEG)]
+    pub(crate) fov: f32,
+    /// Colormap: cool-warm, plasma, viridis, rainbow, gnuplot, grayscale.
+    #[arg(long, default_value = "cool-warm")]
+    pub(crate) colormap: String,
+    /// Visible value range TMIN,TMAX in [0,1] of the data's range; values outside are transparent
+    /// (default 0.1,1; with a transfer function 0,1).
+    #[arg(long, value_parser = parse_pair)]
+    pub(crate) window: Option<(f32, f32)>,
+    /// A transfer-function preset: ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example, or auto (by
+    /// modality: CT gets ct-bone, anything else a grey ramp over its histogram's percentiles).
+    #[arg(long, conflicts_with = "tf")]
+    pub(crate) preset: Option<String>,
+    /// A transfer function from a JSON file (see README).
+    #[arg(long)]
+    pub(crate) tf: Option<PathBuf>,
+    /// Write the transfer function in use (preset or file) as JSON, to start your own from.
+    #[arg(long)]
+    pub(crate) save_tf: Option<PathBuf>,
+    /// Compositing: emission, mip, minip, average, iso, density.
+    #[arg(long, default_value = "emission")]
+    pub(crate) mode: String,
+    /// Iso value for --mode iso, in [0,1] of the data range.
+    #[arg(long, default_value_t = 0.5)]
+    pub(crate) iso: f32,
+    /// The iso-surface's colour R,G,B in [0,1] (sRGB), or "colormap" for the colour the colormap or transfer
+    /// function gives its value (default: a light neutral).
+    #[arg(long, value_parser = parse_iso_color)]
+    pub(crate) iso_color: Option<IsoColor>,
+    /// The iso-surface's opacity in (0,1]: below 1 the surfaces behind show through.
+    #[arg(long, default_value_t = 1.0)]
+    pub(crate) iso_opacity: f32,
+    /// A further iso-surface VALUE[,R,G,B][,OPACITY] or VALUE,colormap[,OPACITY] (repeatable, 4 surfaces in all);
+    /// surfaces are composited in the order a ray meets them. E.g. translucent skin over bone:
+    /// --mode iso --iso 0.45 --surface 0.2,0.9,0.6,0.5,0.3.
+    #[arg(long = "surface", value_parser = parse_surface)]
+    pub(crate) surfaces: Vec<volcast::lighting::IsoSurface>,
+    /// The light: "head" (a headlight, the default) or the direction X,Y,Z towards a light fixed to the volume, in
+    /// world coordinates (RAS for anatomical volumes). Turns shading on.
+    #[arg(long, value_parser = parse_light, allow_hyphen_values = true)]
+    pub(crate) light: Option<LightDirection>,
+    /// The light's colour R,G,B in [0,1] (sRGB). Turns shading on.
+    #[arg(long, value_parser = parse_vec3)]
+    pub(crate) light_color: Option<Vec3>,
+    /// The light's intensity (scales its diffuse and specular terms). Turns shading on.
+    #[arg(long)]
+    pub(crate) light_intensity: Option<f32>,
+    /// Shadows: light attenuated through the volume on its way to each point (a light grid computed on the GPU;
+    /// with a headlight, a key light up and left of the view casts them). Turns shading on; not in MIP, MinIP or
+    /// average.
+    #[arg(long)]
+    pub(crate) shadows: bool,
+    /// Ambient occlusion: the ambient light dimmed where the surroundings are dense. Turns shading on; not in MIP,
+    /// MinIP or average.
+    #[arg(long)]
+    pub(crate) ambient_occlusion: bool,
+    /// Density factor for --mode density (the OSG article's model).
+    #[arg(long, default_value_t = 1.0)]
+    pub(crate) density: f32,
+    /// Gradient shading (Blinn-Phong; a headlight unless --light says otherwise).
+    #[arg(long)]
+    pub(crate) shading: bool,
+    /// Shading coefficients AMBIENT,DIFFUSE,SPECULAR,SHININESS.
+    #[arg(long, value_parser = parse_shading, default_value = "0.2,0.7,0.3,20")]
+    pub(crate) lighting: volcast::settings::Shading,
+    /// Scale opacity by gradient magnitude, full at this value change per voxel (e.g. 0.05).
+    #[arg(long)]
+    pub(crate) gradient_opacity: Option<f32>,
+    /// Sample at step midpoints instead of a per-pixel jittered start.
+    #[arg(long)]
+    pub(crate) no_jitter: bool,
+    /// Seed of the jitter pattern.
+    #[arg(long, default_value_t = 0)]
+    pub(crate) jitter_seed: u32,
+    /// Orthographic projection (same framing at the target as the perspective view).
+    #[arg(long)]
+    pub(crate) ortho: bool,
+    /// March every brick, also those empty-space skipping would leap over (for comparisons).
+    #[arg(long)]
+    pub(crate) no_skip: bool,
+    /// Longest brick stride (1, 2 or 4): faint bricks take every second or fourth sample (emission and density;
+    /// default: the quality's, 1 with --step-length).
+    #[arg(long)]
+    pub(crate) max_stride: Option<u32>,
+    /// Where shaded frames take gradients: auto (the texture while it stays within 1 GiB), texture (precomputed
+    /// central differences on the grid, 8 bytes per voxel, one fetch) or samples (six samples of the interpolant).
+    #[arg(long, default_value = "auto", value_parser = parse_gradients)]
+    pub(crate) gradients: Gradients,
+    /// The same as --gradients texture.
+    #[arg(long, conflicts_with = "gradients")]
+    pub(crate) gradient_texture: bool,
+    /// Opacity of one voxel-length step.
+    #[arg(long, default_value_t = volcast::settings::DEFAULT_STEP_ALPHA)]
+    pub(crate) step_alpha: f32,
+    /// Sampling quality: draft, fast, normal or converged (base steps 2, 1, 0.4, 1/8 voxel, shortened where the
+    /// transfer function is strong).
+    #[arg(long, default_value = "normal", value_parser = parse_quality)]
+    pub(crate) quality: Quality,
+    /// Step length in voxels, overriding the quality's (opacity is corrected for it): every sample is taken.
+    #[arg(long)]
+    pub(crate) step_length: Option<f32>,
+    /// Opacity = windowed value × step alpha.
+    #[arg(long)]
+    pub(crate) multiplied_alpha: bool,
+    /// Stop a ray once its opacity reaches this.
+    #[arg(long, default_value_t = volcast::settings::DEFAULT_EARLY_TERMINATION)]
+    pub(crate) early_termination: f32,
+    /// Background colour R,G,B in [0,1].
+    #[arg(long, value_parser = parse_vec3, default_value = "0,0,0")]
+    pub(crate) background: Vec3,
+    /// Slab slicing AXIS:POSITION:WIDTH in [0,1], e.g. x:0.5:0.2 (repeatable, one per axis).
+    #[arg(long = "slice", value_parser = parse_slice)]
+    pub(crate) slices: Vec<(usize, f32, f32)>,
+    /// Clipping plane NX,NY,NZ[,OFFSET]: keeps the points p (world mm: RAS for anatomical volumes) with
+    /// (p − centre)·N ≥ OFFSET, centre the volume box's centre; N points into what stays (default offset 0).
+    #[arg(long, value_name = "NX,NY,NZ[,OFFSET]", allow_hyphen_values = true, value_parser = parse_clip_plane)]
+    pub(crate) clip_plane: Option<volcast::clip::ClipPlane>,
+    /// Entry/exit position target format: rgba32f or rgba16f.
+    #[arg(long, default_value = "rgba32f", value_parser = ["rgba32f", "rgba16f"])]
+    pub(crate) positions: String,
+}
+
+impl FrameArgs {
+    pub(crate) fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
+        let extent = volume.extent();
+        let mut s = RenderSettings::new(self.size.0, self.size.1, extent);
+        s.voxel_axes = self.voxel_axes;
+        let distance = self
+            .distance
+            .unwrap_or_else(|| Camera::fit_distance(extent.length() * 0.5, self.fov));
+        let anatomical = volume.geometry.anatomical && !self.voxel_axes;
+        let view = match &self.view {
+            Some(name) => Some(ViewPreset::parse(name).with_context(|| {
+                let names: Vec<&str> = ViewPreset::ALL.iter().map(|v| v.name()).collect();
+                format!("unknown view '{name}'; choose one of {}", names.join(", "))
+            })?),
+            None if anatomical && self.azimuth.is_none() && self.elevation.is_none() => Some(ViewPreset::Anterior),
+            None => None,
+        };
+        let target = self.look_at.unwrap_or(Vec3::ZERO);
+        s.camera = match (self.eye, self.view_dir, view) {
+            (Some(eye), _, _) => Camera::looking_at(eye, target),
+            (None, Some(dir), _) => {
+                if !(dir.is_finite() && dir.length() > 1e-6) {
+                    bail!("--view-dir {dir} must be a non-zero direction");
+                }
+                Camera::looking_at(target - dir.normalize() * distance, target)
+            }
+            (None, None, Some(view)) => view.camera(distance, target),
+            (None, None, None) => Camera::orbit(
+                self.azimuth.unwrap_or(if anatomical { 0.0 } else { 35.0 }),
+                self.elevation.unwrap_or(if anatomical { 0.0 } else { 25.0 }),
+                distance,
+                target,
+            ),
+        };
+        s.camera.fov_y_deg = self.fov;
+        s.colormap = Colormap::parse(&self.colormap).with_context(|| {
+            let names: Vec<&str> = Colormap::ALL.iter().map(|c| c.name()).collect();
+            format!(
+                "unknown colormap '{}'; choose one of {}",
+                self.colormap,
+                names.join(", ")
+            )
+        })?;
+        let tf = match (&self.preset, &self.tf) {
+            (Some(name), _) if name == "auto" => Some(volcast::tf_auto::auto_for_volume(volume)),
+            (Some(name), _) => Some(TransferFunction::preset(name)?),
+            (None, Some(path)) => Some(TransferFunction::load(path)?),
+            (None, None) => None,
+        };
+        if let (Some(path), Some(tf)) = (&self.save_tf, &tf) {
+            std::fs::write(path, tf.to_json()).with_context(|| format!("writing {}", path.display()))?;
+        }
+        s.window = match (self.window, &tf) {
+            (Some(w), _) => [w.0, w.1],
+            (None, Some(_)) => [0.0, 1.0],
+            (None, None) => volcast::settings::DEFAULT_WINDOW,
+        };
+        s.transfer_function = tf;
+        s.mode = CompositeMode::parse(&self.mode).with_context(|| {
+            let names: Vec<&str> = CompositeMode::ALL.iter().map(|m| m.name()).collect();
+            format!("unknown mode '{}'; choose one of {}", self.mode, names.join(", "))
+        })?;
+        s.iso_value = self.iso;
+        match self.iso_color {
+            Some(IsoColor::Colormap) => s.iso_color = None,
+            Some(IsoColor::Rgb(c)) => s.iso_color = Some(c),
+            None => {}
+        }
+        s.iso_opacity = self.iso_opacity;
+        s.extra_isosurfaces = self.surfaces.clone();
+        s.density = self.density;
+        let lit = self.light.is_some()
+            || self.light_color.is_some()
+            || self.light_intensity.is_some()
+            || self.shadows
+            || self.ambient_occlusion;
+        s.shadows = self.shadows;
+        s.ambient_occlusion = self.ambient_occlusion;
+        if (s.shadows || s.ambient_occlusion) && s.mode.is_projection() {
+            eprintln!(
+                "note: {} is not lit: shadows and ambient occlusion do not apply",
+                s.mode.name()
+            );
+        }
+        s.shading = (self.shading || lit).then_some(self.lighting);
+        s.light = volcast::lighting::Light {
+            direction: self.light.and_then(|l| l.0),
+            color: self.light_color.unwrap_or(Vec3::ONE),
+            intensity: self.light_intensity.unwrap_or(1.0),
+        };
+        s.gradient_opacity = self.gradient_opacity;
+        s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
+        s.camera.ortho = self.ortho;
+        s.skip_empty = !self.no_skip;
+        s.step_alpha = self.step_alpha;
+        s.multiplied_alpha = self.multiplied_alpha;
+        s.early_termination = self.early_termination;
+        s.background = self.background;
+        for &(axis, pos, width) in &self.slices {
+            s.set_slab(axis, pos, width);
+        }
+        s.clip_plane = self.clip_plane;
+        s.position_format = if self.positions == "rgba16f" {
+            PositionFormat::Rgba16f
+        } else {
+            PositionFormat::Rgba32f
+        };
+        // The quality's step depends on the classification, so it is resolved last, from valid settings.
+        s.validate().map_err(anyhow::Error::msg)?;
+        self.quality.apply(&mut s, volume.range);
+        if let Some(step) = self.step_length {
+            s.step_length = step;
+            s.max_stride = 1;
+        }
+        if let Some(stride) = self.max_stride {
+            s.max_stride = stride;
+        }
+        let gradients = if self.gradient_texture {
+            Gradients::Texture
+        } else {
+            self.gradients
+        };
+        gradients.apply(&mut s, volume.voxel_count() as u64);
+        s.validate().map_err(anyhow::Error::msg)?;
+        Ok(s)
+    }
+}

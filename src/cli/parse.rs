@@ -1,0 +1,138 @@
+//! Value parsers for clap (`value_parser = parse_*`): sizes, vectors, colours, lights, slabs, planes, named
+//! values; their error texts are what a malformed value prints.
+
+use glam::Vec3;
+use volcast::quality::{Gradients, Quality};
+
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size '{s}' must look like 512x512"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("size '{s}' must look like 512x512"))
+    };
+    Ok((p(w)?, p(h)?))
+}
+
+fn parse_floats(s: &str, n: usize, what: &str) -> Result<Vec<f32>, String> {
+    let v: Result<Vec<f32>, _> = s.split(',').map(|x| x.trim().parse::<f32>()).collect();
+    match v {
+        Ok(v) if v.len() == n && v.iter().all(|x| x.is_finite()) => Ok(v),
+        _ => Err(format!("'{s}' must be {n} comma-separated numbers ({what})")),
+    }
+}
+
+pub(crate) fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    parse_floats(s, 3, "X,Y,Z").map(|v| Vec3::new(v[0], v[1], v[2]))
+}
+
+/// `--iso-color`: a colour or the classification's.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum IsoColor {
+    Colormap,
+    Rgb(Vec3),
+}
+
+pub(crate) fn parse_iso_color(s: &str) -> Result<IsoColor, String> {
+    if s.trim().eq_ignore_ascii_case("colormap") {
+        return Ok(IsoColor::Colormap);
+    }
+    parse_floats(s, 3, "R,G,B or colormap").map(|v| IsoColor::Rgb(Vec3::new(v[0], v[1], v[2])))
+}
+
+pub(crate) fn parse_surface(s: &str) -> Result<volcast::lighting::IsoSurface, String> {
+    volcast::lighting::IsoSurface::parse(s)
+}
+
+/// `--light`: a headlight (None) or a direction towards the light.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LightDirection(pub(crate) Option<Vec3>);
+
+pub(crate) fn parse_light(s: &str) -> Result<LightDirection, String> {
+    if s.trim().eq_ignore_ascii_case("head") {
+        return Ok(LightDirection(None));
+    }
+    parse_vec3(s).map(|d| LightDirection(Some(d)))
+}
+
+pub(crate) fn parse_pair(s: &str) -> Result<(f32, f32), String> {
+    parse_floats(s, 2, "TMIN,TMAX").map(|v| (v[0], v[1]))
+}
+
+pub(crate) fn parse_shading(s: &str) -> Result<volcast::settings::Shading, String> {
+    let v = parse_floats(s, 4, "AMBIENT,DIFFUSE,SPECULAR,SHININESS")?;
+    Ok(volcast::settings::Shading {
+        ambient: v[0],
+        diffuse: v[1],
+        specular: v[2],
+        shininess: v[3],
+    })
+}
+
+pub(crate) fn parse_clip_plane(s: &str) -> Result<volcast::clip::ClipPlane, String> {
+    volcast::clip::ClipPlane::parse(s).map_err(|e| e.to_string())
+}
+
+pub(crate) fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {
+    let parts: Vec<&str> = s.split(':').collect();
+    let bad = || format!("slice '{s}' must look like x:0.5:0.2 (axis x|y|z, position, width in [0,1])");
+    if parts.len() != 3 {
+        return Err(bad());
+    }
+    let axis = match parts[0].trim() {
+        "x" | "X" => 0,
+        "y" | "Y" => 1,
+        "z" | "Z" => 2,
+        _ => return Err(bad()),
+    };
+    let pos: f32 = parts[1].trim().parse().map_err(|_| bad())?;
+    let width: f32 = parts[2].trim().parse().map_err(|_| bad())?;
+    if !((0.0..=1.0).contains(&pos) && width > 0.0 && width <= 1.0) {
+        return Err(bad());
+    }
+    Ok((axis, pos, width))
+}
+
+/// `parse(s)`, or an error listing the names of `all` (`what` says what the value is).
+fn parse_named<T: Copy>(
+    s: &str,
+    parse: fn(&str) -> Option<T>,
+    all: &[T],
+    name: fn(T) -> &'static str,
+    what: &str,
+) -> Result<T, String> {
+    parse(s).ok_or_else(|| {
+        let names: Vec<&str> = all.iter().map(|&v| name(v)).collect();
+        format!("unknown {what} '{s}'; choose one of {}", names.join(", "))
+    })
+}
+
+/// `--turntable`'s frame count.
+pub(crate) fn parse_turntable(s: &str) -> Result<u32, String> {
+    let max = volcast::movie::MAX_FRAMES;
+    match s.trim().parse::<u32>() {
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
+        _ => Err(format!("a turntable has 1 to {max} frames")),
+    }
+}
+
+/// `--fps`: a GIF's frame rate.
+pub(crate) fn parse_fps(s: &str) -> Result<f32, String> {
+    let fps = s
+        .trim()
+        .parse::<f32>()
+        .map_err(|_| format!("'{s}' is not a number of frames per second"))?;
+    volcast::movie::gif::check_fps(fps).map(|()| fps)
+}
+
+/// `--gradients`' value, for render and bench alike.
+pub(crate) fn parse_gradients(s: &str) -> Result<Gradients, String> {
+    parse_named(s, Gradients::parse, &Gradients::ALL, Gradients::name, "gradient source")
+}
+
+/// `--quality`'s value, for render, view and bench alike.
+pub(crate) fn parse_quality(s: &str) -> Result<Quality, String> {
+    parse_named(s, Quality::parse, &Quality::ALL, Quality::name, "quality")
+}

@@ -1,0 +1,197 @@
+//! `volcast render`: one image (with timings, memory and a colour bar on request), or a movie (turntable or
+//! keyframes).
+
+use super::args::RenderArgs;
+use super::with_gpu;
+use anyhow::{Context, Result};
+use std::time::Instant;
+use volcast::headless::Headless;
+use volcast::settings::{RaySetup, RenderSettings};
+use volcast::volume::Volume;
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// The volume and settings `render` shows: a saved view's, or the options'.
+fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
+    let state = match &args.state {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            Some(
+                volcast::view_state::ViewState::from_json(&text, &path.display().to_string())
+                    .map_err(anyhow::Error::msg)?,
+            )
+        }
+        None => None,
+    };
+    let volume = match &state {
+        Some(st) => args.volume.or_from(&st.volume).load()?,
+        None => args.volume.load()?,
+    };
+    let s = match state {
+        // The saved view as it was (its method included).
+        Some(st) => st.settings,
+        None => {
+            let mut s = args.frame.settings(&volume)?;
+            s.ray_setup = if args.method == "faces" {
+                RaySetup::Faces
+            } else {
+                RaySetup::Analytic
+            };
+            s.compute = args.method == "compute";
+            s
+        }
+    };
+    Ok((volume, s))
+}
+
+/// `render --turntable` and `render --keyframes`: the frames of `volcast::movie`, as PNGs and a GIF.
+fn movie(args: &RenderArgs) -> Result<()> {
+    use volcast::movie::{MovieError, MovieFiles, Plan};
+    let (volume, plan) = if args.keyframes.is_empty() {
+        let frames = args.turntable.unwrap_or(1);
+        MovieFiles::new(&args.output, frames)?;
+        let (volume, base) = render_view(args)?;
+        (
+            volume,
+            Plan::Turntable {
+                base: Box::new(base),
+                frames,
+            },
+        )
+    } else {
+        let frames = args
+            .frames
+            .ok_or_else(|| MovieError::Usage("--keyframes needs --frames N, the movie's length in frames".into()))?;
+        volcast::movie::check_frames(frames, 2, "--frames")?;
+        MovieFiles::new(&args.output, frames)?;
+        let states = volcast::movie::read_keyframes(&args.keyframes)?;
+        let volume = args.volume.or_from(&states[0].volume).load()?;
+        let keys = states.into_iter().map(|st| st.settings).collect();
+        (volume, Plan::Keyframes { keys, frames })
+    };
+    let files = MovieFiles::new(&args.output, plan.frame_count())?;
+    let label = if args.keyframes.is_empty() {
+        "turntable"
+    } else {
+        "keyframes"
+    };
+    with_gpu(&args.gpu, |gpu| {
+        let mut headless = Headless::new(gpu)?;
+        let mut progress = volcast::movie::Progress::stderr(label, plan.frame_count());
+        let done = volcast::movie::record(gpu, &mut headless, &volume, &plan, &files, args.fps, &mut |k| {
+            progress.update(k)
+        });
+        headless.destroy(gpu);
+        done?;
+        println!("{}", files.summary(args.fps));
+        Ok(())
+    })
+}
+
+pub(crate) fn render(args: &RenderArgs) -> Result<()> {
+    if args.turntable.is_some() || !args.keyframes.is_empty() {
+        return movie(args);
+    }
+    volcast::image_out::check_name(&args.output).map_err(anyhow::Error::msg)?;
+    let t_load = Instant::now();
+    let (volume, s) = render_view(args)?;
+    let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
+    let t_device = Instant::now();
+    with_gpu(&args.gpu, |gpu| {
+        let mut headless = Headless::new(gpu)?;
+        let device_ms = t_device.elapsed().as_secs_f64() * 1e3;
+        let result = (|| -> Result<()> {
+            let t_upload = Instant::now();
+            headless.set_volume(gpu, &volume)?;
+            if s.gradient_texture {
+                headless.renderer.enable_gradient_texture(gpu, &volume)?;
+            }
+            let upload_ms = t_upload.elapsed().as_secs_f64() * 1e3;
+            let t0 = Instant::now();
+            let mut frame = headless.render(gpu, &s)?;
+            let first_ms = t0.elapsed().as_secs_f64() * 1e3;
+            let mut timing_line = String::new();
+            if args.timings {
+                let (mut wall, mut march, mut entry, mut exit, mut total) = (vec![], vec![], vec![], vec![], vec![]);
+                for _ in 0..args.frames.unwrap_or(5).max(1) {
+                    let t = Instant::now();
+                    frame = headless.render(gpu, &s)?;
+                    wall.push(t.elapsed().as_secs_f64() * 1e3);
+                    if let Some(tm) = frame.timings {
+                        march.push(tm.march_ms);
+                        total.push(tm.total_ms);
+                        entry.extend(tm.entry_ms);
+                        exit.extend(tm.exit_ms);
+                    }
+                }
+                timing_line = format!("median of {} frames: {:.2} ms wall", wall.len(), median(&mut wall));
+                if !total.is_empty() {
+                    timing_line += &format!("; GPU {:.2} ms total", median(&mut total));
+                    if !entry.is_empty() {
+                        timing_line += &format!(" = entry {:.2} + exit {:.2}", median(&mut entry), median(&mut exit));
+                        timing_line += &format!(" + march {:.2}", median(&mut march));
+                    } else {
+                        timing_line += &format!(" (march {:.2})", median(&mut march));
+                    }
+                }
+            }
+            if args.colorbar {
+                frame.image = with_colorbar(&frame.image, &s, &volume);
+            }
+            volcast::image_out::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
+            println!(
+                "rendered {} ({}x{}x{} {}, spacing {}x{}x{}) at {}x{} with {} ray setup on {} -> {}",
+                volume.name,
+                volume.dims[0],
+                volume.dims[1],
+                volume.dims[2],
+                volume.source_type,
+                volume.spacing()[0],
+                volume.spacing()[1],
+                volume.spacing()[2],
+                s.width,
+                s.height,
+                match (s.ray_setup, s.compute) {
+                    (RaySetup::Faces, _) => "entry/exit faces",
+                    (RaySetup::Analytic, false) => "analytic",
+                    (RaySetup::Analytic, true) => "analytic (compute pass)",
+                },
+                gpu.device_name,
+                args.output.display()
+            );
+            println!(
+                "load {load_ms:.0} ms; device {device_ms:.0} ms; upload {upload_ms:.0} ms; first frame {first_ms:.0} \
+                 ms (includes shader compilation on lavapipe)"
+            );
+            if !timing_line.is_empty() {
+                println!("{timing_line}");
+            }
+            if let Some(ms) = headless.renderer.light_grid_ms() {
+                println!("light grid (shadows, occlusion): {ms:.0} ms");
+            }
+            if args.memory {
+                println!("{}", volcast::bench::memory_line(gpu, &headless, &s)?);
+            }
+            Ok(())
+        })();
+        headless.destroy(gpu);
+        result
+    })
+}
+
+/// `image` with the colour bar of `s`'s classification appended (unit "HU" for CT).
+fn with_colorbar(image: &image::RgbaImage, s: &RenderSettings, volume: &Volume) -> image::RgbaImage {
+    let classification = s.classification();
+    let to_u8 = |c: f32| (c.clamp(0.0, 1.0) * 255.0).round() as u8;
+    let spec = volcast::colorbar::ColorbarSpec {
+        classification: &classification,
+        window: s.window,
+        range: volume.range,
+        unit: volcast::tf_auto::VolumeFacts::of(volume).kind().unit(),
+        background: [to_u8(s.background.x), to_u8(s.background.y), to_u8(s.background.z)],
+    };
+    volcast::colorbar::append_colorbar(image, &spec)
+}
