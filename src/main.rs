@@ -94,6 +94,8 @@ fn main() -> ExitCode {
             script: None,
             slices: false,
             state: None,
+            preset: None,
+            tf: None,
         }),
         Some(Command::View(a)) => view(a),
         Some(Command::Render(a)) => render(a),

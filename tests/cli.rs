@@ -224,6 +224,9 @@ fn bad_settings_give_clear_errors() {
     ] {
         assert_fails_with(&tiny_render(extra), needle);
     }
+    // The viewer's transfer function is read before any window opens, and a bad one names itself.
+    assert_fails_with(&["view", "--tf", "/nonexistent/tf.json"], "/nonexistent/tf.json");
+    assert_fails_with(&["view", "--preset", "nope"], "unknown preset 'nope'");
 }
 
 /// A render that fails writes nothing: a name volcast cannot write is refused before rendering, and no empty file

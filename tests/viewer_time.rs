@@ -2,7 +2,8 @@
 //! keyboard would): `view FILE --time 2` opens on step 2, the P key plays the series (the window changes while it
 //! plays, each step after the first uploaded ahead of display) and P again pauses it. Each F12 screenshot must
 //! equal, within 1/255, the headless render of exactly the step the viewer logs with it, under the screenshot's
-//! own settings: step 2 at the start, and the step reached after playing. Validation with
+//! own settings: step 2 at the start, and the step reached after playing. `--tf` opens it with a given transfer
+//! function, which the load keeps. Validation with
 //! synchronization validation reports nothing.
 //!
 //! Needs Xvfb, xdotool and xwd like tests/viewer.rs; a missing one is a skip (a failure with CI=true).
@@ -30,7 +31,17 @@ fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
     std::fs::create_dir_all(&dir).expect("scratch dir");
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/time/sim_u16.nrrd");
     let script = format!("frames:3;wait:{WAIT_MS};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &[file.to_str().unwrap(), "--time", "2"], &script);
+    // A transfer function over the whole range (3..293), so that every step looks different: the automatic one
+    // (a faint ramp over the upper percentiles of all steps) leaves the early steps of this tiny series clear.
+    let tf = dir.join("tf.json");
+    std::fs::write(
+        &tf,
+        r#"{"name": "all steps", "units": "data", "colors": [[3, 0, 0, 1], [293, 1, 0.2, 0]],
+            "opacity": [[3, 0.2], [293, 0.9]]}"#,
+    )
+    .unwrap();
+    let args = [file.to_str().unwrap(), "--time", "2", "--tf", tf.to_str().unwrap()];
+    let mut viewer = Viewer::start(&x.display, &dir, &args, &script);
     viewer.wait_for("script: Wait(", Duration::from_secs(180));
     let window = viewer.window(&x.display);
 

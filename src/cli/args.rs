@@ -246,6 +246,13 @@ pub(crate) struct ViewArgs {
     /// view (transfer function, camera, slabs, clip plane, mode, lighting, time step, slice views).
     #[arg(long, value_name = "FILE.json")]
     pub(crate) state: Option<PathBuf>,
+    /// Open with this transfer-function preset (ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example) and
+    /// lock it, instead of the one chosen by modality (auto, the default).
+    #[arg(long, conflicts_with = "tf")]
+    pub(crate) preset: Option<String>,
+    /// Open with the transfer function in this JSON file (see README), locked.
+    #[arg(long, value_name = "FILE.json")]
+    pub(crate) tf: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]

@@ -6,6 +6,7 @@ use anyhow::{bail, Context, Result};
 use volcast::compare;
 use volcast::gpu::GpuError;
 use volcast::headless::Headless;
+use volcast::tf::TransferFunction;
 use volcast::viewer::{self, ViewerOptions, VolumeSource};
 
 pub(crate) fn view(args: &ViewArgs) -> Result<()> {
@@ -24,6 +25,12 @@ pub(crate) fn view(args: &ViewArgs) -> Result<()> {
         Some(s) => viewer::parse_script(s).map_err(anyhow::Error::msg)?,
         None => Vec::new(),
     };
+    let transfer_function = match (&args.preset, &args.tf) {
+        (Some(name), _) if name == "auto" => None,
+        (Some(name), _) => Some(TransferFunction::preset(name)?),
+        (None, Some(path)) => Some(TransferFunction::load(path)?),
+        (None, None) => None,
+    };
     let opts = ViewerOptions {
         source,
         gpu: args.gpu.options(),
@@ -33,6 +40,7 @@ pub(crate) fn view(args: &ViewArgs) -> Result<()> {
         quality: args.quality,
         slices: args.slices,
         restore,
+        transfer_function,
     };
     let log = viewer::run(opts)?;
     if args.gpu.options().validation {

@@ -76,6 +76,8 @@ pub struct ViewerOptions {
     pub slices: bool,
     /// A session to restore once its volume (`source`) is shown (`--state`).
     pub restore: Option<crate::view_state::ViewState>,
+    /// A transfer function to open with, locked (`--preset`, `--tf`); None: the one chosen by modality.
+    pub transfer_function: Option<crate::tf::TransferFunction>,
 }
 
 /// Opens the viewer and runs until the window closes. Returns the validation log for the caller to report.
@@ -327,6 +329,12 @@ impl Running {
             dialog: None,
         };
         r.state.slices.shown = opts.slices;
+        if let Some(tf) = &opts.transfer_function {
+            // Locked, so that loading the volume does not replace it with the automatic one.
+            r.state.look.transfer_function = Some(tf.clone());
+            r.state.look.window = [0.0, 1.0];
+            r.state.tf_locked = true;
+        }
         // On error `r` is torn down properly before the error is returned.
         match r.init(opts) {
             Ok(()) => Ok(r),
