@@ -185,6 +185,8 @@ impl Viewer {
             .current_dir(dir)
             .env("DISPLAY", display)
             .env("XDG_RUNTIME_DIR", &runtime)
+            // The panel's widgets say where they are (`ui rect NAME L T R B`), for tests that click them.
+            .env("VOLCAST_UI_RECTS", "1")
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
             .spawn()
@@ -238,6 +240,28 @@ impl Viewer {
             self.stderr.push('\n');
         }
         status
+    }
+
+    /// Reads the stderr lines that have arrived so far, without waiting.
+    pub fn drain(&mut self) {
+        while let Ok(line) = self.lines.try_recv() {
+            self.stderr.push_str(&line);
+            self.stderr.push('\n');
+        }
+    }
+
+    /// The latest rectangle the viewer logged for widget `name` (see `VOLCAST_UI_RECTS`).
+    pub fn ui_rect(&mut self, name: &str) -> egui::Rect {
+        self.drain();
+        let prefix = format!("ui rect {name} ");
+        let line = self
+            .stderr
+            .lines()
+            .rev()
+            .find_map(|l| l.strip_prefix(&prefix))
+            .unwrap_or_else(|| panic!("the viewer logged no rect for {name}:\n{}", self.stderr));
+        let v: Vec<f32> = line.split_whitespace().map(|x| x.parse().expect("a number")).collect();
+        egui::Rect::from_min_max(egui::pos2(v[0], v[1]), egui::pos2(v[2], v[3]))
     }
 
     pub fn pid(&self) -> String {

@@ -129,6 +129,8 @@ pub fn editor_with_unit(
     let id = ui.id().with("tf_editor");
     let response = ui.interact(plot, id.with("plot"), Sense::click_and_drag());
     let strip_response = ui.interact(strip, id.with("strip"), Sense::click_and_drag());
+    crate::viewer::ui::rects::log("tf-plot", plot);
+    crate::viewer::ui::rects::log("tf-strip", strip);
     let painter = ui.painter_at(rect);
     painter.rect_filled(plot, 2.0, Color32::from_gray(20));
 

@@ -124,15 +124,20 @@ pub fn panel(
             });
     }
     ui.horizontal(|ui| {
-        ui.add(
+        let field = ui.add(
             egui::TextEdit::singleline(&mut state.path)
                 .hint_text("transfer function .json")
                 .desired_width(150.0),
         );
-        if ui.button("Save").clicked() {
+        crate::viewer::ui::rects::log("tf-path", field.rect);
+        let save = ui.button("Save");
+        crate::viewer::ui::rects::log("tf-save", save.rect);
+        if save.clicked() {
             state.message = Some(save_tf(tf, &state.path));
         }
-        if ui.button("Load").clicked() {
+        let load = ui.button("Load");
+        crate::viewer::ui::rects::log("tf-load", load.rect);
+        if load.clicked() {
             state.message = Some(load_tf(&state.path).map(|loaded| {
                 *tf = loaded;
                 changed = true;

@@ -4,6 +4,7 @@
 mod keys;
 mod overlay;
 mod panel;
+pub mod rects;
 mod state;
 mod tf_panel;
 
