@@ -289,33 +289,20 @@ impl Running {
         // SAFETY: rendering was begun above.
         unsafe { dev.cmd_end_rendering(cb) };
         image_barrier(dev, cb, target, Access::ColorAttachmentWrite, Access::Present);
-        let screenshot = match self.pending_screenshot.take() {
-            Some(path) => {
-                let buffer = Buffer::new(
-                    &self.gpu,
-                    view_size.width as u64 * view_size.height as u64 * 4,
-                    vk::BufferUsageFlags::TRANSFER_DST,
-                    gpu_allocator::MemoryLocation::GpuToCpu,
-                    "screenshot",
-                )?;
-                record_readback(&self.gpu, cb, view, Access::TransferRead, &buffer);
-                Some((path, buffer))
-            }
-            None => None,
-        };
-        let recorded = match self.recorder {
-            Some(_) => {
-                let buffer = Buffer::new(
-                    &self.gpu,
-                    view_size.width as u64 * view_size.height as u64 * 4,
-                    vk::BufferUsageFlags::TRANSFER_DST,
-                    gpu_allocator::MemoryLocation::GpuToCpu,
-                    "recorded frame",
-                )?;
-                record_readback(&self.gpu, cb, view, Access::TransferRead, &buffer);
-                Some(buffer)
-            }
-            None => None,
+        // The view image is read back once for whoever wants this frame: F12 and the recording.
+        let screenshot = self.pending_screenshot.take();
+        let readback = if screenshot.is_some() || self.recorder.is_some() {
+            let buffer = Buffer::new(
+                &self.gpu,
+                view_size.width as u64 * view_size.height as u64 * 4,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                gpu_allocator::MemoryLocation::GpuToCpu,
+                "view readback",
+            )?;
+            record_readback(&self.gpu, cb, view, Access::TransferRead, &buffer);
+            Some(buffer)
+        } else {
+            None
         };
         // SAFETY: `cb` is recording.
         unsafe { dev.end_command_buffer(cb) }.ctx("vkEndCommandBuffer")?;
@@ -349,34 +336,37 @@ impl Running {
         self.frame_index += 1;
         self.upload_ahead()?;
 
-        if let Some(buffer) = recorded {
-            let pixels = self.wait_idle().map_err(ViewerError::from).and_then(|_| {
+        if let Some(buffer) = readback {
+            let pixels = self.wait_idle().map_err(|e| e.to_string()).and_then(|_| {
                 buffer
                     .mapped()
                     .map(<[u8]>::to_vec)
-                    .ok_or(GpuError::Lost("recording buffer is not mapped").into())
+                    .ok_or_else(|| "the view's readback buffer is not mapped".to_string())
             });
             buffer.destroy(&self.gpu);
-            let pushed = pixels.map_err(|e| e.to_string()).and_then(|p| {
-                let r = self.recorder.as_mut().ok_or("no recording")?;
-                r.push(view_size.width, view_size.height, p, now)
-            });
-            if let Err(e) = pushed {
-                self.state.error = Some(format!("recording: {e}"));
-                if let Some(r) = self.recorder.take() {
-                    self.stop_recording(r);
+            // F12 is rare and takes a copy; the recording takes the pixels.
+            if let Some(path) = screenshot {
+                let step = self.series.as_ref().map(Volume::shown_step);
+                let saved = pixels
+                    .clone()
+                    .map_err(ViewerError::Other)
+                    .and_then(|p| save_screenshot(&path, p, &self.session_state(&settings), step));
+                match saved {
+                    Ok(()) => self.state.status = Some(format!("saved {}", path.display())),
+                    Err(e) => self.state.error = Some(format!("screenshot: {e}")),
                 }
             }
-        }
-        if let Some((path, buffer)) = screenshot {
-            let saved = self.wait_idle().map_err(ViewerError::from).and_then(|_| {
-                let step = self.series.as_ref().map(Volume::shown_step);
-                save_screenshot(&path, &buffer, &self.session_state(&settings), step)
-            });
-            buffer.destroy(&self.gpu);
-            match saved {
-                Ok(()) => self.state.status = Some(format!("saved {}", path.display())),
-                Err(e) => self.state.error = Some(format!("screenshot: {e}")),
+            if self.recorder.is_some() {
+                let pushed = pixels.and_then(|p| {
+                    let r = self.recorder.as_mut().ok_or("no recording")?;
+                    r.push(view_size.width, view_size.height, p, now)
+                });
+                if let Err(e) = pushed {
+                    self.state.error = Some(format!("recording: {e}"));
+                    if let Some(r) = self.recorder.take() {
+                        self.stop_recording(r);
+                    }
+                }
             }
         }
         if !textures_delta.free.is_empty() {

@@ -2,8 +2,6 @@
 //! `volcast render --state` renders again.
 
 use super::{ViewerError, VolumeSource};
-use crate::gpu::resources::Buffer;
-use crate::gpu::GpuError;
 use crate::view_state::ViewState;
 
 /// The view state's record of where the shown volume came from.
@@ -30,15 +28,11 @@ pub(super) fn volume_ref(source: Option<&VolumeSource>, spacing: [f32; 3], time:
 /// series' shown step is logged after the file name.
 pub(super) fn save_screenshot(
     path: &std::path::Path,
-    buffer: &Buffer,
+    pixels: Vec<u8>,
     state: &ViewState,
     step: Option<u32>,
 ) -> Result<(), ViewerError> {
     let settings = &state.settings;
-    let pixels = buffer
-        .mapped()
-        .ok_or(GpuError::Lost("screenshot buffer is not mapped"))?
-        .to_vec();
     let img = image::RgbaImage::from_raw(settings.width, settings.height, pixels)
         .ok_or_else(|| ViewerError::Other("screenshot size mismatch".into()))?;
     crate::image_out::save(&img, path).map_err(ViewerError::Other)?;
