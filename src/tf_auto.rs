@@ -186,6 +186,12 @@ mod tests {
     }
 
     #[test]
+    fn histogram_bins_values_and_skips_nan() {
+        let h = histogram([0.0, 0.1, 0.99, 1.0, f64::NAN].into_iter(), 4);
+        assert_eq!(h, vec![2, 0, 0, 2]);
+    }
+
+    #[test]
     fn ct_by_tag_or_by_hounsfield_range() {
         assert_eq!(facts([-1024.0, 2986.0], true, None).kind(), DataKind::Ct);
         assert_eq!(facts([-1000.0, 1500.0], true, None).kind(), DataKind::Ct);

@@ -52,7 +52,7 @@ pub fn handles(state: &ViewerState, rect: egui::Rect) -> Option<ClipHandles> {
     } else {
         outline.iter().copied().sum::<Vec3>() / outline.len() as f32
     };
-    let vp = view_projection(state, rect);
+    let vp = state.view_projection(rect);
     Some(ClipHandles {
         handle: project(vp, centre, rect),
         tip: project(vp, centre + n * ARROW, rect),
@@ -61,16 +61,10 @@ pub fn handles(state: &ViewerState, rect: egui::Rect) -> Option<ClipHandles> {
     })
 }
 
-fn view_projection(state: &ViewerState, rect: egui::Rect) -> glam::Mat4 {
-    let mut camera = state.orbit.camera();
-    camera.ortho = state.ortho;
-    camera.projection(rect.width() / rect.height().max(1.0)) * camera.view()
-}
-
 /// A new plane for the C key: through the box's centre, its normal along the view direction (what stays is the far
 /// half, so the cut faces the viewer).
 pub fn facing_away(state: &ViewerState) -> ClipPlane {
-    let forward = state.orbit.rotation * -Vec3::Z;
+    let forward = state.orbit.camera().forward();
     ClipPlane::new(forward, 0.0).unwrap_or_else(|_| ClipPlane::new(Vec3::Z, 0.0).expect("a unit normal"))
 }
 
@@ -85,7 +79,7 @@ pub fn slid(state: &ViewerState, h: &ClipHandles, plane: ClipPlane, delta: Vec2,
             ARROW * delta.dot(s) / s.length_squared()
         }
         _ => {
-            let forward = state.orbit.rotation * -Vec3::Z;
+            let forward = state.orbit.camera().forward();
             let away = if plane.normal().dot(forward) >= 0.0 { 1.0 } else { -1.0 };
             -delta.y / rect.height().max(1.0) * away
         }
@@ -145,7 +139,7 @@ pub fn clip_widget(ui: &egui::Ui, state: &mut ViewerState, rect: egui::Rect, res
     }
 
     let painter = ui.painter_at(rect);
-    let vp = view_projection(state, rect);
+    let vp = state.view_projection(rect);
     let outline: Vec<Pos2> = h.outline.iter().filter_map(|&p| project(vp, p, rect)).collect();
     if outline.len() >= 3 && outline.len() == h.outline.len() {
         painter.add(egui::Shape::convex_polygon(
@@ -170,8 +164,8 @@ pub fn clip_widget(ui: &egui::Ui, state: &mut ViewerState, rect: egui::Rect, res
     state.clip_grab.is_some()
 }
 
-/// The plane through the crosshair's patient point, as a slice view draws it: a point and a normal in the slice
-/// views' millimetres (`mm` maps voxel indices there).
+/// The plane as a slice view draws it: a point of it and its normal in the slice views' millimetres (`mm` maps
+/// voxel indices there).
 pub fn plane_in_slices(state: &ViewerState, plane: &ClipPlane, mm: glam::DMat4) -> (DVec3, DVec3) {
     let d = DVec3::new(
         f64::from(state.dims[0]),

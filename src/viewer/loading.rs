@@ -1,7 +1,7 @@
 //! Loading volumes: a file or built-in read on a background thread (with progress) while the window keeps
 //! drawing, then installed on the GPU; a series' steps uploaded as the time controls ask, one ahead while playing.
 
-use super::{tf_editor, time_control, Running, ViewerError, VolumeSource};
+use super::{time_control, Running, ViewerError, VolumeSource};
 use crate::gpu::GpuError;
 use crate::gpu::VkContext;
 use crate::volume::{self, Volume};
@@ -19,7 +19,7 @@ pub(super) struct Loading {
 
 /// The editor's histogram: 256 bins of normalised values, over every step of a series (as its range is).
 pub(super) fn value_histogram(v: &Volume) -> Vec<u64> {
-    tf_editor::histogram(v.normalized_values(), 256)
+    crate::tf_auto::value_histogram(v, 256)
 }
 
 /// Loads any format `volume::open` reads (raw with the given options); a volume larger than `max_dim` (the

@@ -18,8 +18,6 @@ pub use panel::{panel, TfEditorState};
 use crate::tf::{bake, linear_to_srgb, lookup, Classification, TfUnits, TransferFunction};
 use egui::{Color32, Pos2, Rect, Sense, Stroke};
 
-pub use crate::tf_auto::histogram;
-
 /// A control point's x in normalised units for display, and back.
 pub fn to_normalized(tf: &TransferFunction, x: f32, range: [f64; 2]) -> f32 {
     match tf.units {
@@ -383,9 +381,7 @@ mod tests {
     }
 
     #[test]
-    fn histogram_and_picking() {
-        let h = histogram([0.0, 0.1, 0.99, 1.0, f64::NAN].into_iter(), 4);
-        assert_eq!(h, vec![2, 0, 0, 2]);
+    fn picking_finds_the_nearest_point_within_reach() {
         let pts = [Pos2::new(0.0, 0.0), Pos2::new(10.0, 0.0)];
         assert_eq!(nearest(&pts, Pos2::new(8.0, 1.0), 5.0), Some(1));
         assert_eq!(nearest(&pts, Pos2::new(50.0, 1.0), 5.0), None);

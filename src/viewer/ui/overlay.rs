@@ -2,7 +2,7 @@
 //! camera's mouse input on the view.
 
 use super::state::ViewerState;
-use crate::camera::{edge_labels, Camera};
+use crate::camera::edge_labels;
 use crate::viewer::controls::{gizmo_axes, look_along, pick_axis, RotationAnimation};
 use egui::{Color32, Pos2, Stroke};
 use glam::{Mat4, Vec2, Vec3};
@@ -77,8 +77,7 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
     let painter = ui.painter_at(rect);
     if state.show_boxes {
         let s = state.render_settings(rect.width() as u32, rect.height() as u32);
-        let cam: Camera = s.camera;
-        let vp = cam.projection(rect.width() / rect.height().max(1.0)) * cam.view();
+        let vp = state.view_projection(rect);
         let model = state.tex_to_world();
         let draw_box = |lo: Vec3, hi: Vec3, color: Color32| {
             let corners = box_corners(model, lo, hi).map(|c| project(vp, c, rect));

@@ -153,7 +153,7 @@ fn clip_plane_controls(ui: &mut egui::Ui, state: &mut ViewerState) {
             state.look.clip_plane = Some(plane.flipped());
         }
         if ui.button("Face the camera").clicked() {
-            let forward = state.orbit.rotation * -glam::Vec3::Z;
+            let forward = state.orbit.camera().forward();
             state.look.clip_plane = ClipPlane::through(forward, plane.point()).ok().or(Some(plane));
         }
     });

@@ -199,13 +199,25 @@ impl ViewerState {
         self.geometry.tex_to_world(self.dims, self.look.voxel_axes).as_mat4()
     }
 
+    /// The camera the 3D view renders with.
+    pub fn camera(&self) -> crate::camera::Camera {
+        let mut camera = self.orbit.camera();
+        camera.ortho = self.ortho;
+        camera
+    }
+
+    /// The render world to clip space for the 3D view `rect`: what overlays project their shapes with.
+    pub fn view_projection(&self, rect: egui::Rect) -> Mat4 {
+        let camera = self.camera();
+        camera.projection(rect.width() / rect.height().max(1.0)) * camera.view()
+    }
+
     /// The renderer's parameters for a `width`×`height` frame.
     pub fn render_settings(&self, width: u32, height: u32) -> RenderSettings {
         let mut s = self.look.clone();
         s.width = width.max(1);
         s.height = height.max(1);
-        s.camera = self.orbit.camera();
-        s.camera.ortho = self.ortho;
+        s.camera = self.camera();
         for (axis, &(pos, width)) in self.slabs.iter().enumerate() {
             s.set_slab(axis, pos, width);
             // A slab thinner than the slider's resolution would be empty: keep a sliver.
