@@ -28,15 +28,6 @@ use volcast::volume::Volume;
 
 const SIZE: (f32, f32) = (900.0, 600.0);
 
-/// Saves the session (Ctrl+S) and reads it back.
-fn save_session(viewer: &mut Viewer, display: &str, window: &str, dir: &Path) -> ViewState {
-    type_keys(display, window, &["ctrl+s"]);
-    viewer.wait_for("saved session ", Duration::from_secs(60));
-    let path = dir.join("volcast-session.json");
-    let text = std::fs::read_to_string(&path).unwrap();
-    ViewState::from_json(&text, &path.display().to_string()).expect("a session")
-}
-
 /// The viewer's state for a saved session of `volume`, to say where its widgets are.
 fn state_of(volume: &Volume, session: &ViewState) -> ViewerState {
     let mut state = ViewerState::new(volume.extent(), "phantom".into());
@@ -89,7 +80,7 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
 
     // C: a plane through the centre, facing away from the viewer.
     type_keys(&x.display, window, &["c"]);
-    let shown = save_session(&mut viewer, &x.display, window, &dir);
+    let shown = viewer.save_session(&x.display, window, &dir);
     let camera = shown.settings.camera;
     let forward = (camera.target - camera.eye).normalize();
     let p0 = plane(&shown);
@@ -133,7 +124,7 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
         egui::vec2(8.0, 0.0),
         4,
     );
-    let turned = save_session(&mut viewer, &x.display, window, &dir);
+    let turned = viewer.save_session(&x.display, window, &dir);
     let p1 = plane(&turned);
     let angle = p1.normal().angle_between(p0.normal());
     assert!((angle - 32.0 / RING).abs() <= 2.0 / RING, "turned by {angle} rad");
@@ -172,7 +163,7 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
     assert!(arrow.length() > 12.0, "the turned plane's arrow shows: {arrow:?}");
     let step = arrow.normalized() * 8.0;
     drag(&x.display, window, "1", handle, step, 4);
-    let slid = save_session(&mut viewer, &x.display, window, &dir);
+    let slid = viewer.save_session(&x.display, window, &dir);
     let p2 = plane(&slid);
     let wpm = volume.geometry.world_per_mm(volume.dims) as f32;
     let expected = ARROW * 32.0 / arrow.length() / wpm;
@@ -186,7 +177,7 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
 
     // F flips it.
     type_keys(&x.display, window, &["f"]);
-    let flipped = save_session(&mut viewer, &x.display, window, &dir);
+    let flipped = viewer.save_session(&x.display, window, &dir);
     let p3 = plane(&flipped);
     assert!((p3.normal() + p2.normal()).length() < 1e-6 && (p3.offset() + p2.offset()).abs() < 1e-4);
 
@@ -241,12 +232,6 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
         "the last frame is the still view, up to the GIF's palette: {quantised}"
     );
 
-    let status = viewer.finish();
-    assert!(status.success(), "viewer exit: {status}\n{}", viewer.stderr);
-    assert!(
-        viewer.stderr.contains("validation: 0 errors, 0 warnings"),
-        "{}",
-        viewer.stderr
-    );
+    viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
 }

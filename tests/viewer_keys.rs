@@ -53,13 +53,7 @@ fn shortcuts_keep_working_after_tab_hides_the_panel() {
         "S with the panel back"
     );
 
-    let status = viewer.finish();
-    assert!(status.success(), "viewer exit: {status}\n{}", viewer.stderr);
-    assert!(
-        viewer.stderr.contains("validation: 0 errors, 0 warnings"),
-        "validation summary:\n{}",
-        viewer.stderr
-    );
+    viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
 }
 

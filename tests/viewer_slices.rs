@@ -7,29 +7,16 @@
 
 mod common;
 
-use common::x11::{button, capture, four_up_rects, pointer, type_keys, x_session, Viewer, WAIT_MS};
+use common::x11::{button, capture, four_up_rects, pointer, read_state, type_keys, x_session, Viewer, WAIT_MS};
 use glam::{DVec2, DVec3};
 use image::RgbaImage;
 use std::path::Path;
 use std::time::Duration;
 use volcast::slice::SliceView;
-use volcast::view_state::ViewState;
 use volcast::viewer::slice_views;
 use volcast::viewer::ui::ViewerState;
 
 const SIZE: (f32, f32) = (900.0, 600.0);
-
-fn read_state(path: &Path) -> ViewState {
-    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    ViewState::from_json(&text, &path.display().to_string()).expect("a view state")
-}
-
-/// Saves the session (Ctrl+S) and reads it back.
-fn save_session(viewer: &mut Viewer, display: &str, window: &str, dir: &Path) -> ViewState {
-    type_keys(display, window, &["ctrl+s"]);
-    viewer.wait_for("saved session ", Duration::from_secs(60));
-    read_state(&dir.join("volcast-session.json"))
-}
 
 fn region(img: &RgbaImage, r: egui::Rect) -> Vec<u8> {
     let mut out = Vec::new();
@@ -55,7 +42,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     let window = &viewer.window(&x.display);
 
     // Where the views are: the 3D view (F12's image) is the top-right quadrant of the area right of the panel.
-    let before = save_session(&mut viewer, &x.display, window, &dir);
+    let before = viewer.save_session(&x.display, window, &dir);
     let session = before.viewer.clone().expect("the viewer's part");
     assert!(session.slice_views, "--slices: four-up");
     type_keys(&x.display, window, &["F12"]);
@@ -74,7 +61,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     let window_before = capture(&x.display, window);
     pointer(&x.display, window, click);
     button(&x.display, "click", "1");
-    let moved = save_session(&mut viewer, &x.display, window, &dir);
+    let moved = viewer.save_session(&x.display, window, &dir);
     let crosshair = DVec3::from_array(moved.viewer.clone().unwrap().crosshair);
     let scale = f64::from(shown.width()) / f64::from(frame.width);
     let image_point = DVec2::new(
@@ -105,12 +92,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
 
     // One wheel notch up over the axial view: one voxel superior (the phantom's smallest voxel side).
     button(&x.display, "click", "4");
-    let stepped = DVec3::from_array(
-        save_session(&mut viewer, &x.display, window, &dir)
-            .viewer
-            .unwrap()
-            .crosshair,
-    );
+    let stepped = DVec3::from_array(viewer.save_session(&x.display, window, &dir).viewer.unwrap().crosshair);
     let smallest = volume.geometry.spacing().into_iter().fold(f64::MAX, f64::min);
     let rise = height(stepped) - height(crosshair);
     assert!(
@@ -128,7 +110,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
         egui::vec2(8.0, -4.0),
         5,
     );
-    let dragged = save_session(&mut viewer, &x.display, window, &dir);
+    let dragged = viewer.save_session(&x.display, window, &dir);
     let wl1 = dragged.viewer.clone().unwrap().window_level.unwrap();
     let per_pixel = (volume.range[1] - volume.range[0]) / 500.0;
     assert!(
@@ -147,13 +129,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     type_keys(&x.display, window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (final_shot, _) = common::x11::read_screenshot(&dir, &saved);
-    let status = viewer.finish();
-    assert!(status.success(), "viewer exit: {status}\n{}", viewer.stderr);
-    assert!(
-        viewer.stderr.contains("validation: 0 errors, 0 warnings"),
-        "{}",
-        viewer.stderr
-    );
+    viewer.finish_clean();
 
     // A second viewer restores the session: the same 3D view and the same slice state.
     let session_file = dir.join("volcast-session.json");
@@ -174,12 +150,6 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     assert_eq!(restored_shot.dimensions(), final_shot.dimensions());
     let worst = common::x11::worst_channel_diff(&restored_shot, &final_shot);
     assert!(worst <= 1, "the restored view differs by up to {worst}/255");
-    let status = again.finish();
-    assert!(status.success(), "viewer exit: {status}\n{}", again.stderr);
-    assert!(
-        again.stderr.contains("validation: 0 errors, 0 warnings"),
-        "{}",
-        again.stderr
-    );
+    again.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
 }

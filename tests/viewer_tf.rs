@@ -20,14 +20,6 @@ use volcast::tf::TransferFunction;
 use volcast::view_state::ViewState;
 use volcast::viewer::tf_editor::to_normalized;
 
-fn save_session(viewer: &mut Viewer, display: &str, window: &str, dir: &Path) -> ViewState {
-    type_keys(display, window, &["ctrl+s"]);
-    viewer.wait_for("saved session ", Duration::from_secs(60));
-    let path = dir.join("volcast-session.json");
-    let text = std::fs::read_to_string(&path).unwrap();
-    ViewState::from_json(&text, &path.display().to_string()).expect("a session")
-}
-
 fn tf_of(state: &ViewState) -> TransferFunction {
     state.settings.transfer_function.clone().expect("a transfer function")
 }
@@ -47,7 +39,7 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     let (d, w) = (x.display.as_str(), window.as_str());
 
     // The CT's own preset, in HU.
-    let opened = save_session(&mut viewer, d, w, &dir);
+    let opened = viewer.save_session(d, w, &dir);
     let tf0 = tf_of(&opened);
     assert_eq!(tf0.name, "auto: ct-bone", "the CT opens with its modality's preset");
 
@@ -63,7 +55,7 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     }
     pointer(d, w, at(u, a));
     button(d, "click", "1");
-    let added = tf_of(&save_session(&mut viewer, d, w, &dir));
+    let added = tf_of(&viewer.save_session(d, w, &dir));
     assert_eq!(added.opacity.len(), tf0.opacity.len() + 1, "{:?}", added.opacity);
     assert_eq!(added.name, "custom");
     let new = added
@@ -86,7 +78,7 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     assert_eq!(viewer.ui_rect("tf-plot"), plot, "the editor stayed put");
     let on = at(to_normalized(&added, new[0], range), new[1]);
     drag(d, w, "1", on, egui::vec2(0.0, -8.0), 3);
-    let moved = tf_of(&save_session(&mut viewer, d, w, &dir));
+    let moved = tf_of(&viewer.save_session(d, w, &dir));
     let dragged = moved
         .opacity
         .iter()
@@ -103,7 +95,7 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     // A right click on it deletes it.
     pointer(d, w, at(to_normalized(&moved, dragged[0], range), dragged[1]));
     button(d, "click", "3");
-    let deleted = tf_of(&save_session(&mut viewer, d, w, &dir));
+    let deleted = tf_of(&viewer.save_session(d, w, &dir));
     assert_eq!(deleted.opacity, tf0.opacity, "back to the preset's points");
 
     // A click on the colour strip, clear of its markers: one more colour point there.
@@ -115,7 +107,7 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
         .expect("a place on the strip without a marker");
     pointer(d, w, egui::pos2(strip.left() + su * strip.width(), strip.center().y));
     button(d, "click", "1");
-    let coloured = tf_of(&save_session(&mut viewer, d, w, &dir));
+    let coloured = tf_of(&viewer.save_session(d, w, &dir));
     assert_eq!(coloured.colors.len(), tf0.colors.len() + 1, "{:?}", coloured.colors);
     let c = coloured
         .colors
@@ -152,7 +144,7 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     // Out of the text field, so that the keys below are shortcuts again.
     pointer(d, w, egui::pos2(850.0, 300.0));
     button(d, "click", "1");
-    let loaded = tf_of(&save_session(&mut viewer, d, w, &dir));
+    let loaded = tf_of(&viewer.save_session(d, w, &dir));
     assert_eq!(loaded, coloured, "Load reads it back");
 
     // The GPU renders the edited function as the viewer shows it.
@@ -164,12 +156,6 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     let worst = worst_channel_diff(&again, &shot);
     assert!(worst <= 1, "render --state differs from F12 by up to {worst}/255");
 
-    let status = viewer.finish();
-    assert!(status.success(), "viewer exit: {status}\n{}", viewer.stderr);
-    assert!(
-        viewer.stderr.contains("validation: 0 errors, 0 warnings"),
-        "{}",
-        viewer.stderr
-    );
+    viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -8,6 +8,7 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 use volcast::settings::RenderSettings;
+use volcast::view_state::ViewState;
 
 /// How long the viewer keeps its window open for the test's input (`wait:` script step). The input and captures
 /// took 2.3 s on a 2-core machine with lavapipe; the rest is margin for a loaded one. The test spends what is
@@ -242,6 +243,23 @@ impl Viewer {
         status
     }
 
+    /// Waits for the viewer to exit and asserts what every viewer test ends on: a clean exit and a validation
+    /// layer (with synchronization validation) that reported nothing, leaks at device destruction included.
+    pub fn finish_clean(&mut self) {
+        let status = self.finish();
+        let stderr = &self.stderr;
+        assert!(status.success(), "viewer exit: {status}\n{stderr}");
+        assert!(stderr.contains("validation: 0 errors, 0 warnings"), "{stderr}");
+        assert!(!stderr.contains("[validation"), "{stderr}");
+    }
+
+    /// Saves the session (Ctrl+S into `dir`, the viewer's working directory) and reads it back.
+    pub fn save_session(&mut self, display: &str, window: &str, dir: &Path) -> ViewState {
+        type_keys(display, window, &["ctrl+s"]);
+        self.wait_for("saved session ", Duration::from_secs(60));
+        read_state(&dir.join("volcast-session.json"))
+    }
+
     /// Reads the stderr lines that have arrived so far, without waiting.
     pub fn drain(&mut self) {
         while let Ok(line) = self.lines.try_recv() {
@@ -289,6 +307,12 @@ impl Drop for Viewer {
             let _ = self.child.wait();
         }
     }
+}
+
+/// A view state (a session, or F12's JSON) from its file.
+pub fn read_state(path: &Path) -> ViewState {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    ViewState::from_json(&text, &path.display().to_string()).expect("a view state")
 }
 
 /// A series' step that the "saved screenshot NAME (time step N)" line names.
