@@ -167,9 +167,12 @@ fn ramp(facts: &VolumeFacts, [lo, hi]: [f64; 2]) -> TransferFunction {
     }
 }
 
-/// [`auto_transfer_function`] for a loaded volume (its histogram computed here, 1024 bins).
+/// The bins of the histogram the automatic transfer function reads (its percentiles' resolution).
+pub const AUTO_BINS: usize = 1024;
+
+/// [`auto_transfer_function`] for a loaded volume (its histogram computed here, [`AUTO_BINS`] bins).
 pub fn auto_for_volume(volume: &Volume) -> TransferFunction {
-    auto_transfer_function(&VolumeFacts::of(volume), &value_histogram(volume, 1024))
+    auto_transfer_function(&VolumeFacts::of(volume), &value_histogram(volume, AUTO_BINS))
 }
 
 #[cfg(test)]

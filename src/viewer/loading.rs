@@ -17,9 +17,10 @@ pub(super) struct Loading {
     pub(super) rx: Receiver<Result<(Volume, Vec<u64>), String>>,
 }
 
-/// The editor's histogram: 256 bins of normalised values, over every step of a series (as its range is).
+/// The viewer's histogram of normalised values, over every step of a series (as its range is): the automatic
+/// transfer function's bins, so that the viewer opens a file with the function `render --preset auto` gives.
 pub(super) fn value_histogram(v: &Volume) -> Vec<u64> {
-    crate::tf_auto::value_histogram(v, 256)
+    crate::tf_auto::value_histogram(v, crate::tf_auto::AUTO_BINS)
 }
 
 /// Loads any format `volume::open` reads (raw with the given options); a volume larger than `max_dim` (the
@@ -249,5 +250,23 @@ impl Running {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::viewer::tf_editor::TfEditorState;
+
+    #[test]
+    fn the_viewer_opens_with_the_automatic_function_render_gives() {
+        // Percentile ramps (volumes without CT units) depend on the histogram's bins: the viewer's must be
+        // the one `render --preset auto` takes, or the two open the same file differently.
+        for &name in crate::volume::BUILTIN_NAMES {
+            let v = crate::volume::builtin(name, Some(48)).unwrap();
+            let mut editor = TfEditorState::default();
+            editor.set_volume(&v, &value_histogram(&v));
+            assert_eq!(editor.auto(), Some(crate::tf_auto::auto_for_volume(&v)), "{name}");
+        }
     }
 }

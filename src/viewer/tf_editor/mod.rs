@@ -18,6 +18,16 @@ pub use panel::{panel, TfEditorState};
 use crate::tf::{bake, linear_to_srgb, lookup, Classification, TfUnits, TransferFunction};
 use egui::{Color32, Pos2, Rect, Sense, Stroke};
 
+/// The most histogram bars the editor draws (about one per pixel and a half of its plot).
+const BARS: usize = 256;
+
+/// `histogram` with runs of neighbouring bins summed, so that it has at most `bars` bins (the same counts when it
+/// already has): 1024 bins fold into exactly the 256-bin histogram of the same values.
+pub fn fold(histogram: &[u64], bars: usize) -> Vec<u64> {
+    let run = histogram.len().div_ceil(bars.max(1)).max(1);
+    histogram.chunks(run).map(|c| c.iter().sum()).collect()
+}
+
 /// A control point's x in normalised units for display, and back.
 pub fn to_normalized(tf: &TransferFunction, x: f32, range: [f64; 2]) -> f32 {
     match tf.units {
@@ -132,7 +142,8 @@ pub fn editor_with_unit(
     let painter = ui.painter_at(rect);
     painter.rect_filled(plot, 2.0, Color32::from_gray(20));
 
-    // Log-scale histogram: bar height ∝ ln(1 + count).
+    // Log-scale histogram: bar height ∝ ln(1 + count), at most BARS bars.
+    let histogram = &fold(histogram, BARS);
     let max = histogram.iter().copied().max().unwrap_or(0).max(1) as f32;
     let n = histogram.len().max(1) as f32;
     for (i, &count) in histogram.iter().enumerate() {
@@ -378,6 +389,18 @@ mod tests {
         assert!((to_normalized(&t, 981.0, range) - 0.5).abs() < 1e-6);
         insert_point(&mut t, 0.5, 0.2, range);
         assert!((t.opacity[1][0] - 981.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn folding_1024_bins_gives_the_256_bin_histogram() {
+        let values: Vec<f64> = (0..5000)
+            .map(|i| ((i * 7919) % 5000) as f64 / 4999.0)
+            .chain([f64::NAN])
+            .collect();
+        let fine = crate::tf_auto::histogram(values.iter().copied(), 1024);
+        assert_eq!(fold(&fine, 256), crate::tf_auto::histogram(values.iter().copied(), 256));
+        assert_eq!(fold(&[1, 2, 3], 256), vec![1, 2, 3]);
+        assert_eq!(fold(&[1, 2, 3, 4, 5], 2), vec![6, 9]);
     }
 
     #[test]

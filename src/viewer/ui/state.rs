@@ -43,7 +43,8 @@ pub struct ViewerState {
     pub animation: Option<RotationAnimation>,
     /// Where the volume view is in the window (points), as laid out by the last UI pass.
     pub view_rect: Option<egui::Rect>,
-    /// Value histogram of the volume (256 bins over the normalised range) and its data range, for the editor.
+    /// Value histogram of the volume ([`crate::tf_auto::AUTO_BINS`] bins over the normalised range): the
+    /// editor draws it, the automatic transfer function and the slices' window/level read it.
     pub histogram: Vec<u64>,
     pub range: [f64; 2],
     /// The transfer-function editor's own state (drag, save/load path, the volume's facts for "auto").
