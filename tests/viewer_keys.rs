@@ -1,12 +1,14 @@
 //! Keyboard shortcuts through real X input (xdotool under Xvfb), as a user types them: after Tab hides the panel,
 //! S still shades and Tab brings the panel back, with no Escape in between (egui's focus traversal used to take
 //! Tab into a text field, which then swallowed every key). The panel's state is read from F12's screenshot width
-//! and settings.
+//! and settings. A quick drag, all of it within one slow frame, still turns the camera.
 
 mod common;
 
-use common::x11::{read_screenshot, type_keys, x_session, Viewer, WAIT_MS};
+use common::x11::{read_screenshot, type_keys, x_client, x_session, Viewer, WAIT_MS};
+use glam::Vec2;
 use std::time::Duration;
+use volcast::viewer::controls::OrbitView;
 
 #[test]
 fn shortcuts_keep_working_after_tab_hides_the_panel() {
@@ -99,5 +101,63 @@ fn a_file_from_the_command_line_loads_behind_the_window() {
     let status = missing.finish();
     assert_eq!(status.code(), Some(1), "{}", missing.stderr);
     assert!(missing.stderr.contains("/nonexistent/scan.nrrd"), "{}", missing.stderr);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_quick_drag_within_one_frame_turns_the_camera() {
+    let Some((x, dir)) = x_session("viewer-quick-drag") else {
+        return;
+    };
+    // The full-size helix: frames of tens of milliseconds on lavapipe, and the drag below takes a few.
+    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "helix"], &script);
+    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    let window = &viewer.window(&x.display);
+    type_keys(&x.display, window, &["F12"]);
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    let (shot, before) = read_screenshot(&dir, &saved);
+    let (w, h) = shot.dimensions();
+    let view_left = (900 - w) as f32;
+
+    // Press, six moves and the release in one xdotool call: no pause anywhere, as a flick of the hand.
+    let from = Vec2::new(w as f32 * 0.3, h as f32 * 0.5);
+    let to = from + Vec2::new(180.0, 0.0);
+    let move_to = |p: Vec2| {
+        let at = [format!("{}", (p.x + view_left).round()), format!("{}", p.y.round())];
+        ["mousemove", "--window", window.as_str(), &at[0], &at[1]]
+            .map(String::from)
+            .to_vec()
+    };
+    let mut args = move_to(from);
+    args.extend(["mousedown", "1"].map(String::from));
+    for k in 1..=6 {
+        args.extend(move_to(from + (to - from) * (k as f32 / 6.0)));
+    }
+    args.extend(["mouseup", "1"].map(String::from));
+    x_client(
+        &x.display,
+        "xdotool",
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
+    std::thread::sleep(Duration::from_millis(800));
+
+    type_keys(&x.display, window, &["F12"]);
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    let (_, after) = read_screenshot(&dir, &saved);
+    // What the whole drag does as one arcball turn (as it does when the motion comes in one frame).
+    let mut expected = OrbitView::from_camera(&before.camera);
+    expected.arcball(from, to, Vec2::new(w as f32, h as f32));
+    let turned = OrbitView::from_camera(&after.camera);
+    let angle = |a: glam::Quat, b: glam::Quat| a.angle_between(b).to_degrees();
+    let start = OrbitView::from_camera(&before.camera).rotation;
+    assert!(angle(start, expected.rotation) > 20.0, "the drag is a real turn");
+    assert!(
+        angle(turned.rotation, expected.rotation) < 3.0,
+        "a quick drag turns the camera as a slow one: {:.1}° from the expected turn, {:.1}° from the start",
+        angle(turned.rotation, expected.rotation),
+        angle(turned.rotation, start)
+    );
+    viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -50,6 +50,15 @@ impl Running {
 
         // The UI runs first: it may change what this frame shows.
         let mut raw_input = self.egui_state.take_egui_input(&self.window);
+        // Events a slow frame held back for a drag (`ui::drag_cut`) come first; again some may wait.
+        raw_input.events.splice(0..0, std::mem::take(&mut self.deferred_events));
+        let held = self
+            .egui_ctx
+            .input(|i| i.pointer.press_origin().filter(|_| i.pointer.any_down()));
+        let click_dist = self.egui_ctx.options(|o| o.input_options.max_click_dist);
+        if let Some(cut) = ui::drag_cut(&raw_input.events, held, click_dist) {
+            self.deferred_events = raw_input.events.split_off(cut);
+        }
         // Tab belongs to the panel, not to egui's focus traversal: egui would move the focus into a text field,
         // which then swallowed every shortcut (Tab included) once the panel was hidden.
         let tabs = ui::take_tab_presses(&mut raw_input);

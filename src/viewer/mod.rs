@@ -209,6 +209,8 @@ struct Running {
     state: ViewerState,
     loading: Option<Loading>,
     pending_screenshot: Option<PathBuf>,
+    /// Input held back for the next frame so that a quick drag is seen as one (`ui::drag_cut`).
+    deferred_events: Vec<egui::Event>,
     /// The GIF being recorded (F9).
     recorder: Option<recording::Recorder>,
     zero_size: bool,
@@ -301,6 +303,7 @@ impl Running {
             },
             loading: None,
             pending_screenshot: None,
+            deferred_events: Vec::new(),
             recorder: None,
             zero_size: false,
             recreate_swapchain: true,
@@ -478,6 +481,7 @@ impl Running {
             || self.script.is_some()
             || self.refine_pending
             || self.state.time.playing
+            || !self.deferred_events.is_empty()
     }
 
     fn apply(&mut self, actions: Vec<UiAction>) {
