@@ -185,9 +185,14 @@ pub fn editor_with_unit(
     if let Some(pos) = response.interact_pointer_pos() {
         let (u, a) = from_screen(pos);
         if response.drag_started_by(egui::PointerButton::Primary) {
-            *dragging = nearest(&screen_points(tf), pos, PICK_RADIUS).or_else(|| {
+            // The point under the press, not under the pointer now: egui starts a drag only once the pointer has
+            // moved, and in a slow frame it may have moved past PICK_RADIUS (a fast drag then added a point
+            // instead of moving one; CI's viewer_tf failure).
+            let origin = press_origin(ui.ctx(), pos);
+            *dragging = nearest(&screen_points(tf), origin, PICK_RADIUS).or_else(|| {
                 changed = true;
-                Some(insert_point(tf, u, a, range))
+                let (u0, a0) = from_screen(origin);
+                Some(insert_point(tf, u0, a0, range))
             });
         }
         if response.dragged_by(egui::PointerButton::Primary) {
@@ -248,6 +253,11 @@ pub fn editor_with_unit(
     changed
 }
 
+/// Where the pointer was pressed (`fallback` when egui no longer knows).
+fn press_origin(ctx: &egui::Context, fallback: Pos2) -> Pos2 {
+    ctx.input(|i| i.pointer.press_origin()).unwrap_or(fallback)
+}
+
 fn to_u8(c: f32) -> u8 {
     (c.clamp(0.0, 1.0) * 255.0).round() as u8
 }
@@ -275,7 +285,8 @@ fn colour_strip_input(
     let hit = nearest_on_strip(&markers, pos.x, PICK_RADIUS);
     let mut changed = false;
     if response.drag_started_by(egui::PointerButton::Primary) {
-        state.dragging = hit;
+        // The marker under the press (see the opacity plot's drag).
+        state.dragging = nearest_on_strip(&markers, press_origin(&response.ctx, pos).x, PICK_RADIUS);
     }
     if response.dragged_by(egui::PointerButton::Primary) {
         if let Some(i) = state.dragging {
@@ -401,6 +412,63 @@ mod tests {
         assert_eq!(fold(&fine, 256), crate::tf_auto::histogram(values.iter().copied(), 256));
         assert_eq!(fold(&[1, 2, 3], 256), vec![1, 2, 3]);
         assert_eq!(fold(&[1, 2, 3, 4, 5], 2), vec![6, 9]);
+    }
+
+    /// Runs the editor in a bare egui context, one frame per entry of `frames` (the input events of that frame);
+    /// returns the plot's rect.
+    fn run_editor(tf: &mut TransferFunction, frames: &[Vec<egui::Event>]) -> Rect {
+        let ctx = egui::Context::default();
+        let mut plot = Rect::NOTHING;
+        let mut dragging = None;
+        for (i, events) in [vec![]].iter().chain(frames).enumerate() {
+            let input = egui::RawInput {
+                screen_rect: Some(Rect::from_min_size(Pos2::ZERO, egui::vec2(400.0, 400.0))),
+                time: Some(i as f64 * 0.1),
+                events: events.clone(),
+                ..Default::default()
+            };
+            let _ = ctx.run_ui(input, |ui| {
+                plot = Rect::from_min_size(ui.cursor().min, egui::vec2(ui.available_width(), PLOT_HEIGHT));
+                editor(ui, tf, [0.0, 1.0], [0.0, 1.0], &[1; 16], &mut dragging);
+            });
+        }
+        plot
+    }
+
+    fn button(pos: Pos2, button: egui::PointerButton, pressed: bool) -> egui::Event {
+        egui::Event::PointerButton {
+            pos,
+            button,
+            pressed,
+            modifiers: Default::default(),
+        }
+    }
+
+    #[test]
+    fn a_drag_whose_motion_arrives_at_once_moves_the_point_pressed() {
+        // CI's viewer_tf: the press, then the whole 24-point motion in the next frame. egui starts the drag only
+        // there, with the pointer 24 points from the point, beyond PICK_RADIUS: the drag must still take the point
+        // under the press (it added a new point at the pointer instead).
+        let mut t = tf(TfUnits::Normalized);
+        let plot = run_editor(&mut t.clone(), &[]);
+        let at = |p: [f32; 2]| Pos2::new(plot.left() + p[0] * plot.width(), plot.bottom() - p[1] * plot.height());
+        let (start, end) = (at(t.opacity[1]), at(t.opacity[1]) - egui::vec2(0.0, 24.0));
+        let primary = egui::PointerButton::Primary;
+        run_editor(
+            &mut t,
+            &[
+                vec![egui::Event::PointerMoved(start), button(start, primary, true)],
+                vec![egui::Event::PointerMoved(end)],
+                vec![button(end, primary, false)],
+            ],
+        );
+        assert_eq!(t.opacity.len(), 2, "no point added: {:?}", t.opacity);
+        assert_eq!(t.opacity[1][0], 0.8);
+        assert!(
+            (t.opacity[1][1] - (0.5 + 24.0 / plot.height())).abs() < 1e-4,
+            "{:?}",
+            t.opacity
+        );
     }
 
     #[test]
