@@ -1,4 +1,4 @@
-// Rule 10's clipping plane (src/clip.rs, RenderSettings): cuts the ray's segment a -> b (texture space) to the
+// Rule 10's clipping plane (src/scene/clip.rs, RenderSettings): cuts the ray's segment a -> b (texture space) to the
 // half-space dot(frame.clip_plane.xyz, p) + frame.clip_plane.w >= 0, exactly, before any sample is placed, so the
 // march's sample grid starts where the plane starts the ray (as it starts at a slab face). Both ray setups reach it
 // through march(). Without a plane the uniform is (0, 0, 0, 1) and every segment is kept unchanged.

@@ -1,12 +1,12 @@
 // The march shared by both ray setups: samples the segment a -> b (texture space) and composites it by the
-// rules in RenderSettings (src/settings.rs); the CPU reference in tests/common follows the same rules.
+// rules in RenderSettings (src/scene/settings.rs); the CPU reference in tests/common follows the same rules.
 layout(set = 1, binding = 0) uniform texture3D volume_tex;
 layout(set = 1, binding = 1) uniform sampler linear_smp;
 // The baked table (src/render/mod.rs LUT_ROWS): linear rgb + opacity per voxel step at 4096 values.
 layout(std430, set = 1, binding = 2) readonly buffer Lut {
     vec4 entries[4096];
 } lut;
-// Its integral functions (src/preintegrate.rs): per entry the integrals over the value of extinction x colour
+// Its integral functions (src/transfer/preintegrate.rs): per entry the integrals over the value of extinction x colour
 // (rgb) and of extinction (a), from 0 to the entry's value. A uniform buffer: on lavapipe its per-lane loads are
 // branch-free, where a storage buffer's are a loop over the lanes.
 layout(std140, set = 1, binding = 6) uniform Integrals {
@@ -111,7 +111,7 @@ vec4 integral_at(float v, out vec4 slope) {
     return mix(lo, hi, u - float(i0));
 }
 
-// Pre-integration (src/preintegrate.rs, rule 6): the mean (extinction x colour, extinction) of the segment from
+// Pre-integration (src/transfer/preintegrate.rs, rule 6): the mean (extinction x colour, extinction) of the segment from
 // value vp (integrals ip) to v (integrals iv, slope at v), as the quotient of differences; within one entry
 // (preintegrate::SLOPE_BELOW) the slope instead, which f32 cancellation cannot spoil, if the segment's midpoint
 // is inside the window. A NaN end drops the segment.

@@ -1,28 +1,15 @@
 //! volcast: a volume ray caster on raw Vulkan. The binary (`src/main.rs`, `src/cli/`) and the tests drive this
-//! library, so both exercise one render path.
+//! library, so both exercise one render path. ARCHITECTURE.md draws the map of these rooms.
+//!
+//! Pure rooms (no Vulkan): `volume` (files to a `Volume`), `transfer` (values to colour and opacity), `scene`
+//! (what a frame shows, as plain data). Rooms that drive the GPU: `gpu` (the Vulkan layer), `render` (the passes
+//! and the headless path), `measure` (compare, fidelity, bench, playback), `movie` and `viewer`.
 
-pub mod bench;
-pub mod camera;
-pub mod clip;
-pub mod colorbar;
-pub mod compare;
-pub mod fidelity;
 pub mod gpu;
-pub mod headless;
-pub mod huge_pages;
-pub mod image_out;
-pub mod info;
-pub mod lighting;
+pub mod measure;
 pub mod movie;
-pub mod playback;
-pub mod preintegrate;
-pub mod quality;
 pub mod render;
-pub mod settings;
-pub mod slice;
-pub mod tf;
-pub mod tf_auto;
+pub mod scene;
 pub mod transfer;
-pub mod view_state;
 pub mod viewer;
 pub mod volume;

@@ -9,7 +9,7 @@ use cli::commands::{bench, compare, devices, info, view};
 use cli::render::render;
 use std::process::ExitCode;
 use volcast::gpu::GpuError;
-use volcast::quality::Quality;
+use volcast::scene::quality::Quality;
 use volcast::viewer::ViewerError;
 
 #[derive(Parser)]

@@ -52,9 +52,17 @@ fn quick_bench_prints_valid_numbers_without_validation_errors() {
     let lines: Vec<&str> = stdout.lines().collect();
     let header = lines
         .iter()
-        .position(|l| l.split_whitespace().eq(volcast::bench::TABLE_COLUMNS.iter().copied()))
+        .position(|l| {
+            l.split_whitespace()
+                .eq(volcast::measure::bench::TABLE_COLUMNS.iter().copied())
+        })
         .unwrap_or_else(|| panic!("no table header:\n{stdout}"));
-    let col = |name: &str| volcast::bench::TABLE_COLUMNS.iter().position(|c| *c == name).unwrap();
+    let col = |name: &str| {
+        volcast::measure::bench::TABLE_COLUMNS
+            .iter()
+            .position(|c| *c == name)
+            .unwrap()
+    };
     let rows: Vec<Vec<&str>> = lines[header + 1..]
         .iter()
         .take_while(|l| !l.trim().is_empty())
@@ -63,7 +71,7 @@ fn quick_bench_prints_valid_numbers_without_validation_errors() {
     assert_eq!(rows.len(), 6, "one row per method and shading:\n{stdout}");
     let mut methods = Vec::new();
     for row in &rows {
-        assert_eq!(row.len(), volcast::bench::TABLE_COLUMNS.len(), "row {row:?}");
+        assert_eq!(row.len(), volcast::measure::bench::TABLE_COLUMNS.len(), "row {row:?}");
         methods.push((row[col("method")], row[col("shading")]));
         for name in [
             "wall_med", "wall_min", "wall_max", "gpu_med", "gpu_min", "gpu_max", "march",

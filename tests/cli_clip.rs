@@ -5,10 +5,10 @@
 use image::RgbaImage;
 use std::path::PathBuf;
 use std::process::{Command, Output};
-use volcast::camera::Camera;
-use volcast::clip::ClipPlane;
-use volcast::settings::RenderSettings;
-use volcast::view_state::{ViewState, VolumeRef};
+use volcast::scene::camera::Camera;
+use volcast::scene::clip::ClipPlane;
+use volcast::scene::settings::RenderSettings;
+use volcast::scene::view_state::{ViewState, VolumeRef};
 
 const SIZE: u32 = 32;
 const VOLUME: &[&str] = &["--builtin", "colormap", "--builtin-size", "16"];

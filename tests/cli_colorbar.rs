@@ -4,8 +4,8 @@
 
 use std::path::PathBuf;
 use std::process::Command;
-use volcast::colorbar::{colorbar, layout, ColorbarSpec};
-use volcast::tf::{Classification, TransferFunction};
+use volcast::transfer::colorbar::{colorbar, layout, ColorbarSpec};
+use volcast::transfer::function::{Classification, TransferFunction};
 
 fn scratch(name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_colorbar");
@@ -55,7 +55,7 @@ fn colorbar_strip_is_appended_and_the_render_kept() {
         }
     }
     // The auto preset of a volume spanning −1024..2000 HU is the CT preset, labelled in HU.
-    let tf = TransferFunction::preset(volcast::tf_auto::CT_PRESET).unwrap();
+    let tf = TransferFunction::preset(volcast::transfer::auto::CT_PRESET).unwrap();
     let class = Classification::Function(tf);
     let spec = ColorbarSpec {
         classification: &class,

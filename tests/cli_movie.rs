@@ -4,9 +4,9 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use volcast::camera::Camera;
-use volcast::settings::RenderSettings;
-use volcast::view_state::{ViewState, VolumeRef};
+use volcast::scene::camera::Camera;
+use volcast::scene::settings::RenderSettings;
+use volcast::scene::view_state::{ViewState, VolumeRef};
 
 const VOLUME: [&str; 4] = ["--builtin", "helix", "--builtin-size", "32"];
 const SIZE: (u32, u32) = (48, 40);

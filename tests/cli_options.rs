@@ -13,10 +13,10 @@ use glam::Vec3;
 use image::RgbaImage;
 use std::path::PathBuf;
 use std::process::Command;
-use volcast::camera::Camera;
-use volcast::quality::Quality;
-use volcast::settings::{CompositeMode, RenderSettings, Shading};
-use volcast::tf::TransferFunction;
+use volcast::scene::camera::Camera;
+use volcast::scene::quality::Quality;
+use volcast::scene::settings::{CompositeMode, RenderSettings, Shading};
+use volcast::transfer::function::TransferFunction;
 use volcast::transfer::Colormap;
 use volcast::volume::{self, Volume};
 
@@ -115,7 +115,7 @@ fn check_rules(rules: Vec<Rule>) {
         let (actual, _) = render(HELIX, r.args, &name);
         let mut s = defaults(v.extent());
         (r.settings)(&mut s, v.extent());
-        // The step each rule states is the one `render` resolves (the quality rule, src/quality.rs).
+        // The step each rule states is the one `render` resolves (the quality rule, src/scene/quality.rs).
         let stated = (s.step_length, s.max_stride);
         resolve_quality(&mut s, r.args, v.range);
         if (s.step_length - stated.0).abs() > 1e-6 || s.max_stride != stated.1 {
@@ -182,7 +182,7 @@ fn classification_options_take_effect() {
     let tf_path = scratch("tf.json");
     let tf = TransferFunction {
         name: "cli".into(),
-        units: volcast::tf::TfUnits::Normalized,
+        units: volcast::transfer::function::TfUnits::Normalized,
         colors: vec![[0.2, 1.0, 0.5, 0.0], [0.8, 0.0, 0.3, 1.0]],
         colormap: Colormap::Plasma,
         opacity: vec![[0.15, 0.0], [0.6, 0.3]],
@@ -303,12 +303,12 @@ fn mode_and_shading_options_take_effect() {
                 s.mode = CompositeMode::Isosurface;
                 s.iso_color = Some(glam::Vec3::new(0.2, 0.8, 0.4));
                 s.extra_isosurfaces = vec![
-                    volcast::lighting::IsoSurface {
+                    volcast::scene::lighting::IsoSurface {
                         value: 0.3,
                         color: Some(glam::Vec3::X),
                         opacity: 0.4,
                     },
-                    volcast::lighting::IsoSurface {
+                    volcast::scene::lighting::IsoSurface {
                         value: 0.7,
                         ..Default::default()
                     },
@@ -328,7 +328,7 @@ fn mode_and_shading_options_take_effect() {
             ],
             |s, _| {
                 s.shading = Some(Shading::default());
-                s.light = volcast::lighting::Light {
+                s.light = volcast::scene::lighting::Light {
                     direction: Some(glam::Vec3::new(1.0, -2.0, 0.5)),
                     color: glam::Vec3::new(1.0, 0.5, 0.2),
                     intensity: 1.5,

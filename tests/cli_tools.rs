@@ -316,6 +316,10 @@ fn reporting_options_of_render() {
         ]
         .concat(),
     );
-    let tf = volcast::tf::TransferFunction::load(&saved).expect("--save-tf writes a loadable transfer function");
-    assert_eq!(tf, volcast::tf::TransferFunction::preset("ct-bone").unwrap());
+    let tf = volcast::transfer::function::TransferFunction::load(&saved)
+        .expect("--save-tf writes a loadable transfer function");
+    assert_eq!(
+        tf,
+        volcast::transfer::function::TransferFunction::preset("ct-bone").unwrap()
+    );
 }

@@ -11,7 +11,7 @@ use common::compare::diff;
 use common::gpu::{finish, validated_gpu, Judge, METHODS};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use volcast::headless::Headless;
+use volcast::render::headless::Headless;
 use volcast::volume::{self, Volume};
 
 fn data() -> PathBuf {

@@ -143,14 +143,14 @@ fn every_file_matches_what_vtk_reads_back() {
 fn info_lists_arrays_in_json() {
     let path = data().join("legacy_multi_binary.vtk");
     let v = open(&path, Some("label")).unwrap();
-    let json = serde_json::to_value(volcast::info::Info::of(&v)).unwrap();
+    let json = serde_json::to_value(volcast::render::info::Info::of(&v)).unwrap();
     let arrays = json["arrays"].as_array().unwrap();
     let names: Vec<&str> = arrays.iter().map(|a| a["name"].as_str().unwrap()).collect();
     assert_eq!(names, ["ramp", "grad", "density", "label"]);
     assert_eq!(arrays[3]["type"], "short");
     assert_eq!(arrays[3]["loaded"], true);
     assert_eq!(arrays[1]["components"], 3);
-    assert!(volcast::info::Info::of(&v)
+    assert!(volcast::render::info::Info::of(&v)
         .text(&v)
         .contains("label: short, 1 component(s) (loaded)"));
 }

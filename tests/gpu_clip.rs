@@ -12,11 +12,11 @@ use common::compare::diff;
 use common::gpu::{finish, validated_gpu, Judge, METHODS};
 use common::reference::{background_pixel, Reference};
 use glam::Vec3;
-use volcast::camera::Camera;
-use volcast::clip::ClipPlane;
-use volcast::headless::Headless;
-use volcast::lighting::Light;
-use volcast::settings::{CompositeMode, RaySetup, RenderSettings, Shading};
+use volcast::render::headless::Headless;
+use volcast::scene::camera::Camera;
+use volcast::scene::clip::ClipPlane;
+use volcast::scene::lighting::Light;
+use volcast::scene::settings::{CompositeMode, RaySetup, RenderSettings, Shading};
 use volcast::volume::{self, Volume};
 
 const SIZE: u32 = 80;
@@ -90,7 +90,7 @@ fn plane_cases(v: &Volume) -> Vec<Case> {
         s.mode = CompositeMode::Isosurface;
         s.iso_value = 0.6;
         s.iso_opacity = 0.5;
-        s.extra_isosurfaces = vec![volcast::lighting::IsoSurface {
+        s.extra_isosurfaces = vec![volcast::scene::lighting::IsoSurface {
             value: 0.3,
             color: Some(Vec3::new(0.9, 0.5, 0.3)),
             opacity: 0.4,

@@ -11,9 +11,9 @@ use common::cases::{ct_head, marschner_lobb_as, mirrored, oblique, quality_cases
 use common::compare::{against_reference, diff, write_failure_images};
 use common::gpu::{close, gpu_sample_counts, validated_gpu, Judge};
 use common::reference::Reference;
-use volcast::headless::Headless;
-use volcast::settings::{CompositeMode, RaySetup, RenderSettings, Shading};
-use volcast::tf::TransferFunction;
+use volcast::render::headless::Headless;
+use volcast::scene::settings::{CompositeMode, RaySetup, RenderSettings, Shading};
+use volcast::transfer::function::TransferFunction;
 use volcast::transfer::Colormap;
 use volcast::volume::{self, Volume, VoxelType};
 
@@ -411,16 +411,16 @@ fn a_quantised_field_shades_like_its_float_original() {
         for (v, texture) in [(&float, true), (&quantised, true), (&quantised, false)] {
             headless.set_volume(&gpu, v).unwrap();
             let mut s = s.clone();
-            volcast::quality::Quality::Normal.apply(&mut s, v.range);
+            volcast::scene::quality::Quality::Normal.apply(&mut s, v.range);
             s.gradient_texture = texture;
             if texture {
                 headless.renderer.enable_gradient_texture(&gpu, v).unwrap();
             }
             images.push(headless.render(&gpu, &s).unwrap().image);
         }
-        let bg = volcast::compare::background_u8(&s);
-        let smoothed = volcast::compare::diff_stats(&images[1], &images[0], bg);
-        let central = volcast::compare::diff_stats(&images[2], &images[0], bg);
+        let bg = volcast::measure::image_diff::background_u8(&s);
+        let smoothed = volcast::measure::image_diff::diff_stats(&images[1], &images[0], bg);
+        let central = volcast::measure::image_diff::diff_stats(&images[2], &images[0], bg);
         eprintln!("{label}: uint8 vs float32, filtered {smoothed:?}; central differences {central:?}");
         if smoothed.mean > 1.0 || smoothed.p99 > 8.0 {
             failures.push(format!("{label}: filtered gradients {smoothed:?}"));

@@ -8,10 +8,10 @@ use common::cases::ct_head;
 use common::compare::against_reference;
 use common::gpu::{close, validated_gpu, Judge};
 use common::reference::Reference;
-use volcast::headless::Headless;
-use volcast::lighting::{IsoSurface, Light};
-use volcast::settings::{CompositeMode, RenderSettings, Shading};
-use volcast::tf::TransferFunction;
+use volcast::render::headless::Headless;
+use volcast::scene::lighting::{IsoSurface, Light};
+use volcast::scene::settings::{CompositeMode, RenderSettings, Shading};
+use volcast::transfer::function::TransferFunction;
 use volcast::volume::{self, Volume};
 
 /// The frames: emission lit by a directional light with shadows and occlusion, the same under the key light

@@ -13,10 +13,10 @@ use common::cases::{
 use common::compare::Bounds;
 use common::gpu::{finish, validated_gpu, Judge, METHODS};
 use volcast::gpu::Gpu;
-use volcast::headless::Headless;
+use volcast::render::headless::Headless;
 use volcast::render::{TexelPolicy, VolumeLayout};
-use volcast::settings::{CompositeMode, RaySetup, Shading};
-use volcast::tf::TransferFunction;
+use volcast::scene::settings::{CompositeMode, RaySetup, Shading};
+use volcast::transfer::function::TransferFunction;
 use volcast::volume::{self, Volume, VoxelType};
 
 /// The bounds for the layout the renderer chose for the volume just set.
@@ -205,12 +205,12 @@ fn real_volumes_match_the_reference() {
             cases.push(with(&v, 96, "iso-skin-over-bone-lit", |s| {
                 s.mode = CompositeMode::Isosurface;
                 s.iso_value = 0.45;
-                s.extra_isosurfaces = vec![volcast::lighting::IsoSurface {
+                s.extra_isosurfaces = vec![volcast::scene::lighting::IsoSurface {
                     value: 0.2,
                     color: Some(glam::Vec3::new(0.9, 0.6, 0.5)),
                     opacity: 0.3,
                 }];
-                s.light = volcast::lighting::Light {
+                s.light = volcast::scene::lighting::Light {
                     direction: Some(glam::Vec3::new(0.6, -0.3, 0.74)),
                     color: glam::Vec3::new(1.0, 0.9, 0.8),
                     intensity: 1.3,
@@ -220,7 +220,7 @@ fn real_volumes_match_the_reference() {
                 s.transfer_function = Some(TransferFunction::preset("ct-bone").unwrap());
                 s.window = [0.0, 1.0];
                 s.shading = Some(Shading::default());
-                s.light = volcast::lighting::Light::from_angles(-60.0, 40.0);
+                s.light = volcast::scene::lighting::Light::from_angles(-60.0, 40.0);
             }));
         }
         if v.name.starts_with("motor") {

@@ -11,10 +11,10 @@ use common::bounds::{METHODS, REFERENCE, REFERENCE_R8};
 use common::compare::{between, diff, write_failure_images};
 use common::gpu::{validated_gpu, Judge};
 use common::reference::Reference;
-use volcast::compare::{builtin_views, compare_view};
-use volcast::headless::Headless;
+use volcast::measure::compare::{builtin_views, compare_view};
+use volcast::render::headless::Headless;
 use volcast::render::VolumeLayout;
-use volcast::settings::{RaySetup, RenderSettings};
+use volcast::scene::settings::{RaySetup, RenderSettings};
 use volcast::volume::{self, Volume};
 
 fn check(volume: &Volume, size: u32, window: [f32; 2]) {

@@ -15,10 +15,10 @@ use common::compare::{against_reference, write_failure_images};
 use common::gpu::{close, validated_gpu};
 use common::reference::Reference;
 use glam::Vec3;
-use volcast::camera::Camera;
-use volcast::headless::Headless;
-use volcast::quality::{Gradients, Quality};
-use volcast::settings::{CompositeMode, RenderSettings, Shading};
+use volcast::render::headless::Headless;
+use volcast::scene::camera::Camera;
+use volcast::scene::quality::{Gradients, Quality};
+use volcast::scene::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::transfer::Colormap;
 use volcast::volume::{self, Volume};
 

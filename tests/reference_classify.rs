@@ -1,13 +1,13 @@
 //! The reference's classification (tests/common/classify.rs) against published values and closed forms, and the
-//! library's table (`tf::bake`, what the GPU reads) against the reference. Nothing here needs a GPU.
+//! library's table (`function::bake`, what the GPU reads) against the reference. Nothing here needs a GPU.
 
 mod common;
 
 use common::classify::{colormap_srgb, jitter_offset, linear, srgb_to_linear, Classifier};
 use glam::DVec3;
-use volcast::settings::RenderSettings;
-use volcast::tf::{self, TfUnits, TransferFunction, PRESET_NAMES};
-use volcast::transfer::tables::{COOL_WARM, PLASMA, VIRIDIS};
+use volcast::scene::settings::RenderSettings;
+use volcast::transfer::colormap::tables::{COOL_WARM, PLASMA, VIRIDIS};
+use volcast::transfer::function::{self as tf, TfUnits, TransferFunction, PRESET_NAMES};
 use volcast::transfer::Colormap;
 
 fn near3(what: &str, actual: DVec3, expected: DVec3, tolerance: f64) {
@@ -234,7 +234,7 @@ fn reference_classification_by_hand() {
     );
 }
 
-/// The library's 4096-entry table (`tf::bake` + `tf::lookup`, what the GPU reads) against the reference's
+/// The library's 4096-entry table (`function::bake` + `function::lookup`, what the GPU reads) against the reference's
 /// definition, for every colormap and alpha model, a window off-centre in the range, and every preset. Away
 /// from the window's edges (where the table blends in the zero entry outside) they agree to 1e-3 in linear
 /// light: linear interpolation between entries 1/4095 apart cuts the corners of the colormaps' kinks (rainbow's
@@ -302,7 +302,7 @@ fn jitter_hashes_agree() {
         assert!((0.0..1.0).contains(&ours));
         assert_eq!(
             ours,
-            f64::from(volcast::settings::jitter_offset(x, y, seed)),
+            f64::from(volcast::scene::settings::jitter_offset(x, y, seed)),
             "({x}, {y}, {seed})"
         );
     }

@@ -6,9 +6,9 @@ mod common;
 
 use common::reference::{background_pixel, Reference};
 use glam::Vec3;
-use volcast::camera::Camera;
-use volcast::clip::ClipPlane;
-use volcast::settings::{CompositeMode, RenderSettings};
+use volcast::scene::camera::Camera;
+use volcast::scene::clip::ClipPlane;
+use volcast::scene::settings::{CompositeMode, RenderSettings};
 use volcast::volume::{Volume, VoxelData, VoxelType};
 
 /// `dims` voxels of 1 mm (float32) with value `f(i, j, k)`.

@@ -7,8 +7,8 @@ mod common;
 use common::light::LightGridRef;
 use common::reference::Reference;
 use glam::Vec3;
-use volcast::lighting::Light;
-use volcast::settings::{RenderSettings, Shading};
+use volcast::scene::lighting::Light;
+use volcast::scene::settings::{RenderSettings, Shading};
 use volcast::volume::{Volume, VoxelData, VoxelType};
 
 const N: u32 = 16;

@@ -15,9 +15,9 @@ use common::rays::{pixel_ray, ray_segment};
 use common::reference::{quantise, render_reference, Reference};
 use glam::{DVec3, Vec3};
 use image::{Rgba, RgbaImage};
-use volcast::camera::Camera;
-use volcast::settings::{CompositeMode, RenderSettings, Shading};
-use volcast::tf::{TfUnits, TransferFunction};
+use volcast::scene::camera::Camera;
+use volcast::scene::settings::{CompositeMode, RenderSettings, Shading};
+use volcast::transfer::function::{TfUnits, TransferFunction};
 use volcast::volume::{Volume, VoxelData, VoxelType};
 
 const N: u32 = 16;
@@ -822,13 +822,13 @@ fn isosurface_hits_the_analytic_crossing() {
         }
     }
     // The default material: a light neutral, whatever the classification says.
-    s.iso_color = Some(volcast::lighting::NEUTRAL);
+    s.iso_color = Some(volcast::scene::lighting::NEUTRAL);
     s.iso_value = 0.37;
     let trace = reference.trace(&s, CENTRE, CENTRE);
     assert_near3(
         "neutral",
         trace.color,
-        linear(volcast::lighting::NEUTRAL) * 0.9 + DVec3::splat(0.3),
+        linear(volcast::scene::lighting::NEUTRAL) * 0.9 + DVec3::splat(0.3),
         1e-6,
     );
     // The first sample already at or above the value: the hit is that sample, exactly.
@@ -1041,7 +1041,7 @@ fn layered_isosurfaces_and_a_directional_light_follow_the_closed_form() {
     s.jitter = None;
     let red = Vec3::new(1.0, 0.0, 0.0);
     (s.iso_value, s.iso_color, s.iso_opacity) = (0.6, Some(Vec3::ONE), 1.0);
-    s.extra_isosurfaces = vec![volcast::lighting::IsoSurface {
+    s.extra_isosurfaces = vec![volcast::scene::lighting::IsoSurface {
         value: 0.3,
         color: Some(red),
         opacity: 0.4,
@@ -1086,7 +1086,7 @@ fn layered_isosurfaces_and_a_directional_light_follow_the_closed_form() {
     s.iso_opacity = 1.0;
     let theta = 40f64.to_radians();
     let colour = Vec3::new(1.0, 0.5, 0.25);
-    s.light = volcast::lighting::Light {
+    s.light = volcast::scene::lighting::Light {
         direction: Some(Vec3::new(theta.sin() as f32, 0.0, -theta.cos() as f32)),
         color: colour,
         intensity: 2.0,

@@ -24,9 +24,9 @@ use std::path::PathBuf;
 use std::process::Command;
 use std::time::{Duration, Instant};
 use volcast::gpu::{Gpu, GpuOptions};
-use volcast::headless::Headless;
-use volcast::quality::Quality;
-use volcast::settings::RenderSettings;
+use volcast::render::headless::Headless;
+use volcast::scene::quality::Quality;
+use volcast::scene::settings::RenderSettings;
 
 /// Which pixels of the view (`view` in window pixels; 1 pixel per point under Xvfb) show the volume alone, and
 /// not egui's overlay (`ui::view_overlay`): the bounding box's 1-point lines (plus anti-aliasing feather, hence

@@ -18,9 +18,9 @@ use common::x11::{capture, drag, four_up_rects, read_screenshot, render_state, t
 use image::RgbaImage;
 use std::path::Path;
 use std::time::Duration;
-use volcast::clip::ClipPlane;
-use volcast::slice::SliceView;
-use volcast::view_state::ViewState;
+use volcast::scene::clip::ClipPlane;
+use volcast::scene::slice::SliceView;
+use volcast::scene::view_state::ViewState;
 use volcast::viewer::clip_widget::{self, ARROW, RING};
 use volcast::viewer::slice_views;
 use volcast::viewer::ui::ViewerState;
@@ -87,7 +87,7 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
     assert!(p0.normal().dot(forward) > 0.9999 && p0.offset() == 0.0, "{p0:?}");
     // Its line is in every slice view it is not parallel to (the window polled: the frame may still be coming).
     let mut state = state_of(&volume, &shown);
-    let mm = volcast::slice::mm_from_index(&state.geometry, state.look.voxel_axes);
+    let mm = volcast::scene::slice::mm_from_index(&state.geometry, state.look.voxel_axes);
     let (point, normal) = clip_widget::plane_in_slices(&state, &p0, mm);
     let crossing: Vec<_> = views
         .iter()

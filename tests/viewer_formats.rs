@@ -14,8 +14,8 @@ use common::x11::{have, read_screenshot, type_keys, xvfb, Viewer, WAIT_MS};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
-use volcast::headless::Headless;
-use volcast::settings::RenderSettings;
+use volcast::render::headless::Headless;
+use volcast::scene::settings::RenderSettings;
 
 const FILES: &[&str] = &[
     "vtk/vti_zlib.vti",

@@ -12,7 +12,7 @@ use glam::{DVec2, DVec3};
 use image::RgbaImage;
 use std::path::Path;
 use std::time::Duration;
-use volcast::slice::SliceView;
+use volcast::scene::slice::SliceView;
 use volcast::viewer::slice_views;
 use volcast::viewer::ui::ViewerState;
 

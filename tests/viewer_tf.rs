@@ -16,8 +16,8 @@ use common::x11::{button, drag, pointer, read_screenshot, render_state, type_key
 use common::x11::{worst_channel_diff, WAIT_MS};
 use std::path::Path;
 use std::time::Duration;
-use volcast::tf::TransferFunction;
-use volcast::view_state::ViewState;
+use volcast::scene::view_state::ViewState;
+use volcast::transfer::function::TransferFunction;
 use volcast::viewer::tf_editor::to_normalized;
 
 fn tf_of(state: &ViewState) -> TransferFunction {

@@ -15,7 +15,7 @@ use common::x11::{capture, have, read_screenshot, screenshot_step, type_keys, xv
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
-use volcast::headless::Headless;
+use volcast::render::headless::Headless;
 
 #[test]
 fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {

@@ -7,7 +7,7 @@ use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
 use volcast::gpu::GpuOptions;
-use volcast::quality::{Gradients, Quality};
+use volcast::scene::quality::{Gradients, Quality};
 use volcast::volume::{self, RawOptions, Volume, VoxelType};
 
 #[derive(Args, Clone)]
@@ -53,7 +53,7 @@ pub(crate) struct VolumeArgs {
 
 impl VolumeArgs {
     /// These arguments with the volume of a view state where none is given here.
-    pub(crate) fn or_from(&self, r: &volcast::view_state::VolumeRef) -> VolumeArgs {
+    pub(crate) fn or_from(&self, r: &volcast::scene::view_state::VolumeRef) -> VolumeArgs {
         let mut a = self.clone();
         if a.file.is_some() || a.builtin.is_some() {
             return a;

@@ -3,10 +3,10 @@
 use super::args::{BenchArgs, CompareArgs, InfoArgs, ViewArgs};
 use super::with_gpu;
 use anyhow::{bail, Context, Result};
-use volcast::compare;
 use volcast::gpu::GpuError;
-use volcast::headless::Headless;
-use volcast::tf::TransferFunction;
+use volcast::measure::compare;
+use volcast::render::headless::Headless;
+use volcast::transfer::function::TransferFunction;
 use volcast::viewer::{self, ViewerOptions, VolumeSource};
 
 pub(crate) fn view(args: &ViewArgs) -> Result<()> {
@@ -71,17 +71,17 @@ pub(crate) fn compare(args: &CompareArgs) -> Result<()> {
             let mut rows = Vec::new();
             for view in &views {
                 let c = compare::compare_view(gpu, &mut headless, view, args.frames)?;
-                let diff = compare::amplified_diff(&c.faces.image, &c.analytic.image, 10);
+                let diff = volcast::measure::image_diff::amplified_diff(&c.faces.image, &c.analytic.image, 10);
                 let save = |suffix: &str, img: &image::RgbaImage| -> Result<()> {
                     let path = args.out.join(format!("{}-{suffix}.png", view.name));
-                    volcast::image_out::save(img, &path).map_err(anyhow::Error::msg)
+                    volcast::render::png::save(img, &path).map_err(anyhow::Error::msg)
                 };
                 save("faces", &c.faces.image)?;
                 save("analytic", &c.analytic.image)?;
                 save("diff", &diff)?;
                 save(
                     "side-by-side",
-                    &compare::side_by_side(&[&c.faces.image, &c.analytic.image, &diff]),
+                    &volcast::measure::image_diff::side_by_side(&[&c.faces.image, &c.analytic.image, &diff]),
                 )?;
                 println!("{:>15}: {}", view.name, c.verdict());
                 rows.push(compare::Row::from(&c));
@@ -117,7 +117,7 @@ pub(crate) fn compare(args: &CompareArgs) -> Result<()> {
 }
 
 pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
-    let opts = volcast::bench::BenchOptions {
+    let opts = volcast::measure::bench::BenchOptions {
         frames: if args.quick { args.frames.min(2) } else { args.frames },
         warmup: if args.quick { args.warmup.min(1) } else { args.warmup },
         data_dir: args.data.clone(),
@@ -134,12 +134,12 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
     };
     if args.playback {
         let play = if args.quick {
-            volcast::playback::PlaybackOptions::QUICK
+            volcast::measure::playback::PlaybackOptions::QUICK
         } else {
-            volcast::playback::PlaybackOptions::FULL
+            volcast::measure::playback::PlaybackOptions::FULL
         };
         return with_gpu(&args.gpu, |gpu| {
-            let report = volcast::playback::run(gpu, &play, &mut |line| eprintln!("{line}"))?;
+            let report = volcast::measure::playback::run(gpu, &play, &mut |line| eprintln!("{line}"))?;
             if args.json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -149,7 +149,7 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
         });
     }
     with_gpu(&args.gpu, |gpu| {
-        let report = volcast::bench::run(gpu, &opts, &mut |line| eprintln!("{line}"))?;
+        let report = volcast::measure::bench::run(gpu, &opts, &mut |line| eprintln!("{line}"))?;
         if args.json {
             println!("{}", serde_json::to_string_pretty(&report)?);
         } else {
@@ -161,7 +161,7 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
 
 pub(crate) fn info(args: &InfoArgs) -> Result<()> {
     let v = args.volume.load()?;
-    let info = volcast::info::Info::of(&v);
+    let info = volcast::render::info::Info::of(&v);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&info)?);
     } else {

@@ -9,11 +9,11 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use glam::Vec3;
 use std::path::PathBuf;
-use volcast::camera::{Camera, ViewPreset};
-use volcast::quality::{Gradients, Quality};
-use volcast::settings::CompositeMode;
-use volcast::settings::{PositionFormat, RenderSettings};
-use volcast::tf::TransferFunction;
+use volcast::scene::camera::{Camera, ViewPreset};
+use volcast::scene::quality::{Gradients, Quality};
+use volcast::scene::settings::CompositeMode;
+use volcast::scene::settings::{PositionFormat, RenderSettings};
+use volcast::transfer::function::TransferFunction;
 use volcast::transfer::Colormap;
 use volcast::volume::Volume;
 
@@ -51,7 +51,7 @@ pub(crate) struct FrameArgs {
     #[arg(long)]
     pub(crate) voxel_axes: bool,
     /// Vertical field of view in degrees.
-    #[arg(long, default_value_t = volcast::camera::DEFAULT_FOV_Y_DEG)]
+    #[arg(long, default_value_t = volcast::scene::camera::DEFAULT_FOV_Y_DEG)]
     pub(crate) fov: f32,
     /// Colormap: cool-warm, plasma, viridis, rainbow, gnuplot, grayscale.
     #[arg(long, default_value = "cool-warm")]
@@ -87,7 +87,7 @@ pub(crate) struct FrameArgs {
     /// surfaces are composited in the order a ray meets them. E.g. translucent skin over bone:
     /// --mode iso --iso 0.45 --surface 0.2,0.9,0.6,0.5,0.3.
     #[arg(long = "surface", value_parser = parse_surface)]
-    pub(crate) surfaces: Vec<volcast::lighting::IsoSurface>,
+    pub(crate) surfaces: Vec<volcast::scene::lighting::IsoSurface>,
     /// The light: "head" (a headlight, the default) or the direction X,Y,Z towards a light fixed to the volume, in
     /// world coordinates (RAS for anatomical volumes). Turns shading on.
     #[arg(long, value_parser = parse_light, allow_hyphen_values = true)]
@@ -115,7 +115,7 @@ pub(crate) struct FrameArgs {
     pub(crate) shading: bool,
     /// Shading coefficients AMBIENT,DIFFUSE,SPECULAR,SHININESS.
     #[arg(long, value_parser = parse_shading, default_value = "0.2,0.7,0.3,20")]
-    pub(crate) lighting: volcast::settings::Shading,
+    pub(crate) lighting: volcast::scene::settings::Shading,
     /// Scale opacity by gradient magnitude, full at this value change per voxel (e.g. 0.05).
     #[arg(long)]
     pub(crate) gradient_opacity: Option<f32>,
@@ -143,7 +143,7 @@ pub(crate) struct FrameArgs {
     #[arg(long, conflicts_with = "gradients")]
     pub(crate) gradient_texture: bool,
     /// Opacity of one voxel-length step.
-    #[arg(long, default_value_t = volcast::settings::DEFAULT_STEP_ALPHA)]
+    #[arg(long, default_value_t = volcast::scene::settings::DEFAULT_STEP_ALPHA)]
     pub(crate) step_alpha: f32,
     /// Sampling quality: draft, fast, normal or converged (base steps 2, 1, 0.4, 1/8 voxel, shortened where the
     /// transfer function is strong).
@@ -156,7 +156,7 @@ pub(crate) struct FrameArgs {
     #[arg(long)]
     pub(crate) multiplied_alpha: bool,
     /// Stop a ray once its opacity reaches this.
-    #[arg(long, default_value_t = volcast::settings::DEFAULT_EARLY_TERMINATION)]
+    #[arg(long, default_value_t = volcast::scene::settings::DEFAULT_EARLY_TERMINATION)]
     pub(crate) early_termination: f32,
     /// Background colour R,G,B in [0,1].
     #[arg(long, value_parser = parse_vec3, default_value = "0,0,0")]
@@ -167,7 +167,7 @@ pub(crate) struct FrameArgs {
     /// Clipping plane NX,NY,NZ[,OFFSET]: keeps the points p (world mm: RAS for anatomical volumes) with
     /// (p − centre)·N ≥ OFFSET, centre the volume box's centre; N points into what stays (default offset 0).
     #[arg(long, value_name = "NX,NY,NZ[,OFFSET]", allow_hyphen_values = true, value_parser = parse_clip_plane)]
-    pub(crate) clip_plane: Option<volcast::clip::ClipPlane>,
+    pub(crate) clip_plane: Option<volcast::scene::clip::ClipPlane>,
     /// Entry/exit position target format: rgba32f or rgba16f.
     #[arg(long, default_value = "rgba32f", value_parser = ["rgba32f", "rgba16f"])]
     pub(crate) positions: String,
@@ -217,7 +217,7 @@ impl FrameArgs {
             )
         })?;
         let tf = match (&self.preset, &self.tf) {
-            (Some(name), _) if name == "auto" => Some(volcast::tf_auto::auto_for_volume(volume)),
+            (Some(name), _) if name == "auto" => Some(volcast::transfer::auto::auto_for_volume(volume)),
             (Some(name), _) => Some(TransferFunction::preset(name)?),
             (None, Some(path)) => Some(TransferFunction::load(path)?),
             (None, None) => None,
@@ -228,7 +228,7 @@ impl FrameArgs {
         s.window = match (self.window, &tf) {
             (Some(w), _) => [w.0, w.1],
             (None, Some(_)) => [0.0, 1.0],
-            (None, None) => volcast::settings::DEFAULT_WINDOW,
+            (None, None) => volcast::scene::settings::DEFAULT_WINDOW,
         };
         s.transfer_function = tf;
         s.mode = CompositeMode::parse(&self.mode).with_context(|| {
@@ -258,7 +258,7 @@ impl FrameArgs {
             );
         }
         s.shading = (self.shading || lit).then_some(self.lighting);
-        s.light = volcast::lighting::Light {
+        s.light = volcast::scene::lighting::Light {
             direction: self.light.and_then(|l| l.0),
             color: self.light_color.unwrap_or(Vec3::ONE),
             intensity: self.light_intensity.unwrap_or(1.0),

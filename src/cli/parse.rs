@@ -2,7 +2,7 @@
 //! values; their error texts are what a malformed value prints.
 
 use glam::Vec3;
-use volcast::quality::{Gradients, Quality};
+use volcast::scene::quality::{Gradients, Quality};
 
 pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
@@ -42,8 +42,8 @@ pub(crate) fn parse_iso_color(s: &str) -> Result<IsoColor, String> {
     parse_floats(s, 3, "R,G,B or colormap").map(|v| IsoColor::Rgb(Vec3::new(v[0], v[1], v[2])))
 }
 
-pub(crate) fn parse_surface(s: &str) -> Result<volcast::lighting::IsoSurface, String> {
-    volcast::lighting::IsoSurface::parse(s)
+pub(crate) fn parse_surface(s: &str) -> Result<volcast::scene::lighting::IsoSurface, String> {
+    volcast::scene::lighting::IsoSurface::parse(s)
 }
 
 /// `--light`: a headlight (None) or a direction towards the light.
@@ -61,9 +61,9 @@ pub(crate) fn parse_pair(s: &str) -> Result<(f32, f32), String> {
     parse_floats(s, 2, "TMIN,TMAX").map(|v| (v[0], v[1]))
 }
 
-pub(crate) fn parse_shading(s: &str) -> Result<volcast::settings::Shading, String> {
+pub(crate) fn parse_shading(s: &str) -> Result<volcast::scene::settings::Shading, String> {
     let v = parse_floats(s, 4, "AMBIENT,DIFFUSE,SPECULAR,SHININESS")?;
-    Ok(volcast::settings::Shading {
+    Ok(volcast::scene::settings::Shading {
         ambient: v[0],
         diffuse: v[1],
         specular: v[2],
@@ -71,8 +71,8 @@ pub(crate) fn parse_shading(s: &str) -> Result<volcast::settings::Shading, Strin
     })
 }
 
-pub(crate) fn parse_clip_plane(s: &str) -> Result<volcast::clip::ClipPlane, String> {
-    volcast::clip::ClipPlane::parse(s).map_err(|e| e.to_string())
+pub(crate) fn parse_clip_plane(s: &str) -> Result<volcast::scene::clip::ClipPlane, String> {
+    volcast::scene::clip::ClipPlane::parse(s).map_err(|e| e.to_string())
 }
 
 pub(crate) fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {

@@ -5,8 +5,8 @@ use super::args::RenderArgs;
 use super::with_gpu;
 use anyhow::{Context, Result};
 use std::time::Instant;
-use volcast::headless::Headless;
-use volcast::settings::{RaySetup, RenderSettings};
+use volcast::render::headless::Headless;
+use volcast::scene::settings::{RaySetup, RenderSettings};
 use volcast::volume::Volume;
 
 fn median(v: &mut [f64]) -> f64 {
@@ -20,7 +20,7 @@ fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
         Some(path) => {
             let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
             Some(
-                volcast::view_state::ViewState::from_json(&text, &path.display().to_string())
+                volcast::scene::view_state::ViewState::from_json(&text, &path.display().to_string())
                     .map_err(anyhow::Error::msg)?,
             )
         }
@@ -95,7 +95,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     if args.turntable.is_some() || !args.keyframes.is_empty() {
         return movie(args);
     }
-    volcast::image_out::check_name(&args.output).map_err(anyhow::Error::msg)?;
+    volcast::render::png::check_name(&args.output).map_err(anyhow::Error::msg)?;
     let t_load = Instant::now();
     let (volume, s) = render_view(args)?;
     let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
@@ -141,7 +141,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             if args.colorbar {
                 frame.image = with_colorbar(&frame.image, &s, &volume);
             }
-            volcast::image_out::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
+            volcast::render::png::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
             println!(
                 "rendered {} ({}x{}x{} {}, spacing {}x{}x{}) at {}x{} with {} ray setup on {} -> {}",
                 volume.name,
@@ -173,7 +173,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 println!("light grid (shadows, occlusion): {ms:.0} ms");
             }
             if args.memory {
-                println!("{}", volcast::bench::memory_line(gpu, &headless, &s)?);
+                println!("{}", volcast::measure::bench::memory_line(gpu, &headless, &s)?);
             }
             Ok(())
         })();
@@ -186,12 +186,12 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
 fn with_colorbar(image: &image::RgbaImage, s: &RenderSettings, volume: &Volume) -> image::RgbaImage {
     let classification = s.classification();
     let to_u8 = |c: f32| (c.clamp(0.0, 1.0) * 255.0).round() as u8;
-    let spec = volcast::colorbar::ColorbarSpec {
+    let spec = volcast::transfer::colorbar::ColorbarSpec {
         classification: &classification,
         window: s.window,
         range: volume.range,
-        unit: volcast::tf_auto::VolumeFacts::of(volume).kind().unit(),
+        unit: volcast::transfer::auto::VolumeFacts::of(volume).kind().unit(),
         background: [to_u8(s.background.x), to_u8(s.background.y), to_u8(s.background.z)],
     };
-    volcast::colorbar::append_colorbar(image, &spec)
+    volcast::transfer::colorbar::append_colorbar(image, &spec)
 }

@@ -142,7 +142,7 @@ fn write_in_place(
     let texels = memory
         .get_mut(layout.offset as usize..(layout.offset + needed) as usize)
         .ok_or(GpuError::Lost("host-written image is outside its memory"))?;
-    crate::huge_pages::advise(texels);
+    crate::volume::huge_pages::advise(texels);
     if row_pitch == row && depth_pitch == slice {
         fill(0..len as usize, texels);
     } else {

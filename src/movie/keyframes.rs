@@ -2,7 +2,7 @@
 //! movie: the same volume and the same image size in every file.
 
 use super::MovieError;
-use crate::view_state::{ViewState, VolumeRef};
+use crate::scene::view_state::{ViewState, VolumeRef};
 use std::path::{Path, PathBuf};
 
 /// Reads every state in `paths` (at least two); the first error names its file, a mismatch both files.
@@ -74,7 +74,7 @@ pub fn describe(v: &VolumeRef) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::settings::RenderSettings;
+    use crate::scene::settings::RenderSettings;
 
     fn write(dir: &Path, name: &str, builtin: &str, size: (u32, u32)) -> PathBuf {
         let state = ViewState {

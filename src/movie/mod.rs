@@ -18,8 +18,8 @@ pub use keyframes::read_keyframes;
 pub use progress::Progress;
 
 use crate::gpu::{Gpu, GpuError};
-use crate::headless::Headless;
-use crate::settings::RenderSettings;
+use crate::render::headless::Headless;
+use crate::scene::settings::RenderSettings;
 use crate::volume::Volume;
 use std::path::{Path, PathBuf};
 
@@ -163,7 +163,7 @@ pub fn record(
                 headless.renderer.enable_gradient_texture(gpu, volume)?;
             }
             let frame = headless.render(gpu, &s)?;
-            crate::image_out::save(&frame.image, png).map_err(MovieError::Write)?;
+            crate::render::png::save(&frame.image, png).map_err(MovieError::Write)?;
             written += 1;
             gif.push(&frame.image)?;
             progress(k + 1);

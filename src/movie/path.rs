@@ -3,7 +3,7 @@
 //!
 //! **Turntable.** Frame k of N is the base frame with its camera turned about the vertical axis through the point
 //! it looks at by `360°·k/N`: the eye (relative to the target) and the up vector rotate about world +z, the axis
-//! [`crate::camera::Camera::orbit`]'s azimuth turns about, so an orbit camera at azimuth a becomes the one at
+//! [`crate::scene::camera::Camera::orbit`]'s azimuth turns about, so an orbit camera at azimuth a becomes the one at
 //! a + 360°·k/N (same elevation, distance, target). Nothing else changes; a light fixed to the volume stays fixed,
 //! a headlight follows the camera. Frame 0 is the base frame exactly; the loop closes (frame N would be frame 0).
 //!
@@ -25,8 +25,8 @@
 //! The path is continuous (each segment starts where the previous one ended) and, within a segment, the camera
 //! turns at a constant angular rate; it is not smoothed across keyframes (the rate may change there).
 
-use crate::camera::Camera;
-use crate::settings::RenderSettings;
+use crate::scene::camera::Camera;
+use crate::scene::settings::RenderSettings;
 use glam::{DMat3, DQuat, DVec3, Vec3};
 
 /// Frame `k` of an `n`-frame turntable of `base` (`k < n`).
@@ -99,7 +99,7 @@ pub fn between(a: &RenderSettings, b: &RenderSettings, t: f64) -> RenderSettings
     // linear); otherwise the segment start's.
     if let (Some(ca), Some(cb)) = (&a.clip_plane, &b.clip_plane) {
         let normal = slerp_direction(ca.normal(), cb.normal(), t);
-        if let Ok(plane) = crate::clip::ClipPlane::new(normal, lerp(ca.offset(), cb.offset(), t)) {
+        if let Ok(plane) = crate::scene::clip::ClipPlane::new(normal, lerp(ca.offset(), cb.offset(), t)) {
             s.clip_plane = Some(plane);
         }
     }
@@ -208,7 +208,7 @@ mod tests {
         a.window = [0.2, 0.9];
         let mut b = orbit_settings(100.0, -30.0, 3.0);
         b.iso_value = 0.7;
-        b.mode = crate::settings::CompositeMode::Isosurface;
+        b.mode = crate::scene::settings::CompositeMode::Isosurface;
         let c = orbit_settings(200.0, 60.0, 1.5);
         let keys = [a.clone(), b.clone(), c.clone()];
         let n = 11;

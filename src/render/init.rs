@@ -5,8 +5,8 @@ use super::{FrameSlot, FrameUniforms, PositionTargets, Renderer, LUT_ROWS, QUERI
 use crate::gpu::pipeline::{graphics_pipeline, shader, GraphicsDesc};
 use crate::gpu::resources::Buffer;
 use crate::gpu::{Gpu, GpuError, VkContext};
-use crate::settings::{PositionFormat, RenderSettings};
-use crate::tf::LUT_SIZE;
+use crate::scene::settings::{PositionFormat, RenderSettings};
+use crate::transfer::function::LUT_SIZE;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 

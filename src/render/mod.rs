@@ -4,8 +4,11 @@
 
 mod gpu_volume;
 pub mod gradients;
+pub mod headless;
+pub mod info;
 mod init;
 pub mod light_volume;
+pub mod png;
 mod record;
 pub mod skip;
 mod uniforms;
@@ -20,9 +23,9 @@ use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, Graphics
 use crate::gpu::resources::{Buffer, Filling, Image, ImageDesc};
 pub use crate::gpu::TexelPolicy;
 use crate::gpu::{Gpu, GpuError};
-use crate::preintegrate::integral_table;
-use crate::settings::{PositionFormat, RaySetup, RenderSettings};
-use crate::tf::{bake, Classification};
+use crate::scene::settings::{PositionFormat, RaySetup, RenderSettings};
+use crate::transfer::function::{bake, Classification};
+use crate::transfer::preintegrate::integral_table;
 use crate::volume::Volume;
 use ash::vk;
 
@@ -51,7 +54,7 @@ impl PreparedVolume {
 struct OccupancyKey {
     classification: Classification,
     window: [f32; 2],
-    mode: crate::settings::CompositeMode,
+    mode: crate::scene::settings::CompositeMode,
     iso: f32,
     skip_empty: bool,
     /// Rule 2's strides: the longest stride (1 where strides do not apply), the step, the density factor and the
@@ -115,7 +118,7 @@ struct StepRule {
 impl StepRule {
     fn of(s: &RenderSettings) -> StepRule {
         StepRule {
-            density: (s.mode == crate::settings::CompositeMode::Density).then_some(s.density),
+            density: (s.mode == crate::scene::settings::CompositeMode::Density).then_some(s.density),
         }
     }
 }
@@ -134,7 +137,7 @@ fn setup_index(s: &RenderSettings) -> usize {
 /// gradients from the gradient texture, 5 isosurface with the gradient texture; 6–9 variants 1, 4, 3, 5 reading
 /// rule 9's light grid.
 pub fn march_variant(s: &RenderSettings) -> usize {
-    use crate::settings::CompositeMode as M;
+    use crate::scene::settings::CompositeMode as M;
     let base = match s.mode {
         M::Emission | M::Density if (s.shading.is_some() || s.gradient_opacity.is_some()) && s.gradient_texture => 4,
         M::Emission | M::Density if s.shading.is_some() || s.gradient_opacity.is_some() => 1,

@@ -4,7 +4,7 @@
 use super::{march_variant, mirrors, setup_index, FrameUniforms, PassTimings, Renderer, QUERIES};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
-use crate::settings::{PositionFormat, RaySetup, RenderSettings};
+use crate::scene::settings::{PositionFormat, RaySetup, RenderSettings};
 use ash::vk;
 
 impl Renderer {

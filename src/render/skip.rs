@@ -3,8 +3,8 @@
 //! leaps over empty bricks without moving its sample grid, so skipping changes which samples are *taken*, never
 //! what they would have contributed; strides take every second or fourth sample of that grid. Pure code.
 
-use crate::preintegrate::extinction;
-use crate::settings::{CompositeMode, RenderSettings, STRIDES, STRIDE_SPREAD};
+use crate::scene::settings::{CompositeMode, RenderSettings, STRIDES, STRIDE_SPREAD};
+use crate::transfer::preintegrate::extinction;
 use crate::volume::{Volume, VoxelData};
 use rayon::prelude::*;
 
@@ -538,7 +538,7 @@ mod tests {
         // the bound: stride 1.
         let light = vec![[0.2, 0.2, 0.2, 0.05f32]; 4096];
         assert!(g.classify(&light, &s).iter().all(|&o| o == 2));
-        s.shading = Some(crate::settings::Shading::default());
+        s.shading = Some(crate::scene::settings::Shading::default());
         assert!(g.classify(&light, &s).iter().all(|&o| o == 1));
         s.shading = None;
         s.mode = CompositeMode::Mip;

@@ -1,8 +1,8 @@
 //! The frame's uniform block and what it is computed from: the volume's GPU facts and the render settings.
 
 use super::skip;
-use crate::settings::RenderSettings;
-use crate::tf::srgb_to_linear;
+use crate::scene::settings::RenderSettings;
+use crate::transfer::function::srgb_to_linear;
 use crate::volume::Geometry;
 use glam::{DMat3, DMat4, DVec3};
 
@@ -69,7 +69,7 @@ impl VolumeInfo {
     /// Rule 10's clipping plane of `s` in texture space, as the uniforms carry it.
     pub fn clip_plane(&self, s: &RenderSettings) -> [f32; 4] {
         let world_per_mm = self.geometry.world_per_mm(self.dims);
-        crate::clip::texture_plane_or_all(s.clip_plane.as_ref(), self.tex_to_world(s), world_per_mm)
+        crate::scene::clip::texture_plane_or_all(s.clip_plane.as_ref(), self.tex_to_world(s), world_per_mm)
     }
 
     /// A voxel's step along each index axis in the render world: the columns of `L·diag(1/dims)`, L the linear

@@ -6,7 +6,7 @@
 //! [`ClipHandles`]; [`clip_widget`] draws and takes the input.
 
 use super::ui::{box_corners, project, ViewerState};
-use crate::clip::ClipPlane;
+use crate::scene::clip::ClipPlane;
 use egui::{Color32, Pos2, Stroke};
 use glam::{DVec3, Quat, Vec2, Vec3};
 
@@ -43,10 +43,11 @@ pub fn handles(state: &ViewerState, rect: egui::Rect) -> Option<ClipHandles> {
     let wpm = state.geometry.world_per_mm(state.dims) as f32;
     let n = plane.normal();
     let corners = box_corners(state.tex_to_world(), Vec3::ZERO, Vec3::ONE).map(|c| c.as_dvec3());
-    let outline: Vec<Vec3> = crate::slice::plane_section(&corners, n.as_dvec3(), f64::from(plane.offset() * wpm))
-        .into_iter()
-        .map(|p| p.as_vec3())
-        .collect();
+    let outline: Vec<Vec3> =
+        crate::scene::slice::plane_section(&corners, n.as_dvec3(), f64::from(plane.offset() * wpm))
+            .into_iter()
+            .map(|p| p.as_vec3())
+            .collect();
     let centre = if outline.is_empty() {
         n * plane.offset() * wpm
     } else {
@@ -251,7 +252,7 @@ mod tests {
         let mut s = state();
         let plane = ClipPlane::new(Vec3::new(0.3, -1.0, 0.4), 7.0).unwrap();
         s.look.clip_plane = Some(plane);
-        let mm = crate::slice::mm_from_index(&s.geometry, s.look.voxel_axes);
+        let mm = crate::scene::slice::mm_from_index(&s.geometry, s.look.voxel_axes);
         let (point, normal) = plane_in_slices(&s, &plane, mm);
         // The geometry's millimetres relative to the box's centre: the plane's own frame.
         let centre = mm.transform_point3(DVec3::new(99.0, 79.0, 59.0) * 0.5);

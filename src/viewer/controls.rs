@@ -1,7 +1,7 @@
 //! The viewer's camera control, pure maths with no window or GPU: an arcball (Shoemake) orbit camera with zoom
 //! and pan, turntable auto-rotation, and the origin gizmo's axis projection, picking and fly-to animation.
 
-use crate::camera::Camera;
+use crate::scene::camera::Camera;
 use glam::{Mat3, Quat, Vec2, Vec3};
 
 /// A camera orbiting `target` at `distance`. `rotation` maps camera axes to world axes: the camera's right is

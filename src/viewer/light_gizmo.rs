@@ -42,11 +42,11 @@ pub fn disc_position(d: Vec3, center: Vec2, rotation: Quat) -> (Vec2, bool) {
 
 /// Whether a frame of `state` is lit (the gizmo is shown and takes input only then).
 pub fn shown(state: &ViewerState) -> bool {
-    state.look.mode == crate::settings::CompositeMode::Isosurface
+    state.look.mode == crate::scene::settings::CompositeMode::Isosurface
         || (state.look.shading.is_some()
             && matches!(
                 state.look.mode,
-                crate::settings::CompositeMode::Emission | crate::settings::CompositeMode::Density
+                crate::scene::settings::CompositeMode::Emission | crate::scene::settings::CompositeMode::Density
             ))
 }
 

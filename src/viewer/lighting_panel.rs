@@ -1,8 +1,8 @@
 //! The panel's lighting section: the light (headlight or a direction by azimuth and elevation, colour,
 //! intensity), shadows and ambient occlusion, and the iso-surfaces' materials and extra layers.
 
-use crate::lighting::{IsoSurface, Light, MAX_ISOSURFACES, NEUTRAL};
-use crate::settings::{CompositeMode, RenderSettings};
+use crate::scene::lighting::{IsoSurface, Light, MAX_ISOSURFACES, NEUTRAL};
+use crate::scene::settings::{CompositeMode, RenderSettings};
 use glam::Vec3;
 
 /// Azimuth and elevation (degrees, as `Light::from_angles`) of unit direction `d`.

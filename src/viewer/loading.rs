@@ -20,7 +20,7 @@ pub(super) struct Loading {
 /// The viewer's histogram of normalised values, over every step of a series (as its range is): the automatic
 /// transfer function's bins, so that the viewer opens a file with the function `render --preset auto` gives.
 pub(super) fn value_histogram(v: &Volume) -> Vec<u64> {
-    crate::tf_auto::value_histogram(v, crate::tf_auto::AUTO_BINS)
+    crate::transfer::auto::value_histogram(v, crate::transfer::auto::AUTO_BINS)
 }
 
 /// Loads any format `volume::open` reads (raw with the given options); a volume larger than `max_dim` (the
@@ -118,7 +118,7 @@ impl Running {
             }
         }
         self.state.time = time_control::TimeControl::new(v.timesteps(), v.shown_step());
-        let keep = v.timesteps() == 1 && crate::quality::Gradients::texture_fits(v.voxel_count() as u64);
+        let keep = v.timesteps() == 1 && crate::scene::quality::Gradients::texture_fits(v.voxel_count() as u64);
         self.state.gradient_texture = keep;
         (self.series, self.kept) = if v.timesteps() > 1 {
             (Some(v), None)
@@ -266,7 +266,11 @@ mod tests {
             let v = crate::volume::builtin(name, Some(48)).unwrap();
             let mut editor = TfEditorState::default();
             editor.set_volume(&v, &value_histogram(&v));
-            assert_eq!(editor.auto(), Some(crate::tf_auto::auto_for_volume(&v)), "{name}");
+            assert_eq!(
+                editor.auto(),
+                Some(crate::transfer::auto::auto_for_volume(&v)),
+                "{name}"
+            );
         }
     }
 }

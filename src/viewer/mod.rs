@@ -26,7 +26,7 @@ pub use script::{parse_script, ScriptStep};
 use crate::gpu::resources::Image;
 use crate::gpu::swapchain::{Surface, Swapchain, SwapchainDesc};
 use crate::gpu::{Gpu, GpuError, GpuOptions, ValidationLog, VkContext};
-use crate::headless::OUTPUT_FORMAT;
+use crate::render::headless::OUTPUT_FORMAT;
 use crate::render::{PreparedVolume, Renderer};
 use crate::volume::{RawOptions, Volume};
 use ash::vk;
@@ -71,13 +71,13 @@ pub struct ViewerOptions {
     /// The step of a time series to show first (`--time`).
     pub time: Option<u32>,
     /// Sampling quality of still frames (`--quality`; the panel and Q change it).
-    pub quality: crate::quality::Quality,
+    pub quality: crate::scene::quality::Quality,
     /// Start in the four-up layout with the slice views (`--slices`; L toggles it).
     pub slices: bool,
     /// A session to restore once its volume (`source`) is shown (`--state`).
-    pub restore: Option<crate::view_state::ViewState>,
+    pub restore: Option<crate::scene::view_state::ViewState>,
     /// A transfer function to open with, locked (`--preset`, `--tf`); None: the one chosen by modality.
-    pub transfer_function: Option<crate::tf::TransferFunction>,
+    pub transfer_function: Option<crate::transfer::function::TransferFunction>,
 }
 
 /// Opens the viewer and runs until the window closes. Returns the validation log for the caller to report.
@@ -220,7 +220,7 @@ struct Running {
     script: Option<Script>,
     has_volume: bool,
     /// A session to restore once its volume is shown.
-    pending_restore: Option<crate::view_state::ViewState>,
+    pending_restore: Option<crate::scene::view_state::ViewState>,
     /// Save the session to this file with the next frame's settings.
     pending_session: Option<PathBuf>,
     /// The volume named on the command line is loading in the background: its failure ends the session (there is

@@ -2,11 +2,15 @@
 //! `volcast render --state` renders again.
 
 use super::{ViewerError, VolumeSource};
-use crate::view_state::ViewState;
+use crate::scene::view_state::ViewState;
 
 /// The view state's record of where the shown volume came from.
-pub(super) fn volume_ref(source: Option<&VolumeSource>, spacing: [f32; 3], time: u32) -> crate::view_state::VolumeRef {
-    let mut r = crate::view_state::VolumeRef {
+pub(super) fn volume_ref(
+    source: Option<&VolumeSource>,
+    spacing: [f32; 3],
+    time: u32,
+) -> crate::scene::view_state::VolumeRef {
+    let mut r = crate::scene::view_state::VolumeRef {
         spacing,
         time,
         ..Default::default()
@@ -35,7 +39,7 @@ pub(super) fn save_screenshot(
     let settings = &state.settings;
     let img = image::RgbaImage::from_raw(settings.width, settings.height, pixels)
         .ok_or_else(|| ViewerError::Other("screenshot size mismatch".into()))?;
-    crate::image_out::save(&img, path).map_err(ViewerError::Other)?;
+    crate::render::png::save(&img, path).map_err(ViewerError::Other)?;
     // The view state: the settings (still readable as plain `RenderSettings`), the volume's origin and the
     // viewer's own state, so that `volcast render --state` renders this view again and `view --state` restores it.
     write_session(&path.with_extension("json"), state).map_err(ViewerError::Other)?;

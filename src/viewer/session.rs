@@ -6,7 +6,7 @@
 use super::controls::OrbitView;
 use super::ui::ViewerState;
 use super::{Running, VolumeSource};
-use crate::view_state::{ViewState, ViewerSession, VolumeRef};
+use crate::scene::view_state::{ViewState, ViewerSession, VolumeRef};
 use crate::volume::{RawOptions, VoxelType};
 use glam::DVec3;
 use std::path::Path;
@@ -120,7 +120,7 @@ impl Running {
     }
 
     /// The whole state as a view state with the given render settings (those of the frame drawn).
-    pub(super) fn session_state(&self, settings: &crate::settings::RenderSettings) -> ViewState {
+    pub(super) fn session_state(&self, settings: &crate::scene::settings::RenderSettings) -> ViewState {
         let step = self.series.as_ref().map(crate::volume::Volume::shown_step);
         ViewState {
             volume: super::screenshot::volume_ref(
@@ -137,7 +137,7 @@ impl Running {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::settings::RenderSettings;
+    use crate::scene::settings::RenderSettings;
 
     #[test]
     fn a_session_restores_what_it_saved() {
@@ -145,9 +145,9 @@ mod tests {
         a.slabs[1] = (0.3, 0.4);
         a.slices.shown = true;
         a.slices.crosshair = DVec3::new(3.0, 4.5, 6.0);
-        a.quality = Some(crate::quality::Quality::Fast);
+        a.quality = Some(crate::scene::quality::Quality::Fast);
         a.orbit.turn(0.7);
-        a.look.mode = crate::settings::CompositeMode::Mip;
+        a.look.mode = crate::scene::settings::CompositeMode::Mip;
         let settings = a.render_settings(200, 100);
         let saved = ViewState {
             volume: VolumeRef::default(),

@@ -8,7 +8,7 @@
 //! the window/level, the volume or the view's size changed.
 
 use super::ui::ViewerState;
-use crate::slice::{self, SliceFrame, SliceView, WindowLevel};
+use crate::scene::slice::{self, SliceFrame, SliceView, WindowLevel};
 use crate::volume::Volume;
 use egui::{Color32, Pos2, Stroke};
 use glam::{DMat4, DVec2, DVec3};

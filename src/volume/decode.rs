@@ -226,7 +226,7 @@ fn try_zeroed_vec<T: bytemuck::Zeroable>(count: usize) -> Result<Vec<T>, DecodeE
         return Err(DecodeError::OutOfMemory);
     }
     // SAFETY: the allocation is `layout.size()` initialised (zero) bytes, borrowed only for this call.
-    crate::huge_pages::advise(unsafe { std::slice::from_raw_parts_mut(ptr.cast::<u8>(), layout.size()) });
+    crate::volume::huge_pages::advise(unsafe { std::slice::from_raw_parts_mut(ptr.cast::<u8>(), layout.size()) });
     // SAFETY: allocated by the global allocator with exactly this layout; all-zero bytes are a valid T (Zeroable).
     Ok(unsafe { Vec::from_raw_parts(ptr, count, count) })
 }

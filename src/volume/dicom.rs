@@ -1,7 +1,7 @@
 //! DICOM: a folder of single-frame slices (one series), or one multi-frame file, through `dicom-object`.
 //!
 //! Native pixel data is read straight from the parsed element. RLE Lossless, JPEG (baseline, extended,
-//! lossless), JPEG-LS and JPEG 2000 are decoded frame by frame ([`dicom_codec`]), each frame checked to decode to
+//! lossless), JPEG-LS and JPEG 2000 are decoded frame by frame ([`codec`]), each frame checked to decode to
 //! exactly Rows x Columns x BitsAllocated before it lands in the volume; other compressed transfer syntaxes
 //! (JPEG XL, HTJ2K, video) are refused with a message naming them. An enhanced multi-frame object's per-frame and shared
 //! functional groups (plane position and orientation, pixel measures, pixel value transformation) place and
@@ -11,17 +11,19 @@
 //! names and InstanceNumber do not matter; the z spacing is the mean step between sorted positions. Rescale
 //! slope/intercept becomes [`Volume::scaling`](super::Volume::scaling); the stored integers reach the GPU as is.
 
+pub(crate) mod codec;
+mod geometry;
 mod lengths;
 mod pixels;
 mod temporal;
 
 use super::decode::Progress;
-use super::dicom_codec::{self, Kind};
-use super::dicom_geometry::{self, Placed};
 use super::format::{self, clip, header_error};
 use super::{check_dims, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
+use codec::Kind;
 use dicom_object::file::ReadPreamble;
 use dicom_object::{DefaultDicomObject, InMemDicomObject, OpenFileOptions, Tag};
+use geometry::Placed;
 use lengths::check_lengths;
 use pixels::{append_file, check_backed, empty_data, load_planned};
 use std::path::{Path, PathBuf};
@@ -205,7 +207,7 @@ fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Sl
         }
     }
     let transfer_syntax = obj.meta().transfer_syntax().trim_end_matches(['\0', ' ']).to_string();
-    let kind = dicom_codec::codec(&transfer_syntax).map_err(err)?;
+    let kind = codec::codec(&transfer_syntax).map_err(err)?;
     let series = obj
         .element_opt(SERIES_UID)
         .ok()
@@ -312,7 +314,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
         );
         notes.push(format!(
             "pixel data compressed as {} ({}), decoded{}",
-            dicom_codec::name(&first.transfer_syntax),
+            codec::name(&first.transfer_syntax),
             clip(&first.transfer_syntax),
             if lossy {
                 "; this syntax can be lossy, so values may differ from the original scan"
@@ -338,7 +340,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
             })
             .collect()
     };
-    let arrangement = dicom_geometry::arrange(&placed, pixel_spacing, first.slice_step).map_err(err)?;
+    let arrangement = geometry::arrange(&placed, pixel_spacing, first.slice_step).map_err(err)?;
     notes.extend(arrangement.notes);
     let (slices, frame_order) = if per_frame {
         (slices, arrangement.order.clone())
@@ -369,7 +371,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
 /// The volume from the assembled pixels, placed and (for uneven spacing) resampled as `plan` says.
 fn finish(name: String, plan: Plan, data: VoxelData) -> Result<Volume, VolumeError> {
     let data = match &plan.resample {
-        Some(at) => dicom_geometry::resample_slices(&data, plan.dims, at),
+        Some(at) => geometry::resample_slices(&data, plan.dims, at),
         None => data,
     };
     let spacing = plan.geometry.spacing().map(|s| s as f32);

@@ -14,11 +14,11 @@
 mod builtin;
 mod decode;
 mod dicom;
-mod dicom_codec;
-mod dicom_geometry;
 mod downsample;
+mod error;
 mod format;
 pub mod geometry;
+pub mod huge_pages;
 mod metaimage;
 mod nifti;
 mod nrrd;
@@ -27,17 +27,18 @@ mod raw;
 mod tiff_stack;
 mod time;
 mod unsupported;
-mod vti;
-mod vti_data;
+mod voxel;
 mod vtk;
-mod vtk_scan;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use decode::Endian;
 pub use downsample::downsample_to;
+pub use error::VolumeError;
 pub use open::{detect_format, open, open_with_progress, Format, OpenOptions};
 pub use raw::{load_raw, parse_scivis_name, RawOptions};
 pub use time::TimeSteps;
+use voxel::{compute_range, compute_range_of, stored_offset, stored_value};
+pub use voxel::{Scaling, VoxelData, VoxelType};
 
 /// Parsers that read from memory and never touch the file system: the fuzz targets drive these.
 pub mod from_bytes {
@@ -47,15 +48,11 @@ pub mod from_bytes {
     pub use super::nifti::{from_bytes as nifti, parse_header as nifti_header};
     pub use super::nrrd::{from_bytes as nrrd, parse_header as nrrd_header};
     pub use super::tiff_stack::from_bytes as tiff;
-    pub use super::vti::from_bytes as vti;
+    pub use super::vtk::vti::from_bytes as vti;
     pub use super::vtk::{from_bytes as vtk, parse_header as vtk_header};
 }
 
 pub use geometry::Geometry;
-
-use rayon::prelude::*;
-use std::fmt;
-use std::path::PathBuf;
 
 /// Largest dimension accepted at load; the device's own limit is checked later at upload.
 pub const MAX_DIM: u32 = 16384;
@@ -63,177 +60,6 @@ pub const MAX_DIM: u32 = 16384;
 /// Most voxels accepted at load (2^31): beyond this, byte offsets of 4-byte voxels stop fitting the 32-bit
 /// sizes that drivers and `image` handling commonly assume, and the volume no longer fits typical GPU memory.
 pub const MAX_VOXELS: u64 = 1 << 31;
-
-/// Voxel type of the *source* (file or generator). See [`VoxelData`] for what reaches the GPU.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum VoxelType {
-    U8,
-    U16,
-    I16,
-    F32,
-    F64,
-    I8,
-    U32,
-    I32,
-}
-
-impl VoxelType {
-    pub const ALL: [VoxelType; 8] = [
-        VoxelType::U8,
-        VoxelType::U16,
-        VoxelType::I16,
-        VoxelType::F32,
-        VoxelType::F64,
-        VoxelType::I8,
-        VoxelType::U32,
-        VoxelType::I32,
-    ];
-
-    /// Bytes per voxel in the file.
-    pub fn size(self) -> usize {
-        match self {
-            VoxelType::U8 | VoxelType::I8 => 1,
-            VoxelType::U16 | VoxelType::I16 => 2,
-            VoxelType::F32 | VoxelType::U32 | VoxelType::I32 => 4,
-            VoxelType::F64 => 8,
-        }
-    }
-
-    /// The open-scivis spelling, as used in file names.
-    pub fn name(self) -> &'static str {
-        match self {
-            VoxelType::U8 => "uint8",
-            VoxelType::U16 => "uint16",
-            VoxelType::I16 => "int16",
-            VoxelType::F32 => "float32",
-            VoxelType::F64 => "float64",
-            VoxelType::I8 => "int8",
-            VoxelType::U32 => "uint32",
-            VoxelType::I32 => "int32",
-        }
-    }
-
-    /// Case-insensitive; accepts the open-scivis names and the usual C/numpy aliases.
-    pub fn parse(s: &str) -> Option<VoxelType> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "uint8" | "u8" | "uchar" | "unsigned_char" => Some(VoxelType::U8),
-            "uint16" | "u16" | "ushort" => Some(VoxelType::U16),
-            "int16" | "i16" | "short" => Some(VoxelType::I16),
-            "float32" | "f32" | "float" => Some(VoxelType::F32),
-            "float64" | "f64" | "double" => Some(VoxelType::F64),
-            "int8" | "i8" | "char" | "signed_char" => Some(VoxelType::I8),
-            "uint32" | "u32" | "uint" | "unsigned_int" => Some(VoxelType::U32),
-            "int32" | "i32" | "int" => Some(VoxelType::I32),
-            _ => None,
-        }
-    }
-}
-
-impl fmt::Display for VoxelType {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for VoxelType {
-    type Err = VolumeError;
-
-    fn from_str(s: &str) -> Result<VoxelType, VolumeError> {
-        VoxelType::parse(s).ok_or_else(|| VolumeError::UnknownType { given: s.to_string() })
-    }
-}
-
-/// Voxel values as they go to the GPU: uint8 -> U8 (R8_UNORM), int8 -> U8 with +128 bias, uint16 -> U16
-/// (R16_UNORM), int16 -> U16 with +32768 bias (R16_UNORM keeps all 16 bits), float32 -> F32; float64, uint32
-/// and int32 -> F32 (converted).
-#[derive(Clone, PartialEq)]
-pub enum VoxelData {
-    U8(Vec<u8>),
-    U16(Vec<u16>),
-    F32(Vec<f32>),
-}
-
-impl VoxelData {
-    pub fn len(&self) -> usize {
-        match self {
-            VoxelData::U8(v) => v.len(),
-            VoxelData::U16(v) => v.len(),
-            VoxelData::F32(v) => v.len(),
-        }
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    fn kind(&self) -> &'static str {
-        match self {
-            VoxelData::U8(_) => "U8",
-            VoxelData::U16(_) => "U16",
-            VoxelData::F32(_) => "F32",
-        }
-    }
-
-    /// The representation `source_type` must be stored in.
-    fn matches(&self, source_type: VoxelType) -> bool {
-        matches!(
-            (self, source_type),
-            (VoxelData::U8(_), VoxelType::U8 | VoxelType::I8)
-                | (VoxelData::U16(_), VoxelType::U16 | VoxelType::I16)
-                | (
-                    VoxelData::F32(_),
-                    VoxelType::F32 | VoxelType::F64 | VoxelType::U32 | VoxelType::I32
-                )
-        )
-    }
-}
-
-// Volumes run to gigabytes; a derived Debug would print every voxel.
-impl fmt::Debug for VoxelData {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "VoxelData::{}(len {})", self.kind(), self.len())
-    }
-}
-
-/// Offset that maps int16 onto u16 order-preservingly, so R16_UNORM keeps every bit.
-const INT16_BIAS: f64 = 32768.0;
-/// The same for int8 onto u8.
-const INT8_BIAS: f64 = 128.0;
-
-/// Offset between a stored (biased) integer and the source value.
-fn stored_offset(source_type: VoxelType) -> f64 {
-    match source_type {
-        VoxelType::I16 => INT16_BIAS,
-        VoxelType::I8 => INT8_BIAS,
-        _ => 0.0,
-    }
-}
-
-/// Physical value = slope × source value + intercept (NIfTI `scl_slope`/`scl_inter`, DICOM rescale).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Scaling {
-    pub slope: f64,
-    pub intercept: f64,
-}
-
-impl Scaling {
-    pub const IDENTITY: Scaling = Scaling {
-        slope: 1.0,
-        intercept: 0.0,
-    };
-
-    pub fn is_identity(&self) -> bool {
-        *self == Scaling::IDENTITY
-    }
-
-    fn apply(&self, v: f64) -> f64 {
-        if self.is_identity() {
-            v
-        } else {
-            v * self.slope + self.intercept
-        }
-    }
-}
 
 /// A volume ready for upload.
 #[derive(Clone, Debug)]
@@ -468,53 +294,6 @@ impl Volume {
     }
 }
 
-fn stored_value(source_type: VoxelType, data: &VoxelData, i: usize) -> f64 {
-    match data {
-        VoxelData::U8(v) => f64::from(v[i]) - stored_offset(source_type),
-        VoxelData::U16(v) => f64::from(v[i]) - stored_offset(source_type),
-        VoxelData::F32(v) => f64::from(v[i]),
-    }
-}
-
-fn compute_range(source_type: VoxelType, data: &VoxelData) -> [f64; 2] {
-    compute_range_of(source_type, data).unwrap_or([0.0, 0.0])
-}
-
-/// The data's min/max as source values (NaN/Inf ignored); `None` if no voxel is finite.
-fn compute_range_of(source_type: VoxelType, data: &VoxelData) -> Option<[f64; 2]> {
-    // In blocks on every core (a 1 GiB volume is read once more here), each block a vectorisable fold.
-    fn min_max<T: Copy + PartialOrd + Send + Sync>(values: &[T]) -> Option<(T, T)> {
-        let pick = |(lo, hi): (T, T), (a, b): (T, T)| (if a < lo { a } else { lo }, if b > hi { b } else { hi });
-        values
-            .par_chunks(1 << 20)
-            .map(|block| {
-                let first = block[0];
-                block.iter().fold((first, first), |acc, &v| pick(acc, (v, v)))
-            })
-            .reduce_with(pick)
-    }
-    let found = match data {
-        VoxelData::U8(v) => {
-            let offset = stored_offset(source_type);
-            min_max(v).map(|(lo, hi)| (f64::from(lo) - offset, f64::from(hi) - offset))
-        }
-        VoxelData::U16(v) => {
-            let offset = stored_offset(source_type);
-            min_max(v).map(|(lo, hi)| (f64::from(lo) - offset, f64::from(hi) - offset))
-        }
-        VoxelData::F32(v) => v
-            .par_chunks(1 << 20)
-            .filter_map(|block| {
-                let mut finite = block.iter().copied().filter(|x| x.is_finite());
-                let first = finite.next()?;
-                Some(finite.fold((first, first), |(lo, hi), x| (lo.min(x), hi.max(x))))
-            })
-            .reduce_with(|(a, b), (c, d)| (a.min(c), b.max(d)))
-            .map(|(lo, hi)| (f64::from(lo), f64::from(hi))),
-    };
-    found.map(|(lo, hi)| [lo, hi])
-}
-
 /// Checks dims and returns the voxel count.
 pub(crate) fn check_dims(dims: [u32; 3]) -> Result<u64, VolumeError> {
     if dims.contains(&0) {
@@ -541,131 +320,6 @@ fn check_spacing(dims: [u32; 3], spacing: [f32; 3]) -> Result<(), VolumeError> {
     } else {
         Err(VolumeError::BadSpacing { spacing })
     }
-}
-
-struct Dims([u32; 3]);
-
-impl fmt::Display for Dims {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}x{}x{}", self.0[0], self.0[1], self.0[2])
-    }
-}
-
-fn type_list() -> &'static str {
-    "uint8, int8, uint16, int16, uint32, int32, float32, float64"
-}
-
-/// Everything that can go wrong making a volume. Each message names the problem, the numbers, and what to do.
-#[derive(Debug, thiserror::Error)]
-pub enum VolumeError {
-    #[error("dimensions {} contain a zero; every dimension must be at least 1", Dims(*dims))]
-    ZeroDimension { dims: [u32; 3] },
-    #[error("dimensions {} exceed the limit of {MAX_DIM} per axis", Dims(*dims))]
-    DimensionTooLarge { dims: [u32; 3] },
-    #[error("dimensions {} make {count} voxels, more than the limit of {MAX_VOXELS} (2^31)", Dims(*dims))]
-    TooManyVoxels { dims: [u32; 3], count: u64 },
-    #[error(
-        "voxel spacing {} {} {} is invalid: each must be positive and finite (and dims × spacing finite)",
-        spacing[0], spacing[1], spacing[2]
-    )]
-    BadSpacing { spacing: [f32; 3] },
-    #[error("the voxel-to-world affine {rows:?} is not finite or not invertible (its axes are parallel or zero)")]
-    BadAffine { rows: Box<[[f64; 4]; 4]> },
-    #[error("unknown voxel type '{given}': use one of {}", type_list())]
-    UnknownType { given: String },
-    #[error(
-        "unknown voxel type '{given}' in file name {file}: use one of {}, or pass --type T",
-        type_list()
-    )]
-    UnknownTypeInName { file: String, given: String },
-    #[error("voxel data for {} has {actual} values but needs {expected}", Dims(*dims))]
-    DataLength {
-        dims: [u32; 3],
-        expected: u64,
-        actual: usize,
-    },
-    #[error("voxel data of kind {data} cannot hold source type {source_type}")]
-    TypeMismatch { source_type: VoxelType, data: &'static str },
-    #[error("cannot tell the {missing} of {file}: pass --dims W H D --type T or name the file NAME_WxHxD_TYPE.raw")]
-    MissingLayout { file: String, missing: &'static str },
-    #[error("cannot read {}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
-    #[error("{} is not a regular file", path.display())]
-    NotAFile { path: PathBuf },
-    #[error("file {file} is {actual} bytes but {} {voxel_type} needs {expected}", Dims(*dims))]
-    SizeMismatch {
-        file: String,
-        actual: u64,
-        dims: [u32; 3],
-        voxel_type: VoxelType,
-        expected: u64,
-    },
-    #[error("{} {voxel_type} does not fit in memory addressing ({bytes} bytes)", Dims(*dims))]
-    TooLarge {
-        dims: [u32; 3],
-        voxel_type: VoxelType,
-        bytes: u64,
-    },
-    #[error("cannot allocate {bytes} bytes for the voxels of {}", Dims(*dims))]
-    OutOfMemory { dims: [u32; 3], bytes: u64 },
-    #[error("unknown built-in volume '{given}': choose one of {}", BUILTIN_NAMES.join(", "))]
-    UnknownBuiltin { given: String },
-    #[error("built-in volume size {size} is out of range: use 2 to 1024")]
-    BuiltinSize { size: u32 },
-    #[error("rescale slope {slope} / intercept {intercept} is invalid: the slope must be finite and non-zero")]
-    BadScaling { slope: f64, intercept: f64 },
-    #[error("{file}: {problem}")]
-    Header { file: String, problem: String },
-    #[error("{file}: unsupported {format} voxel type '{given}': volcast reads {}", type_list())]
-    UnsupportedType {
-        file: String,
-        format: &'static str,
-        given: String,
-    },
-    #[error("{file}: the voxel data end after {actual} of the {expected} bytes that {} {voxel_type} needs (truncated file?)", Dims(*dims))]
-    Truncated {
-        file: String,
-        actual: u64,
-        expected: u64,
-        dims: [u32; 3],
-        voxel_type: VoxelType,
-    },
-    #[error("{file}: the {what} data is corrupt: {source}")]
-    Corrupt {
-        file: String,
-        what: &'static str,
-        source: std::io::Error,
-    },
-    #[error(
-        "{file}: {compressed} bytes of {what} data cannot hold the {expected} bytes that {} {voxel_type} needs \
-         (deflate expands at most ~1032:1); the header's sizes are wrong or the file is truncated",
-        Dims(*dims)
-    )]
-    CompressionRatio {
-        file: String,
-        what: &'static str,
-        compressed: u64,
-        expected: u64,
-        dims: [u32; 3],
-        voxel_type: VoxelType,
-    },
-    #[error(
-        "{file}: data file '{data_file}' is outside the header's folder; volcast only reads data files in the \
-         header's folder or below it"
-    )]
-    PathEscape { file: String, data_file: String },
-    #[error(
-        "{} exceeds the maximum dimension {max_dim} and downsampling is off (--no-downsample); \
-         raise --max-dim or allow downsampling",
-        Dims(*dims)
-    )]
-    DownsampleRefused { dims: [u32; 3], max_dim: u32 },
-    #[error(
-        "{file} is {kind}; volcast cannot read {what}. It reads raw, VTK legacy, VTK XML ImageData (.vti), NRRD, \
-         NIfTI-1, MetaImage, DICOM and TIFF (convert the file to one of these, or give --dims and --type to read it \
-         as raw)"
-    )]
-    Unsupported { file: String, kind: String, what: String },
 }
 
 #[cfg(test)]

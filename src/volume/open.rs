@@ -2,7 +2,7 @@
 //! extension second, then applies the caller's overrides and the maximum dimension.
 
 use super::decode::{Endian, Progress};
-use super::{dicom, downsample, format, metaimage, nifti, nrrd, raw, tiff_stack, unsupported, vti, vtk};
+use super::{dicom, downsample, format, metaimage, nifti, nrrd, raw, tiff_stack, unsupported, vtk};
 use super::{RawOptions, Volume, VolumeError};
 use std::path::Path;
 
@@ -64,7 +64,7 @@ pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     if vtk::is_vtk(&prefix) {
         return Ok(Format::Vtk);
     }
-    if vti::is_vtk_xml(&prefix) {
+    if vtk::vti::is_vtk_xml(&prefix) {
         return Ok(Format::Vti);
     }
     if nrrd::is_nrrd(&prefix) {
@@ -207,7 +207,7 @@ fn open_unnamed(path: &Path, opts: &OpenOptions, progress: &mut dyn FnMut(f32)) 
             raw::load_raw_with_progress(path, &opts.raw, extras, &mut progress)?
         }
         Format::Vtk => vtk::load(path, opts.array.as_deref(), &mut progress)?,
-        Format::Vti => vti::load(path, opts.array.as_deref(), &mut progress)?,
+        Format::Vti => vtk::vti::load(path, opts.array.as_deref(), &mut progress)?,
         Format::Nrrd => nrrd::load(path, &mut progress)?,
         Format::Nifti => nifti::load(path, &mut progress)?,
         Format::MetaImage => metaimage::load(path, &mut progress)?,

@@ -4,12 +4,16 @@
 //! `FIELD`, `VECTORS`, ...) in any order; one one-component point array is loaded: the one `--array` names, else
 //! the first `SCALARS`/`COLOR_SCALARS`, else the first one-component `FIELD` array under `POINT_DATA`.
 
+mod scan;
+pub(crate) mod vti;
+mod vti_data;
+
 use super::decode::{Endian, Progress};
 use super::format::{
     self, clip, header_error, number, numbers, signed_spacing, DataLocation, Encoding, Header, Source,
 };
-use super::vtk_scan::{ArrayKind, PointArray, Scanner, Section};
 use super::{ArrayInfo, Volume, VolumeError, VoxelData, MAX_DIM};
+use scan::{ArrayKind, PointArray, Scanner, Section};
 use std::io::{BufRead, BufReader, Cursor, Seek};
 use std::path::Path;
 

@@ -5,9 +5,9 @@
 
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::f64::consts::PI;
-use volcast::camera::Camera;
-use volcast::settings::{CompositeMode, RenderSettings, Shading};
-use volcast::tf::TransferFunction;
+use volcast::scene::camera::Camera;
+use volcast::scene::settings::{CompositeMode, RenderSettings, Shading};
+use volcast::transfer::function::TransferFunction;
 use volcast::transfer::Colormap;
 use volcast::volume::{Geometry, Scaling, Volume, VoxelData, VoxelType};
 

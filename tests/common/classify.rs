@@ -1,5 +1,5 @@
 //! The reference's own classification (rule 4), written from the definitions in f64: no code shared with
-//! `tf::bake` or `Colormap::srgb`, only the documented control points in `volcast::transfer::tables` (checked
+//! `function::bake` or `Colormap::srgb`, only the documented control points in `volcast::transfer::colormap::tables` (checked
 //! against their published values in tests/reference_selftest.rs) and the user's settings.
 //!
 //! A sample of normalised value v inside the window [lo, hi] has window position c = (v − lo)/(hi − lo).
@@ -14,9 +14,9 @@
 #![allow(dead_code)]
 
 use glam::DVec3;
-use volcast::settings::RenderSettings;
-use volcast::tf::{Classification, TfUnits};
-use volcast::transfer::tables::{COOL_WARM, PLASMA, VIRIDIS};
+use volcast::scene::settings::RenderSettings;
+use volcast::transfer::colormap::tables::{COOL_WARM, PLASMA, VIRIDIS};
+use volcast::transfer::function::{Classification, TfUnits};
 use volcast::transfer::Colormap;
 
 /// The sRGB decoding (IEC 61966-2-1).

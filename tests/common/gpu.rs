@@ -10,8 +10,8 @@ use super::reference::{Reference, Rendered};
 use image::RgbaImage;
 use std::collections::BTreeMap;
 use volcast::gpu::{Gpu, GpuOptions};
-use volcast::headless::Headless;
-use volcast::settings::{decode_sample_count, RaySetup, RenderSettings};
+use volcast::render::headless::Headless;
+use volcast::scene::settings::{decode_sample_count, RaySetup, RenderSettings};
 use volcast::volume::Volume;
 
 pub fn validated_gpu() -> Gpu {

@@ -7,7 +7,7 @@ use super::classify::Classifier;
 use super::placement::Placement;
 use super::reference::Reference;
 use glam::DVec3;
-use volcast::settings::{CompositeMode, RenderSettings};
+use volcast::scene::settings::{CompositeMode, RenderSettings};
 
 /// The grid: per cell T and O, and where to read T from a lit point.
 pub struct LightGridRef {

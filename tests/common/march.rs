@@ -10,7 +10,7 @@ use super::reference::{shade, Lamp, PixelTrace, Placement, Reference, Segment};
 use super::segments::Segments;
 use super::strides::{BrickRanges, Strides};
 use glam::DVec3;
-use volcast::settings::{CompositeMode, RenderSettings, Shading};
+use volcast::scene::settings::{CompositeMode, RenderSettings, Shading};
 
 /// Everything per-frame that `trace` needs, computed once.
 pub(crate) struct Frame<'a> {

@@ -2,7 +2,7 @@
 //! `Camera::projection`), and the slab method that finds a ray's segment inside a box.
 
 use glam::DVec3;
-use volcast::settings::RenderSettings;
+use volcast::scene::settings::RenderSettings;
 
 /// The ray of pixel (x, y), row 0 at the top: its origin (the eye, or for an orthographic camera the pixel's point
 /// on the plane through the eye perpendicular to the view direction) and unit direction.

@@ -7,7 +7,7 @@
 //!   rules normalise by), and the `RenderSettings` (camera parameters, transfer function, window, steps, modes).
 //!   These are what a file or a user gives; a bug in producing them is a loader bug, tested by the loaders' own
 //!   tests against files written by other tools and read back by second libraries.
-//! - **Documented constants**: the colormaps' control points (`volcast::transfer::tables`: Moreland's table,
+//! - **Documented constants**: the colormaps' control points (`volcast::transfer::colormap::tables`: Moreland's table,
 //!   matplotlib's viridis and plasma), checked against their published values in tests/reference_selftest.rs.
 //!
 //! Everything else is computed here and in the modules beside it (march.rs: one pixel's march; placement.rs): the
@@ -29,8 +29,8 @@ pub use super::placement::Placement;
 use super::strides::BrickRanges;
 use glam::{DMat4, DVec3};
 use image::{Rgba, RgbaImage};
-use volcast::lighting::Light;
-use volcast::settings::{RenderSettings, Shading};
+use volcast::scene::lighting::Light;
+use volcast::scene::settings::{RenderSettings, Shading};
 use volcast::volume::{Volume, VoxelType};
 
 /// A ray segment inside the slab box, in world units along the unit direction `dir` from `origin` (the eye for a

@@ -1,5 +1,5 @@
 //! The reference's pre-integration (rule 6), written from its definition in f64 and sharing no code with
-//! `volcast::preintegrate`: the segment between two consecutive samples of values v_a and v_b is taken as a value
+//! `volcast::transfer::preintegrate`: the segment between two consecutive samples of values v_a and v_b is taken as a value
 //! varying linearly from v_a to v_b, and composited as one sample of
 //! - mean extinction σ̄ = (1/(v_b − v_a)) ∫ σ(v) dv over [v_a, v_b], with σ(v) = −ln(1 − a(v)) (emission) or
 //!   a(v)·density (density model), at most 32 per voxel length, zero outside the window;

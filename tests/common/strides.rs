@@ -5,7 +5,7 @@
 
 use super::segments::Segments;
 use glam::DVec3;
-use volcast::settings::{CompositeMode, RenderSettings, STRIDES, STRIDE_SPREAD};
+use volcast::scene::settings::{CompositeMode, RenderSettings, STRIDES, STRIDE_SPREAD};
 
 /// Brick edge in voxels (rule 2).
 const BRICK: usize = 8;

@@ -7,8 +7,8 @@ use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
-use volcast::settings::RenderSettings;
-use volcast::view_state::ViewState;
+use volcast::scene::settings::RenderSettings;
+use volcast::scene::view_state::ViewState;
 
 /// How long the viewer keeps its window open for the test's input (`wait:` script step). The input and captures
 /// took 2.3 s on a 2-core machine with lavapipe; the rest is margin for a loaded one. The test spends what is

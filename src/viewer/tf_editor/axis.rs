@@ -1,8 +1,8 @@
 //! The editor's data-unit axis under the histogram: nice round ticks over the volume's value range (the same
 //! tick rule as the colour bar, `colorbar::nice_ticks`), labelled in the data's units.
 
-use crate::colorbar::{nice_ticks, tick_label};
-use crate::tf::TfUnits;
+use crate::transfer::colorbar::{nice_ticks, tick_label};
+use crate::transfer::function::TfUnits;
 use egui::{Align2, Color32, FontId, Pos2, Rect, Stroke};
 
 /// Least room (points) a tick label gets along the axis.

@@ -3,14 +3,14 @@
 //! data range, as the strip is laid out) and are stored in the transfer function's own units.
 
 use super::{from_normalized, to_normalized};
-use crate::tf::{colormap_at, piecewise, TransferFunction};
+use crate::transfer::function::{colormap_at, piecewise, TransferFunction};
 
 /// Points a colormap is turned into when its transfer function gets its first colour point: 17 samples over the
 /// window follow every listed colormap within a few 8-bit steps.
 pub const COLORMAP_SAMPLES: usize = 17;
 
 /// The sRGB colour the transfer function gives normalised value `u` (its colour points, or its colormap over
-/// `window`), as `tf::bake` defines it.
+/// `window`), as `function::bake` defines it.
 pub fn color_at(tf: &TransferFunction, u: f32, window: [f32; 2], range: [f64; 2]) -> [f32; 3] {
     if tf.colors.is_empty() {
         let [lo, hi] = window;
@@ -99,7 +99,7 @@ pub fn nearest_on_strip(xs: &[f32], x: f32, radius: f32) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tf::TfUnits;
+    use crate::transfer::function::TfUnits;
     use crate::transfer::Colormap;
 
     fn tf(units: TfUnits, colors: Vec<[f32; 4]>) -> TransferFunction {

@@ -15,7 +15,7 @@ pub use colors::{
 pub use overlay::paint_colorbar;
 pub use panel::{panel, TfEditorState};
 
-use crate::tf::{bake, linear_to_srgb, lookup, Classification, TfUnits, TransferFunction};
+use crate::transfer::function::{bake, linear_to_srgb, lookup, Classification, TfUnits, TransferFunction};
 use egui::{Color32, Pos2, Rect, Sense, Stroke};
 
 /// The most histogram bars the editor draws (about one per pixel and a half of its plot).
@@ -408,8 +408,11 @@ mod tests {
             .map(|i| ((i * 7919) % 5000) as f64 / 4999.0)
             .chain([f64::NAN])
             .collect();
-        let fine = crate::tf_auto::histogram(values.iter().copied(), 1024);
-        assert_eq!(fold(&fine, 256), crate::tf_auto::histogram(values.iter().copied(), 256));
+        let fine = crate::transfer::auto::histogram(values.iter().copied(), 1024);
+        assert_eq!(
+            fold(&fine, 256),
+            crate::transfer::auto::histogram(values.iter().copied(), 256)
+        );
         assert_eq!(fold(&[1, 2, 3], 256), vec![1, 2, 3]);
         assert_eq!(fold(&[1, 2, 3, 4, 5], 2), vec![6, 9]);
     }

@@ -1,8 +1,8 @@
 //! A colour bar painted into a rect of the 3D view with egui: the same colours, opacity plot and ticks as the
-//! PNG's colour bar (`crate::colorbar`), labels in egui's font.
+//! PNG's colour bar (`crate::transfer::colorbar`), labels in egui's font.
 
-use crate::colorbar::{colour_at, nice_ticks, tick_label};
-use crate::tf::{bake, Classification};
+use crate::transfer::colorbar::{colour_at, nice_ticks, tick_label};
+use crate::transfer::function::{bake, Classification};
 use egui::{Align2, Color32, FontId, Pos2, Rect, Stroke};
 
 /// Paints the colour bar of `classification` over `window` (normalised) of data `range` into `rect`: the bar

@@ -3,8 +3,8 @@
 //! and JSON save/load with a path field (errors beside the buttons).
 
 use super::editor_with_unit;
-use crate::tf::{TransferFunction, PRESET_NAMES};
-use crate::tf_auto::{auto_transfer_function, VolumeFacts};
+use crate::transfer::auto::{auto_transfer_function, VolumeFacts};
+use crate::transfer::function::{TransferFunction, PRESET_NAMES};
 use crate::transfer::Colormap;
 use std::path::Path;
 
@@ -85,7 +85,7 @@ pub fn panel(
                 .clicked()
             {
                 *transfer_function = None;
-                *window = crate::settings::DEFAULT_WINDOW;
+                *window = crate::scene::settings::DEFAULT_WINDOW;
                 changed = true;
             }
             let auto = state.auto();

@@ -1,8 +1,8 @@
 //! Keyboard shortcuts, and Tab taken from egui's input before egui sees it.
 
 use super::state::{UiAction, ViewerState};
-use crate::quality::Quality;
-use crate::settings::Shading;
+use crate::scene::quality::Quality;
+use crate::scene::settings::Shading;
 
 /// Removes the presses of Tab (without modifiers) from `input` and returns how many there were: the viewer handles
 /// Tab itself (panel on/off) and egui must not move its focus with it.

@@ -2,7 +2,7 @@
 //! camera's mouse input on the view.
 
 use super::state::ViewerState;
-use crate::camera::edge_labels;
+use crate::scene::camera::edge_labels;
 use crate::viewer::controls::{gizmo_axes, look_along, pick_axis, RotationAnimation};
 use egui::{Color32, Pos2, Stroke};
 use glam::{Mat4, Vec2, Vec3};
@@ -14,7 +14,7 @@ pub fn box_corners(tex_to_world: Mat4, lo: Vec3, hi: Vec3) -> [Vec3; 8] {
     })
 }
 
-use crate::slice::BOX_EDGES;
+use crate::scene::slice::BOX_EDGES;
 
 /// Screen position (points) of a world point, or None behind the near plane.
 pub fn project(view_proj: Mat4, p: Vec3, rect: egui::Rect) -> Option<Pos2> {
@@ -100,7 +100,7 @@ pub fn view_overlay(ui: &mut egui::Ui, state: &mut ViewerState) {
             );
             let tex = ((state.slices.crosshair + 0.5) / d).as_vec3();
             let centre = model.transform_point3(tex);
-            for view in crate::slice::SliceView::ALL {
+            for view in crate::scene::slice::SliceView::ALL {
                 let mut axis = Vec3::ZERO;
                 axis[view.normal_axis()] = 0.04;
                 if let (Some(a), Some(b)) = (project(vp, centre - axis, rect), project(vp, centre + axis, rect)) {

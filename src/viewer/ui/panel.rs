@@ -3,9 +3,9 @@
 
 use super::state::{raw_only, UiAction, ViewerState};
 use super::tf_panel::transfer_function_section;
-use crate::camera::ViewPreset;
-use crate::clip::ClipPlane;
-use crate::settings::{CompositeMode, PositionFormat, RaySetup, Shading};
+use crate::scene::camera::ViewPreset;
+use crate::scene::clip::ClipPlane;
+use crate::scene::settings::{CompositeMode, PositionFormat, RaySetup, Shading};
 use crate::viewer::clip_widget;
 use crate::viewer::controls::{look_along, RotationAnimation};
 use crate::volume::geometry::index_axis_names;

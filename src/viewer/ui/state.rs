@@ -1,10 +1,10 @@
 //! The viewer's state: everything the user can change, as plain data. [`ViewerState::render_settings`] is the one
 //! place it turns into renderer parameters (unit-tested).
 
-use crate::camera::ViewPreset;
-use crate::quality::{Gradients, Quality};
 use crate::render::PassTimings;
-use crate::settings::RenderSettings;
+use crate::scene::camera::ViewPreset;
+use crate::scene::quality::{Gradients, Quality};
+use crate::scene::settings::RenderSettings;
 use crate::viewer::controls::{OrbitView, RotationAnimation};
 use crate::viewer::slice_views::SliceViews;
 use crate::viewer::time_control::TimeControl;
@@ -43,7 +43,7 @@ pub struct ViewerState {
     pub animation: Option<RotationAnimation>,
     /// Where the volume view is in the window (points), as laid out by the last UI pass.
     pub view_rect: Option<egui::Rect>,
-    /// Value histogram of the volume ([`crate::tf_auto::AUTO_BINS`] bins over the normalised range): the
+    /// Value histogram of the volume ([`crate::transfer::auto::AUTO_BINS`] bins over the normalised range): the
     /// editor draws it, the automatic transfer function and the slices' window/level read it.
     pub histogram: Vec<u64>,
     pub range: [f64; 2],
@@ -186,7 +186,7 @@ impl ViewerState {
     pub fn set_volume(&mut self, extent: Vec3, geometry: Geometry, dims: [u32; 3], label: String) {
         if !self.tf_locked {
             self.look.transfer_function = None;
-            self.look.window = crate::settings::DEFAULT_WINDOW;
+            self.look.window = crate::scene::settings::DEFAULT_WINDOW;
         }
         self.extent = extent;
         self.geometry = geometry;
@@ -201,7 +201,7 @@ impl ViewerState {
     }
 
     /// The camera the 3D view renders with.
-    pub fn camera(&self) -> crate::camera::Camera {
+    pub fn camera(&self) -> crate::scene::camera::Camera {
         let mut camera = self.orbit.camera();
         camera.ortho = self.ortho;
         camera
@@ -332,7 +332,7 @@ pub(super) fn raw_only(path: &std::path::Path, opts: RawOptions) -> RawOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::edge_labels;
+    use crate::scene::camera::edge_labels;
     use crate::viewer::ui::next_lower;
 
     #[test]
@@ -396,7 +396,7 @@ mod tests {
         assert_eq!(state.frame_settings(401, 300, false).step_length, 0.7);
         assert_eq!(plain.step_length, Quality::Normal.step_length(&plain, [0.0, 1.0]));
         // Shaded frames take the gradient texture where the viewer kept the volume for it.
-        state.look.shading = Some(crate::settings::Shading::default());
+        state.look.shading = Some(crate::scene::settings::Shading::default());
         assert!(!state.render_settings(8, 8).gradient_texture);
         state.gradient_texture = true;
         assert!(state.render_settings(8, 8).gradient_texture);
@@ -457,12 +457,12 @@ mod tests {
         // A CT's Hounsfield-unit function left a newly loaded MRI invisible.
         let mut state = ViewerState::new(Vec3::ONE, "x".into());
         let g = Geometry::from_spacing([1.0; 3]);
-        state.look.transfer_function = crate::tf::TransferFunction::preset("ct-bone").ok();
+        state.look.transfer_function = crate::transfer::function::TransferFunction::preset("ct-bone").ok();
         state.look.window = [0.0, 1.0];
         state.set_volume(Vec3::ONE, g, [10, 10, 10], "mri".into());
         assert!(state.look.transfer_function.is_none());
-        assert_eq!(state.look.window, crate::settings::DEFAULT_WINDOW);
-        state.look.transfer_function = crate::tf::TransferFunction::preset("ct-bone").ok();
+        assert_eq!(state.look.window, crate::scene::settings::DEFAULT_WINDOW);
+        state.look.transfer_function = crate::transfer::function::TransferFunction::preset("ct-bone").ok();
         state.tf_locked = true;
         state.set_volume(Vec3::ONE, g, [10, 10, 10], "ct".into());
         assert!(state.look.transfer_function.is_some(), "locked: kept");

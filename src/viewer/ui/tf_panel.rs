@@ -2,7 +2,7 @@
 //! and the sampling quality.
 
 use super::state::ViewerState;
-use crate::quality::Quality;
+use crate::scene::quality::Quality;
 use crate::transfer::Colormap;
 use egui::{Color32, Pos2};
 

@@ -1,8 +1,8 @@
 //! The pre-parse length walk: every element length in a DICOM file checked against the bytes that follow, before
 //! dicom-parser (which allocates by claimed length) sees the data.
 
+use super::codec;
 use super::is_dicom;
-use crate::volume::dicom_codec;
 use crate::volume::format::{clip, header_error};
 use crate::volume::VolumeError;
 use dicom_core::dictionary::{DataDictionary, DataDictionaryEntry};
@@ -141,7 +141,7 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
                 label,
                 format!(
                     "uses {} ({}); volcast cannot decode it",
-                    dicom_codec::name(other),
+                    codec::name(other),
                     clip(other)
                 ),
             ))

@@ -1,11 +1,11 @@
 //! DICOM pixel data into the volume: native frames as found (keeping BitsStored, sign-extending), compressed
-//! frames decoded one by one through [`dicom_codec`], and the check that the files can back the volume before it
+//! frames decoded one by one through [`codec`], and the check that the files can back the volume before it
 //! is allocated.
 
+use super::codec::{self, FrameShape, Kind};
 use super::{finish, open_dicom, Plan, Slice, PIXEL_DATA};
 use crate::volume::decode::try_vec;
 use crate::volume::decode::Progress;
-use crate::volume::dicom_codec::{self, FrameShape, Kind};
 use crate::volume::format;
 use crate::volume::format::{clip, header_error};
 use crate::volume::{check_dims, Volume};
@@ -140,12 +140,12 @@ pub(super) fn append_file(
     let fragments = element.value().fragments().ok_or_else(|| {
         err(format!(
             "{} ({}) needs encapsulated PixelData, the file has native",
-            dicom_codec::name(&s.transfer_syntax),
+            codec::name(&s.transfer_syntax),
             clip(&s.transfer_syntax)
         ))
     })?;
     let offsets = element.value().offset_table().unwrap_or(&[]);
-    let frames = dicom_codec::frames(fragments, offsets, s.frames).map_err(err)?;
+    let frames = codec::frames(fragments, offsets, s.frames).map_err(err)?;
     let shape = FrameShape {
         rows: s.rows as u16,
         columns: s.columns as u16,
@@ -154,7 +154,7 @@ pub(super) fn append_file(
         bits_stored: s.bits_stored,
     };
     for &k in order {
-        let decoded = dicom_codec::decode(s.kind, &s.transfer_syntax, &frames[k], &shape)
+        let decoded = codec::decode(s.kind, &s.transfer_syntax, &frames[k], &shape)
             .map_err(|e| err(format!("frame {} of {}: {e}", k + 1, s.frames)))?;
         append_frame(Pixels::Bytes(&decoded), s, out, label)?;
     }
@@ -162,7 +162,7 @@ pub(super) fn append_file(
 }
 
 /// The files must back the volume before it is allocated: native pixels byte for byte, compressed ones within
-/// [`dicom_codec::MAX_RATIO`] (past that, a small file claiming a large volume is a decompression bomb).
+/// [`codec::MAX_RATIO`] (past that, a small file claiming a large volume is a decompression bomb).
 pub(super) fn check_backed(label: &str, needed: u64, files: &[(Kind, u64)]) -> Result<(), VolumeError> {
     let native: u64 = files.iter().filter(|f| f.0 == Kind::Native).map(|f| f.1).sum();
     let compressed: u64 = files.iter().filter(|f| f.0 != Kind::Native).map(|f| f.1).sum();
@@ -173,13 +173,13 @@ pub(super) fn check_backed(label: &str, needed: u64, files: &[(Kind, u64)]) -> R
             Ok(())
         };
     }
-    if needed > native.saturating_add(compressed.saturating_mul(dicom_codec::MAX_RATIO)) {
+    if needed > native.saturating_add(compressed.saturating_mul(codec::MAX_RATIO)) {
         return Err(header_error(
             label,
             format!(
                 "{compressed} bytes of compressed pixel data claim to decode to {needed} bytes, more than {}x: \
                  refused as a decompression bomb",
-                dicom_codec::MAX_RATIO
+                codec::MAX_RATIO
             ),
         ));
     }

@@ -8,9 +8,9 @@
 //! Every size in a header must agree with the extent × type before anything is allocated, and inflation stops at
 //! the size the extent needs, so a small file cannot claim (or inflate to) more than it holds.
 
-use super::decode::{self, DecodeError, Endian, Progress};
-use super::format::header_error;
-use super::{VolumeError, VoxelData, VoxelType};
+use crate::volume::decode::{self, DecodeError, Endian, Progress};
+use crate::volume::format::header_error;
+use crate::volume::{VolumeError, VoxelData, VoxelType};
 use base64::Engine;
 use std::io::{Read, Write};
 

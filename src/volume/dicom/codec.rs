@@ -81,7 +81,7 @@ pub(super) fn codec(uid: &str) -> Result<Kind, String> {
             return Err(format!(
                 "uses {} ({}); volcast cannot decode it (convert it with e.g. `gdcmconv --raw`)",
                 name(other),
-                super::format::clip(other)
+                crate::volume::format::clip(other)
             ))
         }
     })

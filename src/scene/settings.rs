@@ -2,9 +2,9 @@
 //! Pure data; the rules that turn it into pixels are written out once, in [`RenderSettings`]'s docs, and
 //! implemented twice: by the GPU passes (`shaders/`) and by the independent CPU reference (`tests/common`).
 
-use crate::camera::{Camera, ViewPreset};
-use crate::lighting::{self, IsoSurface, Light, MAX_ISOSURFACES, NEUTRAL};
-use crate::tf::{Classification, TransferFunction};
+use crate::scene::camera::{Camera, ViewPreset};
+use crate::scene::lighting::{self, IsoSurface, Light, MAX_ISOSURFACES, NEUTRAL};
+use crate::transfer::function::{Classification, TransferFunction};
 use crate::transfer::Colormap;
 use crate::volume::Volume;
 use glam::Vec3;
@@ -168,7 +168,7 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    linearly at x = v (normalised units) or x = min + v·(max − min) (data units), constant beyond its ends,
 ///    or its colormap at c when it has no colour points. Colormaps are `Colormap::srgb`'s definitions. Colours
 ///    are sRGB and decoded to linear light: `(rgb, a)`, `a` per voxel-length step. The GPU reads this from a
-///    4096-entry table (`tf::bake`, interpolated at v·4095), which follows the definition except within one
+///    4096-entry table (`function::bake`, interpolated at v·4095), which follows the definition except within one
 ///    entry of a jump in a transfer function.
 /// 5. **Shading** (with `shading`, in emission/density modes; always in isosurface mode): gradient `g` by central
 ///    differences of v one voxel apart along each texture axis, `g_i = (v(p + e_i) − v(p − e_i))/2` (value per
@@ -227,7 +227,7 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    p, and T at `p + 1.5·Δ` (cells, towards the light: a surface does not shadow itself); rule 5 becomes
 ///    `rgb·(ambient·O + diffuse·c·T·max(n·L, 0)) + specular·c·T·max(n·H, 0)^shininess` (O = 1 without
 ///    occlusion, T = 1 without shadows).
-/// 10. **Clipping plane** (`clip_plane`, [`crate::clip::ClipPlane`]): a unit normal n and an offset d in mm, in
+/// 10. **Clipping plane** (`clip_plane`, [`crate::scene::clip::ClipPlane`]): a unit normal n and an offset d in mm, in
 ///     the millimetre world the box is placed in by rule 0 (with `voxel_axes` the voxel box), before centring and
 ///     scaling. A point p is kept where `(p − c)·n ≥ d`, c the box's centre there; n points into what stays. Rule
 ///     1's segment is cut to the kept part exactly (the ray's first sample, rule 2, counts from where the plane
@@ -300,7 +300,7 @@ pub struct RenderSettings {
     /// orientation (what volcast showed before it read orientations; `--voxel-axes`).
     pub voxel_axes: bool,
     /// Rule 10's clipping plane (None: keep everything).
-    pub clip_plane: Option<crate::clip::ClipPlane>,
+    pub clip_plane: Option<crate::scene::clip::ClipPlane>,
     /// Output, instead of each pixel's colour, the number of sample positions its ray visited (rule 2's samples
     /// actually taken: those that empty-space skipping leaps over, gradient and bisection samples not counted),
     /// as a 24-bit integer in the R, G, B bytes. For tests and measurement; see [`decode_sample_count`].
@@ -340,7 +340,7 @@ impl RenderSettings {
     /// Defaults for a volume with box `extent`: the camera orbits at azimuth 35°, elevation 25° and fits the box.
     pub fn new(width: u32, height: u32, extent: Vec3) -> RenderSettings {
         let radius = extent.length() * 0.5;
-        let distance = Camera::fit_distance(radius, crate::camera::DEFAULT_FOV_Y_DEG);
+        let distance = Camera::fit_distance(radius, crate::scene::camera::DEFAULT_FOV_Y_DEG);
         RenderSettings {
             width,
             height,

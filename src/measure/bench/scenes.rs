@@ -1,8 +1,8 @@
 //! The bench's scene table: which volumes, transfer functions, cameras, sizes and shadings are timed, and the
 //! `vtk-helix` scene that matches `../shared/tools/vtk_bench.py`.
 
-use crate::camera::Camera;
-use crate::settings::{self, RenderSettings};
+use crate::scene::camera::Camera;
+use crate::scene::settings::{self, RenderSettings};
 use crate::transfer::Colormap;
 use crate::volume::{self, Volume, VolumeError};
 use glam::Vec3;

@@ -1,6 +1,6 @@
 //! What `volcast info` says about a volume, in words and as JSON. Pure formatting of a loaded [`Volume`].
 
-use crate::quality::Gradients;
+use crate::scene::quality::Gradients;
 use crate::volume::geometry::Handedness;
 use crate::volume::Volume;
 use serde::Serialize;

@@ -2,8 +2,8 @@
 //! affine from Image Orientation and Image Position (Patient), a gantry tilt kept as the shear it is, and uneven
 //! slice spacing resampled onto a regular grid. Pure maths over what the headers say.
 
-use super::geometry::{self, Geometry};
-use super::VoxelData;
+use crate::volume::geometry::{self, Geometry};
+use crate::volume::VoxelData;
 use glam::DVec3;
 
 /// What one slice's header says about where it is.

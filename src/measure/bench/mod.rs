@@ -8,7 +8,7 @@
 //!   shader is left untouched, so the count costs the GPU nothing;
 //! - effective samples per second (samples taken ÷ GPU frame time) and its fraction of the sample-only rate for the
 //!   volume's texel format ([`sample_only`]);
-//! - each configuration's error against the same scene rendered converged ([`crate::fidelity`]).
+//! - each configuration's error against the same scene rendered converged ([`crate::measure::fidelity`]).
 
 mod counter;
 mod report;
@@ -20,11 +20,12 @@ pub use report::*;
 pub use sample_only::*;
 pub use scenes::*;
 
-use crate::fidelity::{converged, Fidelity, CONVERGED_STEP};
 use crate::gpu::{Gpu, GpuError};
-use crate::headless::Headless;
+use crate::measure::fidelity::{converged, Fidelity};
+use crate::render::headless::Headless;
 use crate::render::VolumeLayout;
-use crate::settings::RenderSettings;
+use crate::scene::quality::CONVERGED_STEP;
+use crate::scene::settings::RenderSettings;
 use crate::volume::{self, RawOptions, Volume, VolumeError};
 use ash::vk;
 use std::path::Path;

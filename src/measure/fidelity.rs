@@ -5,12 +5,10 @@
 //! The error is taken over object pixels (where either image shows the volume, `compare::diff_stats`), so a
 //! small object on a large background cannot dilute it.
 
-use crate::compare::{background_u8, diff_stats};
-use crate::settings::RenderSettings;
+use crate::measure::image_diff::{background_u8, diff_stats};
+use crate::scene::quality::CONVERGED_STEP;
+use crate::scene::settings::RenderSettings;
 use image::RgbaImage;
-
-/// The converged image's step, in voxels.
-pub const CONVERGED_STEP: f32 = 0.125;
 
 /// `s` with the converged step and brick strides off.
 pub fn converged(s: &RenderSettings) -> RenderSettings {

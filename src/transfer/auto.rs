@@ -17,7 +17,7 @@
 //! near the median so the bulk of the tissue stays translucent: the brighter half (white matter on T1, grey
 //! matter and fluid on PD/T2) gives the picture, the rest adds faint context.
 
-use crate::tf::{TfUnits, TransferFunction};
+use crate::transfer::function::{TfUnits, TransferFunction};
 use crate::transfer::Colormap;
 use crate::volume::{Volume, VoxelType};
 

@@ -4,7 +4,7 @@ use crate::gpu::resources::{record_readback, Buffer, Image, ImageDesc};
 use crate::gpu::sync::Access;
 use crate::gpu::{Gpu, GpuError};
 use crate::render::{PassTimings, Renderer};
-use crate::settings::RenderSettings;
+use crate::scene::settings::RenderSettings;
 use crate::volume::Volume;
 use ash::vk;
 use gpu_allocator::MemoryLocation;

@@ -206,7 +206,7 @@ mod tests {
         assert!(e.to_string().contains("non-zero"), "{e}");
         assert!(serde_json::from_str::<ClipPlane>(r#"{"offset": 1}"#).is_err());
         // Settings written before planes existed load without one.
-        let old: crate::settings::RenderSettings = serde_json::from_str(r#"{"width": 64}"#).unwrap();
+        let old: crate::scene::settings::RenderSettings = serde_json::from_str(r#"{"width": 64}"#).unwrap();
         assert_eq!(old.clip_plane, None);
     }
 

@@ -2,7 +2,7 @@
 //! `RenderSettings`) and where the volume came from. The viewer's F12 writes it beside the screenshot, and
 //! `volcast render --state FILE.json` renders that view again.
 
-use crate::settings::RenderSettings;
+use crate::scene::settings::RenderSettings;
 use std::path::PathBuf;
 
 /// Where the shown volume came from: a file (with the raw options it was opened with) or a built-in.
@@ -32,9 +32,9 @@ pub struct ViewerSession {
     /// The slice views' crosshair, in continuous voxel index coordinates.
     pub crosshair: [f64; 3],
     /// The slice views' window and level in data units.
-    pub window_level: Option<crate::slice::WindowLevel>,
+    pub window_level: Option<crate::scene::slice::WindowLevel>,
     /// The quality level (None: the settings' own step length).
-    pub quality: Option<crate::quality::Quality>,
+    pub quality: Option<crate::scene::quality::Quality>,
     /// Lower detail while moving.
     pub lod: bool,
     /// Keep the transfer function when another volume loads.
@@ -48,7 +48,7 @@ impl Default for ViewerSession {
             slice_views: false,
             crosshair: [0.0; 3],
             window_level: None,
-            quality: Some(crate::quality::Quality::Normal),
+            quality: Some(crate::scene::quality::Quality::Normal),
             lod: true,
             tf_locked: false,
             panel_visible: true,

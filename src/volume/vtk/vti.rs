@@ -4,11 +4,11 @@
 //! in [`super::vti_data`]. The world is VTK's own (no anatomical convention), as for VTK legacy files:
 //! `world = Origin + Direction · (index · Spacing)`, Direction row-major, index counted from the extent's start.
 
-use super::decode::{Endian, Progress};
-use super::format::{self, clip, header_error, named, Header};
-use super::geometry::{from_columns, Geometry};
 use super::vti_data::{self, Compressor, Layout, Location};
-use super::{ArrayInfo, Volume, VolumeError, VoxelType};
+use crate::volume::decode::{Endian, Progress};
+use crate::volume::format::{self, clip, header_error, named, Header};
+use crate::volume::geometry::{from_columns, Geometry};
+use crate::volume::{ArrayInfo, Volume, VolumeError, VoxelType};
 use glam::{DMat3, DVec3};
 use quick_xml::events::{BytesStart, Event};
 use std::path::Path;
@@ -318,7 +318,7 @@ fn read(
         })
         .collect();
     let dims = format::dims_from(file, "Extent sizes", &sizes)?;
-    let count = super::check_dims(dims).map_err(|e| named(file, e))?;
+    let count = crate::volume::check_dims(dims).map_err(|e| named(file, e))?;
     let spacing = floats(file, "Spacing", p.spacing.as_deref(), [1.0; 3])?;
     let origin = floats(file, "Origin", p.origin.as_deref(), [0.0; 3])?;
     let d = floats(

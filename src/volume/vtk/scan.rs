@@ -2,8 +2,8 @@
 //! rectilinear-grid file, with the payload of each array skipped (binary: count × type size bytes, then a newline;
 //! ASCII: count values) so the arrays before and after the one volcast loads cost a seek, not a parse.
 
-use super::format::{clip, header_error, number};
-use super::{VolumeError, VoxelType};
+use crate::volume::format::{clip, header_error, number};
+use crate::volume::{VolumeError, VoxelType};
 use std::io::{BufRead, Read, Seek, SeekFrom};
 
 /// VTK's own lines are at most 256 characters; a longer one is not a header line.

@@ -9,7 +9,7 @@ mod font;
 
 pub use font::{text_width, GLYPH_HEIGHT};
 
-use crate::tf::{bake, linear_to_srgb, lookup, Classification};
+use crate::transfer::function::{bake, linear_to_srgb, lookup, Classification};
 use image::{Rgba, RgbaImage};
 
 /// What a colour bar shows.
@@ -257,7 +257,7 @@ pub fn append_colorbar(image: &RgbaImage, spec: &ColorbarSpec) -> RgbaImage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tf::{srgb_to_linear, TfUnits, TransferFunction};
+    use crate::transfer::function::{srgb_to_linear, TfUnits, TransferFunction};
     use crate::transfer::Colormap;
 
     fn ct_tf() -> Classification {
@@ -318,7 +318,7 @@ mod tests {
             let y = l.row_of(&spec, t).unwrap();
             // The definition in sRGB at the tick: a row spans 4010/236 ≈ 17 HU, and the colours change by at most
             // 1/2000 per HU, so the row centre's colour is within ~2.2/255 of the tick's (plus rounding).
-            let want = crate::tf::piecewise(&points, t as f32);
+            let want = crate::transfer::function::piecewise(&points, t as f32);
             let px = img.get_pixel(l.bar_x[0] + 2, y);
             for c in 0..3 {
                 let got = f32::from(px[c]) / 255.0;

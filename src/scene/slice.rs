@@ -323,5 +323,4 @@ pub fn render(volume: &Volume, mm_from_index: DMat4, frame: &SliceFrame, wl: Win
 }
 
 #[cfg(test)]
-#[path = "slice_tests.rs"]
 mod tests;

@@ -9,10 +9,12 @@
 //! frame is rendered, so the GPU and the CPU reference render the same rule. Measured errors against the converged image per level and scene are in the
 //! README (Fidelity).
 
-use crate::fidelity::CONVERGED_STEP;
-use crate::preintegrate::extinction;
-use crate::settings::{CompositeMode, RenderSettings};
-use crate::tf::{bake, LUT_SIZE};
+use crate::scene::settings::{CompositeMode, RenderSettings};
+use crate::transfer::function::{bake, LUT_SIZE};
+use crate::transfer::preintegrate::extinction;
+
+/// The converged image's step, in voxels: `converged` quality, and what fidelity measures against.
+pub const CONVERGED_STEP: f32 = 0.125;
 
 /// Optical depth one segment may carry at most (where the step may still shrink): e^−0.25 ≈ 78% transmitted.
 pub const SEGMENT_DEPTH: f64 = 0.25;
@@ -199,7 +201,7 @@ mod tests {
         let n256 = 256u64 * 256 * 256;
         Gradients::Auto.apply(&mut s, n256);
         assert!(!s.gradient_texture, "an unshaded frame reads no gradient");
-        s.shading = Some(crate::settings::Shading::default());
+        s.shading = Some(crate::scene::settings::Shading::default());
         Gradients::Auto.apply(&mut s, n256);
         assert!(s.gradient_texture);
         Gradients::Auto.apply(&mut s, 1024 * 1024 * 512);

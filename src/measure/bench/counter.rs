@@ -1,10 +1,10 @@
 //! Counting the march's samples on the CPU by replaying its rules, so the march shader is left untouched.
 
-use crate::preintegrate;
 use crate::render::skip::{self, BrickGrid};
 use crate::render::{FrameUniforms, VolumeInfo};
-use crate::settings::{self, CompositeMode, RenderSettings};
-use crate::tf;
+use crate::scene::settings::{self, CompositeMode, RenderSettings};
+use crate::transfer::function as tf;
+use crate::transfer::preintegrate;
 use crate::volume::{Geometry, Volume};
 use glam::{Mat3, Mat4, Vec3};
 
@@ -314,7 +314,7 @@ impl SampleCounter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::Camera;
+    use crate::scene::camera::Camera;
     use crate::volume;
 
     #[test]

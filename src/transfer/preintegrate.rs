@@ -15,7 +15,7 @@
 //! The GPU reads [`integral_table`] from a uniform buffer (4096 × 16 bytes, the 64 KiB every desktop device
 //! offers): on lavapipe a uniform load with per-lane indices is 8 branch-free loads where a storage load is a loop.
 
-use crate::tf::LUT_SIZE;
+use crate::transfer::function::LUT_SIZE;
 
 /// Extinction that stands for opacity 1 (per voxel length): `−ln(1 − a)` is infinite there. At a 1-voxel step
 /// it is opacity 1 − e⁻³², at the finest step allowed (0.05 voxel) 0.80.
@@ -40,7 +40,7 @@ pub fn extinction(alpha: f64, density: Option<f64>) -> f64 {
     }
 }
 
-/// The integral functions of the baked table `lut` (`tf::bake`, [`LUT_SIZE`] entries at v = i/(N − 1)), as the
+/// The integral functions of the baked table `lut` (`function::bake`, [`LUT_SIZE`] entries at v = i/(N − 1)), as the
 /// march reads them: entry i holds `(K_r, K_g, K_b, T)` at v = i/(N − 1), where σ and σ·c are the linear
 /// interpolation of their entry values (as the point table is read). Integrated in f64, stored as f32.
 ///

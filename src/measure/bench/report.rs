@@ -2,11 +2,11 @@
 //! text table and the JSON.
 
 use super::{SampleRate, Shading};
-use crate::fidelity::Fidelity;
 use crate::gpu::{Gpu, GpuError};
-use crate::headless::Headless;
+use crate::measure::fidelity::Fidelity;
+use crate::render::headless::Headless;
 use crate::render::Renderer;
-use crate::settings::{RaySetup, RenderSettings};
+use crate::scene::settings::{RaySetup, RenderSettings};
 use std::path::PathBuf;
 
 #[derive(Clone, Debug)]
@@ -29,9 +29,9 @@ pub struct BenchOptions {
     /// Only the sample-only micro-benchmark.
     pub sample_only: bool,
     /// The sampling quality of every scene (`--quality`), as `render` applies it.
-    pub quality: crate::quality::Quality,
+    pub quality: crate::scene::quality::Quality,
     /// Where shaded scenes take gradients (`--gradients`), as `render` applies it.
-    pub gradients: crate::quality::Gradients,
+    pub gradients: crate::scene::quality::Gradients,
     /// A step length (voxels) forced on every scene, overriding the quality's.
     pub step_length: Option<f32>,
 }

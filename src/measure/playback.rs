@@ -4,11 +4,11 @@
 //! three are timed apart, so a shortfall says which to work on. The series (default 64 steps of 128³ float32, the case) is generated:
 //! the helix field moving along z by two voxels a step and brightening, every step different.
 
-use crate::bench::{load_average, Stats};
 use crate::gpu::{Gpu, GpuError};
-use crate::headless::Headless;
+use crate::measure::bench::{load_average, Stats};
+use crate::render::headless::Headless;
 use crate::render::PreparedVolume;
-use crate::settings::RenderSettings;
+use crate::scene::settings::RenderSettings;
 use crate::volume::{self, Volume, VolumeError, VoxelData, VoxelType};
 use std::time::Instant;
 

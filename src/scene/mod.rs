@@ -1,0 +1,11 @@
+//! What a frame shows, as plain data: the render settings, the camera, the clipping plane, the light and the
+//! iso-surfaces, the quality levels, slice geometry and the saved view state. Pure code: the renderer and the
+//! viewer read these; nothing here touches the GPU.
+
+pub mod camera;
+pub mod clip;
+pub mod lighting;
+pub mod quality;
+pub mod settings;
+pub mod slice;
+pub mod view_state;
