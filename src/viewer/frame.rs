@@ -1,14 +1,15 @@
 //! One frame: the UI pass, then the march into the view image, its blit into the swapchain image and egui over
 //! it, submitted and presented; and what a frame must create first (`prepare`).
 
+use super::app::input::{drag_cut, take_tab_presses};
 use super::screenshot::{save_screenshot, write_session};
-use super::{slice_views, ui, Flow, Running, ViewerError, FRAMES_IN_FLIGHT};
+use super::widgets::layout::frame_ui;
+use super::{Flow, Running, ViewerError, FRAMES_IN_FLIGHT};
 use crate::gpu::resources::{record_readback, Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barrier, Access};
 use crate::gpu::{GpuError, VkContext};
 use crate::render::headless::OUTPUT_FORMAT;
 use crate::scene::settings::RenderSettings;
-use crate::scene::slice::SliceView;
 use crate::volume::Volume;
 use ash::vk;
 use std::sync::mpsc::TryRecvError;
@@ -29,12 +30,12 @@ impl Running {
             match rx.try_recv() {
                 Ok(Some(path)) => {
                     self.dialog = None;
-                    let action = self.state.load_action(path);
+                    let action = self.state.files.load_action(path);
                     self.apply(vec![action]);
                 }
                 Ok(None) | Err(TryRecvError::Disconnected) => {
                     self.dialog = None;
-                    self.state.status = Some("no file chosen (or no file dialog here: type a path)".into());
+                    self.state.messages.status = Some("no file chosen (or no file dialog here: type a path)".into());
                 }
                 Err(TryRecvError::Empty) => {}
             }
@@ -50,56 +51,26 @@ impl Running {
 
         // The UI runs first: it may change what this frame shows.
         let mut raw_input = self.egui_state.take_egui_input(&self.window);
-        // Events a slow frame held back for a drag (`ui::drag_cut`) come first; again some may wait.
+        // Events a slow frame held back for a drag (`drag_cut`) come first; again some may wait.
         raw_input.events.splice(0..0, std::mem::take(&mut self.deferred_events));
         let held = self
             .egui_ctx
             .input(|i| i.pointer.press_origin().filter(|_| i.pointer.any_down()));
         let click_dist = self.egui_ctx.options(|o| o.input_options.max_click_dist);
-        if let Some(cut) = ui::drag_cut(&raw_input.events, held, click_dist) {
+        if let Some(cut) = drag_cut(&raw_input.events, held, click_dist) {
             self.deferred_events = raw_input.events.split_off(cut);
         }
         // Tab belongs to the panel, not to egui's focus traversal: egui would move the focus into a text field,
         // which then swallowed every shortcut (Tab included) once the panel was hidden.
-        let tabs = ui::take_tab_presses(&mut raw_input);
+        let tabs = take_tab_presses(&mut raw_input);
         let state = &mut self.state;
         // What the slice views resample: the shown step of a series, or the kept volume.
         let volume = self.series.as_ref().or(self.kept.as_ref());
+        let textures = &mut self.slice_textures;
+        let mut images = |ctx: &egui::Context, image: &_, volume: Option<&_>| textures.texture(ctx, image, volume);
         let mut actions = Vec::new();
         let full = self.egui_ctx.run_ui(raw_input, |ui| {
-            if tabs % 2 == 1 {
-                state.panel_visible = !state.panel_visible;
-            }
-            if !state.panel_visible {
-                // Nothing hidden may keep the keyboard.
-                ui.ctx().memory_mut(|m| m.stop_text_input());
-            }
-            actions.extend(ui::shortcuts(ui.ctx(), state));
-            if state.panel_visible {
-                egui::Panel::left("settings")
-                    .resizable(false)
-                    // A fixed width: a panel that grew with a long status line moved the views under the cursor.
-                    .exact_size(270.0)
-                    .show(ui, |ui| {
-                        egui::ScrollArea::vertical().show(ui, |ui| actions.extend(ui::settings_panel(ui, state)));
-                    });
-            }
-            egui::CentralPanel::no_frame().show(ui, |ui| {
-                if state.slices.shown {
-                    let [axial, three_d, sagittal, coronal] = slice_views::four_up(ui.max_rect());
-                    for (view, rect) in [
-                        (SliceView::Axial, axial),
-                        (SliceView::Sagittal, sagittal),
-                        (SliceView::Coronal, coronal),
-                    ] {
-                        slice_views::slice_view(ui, rect, state, view, volume);
-                    }
-                    let mut view_ui = ui.new_child(egui::UiBuilder::new().max_rect(three_d));
-                    ui::view_overlay(&mut view_ui, state);
-                } else {
-                    ui::view_overlay(ui, state);
-                }
-            });
+            actions = frame_ui(ui, state, tabs, volume, &mut images);
         });
         self.apply(actions);
         self.show_wanted_step()?;
@@ -126,27 +97,27 @@ impl Running {
             self.recreate_swapchain()?;
         }
         let extent = self.swapchain.as_ref().ok_or(GpuError::Lost("swapchain"))?.extent;
-        let (view_offset, view_size) = view_pixels(self.state.view_rect, pixels_per_point, extent);
+        let (view_offset, view_size) = view_pixels(self.state.interaction.view_rect, pixels_per_point, extent);
         // Interacting, animating or auto-rotating: a cheaper frame; once still, one at full quality.
         let dragging = self.script.as_ref().is_some_and(|s| s.drag_left > 0);
         if dragging {
             self.drag_frames.push(frame_s * 1e3);
         }
         // Screenshots and recorded frames are full frames.
-        let moving = (self.state.interacting || self.state.animation.is_some() || self.state.auto_rotate || dragging)
+        let moving = (self.state.interaction.interacting || self.state.camera_moving() || dragging)
             && self.pending_screenshot.is_none()
             && self.recorder.is_none();
         let settings = self.state.frame_settings(view_size.width, view_size.height, moving);
-        self.refine_pending = moving && self.state.lod;
+        self.refine_pending = moving && self.state.sampling.lod;
         if let Some(path) = self.pending_session.take() {
             // The session holds the still frame's settings, whether or not this frame is a reduced one.
             let still = self.state.render_settings(view_size.width, view_size.height);
             match write_session(&path, &self.session_state(&still)) {
                 Ok(()) => {
                     eprintln!("saved session {}", path.display());
-                    self.state.status = Some(format!("saved session {}", path.display()));
+                    self.state.messages.status = Some(format!("saved session {}", path.display()));
                 }
-                Err(e) => self.state.error = Some(e),
+                Err(e) => self.state.messages.error = Some(e),
             }
         }
         self.prepare(&settings)?;
@@ -157,13 +128,13 @@ impl Running {
         unsafe { self.gpu.device.wait_for_fences(&[sync.fence], true, u64::MAX) }.ctx("vkWaitForFences")?;
         let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
         if self.frame_index >= FRAMES_IN_FLIGHT {
-            self.state.gpu = renderer.timings(&self.gpu, slot)?;
+            self.state.stats.gpu = renderer.timings(&self.gpu, slot)?;
             if !self.slot_reduced[slot] {
-                self.state.full_frame_ms = self.state.gpu.map(|t| t.total_ms);
+                self.state.stats.full_frame_ms = self.state.stats.gpu.map(|t| t.total_ms);
             }
         }
         self.slot_reduced[slot] = settings.width < view_size.width;
-        self.state.frame_ms = frame_time_ms(frame_s, follows, self.state.gpu.map(|t| t.total_ms));
+        self.state.stats.frame_ms = frame_time_ms(frame_s, follows, self.state.stats.gpu.map(|t| t.total_ms));
 
         let swapchain = self.swapchain.as_ref().ok_or(GpuError::Lost("swapchain"))?;
         // SAFETY: the semaphore is unsignalled (its last wait completed with the slot's fence).
@@ -361,8 +332,8 @@ impl Running {
                     .map_err(ViewerError::Other)
                     .and_then(|p| save_screenshot(&path, p, &self.session_state(&settings), step));
                 match saved {
-                    Ok(()) => self.state.status = Some(format!("saved {}", path.display())),
-                    Err(e) => self.state.error = Some(format!("screenshot: {e}")),
+                    Ok(()) => self.state.messages.status = Some(format!("saved {}", path.display())),
+                    Err(e) => self.state.messages.error = Some(format!("screenshot: {e}")),
                 }
             }
             if self.recorder.is_some() {
@@ -371,7 +342,7 @@ impl Running {
                     r.push(view_size.width, view_size.height, p, now)
                 });
                 if let Err(e) = pushed {
-                    self.state.error = Some(format!("recording: {e}"));
+                    self.state.messages.error = Some(format!("recording: {e}"));
                     if let Some(r) = self.recorder.take() {
                         self.stop_recording(r);
                     }

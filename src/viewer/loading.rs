@@ -1,7 +1,8 @@
 //! Loading volumes: a file or built-in read on a background thread (with progress) while the window keeps
 //! drawing, then installed on the GPU; a series' steps uploaded as the time controls ask, one ahead while playing.
 
-use super::{time_control, Running, ViewerError, VolumeSource};
+use super::model::time::TimeControl;
+use super::{Running, ViewerError, VolumeSource};
 use crate::gpu::GpuError;
 use crate::gpu::VkContext;
 use crate::volume::{self, Volume};
@@ -103,23 +104,24 @@ impl Running {
             v.name, v.dims[0], v.dims[1], v.dims[2], v.source_type, spacing[0], spacing[1], spacing[2]
         );
         self.state.set_volume(v.extent(), v.geometry, v.dims, label);
-        self.state.describe_raw(v.dims, v.source_type, spacing);
+        self.state.files.describe_raw(v.dims, v.source_type, spacing);
         self.state.slices.reset(v.dims, &histogram, v.range);
-        self.state.histogram = histogram;
-        self.state.range = v.range;
-        self.state.tf_editor.set_volume(&v, &self.state.histogram);
-        self.state.value_unit = self.state.tf_editor.unit().unwrap_or_default().to_string();
+        let histogram: std::sync::Arc<[u64]> = histogram.into();
+        self.state.volume.histogram = histogram.clone();
+        self.state.volume.range = v.range;
+        self.state.tf_editor.set_volume(&v, histogram);
+        self.state.volume.unit = self.state.tf_editor.unit().unwrap_or_default().to_string();
         // A file's volume gets the transfer function its modality calls for (CT in HU, others by percentiles)
         // unless the user locked theirs; the built-ins (synthetic, no modality) keep the simple model.
-        if !self.state.tf_locked && from_file {
+        if !self.state.tf_editor.locked && from_file {
             if let Some(tf) = self.state.tf_editor.auto() {
                 self.state.look.transfer_function = Some(tf);
                 self.state.look.window = [0.0, 1.0];
             }
         }
-        self.state.time = time_control::TimeControl::new(v.timesteps(), v.shown_step());
+        self.state.time = TimeControl::new(v.timesteps(), v.shown_step());
         let keep = v.timesteps() == 1 && crate::scene::quality::Gradients::texture_fits(v.voxel_count() as u64);
-        self.state.gradient_texture = keep;
+        self.state.sampling.gradient_texture = keep;
         (self.series, self.kept) = if v.timesteps() > 1 {
             (Some(v), None)
         } else {
@@ -189,10 +191,10 @@ impl Running {
 
     pub(super) fn start_load(&mut self, source: VolumeSource) {
         if self.loading.is_some() {
-            self.state.status = Some("a volume is already loading".into());
+            self.state.messages.status = Some("a volume is already loading".into());
             return;
         }
-        self.state.error = None;
+        self.state.messages.error = None;
         self.loading = Some(load_in_background(
             source,
             self.gpu.properties.limits.max_image_dimension3_d,
@@ -207,18 +209,18 @@ impl Running {
                 let label = loading.label.clone();
                 let source = loading.source.clone();
                 self.loading = None;
-                self.state.loading = None;
+                self.state.messages.loading = None;
                 // Logged too: a load from the panel or a drop has no other trace outside the window.
                 let from_file = matches!(source, VolumeSource::File(..));
                 if let Err(e) = self.install_volume(volume, histogram, from_file) {
                     eprintln!("could not show {label}: {e}");
-                    self.state.error = Some(format!("{label}: {e}"));
+                    self.state.messages.error = Some(format!("{label}: {e}"));
                     if self.initial_load.take().is_some() {
                         return Err(e.into());
                     }
                 } else {
                     eprintln!("loaded {label}");
-                    self.state.status = Some(format!("loaded {label}"));
+                    self.state.messages.status = Some(format!("loaded {label}"));
                     self.shown_source = Some(source);
                     if let Some(time) = self.initial_load.take() {
                         self.apply_time(time)?;
@@ -235,18 +237,18 @@ impl Running {
                     return Err(ViewerError::Other(e));
                 }
                 eprintln!("could not load {}: {e}", loading.label);
-                self.state.error = Some(format!("{}: {e}", loading.label));
+                self.state.messages.error = Some(format!("{}: {e}", loading.label));
                 self.loading = None;
-                self.state.loading = None;
+                self.state.messages.loading = None;
             }
             Err(TryRecvError::Empty) => {
                 let p = f32::from_bits(loading.progress.load(Ordering::Relaxed));
-                self.state.loading = Some((loading.label.clone(), p));
+                self.state.messages.loading = Some((loading.label.clone(), p));
             }
             Err(TryRecvError::Disconnected) => {
-                self.state.error = Some(format!("{}: the loader stopped unexpectedly", loading.label));
+                self.state.messages.error = Some(format!("{}: the loader stopped unexpectedly", loading.label));
                 self.loading = None;
-                self.state.loading = None;
+                self.state.messages.loading = None;
             }
         }
         Ok(())
@@ -256,7 +258,7 @@ impl Running {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::viewer::tf_editor::TfEditorState;
+    use crate::viewer::model::tf::TfEditorState;
 
     #[test]
     fn the_viewer_opens_with_the_automatic_function_render_gives() {
@@ -265,7 +267,7 @@ mod tests {
         for &name in crate::volume::BUILTIN_NAMES {
             let v = crate::volume::builtin(name, Some(48)).unwrap();
             let mut editor = TfEditorState::default();
-            editor.set_volume(&v, &value_histogram(&v));
+            editor.set_volume(&v, value_histogram(&v).into());
             assert_eq!(
                 editor.auto(),
                 Some(crate::transfer::auto::auto_for_volume(&v)),

@@ -6,20 +6,16 @@
 //! image → blit to the swapchain image → egui over it] → submit → present. Redraws happen only when something
 //! changed, so an idle viewer sleeps in the event loop.
 
-pub mod clip_widget;
-pub mod controls;
+mod app;
 mod frame;
-pub mod light_gizmo;
-pub mod lighting_panel;
 mod loading;
+pub mod model;
+mod present;
 pub mod recording;
 mod screenshot;
 mod script;
 pub mod session;
-pub mod slice_views;
-pub mod tf_editor;
-pub mod time_control;
-pub mod ui;
+pub mod widgets;
 
 pub use script::{parse_script, ScriptStep};
 
@@ -31,13 +27,14 @@ use crate::render::{PreparedVolume, Renderer};
 use crate::volume::{RawOptions, Volume};
 use ash::vk;
 use loading::{open_source, value_histogram, Loading};
+use model::actions::UiAction;
+use model::Model;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use script::Script;
 use std::path::PathBuf;
 use std::sync::mpsc::Receiver;
 use std::sync::Arc;
 use std::time::Instant;
-use ui::{UiAction, ViewerState};
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
@@ -145,7 +142,7 @@ impl ApplicationHandler for App {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(_) => r.window.request_redraw(),
             WindowEvent::DroppedFile(path) => {
-                let action = r.state.load_action(path);
+                let action = r.state.files.load_action(path);
                 r.apply(vec![action]);
                 r.window.request_redraw();
             }
@@ -206,10 +203,12 @@ struct Running {
     egui_ctx: egui::Context,
     egui_state: egui_winit::State,
     egui_renderer: Option<egui_ash_renderer::Renderer<egui_ash_renderer::allocator::GpuAllocator>>,
-    state: ViewerState,
+    state: Model,
+    /// The slice views' textures.
+    slice_textures: present::slice_textures::SliceTextures,
     loading: Option<Loading>,
     pending_screenshot: Option<PathBuf>,
-    /// Input held back for the next frame so that a quick drag is seen as one (`ui::drag_cut`).
+    /// Input held back for the next frame so that a quick drag is seen as one (`app::input::drag_cut`).
     deferred_events: Vec<egui::Event>,
     /// The GIF being recorded (F9).
     recorder: Option<recording::Recorder>,
@@ -239,7 +238,7 @@ struct Running {
     /// A time series' every step, kept to upload the one the time controls ask for; `None` for a 3-D volume.
     series: Option<Volume>,
     /// A 3-D volume kept for its gradient texture, made on the first frame that reads gradients
-    /// (`ViewerState::gradient_texture`); `None` for a series or a volume whose texture would exceed
+    /// (`Sampling::gradient_texture`); `None` for a series or a volume whose texture would exceed
     /// `quality::GRADIENT_LIMIT`.
     kept: Option<Volume>,
     /// The step after the shown one while playing, uploaded ahead of display (see `upload_ahead`).
@@ -297,10 +296,8 @@ impl Running {
             egui_ctx,
             egui_state,
             egui_renderer: None,
-            state: ViewerState {
-                quality: Some(opts.quality),
-                ..ViewerState::new(glam::Vec3::ONE, "loading…".into())
-            },
+            state: Model::new(glam::Vec3::ONE, "loading…".into()),
+            slice_textures: Default::default(),
             loading: None,
             pending_screenshot: None,
             deferred_events: Vec::new(),
@@ -331,12 +328,13 @@ impl Running {
             ahead: None,
             dialog: None,
         };
+        r.state.sampling.quality = Some(opts.quality);
         r.state.slices.shown = opts.slices;
         if let Some(tf) = &opts.transfer_function {
             // Locked, so that loading the volume does not replace it with the automatic one.
             r.state.look.transfer_function = Some(tf.clone());
             r.state.look.window = [0.0, 1.0];
-            r.state.tf_locked = true;
+            r.state.tf_editor.locked = true;
         }
         // On error `r` is torn down properly before the error is returned.
         match r.init(opts) {
@@ -416,7 +414,7 @@ impl Running {
             )
             .map_err(|e| ViewerError::Other(e.to_string()))?;
             self.install_volume(placeholder, Vec::new(), false)?;
-            self.state.volume_label = "loading…".into();
+            self.state.volume.label = "loading…".into();
             self.start_load(opts.source.clone());
             self.initial_load = Some(opts.time);
             if let Some(script) = &mut self.script {
@@ -447,7 +445,7 @@ impl Running {
         let desc = SwapchainDesc {
             width: size.width.max(1),
             height: size.height.max(1),
-            vsync: self.state.vsync,
+            vsync: self.state.display.vsync,
         };
         let surface = self.surface.as_ref().ok_or(GpuError::Lost("surface"))?;
         let new = Swapchain::new(&self.gpu, surface, desc, self.swapchain.as_ref())?;
@@ -476,8 +474,8 @@ impl Running {
     fn wants_continuous_redraw(&self) -> bool {
         self.loading.is_some()
             || self.dialog.is_some()
-            || self.state.auto_rotate
-            || self.state.animation.is_some()
+            || self.state.camera.auto_rotate
+            || self.state.camera.animation.is_some()
             || self.script.is_some()
             || self.refine_pending
             || self.state.time.playing
@@ -497,12 +495,14 @@ impl Running {
                     None => {
                         let path = PathBuf::from(format!("volcast-{}.gif", time_stamp()));
                         eprintln!("recording {}", path.display());
-                        self.state.recording = Some(path.display().to_string());
+                        self.state.messages.recording = Some(path.display().to_string());
                         self.recorder = Some(recording::Recorder::new(path));
                     }
                 },
                 UiAction::VsyncChanged => self.recreate_swapchain = true,
-                UiAction::SaveSession => self.pending_session = Some(PathBuf::from(self.state.session_path.trim())),
+                UiAction::SaveSession => {
+                    self.pending_session = Some(PathBuf::from(self.state.files.session_path.trim()))
+                }
                 UiAction::OpenSession(path) => self.open_session(&path),
                 UiAction::OpenDialog if self.dialog.is_none() => {
                     // The dialog blocks until the user answers, so it runs on its own thread.
@@ -520,15 +520,15 @@ impl Running {
     /// Ends a recording: writes its GIF (or says why not).
     fn stop_recording(&mut self, r: recording::Recorder) {
         let path = r.path().display().to_string();
-        self.state.recording = None;
+        self.state.messages.recording = None;
         match r.finish(Instant::now()) {
             Ok(frames) => {
                 eprintln!("saved recording {path} ({frames} frames)");
-                self.state.status = Some(format!("saved {path} ({frames} frames)"));
+                self.state.messages.status = Some(format!("saved {path} ({frames} frames)"));
             }
             Err(e) => {
                 eprintln!("recording: {e}");
-                self.state.error = Some(format!("recording: {e}"));
+                self.state.messages.error = Some(format!("recording: {e}"));
             }
         }
     }

@@ -2,7 +2,8 @@
 //! after each frame. Real input (xdotool under Xvfb) is what the viewer tests drive; the script only sets up,
 //! waits and captures.
 
-use super::ui::{self, UiAction};
+use super::model::actions::UiAction;
+use super::widgets::keys;
 use super::{Flow, Running, ViewerError};
 use std::collections::VecDeque;
 use std::path::PathBuf;
@@ -93,7 +94,7 @@ impl Running {
             "drag: median frame {median:.1} ms ({:.1} fps) over {} frames, level of detail {}",
             1e3 / median,
             t.len(),
-            if self.state.lod { "on" } else { "off" }
+            if self.state.sampling.lod { "on" } else { "off" }
         );
     }
 
@@ -118,7 +119,7 @@ impl Running {
         script.wait_until = None;
         if script.drag_left > 0 {
             script.drag_left -= 1;
-            self.state.orbit.turn(0.03);
+            self.state.camera.orbit.turn(0.03);
             return Ok(Flow::Continue);
         }
         if let Some((w, h, tries)) = script.waiting_for_size {
@@ -139,9 +140,9 @@ impl Running {
                 return Ok(Flow::Continue);
             }
             script.waiting_for_load = false;
-            match &self.state.error {
+            match &self.state.messages.error {
                 Some(e) => eprintln!("script: load failed: {e}"),
-                None => eprintln!("script: loaded {}", self.state.volume_label),
+                None => eprintln!("script: loaded {}", self.state.volume.label),
             }
         }
         let Some(step) = script.steps.pop_front() else {
@@ -156,12 +157,12 @@ impl Running {
             ScriptStep::Dialog => self.apply(vec![UiAction::OpenDialog]),
             ScriptStep::Drop(path) => {
                 script.waiting_for_load = true;
-                let action = self.state.load_action(path);
+                let action = self.state.files.load_action(path);
                 self.apply(vec![action]);
             }
             ScriptStep::Lod(on) => {
                 self.report_drag();
-                self.state.lod = on;
+                self.state.sampling.lod = on;
             }
             ScriptStep::Resize(w, h) => {
                 let _ = self.window.request_inner_size(winit::dpi::PhysicalSize::new(w, h));
@@ -191,7 +192,7 @@ impl Running {
                     });
                     i.keys_down.insert(key);
                 });
-                let actions = ui::shortcuts(&self.egui_ctx, &mut self.state);
+                let actions = keys::shortcuts(&self.egui_ctx, &mut self.state);
                 self.egui_ctx.input_mut(|i| {
                     i.keys_down.remove(&key);
                     i.events.clear();

@@ -5,8 +5,9 @@
 //! facing away from the viewer: the near half is cut away) or removes it, F flips it. Pure geometry in
 //! [`ClipHandles`]; [`clip_widget`] draws and takes the input.
 
-use super::ui::{box_corners, project, ViewerState};
 use crate::scene::clip::ClipPlane;
+use crate::viewer::model::{ClipGrab, Model};
+use crate::viewer::widgets::screen::{box_corners, project};
 use egui::{Color32, Pos2, Stroke};
 use glam::{DVec3, Quat, Vec2, Vec3};
 
@@ -17,13 +18,6 @@ pub const HANDLE: f32 = 7.0;
 pub const RING: f32 = 34.0;
 /// The normal arrow's length, render-world units (the box's longest side is 1).
 pub const ARROW: f32 = 0.2;
-
-/// What a drag that started on the widget does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ClipGrab {
-    Slide,
-    Turn,
-}
 
 /// The widget's geometry for one frame: the outline in the render world and the handle and arrow on screen.
 #[derive(Clone, Debug)]
@@ -37,12 +31,12 @@ pub struct ClipHandles {
     pub tip: Option<Pos2>,
 }
 
-/// The widget for `state`'s plane in the 3D view `rect`; None without a plane.
-pub fn handles(state: &ViewerState, rect: egui::Rect) -> Option<ClipHandles> {
-    let plane = state.look.clip_plane?;
-    let wpm = state.geometry.world_per_mm(state.dims) as f32;
+/// The widget for `model`'s plane in the 3D view `rect`; None without a plane.
+pub fn handles(model: &Model, rect: egui::Rect) -> Option<ClipHandles> {
+    let plane = model.look.clip_plane?;
+    let wpm = model.geometry.world_per_mm(model.dims) as f32;
     let n = plane.normal();
-    let corners = box_corners(state.tex_to_world(), Vec3::ZERO, Vec3::ONE).map(|c| c.as_dvec3());
+    let corners = box_corners(model.tex_to_world(), Vec3::ZERO, Vec3::ONE).map(|c| c.as_dvec3());
     let outline: Vec<Vec3> =
         crate::scene::slice::plane_section(&corners, n.as_dvec3(), f64::from(plane.offset() * wpm))
             .into_iter()
@@ -53,7 +47,7 @@ pub fn handles(state: &ViewerState, rect: egui::Rect) -> Option<ClipHandles> {
     } else {
         outline.iter().copied().sum::<Vec3>() / outline.len() as f32
     };
-    let vp = state.view_projection(rect);
+    let vp = model.view_projection(rect);
     Some(ClipHandles {
         handle: project(vp, centre, rect),
         tip: project(vp, centre + n * ARROW, rect),
@@ -64,83 +58,83 @@ pub fn handles(state: &ViewerState, rect: egui::Rect) -> Option<ClipHandles> {
 
 /// A new plane for the C key: through the box's centre, its normal along the view direction (what stays is the far
 /// half, so the cut faces the viewer).
-pub fn facing_away(state: &ViewerState) -> ClipPlane {
-    let forward = state.orbit.camera().forward();
+pub fn facing_away(model: &Model) -> ClipPlane {
+    let forward = model.camera.orbit.camera().forward();
     ClipPlane::new(forward, 0.0).unwrap_or_else(|_| ClipPlane::new(Vec3::Z, 0.0).expect("a unit normal"))
 }
 
 /// The plane slid by a drag of `delta` points from the handle: along the arrow's screen direction when it shows
 /// one (the plane then follows the pointer's motion along it), else by the vertical motion (up moves the plane
 /// away from the viewer). Kept within the box's half diagonal of its centre.
-pub fn slid(state: &ViewerState, h: &ClipHandles, plane: ClipPlane, delta: Vec2, rect: egui::Rect) -> ClipPlane {
-    let wpm = state.geometry.world_per_mm(state.dims) as f32;
+pub fn slid(model: &Model, h: &ClipHandles, plane: ClipPlane, delta: Vec2, rect: egui::Rect) -> ClipPlane {
+    let wpm = model.geometry.world_per_mm(model.dims) as f32;
     let along_world = match (h.handle, h.tip) {
         (Some(a), Some(b)) if (b - a).length() >= 12.0 => {
             let s = Vec2::new(b.x - a.x, b.y - a.y);
             ARROW * delta.dot(s) / s.length_squared()
         }
         _ => {
-            let forward = state.orbit.camera().forward();
+            let forward = model.camera.orbit.camera().forward();
             let away = if plane.normal().dot(forward) >= 0.0 { 1.0 } else { -1.0 };
             -delta.y / rect.height().max(1.0) * away
         }
     };
-    let reach = half_diagonal_mm(state);
+    let reach = half_diagonal_mm(model);
     let offset = (plane.offset() + along_world / wpm).clamp(-reach, reach);
     plane.with_offset(offset).unwrap_or(plane)
 }
 
 /// How far a plane may be from the box's centre and still cut it: the box's half diagonal, mm.
-pub fn half_diagonal_mm(state: &ViewerState) -> f32 {
-    let corners = box_corners(state.tex_to_world(), Vec3::ZERO, Vec3::ONE);
-    corners.iter().map(|c| c.length()).fold(0.0, f32::max) / state.geometry.world_per_mm(state.dims) as f32
+pub fn half_diagonal_mm(model: &Model) -> f32 {
+    let corners = box_corners(model.tex_to_world(), Vec3::ZERO, Vec3::ONE);
+    corners.iter().map(|c| c.length()).fold(0.0, f32::max) / model.geometry.world_per_mm(model.dims) as f32
 }
 
 /// The plane turned by a drag of `delta` points on the ring: about the axis in the screen plane perpendicular to
 /// the motion, by `|delta| / RING` radians, keeping it through the handle.
-pub fn turned(state: &ViewerState, h: &ClipHandles, plane: ClipPlane, delta: Vec2) -> ClipPlane {
+pub fn turned(model: &Model, h: &ClipHandles, plane: ClipPlane, delta: Vec2) -> ClipPlane {
     let motion = Vec3::new(delta.x, -delta.y, 0.0);
     let Some(axis) = Vec3::Z.cross(motion).try_normalize() else {
         return plane;
     };
     let in_camera = Quat::from_axis_angle(axis, motion.length() / RING);
-    let rotation = state.orbit.rotation;
+    let rotation = model.camera.orbit.rotation;
     let normal = (rotation * in_camera * rotation.inverse()) * plane.normal();
-    let wpm = state.geometry.world_per_mm(state.dims) as f32;
+    let wpm = model.geometry.world_per_mm(model.dims) as f32;
     ClipPlane::through(normal, h.centre / wpm).unwrap_or(plane)
 }
 
 /// Draws the plane over the view `rect` and handles its input: returns true while a drag on it moves the plane (the
 /// caller then leaves the camera alone).
-pub fn clip_widget(ui: &egui::Ui, state: &mut ViewerState, rect: egui::Rect, response: &egui::Response) -> bool {
-    let Some(h) = handles(state, rect) else {
-        state.clip_grab = None;
+pub fn clip_widget(ui: &egui::Ui, model: &mut Model, rect: egui::Rect, response: &egui::Response) -> bool {
+    let Some(h) = handles(model, rect) else {
+        model.interaction.clip_grab = None;
         return false;
     };
     if response.drag_started_by(egui::PointerButton::Primary) {
         let origin = ui.input(|i| i.pointer.press_origin());
-        state.clip_grab = match (origin, h.handle) {
+        model.interaction.clip_grab = match (origin, h.handle) {
             (Some(o), Some(c)) if o.distance(c) <= HANDLE + 4.0 => Some(ClipGrab::Slide),
             (Some(o), Some(c)) if (o.distance(c) - RING).abs() <= 6.0 => Some(ClipGrab::Turn),
             _ => None,
         };
     }
     if !response.dragged_by(egui::PointerButton::Primary) {
-        state.clip_grab = None;
+        model.interaction.clip_grab = None;
     }
     let delta = response.drag_delta();
     let delta = Vec2::new(delta.x, delta.y);
-    if let (Some(grab), Some(plane)) = (state.clip_grab, state.look.clip_plane) {
+    if let (Some(grab), Some(plane)) = (model.interaction.clip_grab, model.look.clip_plane) {
         if delta != Vec2::ZERO {
-            state.look.clip_plane = Some(match grab {
-                ClipGrab::Slide => slid(state, &h, plane, delta, rect),
-                ClipGrab::Turn => turned(state, &h, plane, delta),
+            model.look.clip_plane = Some(match grab {
+                ClipGrab::Slide => slid(model, &h, plane, delta, rect),
+                ClipGrab::Turn => turned(model, &h, plane, delta),
             });
         }
     }
 
     let painter = ui.painter_at(rect);
-    let vp = state.view_projection(rect);
+    let vp = model.view_projection(rect);
     let outline: Vec<Pos2> = h.outline.iter().filter_map(|&p| project(vp, p, rect)).collect();
     if outline.len() >= 3 && outline.len() == h.outline.len() {
         painter.add(egui::Shape::convex_polygon(
@@ -153,7 +147,7 @@ pub fn clip_widget(ui: &egui::Ui, state: &mut ViewerState, rect: egui::Rect, res
         if let Some(t) = h.tip {
             painter.arrow(c, t - c, Stroke::new(2.0, COLOR));
         }
-        let active = state.clip_grab.is_some();
+        let active = model.interaction.clip_grab.is_some();
         painter.circle(
             c,
             HANDLE,
@@ -162,21 +156,21 @@ pub fn clip_widget(ui: &egui::Ui, state: &mut ViewerState, rect: egui::Rect, res
         );
         painter.circle_stroke(c, RING, Stroke::new(1.0, COLOR.gamma_multiply(0.7)));
     }
-    state.clip_grab.is_some()
+    model.interaction.clip_grab.is_some()
 }
 
 /// The plane as a slice view draws it: a point of it and its normal in the slice views' millimetres (`mm` maps
 /// voxel indices there).
-pub fn plane_in_slices(state: &ViewerState, plane: &ClipPlane, mm: glam::DMat4) -> (DVec3, DVec3) {
+pub fn plane_in_slices(model: &Model, plane: &ClipPlane, mm: glam::DMat4) -> (DVec3, DVec3) {
     let d = DVec3::new(
-        f64::from(state.dims[0]),
-        f64::from(state.dims[1]),
-        f64::from(state.dims[2]),
+        f64::from(model.dims[0]),
+        f64::from(model.dims[1]),
+        f64::from(model.dims[2]),
     );
     // Millimetres → voxel index → texture (i + ½)/dims → render world.
     let tex_from_index = glam::DMat4::from_scale(1.0 / d) * glam::DMat4::from_translation(DVec3::splat(0.5));
-    let to_world = state.geometry.tex_to_world(state.dims, state.look.voxel_axes) * tex_from_index * mm.inverse();
-    plane.point_normal_in(to_world, state.geometry.world_per_mm(state.dims))
+    let to_world = model.geometry.tex_to_world(model.dims, model.look.voxel_axes) * tex_from_index * mm.inverse();
+    plane.point_normal_in(to_world, model.geometry.world_per_mm(model.dims))
 }
 
 #[cfg(test)]
@@ -184,8 +178,8 @@ mod tests {
     use super::*;
     use crate::volume::geometry::Geometry;
 
-    fn state() -> ViewerState {
-        let mut s = ViewerState::new(Vec3::new(1.0, 0.8, 0.6), "test".into());
+    fn model() -> Model {
+        let mut s = Model::new(Vec3::new(1.0, 0.8, 0.6), "test".into());
         let geometry = Geometry::from_spacing([1.0, 1.0, 1.0]);
         s.set_volume(Vec3::new(1.0, 0.8, 0.6), geometry, [100, 80, 60], "test".into());
         s
@@ -197,9 +191,14 @@ mod tests {
 
     #[test]
     fn a_new_plane_faces_away_through_the_centre() {
-        let mut s = state();
+        let mut s = model();
         let plane = facing_away(&s);
-        assert!(plane.normal().dot(s.orbit.camera().target - s.orbit.camera().eye) > 0.99);
+        assert!(
+            plane
+                .normal()
+                .dot(s.camera.orbit.camera().target - s.camera.orbit.camera().eye)
+                > 0.99
+        );
         s.look.clip_plane = Some(plane);
         let h = handles(&s, rect()).unwrap();
         assert!(h.centre.length() < 1e-5, "{}", h.centre);
@@ -209,9 +208,9 @@ mod tests {
 
     #[test]
     fn sliding_follows_the_arrow_and_turning_follows_the_pointer() {
-        let mut s = state();
+        let mut s = model();
         // A plane seen edge on: its normal along the camera's right.
-        let right = s.orbit.rotation * Vec3::X;
+        let right = s.camera.orbit.rotation * Vec3::X;
         let plane = ClipPlane::new(right, 0.0).unwrap();
         s.look.clip_plane = Some(plane);
         let h = handles(&s, rect()).unwrap();
@@ -229,7 +228,7 @@ mod tests {
         assert!(far.offset() * wpm <= 0.75 && far.offset() > 0.0);
 
         // A sideways drag turns about the camera's up: the normal stays in the screen's horizontal plane.
-        let up_vec = s.orbit.rotation * Vec3::Y;
+        let up_vec = s.camera.orbit.rotation * Vec3::Y;
         let side = turned(&s, &h, plane, Vec2::new(RING * 0.3, 0.0));
         assert!(side.normal().dot(up_vec).abs() < 1e-5);
         assert!((side.normal().angle_between(plane.normal()) - 0.3).abs() < 1e-4);
@@ -249,7 +248,7 @@ mod tests {
 
     #[test]
     fn the_slices_get_the_same_plane() {
-        let mut s = state();
+        let mut s = model();
         let plane = ClipPlane::new(Vec3::new(0.3, -1.0, 0.4), 7.0).unwrap();
         s.look.clip_plane = Some(plane);
         let mm = crate::scene::slice::mm_from_index(&s.geometry, s.look.voxel_axes);

@@ -1,5 +1,5 @@
 //! The viewer's camera control, pure maths with no window or GPU: an arcball (Shoemake) orbit camera with zoom
-//! and pan, turntable auto-rotation, and the origin gizmo's axis projection, picking and fly-to animation.
+//! and pan, turntable auto-rotation, the rotations that look along an axis, and the fly-to animation.
 
 use crate::scene::camera::Camera;
 use glam::{Mat3, Quat, Vec2, Vec3};
@@ -76,49 +76,6 @@ pub fn arcball_point(p: Vec2, viewport: Vec2) -> Vec3 {
     } else {
         Vec3::new(x, y, 0.5 / d2.sqrt()).normalize()
     }
-}
-
-/// One of the gizmo's six axis ends (±x, ±y, ±z).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GizmoAxis {
-    /// 0 = x, 1 = y, 2 = z.
-    pub axis: usize,
-    pub positive: bool,
-    /// Screen direction from the gizmo centre (y down), length ≤ 1 (shorter when the axis points at the viewer).
-    pub screen: Vec2,
-    /// Towards the viewer is positive: draw back to front.
-    pub depth: f32,
-}
-
-/// The world axes as seen by a camera with `rotation` (see [`OrbitView`]), back to front.
-pub fn gizmo_axes(rotation: Quat) -> Vec<GizmoAxis> {
-    let to_camera = rotation.inverse();
-    let mut axes: Vec<GizmoAxis> = (0..6)
-        .map(|i| {
-            let axis = i / 2;
-            let positive = i % 2 == 0;
-            let mut w = Vec3::ZERO;
-            w[axis] = if positive { 1.0 } else { -1.0 };
-            let c = to_camera * w;
-            GizmoAxis {
-                axis,
-                positive,
-                screen: Vec2::new(c.x, -c.y),
-                depth: c.z,
-            }
-        })
-        .collect();
-    axes.sort_by(|a, b| a.depth.total_cmp(&b.depth));
-    axes
-}
-
-/// The axis end under `click` (pixels) for a gizmo drawn at `center` with arm length `radius`: the nearest end
-/// within `pick_radius`, preferring the one closer to the viewer.
-pub fn pick_axis(click: Vec2, center: Vec2, radius: f32, pick_radius: f32, axes: &[GizmoAxis]) -> Option<GizmoAxis> {
-    axes.iter()
-        .filter(|a| (center + a.screen * radius).distance(click) <= pick_radius)
-        .max_by(|a, b| a.depth.total_cmp(&b.depth))
-        .copied()
 }
 
 /// The rotation that looks along `-axis` from its positive side (so the clicked axis points at the viewer),
@@ -222,24 +179,6 @@ mod tests {
         // Dragging down moves the scene down, so the target moves up by the view's full height.
         let height = 2.0 * 2.0 * (15f32).to_radians().tan();
         assert!(close(v.target, Vec3::new(0.0, 0.0, height)), "{}", v.target);
-    }
-
-    #[test]
-    fn gizmo_projects_and_picks_axes() {
-        let v = OrbitView::from_camera(&Camera::orbit(0.0, 0.0, 2.0, Vec3::ZERO));
-        let axes = gizmo_axes(v.rotation);
-        let find = |axis, positive| *axes.iter().find(|a| a.axis == axis && a.positive == positive).unwrap();
-        // From +y with +z up: +z points up on screen (negative y), -x points right, +y points at the viewer.
-        assert!((find(2, true).screen - Vec2::new(0.0, -1.0)).length() < 1e-5);
-        assert!((find(0, false).screen - Vec2::new(1.0, 0.0)).length() < 1e-5);
-        assert!(
-            find(1, true).depth > 0.99 && axes.last().unwrap().depth > 0.99,
-            "sorted back to front"
-        );
-        let center = Vec2::new(50.0, 50.0);
-        let hit = pick_axis(Vec2::new(50.0, 20.0), center, 30.0, 8.0, &axes).unwrap();
-        assert_eq!((hit.axis, hit.positive), (2, true));
-        assert!(pick_axis(Vec2::new(80.0, 80.0), center, 30.0, 8.0, &axes).is_none());
     }
 
     #[test]

@@ -1,9 +1,10 @@
 //! The panel's transfer-function section: presets, the value window, the editor or the simple model's colormap,
 //! and the sampling quality.
 
-use super::state::ViewerState;
 use crate::scene::quality::Quality;
 use crate::transfer::Colormap;
+use crate::viewer::model::Model;
+use crate::viewer::widgets::tf_editor;
 use egui::{Color32, Pos2};
 
 fn color_of(rgba: [u8; 4]) -> Color32 {
@@ -36,21 +37,21 @@ fn colormap_strip(ui: &mut egui::Ui, colormap: Colormap, window: [f32; 2]) {
 }
 
 /// Presets, window, editor, quality.
-pub(super) fn transfer_function_section(ui: &mut egui::Ui, state: &mut ViewerState) {
+pub fn transfer_function_section(ui: &mut egui::Ui, model: &mut Model) {
     egui::CollapsingHeader::new("Transfer function")
         .default_open(true)
         .show(ui, |ui| {
-            let look = &mut state.look;
-            crate::viewer::tf_editor::panel(
+            let look = &mut model.look;
+            tf_editor::presets::panel(
                 ui,
                 &mut look.transfer_function,
                 &mut look.window,
-                state.range,
-                &state.histogram,
-                &mut state.tf_editor,
+                model.volume.range,
+                &model.volume.histogram,
+                &mut model.tf_editor,
             );
-            ui.checkbox(&mut state.tf_locked, "keep when another volume loads");
-            let look = &mut state.look;
+            ui.checkbox(&mut model.tf_editor.locked, "keep when another volume loads");
+            let look = &mut model.look;
             ui.label("Visible value range");
             ui.add(egui::Slider::new(&mut look.window[0], 0.0..=1.0).text("min"));
             ui.add(egui::Slider::new(&mut look.window[1], 0.0..=1.0).text("max"));
@@ -71,15 +72,15 @@ pub(super) fn transfer_function_section(ui: &mut egui::Ui, state: &mut ViewerSta
             }
             let name = |q: Option<Quality>| q.map_or("custom step", Quality::name);
             egui::ComboBox::from_label("quality (Q)")
-                .selected_text(name(state.quality))
+                .selected_text(name(model.sampling.quality))
                 .show_ui(ui, |ui| {
                     for q in Quality::ALL.into_iter().map(Some).chain([None]) {
-                        ui.selectable_value(&mut state.quality, q, name(q));
+                        ui.selectable_value(&mut model.sampling.quality, q, name(q));
                     }
                 });
             ui.add_enabled(
-                state.quality.is_none(),
-                egui::Slider::new(&mut state.look.step_length, 0.1..=4.0)
+                model.sampling.quality.is_none(),
+                egui::Slider::new(&mut model.look.step_length, 0.1..=4.0)
                     .logarithmic(true)
                     .text("step length (voxels)"),
             );

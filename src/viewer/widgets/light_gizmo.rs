@@ -3,7 +3,8 @@
 //! (rule 5's `light.direction`, fixed to the volume: it stays put when the camera turns); a double click gives
 //! the headlight back. Pure geometry here; the drawing and input are in [`light_gizmo`].
 
-use super::ui::ViewerState;
+use crate::scene::settings::CompositeMode;
+use crate::viewer::model::Model;
 use egui::{Color32, Pos2, Stroke};
 use glam::{Quat, Vec2, Vec3};
 
@@ -40,20 +41,17 @@ pub fn disc_position(d: Vec3, center: Vec2, rotation: Quat) -> (Vec2, bool) {
     (Vec2::new(center.x + c.x * RADIUS, center.y - c.y * RADIUS), c.z >= 0.0)
 }
 
-/// Whether a frame of `state` is lit (the gizmo is shown and takes input only then).
-pub fn shown(state: &ViewerState) -> bool {
-    state.look.mode == crate::scene::settings::CompositeMode::Isosurface
-        || (state.look.shading.is_some()
-            && matches!(
-                state.look.mode,
-                crate::scene::settings::CompositeMode::Emission | crate::scene::settings::CompositeMode::Density
-            ))
+/// Whether a frame of `model` is lit (the gizmo is shown and takes input only then).
+pub fn shown(model: &Model) -> bool {
+    let look = &model.look;
+    look.mode == CompositeMode::Isosurface
+        || (look.shading.is_some() && matches!(look.mode, CompositeMode::Emission | CompositeMode::Density))
 }
 
 /// Draws the gizmo over the view `rect` and handles its input: returns true while a drag on it moves the light
 /// (the caller then leaves the camera alone).
-pub fn light_gizmo(ui: &egui::Ui, state: &mut ViewerState, rect: egui::Rect, response: &egui::Response) -> bool {
-    if !shown(state) {
+pub fn light_gizmo(ui: &egui::Ui, model: &mut Model, rect: egui::Rect, response: &egui::Response) -> bool {
+    if !shown(model) {
         return false;
     }
     let c = center(rect);
@@ -62,12 +60,12 @@ pub fn light_gizmo(ui: &egui::Ui, state: &mut ViewerState, rect: egui::Rect, res
     let mut dragging = false;
     if response.dragged_by(egui::PointerButton::Primary) && pressed_on_disc {
         if let Some(p) = response.interact_pointer_pos() {
-            state.look.light.direction = Some(world_direction(Vec2::new(p.x, p.y), c, state.orbit.rotation));
+            model.look.light.direction = Some(world_direction(Vec2::new(p.x, p.y), c, model.camera.orbit.rotation));
             dragging = true;
         }
     }
     if response.double_clicked() && response.interact_pointer_pos().is_some_and(on_disc) {
-        state.look.light.direction = None;
+        model.look.light.direction = None;
     }
     let painter = ui.painter_at(rect);
     let centre = Pos2::new(c.x, c.y);
@@ -78,9 +76,9 @@ pub fn light_gizmo(ui: &egui::Ui, state: &mut ViewerState, rect: egui::Rect, res
         Stroke::new(1.0, Color32::from_gray(150)),
     );
     let sun = Color32::from_rgb(255, 210, 80);
-    match state.look.light.direction {
+    match model.look.light.direction {
         Some(d) => {
-            let (p, front) = disc_position(d, c, state.orbit.rotation);
+            let (p, front) = disc_position(d, c, model.camera.orbit.rotation);
             let p = Pos2::new(p.x, p.y);
             painter.line_segment([centre, p], Stroke::new(1.0, sun));
             if front {

@@ -1,4 +1,7 @@
-//! Drags that survive slow frames. egui decides "dragged" from one frame to the next: a press and the motion after
+//! The window's input before egui sees it: Tab taken for the panel, and a frame's events cut so that drags
+//! survive slow frames.
+//!
+//! Why a frame is cut: egui decides "dragged" from one frame to the next: a press and the motion after
 //! it in one frame is not yet a drag, and the frame with the release ends it without a drag delta. When frames are
 //! slower than the hand (lavapipe at full size: a few frames a second), a whole quick drag (press, moves,
 //! release) arrives in one frame's input and egui sees no drag at all: the camera, the clipping plane and the
@@ -7,6 +10,30 @@
 //! for the next frame. Clicks (a press and a release without such motion) stay in one frame, as before.
 
 use egui::{Event, Pos2};
+
+/// Removes the presses of Tab (without modifiers) from `input` and returns how many there were: the viewer handles
+/// Tab itself (panel on/off) and egui must not move its focus with it.
+pub fn take_tab_presses(input: &mut egui::RawInput) -> usize {
+    let is_tab =
+        |e: &Event| matches!(e, egui::Event::Key { key: egui::Key::Tab, modifiers, .. } if modifiers.is_none());
+    let presses = input
+        .events
+        .iter()
+        .filter(|e| {
+            is_tab(e)
+                && matches!(
+                    e,
+                    egui::Event::Key {
+                        pressed: true,
+                        repeat: false,
+                        ..
+                    }
+                )
+        })
+        .count();
+    input.events.retain(|e| !is_tab(e));
+    presses
+}
 
 /// Where to cut a frame's `events` (deliver `events[..cut]`, keep the rest for the next frame), or None to deliver
 /// them all. `held` is where the press began if a button is still down from an earlier frame; `click_dist` is how
@@ -126,5 +153,26 @@ mod tests {
         assert_eq!(drag_cut(&events[2..], None, 6.0), None);
         // Motion within a click's distance of the press does not cut.
         assert_eq!(drag_cut(&events[..2], Some(Pos2::new(10.0, 0.0)), 6.0), None);
+    }
+
+    #[test]
+    fn tab_presses_are_taken_from_egui() {
+        let key = |key, pressed| Event::Key {
+            key,
+            physical_key: None,
+            pressed,
+            repeat: false,
+            modifiers: Default::default(),
+        };
+        let mut input = egui::RawInput {
+            events: vec![
+                key(egui::Key::Tab, true),
+                key(egui::Key::Tab, false),
+                key(egui::Key::R, true),
+            ],
+            ..Default::default()
+        };
+        assert_eq!(take_tab_presses(&mut input), 1);
+        assert_eq!(input.events.len(), 1, "R stays for the shortcuts");
     }
 }

@@ -86,16 +86,6 @@ pub fn color_positions(tf: &TransferFunction, range: [f64; 2]) -> Vec<f32> {
     tf.colors.iter().map(|p| to_normalized(tf, p[0], range)).collect()
 }
 
-/// The index of the marker nearest `x` within `radius` along the strip (screen units).
-pub fn nearest_on_strip(xs: &[f32], x: f32, radius: f32) -> Option<usize> {
-    xs.iter()
-        .enumerate()
-        .map(|(i, p)| (i, (p - x).abs()))
-        .filter(|(_, d)| *d <= radius)
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(i, _)| i)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -158,11 +148,7 @@ mod tests {
     }
 
     #[test]
-    fn strip_hit_testing() {
-        let xs = [10.0, 30.0, 34.0];
-        assert_eq!(nearest_on_strip(&xs, 33.0, 6.0), Some(2));
-        assert_eq!(nearest_on_strip(&xs, 20.0, 6.0), None);
-        assert_eq!(nearest_on_strip(&[], 20.0, 6.0), None);
+    fn colour_positions_are_normalised() {
         let t = tf(TfUnits::Data, vec![[-1000.0, 0.0, 0.0, 0.0], [1000.0, 1.0, 1.0, 1.0]]);
         assert_eq!(color_positions(&t, [-1000.0, 3000.0]), vec![0.0, 0.5]);
     }

@@ -1,5 +1,5 @@
-//! The viewer's time controls for a series (4-D NIfTI, NRRD, MetaImage, DICOM with temporal positions): a step
-//! slider, play/pause, steps per second and looping. The viewer uploads the step the controls ask for
+//! Playback of a series (4-D NIfTI, NRRD, MetaImage, DICOM with temporal positions): the step asked for,
+//! play/pause, steps per second and looping (the panel's time controls edit it). The app uploads the step asked for
 //! ([`TimeControl::wanted`]); the transfer function and value range stay the series'.
 
 /// Where playback is.
@@ -51,32 +51,6 @@ impl TimeControl {
         if self.steps > 1 {
             self.playing = !self.playing;
         }
-    }
-
-    /// The controls, for a series only.
-    pub fn panel(&mut self, ui: &mut egui::Ui) {
-        if self.steps < 2 {
-            return;
-        }
-        ui.separator();
-        ui.label(format!("Time: step {} of {}", self.wanted, self.steps));
-        ui.add(egui::Slider::new(&mut self.wanted, 0..=self.steps - 1).text("step"));
-        ui.horizontal(|ui| {
-            let label = if self.playing { "⏸ Pause" } else { "▶ Play" };
-            if ui
-                .button(label)
-                .on_hover_text("play the series in a loop (P)")
-                .clicked()
-            {
-                self.toggle_play();
-            }
-            ui.add(
-                egui::DragValue::new(&mut self.fps)
-                    .range(0.5..=MAX_FPS)
-                    .speed(0.2)
-                    .suffix(" steps/s"),
-            );
-        });
     }
 }
 

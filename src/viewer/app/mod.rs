@@ -1,0 +1,3 @@
+//! The viewer application.
+
+pub mod input;

@@ -1,0 +1,3 @@
+//! The GPU side of the viewer.
+
+pub mod slice_textures;
