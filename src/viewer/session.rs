@@ -1,9 +1,9 @@
-//! Sessions: the viewer's whole state as one JSON file (a [`ViewState`] with its `viewer` part, see
+//! Session files: the viewer's whole state as one JSON file (a [`ViewState`] with its `viewer` part, see
 //! `model::session`), written by F12 beside the screenshot, by Ctrl+S or the panel's "Save session", and restored
 //! by `volcast view --state FILE`, the panel's "Open session" or by dropping the file on the window. `volcast render
-//! --state` renders the same file.
+//! --state` renders the same file. Here: reading and writing them, and where their volume comes from.
 
-use super::{Running, VolumeSource};
+use super::VolumeSource;
 use crate::scene::view_state::{ViewState, VolumeRef};
 use crate::volume::{RawOptions, VoxelType};
 use std::path::Path;
@@ -28,54 +28,35 @@ pub fn source_of(r: &VolumeRef) -> Option<VolumeSource> {
     Some(VolumeSource::File(path, raw))
 }
 
-impl Running {
-    /// Opens a session: loads its volume unless it is the one shown, then restores the view once it is there.
-    pub(super) fn open_session(&mut self, path: &Path) {
-        let state = match read(path) {
-            Ok(s) => s,
-            Err(e) => {
-                self.state.messages.error = Some(format!("session {e}"));
-                return;
-            }
-        };
-        let Some(source) = source_of(&state.volume) else {
-            self.state.messages.error = Some(format!("session {}: it names no volume", path.display()));
-            return;
-        };
-        let shown = self
-            .shown_source
-            .as_ref()
-            .map(|s| super::screenshot::volume_ref(Some(s), self.state.files.raw_spacing, 0));
-        let same = shown.is_some_and(|r| {
-            (r.path.as_ref(), r.builtin.as_ref(), r.builtin_size)
-                == (
-                    state.volume.path.as_ref(),
-                    state.volume.builtin.as_ref(),
-                    state.volume.builtin_size,
-                )
-        });
-        self.state.messages.status = Some(format!("session {}", path.display()));
-        if same && self.loading.is_none() {
-            self.state.restore(&state);
-        } else {
-            self.pending_restore = Some(state);
-            self.start_load(source);
+/// The view state's record of where the shown volume came from (the inverse of [`source_of`]).
+pub fn volume_ref(source: Option<&VolumeSource>, spacing: [f32; 3], time: u32) -> VolumeRef {
+    let mut r = VolumeRef {
+        spacing,
+        time,
+        ..Default::default()
+    };
+    match source {
+        Some(VolumeSource::Builtin(name, size)) => (r.builtin, r.builtin_size) = (Some(name.clone()), *size),
+        Some(VolumeSource::File(path, raw)) => {
+            r.path = Some(std::fs::canonicalize(path).unwrap_or_else(|_| path.clone()));
+            r.raw_dims = raw.dims;
+            r.raw_type = raw.voxel_type.map(|t| t.name().to_string());
+            r.raw_spacing = raw.spacing;
         }
+        None => {}
     }
+    r
+}
 
-    /// The whole state as a view state with the given render settings (those of the frame drawn).
-    pub(super) fn session_state(&self, settings: &crate::scene::settings::RenderSettings) -> ViewState {
-        let step = self.series.as_ref().map(crate::volume::Volume::shown_step);
-        ViewState {
-            volume: super::screenshot::volume_ref(
-                self.shown_source.as_ref(),
-                self.state.files.raw_spacing,
-                step.unwrap_or(0),
-            ),
-            settings: settings.clone(),
-            viewer: Some(self.state.session()),
-        }
-    }
+/// Writes a session file whole or not at all (a temporary file renamed over it).
+pub fn write_session(path: &Path, state: &ViewState) -> Result<(), String> {
+    let tmp = path.with_extension("json.part");
+    std::fs::write(&tmp, state.to_json())
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            format!("writing {}: {e}", path.display())
+        })
 }
 
 #[cfg(test)]
@@ -98,5 +79,10 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert!(source_of(&VolumeRef::default()).is_none());
+        let builtin = VolumeSource::Builtin("helix".into(), Some(64));
+        match source_of(&volume_ref(Some(&builtin), [1.0; 3], 2)) {
+            Some(VolumeSource::Builtin(name, size)) => assert_eq!((name.as_str(), size), ("helix", Some(64))),
+            other => panic!("{other:?}"),
+        }
     }
 }

@@ -18,9 +18,9 @@ pub mod time;
 
 use crate::render::PassTimings;
 use crate::scene::camera::{Camera, ViewPreset};
-use crate::scene::quality::Quality;
+use crate::scene::quality::{Gradients, Quality};
 use crate::scene::settings::RenderSettings;
-use crate::volume::Geometry;
+use crate::volume::{Geometry, Volume};
 use files::FileFields;
 use glam::{Mat4, Vec3};
 use orbit::{OrbitView, RotationAnimation};
@@ -231,6 +231,34 @@ impl Model {
         self.reset_view();
     }
 
+    /// `v` is shown: its box, placement and description, its values (`histogram` over the normalised range, the
+    /// unit), the slices centred on it, the transfer-function editor's facts, the time controls for its steps. A
+    /// file's volume gets the transfer function its modality calls for (CT in HU, others by percentiles) unless
+    /// the user locked theirs; the built-ins (synthetic, no modality) keep the simple model.
+    pub fn show_volume(&mut self, v: &Volume, histogram: Arc<[u64]>, from_file: bool) {
+        let spacing = v.spacing();
+        let label = format!(
+            "{} — {}×{}×{} {}, spacing {}×{}×{}",
+            v.name, v.dims[0], v.dims[1], v.dims[2], v.source_type, spacing[0], spacing[1], spacing[2]
+        );
+        self.set_volume(v.extent(), v.geometry, v.dims, label);
+        self.files.describe_raw(v.dims, v.source_type, spacing);
+        self.slices.reset(v.dims, &histogram, v.range);
+        self.volume.histogram = histogram.clone();
+        self.volume.range = v.range;
+        self.tf_editor.set_volume(v, histogram);
+        self.volume.unit = self.tf_editor.unit().unwrap_or_default().to_string();
+        if !self.tf_editor.locked && from_file {
+            if let Some(tf) = self.tf_editor.auto() {
+                self.look.transfer_function = Some(tf);
+                self.look.window = [0.0, 1.0];
+            }
+        }
+        self.time = TimeControl::new(v.timesteps(), v.shown_step());
+        // The gradient texture is made from the kept volume: not for a series, whose steps would each need one.
+        self.sampling.gradient_texture = v.timesteps() == 1 && Gradients::texture_fits(v.voxel_count() as u64);
+    }
+
     /// Texture space to the render world for what the view shows.
     pub fn tex_to_world(&self) -> Mat4 {
         self.geometry.tex_to_world(self.dims, self.look.voxel_axes).as_mat4()
@@ -328,6 +356,31 @@ mod tests {
         assert!(
             model.tex_to_world().transform_point3(Vec3::ZERO).x < 0.0,
             "voxel axes: as stored"
+        );
+    }
+
+    #[test]
+    fn a_shown_volume_resets_what_depends_on_it() {
+        let mut model = Model::new(Vec3::ONE, "x".into());
+        let v = crate::volume::builtin("helix", Some(16)).unwrap();
+        let histogram: Arc<[u64]> = vec![1; 1024].into();
+        model.show_volume(&v, histogram.clone(), false);
+        assert_eq!(model.dims, v.dims);
+        assert!(model.volume.label.starts_with(&v.name), "{}", model.volume.label);
+        assert!(Arc::ptr_eq(&model.volume.histogram, &histogram));
+        assert_eq!((model.time.steps, model.slices.generation), (1, 1));
+        assert!(
+            model.look.transfer_function.is_none(),
+            "a built-in keeps the simple model"
+        );
+        model.show_volume(&v, histogram, true);
+        assert!(
+            model.look.transfer_function.is_some(),
+            "a file's volume gets the automatic function"
+        );
+        assert_eq!(
+            model.files.raw_dims, v.dims,
+            "a raw reload starts from the shown volume"
         );
     }
 

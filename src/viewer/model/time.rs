@@ -47,6 +47,19 @@ impl TimeControl {
         true
     }
 
+    /// Asks for step `t` (`--time`); an error where the series has no such step.
+    pub fn start_at(&mut self, t: u32) -> Result<(), String> {
+        if t >= self.steps {
+            return Err(format!(
+                "time step {t} does not exist: the volume has {} (0 to {})",
+                self.steps,
+                self.steps - 1
+            ));
+        }
+        self.wanted = t;
+        Ok(())
+    }
+
     pub fn toggle_play(&mut self) {
         if self.steps > 1 {
             self.playing = !self.playing;
@@ -76,5 +89,11 @@ mod tests {
         one.toggle_play();
         assert!(!one.playing && !one.advance(1.0));
         assert_eq!(TimeControl::new(4, 9).wanted, 3);
+        let mut four = TimeControl::new(4, 0);
+        assert!(four.start_at(3).is_ok() && four.wanted == 3);
+        assert_eq!(
+            four.start_at(4).unwrap_err(),
+            "time step 4 does not exist: the volume has 4 (0 to 3)"
+        );
     }
 }
