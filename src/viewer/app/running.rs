@@ -11,12 +11,11 @@ use crate::viewer::model::Model;
 use crate::viewer::present::Presenter;
 use crate::viewer::{ViewerError, ViewerOptions, VolumeSource};
 use crate::volume::{Volume, VoxelData, VoxelType};
-use std::sync::Arc;
 use winit::event_loop::ActiveEventLoop;
 use winit::window::Window;
 
 pub(super) struct Running {
-    pub(super) window: Arc<Window>,
+    pub(super) window: Window,
     /// The GPU side; destroyed before the window (its surface is the window's).
     pub(super) presenter: Presenter,
     pub(super) gui: Gui,
@@ -33,11 +32,9 @@ impl Running {
         let attributes = Window::default_attributes()
             .with_title("volcast")
             .with_inner_size(winit::dpi::PhysicalSize::new(opts.size.0, opts.size.1));
-        let window = Arc::new(
-            event_loop
-                .create_window(attributes)
-                .map_err(|e| ViewerError::NoDisplay(format!("creating a window: {e}")))?,
-        );
+        let window = event_loop
+            .create_window(attributes)
+            .map_err(|e| ViewerError::NoDisplay(format!("creating a window: {e}")))?;
         let model = initial_model(opts);
         let presenter = Presenter::new(&window, &opts.gpu, model.display.vsync)?;
         let mut r = Running {

@@ -1,7 +1,8 @@
 //! The presenter: everything on the GPU side of the viewer. It owns the device ([`Gpu`]) and all made from it —
 //! the window's surface and swapchain ([`screen`]), the frames in flight ([`slots`]), the volume's pass and view
 //! image ([`volume_pass`]), egui's renderer — plus the slice views' textures. A frame is [`Presenter::draw`];
-//! [`draw::Frame`] says what it holds. It reads no model: the app hands it settings, pixels and shapes.
+//! [`draw::Frame`] says what it holds. It reads no model: the app hands it render settings, egui's shapes and
+//! volumes; the slice textures are keyed by what their image shows (`model::slices::SliceImage`).
 
 mod draw;
 mod record;
