@@ -38,7 +38,7 @@ fn volume_only(settings: &RenderSettings, extent: glam::Vec3, view: egui::Rect) 
     let view_proj = cam.projection(view.width() / view.height()) * cam.view();
     let corners: [Option<egui::Pos2>; 8] = std::array::from_fn(|i| {
         let t = glam::Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
-        volcast::viewer::ui::project(view_proj, (t - glam::Vec3::splat(0.5)) * extent, view)
+        volcast::viewer::widgets::screen::project(view_proj, (t - glam::Vec3::splat(0.5)) * extent, view)
     });
     assert_eq!(
         (settings.slab_lo, settings.slab_hi),

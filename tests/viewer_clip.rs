@@ -21,9 +21,9 @@ use std::time::Duration;
 use volcast::scene::clip::ClipPlane;
 use volcast::scene::slice::SliceView;
 use volcast::scene::view_state::ViewState;
-use volcast::viewer::clip_widget::{self, ARROW, RING};
-use volcast::viewer::slice_views;
-use volcast::viewer::ui::ViewerState;
+use volcast::viewer::model::Model as ViewerState;
+use volcast::viewer::widgets::clip_plane::{self as clip_widget, ARROW, RING};
+use volcast::viewer::widgets::slice_view as slice_views;
 use volcast::volume::Volume;
 
 const SIZE: (f32, f32) = (900.0, 600.0);

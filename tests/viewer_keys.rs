@@ -8,7 +8,7 @@ mod common;
 use common::x11::{read_screenshot, type_keys, x_client, x_session, Viewer, WAIT_MS};
 use glam::Vec2;
 use std::time::Duration;
-use volcast::viewer::controls::OrbitView;
+use volcast::viewer::model::orbit::OrbitView;
 
 #[test]
 fn shortcuts_keep_working_after_tab_hides_the_panel() {

@@ -8,8 +8,8 @@ mod common;
 use common::x11::{capture, read_screenshot, type_keys, x_client, x_session, Viewer, WAIT_MS};
 use glam::Vec2;
 use std::time::Duration;
-use volcast::viewer::controls::OrbitView;
-use volcast::viewer::light_gizmo;
+use volcast::viewer::model::orbit::OrbitView;
+use volcast::viewer::widgets::light_gizmo;
 
 fn pointer(display: &str, window: &str, args: &[&str]) {
     let mut all = vec!["mousemove", "--window", window];

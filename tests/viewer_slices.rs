@@ -13,8 +13,8 @@ use image::RgbaImage;
 use std::path::Path;
 use std::time::Duration;
 use volcast::scene::slice::SliceView;
-use volcast::viewer::slice_views;
-use volcast::viewer::ui::ViewerState;
+use volcast::viewer::model::Model as ViewerState;
+use volcast::viewer::widgets::slice_view as slice_views;
 
 const SIZE: (f32, f32) = (900.0, 600.0);
 

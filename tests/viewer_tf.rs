@@ -18,7 +18,7 @@ use std::path::Path;
 use std::time::Duration;
 use volcast::scene::view_state::ViewState;
 use volcast::transfer::function::TransferFunction;
-use volcast::viewer::tf_editor::to_normalized;
+use volcast::viewer::model::tf::to_normalized;
 
 fn tf_of(state: &ViewState) -> TransferFunction {
     state.settings.transfer_function.clone().expect("a transfer function")

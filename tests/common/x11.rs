@@ -366,11 +366,11 @@ pub fn four_up_rects(size: (f32, f32), shot_width: u32) -> [egui::Rect; 4] {
         .map(|p| p as f32)
         .find(|&left| {
             let area = egui::Rect::from_min_max(egui::pos2(left, 0.0), egui::pos2(size.0, size.1));
-            (volcast::viewer::slice_views::four_up(area)[1].width().round() - shot_width as f32).abs() <= 0.5
+            (volcast::viewer::widgets::layout::four_up(area)[1].width().round() - shot_width as f32).abs() <= 0.5
         })
         .expect("a layout that gives F12's width");
     let area = egui::Rect::from_min_max(egui::pos2(panel_right, 0.0), egui::pos2(size.0, size.1));
-    volcast::viewer::slice_views::four_up(area)
+    volcast::viewer::widgets::layout::four_up(area)
 }
 
 /// The largest difference of any colour channel between two images of one size, in 1/255.

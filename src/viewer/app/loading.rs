@@ -1,0 +1,228 @@
+//! Loading volumes: a file or built-in read on a background thread (with progress) while the window keeps
+//! drawing, and the platform's file dialog on a thread of its own. What arrives is installed by the app
+//! (`volumes`).
+
+use crate::scene::view_state::ViewState;
+use crate::viewer::model::Messages;
+use crate::viewer::{ViewerError, VolumeSource};
+use crate::volume::{self, Volume};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::mpsc::{Receiver, TryRecvError};
+use std::sync::Arc;
+
+/// A load under way.
+struct Loading {
+    label: String,
+    /// What is loading (recorded for the view state once shown).
+    source: VolumeSource,
+    progress: Arc<AtomicU32>,
+    rx: Receiver<Result<(Volume, Vec<u64>), String>>,
+}
+
+/// A volume that finished loading.
+pub(super) struct Arrived {
+    pub(super) volume: Volume,
+    pub(super) histogram: Vec<u64>,
+    pub(super) source: VolumeSource,
+    pub(super) label: String,
+    /// It is the command line's volume: `Some(--time)`.
+    pub(super) initial: Option<Option<u32>>,
+}
+
+/// Loads in the background, one at a time, and what waits for them.
+pub(super) struct Loader {
+    loading: Option<Loading>,
+    /// The volume named on the command line is loading: its failure ends the session (there is nothing else to
+    /// show), and `--time` applies once it is there.
+    pub(super) initial: Option<Option<u32>>,
+    /// A session to restore once its volume is shown.
+    pub(super) pending_restore: Option<ViewState>,
+    /// An open file dialog's answer (None inside: cancelled, or no dialog available, e.g. no desktop portal).
+    dialog: Option<Receiver<Option<PathBuf>>>,
+    /// The device's 3D texture limit: larger volumes are downsampled.
+    max_dim: u32,
+}
+
+/// The viewer's histogram of normalised values, over every step of a series (as its range is): the automatic
+/// transfer function's bins, so that the viewer opens a file with the function `render --preset auto` gives.
+pub(super) fn value_histogram(v: &Volume) -> Vec<u64> {
+    crate::transfer::auto::value_histogram(v, crate::transfer::auto::AUTO_BINS)
+}
+
+/// Loads any format `volume::open` reads (raw with the given options); a volume larger than `max_dim` (the
+/// device's 3D texture limit) is downsampled with a warning rather than refused.
+pub(super) fn open_source(
+    source: &VolumeSource,
+    max_dim: u32,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Volume, String> {
+    match source {
+        VolumeSource::Builtin(name, size) => volume::builtin(name, *size).map_err(|e| e.to_string()),
+        VolumeSource::File(path, raw) => {
+            let opts = volume::OpenOptions {
+                raw: raw.clone(),
+                max_dim: Some(max_dim),
+                ..Default::default()
+            };
+            volume::open_with_progress(path, &opts, progress).map_err(|e| e.to_string())
+        }
+    }
+}
+
+fn load_in_background(source: VolumeSource, max_dim: u32) -> Loading {
+    let label = match &source {
+        VolumeSource::Builtin(name, _) => name.clone(),
+        VolumeSource::File(path, _) => path.display().to_string(),
+    };
+    let progress = Arc::new(AtomicU32::new(0));
+    let (tx, rx) = std::sync::mpsc::channel();
+    let p = progress.clone();
+    let recorded = source.clone();
+    std::thread::spawn(move || {
+        // Reading is 90% of the bar, the histogram the rest.
+        let result = open_source(&source, max_dim, &mut |f| {
+            p.store((0.9 * f).to_bits(), Ordering::Relaxed)
+        });
+        p.store(0.9f32.to_bits(), Ordering::Relaxed);
+        let analysed: Result<(Volume, Vec<u64>), String> = result.map(|v| {
+            let h = value_histogram(&v);
+            (v, h)
+        });
+        p.store(1.0f32.to_bits(), Ordering::Relaxed);
+        let _ = tx.send(analysed);
+    });
+    Loading {
+        label,
+        source: recorded,
+        progress,
+        rx,
+    }
+}
+
+impl Loader {
+    pub(super) fn new(max_dim: u32, restore: Option<ViewState>) -> Loader {
+        Loader {
+            loading: None,
+            initial: None,
+            pending_restore: restore,
+            dialog: None,
+            max_dim,
+        }
+    }
+
+    pub(super) fn max_dim(&self) -> u32 {
+        self.max_dim
+    }
+
+    /// A load is under way.
+    pub(super) fn busy(&self) -> bool {
+        self.loading.is_some()
+    }
+
+    /// A file dialog is open.
+    pub(super) fn dialog_open(&self) -> bool {
+        self.dialog.is_some()
+    }
+
+    /// Starts loading `source` unless a load is under way.
+    pub(super) fn start(&mut self, source: VolumeSource, messages: &mut Messages) {
+        if self.loading.is_some() {
+            messages.status = Some("a volume is already loading".into());
+            return;
+        }
+        messages.error = None;
+        self.loading = Some(load_in_background(source, self.max_dim));
+    }
+
+    /// Shows the platform's file dialog (unless one is open); it blocks until the user answers, so it runs on
+    /// its own thread.
+    pub(super) fn open_dialog(&mut self) {
+        if self.dialog.is_some() {
+            return;
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = tx.send(rfd::FileDialog::new().set_title("Load volume").pick_file());
+        });
+        self.dialog = Some(rx);
+    }
+
+    /// The file the dialog's user chose, once they have.
+    pub(super) fn poll_dialog(&mut self, messages: &mut Messages) -> Option<PathBuf> {
+        let answer = match self.dialog.as_ref()?.try_recv() {
+            Err(TryRecvError::Empty) => return None,
+            Ok(answer) => answer,
+            Err(TryRecvError::Disconnected) => None,
+        };
+        self.dialog = None;
+        if answer.is_none() {
+            messages.status = Some("no file chosen (or no file dialog here: type a path)".into());
+        }
+        answer
+    }
+
+    /// Takes a finished load, or shows the progress of one under way. A failed load leaves the old volume
+    /// (the command line's ends the session).
+    pub(super) fn poll(&mut self, messages: &mut Messages) -> Result<Option<Arrived>, ViewerError> {
+        let Some(loading) = &self.loading else { return Ok(None) };
+        match loading.rx.try_recv() {
+            Ok(Ok((volume, histogram))) => {
+                let (label, source) = (loading.label.clone(), loading.source.clone());
+                self.loading = None;
+                messages.loading = None;
+                let initial = self.initial.take();
+                return Ok(Some(Arrived {
+                    volume,
+                    histogram,
+                    source,
+                    label,
+                    initial,
+                }));
+            }
+            Ok(Err(e)) => {
+                self.pending_restore = None;
+                if self.initial.take().is_some() {
+                    // The command line's volume: nothing else to show, so the session ends with its error.
+                    return Err(ViewerError::Other(e));
+                }
+                eprintln!("could not load {}: {e}", loading.label);
+                messages.error = Some(format!("{}: {e}", loading.label));
+                self.loading = None;
+                messages.loading = None;
+            }
+            Err(TryRecvError::Empty) => {
+                let p = f32::from_bits(loading.progress.load(Ordering::Relaxed));
+                messages.loading = Some((loading.label.clone(), p));
+            }
+            Err(TryRecvError::Disconnected) => {
+                messages.error = Some(format!("{}: the loader stopped unexpectedly", loading.label));
+                self.loading = None;
+                messages.loading = None;
+            }
+        }
+        Ok(None)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::viewer::model::tf::TfEditorState;
+
+    #[test]
+    fn the_viewer_opens_with_the_automatic_function_render_gives() {
+        // Percentile ramps (volumes without CT units) depend on the histogram's bins: the viewer's must be
+        // the one `render --preset auto` takes, or the two open the same file differently.
+        for &name in crate::volume::BUILTIN_NAMES {
+            let v = crate::volume::builtin(name, Some(48)).unwrap();
+            let mut editor = TfEditorState::default();
+            editor.set_volume(&v, value_histogram(&v).into());
+            assert_eq!(
+                editor.auto(),
+                Some(crate::transfer::auto::auto_for_volume(&v)),
+                "{name}"
+            );
+        }
+    }
+}

@@ -1,0 +1,164 @@
+//! When the viewer draws. The one place that decides whether another frame is needed without new input
+//! ([`Activity`]): a load or a file dialog under way, the camera moving by itself, a series playing, a script
+//! running, a reduced-detail frame to refine, input held back for the next frame. Besides these, input that egui
+//! says changed something, a resize and a dropped file each ask for one frame, and egui may ask for one later
+//! (a tooltip's delay).
+//!
+//! Today any activity keeps the event loop polling; an idle viewer that draws only when something changed would
+//! start here.
+
+use std::time::{Duration, Instant};
+
+/// Everything that asks for frames to follow each other.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Activity {
+    pub(super) loading: bool,
+    pub(super) dialog: bool,
+    /// A fly-to or auto-rotation.
+    pub(super) camera_moving: bool,
+    pub(super) playing: bool,
+    pub(super) script: bool,
+    /// The last frame was a reduced-detail one: draw again at full quality once the view is still.
+    pub(super) refining: bool,
+    /// Input a slow frame held back for the next one (see `input::drag_cut`).
+    pub(super) held_input: bool,
+}
+
+impl Activity {
+    pub(super) fn any(&self) -> bool {
+        let Activity {
+            loading,
+            dialog,
+            camera_moving,
+            playing,
+            script,
+            refining,
+            held_input,
+        } = *self;
+        loading || dialog || camera_moving || playing || script || refining || held_input
+    }
+}
+
+/// What the event loop does once it has handled its events.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Wake {
+    /// Draw now and keep polling.
+    Continuous,
+    /// Sleep until `at` (egui's repaint); `due`: it has come, draw now.
+    At { at: Instant, due: bool },
+    /// Sleep until an event comes.
+    Sleep,
+}
+
+/// One frame's clock.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Tick {
+    pub(super) now: Instant,
+    /// Seconds since the last frame.
+    pub(super) interval_s: f64,
+    /// The animation step: the interval, capped (a slow frame must not throw the view).
+    pub(super) dt: f32,
+    /// Frames were following each other (so the interval is a frame time, not an idle pause).
+    pub(super) follows: bool,
+}
+
+pub(super) struct Pacing {
+    last_frame: Instant,
+    /// When egui asked to be drawn again.
+    repaint_at: Option<Instant>,
+    /// The last frame was a reduced-detail one.
+    pub(super) refine_pending: bool,
+}
+
+impl Pacing {
+    pub(super) fn new() -> Pacing {
+        Pacing {
+            last_frame: Instant::now(),
+            repaint_at: None,
+            refine_pending: false,
+        }
+    }
+
+    /// Starts a frame; `busy`: whether frames were following each other ([`Activity::any`]).
+    pub(super) fn tick(&mut self, busy: bool) -> Tick {
+        let now = Instant::now();
+        let interval_s = now.duration_since(self.last_frame).as_secs_f64();
+        self.last_frame = now;
+        Tick {
+            now,
+            interval_s,
+            dt: (interval_s as f32).min(0.1),
+            follows: busy,
+        }
+    }
+
+    /// egui's wish for the next frame after the one started at `now` (`None`: only on input).
+    pub(super) fn repaint_after(&mut self, now: Instant, delay: Option<Duration>) {
+        self.repaint_at = delay.filter(|d| *d < Duration::from_secs(3600)).map(|d| now + d);
+    }
+
+    /// What the event loop does next, given the viewer's `activity`.
+    pub(super) fn wake(&mut self, activity: Activity, now: Instant) -> Wake {
+        if activity.any() {
+            return Wake::Continuous;
+        }
+        let Some(at) = self.repaint_at else {
+            return Wake::Sleep;
+        };
+        let due = now >= at;
+        if due {
+            self.repaint_at = None;
+        }
+        Wake::At { at, due }
+    }
+}
+
+/// The frame time shown: the interval since the last frame when it followed directly (never capped: a 256 ms
+/// frame shows 256), else the frame's GPU time (the interval would be the idle pause before it).
+pub(super) fn frame_time_ms(interval_s: f64, follows: bool, gpu_ms: Option<f64>) -> f64 {
+    match (follows, gpu_ms) {
+        (false, Some(gpu)) => gpu,
+        _ => interval_s * 1e3,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_frame_time_is_not_capped_and_ignores_idle_pauses() {
+        // A 256 ms frame following another shows 256 ms (it was capped at 100).
+        assert_eq!(frame_time_ms(0.256, true, Some(250.0)), 256.0);
+        // After a 7 s idle pause the GPU time stands in.
+        assert_eq!(frame_time_ms(7.0, false, Some(250.0)), 250.0);
+        assert_eq!(frame_time_ms(0.03, false, None), 30.0);
+    }
+
+    #[test]
+    fn activity_polls_and_quiet_waits_for_egui_or_input() {
+        let mut pacing = Pacing::new();
+        let now = Instant::now();
+        let playing = Activity {
+            playing: true,
+            ..Activity::default()
+        };
+        assert_eq!(pacing.wake(playing, now), Wake::Continuous);
+        assert_eq!(pacing.wake(Activity::default(), now), Wake::Sleep);
+        pacing.repaint_after(now, Some(Duration::from_millis(500)));
+        let at = now + Duration::from_millis(500);
+        assert_eq!(pacing.wake(Activity::default(), now), Wake::At { at, due: false });
+        assert_eq!(pacing.wake(Activity::default(), at), Wake::At { at, due: true });
+        assert_eq!(
+            pacing.wake(Activity::default(), at),
+            Wake::Sleep,
+            "a repaint is drawn once"
+        );
+        pacing.repaint_after(now, Some(Duration::from_secs(7200)));
+        assert_eq!(
+            pacing.wake(Activity::default(), now),
+            Wake::Sleep,
+            "egui's 'never' is no wish"
+        );
+    }
+}

@@ -1,0 +1,162 @@
+//! The running viewer: the window, the presenter, egui, the model and what the app keeps beside them. Made when
+//! the window opens (the first volume shown, or loading), torn down when it closes.
+
+use super::capture::Capture;
+use super::gui::Gui;
+use super::loading::{open_source, value_histogram, Arrived, Loader};
+use super::pacing::{Activity, Pacing};
+use super::script::Script;
+use super::volumes::Shown;
+use crate::viewer::model::Model;
+use crate::viewer::present::Presenter;
+use crate::viewer::{ViewerError, ViewerOptions, VolumeSource};
+use crate::volume::{Volume, VoxelData, VoxelType};
+use winit::event_loop::ActiveEventLoop;
+use winit::window::Window;
+
+pub(super) struct Running {
+    pub(super) window: Window,
+    /// The GPU side; destroyed before the window (its surface is the window's).
+    pub(super) presenter: Presenter,
+    pub(super) gui: Gui,
+    pub(super) model: Model,
+    pub(super) shown: Shown,
+    pub(super) loader: Loader,
+    pub(super) capture: Capture,
+    pub(super) script: Option<Script>,
+    pub(super) pacing: Pacing,
+}
+
+impl Running {
+    pub(super) fn new(event_loop: &ActiveEventLoop, opts: &ViewerOptions) -> Result<Running, ViewerError> {
+        let attributes = Window::default_attributes()
+            .with_title("volcast")
+            .with_inner_size(winit::dpi::PhysicalSize::new(opts.size.0, opts.size.1));
+        let window = event_loop
+            .create_window(attributes)
+            .map_err(|e| ViewerError::NoDisplay(format!("creating a window: {e}")))?;
+        let model = initial_model(opts);
+        let presenter = Presenter::new(&window, &opts.gpu, model.display.vsync)?;
+        let mut r = Running {
+            gui: Gui::new(&window, presenter.max_texture_side()),
+            loader: Loader::new(presenter.max_volume_dim(), opts.restore.clone()),
+            window,
+            presenter,
+            model,
+            shown: Shown::default(),
+            capture: Capture::default(),
+            script: (!opts.script.is_empty()).then(|| Script::new(&opts.script)),
+            pacing: Pacing::new(),
+        };
+        // On error `r` is torn down properly before the error is returned.
+        match r.show_first_volume(opts) {
+            Ok(()) => Ok(r),
+            Err(e) => {
+                r.destroy();
+                Err(e)
+            }
+        }
+    }
+
+    /// The volume the command line names. A file loads in the background, so the window shows its progress at
+    /// once (a 1 GiB volume took 20 s with no window at all): until it is there an empty placeholder (all below
+    /// the value window) stands in, and a script waits for it.
+    fn show_first_volume(&mut self, opts: &ViewerOptions) -> Result<(), ViewerError> {
+        if let VolumeSource::File(..) = &opts.source {
+            let placeholder = Volume::new("loading", [2; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![0; 8]))
+                .map_err(|e| ViewerError::Other(e.to_string()))?;
+            (self.shown).install(&mut self.presenter, &mut self.model, placeholder, Vec::new(), false)?;
+            self.model.volume.label = "loading…".into();
+            self.loader.start(opts.source.clone(), &mut self.model.messages);
+            self.loader.initial = Some(opts.time);
+            if let Some(script) = &mut self.script {
+                script.waiting_for_load = true;
+            }
+            return Ok(());
+        }
+        let first = open_source(&opts.source, self.loader.max_dim(), &mut |_| {}).map_err(ViewerError::Other)?;
+        let histogram = value_histogram(&first);
+        (self.shown).install(&mut self.presenter, &mut self.model, first, histogram, false)?;
+        self.shown.source = Some(opts.source.clone());
+        self.start_at(opts.time)?;
+        if let Some(session) = self.loader.pending_restore.take() {
+            self.model.restore(&session);
+        }
+        Ok(())
+    }
+
+    /// Installs a volume that finished loading; the command line's: a failure ends the session, and `--time`
+    /// applies. A session waiting for it is restored.
+    pub(super) fn install_arrived(&mut self, arrived: Arrived) -> Result<(), ViewerError> {
+        let Arrived {
+            volume,
+            histogram,
+            source,
+            label,
+            initial,
+        } = arrived;
+        let from_file = matches!(source, VolumeSource::File(..));
+        let installed = (self.shown).install(&mut self.presenter, &mut self.model, volume, histogram, from_file);
+        // Logged too: a load from the panel or a drop has no other trace outside the window.
+        if let Err(e) = installed {
+            eprintln!("could not show {label}: {e}");
+            self.model.messages.error = Some(format!("{label}: {e}"));
+            return match initial {
+                Some(_) => Err(e.into()),
+                None => Ok(()),
+            };
+        }
+        eprintln!("loaded {label}");
+        self.model.messages.status = Some(format!("loaded {label}"));
+        self.shown.source = Some(source);
+        if let Some(time) = initial {
+            self.start_at(time)?;
+        }
+        if let Some(session) = self.loader.pending_restore.take() {
+            self.model.restore(&session);
+        }
+        Ok(())
+    }
+
+    /// `--time`: the step to show first; an error where the volume has no such step.
+    fn start_at(&mut self, time: Option<u32>) -> Result<(), ViewerError> {
+        match time {
+            Some(t) => self.model.time.start_at(t).map_err(ViewerError::Other),
+            None => Ok(()),
+        }
+    }
+
+    /// What keeps the viewer drawing now (see `pacing`).
+    pub(super) fn activity(&self) -> Activity {
+        Activity {
+            loading: self.loader.busy(),
+            dialog: self.loader.dialog_open(),
+            camera_moving: self.model.camera_moving(),
+            playing: self.model.time.playing,
+            script: self.script.is_some(),
+            refining: self.pacing.refine_pending,
+            held_input: self.gui.holds_input(),
+        }
+    }
+
+    pub(super) fn destroy(mut self) {
+        // A recording still running is written, as if stopped.
+        self.capture.stop_recording(&mut self.model.messages);
+        self.presenter.destroy();
+        // The window drops after the presenter: the surface was made on it.
+    }
+}
+
+/// The model before the first volume: the command line's quality, layout and transfer function.
+fn initial_model(opts: &ViewerOptions) -> Model {
+    let mut model = Model::new(glam::Vec3::ONE, "loading…".into());
+    model.sampling.quality = Some(opts.quality);
+    model.slices.shown = opts.slices;
+    if let Some(tf) = &opts.transfer_function {
+        // Locked, so that loading the volume does not replace it with the automatic one.
+        model.look.transfer_function = Some(tf.clone());
+        model.look.window = [0.0, 1.0];
+        model.tf_editor.locked = true;
+    }
+    model
+}

@@ -1,0 +1,22 @@
+//! What the widgets ask of the app beyond editing the model: loading, files, captures — work that needs the GPU,
+//! a thread or the file system.
+
+use crate::volume::RawOptions;
+use std::path::PathBuf;
+
+/// What the panel (or a shortcut) asks the viewer to do.
+#[derive(Clone, Debug)]
+pub enum UiAction {
+    LoadFile(PathBuf, RawOptions),
+    LoadBuiltin(String),
+    /// Write the session to `FileFields::session_path`.
+    SaveSession,
+    /// Restore a session file (loading its volume if another is shown).
+    OpenSession(PathBuf),
+    Screenshot,
+    /// Start recording the 3D view into a GIF, or stop and write it.
+    ToggleRecording,
+    VsyncChanged,
+    /// Show the platform's file dialog (off the render thread).
+    OpenDialog,
+}

@@ -1,0 +1,117 @@
+//! The panel's file fields (a volume's path and the raw format's dims, type and scale; the session file) and what
+//! a path given to the viewer — typed, dropped or picked — asks it to do.
+
+use super::actions::UiAction;
+use crate::volume::{parse_scivis_name, RawOptions, VoxelType};
+use std::path::{Path, PathBuf};
+
+/// The paths and raw-format fields the panel edits.
+#[derive(Clone, Debug)]
+pub struct FileFields {
+    pub load_path: String,
+    pub raw_dims: [u32; 3],
+    pub raw_type: VoxelType,
+    pub raw_spacing: [f32; 3],
+    /// Where Ctrl+S and "Save session" write, and "Open session" reads.
+    pub session_path: String,
+}
+
+impl Default for FileFields {
+    fn default() -> FileFields {
+        FileFields {
+            load_path: String::new(),
+            raw_dims: [256, 256, 256],
+            raw_type: VoxelType::U8,
+            raw_spacing: [1.0; 3],
+            session_path: "volcast-session.json".into(),
+        }
+    }
+}
+
+impl FileFields {
+    /// The raw fields (dims, type, scale) describe the volume shown, so a raw reload starts from them.
+    pub fn describe_raw(&mut self, dims: [u32; 3], voxel_type: VoxelType, spacing: [f32; 3]) {
+        self.raw_dims = dims;
+        self.raw_type = voxel_type;
+        self.raw_spacing = spacing;
+    }
+
+    /// Fills dims and type from an open-scivis file name, if it matches.
+    pub fn take_dims_from_name(&mut self) {
+        if let Some((_, dims, ty)) = parse_scivis_name(&self.load_path) {
+            self.raw_dims = dims;
+            self.raw_type = ty;
+        }
+    }
+
+    pub fn raw_options(&self) -> RawOptions {
+        RawOptions {
+            dims: Some(self.raw_dims),
+            voxel_type: Some(self.raw_type),
+            spacing: Some(self.raw_spacing),
+        }
+    }
+
+    /// A load of `path` with dims/type from its name when it matches, else from the panel's fields; a session
+    /// file is opened as one.
+    pub fn load_action(&mut self, path: PathBuf) -> UiAction {
+        if is_session_file(&path) {
+            return UiAction::OpenSession(path);
+        }
+        self.load_path = path.display().to_string();
+        let named = parse_scivis_name(&self.load_path).is_some();
+        self.take_dims_from_name();
+        let mut opts = self.raw_options();
+        if named {
+            opts.dims = None;
+            opts.voxel_type = None;
+        }
+        UiAction::LoadFile(path.clone(), raw_only(&path, opts))
+    }
+
+    /// The "Load volume" button: the path field with the raw fields as they stand (filled from a scivis name,
+    /// they may have been edited since).
+    pub fn load_field_action(&self) -> UiAction {
+        let path = PathBuf::from(self.load_path.trim());
+        UiAction::LoadFile(path.clone(), raw_only(&path, self.raw_options()))
+    }
+}
+
+/// The panel's dims/type/scale describe raw files; other formats carry their own (and the scale would override
+/// their spacing), so they get none.
+pub fn raw_only(path: &Path, opts: RawOptions) -> RawOptions {
+    match crate::volume::detect_format(path) {
+        Ok(crate::volume::Format::Raw) | Err(_) => opts,
+        Ok(_) => RawOptions::default(),
+    }
+}
+
+/// Whether a dropped or typed file is a session rather than a volume.
+pub fn is_session_file(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dropped_scivis_file_fills_dims_and_type() {
+        let mut files = FileFields::default();
+        let action = files.load_action(PathBuf::from("/data/skull_64x32x16_int16.raw"));
+        assert_eq!(files.raw_dims, [64, 32, 16]);
+        assert_eq!(files.raw_type, VoxelType::I16);
+        match action {
+            UiAction::LoadFile(p, opts) => {
+                assert_eq!(p, PathBuf::from("/data/skull_64x32x16_int16.raw"));
+                assert_eq!(opts.dims, None, "the loader reads them from the name");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(
+            files.load_action(PathBuf::from("a/volcast-1.JSON")),
+            UiAction::OpenSession(_)
+        ));
+        assert!(is_session_file(Path::new("a/volcast-1.JSON")) && !is_session_file(Path::new("a.nii")));
+    }
+}

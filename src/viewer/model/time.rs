@@ -1,0 +1,99 @@
+//! Playback of a series (4-D NIfTI, NRRD, MetaImage, DICOM with temporal positions): the step asked for,
+//! play/pause, steps per second and looping (the panel's time controls edit it). The app uploads the step asked for
+//! ([`TimeControl::wanted`]); the transfer function and value range stay the series'.
+
+/// Where playback is.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TimeControl {
+    /// Steps in the series; 1 hides the controls.
+    pub steps: u32,
+    /// The step the user (or playback) asks for.
+    pub wanted: u32,
+    pub playing: bool,
+    /// Playback speed in steps per second.
+    pub fps: f32,
+    /// Time since the last step while playing.
+    since_step: f32,
+}
+
+/// Fastest playback offered: beyond it frames would be dropped on most machines anyway.
+pub const MAX_FPS: f32 = 60.0;
+
+impl TimeControl {
+    pub fn new(steps: u32, shown: u32) -> TimeControl {
+        TimeControl {
+            steps: steps.max(1),
+            wanted: shown.min(steps.saturating_sub(1)),
+            playing: false,
+            fps: 10.0,
+            since_step: 0.0,
+        }
+    }
+
+    /// Advances playback by `dt` seconds: at most one step per frame (a slow frame does not skip steps, so every
+    /// step is seen), looping at the end. Returns whether the wanted step changed.
+    pub fn advance(&mut self, dt: f32) -> bool {
+        if !self.playing || self.steps < 2 {
+            self.since_step = 0.0;
+            return false;
+        }
+        self.since_step += dt;
+        let period = 1.0 / self.fps.clamp(0.1, MAX_FPS);
+        if self.since_step < period {
+            return false;
+        }
+        self.since_step = (self.since_step - period).min(period);
+        self.wanted = (self.wanted + 1) % self.steps;
+        true
+    }
+
+    /// Asks for step `t` (`--time`); an error where the series has no such step.
+    pub fn start_at(&mut self, t: u32) -> Result<(), String> {
+        if t >= self.steps {
+            return Err(format!(
+                "time step {t} does not exist: the volume has {} (0 to {})",
+                self.steps,
+                self.steps - 1
+            ));
+        }
+        self.wanted = t;
+        Ok(())
+    }
+
+    pub fn toggle_play(&mut self) {
+        if self.steps > 1 {
+            self.playing = !self.playing;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn playback_steps_at_the_set_rate_and_loops() {
+        let mut t = TimeControl::new(3, 0);
+        assert!(!t.advance(1.0), "paused");
+        t.toggle_play();
+        t.fps = 4.0;
+        assert!(!t.advance(0.2));
+        assert!(t.advance(0.1));
+        assert_eq!(t.wanted, 1);
+        // A long frame moves one step, not several.
+        assert!(t.advance(5.0));
+        assert_eq!(t.wanted, 2);
+        assert!(t.advance(0.25));
+        assert_eq!(t.wanted, 0, "loops");
+        let mut one = TimeControl::new(1, 0);
+        one.toggle_play();
+        assert!(!one.playing && !one.advance(1.0));
+        assert_eq!(TimeControl::new(4, 9).wanted, 3);
+        let mut four = TimeControl::new(4, 0);
+        assert!(four.start_at(3).is_ok() && four.wanted == 3);
+        assert_eq!(
+            four.start_at(4).unwrap_err(),
+            "time step 4 does not exist: the volume has 4 (0 to 3)"
+        );
+    }
+}

@@ -1,0 +1,160 @@
+//! The volume's pass: the same [`Renderer`] as `volcast render`, marching into an offscreen view image, and the
+//! volume on the GPU — installed, switched to another step of a series, the next step uploaded ahead while a
+//! series plays, the gradient texture made on the first frame that reads it.
+
+use crate::gpu::resources::{Image, ImageDesc};
+use crate::gpu::{Gpu, GpuError, VkContext};
+use crate::render::headless::OUTPUT_FORMAT;
+use crate::render::{PassTimings, PreparedVolume, Renderer};
+use crate::scene::settings::RenderSettings;
+use crate::volume::Volume;
+use ash::vk;
+
+#[derive(Default)]
+pub(super) struct VolumePass {
+    renderer: Option<Renderer>,
+    /// What the march draws into; blitted to the swapchain image. Sized to the frame's settings.
+    view: Option<Image>,
+    /// The step after the shown one while a series plays, uploaded ahead of display.
+    ahead: Option<(u32, PreparedVolume)>,
+}
+
+fn wait_idle(gpu: &Gpu) -> Result<(), GpuError> {
+    // SAFETY: plain wait on a live device.
+    unsafe { gpu.device.device_wait_idle() }.ctx("vkDeviceWaitIdle")
+}
+
+impl VolumePass {
+    pub(super) fn new(gpu: &Gpu, frames_in_flight: usize) -> Result<VolumePass, GpuError> {
+        Ok(VolumePass {
+            renderer: Some(Renderer::new(gpu, OUTPUT_FORMAT, frames_in_flight)?),
+            view: None,
+            ahead: None,
+        })
+    }
+
+    fn renderer(&mut self) -> Result<&mut Renderer, GpuError> {
+        self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))
+    }
+
+    pub(super) fn view(&self) -> Result<&Image, GpuError> {
+        self.view.as_ref().ok_or(GpuError::Lost("view image"))
+    }
+
+    /// Shows `volume` (waiting for in-flight frames: their descriptors are rewritten).
+    pub(super) fn set_volume(&mut self, gpu: &Gpu, volume: &Volume) -> Result<(), GpuError> {
+        wait_idle(gpu)?;
+        if let Some((_, old)) = self.ahead.take() {
+            old.destroy(gpu);
+        }
+        self.renderer()?.set_volume(gpu, volume)
+    }
+
+    /// Shows step `step` of `series` (whose voxels are that step's now): a descriptor update when it was uploaded
+    /// ahead, else an upload.
+    pub(super) fn show_step(&mut self, gpu: &Gpu, series: &Volume, step: u32) -> Result<(), GpuError> {
+        // The volume replaced is one that in-flight frames use.
+        wait_idle(gpu)?;
+        let ahead = self.ahead.take();
+        let renderer = self.renderer()?;
+        match ahead {
+            Some((ahead_step, prepared)) if ahead_step == step => {
+                renderer.install_volume(gpu, prepared);
+                Ok(())
+            }
+            other => {
+                if let Some((_, stale)) = other {
+                    stale.destroy(gpu);
+                }
+                renderer.set_volume(gpu, series)
+            }
+        }
+    }
+
+    /// Whether step `step` is the one uploaded ahead.
+    pub(super) fn holds_ahead(&self, step: u32) -> bool {
+        self.ahead.as_ref().is_some_and(|(s, _)| *s == step)
+    }
+
+    /// Forgets the step uploaded ahead.
+    pub(super) fn drop_ahead(&mut self, gpu: &Gpu) {
+        if let Some((_, stale)) = self.ahead.take() {
+            stale.destroy(gpu);
+        }
+    }
+
+    /// Uploads `volume` (showing step `step`) to be shown later. A step that cannot be uploaded now (memory for
+    /// two volumes) is uploaded when it is due instead, where a failure is reported.
+    pub(super) fn upload_ahead(&mut self, gpu: &Gpu, step: u32, volume: &Volume) -> Result<(), GpuError> {
+        let renderer = self.renderer.as_ref().ok_or(GpuError::Lost("renderer"))?;
+        self.ahead = renderer.prepare_volume(gpu, volume).ok().map(|p| (step, p));
+        Ok(())
+    }
+
+    /// Creates what `settings` needs beyond the frame (the gradient texture from `kept`, position targets,
+    /// colormap, the view image) after waiting for in-flight frames, only when something changed.
+    pub(super) fn prepare(
+        &mut self,
+        gpu: &Gpu,
+        settings: &RenderSettings,
+        kept: Option<&Volume>,
+    ) -> Result<(), GpuError> {
+        let view_fits = self
+            .view
+            .as_ref()
+            .is_some_and(|v| (v.desc.extent.width, v.desc.extent.height) == (settings.width, settings.height));
+        // The gradient texture on the first frame that reads gradients (the volume was kept for it).
+        if settings.gradient_texture && self.renderer.as_ref().is_some_and(|r| !r.has_gradient_texture()) {
+            let volume = kept.ok_or(GpuError::Lost("no volume kept for gradients"))?;
+            wait_idle(gpu)?;
+            self.renderer()?.enable_gradient_texture(gpu, volume)?;
+        }
+        if view_fits && !self.renderer()?.needs_prepare(settings) {
+            return Ok(());
+        }
+        wait_idle(gpu)?;
+        if !view_fits {
+            if let Some(old) = self.view.take() {
+                old.destroy(gpu);
+            }
+            let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
+            self.view = Some(Image::new(
+                gpu,
+                ImageDesc::d2(OUTPUT_FORMAT, settings.width, settings.height, usage),
+                "view",
+            )?);
+        }
+        self.renderer()?.prepare(gpu, settings)
+    }
+
+    /// The GPU times of the frame last recorded in `slot` (its fence waited).
+    pub(super) fn timings(&self, gpu: &Gpu, slot: usize) -> Result<Option<PassTimings>, GpuError> {
+        let renderer = self.renderer.as_ref().ok_or(GpuError::Lost("renderer"))?;
+        renderer.timings(gpu, slot)
+    }
+
+    /// Records the march into the view image, which is left ready to be read by transfers (the blit).
+    pub(super) fn record(
+        &mut self,
+        gpu: &Gpu,
+        cb: vk::CommandBuffer,
+        slot: usize,
+        settings: &RenderSettings,
+    ) -> Result<(), GpuError> {
+        let view = self.view.as_ref().ok_or(GpuError::Lost("view image"))?;
+        let target = (view.raw, view.view);
+        let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
+        renderer.record(gpu, cb, slot, target, crate::gpu::sync::Access::TransferRead, settings)
+    }
+
+    /// Destroys the volume uploaded ahead, the renderer and the view image. The device must be idle.
+    pub(super) fn destroy(mut self, gpu: &Gpu) {
+        self.drop_ahead(gpu);
+        if let Some(r) = self.renderer.take() {
+            r.destroy(gpu);
+        }
+        if let Some(v) = self.view.take() {
+            v.destroy(gpu);
+        }
+    }
+}

@@ -1,0 +1,61 @@
+//! The panel's Slicing section: the axis slabs and the clipping plane (which is dragged in the 3D view).
+
+use crate::scene::clip::ClipPlane;
+use crate::viewer::model::Model;
+use crate::viewer::widgets::clip_plane;
+use crate::volume::geometry::index_axis_names;
+
+/// The axis slabs.
+pub fn slicing_section(ui: &mut egui::Ui, model: &mut Model) {
+    egui::CollapsingHeader::new("Slicing")
+        .default_open(true)
+        .show(ui, |ui| {
+            let names = if model.anatomical() {
+                index_axis_names(&model.geometry)
+            } else {
+                ["x", "y", "z"].map(String::from)
+            };
+            for (axis, name) in names.iter().enumerate() {
+                let (pos, width) = &mut model.slabs[axis];
+                ui.add(egui::Slider::new(pos, 0.0..=1.0).text(format!("{name} position")));
+                ui.add(egui::Slider::new(width, 0.0..=1.0).text(format!("{name} width")));
+            }
+            if ui.button("Reset slices").clicked() {
+                model.slabs = [(0.5, 1.0); 3];
+            }
+            ui.separator();
+            clip_plane_controls(ui, model);
+        });
+}
+
+/// The arbitrary clipping plane: on/off, offset, flip, face the camera (dragged in the 3D view).
+fn clip_plane_controls(ui: &mut egui::Ui, model: &mut Model) {
+    let mut on = model.look.clip_plane.is_some();
+    if ui.checkbox(&mut on, "clip plane (C)").changed() {
+        model.look.clip_plane = on.then(|| clip_plane::facing_away(model));
+    }
+    let Some(plane) = model.look.clip_plane else {
+        return;
+    };
+    let reach = clip_plane::half_diagonal_mm(model);
+    let mut offset = plane.offset();
+    if ui
+        .add(egui::Slider::new(&mut offset, -reach..=reach).text("offset (mm)"))
+        .changed()
+    {
+        model.look.clip_plane = plane.with_offset(offset).ok().or(Some(plane));
+    }
+    ui.horizontal(|ui| {
+        if ui.button("Flip (F)").clicked() {
+            model.look.clip_plane = Some(plane.flipped());
+        }
+        if ui.button("Face the camera").clicked() {
+            let forward = model.camera.orbit.camera().forward();
+            model.look.clip_plane = ClipPlane::through(forward, plane.point()).ok().or(Some(plane));
+        }
+    });
+    let n = plane.normal();
+    let frame = if model.anatomical() { "RAS" } else { "xyz" };
+    ui.label(format!("normal {frame} {:.2} {:.2} {:.2}", n.x, n.y, n.z));
+    ui.weak("Drag its handle to slide it, its ring to turn it.");
+}
