@@ -1,5 +1,5 @@
-//! The window's input before egui sees it: Tab taken for the panel, and a frame's events cut so that drags
-//! survive slow frames.
+//! The window's input before egui sees it: Tab taken for the panel, and a frame's events cut so that drags and
+//! typing survive slow frames.
 //!
 //! Why a frame is cut: egui decides "dragged" from one frame to the next: a press and the motion after
 //! it in one frame is not yet a drag, and the frame with the release ends it without a drag delta. When frames are
@@ -8,6 +8,10 @@
 //! light stayed put. So a frame's events are cut where a drag needs a new frame: after a press that the pointer
 //! then leaves by more than a click's distance, and before the release that ends such a motion. The rest waits
 //! for the next frame. Clicks (a press and a release without such motion) stay in one frame, as before.
+//!
+//! Typing after a click is cut from it too: egui gives a text field the focus at the end of the frame that
+//! clicked it, so keys typed in that same frame went nowhere (a path typed quickly into the editor's file field
+//! lost its first letters, or all of them: CI's viewer_tf, under load).
 
 use egui::{Event, Pos2};
 
@@ -36,7 +40,7 @@ pub fn take_tab_presses(input: &mut egui::RawInput) -> usize {
 }
 
 /// Where to cut a frame's `events` (deliver `events[..cut]`, keep the rest for the next frame), or None to deliver
-/// them all. `held` is where the press began if a button is still down from an earlier frame; `click_dist` is how
+/// them all: before a drag's motion, before its release, and between a click and keys typed after it. `held` is where the press began if a button is still down from an earlier frame; `click_dist` is how
 /// far the pointer may move and still click (egui's `max_click_dist`). The cut is never 0, so every frame makes
 /// progress.
 pub fn drag_cut(events: &[Event], held: Option<Pos2>, click_dist: f32) -> Option<usize> {
@@ -45,6 +49,8 @@ pub fn drag_cut(events: &[Event], held: Option<Pos2>, click_dist: f32) -> Option
     let mut origin = held;
     let mut pressed_here = false;
     let mut moved_far = false;
+    // Just after the last click's release in this frame: where typing that follows it is cut off.
+    let mut after_click = None;
     for (i, event) in events.iter().enumerate() {
         match *event {
             Event::PointerButton { pos, pressed: true, .. } => {
@@ -65,7 +71,11 @@ pub fn drag_cut(events: &[Event], held: Option<Pos2>, click_dist: f32) -> Option
                 if moved_far {
                     return Some(i);
                 }
+                after_click = Some(i + 1);
                 (origin, pressed_here) = (None, false);
+            }
+            Event::Text(_) | Event::Paste(_) | Event::Key { pressed: true, .. } if after_click.is_some() => {
+                return after_click;
             }
             _ => {}
         }
@@ -153,6 +163,81 @@ mod tests {
         assert_eq!(drag_cut(&events[2..], None, 6.0), None);
         // Motion within a click's distance of the press does not cut.
         assert_eq!(drag_cut(&events[..2], Some(Pos2::new(10.0, 0.0)), 6.0), None);
+    }
+
+    #[test]
+    fn typing_after_a_click_waits_for_the_next_frame() {
+        let text = |t: &str| Event::Text(t.into());
+        let events = vec![
+            moved(10.0),
+            button(10.0, true),
+            button(10.0, false),
+            text("a"),
+            text("b"),
+        ];
+        assert_eq!(
+            frames(events),
+            vec![
+                vec![moved(10.0), button(10.0, true), button(10.0, false)],
+                vec![text("a"), text("b")],
+            ]
+        );
+        // Typing before a click, and a double click, stay in one frame.
+        let before = vec![text("x"), button(5.0, true), button(5.0, false)];
+        assert_eq!(frames(before.clone()), vec![before]);
+        let double = vec![
+            button(5.0, true),
+            button(5.0, false),
+            button(5.0, true),
+            button(5.0, false),
+            text("y"),
+        ];
+        assert_eq!(frames(double.clone()), vec![double[..4].to_vec(), vec![text("y")]]);
+    }
+
+    #[test]
+    fn a_field_clicked_and_typed_into_within_one_slow_frame_gets_the_text() {
+        // egui focuses a text field at the end of the frame that clicked it: fed whole, the text is lost; cut as
+        // the viewer cuts it, the field gets every letter.
+        let typed = |cut: bool| {
+            let ctx = egui::Context::default();
+            let mut text = String::new();
+            // Runs one frame; returns where the field is.
+            let run = |events: Vec<Event>, text: &mut String| {
+                let input = egui::RawInput {
+                    screen_rect: Some(egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(400.0, 300.0))),
+                    events,
+                    ..Default::default()
+                };
+                let mut field = egui::Rect::NOTHING;
+                let _ = ctx.run_ui(input, |ui| field = ui.text_edit_singleline(text).rect);
+                field
+            };
+            let at = run(vec![], &mut text).center();
+            let press = |pressed| Event::PointerButton {
+                pos: at,
+                button: PointerButton::Primary,
+                pressed,
+                modifiers: Modifiers::NONE,
+            };
+            let events = vec![
+                Event::PointerMoved(at),
+                press(true),
+                press(false),
+                Event::Text("edited.json".into()),
+            ];
+            let batches = if cut { frames(events) } else { vec![events] };
+            for events in batches.into_iter().chain([vec![]]) {
+                run(events, &mut text);
+            }
+            text
+        };
+        assert_eq!(
+            typed(false),
+            "",
+            "egui itself drops keys typed in the frame of the focusing click"
+        );
+        assert_eq!(typed(true), "edited.json");
     }
 
     #[test]
