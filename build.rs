@@ -33,16 +33,16 @@ fn splice(path: &Path, depth: usize, out: &mut Spliced) -> Result<(), String> {
 
 /// Variants of the march shaders: (suffix, defines), in the order of `render::march_variant`'s indices.
 /// lavapipe pays for code under an untaken `if` that samples textures, so each compositing family and the
-/// shading path get their own SPIR-V (see shaders/march.glsl).
+/// shading path get their own SPIR-V (see shaders/march.glsl, which needs one FAMILY_ define).
 const MARCH_VARIANTS: &[(&str, &[&str])] = &[
-    ("ea", &[]),
-    ("ea_shaded", &["SHADED"]),
+    ("ea", &["FAMILY_EMISSION"]),
+    ("ea_shaded", &["FAMILY_EMISSION", "SHADED"]),
     ("proj", &["FAMILY_PROJECTION"]),
     ("iso", &["FAMILY_ISOSURFACE"]),
-    ("ea_shaded_tex", &["SHADED", "GRADIENT_TEXTURE"]),
+    ("ea_shaded_tex", &["FAMILY_EMISSION", "SHADED", "GRADIENT_TEXTURE"]),
     ("iso_tex", &["FAMILY_ISOSURFACE", "GRADIENT_TEXTURE"]),
-    ("ea_shaded_lv", &["SHADED", "LIGHT_VOLUME"]),
-    ("ea_shaded_tex_lv", &["SHADED", "GRADIENT_TEXTURE", "LIGHT_VOLUME"]),
+    ("ea_shaded_lv", &["FAMILY_EMISSION", "SHADED", "LIGHT_VOLUME"]),
+    ("ea_shaded_tex_lv", &["FAMILY_EMISSION", "SHADED", "GRADIENT_TEXTURE", "LIGHT_VOLUME"]),
     ("iso_lv", &["FAMILY_ISOSURFACE", "LIGHT_VOLUME"]),
     ("iso_tex_lv", &["FAMILY_ISOSURFACE", "GRADIENT_TEXTURE", "LIGHT_VOLUME"]),
 ];

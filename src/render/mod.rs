@@ -193,9 +193,9 @@ pub struct Renderer {
     slots: Vec<FrameSlot>,
     linear_sampler: vk::Sampler,
     point_sampler: vk::Sampler,
-    /// The baked table (shaders/march.glsl `Lut`): [`LUT_ROWS`] rows of [`LUT_SIZE`] entries.
+    /// The baked table (shaders/volume.glsl `Lut`): [`LUT_ROWS`] rows of [`LUT_SIZE`] entries.
     lut: Buffer,
-    /// Its integral functions (shaders/march.glsl `Integrals`, a uniform buffer of [`LUT_SIZE`] vec4).
+    /// Its integral functions (shaders/volume.glsl `Integrals`, a uniform buffer of [`LUT_SIZE`] vec4).
     integrals: Buffer,
     /// What the table holds: classification, window, data range and step rule it was baked for, and row 0
     /// itself (the brick occupancy is computed from it).
