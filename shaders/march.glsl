@@ -2,7 +2,7 @@
 // RenderSettings (src/scene/settings.rs); the CPU reference in tests/common follows the same rules. Every family
 // walks the ray with walk.glsl and differs only in what it does with the samples.
 //
-// It is compiled in variants (build.rs MARCH_VARIANTS and SAMPLINGS; it defines one of FAMILY_EMISSION,
+// It is compiled in variants (src/render/march_key.rs names them; build.rs defines one of FAMILY_EMISSION,
 // FAMILY_PROJECTION or FAMILY_ISOSURFACE, and SHADED, GRADIENT_TEXTURE, LIGHT_VOLUME, CORNERS8/CORNERS16),
 // because lavapipe executes an `if` holding texture samples at full cost even when no pixel takes it: unused
 // shading code made the plain march 4x slower.

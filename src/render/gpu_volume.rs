@@ -2,6 +2,7 @@
 //! and policy), its upload, brick grid and occupancy texture. A [`GpuVolume`] is made whole before it replaces the
 //! shown one, so the next step of a series can be uploaded ahead of display (`Renderer::prepare_volume`).
 
+use super::march_key::Sampling;
 use super::{skip, OccupancyKey, VolumeInfo};
 use crate::gpu::resources::{Image, ImageDesc};
 use crate::gpu::upload::{upload_image, upload_image_with};
@@ -86,12 +87,12 @@ pub enum VolumeLayout {
 }
 
 impl VolumeLayout {
-    /// The sampling index of the march shaders (build.rs SAMPLINGS).
-    pub fn index(self) -> usize {
+    /// How the shaders read a volume of this layout (their compiled variant).
+    pub fn sampling(self) -> Sampling {
         match self {
-            VolumeLayout::Texture(_) => 0,
-            VolumeLayout::Corners8 => 1,
-            VolumeLayout::Corners16 => 2,
+            VolumeLayout::Texture(_) => Sampling::Texture,
+            VolumeLayout::Corners8 => Sampling::Corners8,
+            VolumeLayout::Corners16 => Sampling::Corners16,
         }
     }
 

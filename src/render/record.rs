@@ -1,7 +1,7 @@
 //! Recording a frame: the entry and exit passes, the march (fragment or compute), their barriers and
 //! timestamps, and reading the timestamps back.
 
-use super::{march_variant, mirrors, setup_index, FrameUniforms, PassTimings, Renderer, QUERIES};
+use super::{mirrors, FrameUniforms, PassTimings, Renderer, QUERIES};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::scene::settings::{PositionFormat, RaySetup, RenderSettings};
@@ -23,6 +23,7 @@ impl Renderer {
     ) -> Result<(), GpuError> {
         let vol = self.volume.as_ref().ok_or(GpuError::Lost("no volume loaded"))?;
         let uniforms = FrameUniforms::new(s, &vol.info);
+        let key = self.march_key(s);
         let slot = self
             .slots
             .get_mut(slot)
@@ -30,7 +31,7 @@ impl Renderer {
         slot.uniforms.write(bytemuck::bytes_of(&uniforms))?;
         slot.recorded = Some(s.ray_setup);
         let (frame_set, query_pool, storage_set) = (slot.set, slot.query_pool, slot.storage_set);
-        let march_pipeline = self.march_pipelines[setup_index(s)][march_variant(s)][self.layout_index()];
+        let march_pipeline = self.march_pipelines[key.index()];
         if march_pipeline == vk::Pipeline::null() {
             return Err(GpuError::Lost("prepare() was not called for these settings"));
         }
