@@ -9,8 +9,8 @@
 #include "volume.glsl"
 #include "clip.glsl"
 #include "shade.glsl"
-// Emission and density composite segments between points (rule 6): only their walk yields the exiting sample and
-// the resample.
+// Emission and density composite segments between points (rule 6): only their walk takes strides and yields the
+// exiting sample and the resample.
 #if defined(FAMILY_EMISSION)
 #define WALK_SEGMENTS true
 #else

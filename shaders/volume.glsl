@@ -106,7 +106,8 @@ vec4 segment_mean(float vp, vec4 ip, float v, vec4 iv, vec4 slope) {
     return (isnan(v) || isnan(vp)) ? vec4(0.0) : mean;
 }
 
-// Central differences one voxel apart: value change per voxel along each texture axis.
+// Central differences one voxel apart: value change per voxel along each texture axis, from the gradient texture
+// (binding 4) or six samples.
 #if defined(GRADIENT_TEXTURE)
 vec3 gradient(vec3 p) {
     return 0.5 * textureLod(sampler3D(gradient_tex, linear_smp), p, 0.0).xyz;

@@ -8,8 +8,9 @@
 //
 // Emission and density composite segments between consecutive points (rule 6), so their walk also yields, leaving
 // bricks that hold something, the first sample beyond them, and after a leap the last sample leapt over as the next
-// segment's start (WALK_RESAMPLE). WALK_SEGMENTS, a constant march.glsl defines per family, turns that on: the
-// projection and isosurface families compile the walk without it and take the samples alone.
+// segment's start (WALK_RESAMPLE); and only they take strides (skip.rs gives the other families none). WALK_SEGMENTS,
+// a constant march.glsl defines per family, turns all that on: the projection and isosurface families compile the
+// walk without it (lavapipe pays for every line of the lookup on every step) and take every sample alone.
 //
 // The walk is the only code that knows the sample grid and the bricks: the families loop over walk_step and say
 // only what they do with what it yields.
@@ -102,12 +103,9 @@ int walk_step(WalkRay r, inout Walk w, out float t) {
     t = 0.0;
     if (w.k >= w.stop && !w.resample) {
         w.k = w.span_end;
-        if (w.k >= r.max_steps) {
-            return WALK_END;
-        }
         float t0 = (float(w.k) + r.o) * r.h;
-        if (t0 >= r.len) {
-            w.reached_end = true;
+        if (w.k >= r.max_steps || t0 >= r.len) {
+            w.reached_end = w.k < r.max_steps;
             return WALK_END;
         }
         Span span = span_at(r, t0);
@@ -124,10 +122,10 @@ int walk_step(WalkRay r, inout Walk w, out float t) {
         w.resample_at = w.k - 1;
         w.walked = !exiting;
         // The span's stride s (rule 2): the samples whose index is a multiple of s.
-        w.stride = exiting ? 1 : 1 << (3 - span.level);
+        w.stride = (exiting || !WALK_SEGMENTS) ? 1 : 1 << (3 - span.level);
         w.stop = exiting ? w.k + 1 : w.span_end;
         w.k = (w.k + w.stride - 1) & ~(w.stride - 1);
-        if (w.k >= w.stop && !w.resample) {
+        if (WALK_SEGMENTS && w.k >= w.stop && !w.resample) {
             return WALK_NONE;
         }
     }
