@@ -1,6 +1,8 @@
 //! Compiles every GLSL 450 stage in `shaders/` (`*.vert`, `*.frag`, `*.comp`) to SPIR-V with naga (no shaderc or
 //! glslang). `#include "file.glsl"` lines are spliced here, since naga's GLSL front end has no `#include`.
-//! A parse or validation error fails the build with the file, the line and naga's message.
+//! The march files are compiled once per variant that src/render/march_key.rs lists, light.comp once per volume
+//! layout, and a table of them written for the renderer. A parse or validation error fails the build with the
+//! file, the line and naga's message.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -31,28 +33,16 @@ fn splice(path: &Path, depth: usize, out: &mut Spliced) -> Result<(), String> {
     Ok(())
 }
 
-/// Variants of the march shaders: (suffix, defines), in the order of `render::march_variant`'s indices.
-/// lavapipe pays for code under an untaken `if` that samples textures, so each compositing family and the
-/// shading path get their own SPIR-V (see shaders/march.glsl).
-const MARCH_VARIANTS: &[(&str, &[&str])] = &[
-    ("ea", &[]),
-    ("ea_shaded", &["SHADED"]),
-    ("proj", &["FAMILY_PROJECTION"]),
-    ("iso", &["FAMILY_ISOSURFACE"]),
-    ("ea_shaded_tex", &["SHADED", "GRADIENT_TEXTURE"]),
-    ("iso_tex", &["FAMILY_ISOSURFACE", "GRADIENT_TEXTURE"]),
-    ("ea_shaded_lv", &["SHADED", "LIGHT_VOLUME"]),
-    ("ea_shaded_tex_lv", &["SHADED", "GRADIENT_TEXTURE", "LIGHT_VOLUME"]),
-    ("iso_lv", &["FAMILY_ISOSURFACE", "LIGHT_VOLUME"]),
-    ("iso_tex_lv", &["FAMILY_ISOSURFACE", "GRADIENT_TEXTURE", "LIGHT_VOLUME"]),
-];
+// The march variants and the light pass's samplings: the same file the renderer indexes the table by.
+#[allow(dead_code)] // build.rs needs the list, the names and the defines; the renderer the rest
+#[path = "src/render/march_key.rs"]
+mod march_key;
+use march_key::{MarchKey, Sampling, Setup};
 
-/// How the march reads the volume, in the order of `render::VolumeLayout::index`: a 3D texture, or the corner
-/// buffers of 8- and 16-bit data (see `render::VolumeLayout`).
-const SAMPLINGS: &[(&str, &[&str])] = &[("", &[]), ("_c8", &["CORNERS8"]), ("_c16", &["CORNERS16"])];
-
-/// The march shader files, in the order of `render::setup_index`.
-const MARCH_FILES: &[&str] = &["march_faces.frag", "march_analytic.frag", "march_compute.comp"];
+/// The SPIR-V name of light.comp compiled for `sampling`.
+fn light_name(sampling: Sampling) -> String {
+    format!("light.comp{}", sampling.suffix())
+}
 
 fn compile(path: &Path, stage: naga::ShaderStage, defines: &[&str]) -> Result<Vec<u32>, String> {
     let mut sp = Spliced {
@@ -114,6 +104,7 @@ fn compile(path: &Path, stage: naga::ShaderStage, defines: &[&str]) -> Result<Ve
 fn main() {
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     println!("cargo:rerun-if-changed=shaders");
+    println!("cargo:rerun-if-changed=src/render/march_key.rs");
     let mut entries: Vec<PathBuf> = std::fs::read_dir("shaders")
         .expect("shaders/ folder")
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -137,20 +128,14 @@ fn main() {
             .to_string();
         let variants: Vec<(String, Vec<&str>)> = if name == "light.comp" {
             // Rule 9's light grid reads the volume as the march does, in every layout.
-            SAMPLINGS
+            Sampling::ALL
                 .iter()
-                .map(|(sampling, defines)| (format!("light.comp{sampling}"), defines.to_vec()))
+                .map(|&s| (light_name(s), s.defines().to_vec()))
                 .collect()
-        } else if name.starts_with("march_") {
-            let name = &name;
-            MARCH_VARIANTS
-                .iter()
-                .flat_map(|(suffix, defines)| {
-                    SAMPLINGS.iter().map(move |(sampling, more)| {
-                        let all: Vec<&str> = defines.iter().chain(more.iter()).copied().collect();
-                        (format!("{name}.{suffix}{sampling}"), all)
-                    })
-                })
+        } else if let Some(setup) = Setup::ALL.into_iter().find(|s| s.file() == name) {
+            MarchKey::all()
+                .filter(|k| k.setup == setup)
+                .map(|k| (k.name(), k.defines()))
                 .collect()
         } else {
             vec![(name.clone(), Vec::new())]
@@ -165,27 +150,20 @@ fn main() {
             }
         }
     }
-    // The table of march shaders the renderer indexes by [setup][variant][sampling].
-    let mut table = format!(
-        "/// March SPIR-V by [`setup_index`][`march_variant`][`VolumeLayout::index`] (written by build.rs).\n\
-         pub(crate) const MARCH_SHADERS: [[[ShaderCode; 3]; {}]; 3] = [\n",
-        MARCH_VARIANTS.len()
+    // The tables the renderer indexes by `MarchKey::index` and `Sampling::index`.
+    let entry = |name: &str| {
+        format!("    ShaderCode {{ name: \"{name}\", bytes: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")) }},\n")
+    };
+    let mut table = String::from(
+        "/// The march SPIR-V in `MarchKey::index` order (written by build.rs).\n\
+         pub(crate) const MARCH_SHADERS: [ShaderCode; MarchKey::COUNT] = [\n",
     );
-    for file in MARCH_FILES {
-        table.push_str("    [\n");
-        for (suffix, _) in MARCH_VARIANTS {
-            table.push_str("        [\n");
-            for (sampling, _) in SAMPLINGS {
-                let name = format!("{file}.{suffix}{sampling}");
-                let _ = writeln!(
-                    table,
-                    "            ShaderCode {{ name: \"{name}\", bytes: include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{name}.spv\")) }},"
-                );
-            }
-            table.push_str("        ],\n");
-        }
-        table.push_str("    ],\n");
-    }
+    table.extend(MarchKey::all().map(|k| entry(&k.name())));
+    table.push_str(
+        "];\n\n/// light.comp in `Sampling::index` order (written by build.rs).\n\
+         pub(crate) const LIGHT_SHADERS: [ShaderCode; Sampling::ALL.len()] = [\n",
+    );
+    table.extend(Sampling::ALL.map(|s| entry(&light_name(s))));
     table.push_str("];\n");
     std::fs::write(out_dir.join("march_shaders.rs"), table).expect("write march_shaders.rs to OUT_DIR");
     if !failures.is_empty() {

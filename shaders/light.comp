@@ -3,7 +3,7 @@
 // transmittance T, y the ambient occlusion O. Pass 0 fills every cell with (1, O) (O = 1 without occlusion); each
 // later pass is one slice of the shadow sweep, from the slice nearest the light on, reading the slice before it.
 #include "frame.glsl"
-#include "march.glsl"
+#include "volume.glsl"
 
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 layout(set = 2, binding = 0, rgba16f) uniform image3D light_img;

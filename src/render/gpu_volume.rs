@@ -2,6 +2,7 @@
 //! and policy), its upload, brick grid and occupancy texture. A [`GpuVolume`] is made whole before it replaces the
 //! shown one, so the next step of a series can be uploaded ahead of display (`Renderer::prepare_volume`).
 
+use super::march_key::Sampling;
 use super::{skip, OccupancyKey, VolumeInfo};
 use crate::gpu::resources::{Image, ImageDesc};
 use crate::gpu::upload::{upload_image, upload_image_with};
@@ -72,7 +73,7 @@ fn extent_3d(dims: [u32; 3]) -> vk::Extent3D {
 /// The most memory `TexelPolicy::Auto` spends on a volume beyond its native format.
 pub const AUTO_LIMIT: u64 = 1 << 30;
 
-/// How the march reads the loaded volume (shaders/march.glsl, `sample_raw`).
+/// How the march reads the loaded volume (shaders/volume.glsl, `sample_raw`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VolumeLayout {
     /// A 3D texture of this format, filtered by the sampler.
@@ -86,12 +87,12 @@ pub enum VolumeLayout {
 }
 
 impl VolumeLayout {
-    /// The sampling index of the march shaders (build.rs SAMPLINGS).
-    pub fn index(self) -> usize {
+    /// How the shaders read a volume of this layout (their compiled variant).
+    pub fn sampling(self) -> Sampling {
         match self {
-            VolumeLayout::Texture(_) => 0,
-            VolumeLayout::Corners8 => 1,
-            VolumeLayout::Corners16 => 2,
+            VolumeLayout::Texture(_) => Sampling::Texture,
+            VolumeLayout::Corners8 => Sampling::Corners8,
+            VolumeLayout::Corners16 => Sampling::Corners16,
         }
     }
 

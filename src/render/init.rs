@@ -1,6 +1,7 @@
 //! Creating the renderer: descriptor set and pipeline layouts, samplers, pipelines for every variant, the
 //! table buffer and the frame slots.
 
+use super::march_key::MarchKey;
 use super::{FrameSlot, FrameUniforms, PositionTargets, Renderer, LUT_ROWS, QUERIES};
 use crate::gpu::pipeline::{graphics_pipeline, shader, GraphicsDesc};
 use crate::gpu::resources::Buffer;
@@ -96,7 +97,7 @@ impl Renderer {
             storage_set_layout: vk::DescriptorSetLayout::null(),
             march_compute_layout: vk::PipelineLayout::null(),
             position_pipelines: [[vk::Pipeline::null(); 2]; 2],
-            march_pipelines: [[[vk::Pipeline::null(); 3]; 10]; 3],
+            march_pipelines: [vk::Pipeline::null(); MarchKey::COUNT],
             light_pass: None,
             light_ms: None,
             descriptor_pool: vk::DescriptorPool::null(),

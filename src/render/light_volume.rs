@@ -3,8 +3,9 @@
 //! by shaders/light.comp when the transfer function, the light or the volume changes, and read by the march with
 //! one filtered fetch per lit sample (two with occlusion).
 
-use super::{FrameUniforms, Renderer, VolumeInfo};
-use crate::gpu::pipeline::{compute_pipeline, ShaderCode};
+use super::march_key::Sampling;
+use super::{FrameUniforms, Renderer, VolumeInfo, LIGHT_SHADERS};
+use crate::gpu::pipeline::compute_pipeline;
 use crate::gpu::resources::{Buffer, Image, ImageDesc};
 use crate::gpu::sync::{image_barrier, memory_barrier, Access};
 use crate::gpu::{Gpu, GpuError};
@@ -178,7 +179,8 @@ pub(super) struct LightImage {
 pub(super) struct LightPass {
     set_layout: vk::DescriptorSetLayout,
     layout: vk::PipelineLayout,
-    pipelines: [vk::Pipeline; 3],
+    /// By `Sampling::index`.
+    pipelines: [vk::Pipeline; Sampling::ALL.len()],
     pub(super) set: vk::DescriptorSet,
     extinction: Buffer,
 }
@@ -191,12 +193,6 @@ struct Push {
     delta: [f32; 4],
     grid: [f32; 4],
 }
-
-const SHADERS: [ShaderCode; 3] = [
-    crate::gpu::pipeline::shader!("light.comp"),
-    crate::gpu::pipeline::shader!("light.comp_c8"),
-    crate::gpu::pipeline::shader!("light.comp_c16"),
-];
 
 impl LightPass {
     /// Layouts and the table; `frame` and `volume` are the march's set layouts (sets 0 and 1).
@@ -215,7 +211,7 @@ impl LightPass {
         let mut pass = LightPass {
             set_layout: vk::DescriptorSetLayout::null(),
             layout: vk::PipelineLayout::null(),
-            pipelines: [vk::Pipeline::null(); 3],
+            pipelines: [vk::Pipeline::null(); Sampling::ALL.len()],
             set: vk::DescriptorSet::null(),
             extinction,
         };
@@ -263,14 +259,15 @@ impl LightPass {
     pub(super) fn fill(
         &mut self,
         gpu: &Gpu,
-        layout_index: usize,
+        sampling: Sampling,
         extinction: &[f32],
         grid: &LightGrid,
         image: &Image,
         sets: [vk::DescriptorSet; 2],
     ) -> Result<(), GpuError> {
-        if self.pipelines[layout_index] == vk::Pipeline::null() {
-            self.pipelines[layout_index] = compute_pipeline(gpu, &SHADERS[layout_index], self.layout)?;
+        let li = sampling.index();
+        if self.pipelines[li] == vk::Pipeline::null() {
+            self.pipelines[li] = compute_pipeline(gpu, &LIGHT_SHADERS[li], self.layout)?;
         }
         self.extinction.write(bytemuck::cast_slice(extinction))?;
         let image_info = [vk::DescriptorImageInfo::default()
@@ -308,7 +305,7 @@ impl LightPass {
             1 => (0, 2),
             _ => (0, 1),
         };
-        let pipeline = self.pipelines[layout_index];
+        let pipeline = self.pipelines[li];
         let d = &gpu.device;
         gpu.submit_and_wait(|cb| {
             let all_sets = [sets[0], sets[1], self.set];
@@ -414,7 +411,7 @@ impl Renderer {
         if self.light_is_current(s) {
             return Ok(());
         }
-        let li = self.layout_index();
+        let sampling = self.sampling();
         let (Some(vol), Some(pass), Some(slot)) = (&mut self.volume, &mut self.light_pass, self.slots.first_mut())
         else {
             return Ok(());
@@ -437,7 +434,7 @@ impl Renderer {
         };
         let extinction = extinction_table(s, &self.lut_table);
         let started = std::time::Instant::now();
-        let filled = pass.fill(gpu, li, &extinction, &grid, &image, [slot.set, self.volume_set]);
+        let filled = pass.fill(gpu, sampling, &extinction, &grid, &image, [slot.set, self.volume_set]);
         self.light_ms = Some(started.elapsed().as_secs_f64() * 1e3);
         if let Err(e) = filled {
             image.destroy(gpu);

@@ -8,6 +8,7 @@ pub mod headless;
 pub mod info;
 mod init;
 pub mod light_volume;
+pub mod march_key;
 pub mod png;
 mod record;
 pub mod skip;
@@ -28,6 +29,7 @@ use crate::transfer::function::{bake, Classification};
 use crate::transfer::preintegrate::integral_table;
 use crate::volume::Volume;
 use ash::vk;
+use march_key::{Family, Lighting, MarchKey, Sampling, Setup};
 
 /// GPU time per pass of the last frame, from timestamp queries.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -123,39 +125,6 @@ impl StepRule {
     }
 }
 
-/// Which march pipeline family `s` uses: 0 entry/exit faces, 1 analytic (fragment), 2 analytic (compute).
-fn setup_index(s: &RenderSettings) -> usize {
-    match s.ray_setup {
-        RaySetup::Faces => 0,
-        RaySetup::Analytic if s.compute => 2,
-        RaySetup::Analytic => 1,
-    }
-}
-
-/// Which compiled variant of the march `s` needs (build.rs MARCH_VARIANTS): 0 emission/density, 1 the same with
-/// gradients (shading or gradient-modulated opacity), 2 MIP/MinIP/average, 3 isosurface, 4 emission/density with
-/// gradients from the gradient texture, 5 isosurface with the gradient texture; 6–9 variants 1, 4, 3, 5 reading
-/// rule 9's light grid.
-pub fn march_variant(s: &RenderSettings) -> usize {
-    use crate::scene::settings::CompositeMode as M;
-    let base = match s.mode {
-        M::Emission | M::Density if (s.shading.is_some() || s.gradient_opacity.is_some()) && s.gradient_texture => 4,
-        M::Emission | M::Density if s.shading.is_some() || s.gradient_opacity.is_some() => 1,
-        M::Emission | M::Density => 0,
-        M::Mip | M::MinIp | M::Average => 2,
-        M::Isosurface if s.gradient_texture => 5,
-        M::Isosurface => 3,
-    };
-    // The same with rule 9's light grid.
-    match (base, s.uses_light_volume()) {
-        (1, true) => 6,
-        (4, true) => 7,
-        (3, true) => 8,
-        (5, true) => 9,
-        _ => base,
-    }
-}
-
 include!(concat!(env!("OUT_DIR"), "/march_shaders.rs"));
 
 /// Bytes per pixel that the entry/exit method needs beyond the output image (both position targets).
@@ -180,9 +149,8 @@ pub struct Renderer {
     march_compute_layout: vk::PipelineLayout,
     /// Entry and exit pipelines per position format: [Rgba32f, Rgba16f] × [entry, exit].
     position_pipelines: [[vk::Pipeline; 2]; 2],
-    /// March pipelines per `setup_index` × shader variant × volume layout, created when first needed (see
-    /// `march_variant`, `VolumeLayout::index`).
-    march_pipelines: [[[vk::Pipeline; 3]; 10]; 3],
+    /// March pipelines by `MarchKey::index`, created when first needed.
+    march_pipelines: [vk::Pipeline; MarchKey::COUNT],
     /// Rule 9's light grid pass (None only while the renderer is being made).
     light_pass: Option<light_volume::LightPass>,
     /// How long the last light grid took to fill (wall clock, submission to completion).
@@ -193,9 +161,9 @@ pub struct Renderer {
     slots: Vec<FrameSlot>,
     linear_sampler: vk::Sampler,
     point_sampler: vk::Sampler,
-    /// The baked table (shaders/march.glsl `Lut`): [`LUT_ROWS`] rows of [`LUT_SIZE`] entries.
+    /// The baked table (shaders/volume.glsl `Lut`): [`LUT_ROWS`] rows of [`LUT_SIZE`] entries.
     lut: Buffer,
-    /// Its integral functions (shaders/march.glsl `Integrals`, a uniform buffer of [`LUT_SIZE`] vec4).
+    /// Its integral functions (shaders/volume.glsl `Integrals`, a uniform buffer of [`LUT_SIZE`] vec4).
     integrals: Buffer,
     /// What the table holds: classification, window, data range and step rule it was baked for, and row 0
     /// itself (the brick occupancy is computed from it).
@@ -393,9 +361,33 @@ impl Renderer {
         })
     }
 
-    /// The sampling index of the march shaders for the loaded volume (0 without one).
-    fn layout_index(&self) -> usize {
-        self.volume.as_ref().map_or(0, |v| v.layout.index())
+    /// How the shaders read the loaded volume (as a texture without one).
+    fn sampling(&self) -> Sampling {
+        self.volume.as_ref().map_or(Sampling::Texture, |v| v.layout.sampling())
+    }
+
+    /// The march variant frame `s` needs on the loaded volume.
+    fn march_key(&self, s: &RenderSettings) -> MarchKey {
+        use crate::scene::settings::CompositeMode as M;
+        let setup = match s.ray_setup {
+            RaySetup::Faces => Setup::Faces,
+            RaySetup::Analytic if s.compute => Setup::Compute,
+            RaySetup::Analytic => Setup::Analytic,
+        };
+        let lighting = Lighting::new(s.gradient_texture, s.uses_light_volume());
+        let family = match s.mode {
+            M::Emission | M::Density if s.shading.is_some() || s.gradient_opacity.is_some() => {
+                Family::EmissionShaded(lighting)
+            }
+            M::Emission | M::Density => Family::Emission,
+            M::Mip | M::MinIp | M::Average => Family::Projection,
+            M::Isosurface => Family::Isosurface(lighting),
+        };
+        MarchKey {
+            setup,
+            family,
+            sampling: self.sampling(),
+        }
     }
 
     /// Whether [`Renderer::prepare`] has work to do for `s` (callers wait for in-flight frames only then).
@@ -407,7 +399,7 @@ impl Renderer {
         !targets_fit
             || !self.lut_is_current(s)
             || !self.occupancy_is_current(s)
-            || self.march_pipelines[setup_index(s)][march_variant(s)][self.layout_index()] == vk::Pipeline::null()
+            || self.march_pipelines[self.march_key(s).index()] == vk::Pipeline::null()
             || !self.light_is_current(s)
     }
 
@@ -442,34 +434,15 @@ impl Renderer {
     /// Creates (or re-creates) what `settings` needs that depends on more than the frame: colormap, targets.
     /// Must be called while no submitted frame is in flight.
     pub fn prepare(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
-        let (si, vi) = (setup_index(s), march_variant(s));
-        // The variants that read the gradient texture (build.rs MARCH_VARIANTS).
-        if [4, 5, 7, 9].contains(&vi) && self.volume.as_ref().is_some_and(|v| v.gradient.is_none()) {
+        let key = self.march_key(s);
+        let reads_gradients = key.family.lighting().is_some_and(|l| l.gradient_texture);
+        if reads_gradients && self.volume.as_ref().is_some_and(|v| v.gradient.is_none()) {
             return Err(GpuError::InvalidSettings(
                 "gradient_texture needs enable_gradient_texture() first".into(),
             ));
         }
-        let li = self.layout_index();
-        if self.march_pipelines[si][vi][li] == vk::Pipeline::null() {
-            let code = &MARCH_SHADERS[si][vi][li];
-            self.march_pipelines[si][vi][li] = if si == 2 {
-                compute_pipeline(gpu, code, self.march_compute_layout)?
-            } else {
-                let layout = match s.ray_setup {
-                    RaySetup::Faces => self.march_faces_layout,
-                    RaySetup::Analytic => self.march_analytic_layout,
-                };
-                graphics_pipeline(
-                    gpu,
-                    &GraphicsDesc {
-                        vertex: &shader!("fullscreen.vert"),
-                        fragment: code,
-                        layout,
-                        color_format: self.output_format,
-                        cull: vk::CullModeFlags::NONE,
-                    },
-                )?
-            };
+        if self.march_pipelines[key.index()] == vk::Pipeline::null() {
+            self.march_pipelines[key.index()] = self.march_pipeline(gpu, key)?;
         }
         if !self.lut_is_current(s) {
             self.upload_lut(s, self.volume_range())?;
@@ -540,6 +513,25 @@ impl Renderer {
         Ok(())
     }
 
+    fn march_pipeline(&self, gpu: &Gpu, key: MarchKey) -> Result<vk::Pipeline, GpuError> {
+        let code = &MARCH_SHADERS[key.index()];
+        let layout = match key.setup {
+            Setup::Faces => self.march_faces_layout,
+            Setup::Analytic => self.march_analytic_layout,
+            Setup::Compute => return compute_pipeline(gpu, code, self.march_compute_layout),
+        };
+        graphics_pipeline(
+            gpu,
+            &GraphicsDesc {
+                vertex: &shader!("fullscreen.vert"),
+                fragment: code,
+                layout,
+                color_format: self.output_format,
+                cull: vk::CullModeFlags::NONE,
+            },
+        )
+    }
+
     /// Bytes the current ray setup needs on the GPU for extra targets at `width`×`height`.
     pub fn extra_target_bytes(s: &RenderSettings) -> u64 {
         match s.ray_setup {
@@ -567,8 +559,8 @@ impl Renderer {
             for p in self.position_pipelines.iter().flatten() {
                 d.destroy_pipeline(*p, None);
             }
-            for p in self.march_pipelines.iter().flatten().flatten() {
-                d.destroy_pipeline(*p, None);
+            for p in self.march_pipelines {
+                d.destroy_pipeline(p, None);
             }
             if let Some(pass) = self.light_pass.take() {
                 pass.destroy(gpu);

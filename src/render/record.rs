@@ -1,11 +1,86 @@
-//! Recording a frame: the entry and exit passes, the march (fragment or compute), their barriers and
-//! timestamps, and reading the timestamps back.
+//! Recording a frame: one function per ray setup (faces: the entry pass, the exit pass, the march; analytic: the
+//! march; compute: the march's dispatch) over the steps they share, with their barriers and timestamps, and
+//! reading the timestamps back.
 
-use super::{march_variant, mirrors, setup_index, FrameUniforms, PassTimings, Renderer, QUERIES};
+use super::march_key::Setup;
+use super::{mirrors, FrameUniforms, PassTimings, Renderer, QUERIES};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::scene::settings::{PositionFormat, RaySetup, RenderSettings};
 use ash::vk;
+
+/// What the passes of one frame being recorded share.
+struct FrameRecording<'a> {
+    dev: &'a ash::Device,
+    cb: vk::CommandBuffer,
+    extent: vk::Extent2D,
+    query_pool: vk::QueryPool,
+    frame_set: vk::DescriptorSet,
+    march_pipeline: vk::Pipeline,
+    output: (vk::Image, vk::ImageView),
+    /// The output from its last use to a colour attachment, its old contents discarded.
+    output_to_attachment: ImageTransition,
+}
+
+impl FrameRecording<'_> {
+    /// Timestamp `query`: 0 before the first pass, then one after each.
+    fn timestamp(&self, query: u32) {
+        // SAFETY: the query was reset at the start of this command buffer.
+        unsafe {
+            self.dev
+                .cmd_write_timestamp2(self.cb, vk::PipelineStageFlags2::ALL_COMMANDS, self.query_pool, query)
+        }
+    }
+
+    /// Begins rendering into `view` (whose image is a colour attachment by now) over the whole target.
+    fn begin_rendering(&self, view: vk::ImageView, load: vk::AttachmentLoadOp) {
+        let area = vk::Rect2D {
+            offset: vk::Offset2D::default(),
+            extent: self.extent,
+        };
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: self.extent.width as f32,
+            height: self.extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        let attachment = [vk::RenderingAttachmentInfo::default()
+            .image_view(view)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(load)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                color: vk::ClearColorValue { float32: [0.0; 4] },
+            })];
+        let info = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(1)
+            .color_attachments(&attachment);
+        // SAFETY: `view`'s image is in COLOR_ATTACHMENT_OPTIMAL (the callers' barriers) and matches `extent`.
+        unsafe {
+            self.dev.cmd_begin_rendering(self.cb, &info);
+            self.dev.cmd_set_viewport(self.cb, 0, &[viewport]);
+            self.dev.cmd_set_scissor(self.cb, 0, &[area]);
+        }
+    }
+
+    /// The fullscreen march into the output (a colour attachment by now), with `sets` bound to `layout`.
+    fn draw_march(&self, layout: vk::PipelineLayout, sets: &[vk::DescriptorSet]) {
+        // The march writes every pixel, so the old contents need not be loaded.
+        self.begin_rendering(self.output.1, vk::AttachmentLoadOp::DONT_CARE);
+        // SAFETY: rendering has begun; the callers' sets match `layout` and hold live resources.
+        unsafe {
+            self.dev
+                .cmd_bind_pipeline(self.cb, vk::PipelineBindPoint::GRAPHICS, self.march_pipeline);
+            self.dev
+                .cmd_bind_descriptor_sets(self.cb, vk::PipelineBindPoint::GRAPHICS, layout, 0, sets, &[]);
+            self.dev.cmd_draw(self.cb, 3, 1, 0, 0);
+            self.dev.cmd_end_rendering(self.cb);
+        }
+    }
+}
 
 impl Renderer {
     /// Records one frame into `output` (a `width`×`height` colour image of `output_format`, last used as `from`;
@@ -23,204 +98,160 @@ impl Renderer {
     ) -> Result<(), GpuError> {
         let vol = self.volume.as_ref().ok_or(GpuError::Lost("no volume loaded"))?;
         let uniforms = FrameUniforms::new(s, &vol.info);
+        let key = self.march_key(s);
         let slot = self
             .slots
             .get_mut(slot)
             .ok_or(GpuError::Lost("frame slot out of range"))?;
         slot.uniforms.write(bytemuck::bytes_of(&uniforms))?;
         slot.recorded = Some(s.ray_setup);
-        let (frame_set, query_pool, storage_set) = (slot.set, slot.query_pool, slot.storage_set);
-        let march_pipeline = self.march_pipelines[setup_index(s)][march_variant(s)][self.layout_index()];
-        if march_pipeline == vk::Pipeline::null() {
+        let (query_pool, storage_set) = (slot.query_pool, slot.storage_set);
+        let frame = FrameRecording {
+            dev: &gpu.device,
+            cb,
+            extent: vk::Extent2D {
+                width: s.width,
+                height: s.height,
+            },
+            query_pool,
+            frame_set: slot.set,
+            march_pipeline: self.march_pipelines[key.index()],
+            output,
+            output_to_attachment: ImageTransition {
+                image: output.0,
+                from,
+                to: Access::ColorAttachmentWrite,
+                discard: true,
+            },
+        };
+        if frame.march_pipeline == vk::Pipeline::null() {
             return Err(GpuError::Lost("prepare() was not called for these settings"));
         }
-        let dev = &gpu.device;
-        let extent = vk::Extent2D {
-            width: s.width,
-            height: s.height,
-        };
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: s.width as f32,
-            height: s.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
-        let scissor = vk::Rect2D {
-            offset: vk::Offset2D::default(),
-            extent,
-        };
-        let ts = |cb, i| {
-            // SAFETY: the query was reset at the start of this command buffer.
-            unsafe { dev.cmd_write_timestamp2(cb, vk::PipelineStageFlags2::ALL_COMMANDS, query_pool, i) }
-        };
         // SAFETY: `cb` is recording, outside any rendering scope.
-        unsafe { dev.cmd_reset_query_pool(cb, query_pool, 0, QUERIES) };
-        ts(cb, 0);
-        let begin = |view: vk::ImageView, load: vk::AttachmentLoadOp| {
-            let attachment = [vk::RenderingAttachmentInfo::default()
-                .image_view(view)
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(load)
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue {
-                    color: vk::ClearColorValue { float32: [0.0; 4] },
-                })];
-            let info = vk::RenderingInfo::default()
-                .render_area(scissor)
-                .layer_count(1)
-                .color_attachments(&attachment);
-            // SAFETY: `view`'s image is in COLOR_ATTACHMENT_OPTIMAL (barriers above) and matches `extent`.
-            unsafe {
-                dev.cmd_begin_rendering(cb, &info);
-                dev.cmd_set_viewport(cb, 0, &[viewport]);
-                dev.cmd_set_scissor(cb, 0, &[scissor]);
-            }
+        unsafe { frame.dev.cmd_reset_query_pool(cb, query_pool, 0, QUERIES) };
+        frame.timestamp(0);
+        match key.setup {
+            Setup::Faces => self.record_faces(&frame, s)?,
+            Setup::Analytic => self.record_analytic(&frame),
+            Setup::Compute => self.record_compute(&frame, storage_set, s),
+        }
+        Ok(())
+    }
+
+    /// The entry/exit method: the entry pass, the exit pass (timestamps 1 and 2) and the march reading both (3).
+    fn record_faces(&self, f: &FrameRecording, s: &RenderSettings) -> Result<(), GpuError> {
+        let p = self
+            .positions
+            .as_ref()
+            .ok_or(GpuError::Lost("prepare() was not called"))?;
+        let pi = match p.format {
+            PositionFormat::Rgba32f => 0,
+            PositionFormat::Rgba16f => 1,
         };
-        let output_to_attachment = ImageTransition {
-            image: output.0,
-            from,
+        // Last frame's march read both targets; wait for that before overwriting them.
+        let discard = |image| ImageTransition {
+            image,
+            from: Access::FragmentSampled,
             to: Access::ColorAttachmentWrite,
             discard: true,
         };
-        match s.ray_setup {
-            RaySetup::Faces => {
-                let p = self
-                    .positions
-                    .as_ref()
-                    .ok_or(GpuError::Lost("prepare() was not called"))?;
-                let pi = match p.format {
-                    PositionFormat::Rgba32f => 0,
-                    PositionFormat::Rgba16f => 1,
-                };
-                // Last frame's march read both targets; wait for that before overwriting them.
-                let discard = |image| ImageTransition {
-                    image,
-                    from: Access::FragmentSampled,
-                    to: Access::ColorAttachmentWrite,
-                    discard: true,
-                };
-                image_barriers(
-                    dev,
-                    cb,
-                    &[discard(p.entry.raw), discard(p.exit.raw), output_to_attachment],
+        image_barriers(
+            f.dev,
+            f.cb,
+            &[discard(p.entry.raw), discard(p.exit.raw), f.output_to_attachment],
+        );
+        // Pipeline 0 culls back faces, 1 front faces; a mirroring placement swaps which is which.
+        let flip = usize::from(self.volume.as_ref().is_some_and(|v| mirrors(v.info.tex_to_world(s))));
+        for (j, target) in [&p.entry, &p.exit].into_iter().enumerate() {
+            f.begin_rendering(target.view, vk::AttachmentLoadOp::CLEAR);
+            // SAFETY: rendering has begun; the pipeline and set match the faces layout.
+            unsafe {
+                f.dev.cmd_bind_pipeline(
+                    f.cb,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.position_pipelines[pi][j ^ flip],
                 );
-                // Pipeline 0 culls back faces, 1 front faces; a mirroring placement swaps which is which.
-                let flip = usize::from(self.volume.as_ref().is_some_and(|v| mirrors(v.info.tex_to_world(s))));
-                for (j, target) in [&p.entry, &p.exit].into_iter().enumerate() {
-                    begin(target.view, vk::AttachmentLoadOp::CLEAR);
-                    // SAFETY: rendering has begun; the pipeline and set match the faces layout.
-                    unsafe {
-                        dev.cmd_bind_pipeline(
-                            cb,
-                            vk::PipelineBindPoint::GRAPHICS,
-                            self.position_pipelines[pi][j ^ flip],
-                        );
-                        dev.cmd_bind_descriptor_sets(
-                            cb,
-                            vk::PipelineBindPoint::GRAPHICS,
-                            self.faces_layout,
-                            0,
-                            &[frame_set],
-                            &[],
-                        );
-                        dev.cmd_draw(cb, 36, 1, 0, 0);
-                        dev.cmd_end_rendering(cb);
-                    }
-                    ts(cb, 1 + j as u32);
-                }
-                let to_sampled = |image| ImageTransition {
-                    image,
-                    from: Access::ColorAttachmentWrite,
-                    to: Access::FragmentSampled,
-                    discard: false,
-                };
-                image_barriers(dev, cb, &[to_sampled(p.entry.raw), to_sampled(p.exit.raw)]);
-                // The march writes every pixel, so the old contents need not be loaded.
-                begin(output.1, vk::AttachmentLoadOp::DONT_CARE);
-                // SAFETY: rendering has begun; the sets match the march-faces layout and hold live resources.
-                unsafe {
-                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, march_pipeline);
-                    dev.cmd_bind_descriptor_sets(
-                        cb,
-                        vk::PipelineBindPoint::GRAPHICS,
-                        self.march_faces_layout,
-                        0,
-                        &[frame_set, self.volume_set, self.positions_set],
-                        &[],
-                    );
-                    dev.cmd_draw(cb, 3, 1, 0, 0);
-                    dev.cmd_end_rendering(cb);
-                }
-                ts(cb, 3);
-            }
-            RaySetup::Analytic if s.compute => {
-                let image_info = [vk::DescriptorImageInfo::default()
-                    .image_view(output.1)
-                    .image_layout(vk::ImageLayout::GENERAL)];
-                let write = vk::WriteDescriptorSet::default()
-                    .dst_set(storage_set)
-                    .dst_binding(0)
-                    .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
-                    .image_info(&image_info);
-                // SAFETY: the slot's last frame has completed (record's contract), so nothing uses the set.
-                unsafe { dev.update_descriptor_sets(&[write], &[]) };
-                image_barriers(
-                    dev,
-                    cb,
-                    &[ImageTransition {
-                        to: Access::ComputeWrite,
-                        ..output_to_attachment
-                    }],
+                f.dev.cmd_bind_descriptor_sets(
+                    f.cb,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.faces_layout,
+                    0,
+                    &[f.frame_set],
+                    &[],
                 );
-                // SAFETY: the sets match the march-compute layout and hold live resources; `output` is in GENERAL.
-                unsafe {
-                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, march_pipeline);
-                    dev.cmd_bind_descriptor_sets(
-                        cb,
-                        vk::PipelineBindPoint::COMPUTE,
-                        self.march_compute_layout,
-                        0,
-                        &[frame_set, self.volume_set, storage_set],
-                        &[],
-                    );
-                    dev.cmd_dispatch(cb, s.width.div_ceil(8), s.height.div_ceil(8), 1);
-                }
-                ts(cb, 1);
-                // record's contract: the output ends as a colour attachment, whichever pass wrote it.
-                image_barriers(
-                    dev,
-                    cb,
-                    &[ImageTransition {
-                        image: output.0,
-                        from: Access::ComputeWrite,
-                        to: Access::ColorAttachmentWrite,
-                        discard: false,
-                    }],
-                );
+                f.dev.cmd_draw(f.cb, 36, 1, 0, 0);
+                f.dev.cmd_end_rendering(f.cb);
             }
-            RaySetup::Analytic => {
-                image_barriers(dev, cb, &[output_to_attachment]);
-                begin(output.1, vk::AttachmentLoadOp::DONT_CARE);
-                // SAFETY: rendering has begun; the sets match the march-analytic layout and hold live resources.
-                unsafe {
-                    dev.cmd_bind_pipeline(cb, vk::PipelineBindPoint::GRAPHICS, march_pipeline);
-                    dev.cmd_bind_descriptor_sets(
-                        cb,
-                        vk::PipelineBindPoint::GRAPHICS,
-                        self.march_analytic_layout,
-                        0,
-                        &[frame_set, self.volume_set],
-                        &[],
-                    );
-                    dev.cmd_draw(cb, 3, 1, 0, 0);
-                    dev.cmd_end_rendering(cb);
-                }
-                ts(cb, 1);
-            }
+            f.timestamp(1 + j as u32);
         }
+        let to_sampled = |image| ImageTransition {
+            image,
+            from: Access::ColorAttachmentWrite,
+            to: Access::FragmentSampled,
+            discard: false,
+        };
+        image_barriers(f.dev, f.cb, &[to_sampled(p.entry.raw), to_sampled(p.exit.raw)]);
+        f.draw_march(
+            self.march_faces_layout,
+            &[f.frame_set, self.volume_set, self.positions_set],
+        );
+        f.timestamp(3);
         Ok(())
+    }
+
+    /// The analytic method in a fullscreen fragment pass: the march alone (timestamp 1).
+    fn record_analytic(&self, f: &FrameRecording) {
+        image_barriers(f.dev, f.cb, &[f.output_to_attachment]);
+        f.draw_march(self.march_analytic_layout, &[f.frame_set, self.volume_set]);
+        f.timestamp(1);
+    }
+
+    /// The analytic method as a compute dispatch writing the output as a storage image (`storage_set`, the
+    /// slot's; timestamp 1), which then becomes a colour attachment as `record` promises.
+    fn record_compute(&self, f: &FrameRecording, storage_set: vk::DescriptorSet, s: &RenderSettings) {
+        let image_info = [vk::DescriptorImageInfo::default()
+            .image_view(f.output.1)
+            .image_layout(vk::ImageLayout::GENERAL)];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(storage_set)
+            .dst_binding(0)
+            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+            .image_info(&image_info);
+        // SAFETY: the slot's last frame has completed (record's contract), so nothing uses the set.
+        unsafe { f.dev.update_descriptor_sets(&[write], &[]) };
+        image_barriers(
+            f.dev,
+            f.cb,
+            &[ImageTransition {
+                to: Access::ComputeWrite,
+                ..f.output_to_attachment
+            }],
+        );
+        // SAFETY: the sets match the march-compute layout and hold live resources; `output` is in GENERAL.
+        unsafe {
+            f.dev
+                .cmd_bind_pipeline(f.cb, vk::PipelineBindPoint::COMPUTE, f.march_pipeline);
+            f.dev.cmd_bind_descriptor_sets(
+                f.cb,
+                vk::PipelineBindPoint::COMPUTE,
+                self.march_compute_layout,
+                0,
+                &[f.frame_set, self.volume_set, storage_set],
+                &[],
+            );
+            f.dev.cmd_dispatch(f.cb, s.width.div_ceil(8), s.height.div_ceil(8), 1);
+        }
+        f.timestamp(1);
+        image_barriers(
+            f.dev,
+            f.cb,
+            &[ImageTransition {
+                image: f.output.0,
+                from: Access::ComputeWrite,
+                to: Access::ColorAttachmentWrite,
+                discard: false,
+            }],
+        );
     }
 
     /// GPU times of the last frame recorded in `slot`; call after its submission has completed.
