@@ -83,6 +83,9 @@ impl ApplicationHandler for App {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
         let Some(r) = &mut self.running else { return };
         let repaint = r.gui.on_window_event(&r.window, &event);
+        // egui-winit asks for a repaint on every RedrawRequested; honouring that redrew forever, a full frame
+        // after a full frame with nothing changed (a core busy while nobody touched the viewer).
+        let repaint = repaint && !matches!(event, WindowEvent::RedrawRequested);
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(_) => r.window.request_redraw(),
@@ -108,6 +111,9 @@ impl ApplicationHandler for App {
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
         let Some(r) = &mut self.running else { return };
         let activity = r.activity();
+        if let Some(at) = r.script.as_ref().and_then(|s| s.waiting_until()) {
+            r.pacing.wake_by(at);
+        }
         match r.pacing.wake(activity, Instant::now()) {
             Wake::Continuous => {
                 r.window.request_redraw();

@@ -4,8 +4,8 @@
 //! says changed something, a resize and a dropped file each ask for one frame, and egui may ask for one later
 //! (a tooltip's delay).
 //!
-//! Today any activity keeps the event loop polling; an idle viewer that draws only when something changed would
-//! start here.
+//! Without activity the viewer sleeps until input, egui's wish or a script's wait ending: an untouched viewer
+//! costs no CPU.
 
 use std::time::{Duration, Instant};
 
@@ -95,6 +95,11 @@ impl Pacing {
     /// egui's wish for the next frame after the one started at `now` (`None`: only on input).
     pub(super) fn repaint_after(&mut self, now: Instant, delay: Option<Duration>) {
         self.repaint_at = delay.filter(|d| *d < Duration::from_secs(3600)).map(|d| now + d);
+    }
+
+    /// Draws a frame at `at` at the latest (a script's wait ending), without drawing before it.
+    pub(super) fn wake_by(&mut self, at: Instant) {
+        self.repaint_at = Some(self.repaint_at.map_or(at, |r| r.min(at)));
     }
 
     /// What the event loop does next, given the viewer's `activity`.

@@ -133,7 +133,7 @@ impl Running {
             dialog: self.loader.dialog_open(),
             camera_moving: self.model.camera_moving(),
             playing: self.model.time.playing,
-            script: self.script.is_some(),
+            script: self.script.as_ref().is_some_and(|s| s.waiting_until().is_none()),
             refining: self.pacing.refine_pending,
             held_input: self.gui.holds_input(),
         }

@@ -14,7 +14,8 @@ use std::time::{Duration, Instant};
 pub enum ScriptStep {
     /// Render this many frames.
     Frames(u32),
-    /// Keep the window open and drawing for this long, so that a test can drive it with real X input meanwhile.
+    /// Keep the window open for this long, so that a test can drive it with real X input meanwhile (the viewer
+    /// draws as it would untouched: when input or an animation asks for a frame).
     Wait(Duration),
     /// Rotate the view a little each frame for this many frames, as a drag would, and report the frame times.
     Drag(u32),
@@ -132,6 +133,14 @@ impl Script {
             zero_size: false,
             drag_frames: Vec::new(),
         }
+    }
+
+    /// When the script only waits for time to pass (a `wait:` step with nothing else under way), until when: the
+    /// viewer then sleeps until that time or input, like an untouched viewer, instead of drawing frame after frame.
+    pub(super) fn waiting_until(&self) -> Option<Instant> {
+        let busy =
+            self.frames_left > 0 || self.drag_left > 0 || self.waiting_for_size.is_some() || self.waiting_for_load;
+        self.wait_until.filter(|_| !busy)
     }
 
     /// A scripted drag is turning the view.
