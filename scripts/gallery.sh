@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Renders the README's gallery into docs/gallery/ with the commands the README lists (needs ../shared/data).
+# Renders the gallery of docs/rendering.md into docs/gallery/ with the commands it lists (needs ../shared/data).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q
@@ -9,7 +9,7 @@ brain=../shared/data/native/colin27_t1/ch2.nii.gz
 common=(--spacing 0.957031 0.957031 1.5 --azimuth 25 --elevation 10 --distance 1.85 --size 256x256)
 out=docs/gallery
 mkdir -p $out
-# Lighting (README, Lighting): shadows and ambient occlusion, layered iso-surfaces, the terracing fix.
+# Lighting (docs/rendering.md, Lighting): shadows and ambient occlusion, layered iso-surfaces, the terracing fix.
 $v "$ct" "${common[@]}" --preset ct-bone --shadows --ambient-occlusion -o $out/ct-bone-shadows-ao.png
 $v "$ct" "${common[@]}" --preset ct-bone --shading -o $out/ct-bone-shaded.png
 $v "$ct" "${common[@]}" --mode iso --iso 0.45 --surface 0.2,0.95,0.72,0.62,0.3 --shadows --ambient-occlusion \

@@ -4,7 +4,7 @@
 A test suite proves something only if it fails when the code is wrong. Each bug below is a small, realistic
 source change (a wrong sign, a dropped factor, an edge off by one); for each, this script applies it to a scratch
 copy of the committed tree, runs `cargo test --release --no-fail-fast` there, and records the failing tests. A bug
-that no test catches is a *survivor*: a hole in the proof. The README's Tests section lists the last result.
+that no test catches is a *survivor*: a hole in the proof. docs/planted-bugs.md lists the last result (docs/testing.md explains it).
 
 Runs by hand, not in CI (each bug rebuilds the crate and runs the whole suite: ~5 minutes a bug on 2 cores):
 

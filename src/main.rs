@@ -35,7 +35,7 @@ enum Command {
     Info(Box<InfoArgs>),
     /// Render built-in viewpoints with both ray setups and measure how they differ and what each costs.
     Compare(Box<CompareArgs>),
-    /// Time a fixed set of scenes and the raw 3D-texture sample rate (see README, Performance).
+    /// Time a fixed set of scenes and the raw 3D-texture sample rate (docs/performance.md).
     Bench(Box<BenchArgs>),
     /// List the Vulkan devices and which one volcast would pick.
     Devices,

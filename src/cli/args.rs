@@ -13,7 +13,8 @@ use volcast::volume::{self, RawOptions, Volume, VoxelType};
 #[derive(Args, Clone)]
 pub(crate) struct VolumeArgs {
     /// A volume file: raw, VTK (.vtk, .vti), NRRD (.nrrd/.nhdr), NIfTI-1 (.nii/.nii.gz), MetaImage (.mha/.mhd), DICOM
-    /// (a folder of slices or one file). Raw files take dims and type from --dims/--type or a NAME_WxHxD_TYPE name.
+    /// (a folder of slices or one file), TIFF stack (.tif/.tiff, one multi-page file or a folder). Raw files take
+    /// dims and type from --dims/--type or a NAME_WxHxD_TYPE name.
     pub(crate) file: Option<PathBuf>,
     /// A built-in volume: helix, box, colormap or marschner-lobb.
     #[arg(long, conflicts_with = "file")]
@@ -211,7 +212,7 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "FILE.json")]
     pub(crate) state: Option<PathBuf>,
     /// A turntable movie of N frames (1 to 3600) once around the vertical axis (+z through the point looked at),
-    /// starting at the view given: `-o NAME.png` writes NAME-0000.png … and a looping NAME.gif (README, Movies).
+    /// starting at the view given: `-o NAME.png` writes NAME-0000.png … and a looping NAME.gif (docs/cli.md, Movies).
     #[arg(long, value_name = "N", value_parser = parse_turntable, group = "movie", conflicts_with = "timings")]
     pub(crate) turntable: Option<u32>,
     /// A movie along a camera path through view states (F12's JSON), --frames N in all: the first frame is the
@@ -250,7 +251,7 @@ pub(crate) struct ViewArgs {
     /// lock it, instead of the one chosen by modality (auto, the default).
     #[arg(long, conflicts_with = "tf")]
     pub(crate) preset: Option<String>,
-    /// Open with the transfer function in this JSON file (see README), locked.
+    /// Open with the transfer function in this JSON file (docs/rendering.md, The JSON format), locked.
     #[arg(long, value_name = "FILE.json")]
     pub(crate) tf: Option<PathBuf>,
 }

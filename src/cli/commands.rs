@@ -175,8 +175,14 @@ pub(crate) fn devices() -> Result<()> {
     if list.is_empty() {
         return Err(GpuError::NoDevice("the Vulkan loader found no physical device".into()).into());
     }
+    let chosen = volcast::gpu::default_device(&list);
     for d in &list {
-        println!("{d}");
+        let mark = if chosen == Some(d.index) {
+            "  <- volcast's choice (--device picks another)"
+        } else {
+            ""
+        };
+        println!("{d}{mark}");
     }
     Ok(())
 }

@@ -64,7 +64,7 @@ pub(crate) struct FrameArgs {
     /// modality: CT gets ct-bone, anything else a grey ramp over its histogram's percentiles).
     #[arg(long, conflicts_with = "tf")]
     pub(crate) preset: Option<String>,
-    /// A transfer function from a JSON file (see README).
+    /// A transfer function from a JSON file (docs/rendering.md, The JSON format).
     #[arg(long)]
     pub(crate) tf: Option<PathBuf>,
     /// Write the transfer function in use (preset or file) as JSON, to start your own from.
@@ -135,8 +135,9 @@ pub(crate) struct FrameArgs {
     /// default: the quality's, 1 with --step-length).
     #[arg(long)]
     pub(crate) max_stride: Option<u32>,
-    /// Where shaded frames take gradients: auto (the texture while it stays within 1 GiB), texture (precomputed
-    /// central differences on the grid, 8 bytes per voxel, one fetch) or samples (six samples of the interpolant).
+    /// Where shaded frames take gradients: auto (the texture while it stays within 1 GiB), texture (gradients
+    /// precomputed on the grid, smoothed for integer data; 8 bytes per voxel, one fetch) or samples (six samples of
+    /// the interpolant).
     #[arg(long, default_value = "auto", value_parser = parse_gradients)]
     pub(crate) gradients: Gradients,
     /// The same as --gradients texture.

@@ -367,6 +367,11 @@ fn choose(devices: &[DeviceInfo], wanted: Option<&str>) -> Result<usize, GpuErro
     }
 }
 
+/// The device volcast takes when `--device` does not say (see [`list_devices`]), if any is usable.
+pub fn default_device(devices: &[DeviceInfo]) -> Option<usize> {
+    choose(devices, None).ok()
+}
+
 /// Lists the physical devices (for `volcast devices`).
 pub fn list_devices() -> Result<Vec<DeviceInfo>, GpuError> {
     let entry = load_entry()?;

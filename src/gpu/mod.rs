@@ -8,7 +8,7 @@ pub mod swapchain;
 pub mod sync;
 pub mod upload;
 
-pub use context::{list_devices, DeviceInfo, Gpu, GpuOptions, ValidationLog, ValidationMessage};
+pub use context::{default_device, list_devices, DeviceInfo, Gpu, GpuOptions, ValidationLog, ValidationMessage};
 
 use ash::vk;
 

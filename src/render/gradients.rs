@@ -10,7 +10,7 @@ use rayon::prelude::*;
 ///
 /// Integer data are quantised: a smooth field stored in few levels per voxel of change (an 8-bit MRI, a narrow
 /// value range) has terraces a voxel or less apart, and a 3-tap gradient shades every terrace. Measured on a
-/// three-Gaussian field stored as float32 and as 100-level uint8 (normals at its iso-surface, README Lighting):
+/// three-Gaussian field stored as float32 and as 100-level uint8 (normals at its iso-surface, docs/rendering.md, Gradients):
 /// central differences err 3.2° on the uint8 copy, Sobel 1.7°, Gaussian σ = 1 0.9°, σ = 1.5 0.6°; on float32 all
 /// err 0.5° against the field. Rendered, σ = 1.5 brings the uint8 copy's iso-surface from 4.4/255 (p99 19) to
 /// 1.3/255 (p99 4) of the float32 one, σ = 1 to 1.7 (p99 6). A wide kernel also rounds off real detail

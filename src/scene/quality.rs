@@ -7,7 +7,7 @@
 //! Within that step, faint bricks take longer strides (rule 2 of `RenderSettings`: segments of at most
 //! `STRIDE_DEPTH`). The level resolves to an ordinary `RenderSettings::step_length` and `max_stride` before a
 //! frame is rendered, so the GPU and the CPU reference render the same rule. Measured errors against the converged image per level and scene are in the
-//! README (Fidelity).
+//! docs/performance.md (Quality levels).
 
 use crate::scene::settings::{CompositeMode, RenderSettings};
 use crate::transfer::function::{bake, LUT_SIZE};
@@ -30,7 +30,7 @@ pub enum Quality {
     /// Base step 1 voxel (volcast's default before quality levels; VTK's default sample distance).
     Fast,
     /// Base step 0.4 voxel, the default: "visually converged", within mean 0.5/255 and p99 4/255 of the
-    /// converged image on the test and bench scenes the README lists (errors fall with the square of the step:
+    /// converged image on the test and bench scenes docs/performance.md lists (errors fall with the square of the step:
     /// at 1 voxel the small test volumes are 1–1.5/255 off on average).
     #[default]
     Normal,
@@ -117,8 +117,9 @@ pub enum Gradients {
     /// The texture when it stays within [`GRADIENT_LIMIT`], else the samples.
     #[default]
     Auto,
-    /// A precomputed gradient texture (the grid's central differences, RGBA16 SNORM, 8 bytes per voxel), one
-    /// filtered fetch per gradient. Measured on lavapipe: shaded frames about 1.5× faster (README, Fidelity).
+    /// A precomputed gradient texture (the grid's gradients, Sobel for float data and a Gaussian derivative for
+    /// integer data: `render::gradients`; RGBA16 SNORM, 8 bytes per voxel), one filtered fetch per gradient.
+    /// Measured on lavapipe: shaded frames about 1.5× faster (docs/performance.md, Quality levels).
     Texture,
     /// Six samples of the interpolant per gradient (the rule the converged image follows).
     Samples,

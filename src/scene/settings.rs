@@ -119,7 +119,7 @@ pub const STRIDE_DEPTH: f64 = 0.05;
 /// for the whole segment). Measured: the shaded MRI bench scene erred 1.09/255 on average with strides at 0.05
 /// (0.46 without); Marschner–Lobb under a faint flat table (0.012 depth per step), lit, erred p99 5/255, max 10
 /// against every step at 0.025 (stride 2), beyond the strides bound (p99 4). Half that keeps such segments at
-/// stride 1; README, Fidelity.
+/// stride 1; docs/performance.md, Quality levels.
 pub const STRIDE_DEPTH_LIT: f64 = 0.0125;
 
 /// Rule 2's most optical depth by which a strided segment may vary between the brick's faintest and strongest
@@ -294,7 +294,7 @@ pub struct RenderSettings {
     /// while it stays within 1 GiB.
     pub gradient_texture: bool,
     /// March in a compute pass instead of a fullscreen fragment pass (analytic ray setup only; the output image
-    /// must allow storage). The same rays and rules: a measured alternative for lavapipe (README, Performance).
+    /// must allow storage). The same rays and rules: a measured alternative for lavapipe (docs/performance.md).
     pub compute: bool,
     /// Render in voxel index space: the box along the world's axes by its voxel sizes, ignoring the file's
     /// orientation (what volcast showed before it read orientations; `--voxel-axes`).

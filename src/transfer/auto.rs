@@ -23,7 +23,7 @@ use crate::volume::{Volume, VoxelType};
 
 /// Opacity per voxel-length step at the ramp's top. Low, because in a whole-head MR the scalp is as bright as
 /// the brain (a 1-D function cannot tell them apart): at 0.25 the scalp hid the brain of the real T1 and PD
-/// heads; at 0.08 the head is translucent and the brain's vessels and white matter show through (README).
+/// heads; at 0.08 the head is translucent and the brain's vessels and white matter show through (docs/rendering.md, Auto).
 pub const RAMP_ALPHA: f32 = 0.08;
 /// Percentiles of the non-background values where the ramp starts and ends.
 pub const RAMP_PERCENTILES: [f64; 2] = [0.55, 0.99];

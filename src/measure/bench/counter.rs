@@ -18,7 +18,7 @@ use glam::{Mat3, Mat4, Vec3};
 ///   gradient (shading or gradient opacity, on steps with opacity > 0) and, in isosurface mode,
 ///   the bisection's eight and the hit's gradient.
 ///
-/// Approximations, all small: the entry/exit method finds the same segments to float precision (README, "Two ray
+/// Approximations, all small: the entry/exit method finds the same segments to float precision (docs/rendering.md, "Two ray
 /// setups"), so one count serves both setups; lavapipe filters 8-bit textures with 8-bit weights, so a ray may end
 /// a step earlier or later than here; gradient opacity is not modelled (its rays may run longer on the GPU).
 /// When the march changes how many samples it takes (empty-space skipping, adaptive steps), change
