@@ -1,8 +1,6 @@
 //! The `volcast` binary end to end: a render under validation, and every bad input a user can give ending in a
 //! clear message and a non-zero exit, never a panic.
 
-mod common;
-
 use std::path::PathBuf;
 use std::process::{Command, Output};
 

@@ -2,8 +2,6 @@
 //! (its images, `compare.md` and `compare.json`, and a view where the two setups do not agree), `info` on every
 //! format, `devices` and `--device`, and the options of `render` that print or write rather than draw.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

@@ -1,8 +1,6 @@
 //! Volume file formats end to end through `volume::open`: files written here (round trips, known values,
 //! detached data, path escapes, hostile input) and the real volumes in ../shared/data against their raw twins.
 
-mod common;
-
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use volcast::volume::{self, Endian, Format, OpenOptions, RawOptions, Volume, VoxelType};

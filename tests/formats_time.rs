@@ -3,8 +3,6 @@
 //! affine; each shown step rendered against the independent reference under validation; the CLI's `--time` and
 //! `info`; headers claiming more steps than memory holds.
 
-mod common;
-
 use common::bounds::REFERENCE;
 use common::cases::standard_cases;
 use common::compare::diff;

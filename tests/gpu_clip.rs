@@ -4,8 +4,6 @@
 //! march), on volumes placed obliquely with anisotropic voxels and mirrored. The reference clips the world ray
 //! itself (tests/common/march.rs); the GPU clips the texture-space segment (shaders/clip.glsl).
 
-mod common;
-
 use common::bounds::REFERENCE;
 use common::cases::{mirrored, oblique, with, Case};
 use common::compare::diff;

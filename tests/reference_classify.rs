@@ -1,8 +1,6 @@
 //! The reference's classification (tests/common/classify.rs) against published values and closed forms, and the
 //! library's table (`function::bake`, what the GPU reads) against the reference. Nothing here needs a GPU.
 
-mod common;
-
 use common::classify::{colormap_srgb, jitter_offset, linear, srgb_to_linear, Classifier};
 use glam::DVec3;
 use volcast::scene::settings::RenderSettings;

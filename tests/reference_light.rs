@@ -2,8 +2,6 @@
 //! e^(−σ·depth) along the light and the occlusion inside is e^(−4σ); nothing absorbs outside the window or past the
 //! box; a slab casts its shadow only below it.
 
-mod common;
-
 use common::light::LightGridRef;
 use common::reference::Reference;
 use glam::Vec3;

@@ -7,8 +7,6 @@
 //! constant volume reaches A = 1 - (1 - α)^16 at every step length. Colours are composited in linear light and
 //! encoded to sRGB once (rule 8).
 
-mod common;
-
 use common::classify::{encode, jitter_offset, linear_to_srgb, srgb_to_linear};
 use common::compare::{self, Bounds};
 use common::rays::{pixel_ray, ray_segment};

@@ -12,8 +12,6 @@
 //!
 //! Validation reports 0 messages.
 
-mod common;
-
 use common::x11::{capture, drag, four_up_rects, read_screenshot, render_state, type_keys, x_session, Viewer, WAIT_MS};
 use image::RgbaImage;
 use std::path::Path;

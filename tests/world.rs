@@ -6,8 +6,6 @@
 //! make.py): a body with three markers in patient space — value 1000 on the patient's left at RAS (−30, 0, 0) mm,
 //! 700 anterior at (0, 35, 0), 400 superior at (0, 0, 32) — stored in many orders, mirrored, oblique and tilted.
 
-mod common;
-
 use std::path::PathBuf;
 use std::process::Command;
 

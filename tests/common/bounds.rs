@@ -3,8 +3,6 @@
 //! binaries print each family's worst with --nocapture), and says the smallest bug it catches. Means leave out the
 //! `outliers` worst pixels, as the max bound allows them. The README's Tests section lists the same numbers.
 
-#![allow(dead_code)]
-
 use super::compare::Bounds;
 
 /// The GPU against the reference, every layout but 8-bit textures: every test family in gpu_vs_reference.rs,

@@ -11,8 +11,6 @@
 //! - Outside the window: no colour, no opacity.
 //! - Colours are sRGB; the renderer composites their linear-light values (IEC 61966-2-1 decoding).
 
-#![allow(dead_code)]
-
 use glam::DVec3;
 use volcast::scene::settings::RenderSettings;
 use volcast::transfer::colormap::tables::{COOL_WARM, PLASMA, VIRIDIS};

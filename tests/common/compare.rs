@@ -5,8 +5,6 @@
 //! against the reference are taken over the *object pixels* (see [`object_mask`]): background pixels agree
 //! trivially, and counting them would dilute a real error by however much of the image is empty.
 
-#![allow(dead_code)]
-
 use super::reference::{background_pixel, Rendered};
 use image::{Rgba, RgbaImage};
 use std::fmt;
@@ -211,11 +209,9 @@ pub fn diff_image(a: &RgbaImage, b: &RgbaImage) -> RgbaImage {
     })
 }
 
-/// `target/test-failures/` in the crate, created if needed (git-ignored with the rest of `target/`).
+/// `target/test-failures/` in the repository, created if needed (git-ignored with the rest of `target/`).
 pub fn failure_dir() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target")
-        .join("test-failures");
+    let dir = crate::scratch::target_dir().join("test-failures");
     std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("cannot create {}: {e}", dir.display()));
     dir
 }

@@ -21,8 +21,6 @@
 //! numerically), and so are rule 2's brick strides (strides.rs: brick value ranges and the stride rule). Where the GPU works in f32 or through a 4096-entry table, the two differ by rounding; the tests'
 //! bounds (tests/common/bounds.rs) say by how much.
 
-#![allow(dead_code)]
-
 use super::classify::{encode, linear, Classifier};
 use super::march::Frame;
 pub use super::placement::Placement;

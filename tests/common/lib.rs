@@ -1,7 +1,9 @@
-//! Helpers shared by the integration tests: the CPU reference renderer, image comparison, shared test data and
-//! the reporting of skipped tests.
-
-#![allow(dead_code)]
+//! What volcast's integration tests share: the independent CPU reference renderer and the rules' cases, image
+//! comparison and the GPU-against-reference judge, running the binary, scratch folders, the X session of the
+//! viewer tests, shared test data and the reporting of skipped tests.
+//!
+//! A library of its own (tests/common/Cargo.toml), not a module of each test binary: it is compiled once, and as
+//! its items are public no test binary sees the parts it does not use as dead code.
 
 pub mod bounds;
 pub mod cases;
@@ -13,18 +15,32 @@ pub mod march;
 pub mod placement;
 pub mod rays;
 pub mod reference;
+pub mod run;
+pub mod scratch;
 pub mod segments;
 pub mod strides;
 pub mod x11;
 pub mod xdnd;
 
+pub use run::{stderr, stdout, volcast, volcast_command, volcast_ok, volcast_validated};
+pub use scratch::{scratch, Scratch};
+
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Mutex, Once};
 
-/// `../shared` beside the crate (found from the crate's own directory, never an absolute path).
+/// The repository's root, found from this library's place in it (tests/common), never an absolute path. Cargo
+/// tells an integration test its package's folder (`CARGO_MANIFEST_DIR`); this library is a package of its own.
+pub fn repository() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .ancestors()
+        .nth(2)
+        .expect("tests/common sits two levels below the repository's root")
+}
+
+/// `../shared` beside the repository.
 pub fn shared_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("shared")
+    repository().join("..").join("shared")
 }
 
 /// `../shared/data/<rel>`, where the large test volumes live (not in git); `None` after [`skip`] if missing.
