@@ -2,18 +2,11 @@
 //! well-formed positive numbers, and its JSON has the fields scripts rely on. Never asserts speed (the machine is
 //! shared and lavapipe is a CPU).
 
-use std::process::{Command, Output};
+use common::{stderr, stdout};
+use std::process::Output;
 
 fn bench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .arg("bench")
-        .args(args)
-        .output()
-        .expect("could not start the volcast binary")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
+    common::volcast(&[&["bench"], args].concat())
 }
 
 fn positive(cell: &str, what: &str) -> f64 {
@@ -27,7 +20,7 @@ fn positive(cell: &str, what: &str) -> f64 {
 #[test]
 fn quick_bench_prints_valid_numbers_without_validation_errors() {
     let out = bench(&["--quick", "--validate"]);
-    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    let (stdout, stderr) = (stdout(&out), stderr(&out));
     assert!(
         out.status.success(),
         "exit {:?}\nstdout:\n{stdout}\nstderr:\n{stderr}",
@@ -108,8 +101,8 @@ fn quick_bench_prints_valid_numbers_without_validation_errors() {
 #[test]
 fn quick_bench_json_has_the_expected_fields() {
     let out = bench(&["--quick", "--json", "--validate"]);
-    let stdout = text(&out.stdout);
-    let stderr = text(&out.stderr);
+    let stdout = stdout(&out);
+    let stderr = stderr(&out);
     assert!(out.status.success(), "stderr:\n{stderr}");
     assert!(
         stderr.contains("validation: 0 errors, 0 warnings"),
@@ -154,7 +147,7 @@ fn quick_bench_json_has_the_expected_fields() {
 fn unknown_scene_is_refused_with_the_list() {
     let out = bench(&["--scene", "nope", "--validate"]);
     assert_eq!(out.status.code(), Some(1));
-    let stderr = text(&out.stderr);
+    let stderr = stderr(&out);
     assert!(
         stderr.contains("unknown scene 'nope'") && stderr.contains("vtk-helix"),
         "{stderr}"
@@ -166,7 +159,7 @@ fn unknown_scene_is_refused_with_the_list() {
 #[test]
 fn quick_playback_times_every_step_without_validation_errors() {
     let out = bench(&["--playback", "--quick", "--validate", "--json"]);
-    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    let (stdout, stderr) = (stdout(&out), stderr(&out));
     assert!(out.status.success(), "exit {:?}\nstderr:\n{stderr}", out.status);
     assert!(stderr.contains("validation: 0 errors, 0 warnings"), "{stderr}");
     let json: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
@@ -200,7 +193,7 @@ fn bench_errors_are_against_the_converged_image_at_the_forced_step() {
             step,
             "--json",
         ]);
-        let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+        let (stdout, stderr) = (stdout(&out), stderr(&out));
         assert!(out.status.success(), "exit {:?}\nstderr:\n{stderr}", out.status);
         let json: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
         let results = json["results"].as_array().expect("results");

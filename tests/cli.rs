@@ -1,37 +1,19 @@
 //! The `volcast` binary end to end: a render under validation, and every bad input a user can give ending in a
 //! clear message and a non-zero exit, never a panic.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use common::{scratch, stderr};
+use std::process::Output;
 
 /// Runs the binary; commands that use the GPU run under `--validate`, and whatever they print of the layer must be
 /// its clean summary.
 fn volcast(args: &[&str]) -> Output {
-    let gpu = matches!(args.first(), Some(&("render" | "compare" | "bench" | "view"))) && !args.contains(&"--validate");
-    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .args(args)
-        .args(if gpu { &["--validate"][..] } else { &[] })
-        .output()
-        .expect("run volcast");
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        !err.contains("[validation"),
-        "{args:?}: the validation layer spoke:\n{err}"
-    );
-    if err.contains("validation:") {
-        assert!(err.contains("validation: 0 errors, 0 warnings"), "{args:?}:\n{err}");
+    if matches!(args.first(), Some(&("render" | "compare" | "bench" | "view"))) {
+        common::volcast_validated(args)
+    } else {
+        let o = common::volcast(args);
+        common::run::assert_validation_clean(&args, &o);
+        o
     }
-    o
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli");
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir.join(name)
 }
 
 /// `render` of an 8³ built-in with `extra` arguments.
@@ -53,7 +35,7 @@ fn assert_fails_with(args: &[&str], needle: &str) {
 
 #[test]
 fn renders_the_helix_under_validation() {
-    let out = scratch("helix.png");
+    let out = scratch("cli").join("helix.png");
     let o = volcast(&[
         "render",
         "--builtin",
@@ -83,7 +65,7 @@ fn renders_the_helix_under_validation() {
 
 #[test]
 fn analytic_method_and_timings_run() {
-    let out = scratch("ml.png");
+    let out = scratch("cli").join("ml.png");
     let o = volcast(&[
         "render",
         "--builtin",
@@ -115,14 +97,14 @@ fn analytic_method_and_timings_run() {
 
 #[test]
 fn bad_volumes_give_clear_errors() {
-    let short = scratch("short_8x8x8_uint16.raw");
+    let short = scratch("cli").join("short_8x8x8_uint16.raw");
     std::fs::write(&short, vec![0u8; 100]).unwrap();
     assert_fails_with(
         &["info", short.to_str().unwrap()],
         "is 100 bytes but 8x8x8 uint16 needs 1024",
     );
 
-    let unnamed = scratch("scan.raw");
+    let unnamed = scratch("cli").join("scan.raw");
     std::fs::write(&unnamed, vec![0u8; 64]).unwrap();
     assert_fails_with(&["info", unnamed.to_str().unwrap()], "--dims W H D --type T");
     assert_fails_with(
@@ -172,7 +154,7 @@ fn bad_volumes_give_clear_errors() {
     let o = volcast(&["info", "/nonexistent/vol_8x8x8_uint8.raw"]);
     assert_eq!(stderr(&o).matches("(os error 2)").count(), 1, "{}", stderr(&o));
     // A size limit names the file (it is found before anything is read).
-    let huge = scratch("huge_3000x3000x3000_uint16.raw");
+    let huge = scratch("cli").join("huge_3000x3000x3000_uint16.raw");
     std::fs::write(&huge, vec![0u8; 16]).unwrap();
     assert_fails_with(
         &["info", huge.to_str().unwrap()],
@@ -232,7 +214,7 @@ fn bad_settings_give_clear_errors() {
 #[test]
 fn a_failed_render_leaves_no_file() {
     for name in ["failed.jpg", "failed"] {
-        let out = scratch(name);
+        let out = scratch("cli").join(name);
         let _ = std::fs::remove_file(&out);
         assert_fails_with(
             &tiny_render(&["-o", out.to_str().unwrap()]),
@@ -240,7 +222,7 @@ fn a_failed_render_leaves_no_file() {
         );
         assert!(!out.exists(), "{name} was left behind");
     }
-    let out = scratch("failed-size.png");
+    let out = scratch("cli").join("failed-size.png");
     let _ = std::fs::remove_file(&out);
     assert_fails_with(
         &tiny_render(&["--size", "0x4", "-o", out.to_str().unwrap()]),
@@ -252,7 +234,7 @@ fn a_failed_render_leaves_no_file() {
 /// Shadows and occlusion asked of a projection render it unlit, with a note saying so.
 #[test]
 fn shadows_in_mip_render_with_a_note() {
-    let out = scratch("mip-shadows.png");
+    let out = scratch("cli").join("mip-shadows.png");
     let o = volcast(&tiny_render(&[
         "--mode",
         "mip",
@@ -287,7 +269,7 @@ fn clap_rejects_malformed_arguments() {
 
 #[test]
 fn no_vulkan_driver_is_a_clear_error_with_exit_2() {
-    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
+    let o = common::volcast_command()
         .args([
             "render",
             "--builtin",

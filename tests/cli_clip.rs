@@ -2,9 +2,8 @@
 //! flipped plane the other half, a plane beyond the box nothing; a view state file carries the plane (and one
 //! written before planes existed still loads); bad planes are refused with a clear message.
 
+use common::{scratch, volcast};
 use image::RgbaImage;
-use std::path::PathBuf;
-use std::process::{Command, Output};
 use volcast::scene::camera::Camera;
 use volcast::scene::clip::ClipPlane;
 use volcast::scene::settings::RenderSettings;
@@ -15,26 +14,10 @@ const VOLUME: &[&str] = &["--builtin", "colormap", "--builtin-size", "16"];
 /// Orthographic, looking along +y with +z up: +x runs to the right of the image, and the box's centre is its centre.
 const VIEW: &[&str] = &["--view-dir", "0,1,0", "--ortho", "--size", "32x32"];
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli-clip");
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir.join(name)
-}
-
-fn volcast(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .args(args)
-        .output()
-        .expect("run volcast")
-}
-
 /// `volcast render <args> --validate -o NAME.png`; panics on a failure or a validation message.
 fn render(args: &[&str], name: &str) -> RgbaImage {
-    let out = scratch(&format!("{name}.png"));
-    let o = volcast(&[&["render"], args, &["--validate", "-o", out.to_str().unwrap()]].concat());
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{name}: {args:?} failed:\n{err}");
-    assert!(err.contains("validation: 0 errors, 0 warnings"), "{name}:\n{err}");
+    let out = scratch("cli-clip").join(format!("{name}.png"));
+    common::volcast_ok(&[&["render"], args, &["--validate", "-o", out.to_str().unwrap()]].concat());
     image::open(&out).expect("a PNG").to_rgba8()
 }
 
@@ -130,7 +113,7 @@ fn a_view_state_carries_the_plane() {
     };
     let json = state.to_json();
     assert!(json.contains("\"clip_plane\""), "{json}");
-    let path = scratch("state.json");
+    let path = scratch("cli-clip").join("state.json");
     std::fs::write(&path, &json).unwrap();
     let (l, r) = shown(&render(&["--state", path.to_str().unwrap()], "state"));
     assert_eq!(l, 0, "the state's plane cuts the left half");
@@ -138,14 +121,14 @@ fn a_view_state_carries_the_plane() {
 
     let mut old: serde_json::Value = serde_json::from_str(&json).unwrap();
     old.as_object_mut().unwrap().remove("clip_plane");
-    let old_path = scratch("state-old.json");
+    let old_path = scratch("cli-clip").join("state-old.json");
     std::fs::write(&old_path, old.to_string()).unwrap();
     let (l, r) = shown(&render(&["--state", old_path.to_str().unwrap()], "state-old"));
     assert!(l > 100 && r > 100, "{l}, {r}");
 
     let mut bad = old.clone();
     bad["clip_plane"] = serde_json::json!({"normal": [0, 0, 0], "offset": 1});
-    let bad_path = scratch("state-bad.json");
+    let bad_path = scratch("cli-clip").join("state-bad.json");
     std::fs::write(&bad_path, bad.to_string()).unwrap();
     let o = volcast(&["render", "--state", bad_path.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);

@@ -2,38 +2,21 @@
 //! exactly the library's colour bar for the classification in use (data-unit ticks, "HU" for CT), and the
 //! rendered pixels stay as they were.
 
-use std::path::PathBuf;
-use std::process::Command;
+use common::scratch;
+use std::path::{Path, PathBuf};
 use volcast::transfer::colorbar::{colorbar, layout, ColorbarSpec};
 use volcast::transfer::function::{Classification, TransferFunction};
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_colorbar");
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir.join(name)
-}
-
 /// Renders under validation; the layer must stay silent.
-fn render(args: &[&str], out: &PathBuf) -> image::RgbaImage {
-    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .arg("render")
-        .args(args)
-        .args(["--size", "64x48", "--validate", "-o"])
-        .arg(out)
-        .output()
-        .expect("run volcast");
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{args:?}: {err}");
-    assert!(
-        !err.contains("[validation"),
-        "{args:?}: the validation layer spoke:\n{err}"
-    );
+fn render(args: &[&str], out: &Path) -> image::RgbaImage {
+    let out_arg = out.to_str().expect("a UTF-8 path");
+    common::volcast_ok(&[&["render"], args, &["--size", "64x48", "--validate", "-o", out_arg]].concat());
     image::open(out).expect("read the PNG").to_rgba8()
 }
 
 /// A tiny CT-like volume: int16 from −1024 HU (air) to 2000 HU (bone), no modality tag.
 fn tiny_ct() -> PathBuf {
-    let path = scratch("tinyct_8x8x8_int16.raw");
+    let path = scratch("cli-colorbar").join("tinyct_8x8x8_int16.raw");
     let bytes: Vec<u8> = (0..512i32)
         .flat_map(|i| ((-1024 + i * 3024 / 511) as i16).to_le_bytes())
         .collect();
@@ -45,8 +28,11 @@ fn tiny_ct() -> PathBuf {
 fn colorbar_strip_is_appended_and_the_render_kept() {
     let ct = tiny_ct();
     let ct = ct.to_str().unwrap();
-    let plain = render(&[ct, "--preset", "auto"], &scratch("plain.png"));
-    let barred = render(&[ct, "--preset", "auto", "--colorbar"], &scratch("barred.png"));
+    let plain = render(&[ct, "--preset", "auto"], &scratch("cli-colorbar").join("plain.png"));
+    let barred = render(
+        &[ct, "--preset", "auto", "--colorbar"],
+        &scratch("cli-colorbar").join("barred.png"),
+    );
     assert_eq!((plain.width(), plain.height()), (64, 48));
     assert_eq!(barred.height(), 48, "the height is kept");
     for y in 0..48 {
@@ -102,7 +88,7 @@ fn colorbar_of_the_simple_model_follows_the_window_and_background() {
             "1,1,1",
             "--colorbar",
         ],
-        &scratch("simple.png"),
+        &scratch("cli-colorbar").join("simple.png"),
     );
     let class = Classification::Simple {
         colormap: volcast::transfer::Colormap::Viridis,

@@ -2,51 +2,14 @@
 //! are the plain renders they claim to be, the GIF decodes to them at the right rate and loops, and bad input is
 //! refused before anything is written.
 
+use common::{volcast_ok, volcast_validated};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use volcast::scene::camera::Camera;
 use volcast::scene::settings::RenderSettings;
 use volcast::scene::view_state::{ViewState, VolumeRef};
 
 const VOLUME: [&str; 4] = ["--builtin", "helix", "--builtin-size", "32"];
 const SIZE: (u32, u32) = (48, 40);
-
-/// Runs the binary; `render` runs under `--validate`, whose summary must be clean.
-fn volcast(args: &[&str]) -> Output {
-    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .args(args)
-        .arg("--validate")
-        .output()
-        .expect("run volcast");
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(
-        !err.contains("[validation"),
-        "{args:?}: the validation layer spoke:\n{err}"
-    );
-    if err.contains("validation:") {
-        assert!(err.contains("validation: 0 errors, 0 warnings"), "{args:?}:\n{err}");
-    }
-    assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
-    o
-}
-
-fn ok(args: &[&str]) -> Output {
-    let o = volcast(args);
-    assert!(
-        o.status.success(),
-        "{args:?} failed:\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
-
-/// An empty folder of its own for each test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_movie").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("a UTF-8 path")
@@ -120,10 +83,10 @@ fn render_args<'a>(extra: &[&'a str]) -> Vec<&'a str> {
 
 #[test]
 fn turntable_writes_its_frames_and_a_looping_gif() {
-    let dir = scratch("turntable");
+    let dir = common::scratch("cli-movie-turntable");
     let out = dir.join("spin.png");
     let view = ["--azimuth", "20", "--elevation", "30"];
-    let o = ok(&render_args(
+    let o = volcast_ok(&render_args(
         &[&view[..], &["--turntable", "6", "-o", s(&out)]].concat(),
     ));
     let stdout = String::from_utf8_lossy(&o.stdout);
@@ -142,10 +105,10 @@ fn turntable_writes_its_frames_and_a_looping_gif() {
 
     // Frame 0 is the plain render; frame 3 (180°) the plain render from the other side.
     let plain = dir.join("plain.png");
-    ok(&render_args(&[&view[..], &["-o", s(&plain)]].concat()));
+    volcast_ok(&render_args(&[&view[..], &["-o", s(&plain)]].concat()));
     assert_same(&dir.join(&frames[0]), &plain);
     let behind = dir.join("behind.png");
-    ok(&render_args(&[
+    volcast_ok(&render_args(&[
         "--azimuth",
         "200",
         "--elevation",
@@ -159,7 +122,7 @@ fn turntable_writes_its_frames_and_a_looping_gif() {
 
     // --fps sets the delay.
     let slow = dir.join("slow.png");
-    ok(&render_args(&["--turntable", "2", "--fps", "10", "-o", s(&slow)]));
+    volcast_ok(&render_args(&["--turntable", "2", "--fps", "10", "-o", s(&slow)]));
     assert_eq!(decode_gif(&dir.join("slow.gif")).0, vec![(48, 40, 10); 2]);
 }
 
@@ -186,12 +149,12 @@ fn write_state(dir: &Path, name: &str, builtin: &str, azimuth: f32, elevation: f
 
 #[test]
 fn keyframes_start_pass_and_end_on_their_states() {
-    let dir = scratch("keyframes");
+    let dir = common::scratch("cli-movie-keyframes");
     let a = write_state(&dir, "a.json", "helix", 10.0, 20.0, [0.1, 1.0]);
     let b = write_state(&dir, "b.json", "helix", 120.0, 50.0, [0.3, 0.9]);
     let c = write_state(&dir, "c.json", "helix", 250.0, -10.0, [0.2, 1.0]);
     let out = dir.join("path.png");
-    let o = ok(&[
+    let o = volcast_ok(&[
         "render",
         "--keyframes",
         s(&a),
@@ -209,7 +172,7 @@ fn keyframes_start_pass_and_end_on_their_states() {
     // Frames 0, 2 and 4 of 5 over two segments are the three states exactly.
     for (k, state) in [(0, &a), (2, &b), (4, &c)] {
         let plain = dir.join(format!("state-{k}.png"));
-        ok(&["render", "--state", s(state), "-o", s(&plain)]);
+        volcast_ok(&["render", "--state", s(state), "-o", s(&plain)]);
         assert_same(&dir.join(format!("path-{k:04}.png")), &plain);
     }
     let between = png(&dir.join("path-0001.png"));
@@ -220,7 +183,7 @@ fn keyframes_start_pass_and_end_on_their_states() {
 /// Runs a command that must fail with `code` and `needle` in its message, leaving the folder as it was.
 fn refused(dir: &Path, args: &[&str], code: i32, needle: &str) {
     let before = names(dir);
-    let o = volcast(args);
+    let o = volcast_validated(args);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(code), "{args:?}:\n{err}");
     assert!(err.contains(needle), "{args:?}: expected '{needle}' in:\n{err}");
@@ -229,7 +192,7 @@ fn refused(dir: &Path, args: &[&str], code: i32, needle: &str) {
 
 #[test]
 fn bad_movies_are_refused_and_write_nothing() {
-    let dir = scratch("bad");
+    let dir = common::scratch("cli-movie-bad");
     let out = dir.join("m.png");
     let o = s(&out);
     let a = write_state(&dir, "a.json", "helix", 10.0, 20.0, [0.1, 1.0]);

@@ -10,7 +10,6 @@ use common::reference::Reference;
 use glam::Vec3;
 use image::RgbaImage;
 use std::path::PathBuf;
-use std::process::Command;
 use volcast::scene::camera::Camera;
 use volcast::scene::quality::Quality;
 use volcast::scene::settings::{CompositeMode, RenderSettings, Shading};
@@ -21,38 +20,20 @@ use volcast::volume::{self, Volume};
 const W: u32 = 64;
 const H: u32 = 48;
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli-options");
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir.join(name)
-}
-
 /// Runs `volcast render <volume> --size 64x48 --validate <args>` and returns the image and stdout; panics on a
 /// failure or any validation message.
 fn render(volume_args: &[&str], args: &[&str], name: &str) -> (RgbaImage, String) {
-    let out = scratch(&format!("{name}.png"));
+    let out = common::scratch("cli-options").join(format!("{name}.png"));
     let size = format!("{W}x{H}");
     let size_args: &[&str] = if args.contains(&"--size") {
         &[]
     } else {
         &["--size", &size]
     };
-    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .arg("render")
-        .args(volume_args)
-        .args(size_args)
-        .args(["--validate", "-o", out.to_str().unwrap()])
-        .args(args)
-        .output()
-        .expect("run volcast");
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{name}: {args:?} failed:\n{stderr}");
-    assert!(
-        stderr.contains("validation: 0 errors, 0 warnings"),
-        "{name}: {args:?}:\n{stderr}"
-    );
+    let validate_out = ["--validate", "-o", out.to_str().unwrap()];
+    let o = common::volcast_ok(&[&["render"], volume_args, size_args, &validate_out, args].concat());
     let image = image::open(&out).expect("a PNG").to_rgba8();
-    (image, String::from_utf8_lossy(&o.stdout).into_owned())
+    (image, common::stdout(&o))
 }
 
 const HELIX: &[&str] = &["--builtin", "helix", "--builtin-size", "48"];
@@ -177,7 +158,7 @@ fn camera_options_take_effect() {
 
 #[test]
 fn classification_options_take_effect() {
-    let tf_path = scratch("tf.json");
+    let tf_path = common::scratch("cli-options").join("tf.json");
     let tf = TransferFunction {
         name: "cli".into(),
         units: volcast::transfer::function::TfUnits::Normalized,
@@ -244,7 +225,7 @@ fn classification_options_take_effect() {
     rules.push(Rule {
         args: Box::leak(vec!["--tf", tf_arg].into_boxed_slice()),
         settings: |s, _| {
-            let path = scratch("tf.json");
+            let path = common::scratch("cli-options").join("tf.json");
             s.transfer_function = Some(TransferFunction::load(&path).unwrap());
             s.window = [0.0, 1.0];
         },
@@ -431,17 +412,17 @@ fn method_and_storage_options_keep_the_image() {
 fn volume_options_take_effect() {
     let v = helix();
     let bytes = v.gpu_bytes().to_vec();
-    let named = scratch("helix_48x48x48_uint8.raw");
+    let named = common::scratch("cli-options").join("helix_48x48x48_uint8.raw");
     std::fs::write(&named, &bytes).unwrap();
-    let unnamed = scratch("scan.bin");
+    let unnamed = common::scratch("cli-options").join("scan.bin");
     std::fs::write(&unnamed, &bytes).unwrap();
     let mut header = vec![0xabu8; 100];
     header.extend_from_slice(&bytes);
-    let headed = scratch("headed.bin");
+    let headed = common::scratch("cli-options").join("headed.bin");
     std::fs::write(&headed, &header).unwrap();
     // The same values as uint16, big-endian (value × 257 keeps the normalised values).
     let big: Vec<u8> = bytes.iter().flat_map(|&b| (u16::from(b) * 257).to_be_bytes()).collect();
-    let big_path = scratch("big.bin");
+    let big_path = common::scratch("cli-options").join("big.bin");
     std::fs::write(&big_path, &big).unwrap();
 
     let raw = |p: &PathBuf, rest: &[&str]| {

@@ -2,39 +2,12 @@
 //! (its images, `compare.md` and `compare.json`, and a view where the two setups do not agree), `info` on every
 //! format, `devices` and `--device`, and the options of `render` that print or write rather than draw.
 
+use common::{stderr, stdout, volcast};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn volcast(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .args(args)
-        .output()
-        .expect("run volcast")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
 
 /// Runs a GPU command with `--validate`; asserts it succeeded with zero validation messages and returns stdout.
 fn validated(args: &[&str]) -> String {
-    let mut all = args.to_vec();
-    all.push("--validate");
-    let o = volcast(&all);
-    let (stdout, stderr) = (text(&o.stdout), text(&o.stderr));
-    assert!(o.status.success(), "{all:?} failed ({:?}):\n{stderr}", o.status);
-    assert!(
-        stderr.contains("validation: 0 errors, 0 warnings"),
-        "{all:?}: validation must be clean:\n{stderr}"
-    );
-    stdout
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli-tools").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
+    common::stdout(&common::volcast_ok(args))
 }
 
 const VIEWS: [&str; 9] = [
@@ -57,7 +30,7 @@ fn read_rows(dir: &Path) -> Vec<serde_json::Value> {
 
 #[test]
 fn compare_writes_its_images_and_tables() {
-    let dir = scratch("agree");
+    let dir = common::scratch("cli-tools-agree");
     let out = dir.to_str().unwrap();
     let stdout = validated(&[
         "compare",
@@ -115,7 +88,7 @@ fn compare_writes_its_images_and_tables() {
 /// samples, and `compare` must say the setups differ (so `agree` can be false).
 #[test]
 fn compare_reports_setups_that_differ() {
-    let dir = scratch("differ");
+    let dir = common::scratch("cli-tools-differ");
     let out = dir.to_str().unwrap();
     let stdout = validated(&[
         "compare",
@@ -165,8 +138,7 @@ fn data(rel: &str) -> String {
 /// `info` names the format, dims, type, spacing and range of a file of every format.
 #[test]
 fn info_on_every_format() {
-    let raw_dir = std::env::temp_dir().join(format!("volcast-info-{}", std::process::id()));
-    std::fs::create_dir_all(&raw_dir).unwrap();
+    let raw_dir = common::scratch("cli-tools-info");
     let raw = raw_dir.join("ramp_4x3x2_int16.raw");
     let values: Vec<u8> = (0..24i16).flat_map(|i| (i - 12).to_le_bytes()).collect();
     std::fs::write(&raw, values).unwrap();
@@ -203,8 +175,8 @@ fn info_on_every_format() {
     }
     for (file, expected) in cases {
         let o = volcast(&["info", &file]);
-        let stdout = text(&o.stdout);
-        assert!(o.status.success(), "info {file}: {}", text(&o.stderr));
+        let stdout = stdout(&o);
+        assert!(o.status.success(), "info {file}: {}", stderr(&o));
         let line = |key: &str| {
             stdout
                 .lines()
@@ -220,7 +192,6 @@ fn info_on_every_format() {
         assert!(stdout.contains(range), "{file}:\n{stdout}");
         assert!(line("gpu:").contains("MiB"), "{file}:\n{stdout}");
     }
-    let _ = std::fs::remove_dir_all(&raw_dir);
 }
 
 /// `devices` lists what the loader sees; `--device` picks by index or by part of the name, and an unknown one is
@@ -228,14 +199,14 @@ fn info_on_every_format() {
 #[test]
 fn devices_and_device_selection() {
     let o = volcast(&["devices"]);
-    let stdout = text(&o.stdout);
-    assert!(o.status.success(), "{}", text(&o.stderr));
+    let stdout = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
     let first = stdout.lines().next().expect("at least one device");
     let (index, rest) = first.split_once(": ").expect("'N: name (kind, Vulkan x.y.z)'");
     assert_eq!(index, "0");
     assert!(rest.contains("Vulkan 1.3"), "{first}");
     let name_part = rest.split_whitespace().next().unwrap();
-    let dir = scratch("device");
+    let dir = common::scratch("cli-tools-device");
     let png = dir.join("d.png");
     let png = png.to_str().unwrap();
     for device in ["0", name_part] {
@@ -265,15 +236,15 @@ fn devices_and_device_selection() {
         "-o",
         png,
     ]);
-    let stderr = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("no-such-gpu") && stderr.contains(first), "{stderr}");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("no-such-gpu") && err.contains(first), "{err}");
 }
 
 /// The `render` options that report or write instead of changing the image.
 #[test]
 fn reporting_options_of_render() {
-    let dir = scratch("reporting");
+    let dir = common::scratch("cli-tools-reporting");
     let png = dir.join("r.png");
     let png = png.to_str().unwrap();
     let base = [

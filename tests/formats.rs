@@ -2,36 +2,7 @@
 //! detached data, path escapes, hostile input) and the real volumes in ../shared/data against their raw twins.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use volcast::volume::{self, Endian, Format, OpenOptions, RawOptions, Volume, VoxelType};
-
-/// A fresh folder under the temp dir, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new() -> Scratch {
-        static NEXT: AtomicUsize = AtomicUsize::new(0);
-        let n = NEXT.fetch_add(1, Ordering::Relaxed);
-        let path = std::env::temp_dir().join(format!("volcast-formats-{}-{n}", std::process::id()));
-        std::fs::create_dir_all(&path).expect("create scratch dir");
-        Scratch(path)
-    }
-
-    fn write(&self, name: &str, bytes: &[u8]) -> PathBuf {
-        let path = self.0.join(name);
-        if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent).expect("create dir");
-        }
-        std::fs::write(&path, bytes).expect("write scratch file");
-        path
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 fn open(path: &Path) -> Result<Volume, volume::VolumeError> {
     volume::open(path, &OpenOptions::default())
@@ -88,7 +59,7 @@ fn committed_samples_load_with_known_values() {
 
 #[test]
 fn formats_are_detected_by_content_not_just_name() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-formats_are_detected_by_content_not_just_name");
     let vtk = b"# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 1 1\nPOINT_DATA 2\nSCALARS s float\nLOOKUP_TABLE default\n1 2\n";
     let p = dir.write("data.bin", vtk);
     assert_eq!(volume::detect_format(&p).unwrap(), Format::Vtk);
@@ -104,18 +75,18 @@ fn formats_are_detected_by_content_not_just_name() {
     );
     assert_eq!(volume::detect_format(&p).unwrap(), Format::MetaImage);
     // A folder is judged by its files: this one holds none that is TIFF or DICOM; one with a DICOM file is a series.
-    assert!(volume::detect_format(&dir.0).is_err());
-    let series = Scratch::new();
+    assert!(volume::detect_format(&dir).is_err());
+    let series = common::scratch("formats-formats_are_detected_by_content_not_just_name-series");
     let slice = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/slice.dcm")).unwrap();
     series.write("1.dcm", &slice);
-    assert_eq!(volume::detect_format(&series.0).unwrap(), Format::Dicom);
+    assert_eq!(volume::detect_format(&series).unwrap(), Format::Dicom);
     let p = dir.write("thing_2x1x1_uint8.raw", &[1, 2]);
     assert_eq!(volume::detect_format(&p).unwrap(), Format::Raw);
 }
 
 #[test]
 fn raw_endian_and_header_bytes() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-raw_endian_and_header_bytes");
     let mut bytes = b"HEADER!!".to_vec();
     for v in [1u16, 2, 3, 0x1234] {
         bytes.extend(v.to_be_bytes());
@@ -150,7 +121,7 @@ fn raw_endian_and_header_bytes() {
 
 #[test]
 fn detached_nrrd_and_metaimage_stay_in_their_folder() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-detached_nrrd_and_metaimage_stay_in_their_folder");
     let data: Vec<u8> = (0u8..8).collect();
     dir.write("sub/v.raw", &data);
     dir.write("secret.raw", &data);
@@ -189,7 +160,7 @@ fn detached_nrrd_and_metaimage_stay_in_their_folder() {
 
 #[test]
 fn nifti_files_round_trip_in_both_byte_orders_and_gzip() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-nifti_files_round_trip_in_both_byte_orders_and_gzip");
     for (big, gz) in [(false, false), (true, false), (false, true), (true, true)] {
         let mut h = vec![0u8; 352];
         let p16 = |h: &mut Vec<u8>, at: usize, v: i16| {
@@ -230,7 +201,7 @@ fn nifti_files_round_trip_in_both_byte_orders_and_gzip() {
 
 #[test]
 fn hostile_files_give_clear_errors() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-hostile_files_give_clear_errors");
     let vtk = "# vtk DataFile Version 3.0\nt\nBINARY\nDATASET STRUCTURED_POINTS\nDIMENSIONS 100000 100000 100000\nPOINT_DATA 1000000000000000\nSCALARS s float\nLOOKUP_TABLE default\n";
     assert!(err(&dir.write("huge.vtk", vtk.as_bytes())).contains("exceed the limit of 16384 per axis"));
     let nrrd = "NRRD0004\ntype: float\ndimension: 3\nsizes: 1000 1000 500\nencoding: gzip\n\n";
@@ -252,13 +223,13 @@ fn hostile_files_give_clear_errors() {
     assert!(e.contains("bad.nii.gz: the gzip data is corrupt"), "{e}");
     let e = err(&dir.write("junk.dcm", b"this is not dicom"));
     assert!(e.contains("junk.dcm: not a readable DICOM file"), "{e}");
-    let empty = Scratch::new();
-    assert!(err(&empty.0).contains("the folder holds neither TIFF nor DICOM files"));
+    let empty = common::scratch("formats-hostile_files_give_clear_errors-empty");
+    assert!(err(&empty).contains("the folder holds neither TIFF nor DICOM files"));
 }
 
 #[test]
 fn max_dim_downsamples_or_refuses() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-max_dim_downsamples_or_refuses");
     let p = dir.write(
         "wide_8x2x1_uint8.raw",
         &[10, 20, 30, 40, 50, 60, 70, 80, 1, 1, 1, 1, 1, 1, 1, 1],
@@ -292,7 +263,7 @@ fn max_dim_downsamples_or_refuses() {
 
 #[test]
 fn progress_is_reported() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-progress_is_reported");
     let p = dir.write("p_64x64x64_uint8.raw", &vec![1u8; 64 * 64 * 64]);
     let mut seen = Vec::new();
     volume::open_with_progress(&p, &OpenOptions::default(), &mut |f| seen.push(f)).unwrap();

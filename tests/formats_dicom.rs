@@ -93,7 +93,7 @@ fn load_err(path: &Path) -> String {
 /// (the same length, so the file stays well formed).
 #[test]
 fn a_syntax_without_a_decoder_is_named_and_refused() {
-    let dir = Scratch::new("jpip");
+    let dir = common::scratch("formats-dicom-a_syntax_without_a_decoder_is_named_and_refused");
     let mut bytes = std::fs::read(data().join("u16_jpegls/00.dcm")).unwrap();
     let uid = b"1.2.840.10008.1.2.4.80";
     let at = bytes
@@ -130,28 +130,6 @@ fn a_jpeg_ls_code_running_past_its_data_is_refused_at_once() {
     );
 }
 
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(tag: &str) -> Scratch {
-        let p = std::env::temp_dir().join(format!("volcast-dicom-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).unwrap();
-        Scratch(p)
-    }
-    fn write(&self, name: &str, bytes: &[u8]) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::write(&p, bytes).unwrap();
-        p
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 /// The encapsulated PixelData of an explicit-VR file: where its first fragment item starts (after the offset
 /// table item) and the fragments' bytes.
 fn first_fragment(bytes: &[u8]) -> usize {
@@ -182,7 +160,7 @@ fn with_fragment(bytes: &[u8], f: impl Fn(&[u8]) -> Vec<u8>) -> Vec<u8> {
 
 #[test]
 fn hostile_compressed_frames_are_refused_naming_the_file() {
-    let dir = Scratch::new("hostile");
+    let dir = common::scratch("formats-dicom-hostile_compressed_frames_are_refused_naming_the_file");
     let rle = std::fs::read(data().join("u16_rle/00.dcm")).unwrap();
     let jpeg = std::fs::read(data().join("u16_jpeg/00.dcm")).unwrap();
     let j2k = std::fs::read(data().join("u16_j2k/00.dcm")).unwrap();

@@ -4,43 +4,10 @@
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use volcast::volume::{self, Format, OpenOptions, RawOptions, Volume, VoxelType};
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiff").join(name)
-}
-
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new() -> Scratch {
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!(
-            "tiff-{}-{}",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        ));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn write(&self, name: &str, bytes: &[u8]) -> PathBuf {
-        let p = self.0.join(name);
-        if let Some(parent) = p.parent() {
-            std::fs::create_dir_all(parent).unwrap();
-        }
-        std::fs::write(&p, bytes).unwrap();
-        p
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }
 
 fn err(path: &Path) -> String {
@@ -139,29 +106,29 @@ fn hyperstacks_folders_and_rgb() {
 
 #[test]
 fn folders_are_judged_by_their_files() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-tiff-folders_are_judged_by_their_files");
     dir.write("a/readme.txt", b"hello");
-    let e = err(&dir.0.join("a"));
+    let e = err(&dir.join("a"));
     assert!(e.starts_with("a: the folder holds neither TIFF nor DICOM files"), "{e}");
-    let empty = dir.0.join("empty");
+    let empty = dir.join("empty");
     std::fs::create_dir_all(&empty).unwrap();
     assert!(err(&empty).contains("neither TIFF nor DICOM"));
     let slice = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/slice.dcm")).unwrap();
     dir.write("d/1.dcm", &slice);
     dir.write("d/notes.txt", b"x");
-    assert_eq!(volume::detect_format(&dir.0.join("d")).unwrap(), Format::Dicom);
+    assert_eq!(volume::detect_format(&dir.join("d")).unwrap(), Format::Dicom);
     dir.write("mixed/1.dcm", &slice);
     dir.write("mixed/z1.tif", &std::fs::read(data("stack/z1.tif")).unwrap());
-    let e = err(&dir.0.join("mixed"));
+    let e = err(&dir.join("mixed"));
     assert!(e.contains("both TIFF (1) and DICOM (1)"), "{e}");
     // Slices of different sizes.
     dir.write("sizes/z1.tif", &std::fs::read(data("stack/z1.tif")).unwrap());
     dir.write("sizes/z2.tif", &tiff_u8(3, 2, &[[0u8; 6]]));
-    let e = err(&dir.0.join("sizes"));
+    let e = err(&dir.join("sizes"));
     assert!(e.contains("is 3x2 uint8 but the first slice is 9x7 uint8"), "{e}");
     // A multi-page file in a folder.
     dir.write("pages/a.tif", &tiff_u8(2, 2, &[[1u8; 4], [2u8; 4]]));
-    let e = err(&dir.0.join("pages"));
+    let e = err(&dir.join("pages"));
     assert!(e.contains("a.tif: has more than one page"), "{e}");
 }
 
@@ -223,7 +190,7 @@ fn tiff_u8<const N: usize>(w: u32, h: u32, pages: &[[u8; N]]) -> Vec<u8> {
 
 #[test]
 fn hand_built_tiff_loads() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-tiff-hand_built_tiff_loads");
     let p = dir.write("two.tif", &tiff_u8(2, 2, &[[1, 2, 3, 4], [5, 6, 7, 8]]));
     let v = Volume::open(&p).unwrap();
     assert_eq!(v.dims, [2, 2, 2]);
@@ -233,7 +200,7 @@ fn hand_built_tiff_loads() {
 
 #[test]
 fn hostile_tiffs_are_refused_naming_the_file() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-tiff-hostile_tiffs_are_refused_naming_the_file");
     // Dimensions beyond the per-axis limit.
     let mut huge = b"II*\0".to_vec();
     huge.extend(8u32.to_le_bytes());
@@ -315,7 +282,7 @@ fn hostile_tiffs_are_refused_naming_the_file() {
 
 #[test]
 fn too_many_slices_for_one_axis() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-tiff-too_many_slices_for_one_axis");
     let n = 20_000u32;
     let mut deep = b"II*\0".to_vec();
     deep.extend(8u32.to_le_bytes());
@@ -392,22 +359,15 @@ fn unsupported_cases() -> Vec<(&'static str, Vec<u8>, &'static str)> {
     ]
 }
 
-fn volcast_bin(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .args(args)
-        .output()
-        .expect("run volcast")
-}
-
 #[test]
 fn unsupported_formats_are_named_by_open_and_the_cli() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-tiff-unsupported_formats_are_named_by_open_and_the_cli");
     for (name, bytes, want) in unsupported_cases() {
         let p = dir.write(name, &bytes);
         let e = err(&p);
         assert!(e.starts_with(want), "{name}: {e}");
         assert!(!e.contains("bytes but"), "{name}: read as raw: {e}");
-        let o = volcast_bin(&["info", p.to_str().unwrap()]);
+        let o = common::volcast(&["info", p.to_str().unwrap()]);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{name}: {stderr}");
         assert!(stderr.contains(want), "{name}: {stderr}");
@@ -415,14 +375,14 @@ fn unsupported_formats_are_named_by_open_and_the_cli() {
     }
     // Zarr stores are folders.
     for (i, marker) in [".zarray", ".zgroup", "zarr.json", ".zattrs"].iter().enumerate() {
-        let store = dir.0.join(format!("img{i}.zarr"));
+        let store = dir.join(format!("img{i}.zarr"));
         dir.write(&format!("img{i}.zarr/{marker}"), b"{}");
         let e = err(&store);
         assert!(
             e.contains("is a Zarr store (OME-Zarr); volcast cannot read Zarr"),
             "{marker}: {e}"
         );
-        let o = volcast_bin(&["info", store.to_str().unwrap()]);
+        let o = common::volcast(&["info", store.to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(1));
         assert!(String::from_utf8_lossy(&o.stderr).contains("Zarr store"));
     }
@@ -447,7 +407,7 @@ fn h5py_file_is_named() {
 
 #[test]
 fn raw_files_still_load_whatever_their_first_bytes() {
-    let dir = Scratch::new();
+    let dir = common::scratch("formats-tiff-raw_files_still_load_whatever_their_first_bytes");
     // Named like a raw file: raw, even with PNG magic.
     let p = dir.write("t_8x1x1_uint8.raw", b"\x89PNG\r\n\x1a\n");
     assert_eq!(volume::detect_format(&p).unwrap(), Format::Raw);
@@ -476,12 +436,12 @@ fn raw_files_still_load_whatever_their_first_bytes() {
 #[test]
 fn cli_reads_a_tiff_folder_and_renders_it() {
     let stack = data("stack");
-    let o = volcast_bin(&["info", stack.to_str().unwrap()]);
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = common::volcast(&["info", stack.to_str().unwrap()]);
+    let out = common::stdout(&o);
+    assert!(o.status.success(), "{}", common::stderr(&o));
     assert!(out.contains("9 x 7 x 12") && out.contains("TIFF"), "{out}");
-    let png = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("tiff-stack.png");
-    let o = volcast_bin(&[
+    let png = common::scratch("formats-tiff").join("tiff-stack.png");
+    let o = common::volcast(&[
         "render",
         stack.to_str().unwrap(),
         "--size",

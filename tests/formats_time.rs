@@ -7,8 +7,8 @@ use common::bounds::REFERENCE;
 use common::cases::standard_cases;
 use common::compare::diff;
 use common::gpu::{finish, validated_gpu, Judge, METHODS};
+use common::{stderr, stdout, volcast};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use volcast::render::headless::Headless;
 use volcast::volume::{self, Volume};
 
@@ -110,32 +110,23 @@ fn shown_steps_render_against_the_reference() {
     finish(gpu, headless, judge);
 }
 
-fn volcast(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_volcast")).args(args).output().unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
 #[test]
 fn cli_shows_timesteps_and_renders_one() {
     let file = data().join("sim_u16.nrrd");
     let file = file.to_str().unwrap();
-    let (ok, out, _) = volcast(&["info", "--json", file]);
-    assert!(ok);
-    let json: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let o = volcast(&["info", "--json", file]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(json["timesteps"], 7);
     assert_eq!(json["value_range"], serde_json::json!([3.0, 293.0]));
-    let (ok, out, _) = volcast(&["info", file]);
-    assert!(ok && out.contains("timesteps: 7 (showing 0"), "{out}");
-    let dir = std::env::temp_dir().join(format!("volcast-time-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let o = volcast(&["info", file]);
+    let out = stdout(&o);
+    assert!(o.status.success() && out.contains("timesteps: 7 (showing 0"), "{out}");
+    let dir = common::scratch("formats-time-cli");
     let png = |t: &str| dir.join(format!("t{t}.png"));
     for t in ["2", "5"] {
         let out = png(t);
-        let (ok, _, err) = volcast(&[
+        common::volcast_ok(&[
             "render",
             file,
             "--time",
@@ -146,12 +137,11 @@ fn cli_shows_timesteps_and_renders_one() {
             "-o",
             out.to_str().unwrap(),
         ]);
-        assert!(ok, "{err}");
     }
     let a = image::open(png("2")).unwrap().to_rgba8();
     let b = image::open(png("5")).unwrap().to_rgba8();
     assert!(diff(&a, &b).max > 8.0, "--time 2 and --time 5 give the same image");
-    let (ok, _, err) = volcast(&[
+    let o = volcast(&[
         "render",
         file,
         "--time",
@@ -161,11 +151,11 @@ fn cli_shows_timesteps_and_renders_one() {
         "-o",
         png("7").to_str().unwrap(),
     ]);
+    let err = stderr(&o);
     assert!(
-        !ok && err.contains("time step 7 does not exist: the volume has 7 (0 to 6)"),
+        !o.status.success() && err.contains("time step 7 does not exist: the volume has 7 (0 to 6)"),
         "{err}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A header claiming more steps than memory holds is refused before anything is read; one claiming more than
@@ -177,8 +167,7 @@ fn series_beyond_memory_are_refused_up_front() {
     for (i, v) in [(1, 1024i16), (2, 1024), (3, 1024), (4, 16000)] {
         nii[40 + 2 * i..42 + 2 * i].copy_from_slice(&v.to_le_bytes());
     }
-    let dir = std::env::temp_dir().join(format!("volcast-time-hostile-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("formats-time-hostile");
     let path = dir.join("huge_series.nii");
     std::fs::write(&path, &nii).unwrap();
     let e = volume::open(&path, &Default::default())
@@ -196,5 +185,4 @@ fn series_beyond_memory_are_refused_up_front() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("has 20000 time steps, more than the limit of 16384"), "{e}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

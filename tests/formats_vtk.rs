@@ -190,31 +190,6 @@ fn clear_refusals_name_the_file() {
     );
 }
 
-/// A fresh folder under the temp dir, removed on drop.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(tag: &str) -> Scratch {
-        let path = std::env::temp_dir().join(format!("volcast-vtk-{tag}-{}", std::process::id()));
-        std::fs::create_dir_all(&path).unwrap();
-        Scratch(path)
-    }
-
-    fn error(&self, name: &str, bytes: &[u8]) -> String {
-        let path = self.0.join(name);
-        std::fs::write(&path, bytes).unwrap();
-        let e = open(&path, None).expect_err(name).to_string();
-        assert!(e.contains(name), "{name}: the message should name the file: {e}");
-        e
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 /// A one-array `.vti` with raw appended bytes: `words` (the block header, UInt32) then `payload`.
 fn vti(extent: &str, compressor: &str, words: &[u32], payload: &[u8], offset: &str) -> Vec<u8> {
     let compressor = if compressor.is_empty() {
@@ -247,7 +222,7 @@ fn zlib(data: &[u8]) -> Vec<u8> {
 
 #[test]
 fn hostile_vti_files_are_refused() {
-    let s = Scratch::new("hostile");
+    let s = common::scratch("formats-vtk-hostile_vti_files_are_refused");
     let small = "0 6 0 5 0 4"; // 210 bytes of UInt8
     let huge = "0 1023 0 1023 0 1023"; // 1 GiB of UInt8
     let zeros = vec![0u8; 4 << 20];
@@ -342,7 +317,8 @@ fn hostile_vti_files_are_refused() {
         ("not-xml.vti", b"<VTKFile type=\"ImageData\" <<<".to_vec(), "malformed"),
     ];
     for (name, bytes, expected) in cases {
-        let e = s.error(name, &bytes);
+        let e = open(&s.write(name, &bytes), None).expect_err(name).to_string();
+        assert!(e.contains(name), "{name}: the message should name the file: {e}");
         assert!(e.contains(expected), "{name}: {e} should contain '{expected}'");
     }
 }

@@ -18,8 +18,6 @@
 use common::x11::{capture, have, read_screenshot, type_keys, xvfb, Viewer, WAIT_MS};
 
 use image::RgbaImage;
-use std::path::PathBuf;
-use std::process::Command;
 use std::time::{Duration, Instant};
 use volcast::gpu::{Gpu, GpuOptions};
 use volcast::render::headless::Headless;
@@ -155,9 +153,7 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
             return;
         }
     }
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let dir = common::scratch("viewer");
     let started = Instant::now();
 
     // Scripted: what X cannot do deterministically (a 0×0 size) and the frames in between; then the window stays
@@ -281,7 +277,7 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
 
 #[test]
 fn viewer_without_a_display_says_so_and_points_to_render() {
-    let out = Command::new(env!("CARGO_BIN_EXE_volcast"))
+    let out = common::volcast_command()
         .args(["view", "--builtin", "box", "--builtin-size", "8"])
         .env_remove("DISPLAY")
         .env_remove("WAYLAND_DISPLAY")

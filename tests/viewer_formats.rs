@@ -9,7 +9,7 @@
 
 use common::compare::diff;
 use common::x11::{have, read_screenshot, type_keys, xvfb, Viewer, WAIT_MS};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
 use volcast::render::headless::Headless;
@@ -32,9 +32,7 @@ fn viewer_opens_every_new_format_as_a_dropped_file() {
         common::skip("xdotool not found; apt-get install xdotool");
         return;
     }
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer-formats");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let dir = common::scratch("viewer-formats");
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
     let mut script = String::from("frames:2;");
     for (i, f) in FILES.iter().enumerate() {
@@ -93,9 +91,7 @@ fn viewer_loads_a_file_dropped_by_xdnd() {
         common::skip("xdotool not found; apt-get install xdotool");
         return;
     }
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer-xdnd");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let dir = common::scratch("viewer-xdnd");
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk/vti_zlib.vti");
     let script = format!("frames:3;wait:{WAIT_MS};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);

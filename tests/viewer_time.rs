@@ -10,7 +10,7 @@
 
 use common::compare::diff;
 use common::x11::{capture, have, read_screenshot, screenshot_step, type_keys, xvfb, Viewer, WAIT_MS};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
 use volcast::render::headless::Headless;
@@ -24,9 +24,7 @@ fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
             return;
         }
     }
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("viewer-time");
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let dir = common::scratch("viewer-time");
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/time/sim_u16.nrrd");
     let script = format!("frames:3;wait:{WAIT_MS};exit");
     // A transfer function over the whole range (3..293), so that every step looks different: the automatic one

@@ -6,8 +6,7 @@
 //! make.py): a body with three markers in patient space — value 1000 on the patient's left at RAS (−30, 0, 0) mm,
 //! 700 anterior at (0, 35, 0), 400 superior at (0, 0, 32) — stored in many orders, mirrored, oblique and tilted.
 
-use std::path::PathBuf;
-use std::process::Command;
+use std::path::{Path, PathBuf};
 
 /// A file's expected placement, from the library that wrote or reads it.
 struct Expected {
@@ -23,6 +22,10 @@ struct Expected {
 // with more detail).
 include!("world/expected.rs");
 
+fn s(path: &Path) -> &str {
+    path.to_str().expect("a UTF-8 path")
+}
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -35,18 +38,9 @@ fn file(rel: &str) -> Option<PathBuf> {
     }
 }
 
-fn info_json(path: &PathBuf) -> serde_json::Value {
-    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .args(["info", "--json"])
-        .arg(path)
-        .output()
-        .expect("run volcast");
-    assert!(
-        o.status.success(),
-        "{}: {}",
-        path.display(),
-        String::from_utf8_lossy(&o.stderr)
-    );
+fn info_json(path: &Path) -> serde_json::Value {
+    let o = common::volcast(&["info", "--json", s(path)]);
+    assert!(o.status.success(), "{}: {}", path.display(), common::stderr(&o));
     serde_json::from_slice(&o.stdout).expect("info --json prints JSON")
 }
 
@@ -229,32 +223,31 @@ fn views_show_the_patient_the_right_way_round() {
         ("left", 0.7, 'x', -1.0),
         ("left", 0.4, 'y', -1.0),
     ];
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("world-views");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("world-views");
     let mut failures = Vec::new();
     for f in files {
         for view in ["anterior", "posterior", "superior", "left"] {
             let out = dir.join(format!("{f}-{view}.png"));
-            let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
-                .arg("render")
-                .arg(root().join("tests/data/world").join(f))
-                .args([
-                    "--view",
-                    view,
-                    "--mode",
-                    "mip",
-                    "--colormap",
-                    "grayscale",
-                    "--window",
-                    "0,1",
-                ])
-                .args(["--no-jitter", "--size", &format!("{SIZE}x{SIZE}"), "--validate", "-o"])
-                .arg(&out)
-                .output()
-                .expect("run volcast");
-            let stderr = String::from_utf8_lossy(&o.stderr);
-            assert!(o.status.success(), "{f} {view}: {stderr}");
-            assert!(stderr.contains("validation: 0 errors, 0 warnings"), "{stderr}");
+            let volume = root().join("tests/data/world").join(f);
+            let size = format!("{SIZE}x{SIZE}");
+            common::volcast_ok(&[
+                "render",
+                s(&volume),
+                "--view",
+                view,
+                "--mode",
+                "mip",
+                "--colormap",
+                "grayscale",
+                "--window",
+                "0,1",
+                "--no-jitter",
+                "--size",
+                &size,
+                "--validate",
+                "-o",
+                s(&out),
+            ]);
             let image = image::open(&out).expect("PNG").to_rgba8();
             for &(v, value, axis, side) in expectations.iter().filter(|e| e.0 == view) {
                 let Some((x, y)) = marker_at(&image, value) else {
@@ -288,32 +281,29 @@ fn views_show_the_patient_the_right_way_round() {
 #[test]
 fn voxel_axes_draw_the_grid_as_stored() {
     let file = root().join("tests/data/world/nifti_las_qform.nii.gz");
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("world-voxel-axes");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("world-voxel-axes");
     let mut sides = Vec::new();
     for extra in [&[][..], &["--voxel-axes"][..]] {
         let out = dir.join(format!("las{}.png", extra.len()));
-        let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
-            .arg("render")
-            .arg(&file)
-            .args([
-                "--view",
-                "anterior",
-                "--mode",
-                "mip",
-                "--colormap",
-                "grayscale",
-                "--window",
-                "0,1",
-            ])
-            .args(["--no-jitter", "--size", "128x128", "--validate", "-o"])
-            .arg(&out)
-            .args(extra)
-            .output()
-            .expect("run volcast");
-        let stderr = String::from_utf8_lossy(&o.stderr);
-        assert!(o.status.success(), "{stderr}");
-        assert!(stderr.contains("validation: 0 errors, 0 warnings"), "{stderr}");
+        let args = [
+            "render",
+            s(&file),
+            "--view",
+            "anterior",
+            "--mode",
+            "mip",
+            "--colormap",
+            "grayscale",
+            "--window",
+            "0,1",
+            "--no-jitter",
+            "--size",
+            "128x128",
+            "--validate",
+            "-o",
+            s(&out),
+        ];
+        common::volcast_ok(&[&args[..], extra].concat());
         let image = image::open(&out).unwrap().to_rgba8();
         let (x, _) = marker_at(&image, 1.0).expect("the left marker is visible");
         sides.push(x - 64.0);
@@ -322,12 +312,8 @@ fn voxel_axes_draw_the_grid_as_stored() {
         sides[0] > 10.0 && sides[1] < -10.0,
         "left marker columns from centre: {sides:?}"
     );
-    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .arg("info")
-        .arg(&file)
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&o.stdout);
+    let o = common::volcast(&["info", s(&file)]);
+    let text = common::stdout(&o);
     assert!(
         text.contains("LAS") && text.contains("mirrored (left-handed)"),
         "{text}"
