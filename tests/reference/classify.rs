@@ -1,19 +1,15 @@
-//! The reference's classification (tests/common/classify.rs) against published values and closed forms, and the
-//! library's table (`function::bake`, what the GPU reads) against the reference. Nothing here needs a GPU.
+//! Rule 4 in the reference: its classification (tests/common/classify.rs) against published values and closed
+//! forms, multiplied alpha on a head-on ray, and the library's table (`function::bake`, what the GPU reads)
+//! against the reference.
 
+use super::scenes::{assert_near, assert_near3, constant_volume, head_on, table_rgb, CENTRE, SIZE, STEP_ALPHA};
 use common::classify::{colormap_srgb, jitter_offset, linear, srgb_to_linear, Classifier};
+use common::reference::Reference;
 use glam::DVec3;
 use volcast::scene::settings::RenderSettings;
 use volcast::transfer::colormap::tables::{COOL_WARM, PLASMA, VIRIDIS};
 use volcast::transfer::function::{self as tf, TfUnits, TransferFunction, PRESET_NAMES};
 use volcast::transfer::Colormap;
-
-fn near3(what: &str, actual: DVec3, expected: DVec3, tolerance: f64) {
-    assert!(
-        (actual - expected).abs().max_element() <= tolerance,
-        "{what}: {actual} but expected {expected} (± {tolerance})"
-    );
-}
 
 /// The tabulated maps' control points against their sources.
 #[test]
@@ -95,50 +91,50 @@ fn colormap_control_points_match_their_published_values() {
 #[test]
 fn reference_colormaps_follow_their_definitions() {
     let c = |map, x| colormap_srgb(map, x);
-    near3(
+    assert_near3(
         "rainbow at 0: blue",
         c(Colormap::Rainbow, 0.0),
         DVec3::new(0.0, 0.0, 1.0),
         1e-12,
     );
-    near3(
+    assert_near3(
         "rainbow at 1/4: cyan",
         c(Colormap::Rainbow, 0.25),
         DVec3::new(0.0, 1.0, 1.0),
         1e-12,
     );
-    near3(
+    assert_near3(
         "rainbow at 1/2: green",
         c(Colormap::Rainbow, 0.5),
         DVec3::new(0.0, 1.0, 0.0),
         1e-12,
     );
-    near3(
+    assert_near3(
         "rainbow at 5/8",
         c(Colormap::Rainbow, 0.625),
         DVec3::new(0.5, 1.0, 0.0),
         1e-12,
     );
-    near3(
+    assert_near3(
         "rainbow at 1: red",
         c(Colormap::Rainbow, 1.0),
         DVec3::new(1.0, 0.0, 0.0),
         1e-12,
     );
-    near3(
+    assert_near3(
         "gnuplot at 1/4",
         c(Colormap::Gnuplot, 0.25),
         DVec3::new(0.5, 1.0 / 64.0, 1.0),
         1e-12,
     );
-    near3(
+    assert_near3(
         "gnuplot at 3/4: blue clipped",
         c(Colormap::Gnuplot, 0.75),
         DVec3::new(0.75f64.sqrt(), 0.421875, 0.0),
         1e-12,
     );
-    near3("grayscale", c(Colormap::Grayscale, 0.3), DVec3::splat(0.3), 1e-12);
-    near3(
+    assert_near3("grayscale", c(Colormap::Grayscale, 0.3), DVec3::splat(0.3), 1e-12);
+    assert_near3(
         "cool-warm at 1/2",
         c(Colormap::CoolWarm, 0.5),
         DVec3::splat(221.0 / 255.0),
@@ -149,8 +145,8 @@ fn reference_colormaps_follow_their_definitions() {
     let expected = DVec3::from_array(std::array::from_fn(|k| {
         (f64::from(mid.1 .0[k]) + f64::from(mid.1 .1[k])) / 2.0
     }));
-    near3("viridis between entries", c(Colormap::Viridis, mid.0), expected, 1e-7);
-    near3(
+    assert_near3("viridis between entries", c(Colormap::Viridis, mid.0), expected, 1e-7);
+    assert_near3(
         "clamped below",
         c(Colormap::Plasma, -3.0),
         c(Colormap::Plasma, 0.0),
@@ -175,7 +171,7 @@ fn reference_classification_by_hand() {
     let k = Classifier::new(&s, [0.0, 1.0]);
     // v = 0.3 sits a quarter into the window: grey 0.25, not 0.3.
     let (rgb, a) = k.at(0.3);
-    near3(
+    assert_near3(
         "colour by window position",
         rgb,
         DVec3::splat(srgb_to_linear(0.25)),
@@ -212,9 +208,9 @@ fn reference_classification_by_hand() {
     let v = |hu: f64| (hu - range[0]) / (range[1] - range[0]);
     let (rgb, a) = k.at(v(200.0));
     assert!((a - 0.4).abs() < 1e-6, "{a}");
-    near3("colour at 200 HU", rgb, linear(DVec3::new(1.0, 0.2, 0.2)), 1e-6);
+    assert_near3("colour at 200 HU", rgb, linear(DVec3::new(1.0, 0.2, 0.2)), 1e-6);
     assert_eq!(k.at(v(-500.0)).1, 0.0, "constant before the first point");
-    near3("constant after the last point", k.at(v(2500.0)).0, DVec3::ONE, 1e-6);
+    assert_near3("constant after the last point", k.at(v(2500.0)).0, DVec3::ONE, 1e-6);
     assert!((k.at(v(2500.0)).1 - 0.8).abs() < 1e-6);
     // Without colour points, its colormap spans the window.
     let s = settings(|s| {
@@ -224,7 +220,7 @@ fn reference_classification_by_hand() {
             ..tf.clone()
         });
     });
-    near3(
+    assert_near3(
         "colormap over the window",
         Classifier::new(&s, range).at(0.5).0,
         linear(colormap_srgb(Colormap::Viridis, 0.5)),
@@ -237,6 +233,21 @@ fn reference_classification_by_hand() {
 /// from the window's edges (where the table blends in the zero entry outside) they agree to 1e-3 in linear
 /// light: linear interpolation between entries 1/4095 apart cuts the corners of the colormaps' kinks (rainbow's
 /// sextants, gnuplot's clipped blue) and of the transfer functions' control points.
+#[test]
+fn multiplied_alpha_scales_opacity_by_the_windowed_value() {
+    let volume = constant_volume();
+    let reference = Reference::new(&volume);
+    let mut s = head_on(&volume, SIZE);
+    s.multiplied_alpha = true;
+    s.window = [0.25, 1.0];
+    let c = (0.5 - 0.25) / 0.75;
+    let trace = reference.trace(&s, CENTRE, CENTRE);
+    // The table is linear in c between neighbouring entries, so the lookup gives c × step alpha up to f32 rounding.
+    let alpha = 1.0 - (1.0 - c * f64::from(STEP_ALPHA)).powi(16);
+    assert_near("opacity", trace.alpha, alpha, 1e-6);
+    assert_near3("colour", trace.color, table_rgb(&volume, &s, 0.5) * trace.alpha, 1e-7);
+}
+
 #[test]
 fn the_library_table_follows_the_reference_definition() {
     let mut cases: Vec<(String, RenderSettings, [f64; 2])> = Vec::new();
@@ -280,7 +291,7 @@ fn the_library_table_follows_the_reference_definition() {
             }
             let [r, g, b, a] = tf::lookup(&table, v as f32).map(f64::from);
             let (rgb, alpha) = k.at(v);
-            near3(&format!("{what}: colour at {v}"), DVec3::new(r, g, b), rgb, 1e-3);
+            assert_near3(&format!("{what}: colour at {v}"), DVec3::new(r, g, b), rgb, 1e-3);
             assert!((a - alpha).abs() <= 1e-3, "{what}: opacity at {v}: {a} vs {alpha}");
         }
     }

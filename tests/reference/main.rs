@@ -1,7 +1,27 @@
-//! The independent CPU reference (tests/common) proven against closed forms and published values, so that a GPU
-//! test failing against it points at the GPU. Nothing here needs a GPU.
+//! The independent CPU reference (tests/common) proven against closed forms and published values, rule by rule,
+//! so that a GPU test failing against it points at the GPU. The rules are numbered in `RenderSettings`'s docs:
+//!
+//! | module | rules |
+//! |---|---|
+//! | `rays` | 0 placement, 1 rays |
+//! | `samples` | 2 samples, 3 values |
+//! | `classify` | 4 classification |
+//! | `shading` | 5 shading |
+//! | `compositing` | 6 segments, 7 compositing, 8 output |
+//! | `isosurfaces` | 7's iso-surfaces, with 5's directional light |
+//! | `light` | 9 shadows and ambient occlusion |
+//! | `clip` | 10 clipping plane |
+//! | `harness` | the image comparison the GPU tests judge by, and the reference's speed |
+//!
+//! `scenes` holds what they share. Nothing here needs a GPU.
 
 mod classify;
 mod clip;
+mod compositing;
+mod harness;
+mod isosurfaces;
 mod light;
-mod selftest;
+mod rays;
+mod samples;
+mod scenes;
+mod shading;
