@@ -367,7 +367,7 @@ fn real_dicom_series_matches_its_raw_twin() {
     assert_eq!((v.format.as_str(), v.dims), ("DICOM", [256, 256, 20]));
     assert_eq!(v.range, [0.0, 1059.0]);
     // MANIFEST: spacing 0.859375 0.859375 7.0005, slices ordered along the normal; the stack is tilted 7.7°
-    // about left-right (tests/world.rs checks the whole affine).
+    // about left-right (world.rs checks the whole affine).
     assert!((v.spacing()[0] - 0.859375).abs() < 1e-6 && (v.spacing()[1] - 0.859375).abs() < 1e-6);
     assert!((v.spacing()[2] - 7.0005).abs() < 1e-3, "{:?}", v.spacing());
     assert!((v.geometry.obliquity_deg() - 7.71).abs() < 0.01, "{:?}", v.geometry);

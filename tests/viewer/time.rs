@@ -6,7 +6,7 @@
 //! function, which the load keeps. Validation with
 //! synchronization validation reports nothing.
 //!
-//! Needs Xvfb, xdotool and xwd like tests/viewer.rs; a missing one is a skip (a failure with CI=true).
+//! Needs Xvfb, xdotool and xwd like tests/viewer/window.rs; a missing one is a skip (a failure with CI=true).
 
 use common::compare::diff;
 use common::x11::{capture, have, read_screenshot, screenshot_step, type_keys, xvfb, Viewer, WAIT_MS};

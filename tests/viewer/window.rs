@@ -215,7 +215,7 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
     let window_shaded = capture_view(&x.display, window, view_panel, &shot_shaded, &mask_shaded);
     type_keys(&x.display, window, &["s"]);
 
-    // Tab hides the panel, and F12 right after it works (viewer_keys.rs: Tab no longer moves egui's focus).
+    // Tab hides the panel, and F12 right after it works (keys.rs: Tab no longer moves egui's focus).
     type_keys(&x.display, window, &["Tab", "F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (shot_full, settings_full) = read_screenshot(&dir, &saved);
