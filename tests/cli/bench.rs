@@ -2,6 +2,8 @@
 //! well-formed positive numbers, and its JSON has the fields scripts rely on. Never asserts speed (the machine is
 //! shared and lavapipe is a CPU).
 
+use crate::common;
+
 use common::{stderr, stdout};
 use std::process::Output;
 

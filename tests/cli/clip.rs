@@ -2,6 +2,8 @@
 //! flipped plane the other half, a plane beyond the box nothing; a view state file carries the plane (and one
 //! written before planes existed still loads); bad planes are refused with a clear message.
 
+use crate::common;
+
 use common::{scratch, volcast};
 use image::RgbaImage;
 use volcast::scene::camera::Camera;

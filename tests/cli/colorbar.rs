@@ -2,6 +2,8 @@
 //! exactly the library's colour bar for the classification in use (data-unit ticks, "HU" for CT), and the
 //! rendered pixels stay as they were.
 
+use crate::common;
+
 use common::scratch;
 use std::path::{Path, PathBuf};
 use volcast::transfer::colorbar::{colorbar, layout, ColorbarSpec};

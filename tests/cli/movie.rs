@@ -2,6 +2,8 @@
 //! are the plain renders they claim to be, the GIF decodes to them at the right rate and loops, and bad input is
 //! refused before anything is written.
 
+use crate::common;
+
 use common::{volcast_ok, volcast_validated};
 use std::path::{Path, PathBuf};
 use volcast::scene::camera::Camera;

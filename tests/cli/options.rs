@@ -3,6 +3,8 @@
 //! settings the option stands for (so an option that is parsed but ignored, or mapped to the wrong setting,
 //! fails); the others by a property (an unchanged image, a line printed, a file written).
 
+use crate::common;
+
 use common::bounds::{POSITIONS_RGBA16F, REFERENCE, REFERENCE_R8};
 use common::compare::{against_reference, diff, write_failure_images, Bounds};
 use common::gpu::Judge;

@@ -1,6 +1,8 @@
 //! The `volcast` binary end to end: a render under validation, and every bad input a user can give ending in a
 //! clear message and a non-zero exit, never a panic.
 
+use crate::common;
+
 use common::{scratch, stderr};
 use std::process::Output;
 

@@ -2,6 +2,8 @@
 //! (its images, `compare.md` and `compare.json`, and a view where the two setups do not agree), `info` on every
 //! format, `devices` and `--device`, and the options of `render` that print or write rather than draw.
 
+use crate::common;
+
 use common::{stderr, stdout, volcast};
 use std::path::{Path, PathBuf};
 

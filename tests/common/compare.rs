@@ -209,9 +209,11 @@ pub fn diff_image(a: &RgbaImage, b: &RgbaImage) -> RgbaImage {
     })
 }
 
-/// `target/test-failures/` in the repository, created if needed (git-ignored with the rest of `target/`).
+/// `target/test-failures/` in the crate, created if needed (git-ignored with the rest of `target/`).
 pub fn failure_dir() -> PathBuf {
-    let dir = crate::scratch::target_dir().join("test-failures");
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target")
+        .join("test-failures");
     std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("cannot create {}: {e}", dir.display()));
     dir
 }

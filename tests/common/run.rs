@@ -1,21 +1,11 @@
 //! The `volcast` binary run as a user runs it, and what every validated run must show.
 
 use std::fmt::Debug;
-use std::path::PathBuf;
 use std::process::{Command, Output};
-
-/// The binary cargo built for this test run. Cargo names it in `CARGO_BIN_EXE_volcast` when it compiles an
-/// integration test and again in the environment when it runs one; this library is compiled as the tests'
-/// dependency, where the variable is not set, so it reads the run's.
-pub fn volcast_binary() -> PathBuf {
-    std::env::var_os("CARGO_BIN_EXE_volcast")
-        .map(PathBuf::from)
-        .expect("CARGO_BIN_EXE_volcast is not set: run the tests through `cargo test`, which names the binary there")
-}
 
 /// `volcast`, for a test that sets more than arguments (environment, working folder, streams) before it runs.
 pub fn volcast_command() -> Command {
-    Command::new(volcast_binary())
+    Command::new(env!("CARGO_BIN_EXE_volcast"))
 }
 
 /// Runs `volcast ARGS` and returns what it did; asserts nothing.

@@ -1,16 +1,10 @@
-//! Folders under the repository's `target/` for the files tests write: volumes to read, images to compare, and
-//! what a person looks at after a failure.
+//! Folders under `target/tmp` (cargo's `CARGO_TARGET_TMPDIR`) for the files tests write: volumes to read, images
+//! to compare.
 
 use std::collections::BTreeSet;
 use std::ops::Deref;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-
-/// The repository's `target/` (git-ignored). Cargo tells an integration test its temporary folder
-/// (`CARGO_TARGET_TMPDIR`, `target/tmp`) but not a library the test depends on.
-pub fn target_dir() -> PathBuf {
-    crate::repository().join("target")
-}
 
 /// A test's folder: `target/tmp/NAME`.
 pub struct Scratch(PathBuf);
@@ -46,7 +40,7 @@ impl AsRef<Path> for Scratch {
 /// can look at what the tests wrote.
 pub fn scratch(name: &str) -> Scratch {
     static HANDED_OUT: Mutex<BTreeSet<String>> = Mutex::new(BTreeSet::new());
-    let dir = target_dir().join("tmp").join(name);
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
     // A test that failed while holding the lock left the set as it was: still right.
     let mut handed_out = HANDED_OUT.lock().unwrap_or_else(|e| e.into_inner());
     if handed_out.insert(name.to_string()) {

@@ -3,6 +3,8 @@
 //! gdcmconv --raw read back by pydicom) must load with its dims, type, spacing, RAS affine, rescale and every
 //! stored voxel. Hostile variants of those files must fail with an error naming the file.
 
+use crate::common;
+
 use std::path::{Path, PathBuf};
 use volcast::volume::{self, VoxelType};
 

@@ -1,6 +1,8 @@
 //! Volume file formats end to end through `volume::open`: files written here (round trips, known values,
 //! detached data, path escapes, hostile input) and the real volumes in ../shared/data against their raw twins.
 
+use crate::common;
+
 use std::path::{Path, PathBuf};
 use volcast::volume::{self, Endian, Format, OpenOptions, RawOptions, Volume, VoxelType};
 

@@ -2,6 +2,8 @@
 //! tests/data/tiff/make.py); hostile TIFFs built byte by byte; formats volcast does not read named, through
 //! `volume::open` and through the `volcast` binary.
 
+use crate::common;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use volcast::volume::{self, Format, OpenOptions, RawOptions, Volume, VoxelType};

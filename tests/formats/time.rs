@@ -3,6 +3,8 @@
 //! affine; each shown step rendered against the independent reference under validation; the CLI's `--time` and
 //! `info`; headers claiming more steps than memory holds.
 
+use crate::common;
+
 use common::bounds::REFERENCE;
 use common::cases::standard_cases;
 use common::compare::diff;

@@ -3,6 +3,8 @@
 //! dims, spacing, placement, every one-component point array's sum and samples. Then hostile `.vti` files built
 //! here: each must give an error that names the file, never a panic or an allocation the file cannot back.
 
+use crate::common;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use volcast::volume::{self, OpenOptions, Volume};

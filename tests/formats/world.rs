@@ -6,6 +6,8 @@
 //! make.py): a body with three markers in patient space — value 1000 on the patient's left at RAS (−30, 0, 0) mm,
 //! 700 anterior at (0, 35, 0), 400 superior at (0, 0, 32) — stored in many orders, mirrored, oblique and tilted.
 
+use crate::common;
+
 use std::path::{Path, PathBuf};
 
 /// A file's expected placement, from the library that wrote or reads it.

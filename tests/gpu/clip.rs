@@ -4,6 +4,8 @@
 //! march), on volumes placed obliquely with anisotropic voxels and mirrored. The reference clips the world ray
 //! itself (tests/common/march.rs); the GPU clips the texture-space segment (shaders/clip.glsl).
 
+use crate::common;
+
 use common::bounds::REFERENCE;
 use common::cases::{mirrored, oblique, with, Case};
 use common::compare::diff;

@@ -4,6 +4,8 @@
 //! the gradient texture renders what the reference renders with the same (grid-gradient) rule; jitter averages
 //! towards the finely sampled image. All under validation.
 
+use crate::common;
+
 use common::bounds::{REFERENCE, STRIDES};
 use common::cases::{ct_head, marschner_lobb_as, mirrored, oblique, quality_cases, standard_cases, with};
 use common::compare::{against_reference, diff, write_failure_images};

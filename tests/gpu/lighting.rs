@@ -1,6 +1,8 @@
 //! Rule 9 on the GPU against the CPU reference: shadows and ambient occlusion from the light grid, in emission,
 //! density and iso-surface frames, under validation with synchronization validation.
 
+use crate::common;
+
 use common::bounds::REFERENCE;
 use common::cases::ct_head;
 use common::compare::against_reference;

@@ -5,6 +5,8 @@
 //! The methods agree within `compare::AGREE_*` over the object pixels; each matches the reference within the
 //! bounds of tests/common/bounds.rs.
 
+use crate::common;
+
 use common::bounds::{METHODS, REFERENCE, REFERENCE_R8};
 use common::compare::{between, diff, write_failure_images};
 use common::gpu::{validated_gpu, Judge};

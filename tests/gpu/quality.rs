@@ -9,6 +9,8 @@
 //! bound (README, Fidelity): shaded Marschner–Lobb and CT head, whose lighting changes within a voxel more than
 //! the default step resolves.
 
+use crate::common;
+
 use common::compare::{against_reference, write_failure_images};
 use common::gpu::{close, validated_gpu};
 use common::reference::Reference;

@@ -3,6 +3,8 @@
 //! pipeline on first use, ~0.5 s); at the end the GPU is dropped and the test asserts that the layer said
 //! nothing, leaked objects and allocations included. Bounds per family: tests/common/bounds.rs.
 
+use crate::common;
+
 use common::bounds::{REFERENCE, REFERENCE_R8};
 use common::cases::{
     gradient_cases, marschner_lobb_as, marschner_lobb_sized, mask_as, mirrored, oblique, quality_cases, settings_cases,

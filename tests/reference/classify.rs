@@ -2,6 +2,8 @@
 //! forms, multiplied alpha on a head-on ray, and the library's table (`function::bake`, what the GPU reads)
 //! against the reference.
 
+use crate::common;
+
 use super::scenes::{assert_near, assert_near3, constant_volume, head_on, table_rgb, CENTRE, SIZE, STEP_ALPHA};
 use common::classify::{colormap_srgb, jitter_offset, linear, srgb_to_linear, Classifier};
 use common::reference::Reference;

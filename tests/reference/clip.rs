@@ -2,6 +2,8 @@
 //! plane, the extremum a MIP/MinIP frame then finds on a ramp, iso-surfaces cut open rather than capped, and the
 //! planes beyond the box.
 
+use crate::common;
+
 use common::reference::{background_pixel, Reference};
 use glam::Vec3;
 use volcast::scene::camera::Camera;

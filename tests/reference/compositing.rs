@@ -2,6 +2,8 @@
 //! model, front-to-back compositing with early termination, MIP/MinIP/average, and the output composited in
 //! linear light over the background and encoded to sRGB once.
 
+use crate::common;
+
 use super::scenes::{
     assert_all_background, assert_near, assert_near3, background_pixel, constant_tf, constant_volume, expected_samples,
     grey_ramp_tf, head_on, keep, linear, segment_lengths, table_rgb, volume_from, z_ramp, BACKGROUND, CENTRE, SIZE,

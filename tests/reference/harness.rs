@@ -1,6 +1,8 @@
 //! What the GPU tests judge by, besides the rules: the image comparison (statistics, bounds, masks over the object
 //! pixels, the failure images) and the reference's speed at a realistic size.
 
+use crate::common;
+
 use super::scenes::{assert_near, constant_volume, head_on};
 use common::compare::{self, Bounds};
 use common::reference::Reference;

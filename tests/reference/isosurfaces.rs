@@ -1,6 +1,8 @@
 //! Rule 7's iso-surfaces in the reference: the crossing found by bisection within its bound, several surfaces met
 //! in the order the ray crosses them, and their shading under a directional light (rule 5).
 
+use crate::common;
+
 use super::scenes::{
     assert_all_background, assert_near, assert_near3, grey_ramp_tf, head_on, linear, volume_from, z_ramp, CENTRE, SIZE,
 };

@@ -2,6 +2,8 @@
 //! e^(−σ·depth) along the light and the occlusion inside is e^(−4σ); nothing absorbs outside the window or past the
 //! box; a slab casts its shadow only below it.
 
+use crate::common;
+
 use common::light::LightGridRef;
 use common::reference::Reference;
 use glam::Vec3;

@@ -15,6 +15,11 @@
 //!
 //! `scenes` holds what they share. Nothing here needs a GPU.
 
+// Public: this binary's tests use only part of what the tests share, and rustc counts a crate's public items as
+// used, so the rest is not dead code here (tests/common/mod.rs).
+#[path = "../common/mod.rs"]
+pub mod common;
+
 mod classify;
 mod clip;
 mod compositing;

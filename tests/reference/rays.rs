@@ -2,6 +2,8 @@
 //! against `Camera`'s own matrices (the GPU's convention) and closed forms: the segment inside the slab box and
 //! past the near plane, the image's orientation, the silhouette, orthographic rays, and the slab test itself.
 
+use crate::common;
+
 use super::scenes::{
     assert_near, assert_near3, background_pixel, constant_volume, expected_samples, head_on, keep, volume_from,
     BACKGROUND, CENTRE, N, SIZE,

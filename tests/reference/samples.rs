@@ -2,6 +2,8 @@
 //! and what a sample reads (trilinear between texel centres, clamped at the edges; NaN and values outside the
 //! window skipped).
 
+use crate::common;
+
 use super::scenes::{
     assert_all_background, assert_near, constant_tf, constant_volume, expected_samples_at, head_on, keep, volume_from,
     volume_with, CENTRE, N, SIZE, STEP_ALPHA,

@@ -7,6 +7,8 @@
 //! constant volume reaches A = 1 - (1 - α)^16 at every step length. Colours are composited in linear light and
 //! encoded to sRGB once (rule 8).
 
+use crate::common;
+
 use common::classify::{encode, srgb_to_linear};
 use common::reference::{quantise, Reference};
 use glam::{DVec3, Vec3};

@@ -1,6 +1,8 @@
 //! Rule 5 in the reference: lighting and gradient opacity on a planar ramp with anisotropic voxels, whose gradient
 //! is known exactly.
 
+use crate::common;
+
 use super::scenes::{
     assert_near, assert_near3, constant_tf, constant_volume, expected_samples, head_on, keep, linear, volume_from,
     volume_with, CENTRE, N, SIZE, STEP_ALPHA,

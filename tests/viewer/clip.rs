@@ -12,6 +12,8 @@
 //!
 //! Validation reports 0 messages.
 
+use crate::common;
+
 use common::x11::{capture, drag, four_up_rects, read_screenshot, render_state, type_keys, x_session, Viewer, WAIT_MS};
 use image::RgbaImage;
 use std::path::Path;

@@ -7,6 +7,8 @@
 //! A second test drops a file for real: `common::xdnd` is an XDND drag source (what a file manager is), so the
 //! drop goes through the X server and the window's own XDND handling, which xdotool cannot drive.
 
+use crate::common;
+
 use common::compare::diff;
 use common::x11::{have, read_screenshot, type_keys, xvfb, Viewer, WAIT_MS};
 use std::path::Path;

@@ -3,6 +3,8 @@
 //! Tab into a text field, which then swallowed every key). The panel's state is read from F12's screenshot width
 //! and settings. A quick drag, all of it within one slow frame, still turns the camera.
 
+use crate::common;
+
 use common::x11::{read_screenshot, type_keys, x_client, x_session, Viewer, WAIT_MS};
 use glam::Vec2;
 use std::time::Duration;

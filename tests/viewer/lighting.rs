@@ -3,6 +3,8 @@
 //! double click gives the headlight back. Each state is read from F12's settings JSON, and the window must change
 //! with the light. Validation reports 0 messages.
 
+use crate::common;
+
 use common::x11::{capture, read_screenshot, type_keys, x_client, x_session, Viewer, WAIT_MS};
 use glam::Vec2;
 use std::time::Duration;

@@ -5,6 +5,8 @@
 //! started with `--state` on it shows the same view (F12 equal to 1/255) with the same crosshair. Validation
 //! reports 0 messages in both.
 
+use crate::common;
+
 use common::x11::{button, capture, four_up_rects, pointer, read_state, type_keys, x_session, Viewer, WAIT_MS};
 use glam::{DVec2, DVec3};
 use image::RgbaImage;

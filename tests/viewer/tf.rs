@@ -10,6 +10,8 @@
 //! Where the editor's widgets are comes from the viewer's `ui rect` lines (`VOLCAST_UI_RECTS`); the input is X's.
 //! Validation reports 0 messages.
 
+use crate::common;
+
 use common::x11::{button, drag, pointer, read_screenshot, render_state, type_keys, x_client, x_session, Viewer};
 use common::x11::{worst_channel_diff, WAIT_MS};
 use std::path::Path;

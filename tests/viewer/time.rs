@@ -8,6 +8,8 @@
 //!
 //! Needs Xvfb, xdotool and xwd like tests/viewer/window.rs; a missing one is a skip (a failure with CI=true).
 
+use crate::common;
+
 use common::compare::diff;
 use common::x11::{capture, have, read_screenshot, screenshot_step, type_keys, xvfb, Viewer, WAIT_MS};
 use std::path::Path;

@@ -1,6 +1,8 @@
 //! The X tests' turns (`common::x11::xvfb`): this binary runs its tests on several threads, but the X tests
 //! take turns, and one that fails during its turn does not keep the others from theirs.
 
+use crate::common;
+
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 

@@ -15,6 +15,8 @@
 //! Needs Xvfb (`xvfb`), xdotool (`xdotool`) and xwd (`x11-apps`); a missing one is a skip (a failure with CI=true).
 //! A DISPLAY that is already set is not used: the test types keys, which must not land in someone's desktop.
 
+use crate::common;
+
 use common::x11::{capture, have, read_screenshot, type_keys, xvfb, Viewer, WAIT_MS};
 
 use image::RgbaImage;

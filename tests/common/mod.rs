@@ -2,8 +2,8 @@
 //! comparison and the GPU-against-reference judge, running the binary, scratch folders, the X session of the
 //! viewer tests, shared test data and the reporting of skipped tests.
 //!
-//! A library of its own (tests/common/Cargo.toml), not a module of each test binary: it is compiled once, and as
-//! its items are public no test binary sees the parts it does not use as dead code.
+//! Each test binary (tests/KIND/main.rs) declares it `pub`: a binary uses only part of it, and rustc counts a
+//! crate's public items as used (as it does a library's), so the rest is not dead code there.
 
 pub mod bounds;
 pub mod cases;
@@ -26,21 +26,12 @@ pub use run::{stderr, stdout, volcast, volcast_command, volcast_ok, volcast_vali
 pub use scratch::{scratch, Scratch};
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::{Mutex, Once};
 
-/// The repository's root, found from this library's place in it (tests/common), never an absolute path. Cargo
-/// tells an integration test its package's folder (`CARGO_MANIFEST_DIR`); this library is a package of its own.
-pub fn repository() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .ancestors()
-        .nth(2)
-        .expect("tests/common sits two levels below the repository's root")
-}
-
-/// `../shared` beside the repository.
+/// `../shared` beside the crate (found from the crate's own directory, never an absolute path).
 pub fn shared_dir() -> PathBuf {
-    repository().join("..").join("shared")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("shared")
 }
 
 /// `../shared/data/<rel>`, where the large test volumes live (not in git); `None` after [`skip`] if missing.
