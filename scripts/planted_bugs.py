@@ -172,7 +172,9 @@ def failing_tests(output):
     for line in output.splitlines():
         m = re.match(r"\s*Running (\S+)", line)
         if m:
-            binary = Path(m.group(1)).stem
+            # `unittests` for the library's own tests; the folder of tests/KIND/main.rs for the test binaries.
+            source = Path(m.group(1))
+            binary = source.parent.name if source.name == "main.rs" else source.stem
         m = re.match(r"test (\S+) \.\.\. FAILED", line)
         if m:
             failed.append(f"{binary}::{m.group(1)}")

@@ -3,12 +3,10 @@
 //! binaries print each family's worst with --nocapture), and says the smallest bug it catches. Means leave out the
 //! `outliers` worst pixels, as the max bound allows them. The README's Tests section lists the same numbers.
 
-#![allow(dead_code)]
-
 use super::compare::Bounds;
 
-/// The GPU against the reference, every layout but 8-bit textures: every test family in gpu_vs_reference.rs,
-/// methods_agree.rs, gpu_features.rs (skipping, gradient texture) and cli_options.rs.
+/// The GPU against the reference, every layout but 8-bit textures: every test family in tests/gpu/vs_reference.rs,
+/// gpu/methods_agree.rs, gpu/features.rs (skipping, gradient texture) and cli/options.rs.
 /// Measured over ~1000 comparisons (axis-aligned, oblique, mirrored and sheared placements): worst mean 0.142 (the
 /// float64 diffusion MRI), p99 1; at most 3 pixels of one image above 2/255 (silhouettes, early-termination ties). Catches: a steady error of 1/255 on a
 /// quarter of the object (mean), an error of 3/255 on 2% of it (p99), and any wrong region of more than 6 pixels
@@ -60,8 +58,8 @@ pub const METHODS: Bounds = Bounds {
 
 /// Entry/exit targets of half floats (`--positions rgba16f`): positions keep 11 significant bits, so a ray's ends
 /// move by up to 1/2048 of the box and its samples with them: a documented trade of accuracy for memory, which
-/// `volcast compare` reports as the setups differing (tests/cli_tools.rs).
-/// Measured (the 48³ helix at 64×48, cli_options.rs): mean 0.636, p99 5, max 11; 1 pixel above 8/255.
+/// `volcast compare` reports as the setups differing (tests/cli/tools.rs).
+/// Measured (the 48³ helix at 64×48, tests/cli/options.rs): mean 0.636, p99 5, max 11; 1 pixel above 8/255.
 /// Catches: rgba16f targets read at the wrong pixel or with the wrong format (mean, p99).
 pub const POSITIONS_RGBA16F: Bounds = Bounds {
     mean: 1.25,

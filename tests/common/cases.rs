@@ -1,8 +1,6 @@
 //! The settings and volumes the GPU tests render: viewpoints, one case per setting and per rendering rule, and
 //! synthetic volumes of every voxel type on non-cubic voxels.
 
-#![allow(dead_code)]
-
 use glam::{DMat3, DMat4, DVec3, Vec3};
 use std::f64::consts::PI;
 use volcast::scene::camera::Camera;

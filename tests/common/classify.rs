@@ -1,6 +1,6 @@
 //! The reference's own classification (rule 4), written from the definitions in f64: no code shared with
 //! `function::bake` or `Colormap::srgb`, only the documented control points in `volcast::transfer::colormap::tables` (checked
-//! against their published values in tests/reference_selftest.rs) and the user's settings.
+//! against their published values in tests/reference/classify.rs) and the user's settings.
 //!
 //! A sample of normalised value v inside the window [lo, hi] has window position c = (v − lo)/(hi − lo).
 //! - The simple (Qt) model: colour = colormap(c), opacity = step_alpha, or c·step_alpha when multiplied.
@@ -10,8 +10,6 @@
 //!   beyond the first and last.
 //! - Outside the window: no colour, no opacity.
 //! - Colours are sRGB; the renderer composites their linear-light values (IEC 61966-2-1 decoding).
-
-#![allow(dead_code)]
 
 use glam::DVec3;
 use volcast::scene::settings::RenderSettings;

@@ -5,8 +5,6 @@
 //! against the reference are taken over the *object pixels* (see [`object_mask`]): background pixels agree
 //! trivially, and counting them would dilute a real error by however much of the image is empty.
 
-#![allow(dead_code)]
-
 use super::reference::{background_pixel, Rendered};
 use image::{Rgba, RgbaImage};
 use std::fmt;

@@ -2,8 +2,6 @@
 //! comparison recorded with the bounds it is held to, a summary per family printed for measuring the bounds, and
 //! at the end one assertion over all comparisons and one that the validation layer said nothing.
 
-#![allow(dead_code)]
-
 use super::cases::Case;
 use super::compare::{against_reference, write_failure_images, Bounds, ImageDiff};
 use super::reference::{Reference, Rendered};

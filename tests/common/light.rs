@@ -1,8 +1,6 @@
 //! Rule 9's light grid for the reference, written from the rule (`RenderSettings` docs) in f64: the shadow sweep
 //! away from the light and the 14-ray ambient occlusion, over a grid of cells that sample the volume by rule 3.
 
-#![allow(dead_code)]
-
 use super::classify::Classifier;
 use super::placement::Placement;
 use super::reference::Reference;

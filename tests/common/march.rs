@@ -2,8 +2,6 @@
 //! compositing mode (emission/density with pre-integrated segments and brick strides, MIP/MinIP/average, the
 //! isosurface with its bisection), in f64. `Reference` (reference.rs) holds the volume it samples.
 
-#![allow(dead_code)]
-
 use super::classify::{encode, jitter_offset, linear, Classifier};
 use super::rays::{ray_segment, CameraBasis};
 use super::reference::{shade, Lamp, PixelTrace, Placement, Reference, Segment};
@@ -36,7 +34,6 @@ pub(crate) struct Frame<'a> {
     lamp: Lamp,
     /// Rule 9's light grid, where it applies.
     light_grid: Option<super::light::LightGridRef>,
-    density: f64,
     /// Rule 5's lighting where it applies: `shading` in emission/density modes, `shading` or its defaults in
     /// isosurface mode.
     shading: Option<Shading>,
@@ -112,7 +109,6 @@ impl<'a> Frame<'a> {
             lamp: Lamp::new(&s.light, super::light::light_direction(s)),
             // Made below, from the frame's own classifier and placement.
             light_grid: None,
-            density: f64::from(s.density),
             shading,
             gradient_opacity: s.gradient_opacity.map(f64::from),
             grid_gradients: s.gradient_texture,

@@ -1,7 +1,9 @@
-//! Helpers shared by the integration tests: the CPU reference renderer, image comparison, shared test data and
-//! the reporting of skipped tests.
-
-#![allow(dead_code)]
+//! What volcast's integration tests share: the independent CPU reference renderer and the rules' cases, image
+//! comparison and the GPU-against-reference judge, running the binary, scratch folders, the X session of the
+//! viewer tests, shared test data and the reporting of skipped tests.
+//!
+//! Each test binary (tests/KIND/main.rs) declares it `pub`: a binary uses only part of it, and rustc counts a
+//! crate's public items as used (as it does a library's), so the rest is not dead code there.
 
 pub mod bounds;
 pub mod cases;
@@ -13,10 +15,15 @@ pub mod march;
 pub mod placement;
 pub mod rays;
 pub mod reference;
+pub mod run;
+pub mod scratch;
 pub mod segments;
 pub mod strides;
 pub mod x11;
 pub mod xdnd;
+
+pub use run::{stderr, stdout, volcast, volcast_command, volcast_ok, volcast_validated};
+pub use scratch::{scratch, Scratch};
 
 use std::io::Write;
 use std::path::PathBuf;

@@ -68,9 +68,4 @@ impl Placement {
     pub fn normal(&self, g: DVec3) -> DVec3 {
         self.index_to_world.inverse().transpose() * g
     }
-
-    /// Whether the placement mirrors (a left-handed affine).
-    pub fn mirrors(&self) -> bool {
-        self.index_to_world.determinant() < 0.0
-    }
 }

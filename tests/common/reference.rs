@@ -8,7 +8,7 @@
 //!   These are what a file or a user gives; a bug in producing them is a loader bug, tested by the loaders' own
 //!   tests against files written by other tools and read back by second libraries.
 //! - **Documented constants**: the colormaps' control points (`volcast::transfer::colormap::tables`: Moreland's table,
-//!   matplotlib's viridis and plasma), checked against their published values in tests/reference_selftest.rs.
+//!   matplotlib's viridis and plasma), checked against their published values in tests/reference/classify.rs.
 //!
 //! Everything else is computed here and in the modules beside it (march.rs: one pixel's march; placement.rs): the
 //! normalisation of values, the placement of the box in the world (the affine or the voxel axes, centred, longest
@@ -20,8 +20,6 @@
 //! Pre-integration's segment integrals are the reference's own (segments.rs: the exact classification integrated
 //! numerically), and so are rule 2's brick strides (strides.rs: brick value ranges and the stride rule). Where the GPU works in f32 or through a 4096-entry table, the two differ by rounding; the tests'
 //! bounds (tests/common/bounds.rs) say by how much.
-
-#![allow(dead_code)]
 
 use super::classify::{encode, linear, Classifier};
 use super::march::Frame;

@@ -6,6 +6,7 @@ use std::io::BufRead;
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::sync::{Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 use volcast::scene::settings::RenderSettings;
 use volcast::scene::view_state::ViewState;
@@ -19,7 +20,15 @@ pub const WAIT_MS: u64 = 20_000;
 pub struct Xvfb {
     child: Child,
     pub display: String,
+    /// Held while the X server runs: see [`X_TESTS`]. A field, so it is let go after `drop` has stopped Xvfb.
+    _turn: MutexGuard<'static, ()>,
 }
+
+/// One X test at a time in a test binary. libtest runs a binary's tests on several threads, but these type
+/// through XTEST, click and time their input against a viewer's scripted `wait:`; run side by side on a small
+/// machine they starve each other's viewers (and before they shared a binary, cargo ran them one after another).
+/// A test that fails while holding it only poisons it: the next takes it all the same, see [`xvfb`].
+static X_TESTS: Mutex<()> = Mutex::new(());
 
 impl Drop for Xvfb {
     fn drop(&mut self) {
@@ -35,8 +44,11 @@ impl Drop for Xvfb {
     }
 }
 
-/// A fresh Xvfb, or None after a skip where it cannot start.
+/// A fresh Xvfb, or None after a skip where it cannot start. Waits until no other X test of this binary runs
+/// ([`X_TESTS`]), and keeps the others waiting until the returned server is dropped at the end of the test.
 pub fn xvfb() -> Option<Xvfb> {
+    // A poisoned lock says only that an earlier X test failed; its server was stopped as it unwound.
+    let turn = X_TESTS.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     // -displayfd: Xvfb picks a free display itself and writes its number once it accepts connections (a fixed
     // number can collide with another server or a stale lock, and a socket file can exist before it is ready).
     let mut child = match Command::new("Xvfb")
@@ -68,6 +80,7 @@ pub fn xvfb() -> Option<Xvfb> {
     Some(Xvfb {
         child,
         display: format!(":{number}"),
+        _turn: turn,
     })
 }
 
@@ -79,10 +92,7 @@ pub fn x_session(name: &str) -> Option<(Xvfb, std::path::PathBuf)> {
         return None;
     }
     let x = xvfb()?;
-    let dir = std::env::temp_dir().join(format!("volcast-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    Some((x, dir))
+    Some((x, super::scratch(name).to_path_buf()))
 }
 
 /// Whether `program` can be started at all (its exit status does not matter).
@@ -178,7 +188,7 @@ impl Viewer {
     pub fn start(display: &str, dir: &Path, volume: &[&str], script: &str) -> Viewer {
         let runtime = dir.join("xdg");
         std::fs::create_dir_all(&runtime).expect("XDG_RUNTIME_DIR");
-        let mut child = Command::new(env!("CARGO_BIN_EXE_volcast"))
+        let mut child = super::volcast_command()
             .arg("view")
             .args(volume)
             .args(["--validate", "--size", "900x600", "--script", script])
@@ -386,14 +396,8 @@ pub fn worst_channel_diff(a: &RgbaImage, b: &RgbaImage) -> u8 {
 /// `volcast render --validate --state JSON` into `dir`: the image a view state renders headless.
 pub fn render_state(dir: &Path, json: &Path) -> RgbaImage {
     let out = dir.join("render-state.png");
-    let o = Command::new(env!("CARGO_BIN_EXE_volcast"))
-        .args(["render", "--validate", "--state"])
-        .arg(json)
-        .arg("-o")
-        .arg(&out)
-        .output()
-        .expect("run volcast render --state");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let path = |p: &Path| p.to_str().expect("a UTF-8 path").to_string();
+    super::volcast_ok(&["render", "--validate", "--state", &path(json), "-o", &path(&out)]);
     image::open(&out)
         .unwrap_or_else(|e| panic!("{}: {e}", out.display()))
         .to_rgba8()

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Oracle DICOM files for volcast's compressed and multi-frame pixel data (tests/formats_dicom.rs).
+"""Oracle DICOM files for volcast's compressed and multi-frame pixel data (tests/formats/dicom.rs).
 
 Run from the repository root (rewrites tests/data/dicom/ except this script and README-listed notes):
 

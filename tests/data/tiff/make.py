@@ -1,4 +1,4 @@
-"""Writes the TIFF oracle files for tests/formats_tiff.rs with tifffile, then reads every one back with tifffile
+"""Writes the TIFF oracle files for tests/formats/tiff.rs with tifffile, then reads every one back with tifffile
 and records what volcast must find in expected.json: dims (x, y, z), dtype, spacing in millimetres, the sum of
 the voxels and a few voxels by (x, y, z).
 

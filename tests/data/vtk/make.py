@@ -211,7 +211,7 @@ def main():
     w.SetFileName(os.path.join(HERE, "unsupported.vtu"))
     w.Write()
 
-    # An xz stream (as vtkLZMADataCompressor writes blocks) of 4 MiB of zeros in ~700 bytes: tests/formats_vtk.rs
+    # An xz stream (as vtkLZMADataCompressor writes blocks) of 4 MiB of zeros in ~700 bytes: tests/formats/vtk.rs
     # wraps it in a .vti whose block header claims far less, and expects a refusal, not 4 MiB of output.
     with open(os.path.join(HERE, "bomb.xz"), "wb") as f:
         f.write(lzma.compress(bytes(4 << 20), format=lzma.FORMAT_XZ, check=lzma.CHECK_CRC32))

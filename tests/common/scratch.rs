@@ -1,0 +1,51 @@
+//! Folders under `target/tmp` (cargo's `CARGO_TARGET_TMPDIR`) for the files tests write: volumes to read, images
+//! to compare.
+
+use std::collections::BTreeSet;
+use std::ops::Deref;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// A test's folder: `target/tmp/NAME`.
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    /// Writes `bytes` to `NAME` in the folder (subfolders in `NAME` made as needed) and returns its path.
+    pub fn write(&self, name: &str, bytes: &[u8]) -> PathBuf {
+        let path = self.0.join(name);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).unwrap_or_else(|e| panic!("{}: {e}", parent.display()));
+        }
+        std::fs::write(&path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        path
+    }
+}
+
+impl Deref for Scratch {
+    type Target = Path;
+
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+/// The folder `target/tmp/NAME`, emptied the first time this test binary asks for `name` and shared by every
+/// later ask: a test that wants the folder to itself gives its own name. It is kept after the run, so a person
+/// can look at what the tests wrote.
+pub fn scratch(name: &str) -> Scratch {
+    static HANDED_OUT: Mutex<BTreeSet<String>> = Mutex::new(BTreeSet::new());
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    // A test that failed while holding the lock left the set as it was: still right.
+    let mut handed_out = HANDED_OUT.lock().unwrap_or_else(|e| e.into_inner());
+    if handed_out.insert(name.to_string()) {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+    Scratch(dir)
+}

@@ -1,0 +1,14 @@
+//! Volume files: every reader against files written (and read back) by the libraries of each format, hostile
+//! files refused with a clear message, time series, and volumes placed where the patient has them.
+
+// Public: this binary's tests use only part of what the tests share, and rustc counts a crate's public items as
+// used, so the rest is not dead code here (tests/common/mod.rs).
+#[path = "../common/mod.rs"]
+pub mod common;
+
+mod dicom;
+mod open;
+mod tiff;
+mod time;
+mod vtk;
+mod world;

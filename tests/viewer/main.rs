@@ -1,0 +1,18 @@
+//! The desktop viewer in a real window, each test under its own Xvfb and driven by real X input (xdotool through
+//! XTEST), read back with `xwd`. The X tests share this binary but run one at a time: the X session helper
+//! (`common::x11::xvfb`) hands out one turn at a time, held until the test's Xvfb is dropped.
+
+// Public: this binary's tests use only part of what the tests share, and rustc counts a crate's public items as
+// used, so the rest is not dead code here (tests/common/mod.rs).
+#[path = "../common/mod.rs"]
+pub mod common;
+
+mod clip;
+mod formats;
+mod keys;
+mod lighting;
+mod slices;
+mod tf;
+mod time;
+mod turns;
+mod window;
