@@ -316,6 +316,17 @@ impl Drop for Viewer {
             let _ = self.child.kill();
             let _ = self.child.wait();
         }
+        // A failing test shows what the viewer said (its widget rectangles left out), so a failure in CI can be
+        // read without running it again.
+        if std::thread::panicking() {
+            self.drain();
+            let said: Vec<&str> = self.stderr.lines().filter(|l| !l.starts_with("ui rect ")).collect();
+            let from = said.len().saturating_sub(120);
+            eprintln!("--- the viewer's stderr (last {} lines) ---", said.len() - from);
+            for line in &said[from..] {
+                eprintln!("{line}");
+            }
+        }
     }
 }
 

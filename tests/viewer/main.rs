@@ -9,6 +9,7 @@ pub mod common;
 
 mod clip;
 mod formats;
+mod idle;
 mod keys;
 mod lighting;
 mod slices;

@@ -1,0 +1,61 @@
+//! An untouched viewer costs nothing: once its first frames are drawn, and again after a key changed the view, it
+//! sleeps until input comes (it used to draw full frame after full frame with nothing changed: a core busy).
+//! Measured as the process's CPU time (/proc/PID/stat) over seconds of idleness.
+
+use crate::common::x11::{type_keys, x_session, Viewer, WAIT_MS};
+use std::time::Duration;
+
+/// CPU seconds (user + system) the process has used so far.
+fn cpu_seconds(pid: &str) -> f64 {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).expect("the viewer's /proc stat");
+    // Fields after the command name (which may hold spaces) in parentheses: utime and stime are the 12th and 13th.
+    let after = &stat[stat.rfind(')').expect("a stat line") + 2..];
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    let ticks: f64 = fields[11].parse::<f64>().unwrap() + fields[12].parse::<f64>().unwrap();
+    let out = std::process::Command::new("getconf")
+        .arg("CLK_TCK")
+        .output()
+        .expect("getconf");
+    let per_second: f64 = String::from_utf8_lossy(&out.stdout).trim().parse().expect("CLK_TCK");
+    ticks / per_second
+}
+
+/// CPU seconds the viewer uses over `quiet` of doing nothing.
+fn cpu_over(viewer: &Viewer, quiet: Duration) -> f64 {
+    let before = cpu_seconds(&viewer.pid());
+    std::thread::sleep(quiet);
+    cpu_seconds(&viewer.pid()) - before
+}
+
+#[test]
+fn an_untouched_viewer_uses_no_cpu() {
+    let Some((x, dir)) = x_session("viewer-idle") else {
+        return;
+    };
+    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "helix"], &script);
+    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    let window = viewer.window(&x.display);
+    // The last frames (a full-detail one after the first) finish; then nothing should run. A frame here costs
+    // about 0.2-1 s of CPU, so 0.1 s over 3 s allows stray wake-ups but not a single frame.
+    std::thread::sleep(Duration::from_millis(1500));
+    let idle = cpu_over(&viewer, Duration::from_secs(3));
+    assert!(idle < 0.1, "untouched, the viewer used {idle:.2} CPU-seconds in 3 s");
+
+    // A key that changes the view (the panel hidden and shown) draws frames, then the viewer is idle again.
+    type_keys(&x.display, &window, &["Tab", "Tab"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let busy = cpu_over(&viewer, Duration::from_millis(700));
+    std::thread::sleep(Duration::from_millis(1500));
+    let idle_again = cpu_over(&viewer, Duration::from_secs(3));
+    assert!(
+        busy > idle_again,
+        "the key drew frames ({busy:.2} s) where idleness costs {idle_again:.2} s"
+    );
+    assert!(
+        idle_again < 0.1,
+        "after the key, the viewer used {idle_again:.2} CPU-seconds in 3 s"
+    );
+
+    viewer.finish_clean();
+}
