@@ -3,7 +3,7 @@
 
 mod cli;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use cli::args::{BenchArgs, CompareArgs, GpuArgs, InfoArgs, RenderArgs, ViewArgs, VolumeArgs};
 use cli::commands::{bench, compare, devices, info, view};
 use cli::render::render;
@@ -59,15 +59,35 @@ fn error_text(e: &anyhow::Error) -> String {
     text
 }
 
+/// The options subcommand `name`'s command line gave.
+fn given(matches: &clap::ArgMatches, name: &str, volume: &VolumeArgs) -> cli::frame::Given {
+    let mut given = matches
+        .subcommand_matches(name)
+        .map(cli::frame::Given::from_matches)
+        .unwrap_or_default();
+    given.from_file = volume.builtin.is_none();
+    given
+}
+
 fn main() -> ExitCode {
     // Usage errors exit 64 (sysexits' EX_USAGE), not clap's 2: 2 says "no usable Vulkan".
-    let cli = match Cli::try_parse() {
-        Ok(cli) => cli,
+    let parsed = Cli::command()
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m).map(|cli| (cli, m)));
+    let (mut cli, matches) = match parsed {
+        Ok(parsed) => parsed,
         Err(e) => {
             let _ = e.print();
             return ExitCode::from(if e.use_stderr() { USAGE_EXIT } else { 0 });
         }
     };
+    // Which frame options the command line gave: `render --state` applies those over the saved view, and a file
+    // given none of the classification options is shown with the automatic transfer function.
+    match &mut cli.command {
+        Some(Command::Render(a)) => a.frame.given = given(&matches, "render", &a.volume),
+        Some(Command::Compare(a)) => a.frame.given = given(&matches, "compare", &a.volume),
+        _ => {}
+    }
     let result = match &cli.command {
         None => view(&ViewArgs {
             volume: VolumeArgs {
@@ -116,7 +136,8 @@ fn main() -> ExitCode {
                 });
             let usage = e
                 .downcast_ref::<volcast::movie::MovieError>()
-                .is_some_and(|m| matches!(m, volcast::movie::MovieError::Usage(_)));
+                .is_some_and(|m| matches!(m, volcast::movie::MovieError::Usage(_)))
+                || e.downcast_ref::<cli::UsageError>().is_some();
             ExitCode::from(if unavailable {
                 2
             } else if usage {

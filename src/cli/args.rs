@@ -2,7 +2,9 @@
 //! and which GPU to run on.
 
 use super::frame::FrameArgs;
-use super::parse::{parse_fps, parse_gradients, parse_quality, parse_size, parse_turntable};
+use super::parse::{
+    parse_builtin, parse_fps, parse_gradients, parse_preset, parse_quality, parse_size, parse_turntable,
+};
 use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -17,7 +19,7 @@ pub(crate) struct VolumeArgs {
     /// dims and type from --dims/--type or a NAME_WxHxD_TYPE name.
     pub(crate) file: Option<PathBuf>,
     /// A built-in volume: helix, box, colormap or marschner-lobb.
-    #[arg(long, conflicts_with = "file")]
+    #[arg(long, conflicts_with = "file", value_parser = parse_builtin)]
     pub(crate) builtin: Option<String>,
     /// Edge length of the built-in volume (default 256; 41 for marschner-lobb).
     #[arg(long, requires = "builtin")]
@@ -249,7 +251,7 @@ pub(crate) struct ViewArgs {
     pub(crate) state: Option<PathBuf>,
     /// Open with this transfer-function preset (ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example) and
     /// lock it, instead of the one chosen by modality (auto, the default).
-    #[arg(long, conflicts_with = "tf")]
+    #[arg(long, conflicts_with = "tf", value_parser = parse_preset)]
     pub(crate) preset: Option<String>,
     /// Open with the transfer function in this JSON file (docs/rendering.md, The JSON format), locked.
     #[arg(long, value_name = "FILE.json")]

@@ -1,21 +1,21 @@
 //! `FrameArgs`: the options that say what a frame shows (camera, transfer function, compositing, lighting,
-//! sampling, slicing), and how they become `RenderSettings`. Shared by `render` and `compare`.
+//! sampling, slicing), and which of them a command line gave. Shared by `render` and `compare`; how they become
+//! `RenderSettings` is in `settings.rs`.
 
 use super::parse::{
-    parse_clip_plane, parse_gradients, parse_iso_color, parse_light, parse_pair, parse_quality, parse_shading,
-    parse_size, parse_slice, parse_surface, parse_vec3, IsoColor, LightDirection,
+    parse_clip_plane, parse_colormap, parse_gradients, parse_iso_color, parse_light, parse_mode, parse_pair,
+    parse_preset, parse_quality, parse_shading, parse_size, parse_slice, parse_surface, parse_vec3, parse_view,
+    IsoColor, LightDirection,
 };
-use anyhow::{bail, Context, Result};
-use clap::Args;
+use clap::parser::ValueSource;
+use clap::{ArgMatches, Args};
 use glam::Vec3;
+use std::collections::BTreeSet;
 use std::path::PathBuf;
-use volcast::scene::camera::{Camera, ViewPreset};
+use volcast::scene::camera::ViewPreset;
 use volcast::scene::quality::{Gradients, Quality};
 use volcast::scene::settings::CompositeMode;
-use volcast::scene::settings::{PositionFormat, RenderSettings};
-use volcast::transfer::function::TransferFunction;
 use volcast::transfer::Colormap;
-use volcast::volume::Volume;
 
 /// What a frame shows: camera, transfer function, slicing. Shared by `render` and `compare`.
 #[derive(Args, Clone)]
@@ -45,8 +45,8 @@ pub(crate) struct FrameArgs {
     pub(crate) view_dir: Option<Vec3>,
     /// View from a side of the patient: anterior, posterior, left, right, superior or inferior (head up; from
     /// above and below anterior up). An anatomical volume is seen from anterior unless told otherwise.
-    #[arg(long)]
-    pub(crate) view: Option<String>,
+    #[arg(long, value_parser = parse_view)]
+    pub(crate) view: Option<ViewPreset>,
     /// Render in voxel index space (the box along the world's axes, the file's orientation ignored).
     #[arg(long)]
     pub(crate) voxel_axes: bool,
@@ -54,15 +54,17 @@ pub(crate) struct FrameArgs {
     #[arg(long, default_value_t = volcast::scene::camera::DEFAULT_FOV_Y_DEG)]
     pub(crate) fov: f32,
     /// Colormap: cool-warm, plasma, viridis, rainbow, gnuplot, grayscale.
-    #[arg(long, default_value = "cool-warm")]
-    pub(crate) colormap: String,
+    #[arg(long, default_value = "cool-warm", value_parser = parse_colormap)]
+    pub(crate) colormap: Colormap,
     /// Visible value range TMIN,TMAX in [0,1] of the data's range; values outside are transparent
     /// (default 0.1,1; with a transfer function 0,1).
     #[arg(long, value_parser = parse_pair)]
     pub(crate) window: Option<(f32, f32)>,
     /// A transfer-function preset: ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example, or auto (by
-    /// modality: CT gets ct-bone, anything else a grey ramp over its histogram's percentiles).
-    #[arg(long, conflicts_with = "tf")]
+    /// modality: CT gets ct-bone, anything else a grey ramp over its histogram's percentiles). A file is shown with
+    /// auto unless --preset, --tf, --colormap, --step-alpha or --multiplied-alpha says otherwise; a built-in volume
+    /// with the colormap.
+    #[arg(long, conflicts_with = "tf", value_parser = parse_preset)]
     pub(crate) preset: Option<String>,
     /// A transfer function from a JSON file (docs/rendering.md, The JSON format).
     #[arg(long)]
@@ -71,8 +73,8 @@ pub(crate) struct FrameArgs {
     #[arg(long)]
     pub(crate) save_tf: Option<PathBuf>,
     /// Compositing: emission, mip, minip, average, iso, density.
-    #[arg(long, default_value = "emission")]
-    pub(crate) mode: String,
+    #[arg(long, default_value = "emission", value_parser = parse_mode)]
+    pub(crate) mode: CompositeMode,
     /// Iso value for --mode iso, in [0,1] of the data range.
     #[arg(long, default_value_t = 0.5)]
     pub(crate) iso: f32,
@@ -172,132 +174,44 @@ pub(crate) struct FrameArgs {
     /// Entry/exit position target format: rgba32f or rgba16f.
     #[arg(long, default_value = "rgba32f", value_parser = ["rgba32f", "rgba16f"])]
     pub(crate) positions: String,
+    /// Which of these options the command line gave (the rest are defaults): see [`Given`].
+    #[arg(skip)]
+    pub(crate) given: Given,
 }
 
-impl FrameArgs {
-    pub(crate) fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
-        let extent = volume.extent();
-        let mut s = RenderSettings::new(self.size.0, self.size.1, extent);
-        s.voxel_axes = self.voxel_axes;
-        let distance = self
-            .distance
-            .unwrap_or_else(|| Camera::fit_distance(extent.length() * 0.5, self.fov));
-        let anatomical = volume.geometry.anatomical && !self.voxel_axes;
-        let view = match &self.view {
-            Some(name) => Some(ViewPreset::parse(name).with_context(|| {
-                let names: Vec<&str> = ViewPreset::ALL.iter().map(|v| v.name()).collect();
-                format!("unknown view '{name}'; choose one of {}", names.join(", "))
-            })?),
-            None if anatomical && self.azimuth.is_none() && self.elevation.is_none() => Some(ViewPreset::Anterior),
-            None => None,
-        };
-        let target = self.look_at.unwrap_or(Vec3::ZERO);
-        s.camera = match (self.eye, self.view_dir, view) {
-            (Some(eye), _, _) => Camera::looking_at(eye, target),
-            (None, Some(dir), _) => {
-                if !(dir.is_finite() && dir.length() > 1e-6) {
-                    bail!("--view-dir {dir} must be a non-zero direction");
-                }
-                Camera::looking_at(target - dir.normalize() * distance, target)
-            }
-            (None, None, Some(view)) => view.camera(distance, target),
-            (None, None, None) => Camera::orbit(
-                self.azimuth.unwrap_or(if anatomical { 0.0 } else { 35.0 }),
-                self.elevation.unwrap_or(if anatomical { 0.0 } else { 25.0 }),
-                distance,
-                target,
-            ),
-        };
-        s.camera.fov_y_deg = self.fov;
-        s.colormap = Colormap::parse(&self.colormap).with_context(|| {
-            let names: Vec<&str> = Colormap::ALL.iter().map(|c| c.name()).collect();
-            format!(
-                "unknown colormap '{}'; choose one of {}",
-                self.colormap,
-                names.join(", ")
-            )
-        })?;
-        let tf = match (&self.preset, &self.tf) {
-            (Some(name), _) if name == "auto" => Some(volcast::transfer::auto::auto_for_volume(volume)),
-            (Some(name), _) => Some(TransferFunction::preset(name)?),
-            (None, Some(path)) => Some(TransferFunction::load(path)?),
-            (None, None) => None,
-        };
-        if let (Some(path), Some(tf)) = (&self.save_tf, &tf) {
-            std::fs::write(path, tf.to_json()).with_context(|| format!("writing {}", path.display()))?;
+/// The options a command line gave, by clap id (the field's name), and whether the volume is a file. `render
+/// --state` applies only these over the saved view; a file without a classification option gets the automatic
+/// transfer function.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Given {
+    ids: BTreeSet<String>,
+    pub(crate) from_file: bool,
+}
+
+impl Given {
+    /// The options given on the command line of `matches` (not defaults, not the environment).
+    pub(crate) fn from_matches(matches: &ArgMatches) -> Given {
+        let ids = matches
+            .ids()
+            .filter(|id| matches.value_source(id.as_str()) == Some(ValueSource::CommandLine))
+            .map(|id| id.as_str().to_string())
+            .collect();
+        Given { ids, from_file: false }
+    }
+
+    pub(crate) fn has(&self, id: &str) -> bool {
+        self.ids.contains(id)
+    }
+
+    pub(crate) fn any(&self, ids: &[&str]) -> bool {
+        ids.iter().any(|id| self.has(id))
+    }
+
+    #[cfg(test)]
+    pub(crate) fn for_test(ids: &[&str], from_file: bool) -> Given {
+        Given {
+            ids: ids.iter().map(|s| s.to_string()).collect(),
+            from_file,
         }
-        s.window = match (self.window, &tf) {
-            (Some(w), _) => [w.0, w.1],
-            (None, Some(_)) => [0.0, 1.0],
-            (None, None) => volcast::scene::settings::DEFAULT_WINDOW,
-        };
-        s.transfer_function = tf;
-        s.mode = CompositeMode::parse(&self.mode).with_context(|| {
-            let names: Vec<&str> = CompositeMode::ALL.iter().map(|m| m.name()).collect();
-            format!("unknown mode '{}'; choose one of {}", self.mode, names.join(", "))
-        })?;
-        s.iso_value = self.iso;
-        match self.iso_color {
-            Some(IsoColor::Colormap) => s.iso_color = None,
-            Some(IsoColor::Rgb(c)) => s.iso_color = Some(c),
-            None => {}
-        }
-        s.iso_opacity = self.iso_opacity;
-        s.extra_isosurfaces = self.surfaces.clone();
-        s.density = self.density;
-        let lit = self.light.is_some()
-            || self.light_color.is_some()
-            || self.light_intensity.is_some()
-            || self.shadows
-            || self.ambient_occlusion;
-        s.shadows = self.shadows;
-        s.ambient_occlusion = self.ambient_occlusion;
-        if (s.shadows || s.ambient_occlusion) && s.mode.is_projection() {
-            eprintln!(
-                "note: {} is not lit: shadows and ambient occlusion do not apply",
-                s.mode.name()
-            );
-        }
-        s.shading = (self.shading || lit).then_some(self.lighting);
-        s.light = volcast::scene::lighting::Light {
-            direction: self.light.and_then(|l| l.0),
-            color: self.light_color.unwrap_or(Vec3::ONE),
-            intensity: self.light_intensity.unwrap_or(1.0),
-        };
-        s.gradient_opacity = self.gradient_opacity;
-        s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
-        s.camera.ortho = self.ortho;
-        s.skip_empty = !self.no_skip;
-        s.step_alpha = self.step_alpha;
-        s.multiplied_alpha = self.multiplied_alpha;
-        s.early_termination = self.early_termination;
-        s.background = self.background;
-        for &(axis, pos, width) in &self.slices {
-            s.set_slab(axis, pos, width);
-        }
-        s.clip_plane = self.clip_plane;
-        s.position_format = if self.positions == "rgba16f" {
-            PositionFormat::Rgba16f
-        } else {
-            PositionFormat::Rgba32f
-        };
-        // The quality's step depends on the classification, so it is resolved last, from valid settings.
-        s.validate().map_err(anyhow::Error::msg)?;
-        self.quality.apply(&mut s, volume.range);
-        if let Some(step) = self.step_length {
-            s.step_length = step;
-            s.max_stride = 1;
-        }
-        if let Some(stride) = self.max_stride {
-            s.max_stride = stride;
-        }
-        let gradients = if self.gradient_texture {
-            Gradients::Texture
-        } else {
-            self.gradients
-        };
-        gradients.apply(&mut s, volume.voxel_count() as u64);
-        s.validate().map_err(anyhow::Error::msg)?;
-        Ok(s)
     }
 }

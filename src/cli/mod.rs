@@ -5,8 +5,15 @@ pub(crate) mod commands;
 pub(crate) mod frame;
 pub(crate) mod parse;
 pub(crate) mod render;
+pub(crate) mod settings;
 
 use anyhow::{bail, Result};
+
+/// A command line whose values do not make a valid frame on their own (an empty window, a light of no direction):
+/// it exits 64 like a value that does not parse, and says what is wrong.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub(crate) struct UsageError(pub(crate) String);
 use args::GpuArgs;
 use volcast::gpu::Gpu;
 

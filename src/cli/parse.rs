@@ -136,3 +136,49 @@ pub(crate) fn parse_gradients(s: &str) -> Result<Gradients, String> {
 pub(crate) fn parse_quality(s: &str) -> Result<Quality, String> {
     parse_named(s, Quality::parse, &Quality::ALL, Quality::name, "quality")
 }
+
+/// `--colormap`: a colormap's name.
+pub(crate) fn parse_colormap(s: &str) -> Result<volcast::transfer::Colormap, String> {
+    use volcast::transfer::Colormap;
+    parse_named(s, Colormap::parse, &Colormap::ALL, Colormap::name, "colormap")
+}
+
+/// `--mode`: a compositing mode's name.
+pub(crate) fn parse_mode(s: &str) -> Result<volcast::scene::settings::CompositeMode, String> {
+    use volcast::scene::settings::CompositeMode;
+    parse_named(
+        s,
+        CompositeMode::parse,
+        &CompositeMode::ALL,
+        CompositeMode::name,
+        "mode",
+    )
+}
+
+/// `--view`: a side of the patient.
+pub(crate) fn parse_view(s: &str) -> Result<volcast::scene::camera::ViewPreset, String> {
+    use volcast::scene::camera::ViewPreset;
+    parse_named(s, ViewPreset::parse, &ViewPreset::ALL, ViewPreset::name, "view")
+}
+
+/// `--preset`: a preset's name or "auto" (kept as text: `auto` needs the volume to become a function).
+pub(crate) fn parse_preset(s: &str) -> Result<String, String> {
+    let name = s.trim();
+    if name == "auto" || volcast::transfer::function::PRESET_NAMES.contains(&name) {
+        Ok(name.to_string())
+    } else {
+        Err(format!(
+            "unknown preset '{name}'; choose one of {}, auto",
+            volcast::transfer::function::PRESET_NAMES.join(", ")
+        ))
+    }
+}
+
+/// `--builtin`: a built-in volume's name.
+pub(crate) fn parse_builtin(s: &str) -> Result<String, String> {
+    let names = volcast::volume::BUILTIN_NAMES;
+    names
+        .contains(&s.trim())
+        .then(|| s.trim().to_string())
+        .ok_or_else(|| format!("unknown built-in volume '{s}'; choose one of {}", names.join(", ")))
+}

@@ -30,20 +30,24 @@ fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
         Some(st) => args.volume.or_from(&st.volume).load()?,
         None => args.volume.load()?,
     };
-    let s = match state {
-        // The saved view as it was (its method included).
-        Some(st) => st.settings,
-        None => {
-            let mut s = args.frame.settings(&volume)?;
-            s.ray_setup = if args.method == "faces" {
-                RaySetup::Faces
-            } else {
-                RaySetup::Analytic
-            };
-            s.compute = args.method == "compute";
+    let mut s = match state {
+        // The saved view (its method included), with the options given here over it.
+        Some(st) => {
+            let mut s = st.settings;
+            let quality = st.viewer.and_then(|v| v.quality);
+            args.frame.override_view(&mut s, &volume, quality)?;
             s
         }
+        None => args.frame.settings(&volume)?,
     };
+    if args.state.is_none() || args.frame.given.has("method") {
+        s.ray_setup = if args.method == "faces" {
+            RaySetup::Faces
+        } else {
+            RaySetup::Analytic
+        };
+        s.compute = args.method == "compute";
+    }
     Ok((volume, s))
 }
 
@@ -166,6 +170,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 "load {load_ms:.0} ms; device {device_ms:.0} ms; upload {upload_ms:.0} ms; first frame {first_ms:.0} \
                  ms (includes shader compilation on lavapipe)"
             );
+            println!("classification: {}", classification_text(&s));
             if !timing_line.is_empty() {
                 println!("{timing_line}");
             }
@@ -194,4 +199,22 @@ fn with_colorbar(image: &image::RgbaImage, s: &RenderSettings, volume: &Volume) 
         background: [to_u8(s.background.x), to_u8(s.background.y), to_u8(s.background.z)],
     };
     volcast::transfer::colorbar::append_colorbar(image, &spec)
+}
+
+/// What `s` classifies with, in words: the transfer function's name, or the colormap model's parts.
+fn classification_text(s: &RenderSettings) -> String {
+    match &s.transfer_function {
+        Some(tf) => format!(
+            "transfer function '{}' (window {:.2}-{:.2}; --preset, --tf or --colormap choose another)",
+            tf.name, s.window[0], s.window[1]
+        ),
+        None => format!(
+            "colormap {}, window {:.2}-{:.2}, step alpha {}{}",
+            s.colormap.name(),
+            s.window[0],
+            s.window[1],
+            s.step_alpha,
+            if s.multiplied_alpha { " x value" } else { "" }
+        ),
+    }
 }

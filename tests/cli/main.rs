@@ -13,4 +13,5 @@ mod colorbar;
 mod movie;
 mod options;
 mod render_and_errors;
+mod state;
 mod tools;

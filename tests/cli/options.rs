@@ -466,7 +466,19 @@ fn volume_options_take_effect() {
     for (i, (args, volume)) in cases.iter().enumerate() {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let (actual, stdout) = render(&args, &[], &format!("volume-{i}"));
-        let s = defaults(volume.extent());
+        let mut s = defaults(volume.extent());
+        if args[0] != "--builtin" {
+            // A file given no classification option is shown with the automatic transfer function (as the viewer
+            // shows it), at the normal quality's step for that function.
+            s.transfer_function = Some(volcast::transfer::auto::auto_for_volume(volume));
+            s.window = [0.0, 1.0];
+            volcast::scene::quality::Quality::Normal.apply(&mut s, volume.range);
+            if !stdout.contains("transfer function 'auto: ") {
+                failures.push(format!(
+                    "{args:?}: render does not say it took the automatic function: {stdout}"
+                ));
+            }
+        }
         let expected = Reference::new(volume).render_full(&s);
         let d = against_reference(&actual, &expected, s.background);
         eprintln!("{args:?}: {d}");

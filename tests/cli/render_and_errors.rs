@@ -27,10 +27,19 @@ fn tiny_render<'a>(extra: &[&'a str]) -> Vec<&'a str> {
 }
 
 fn assert_fails_with(args: &[&str], needle: &str) {
+    assert_exits_with(args, 1, needle);
+}
+
+/// A command line that is wrong on its own exits 64, like one that does not parse (docs/cli.md, Exit codes).
+fn assert_usage_error(args: &[&str], needle: &str) {
+    assert_exits_with(args, 64, needle);
+}
+
+fn assert_exits_with(args: &[&str], code: i32, needle: &str) {
     let o = volcast(args);
     let err = stderr(&o);
     assert!(!o.status.success(), "{args:?} succeeded");
-    assert_eq!(o.status.code(), Some(1), "{args:?}: exit code; stderr: {err}");
+    assert_eq!(o.status.code(), Some(code), "{args:?}: exit code; stderr: {err}");
     assert!(err.contains(needle), "{args:?}: expected '{needle}' in stderr:\n{err}");
     assert!(!err.contains("panicked"), "{args:?} panicked:\n{err}");
 }
@@ -162,26 +171,26 @@ fn bad_volumes_give_clear_errors() {
         &["info", huge.to_str().unwrap()],
         "huge_3000x3000x3000_uint16.raw: dimensions 3000x3000x3000",
     );
-    assert_fails_with(&["info", "--builtin", "teapot"], "helix");
+    assert_usage_error(&["info", "--builtin", "teapot"], "helix");
     assert_fails_with(&["render"], "no volume given");
 }
 
 #[test]
 fn bad_settings_give_clear_errors() {
-    assert_fails_with(&tiny_render(&["--window", "0.8,0.2"]), "window");
-    assert_fails_with(&tiny_render(&["--colormap", "jet"]), "viridis");
-    assert_fails_with(&tiny_render(&["--step-length", "0"]), "step length");
-    assert_fails_with(&tiny_render(&["--size", "0x10"]), "image size");
+    assert_usage_error(&tiny_render(&["--window", "0.8,0.2"]), "window");
+    assert_usage_error(&tiny_render(&["--colormap", "jet"]), "viridis");
+    assert_usage_error(&tiny_render(&["--step-length", "0"]), "step length");
+    assert_usage_error(&tiny_render(&["--size", "0x10"]), "image size");
     // One message per condition.
-    assert_fails_with(
+    assert_usage_error(
         &tiny_render(&["--eye", "0.2,0,0", "--look-at", "0.2,0,0"]),
         "must differ from the point it looks at",
     );
-    assert_fails_with(
+    assert_usage_error(
         &tiny_render(&["--fov", "200"]),
         "field of view 200° must be in 1..170 degrees",
     );
-    assert_fails_with(&tiny_render(&["--view-dir", "0,0,0"]), "non-zero direction");
+    assert_usage_error(&tiny_render(&["--view-dir", "0,0,0"]), "non-zero direction");
     // The lighting options: each bad value is named.
     for (extra, needle) in [
         (&["--light", "0,0,0"][..], "light direction"),
@@ -204,11 +213,21 @@ fn bad_settings_give_clear_errors() {
             "at most 4 iso-surfaces",
         ),
     ] {
-        assert_fails_with(&tiny_render(extra), needle);
+        assert_usage_error(&tiny_render(extra), needle);
     }
+    // Names that are not among the choices list the choices.
+    for (extra, needle) in [
+        (&["--mode", "blend"][..], "unknown mode 'blend'; choose one of emission"),
+        (&["--preset", "bones"], "unknown preset 'bones'; choose one of ct-bone"),
+        (&["--view", "top"], "unknown view 'top'; choose one of anterior"),
+        (&["--quality", "best"], "unknown quality 'best'"),
+        (&["--texture", "huge"], "huge"),
+    ] {
+        assert_usage_error(&tiny_render(extra), needle);
+    }
+    assert_usage_error(&["view", "--preset", "nope"], "unknown preset 'nope'");
     // The viewer's transfer function is read before any window opens, and a bad one names itself.
     assert_fails_with(&["view", "--tf", "/nonexistent/tf.json"], "/nonexistent/tf.json");
-    assert_fails_with(&["view", "--preset", "nope"], "unknown preset 'nope'");
 }
 
 /// A render that fails writes nothing: a name volcast cannot write is refused before rendering, and no empty file
@@ -226,7 +245,7 @@ fn a_failed_render_leaves_no_file() {
     }
     let out = scratch("cli").join("failed-size.png");
     let _ = std::fs::remove_file(&out);
-    assert_fails_with(
+    assert_usage_error(
         &tiny_render(&["--size", "0x4", "-o", out.to_str().unwrap()]),
         "image size",
     );

@@ -204,6 +204,9 @@ fn devices_and_device_selection() {
     let stdout = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
     let first = stdout.lines().next().expect("at least one device");
+    // The device volcast takes without --device is marked.
+    let (first, mark) = first.split_once("  <- ").unwrap_or((first, ""));
+    assert!(mark.starts_with("volcast's choice"), "{stdout}");
     let (index, rest) = first.split_once(": ").expect("'N: name (kind, Vulkan x.y.z)'");
     assert_eq!(index, "0");
     assert!(rest.contains("Vulkan 1.3"), "{first}");

@@ -1,0 +1,358 @@
+//! How `FrameArgs` become `RenderSettings`: whole (every option, defaults included, over the volume's default
+//! view), or as overrides of a saved view (`render --state`: only the options the command line gave, each over
+//! the view's own value). One function per group of options; each applies an option where `wants` says so.
+
+use super::frame::FrameArgs;
+use super::parse::IsoColor;
+use super::UsageError;
+use anyhow::{bail, Context, Result};
+use glam::Vec3;
+use volcast::scene::camera::Camera;
+use volcast::scene::quality::{Gradients, Quality};
+use volcast::scene::settings::{PositionFormat, RenderSettings, DEFAULT_WINDOW};
+use volcast::transfer::function::TransferFunction;
+use volcast::volume::Volume;
+
+/// Whether the settings are made whole or override a saved view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Scope {
+    Whole,
+    Overrides,
+}
+
+/// The options that choose the classification's model: given any, a file keeps the simple colormap model (or the
+/// function named) instead of the automatic transfer function.
+const CLASSIFICATION: &[&str] = &["preset", "tf", "colormap", "step_alpha", "multiplied_alpha"];
+const CAMERA: &[&str] = &["azimuth", "elevation", "distance", "eye", "look_at", "view_dir", "view"];
+const LIGHTING: &[&str] = &[
+    "shading",
+    "lighting",
+    "light",
+    "light_color",
+    "light_intensity",
+    "shadows",
+    "ambient_occlusion",
+];
+/// Options whose change changes the step a quality level resolves to.
+const STEP_INPUTS: &[&str] = &[
+    "preset",
+    "tf",
+    "colormap",
+    "window",
+    "step_alpha",
+    "multiplied_alpha",
+    "mode",
+    "density",
+];
+
+impl FrameArgs {
+    /// Settings for `volume` from every option (the defaults of those not given). Values that make no valid frame
+    /// are a [`UsageError`]: only the command line is to blame.
+    pub(crate) fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
+        let mut s = RenderSettings::new(self.size.0, self.size.1, volume.extent());
+        self.apply(&mut s, volume, Scope::Whole, None)?;
+        Ok(s)
+    }
+
+    /// A saved view's settings `s` with the options the command line gave applied over it; `quality` is the view's
+    /// quality level (re-resolved when an option changes what the step depends on).
+    pub(crate) fn override_view(
+        &self,
+        s: &mut RenderSettings,
+        volume: &Volume,
+        quality: Option<Quality>,
+    ) -> Result<()> {
+        self.apply(s, volume, Scope::Overrides, quality)
+    }
+
+    fn apply(&self, s: &mut RenderSettings, volume: &Volume, scope: Scope, quality: Option<Quality>) -> Result<()> {
+        let wants = |id: &str| scope == Scope::Whole || self.given.has(id);
+        if wants("size") {
+            (s.width, s.height) = self.size;
+        }
+        if wants("voxel_axes") {
+            s.voxel_axes = self.voxel_axes;
+        }
+        self.apply_camera(s, volume, scope)?;
+        self.apply_classification(s, volume, scope)?;
+        self.apply_compositing(s, &wants);
+        self.apply_lighting(s, scope);
+        self.apply_sampling(s, &wants);
+        // The quality's step depends on the classification, so it is resolved last, from valid settings.
+        let invalid = |m: String| match scope {
+            Scope::Whole => anyhow::Error::new(UsageError(m)),
+            // A saved view's own values may be what is wrong.
+            Scope::Overrides => anyhow::Error::msg(m),
+        };
+        s.validate().map_err(invalid)?;
+        self.apply_quality(s, volume, scope, quality);
+        s.validate().map_err(invalid)
+    }
+
+    /// The camera: `--eye`, `--view-dir`, `--view` or the orbit. Over a saved view, the angles and distance not
+    /// given are the view's own.
+    fn apply_camera(&self, s: &mut RenderSettings, volume: &Volume, scope: Scope) -> Result<()> {
+        let given = |id: &str| scope == Scope::Whole || self.given.has(id);
+        let fov = if given("fov") { self.fov } else { s.camera.fov_y_deg };
+        if scope == Scope::Whole || self.given.any(CAMERA) {
+            s.camera = self.camera(s, volume, scope, fov)?;
+        }
+        s.camera.fov_y_deg = fov;
+        if given("ortho") {
+            s.camera.ortho = self.ortho;
+        }
+        Ok(())
+    }
+
+    fn camera(&self, s: &RenderSettings, volume: &Volume, scope: Scope, fov: f32) -> Result<Camera> {
+        let extent = volume.extent();
+        let old = &s.camera;
+        let target = match (self.look_at, scope) {
+            (Some(t), _) => t,
+            (None, Scope::Whole) => Vec3::ZERO,
+            (None, Scope::Overrides) => old.target,
+        };
+        let distance = match (self.distance, scope) {
+            (Some(d), _) => d,
+            (None, Scope::Whole) => Camera::fit_distance(extent.length() * 0.5, fov),
+            (None, Scope::Overrides) => old.eye.distance(old.target),
+        };
+        let anatomical = volume.geometry.anatomical && !self.voxel_axes;
+        let view = match self.view {
+            Some(v) => Some(v),
+            None if scope == Scope::Whole && anatomical && self.azimuth.is_none() && self.elevation.is_none() => {
+                Some(volcast::scene::camera::ViewPreset::Anterior)
+            }
+            None => None,
+        };
+        // Over a saved view, the direction it looks from (as orbit angles) stands in for angles not given.
+        let (az, el) = match scope {
+            Scope::Whole => (if anatomical { 0.0 } else { 35.0 }, if anatomical { 0.0 } else { 25.0 }),
+            Scope::Overrides => orbit_angles(old),
+        };
+        Ok(match (self.eye, self.view_dir, view) {
+            (Some(eye), _, _) => Camera::looking_at(eye, target),
+            (None, Some(dir), _) => {
+                if !(dir.is_finite() && dir.length() > 1e-6) {
+                    bail!(UsageError(format!("--view-dir {dir} must be a non-zero direction")));
+                }
+                Camera::looking_at(target - dir.normalize() * distance, target)
+            }
+            (None, None, Some(view)) => view.camera(distance, target),
+            (None, None, None) => Camera::orbit(
+                self.azimuth.unwrap_or(az),
+                self.elevation.unwrap_or(el),
+                distance,
+                target,
+            ),
+        })
+    }
+
+    /// The classification: a transfer function (`--preset`, `--tf`, or for a file given none of the
+    /// classification options the automatic one), else the colormap model; the value window.
+    fn apply_classification(&self, s: &mut RenderSettings, volume: &Volume, scope: Scope) -> Result<()> {
+        let wants = |id: &str| scope == Scope::Whole || self.given.has(id);
+        let named = self.transfer_function(volume)?;
+        let automatic =
+            scope == Scope::Whole && named.is_none() && self.given.from_file && !self.given.any(CLASSIFICATION);
+        let tf = if automatic {
+            Some(volcast::transfer::auto::auto_for_volume(volume))
+        } else {
+            named
+        };
+        let new_function = tf.is_some() && (automatic || wants("preset") || wants("tf"));
+        // Over a saved view, --colormap alone leaves its transfer function for the colormap model, whose window
+        // the function's [0, 1] is not.
+        let to_colormap = scope == Scope::Overrides && self.given.has("colormap") && s.transfer_function.is_some();
+        if wants("colormap") {
+            s.colormap = self.colormap;
+        }
+        if new_function || scope == Scope::Whole || self.given.has("colormap") {
+            s.transfer_function = tf;
+        }
+        s.window = match (self.window, scope) {
+            (Some(w), _) => [w.0, w.1],
+            _ if new_function => [0.0, 1.0],
+            (None, Scope::Whole) => DEFAULT_WINDOW,
+            (None, Scope::Overrides) if to_colormap && !new_function => DEFAULT_WINDOW,
+            (None, Scope::Overrides) => s.window,
+        };
+        if wants("step_alpha") {
+            s.step_alpha = self.step_alpha;
+        }
+        if wants("multiplied_alpha") {
+            s.multiplied_alpha = self.multiplied_alpha;
+        }
+        if let (Some(path), Some(tf)) = (&self.save_tf, &s.transfer_function) {
+            std::fs::write(path, tf.to_json()).with_context(|| format!("writing {}", path.display()))?;
+        }
+        Ok(())
+    }
+
+    /// The function `--preset` or `--tf` names, if any.
+    fn transfer_function(&self, volume: &Volume) -> Result<Option<TransferFunction>> {
+        Ok(match (&self.preset, &self.tf) {
+            (Some(name), _) if name == "auto" => Some(volcast::transfer::auto::auto_for_volume(volume)),
+            (Some(name), _) => Some(TransferFunction::preset(name)?),
+            (None, Some(path)) => Some(TransferFunction::load(path)?),
+            (None, None) => None,
+        })
+    }
+
+    fn apply_compositing(&self, s: &mut RenderSettings, wants: &dyn Fn(&str) -> bool) {
+        if wants("mode") {
+            s.mode = self.mode;
+        }
+        if wants("iso") {
+            s.iso_value = self.iso;
+        }
+        if wants("iso_color") {
+            match self.iso_color {
+                Some(IsoColor::Colormap) => s.iso_color = None,
+                Some(IsoColor::Rgb(c)) => s.iso_color = Some(c),
+                None => {}
+            }
+        }
+        if wants("iso_opacity") {
+            s.iso_opacity = self.iso_opacity;
+        }
+        if wants("surfaces") {
+            s.extra_isosurfaces = self.surfaces.clone();
+        }
+        if wants("density") {
+            s.density = self.density;
+        }
+    }
+
+    /// Shading and the light. A light option, shadows or occlusion turn shading on; over a saved view shading stays
+    /// as it was unless such an option is given.
+    fn apply_lighting(&self, s: &mut RenderSettings, scope: Scope) {
+        let wants = |id: &str| scope == Scope::Whole || self.given.has(id);
+        if scope == Scope::Overrides && !self.given.any(LIGHTING) {
+            return;
+        }
+        let lit = self.light.is_some()
+            || self.light_color.is_some()
+            || self.light_intensity.is_some()
+            || self.shadows
+            || self.ambient_occlusion;
+        if wants("shadows") {
+            s.shadows = self.shadows;
+        }
+        if wants("ambient_occlusion") {
+            s.ambient_occlusion = self.ambient_occlusion;
+        }
+        if (s.shadows || s.ambient_occlusion) && s.mode.is_projection() {
+            eprintln!(
+                "note: {} is not lit: shadows and ambient occlusion do not apply",
+                s.mode.name()
+            );
+        }
+        let was_on = scope == Scope::Overrides && s.shading.is_some();
+        let coefficients = match s.shading {
+            Some(c) if !wants("lighting") => c,
+            _ => self.lighting,
+        };
+        s.shading = (self.shading || lit || was_on).then_some(coefficients);
+        if wants("light") {
+            s.light.direction = self.light.and_then(|l| l.0);
+        }
+        if wants("light_color") {
+            s.light.color = self.light_color.unwrap_or(Vec3::ONE);
+        }
+        if wants("light_intensity") {
+            s.light.intensity = self.light_intensity.unwrap_or(1.0);
+        }
+    }
+
+    /// Gradient opacity, jitter, skipping, early termination, background, slabs, the clipping plane and the
+    /// position targets' format.
+    fn apply_sampling(&self, s: &mut RenderSettings, wants: &dyn Fn(&str) -> bool) {
+        if wants("gradient_opacity") {
+            s.gradient_opacity = self.gradient_opacity;
+        }
+        if wants("no_jitter") || wants("jitter_seed") {
+            s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
+        }
+        if wants("no_skip") {
+            s.skip_empty = !self.no_skip;
+        }
+        if wants("early_termination") {
+            s.early_termination = self.early_termination;
+        }
+        if wants("background") {
+            s.background = self.background;
+        }
+        for &(axis, pos, width) in &self.slices {
+            s.set_slab(axis, pos, width);
+        }
+        if wants("clip_plane") {
+            s.clip_plane = self.clip_plane;
+        }
+        if wants("positions") {
+            s.position_format = if self.positions == "rgba16f" {
+                PositionFormat::Rgba16f
+            } else {
+                PositionFormat::Rgba32f
+            };
+        }
+    }
+
+    /// The step and strides (the quality level's, or `--step-length`), and where gradients come from. Over a saved
+    /// view, its own quality level is resolved again where an option changed what the step depends on.
+    fn apply_quality(&self, s: &mut RenderSettings, volume: &Volume, scope: Scope, saved: Option<Quality>) {
+        let wants = |id: &str| scope == Scope::Whole || self.given.has(id);
+        let level = match scope {
+            Scope::Whole => Some(self.quality),
+            Scope::Overrides if self.given.has("quality") => Some(self.quality),
+            Scope::Overrides => saved.filter(|_| self.given.any(STEP_INPUTS)),
+        };
+        if let Some(q) = level {
+            q.apply(s, volume.range);
+        }
+        if let Some(step) = self.step_length {
+            s.step_length = step;
+            s.max_stride = 1;
+        }
+        if let Some(stride) = self.max_stride {
+            s.max_stride = stride;
+        }
+        let reads_gradients = self.given.any(LIGHTING) || self.given.any(&["mode", "gradient_opacity"]);
+        if wants("gradients") || wants("gradient_texture") || reads_gradients {
+            let gradients = if self.gradient_texture {
+                Gradients::Texture
+            } else {
+                self.gradients
+            };
+            gradients.apply(s, volume.voxel_count() as u64);
+        }
+    }
+}
+
+/// The orbit angles (azimuth about +z from +y, elevation) `camera` looks from, as `Camera::orbit` takes them.
+fn orbit_angles(camera: &Camera) -> (f32, f32) {
+    let dir = (camera.eye - camera.target).normalize_or_zero();
+    let elevation = dir.z.clamp(-1.0, 1.0).asin().to_degrees();
+    let azimuth = (-dir.x).atan2(dir.y).to_degrees();
+    (azimuth, elevation)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn orbit_angles_invert_the_orbit() {
+        for (az, el) in [(35.0, 25.0), (-120.0, -40.0), (0.0, 0.0), (170.0, 60.0)] {
+            let c = Camera::orbit(az, el, 3.0, Vec3::new(0.1, -0.2, 0.3));
+            let (a, e) = orbit_angles(&c);
+            assert!((a - az).abs() < 1e-3 && (e - el).abs() < 1e-3, "{az},{el} -> {a},{e}");
+        }
+    }
+
+    #[test]
+    fn given_ids_are_what_the_command_line_named() {
+        let g = super::super::frame::Given::for_test(&["size", "window"], true);
+        assert!(g.has("size") && g.any(&["tf", "window"]) && !g.has("mode"));
+    }
+}
