@@ -1,4 +1,4 @@
-//! Every `volcast render` option in the README, through the binary under `--validate`: each must change the
+//! Every `volcast render` option in docs/cli.md, through the binary under `--validate`: each must change the
 //! output as documented. Options that are rendering rules are checked against the CPU reference rendering the
 //! settings the option stands for (so an option that is parsed but ignored, or mapped to the wrong setting,
 //! fails); the others by a property (an unchanged image, a line printed, a file written).

@@ -1,7 +1,7 @@
 //! How close each family of GPU images must come to the reference, over the object pixels (compare.rs). Each bound
 //! sits at most 2× above the worst case measured over its family on lavapipe (Mesa 22.3, LLVM 15; the test
 //! binaries print each family's worst with --nocapture), and says the smallest bug it catches. Means leave out the
-//! `outliers` worst pixels, as the max bound allows them. The README's Tests section lists the same numbers.
+//! `outliers` worst pixels, as the max bound allows them. docs/testing.md's Tolerances lists the same numbers.
 
 use super::compare::Bounds;
 

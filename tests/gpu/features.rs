@@ -391,8 +391,8 @@ fn blobs(n: u32, quantised: bool) -> Volume {
 }
 
 /// Rule 5's filter reconstructs a quantised field's smooth gradient: the 100-level uint8 copy's iso-surface and
-/// shaded emission stay close to its float32 original (README, Lighting; the goal is a mean of 1/255 and p99
-/// 8/255 over object pixels), where central differences shade every terrace.
+/// shaded emission stay close to its float32 original (docs/rendering.md, Gradients; the goal is a mean of 1/255
+/// and p99 8/255 over object pixels), where central differences shade every terrace.
 #[test]
 fn a_quantised_field_shades_like_its_float_original() {
     let gpu = validated_gpu();

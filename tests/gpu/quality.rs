@@ -6,8 +6,8 @@
 //! Cases: the built-in helix (unshaded and shaded) and Marschner–Lobb volumes with their default classification,
 //! the real CT head with a strong transfer function (opacity 0.6 per voxel over a narrow window, where the quality
 //! rule shortens the step to 0.27 voxel) and the MRI brain, unshaded and shaded. Measured but not held to the
-//! bound (README, Fidelity): shaded Marschner–Lobb and CT head, whose lighting changes within a voxel more than
-//! the default step resolves.
+//! bound (docs/performance.md, Quality levels): shaded Marschner–Lobb and CT head, whose lighting changes within a
+//! voxel more than the default step resolves.
 
 use crate::common;
 

@@ -21,7 +21,7 @@ fn planar_ramp() -> Volume {
     })
 }
 
-/// Looking along `-axis_dir` at the box through the centre pixel, the segment kept where the gradient's stencil
+/// Looking from `eye` at the box's centre through the centre pixel, the segment kept where the gradient's stencil
 /// stays clear of the clamped edges.
 fn planar_view(volume: &Volume, eye: Vec3) -> RenderSettings {
     let mut s = head_on(volume, SIZE);

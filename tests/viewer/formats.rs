@@ -1,5 +1,5 @@
 //! The desktop viewer opens every format of issue 12 the way a dropped file is opened: the script's `drop:PATH`
-//! step calls the window's `DroppedFile` handler path (`ViewerState::load_action`, then the background load),
+//! step calls the window's `DroppedFile` handler path (`FileFields::load_action`, then the background load),
 //! under its own Xvfb and validation. For each file the viewer must say it loaded, and its F12-path screenshot
 //! must equal, within 1/255, the headless render of the same file (opened by `volume::open`) under the
 //! screenshot's own settings; a time series opens on step 0.

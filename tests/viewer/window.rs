@@ -27,10 +27,9 @@ use volcast::scene::quality::Quality;
 use volcast::scene::settings::RenderSettings;
 
 /// Which pixels of the view (`view` in window pixels; 1 pixel per point under Xvfb) show the volume alone, and
-/// not egui's overlay (`ui::view_overlay`): the bounding box's 1-point lines (plus anti-aliasing feather, hence
-/// 3 px), the gizmo's disc of radius 52 centred 60 px from the bottom-right corner and the light gizmo's from the
-/// top-right. The box is projected as
-/// the overlay projects it, from the frame's own camera.
+/// not egui's overlay (`widgets::overlay::view_overlay`): the bounding box's 1-point lines (plus anti-aliasing
+/// feather, hence 3 px), the gizmo's disc of radius 52 centred 60 px from the bottom-right corner and the light
+/// gizmo's from the top-right. The box is projected as the overlay projects it, from the frame's own camera.
 fn volume_only(settings: &RenderSettings, extent: glam::Vec3, view: egui::Rect) -> Vec<bool> {
     let cam = &settings.camera;
     let view_proj = cam.projection(view.width() / view.height()) * cam.view();

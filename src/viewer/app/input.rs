@@ -11,7 +11,7 @@
 //!
 //! Typing after a click is cut from it too: egui gives a text field the focus at the end of the frame that
 //! clicked it, so keys typed in that same frame went nowhere (a path typed quickly into the editor's file field
-//! lost its first letters, or all of them: CI's viewer_tf, under load).
+//! lost its first letters, or all of them: CI's viewer::tf, under load).
 
 use egui::{Event, Pos2};
 

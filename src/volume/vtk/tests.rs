@@ -1,4 +1,4 @@
-//! The legacy VTK reader's unit tests (hand-made files; VTK-written oracles are in tests/formats_vtk.rs).
+//! The legacy VTK reader's unit tests (hand-made files; VTK-written oracles are in tests/formats/vtk.rs).
 
 use super::*;
 use crate::volume::{VoxelData, VoxelType};

@@ -160,7 +160,7 @@ fn opacity_input(
         if response.drag_started_by(egui::PointerButton::Primary) {
             // The point under the press, not under the pointer now: egui starts a drag only once the pointer has
             // moved, and in a slow frame it may have moved past PICK_RADIUS (a fast drag then added a point
-            // instead of moving one; CI's viewer_tf failure).
+            // instead of moving one; CI's viewer::tf failure).
             let origin = press_origin(ctx, pos);
             *dragging = nearest(&plot.screen_points(tf, range), origin, PICK_RADIUS).or_else(|| {
                 changed = true;
@@ -280,7 +280,7 @@ mod tests {
 
     #[test]
     fn a_drag_whose_motion_arrives_at_once_moves_the_point_pressed() {
-        // CI's viewer_tf: the press, then the whole 24-point motion in the next frame. egui starts the drag only
+        // CI's viewer::tf: the press, then the whole 24-point motion in the next frame. egui starts the drag only
         // there, with the pointer 24 points from the point, beyond PICK_RADIUS: the drag must still take the point
         // under the press (it added a new point at the pointer instead).
         let mut t = tf(TfUnits::Normalized);
