@@ -22,7 +22,7 @@ ctspacing=(--spacing 0.957031 0.957031 1.5)
 r() { local name=$1; shift; "$bin" render --size "${SIZE:-256x256}" "$@" -o "$out/$name.png" >/dev/null 2>"$out/$name.log" \
   || { echo "failed: $name: $*" >&2; cat "$out/$name.log" >&2; exit 1; }; rm -f "$out/$name.log"; }
 
-# The bench scenes (src/bench/scenes.rs) in render's terms, under each ray setup and shading.
+# The bench scenes (src/measure/bench/scenes.rs) in render's terms, under each ray setup and shading.
 declare -A scene=(
   [helix]="--builtin helix"
   [dense]="--builtin colormap --window 0,1 --step-alpha 0.02"

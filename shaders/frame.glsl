@@ -1,4 +1,4 @@
-// Per-frame parameters, shared by every stage (set 0, binding 0). Must match `FrameUniforms` in src/render/mod.rs.
+// Per-frame parameters, shared by every stage (set 0, binding 0). Must match `FrameUniforms` in src/render/uniforms.rs.
 layout(std140, set = 0, binding = 0) uniform Frame {
     mat4 tex_to_clip;     // texture space [0,1]^3 -> Vulkan clip space (y down)
     mat4 tex_to_world;    // texture space -> the render world (RenderSettings rule 1): its linear part measures rays

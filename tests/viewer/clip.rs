@@ -21,16 +21,16 @@ use std::time::Duration;
 use volcast::scene::clip::ClipPlane;
 use volcast::scene::slice::SliceView;
 use volcast::scene::view_state::ViewState;
-use volcast::viewer::model::Model as ViewerState;
-use volcast::viewer::widgets::clip_plane::{self as clip_widget, ARROW, RING};
-use volcast::viewer::widgets::slice_view as slice_views;
+use volcast::viewer::model::Model;
+use volcast::viewer::widgets::clip_plane::{self, ARROW, RING};
+use volcast::viewer::widgets::slice_view;
 use volcast::volume::Volume;
 
 const SIZE: (f32, f32) = (900.0, 600.0);
 
 /// The viewer's state for a saved session of `volume`, to say where its widgets are.
-fn state_of(volume: &Volume, session: &ViewState) -> ViewerState {
-    let mut state = ViewerState::new(volume.extent(), "phantom".into());
+fn state_of(volume: &Volume, session: &ViewState) -> Model {
+    let mut state = Model::new(volume.extent(), "phantom".into());
     state.set_volume(volume.extent(), volume.geometry, volume.dims, "phantom".into());
     state.restore(session);
     state
@@ -38,7 +38,7 @@ fn state_of(volume: &Volume, session: &ViewState) -> ViewerState {
 
 /// Pixels of the plane's colour (within 40/255 a channel) inside `r`.
 fn plane_pixels(img: &RgbaImage, r: egui::Rect) -> usize {
-    let c = clip_widget::COLOR;
+    let c = clip_plane::COLOR;
     let mut n = 0;
     for y in r.top() as u32 + 1..r.bottom() as u32 - 1 {
         for x in r.left() as u32 + 1..r.right() as u32 - 1 {
@@ -88,11 +88,11 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
     // Its line is in every slice view it is not parallel to (the window polled: the frame may still be coming).
     let mut state = state_of(&volume, &shown);
     let mm = volcast::scene::slice::mm_from_index(&state.geometry, state.look.voxel_axes);
-    let (point, normal) = clip_widget::plane_in_slices(&state, &p0, mm);
+    let (point, normal) = clip_plane::plane_in_slices(&state, &p0, mm);
     let crossing: Vec<_> = views
         .iter()
         .filter(|(view, rect)| {
-            let frame = slice_views::frame_of(&state, *view, *rect, 1.0);
+            let frame = slice_view::frame_of(&state, *view, *rect, 1.0);
             frame.line_of_plane(point, normal).is_some()
         })
         .collect();
@@ -114,7 +114,7 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
     assert!(crossed >= 2, "the plane crosses at least two slice views");
 
     // A drag to the right on the ring, from its top: a turn about the camera's up by length / RING.
-    let h = clip_widget::handles(&state, three_d).expect("the widget");
+    let h = clip_plane::handles(&state, three_d).expect("the widget");
     let handle = h.handle.expect("the handle on screen");
     drag(
         &x.display,
@@ -157,7 +157,7 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
 
     // A drag of the handle along the arrow: the plane slides by ARROW per arrow's screen length.
     state = state_of(&volume, &turned);
-    let h = clip_widget::handles(&state, three_d).expect("the widget");
+    let h = clip_plane::handles(&state, three_d).expect("the widget");
     let (handle, tip) = (h.handle.unwrap(), h.tip.unwrap());
     let arrow = tip - handle;
     assert!(arrow.length() > 12.0, "the turned plane's arrow shows: {arrow:?}");

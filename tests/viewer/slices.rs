@@ -13,8 +13,8 @@ use image::RgbaImage;
 use std::path::Path;
 use std::time::Duration;
 use volcast::scene::slice::SliceView;
-use volcast::viewer::model::Model as ViewerState;
-use volcast::viewer::widgets::slice_view as slice_views;
+use volcast::viewer::model::Model;
+use volcast::viewer::widgets::slice_view;
 
 const SIZE: (f32, f32) = (900.0, 600.0);
 
@@ -51,11 +51,11 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     let [axial_rect, _, sagittal_rect, coronal_rect] = four_up_rects(SIZE, shot.width());
 
     // The viewer's state for the same volume, to say where a click lands in patient space.
-    let mut state = ViewerState::new(volume.extent(), "phantom".into());
+    let mut state = Model::new(volume.extent(), "phantom".into());
     state.set_volume(volume.extent(), volume.geometry, volume.dims, "phantom".into());
     state.slices.crosshair = DVec3::from_array(session.crosshair);
-    let frame = slice_views::frame_of(&state, SliceView::Axial, axial_rect, 1.0);
-    let shown = slice_views::image_rect(&frame, axial_rect);
+    let frame = slice_view::frame_of(&state, SliceView::Axial, axial_rect, 1.0);
+    let shown = slice_view::image_rect(&frame, axial_rect);
     let click = shown.lerp_inside(egui::vec2(0.3, 0.65));
 
     let window_before = capture(&x.display, window);

@@ -107,7 +107,7 @@ pub fn scenes() -> Vec<Scene> {
         Scene {
             name: "ct-head",
             about: "CT head 256×256×108 int16 at 0.96×0.96×1.5 mm, window 0.33–0.9, plasma, step alpha 0.6 (the \
-                    README's CT picture)",
+                    CT picture of docs/cli.md)",
             source: Source::DataFile {
                 file: "cranium_ct_256x256x108_int16.raw",
                 spacing: [0.957031, 0.957031, 1.5],
