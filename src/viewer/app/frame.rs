@@ -24,7 +24,7 @@ struct Planned {
 impl Running {
     pub(super) fn redraw(&mut self) -> Result<Flow, ViewerError> {
         let tick = self.pacing.tick(self.activity().any());
-        self.poll(tick.dt)?;
+        self.poll(&tick)?;
         if self.window_hidden() {
             // Nothing to draw into. Keep the event loop (and a running script) going.
             return self.step_script();
@@ -44,16 +44,23 @@ impl Running {
     }
 
     /// What happened since the last frame: a load finished (or progressed), the file dialog answered, animations
-    /// and playback advanced by `dt` seconds.
-    fn poll(&mut self, dt: f32) -> Result<(), ViewerError> {
+    /// advanced by the tick's capped step, playback by the real time passed (its rate is measured on it).
+    fn poll(&mut self, tick: &Tick) -> Result<(), ViewerError> {
         if let Some(arrived) = self.loader.poll(&mut self.model.messages)? {
             self.install_arrived(arrived)?;
         }
         if let Some(path) = self.loader.poll_dialog(&mut self.model.messages) {
             self.drop_file(path);
         }
-        self.model.animate(dt);
-        self.model.time.advance(dt);
+        self.model.animate(tick.dt);
+        // Paused since the last frame: say the rate playback reached (advance forgets it).
+        if let (false, Some(r)) = (self.model.time.playing, self.model.time.reached) {
+            eprintln!(
+                "playback: paused; reached {r:.1} steps/s of the {:.1} asked",
+                self.model.time.fps
+            );
+        }
+        self.model.time.advance(tick.interval_s as f32);
         Ok(())
     }
 
@@ -97,8 +104,10 @@ impl Running {
         };
         // Interacting, animating or auto-rotating: a cheaper frame; once still, one at full quality. Screenshots
         // and recorded frames are full frames.
-        let moving = (self.model.interaction.interacting || self.model.camera_moving() || dragging)
-            && !self.capture.wants_pixels();
+        // Playback too: each step is seen once, so a reduced frame per step plays at several times the rate.
+        let moving =
+            (self.model.interaction.interacting || self.model.camera_moving() || dragging || self.model.time.playing)
+                && !self.capture.wants_pixels();
         let settings = self.model.frame_settings(view_size.width, view_size.height, moving);
         self.pacing.refine_pending = moving && self.model.sampling.lod;
         if let Some(path) = self.capture.take_session() {

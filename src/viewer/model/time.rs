@@ -14,6 +14,10 @@ pub struct TimeControl {
     pub fps: f32,
     /// Time since the last step while playing.
     since_step: f32,
+    /// Real time since the step before, while playing (what the reached rate is measured over).
+    since_shown: f32,
+    /// The rate playback reaches (steps per second, smoothed), once it has taken a step; None when paused.
+    pub reached: Option<f32>,
 }
 
 /// Fastest playback offered: beyond it frames would be dropped on most machines anyway.
@@ -27,24 +31,37 @@ impl TimeControl {
             playing: false,
             fps: 10.0,
             since_step: 0.0,
+            since_shown: 0.0,
+            reached: None,
         }
     }
 
-    /// Advances playback by `dt` seconds: at most one step per frame (a slow frame does not skip steps, so every
-    /// step is seen), looping at the end. Returns whether the wanted step changed.
+    /// Advances playback by `dt` seconds of real time: at most one step per frame (a slow frame does not skip
+    /// steps, so every step is seen), looping at the end. Returns whether the wanted step changed.
     pub fn advance(&mut self, dt: f32) -> bool {
         if !self.playing || self.steps < 2 {
             self.since_step = 0.0;
+            self.since_shown = 0.0;
+            self.reached = None;
             return false;
         }
         self.since_step += dt;
+        self.since_shown += dt;
         let period = 1.0 / self.fps.clamp(0.1, MAX_FPS);
         if self.since_step < period {
             return false;
         }
         self.since_step = (self.since_step - period).min(period);
         self.wanted = (self.wanted + 1) % self.steps;
+        let rate = 1.0 / self.since_shown.max(1e-3);
+        self.reached = Some(self.reached.map_or(rate, |r| 0.7 * r + 0.3 * rate));
+        self.since_shown = 0.0;
         true
+    }
+
+    /// Playing slower than asked (the frames cannot keep up): the rate reached, to show beside the one asked.
+    pub fn falling_behind(&self) -> Option<f32> {
+        self.reached.filter(|r| self.playing && *r < 0.95 * self.fps)
     }
 
     /// Asks for step `t` (`--time`); an error where the series has no such step.
@@ -70,6 +87,28 @@ impl TimeControl {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_rate_reached_is_measured_over_real_time() {
+        let mut t = TimeControl::new(5, 0);
+        t.toggle_play();
+        t.fps = 10.0;
+        // Frames of 0.25 s: one step each (never skipped), so 4 steps/s where 10 were asked.
+        for _ in 0..20 {
+            assert!(t.advance(0.25));
+        }
+        let reached = t.falling_behind().expect("behind");
+        assert!((reached - 4.0).abs() < 0.01, "{reached}");
+        // Frames of 0.02 s keep up: 10 steps/s.
+        for _ in 0..200 {
+            t.advance(0.02);
+        }
+        assert!((t.reached.unwrap() - 10.0).abs() < 0.6, "{:?}", t.reached);
+        assert_eq!(t.falling_behind(), None);
+        t.toggle_play();
+        t.advance(0.1);
+        assert_eq!(t.reached, None, "paused: no rate");
+    }
 
     #[test]
     fn playback_steps_at_the_set_rate_and_loops() {

@@ -26,4 +26,9 @@ pub fn time_controls(ui: &mut egui::Ui, time: &mut TimeControl) {
                 .suffix(" steps/s"),
         );
     });
+    // Frames slower than the rate asked: say what is reached (every step is still shown).
+    match time.falling_behind() {
+        Some(r) => ui.weak(format!("reaching {r:.1} steps/s (frames are the limit)")),
+        None => ui.weak(""),
+    };
 }
