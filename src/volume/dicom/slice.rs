@@ -91,35 +91,7 @@ fn in_groups(
 
 pub(super) fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Slice, VolumeError> {
     let err = |problem: String| header_error(label, problem);
-    let required = |tag: Tag, name: &str| int(obj, tag).ok_or_else(|| err(format!("no {name} element")));
-    let samples = int(obj, SAMPLES_PER_PIXEL).unwrap_or(1);
-    if samples != 1 {
-        return Err(err(format!(
-            "SamplesPerPixel = {samples}: colour DICOM is not supported, only one value per voxel"
-        )));
-    }
-    let rows = required(ROWS, "Rows")?;
-    let columns = required(COLUMNS, "Columns")?;
-    let frames = int(obj, NUMBER_OF_FRAMES).unwrap_or(1);
-    let dims = format::dims_from(label, "Columns/Rows/NumberOfFrames", &[columns, rows, frames])?;
-    let bits_allocated = required(BITS_ALLOCATED, "BitsAllocated")?;
-    if bits_allocated != 8 && bits_allocated != 16 {
-        return Err(err(format!(
-            "BitsAllocated = {bits_allocated}: volcast reads 8- and 16-bit DICOM"
-        )));
-    }
-    let bits_stored = int(obj, BITS_STORED).unwrap_or(bits_allocated);
-    if !(1..=bits_allocated).contains(&bits_stored) {
-        return Err(err(format!(
-            "BitsStored = {bits_stored} does not fit BitsAllocated = {bits_allocated}"
-        )));
-    }
-    let slope = floats(obj, RESCALE_SLOPE)
-        .and_then(|v| v.first().copied())
-        .unwrap_or(1.0);
-    let intercept = floats(obj, RESCALE_INTERCEPT)
-        .and_then(|v| v.first().copied())
-        .unwrap_or(0.0);
+    let format = PixelFormat::read(obj, label)?;
     let shared = item(obj, SHARED_GROUPS);
     let per_frame: &[InMemDicomObject] = obj
         .element_opt(PER_FRAME_GROUPS)
@@ -128,27 +100,7 @@ pub(super) fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -
         .and_then(|e| e.items())
         .unwrap_or(&[]);
     let first_frame = per_frame.first();
-    // An enhanced object's rescale lives in PixelValueTransformationSequence; volcast needs one for all frames.
-    let rescale = |frame: Option<&InMemDicomObject>| {
-        let pick =
-            |tag: Tag| in_groups(frame, shared, PIXEL_VALUE_TRANSFORMATION, tag).and_then(|v| v.first().copied());
-        (pick(RESCALE_SLOPE), pick(RESCALE_INTERCEPT))
-    };
-    let (group_slope, group_intercept) = rescale(first_frame);
-    if per_frame
-        .iter()
-        .any(|f| rescale(Some(f)) != (group_slope, group_intercept))
-    {
-        return Err(err(
-            "frames have different rescale slope/intercept (PixelValueTransformationSequence); volcast needs one per \
-             series"
-                .into(),
-        ));
-    }
-    let slope = group_slope.unwrap_or(slope);
-    let intercept = group_intercept.unwrap_or(intercept);
-    let three = |v: Vec<f64>| (v.len() == 3).then(|| [v[0], v[1], v[2]]);
-    let six = |v: Vec<f64>| (v.len() == 6).then(|| [v[0], v[1], v[2], v[3], v[4], v[5]]);
+    let scaling = rescale(obj, shared, per_frame, label)?;
     let two = |v: Vec<f64>| (v.len() == 2 && v.iter().all(|&s| s > 0.0)).then(|| [v[0], v[1]]);
     let pixel_spacing =
         in_groups(first_frame, shared, PIXEL_MEASURES, PIXEL_SPACING).or_else(|| floats(obj, PIXEL_SPACING));
@@ -158,55 +110,27 @@ pub(super) fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -
         .or_else(|| floats(obj, SPACING_BETWEEN_SLICES))
         .or_else(|| in_groups(first_frame, shared, PIXEL_MEASURES, SLICE_THICKNESS))
         .or_else(|| floats(obj, SLICE_THICKNESS));
-    // Per-frame positions (and orientations) place each frame of an enhanced object; all or none are used.
-    let mut frame_places = Vec::new();
-    if dims[2] > 1 && per_frame.len() == dims[2] as usize {
-        let places: Vec<Placed> = per_frame
-            .iter()
-            .enumerate()
-            .map(|(k, f)| Placed {
-                position: in_groups(Some(f), shared, PLANE_POSITION, IMAGE_POSITION).and_then(three),
-                orientation: in_groups(Some(f), shared, PLANE_ORIENTATION, IMAGE_ORIENTATION)
-                    .and_then(six)
-                    .or_else(|| orientation.clone().and_then(six)),
-                instance: k as i64,
-            })
-            .collect();
-        if places.iter().all(|p| p.position.is_some()) {
-            frame_places = places;
-        }
-    }
+    let frame_places = frame_places(per_frame, shared, orientation.as_deref(), format.dims[2]);
     let transfer_syntax = obj.meta().transfer_syntax().trim_end_matches(['\0', ' ']).to_string();
     let kind = codec::codec(&transfer_syntax).map_err(err)?;
-    let series = obj
-        .element_opt(SERIES_UID)
-        .ok()
-        .flatten()
-        .and_then(|e| e.to_str().ok().map(|s| s.trim().to_string()))
-        .unwrap_or_default();
-    let modality = obj
-        .element_opt(MODALITY)
-        .ok()
-        .flatten()
-        .and_then(|e| e.to_str().ok().map(|s| s.trim().to_ascii_uppercase()))
-        .unwrap_or_default();
+    let dims = format.dims;
     Ok(Slice {
         source,
         rows: dims[1],
         columns: dims[0],
         frames: dims[2],
-        bits_allocated: bits_allocated as u16,
-        bits_stored: bits_stored as u16,
+        bits_allocated: format.bits_allocated,
+        bits_stored: format.bits_stored,
         signed: int(obj, PIXEL_REPRESENTATION).unwrap_or(0) == 1,
-        scaling: Scaling { slope, intercept },
+        scaling,
         pixel_spacing: pixel_spacing.and_then(two),
         position: frame_places
             .first()
             .and_then(|p| p.position)
             .or_else(|| floats(obj, IMAGE_POSITION).and_then(three)),
         orientation: orientation.and_then(six),
-        series,
-        modality,
+        series: text(obj, SERIES_UID).unwrap_or_default(),
+        modality: text(obj, MODALITY).map(|m| m.to_ascii_uppercase()).unwrap_or_default(),
         instance: int(obj, INSTANCE_NUMBER).unwrap_or(0),
         temporal: int(obj, TEMPORAL_POSITION),
         native_little_endian: matches!(
@@ -218,4 +142,129 @@ pub(super) fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -
         transfer_syntax,
         frame_places,
     })
+}
+
+/// A string element, trimmed.
+fn text(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
+    obj.element_opt(tag)
+        .ok()
+        .flatten()
+        .and_then(|e| e.to_str().ok().map(|s| s.trim().to_string()))
+}
+
+fn three(v: Vec<f64>) -> Option<[f64; 3]> {
+    (v.len() == 3).then(|| [v[0], v[1], v[2]])
+}
+
+fn six(v: Vec<f64>) -> Option<[f64; 6]> {
+    (v.len() == 6).then(|| [v[0], v[1], v[2], v[3], v[4], v[5]])
+}
+
+/// The pixel grid and sample layout, checked: one sample per pixel, 8 or 16 bits allocated.
+struct PixelFormat {
+    /// Columns, rows, frames.
+    dims: [u32; 3],
+    bits_allocated: u16,
+    bits_stored: u16,
+}
+
+impl PixelFormat {
+    fn read(obj: &DefaultDicomObject, label: &str) -> Result<Self, VolumeError> {
+        let err = |problem: String| header_error(label, problem);
+        let required = |tag: Tag, name: &str| int(obj, tag).ok_or_else(|| err(format!("no {name} element")));
+        let samples = int(obj, SAMPLES_PER_PIXEL).unwrap_or(1);
+        if samples != 1 {
+            return Err(err(format!(
+                "SamplesPerPixel = {samples}: colour DICOM is not supported, only one value per voxel"
+            )));
+        }
+        let rows = required(ROWS, "Rows")?;
+        let columns = required(COLUMNS, "Columns")?;
+        let frames = int(obj, NUMBER_OF_FRAMES).unwrap_or(1);
+        let dims = format::dims_from(label, "Columns/Rows/NumberOfFrames", &[columns, rows, frames])?;
+        let bits_allocated = required(BITS_ALLOCATED, "BitsAllocated")?;
+        if bits_allocated != 8 && bits_allocated != 16 {
+            return Err(err(format!(
+                "BitsAllocated = {bits_allocated}: volcast reads 8- and 16-bit DICOM"
+            )));
+        }
+        let bits_stored = int(obj, BITS_STORED).unwrap_or(bits_allocated);
+        if !(1..=bits_allocated).contains(&bits_stored) {
+            return Err(err(format!(
+                "BitsStored = {bits_stored} does not fit BitsAllocated = {bits_allocated}"
+            )));
+        }
+        Ok(Self {
+            dims,
+            bits_allocated: bits_allocated as u16,
+            bits_stored: bits_stored as u16,
+        })
+    }
+}
+
+/// The rescale slope and intercept: the object's, unless its functional groups give them, which must then be the
+/// same for every frame.
+fn rescale(
+    obj: &DefaultDicomObject,
+    shared: Option<&InMemDicomObject>,
+    per_frame: &[InMemDicomObject],
+    label: &str,
+) -> Result<Scaling, VolumeError> {
+    let slope = floats(obj, RESCALE_SLOPE)
+        .and_then(|v| v.first().copied())
+        .unwrap_or(1.0);
+    let intercept = floats(obj, RESCALE_INTERCEPT)
+        .and_then(|v| v.first().copied())
+        .unwrap_or(0.0);
+    // An enhanced object's rescale lives in PixelValueTransformationSequence; volcast needs one for all frames.
+    let rescale = |frame: Option<&InMemDicomObject>| {
+        let pick =
+            |tag: Tag| in_groups(frame, shared, PIXEL_VALUE_TRANSFORMATION, tag).and_then(|v| v.first().copied());
+        (pick(RESCALE_SLOPE), pick(RESCALE_INTERCEPT))
+    };
+    let (group_slope, group_intercept) = rescale(per_frame.first());
+    if per_frame
+        .iter()
+        .any(|f| rescale(Some(f)) != (group_slope, group_intercept))
+    {
+        return Err(header_error(
+            label,
+            "frames have different rescale slope/intercept (PixelValueTransformationSequence); volcast needs one per \
+             series"
+                .into(),
+        ));
+    }
+    Ok(Scaling {
+        slope: group_slope.unwrap_or(slope),
+        intercept: group_intercept.unwrap_or(intercept),
+    })
+}
+
+/// Per-frame positions (and orientations, else the object's `orientation`) place each of the `frames` frames of
+/// an enhanced object; all or none are used.
+fn frame_places(
+    per_frame: &[InMemDicomObject],
+    shared: Option<&InMemDicomObject>,
+    orientation: Option<&[f64]>,
+    frames: u32,
+) -> Vec<Placed> {
+    if frames <= 1 || per_frame.len() != frames as usize {
+        return Vec::new();
+    }
+    let places: Vec<Placed> = per_frame
+        .iter()
+        .enumerate()
+        .map(|(k, f)| Placed {
+            position: in_groups(Some(f), shared, PLANE_POSITION, IMAGE_POSITION).and_then(three),
+            orientation: in_groups(Some(f), shared, PLANE_ORIENTATION, IMAGE_ORIENTATION)
+                .and_then(six)
+                .or_else(|| orientation.map(<[f64]>::to_vec).and_then(six)),
+            instance: k as i64,
+        })
+        .collect();
+    if places.iter().all(|p| p.position.is_some()) {
+        places
+    } else {
+        Vec::new()
+    }
 }
