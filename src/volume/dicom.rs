@@ -67,29 +67,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
             "a folder of several multi-frame files is not supported: open one file".into(),
         ));
     }
-    for s in &slices {
-        let same = (s.rows, s.columns, s.bits_allocated, s.signed)
-            == (first.rows, first.columns, first.bits_allocated, first.signed);
-        if !same {
-            return Err(err(format!(
-                "slices differ: {}x{} {}-bit{} against {}x{} {}-bit{} in the first; one series must share one layout",
-                s.columns,
-                s.rows,
-                s.bits_allocated,
-                if s.signed { " signed" } else { "" },
-                first.columns,
-                first.rows,
-                first.bits_allocated,
-                if first.signed { " signed" } else { "" },
-            )));
-        }
-        if s.scaling != first.scaling {
-            return Err(err(format!(
-                "slices have different rescale slope/intercept ({} {} and {} {}); volcast needs one per series",
-                s.scaling.slope, s.scaling.intercept, first.scaling.slope, first.scaling.intercept
-            )));
-        }
-    }
+    check_one_layout(&slices, &first, label)?;
     let depth = if first.frames > 1 {
         first.frames
     } else {
@@ -97,22 +75,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
     };
     let dims = [first.columns, first.rows, depth];
     check_dims(dims)?;
-    if first.kind != Kind::Native {
-        let lossy = matches!(
-            first.transfer_syntax.as_str(),
-            "1.2.840.10008.1.2.4.50" | "1.2.840.10008.1.2.4.51" | "1.2.840.10008.1.2.4.91"
-        );
-        notes.push(format!(
-            "pixel data compressed as {} ({}), decoded{}",
-            codec::name(&first.transfer_syntax),
-            clip(&first.transfer_syntax),
-            if lossy {
-                "; this syntax can be lossy, so values may differ from the original scan"
-            } else {
-                ""
-            }
-        ));
-    }
+    notes.extend(compression_note(&first));
     let pixel_spacing = first.pixel_spacing.unwrap_or_else(|| {
         notes.push("no PixelSpacing: in-plane spacing 1 is used".into());
         [1.0, 1.0]
@@ -121,14 +84,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
     let placed: Vec<Placed> = if per_frame {
         first.frame_places.clone()
     } else {
-        slices
-            .iter()
-            .map(|s| Placed {
-                position: s.position,
-                orientation: s.orientation,
-                instance: s.instance,
-            })
-            .collect()
+        slices.iter().map(Slice::placed).collect()
     };
     let arrangement = geometry::arrange(&placed, pixel_spacing, first.slice_step).map_err(err)?;
     notes.extend(arrangement.notes);
@@ -156,6 +112,62 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
         modality: first.modality.clone(),
         notes,
     })
+}
+
+/// Every slice must share the first one's size, bit depth, signedness and rescale.
+fn check_one_layout(slices: &[Slice], first: &Slice, label: &str) -> Result<(), VolumeError> {
+    for s in slices {
+        let same = (s.rows, s.columns, s.bits_allocated, s.signed)
+            == (first.rows, first.columns, first.bits_allocated, first.signed);
+        if !same {
+            return Err(header_error(
+                label,
+                format!(
+                    "slices differ: {}x{} {}-bit{} against {}x{} {}-bit{} in the first; one series must share one \
+                     layout",
+                    s.columns,
+                    s.rows,
+                    s.bits_allocated,
+                    if s.signed { " signed" } else { "" },
+                    first.columns,
+                    first.rows,
+                    first.bits_allocated,
+                    if first.signed { " signed" } else { "" },
+                ),
+            ));
+        }
+        if s.scaling != first.scaling {
+            return Err(header_error(
+                label,
+                format!(
+                    "slices have different rescale slope/intercept ({} {} and {} {}); volcast needs one per series",
+                    s.scaling.slope, s.scaling.intercept, first.scaling.slope, first.scaling.intercept
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Says how compressed pixel data were decoded, and warns of a syntax that can be lossy.
+fn compression_note(first: &Slice) -> Option<String> {
+    if first.kind == Kind::Native {
+        return None;
+    }
+    let lossy = matches!(
+        first.transfer_syntax.as_str(),
+        "1.2.840.10008.1.2.4.50" | "1.2.840.10008.1.2.4.51" | "1.2.840.10008.1.2.4.91"
+    );
+    Some(format!(
+        "pixel data compressed as {} ({}), decoded{}",
+        codec::name(&first.transfer_syntax),
+        clip(&first.transfer_syntax),
+        if lossy {
+            "; this syntax can be lossy, so values may differ from the original scan"
+        } else {
+            ""
+        }
+    ))
 }
 
 /// The volume from the assembled pixels, placed and (for uneven spacing) resampled as `plan` says.
@@ -214,28 +226,8 @@ fn open_dicom(path: &Path, header_only: bool) -> Result<DefaultDicomObject, Volu
 /// slices; pass 2 reads the pixels slice by slice into the final buffer, so the peak is one volume plus one slice.
 pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, VolumeError> {
     let label = format::file_label(path);
-    let io = |source| VolumeError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
     let files: Vec<PathBuf> = if path.is_dir() {
-        let mut files = Vec::new();
-        for entry in std::fs::read_dir(path).map_err(io)? {
-            let entry = entry.map_err(io)?;
-            let p = entry.path();
-            let hidden = p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
-            if p.is_file() && !hidden {
-                files.push(p);
-                if files.len() > MAX_FILES {
-                    return Err(header_error(
-                        &label,
-                        format!("more than {MAX_FILES} files in the folder"),
-                    ));
-                }
-            }
-        }
-        files.sort();
-        files
+        list_folder(path, &label)?
     } else {
         vec![path.to_path_buf()]
     };
@@ -262,25 +254,7 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
             "{skipped} file(s) in the folder are not DICOM images and were skipped"
         ));
     }
-    // More than one series: the largest is loaded.
-    let mut series: Vec<(String, usize)> = Vec::new();
-    for s in &slices {
-        match series.iter_mut().find(|(uid, _)| *uid == s.series) {
-            Some((_, n)) => *n += 1,
-            None => series.push((s.series.clone(), 1)),
-        }
-    }
-    if series.len() > 1 {
-        series.sort_by_key(|s| std::cmp::Reverse(s.1));
-        let chosen = series[0].0.clone();
-        notes.push(format!(
-            "the folder holds {} series; the largest ({} slices, SeriesInstanceUID {}) is loaded",
-            series.len(),
-            series[0].1,
-            clip(&chosen)
-        ));
-        slices.retain(|s| s.series == chosen);
-    }
+    keep_largest_series(&mut slices, &mut notes);
     // Several temporal positions (TemporalPositionIdentifier): one volume per position, as time steps.
     let mut times: Vec<i64> = slices.iter().filter_map(|s| s.temporal).collect();
     times.sort_unstable();
@@ -300,6 +274,53 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         notes,
         progress,
     )
+}
+
+/// The visible files of a folder, sorted by name; at most [`MAX_FILES`].
+fn list_folder(path: &Path, label: &str) -> Result<Vec<PathBuf>, VolumeError> {
+    let io = |source| VolumeError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(path).map_err(io)? {
+        let entry = entry.map_err(io)?;
+        let p = entry.path();
+        let hidden = p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
+        if p.is_file() && !hidden {
+            files.push(p);
+            if files.len() > MAX_FILES {
+                return Err(header_error(
+                    label,
+                    format!("more than {MAX_FILES} files in the folder"),
+                ));
+            }
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+/// More than one series: the largest is kept (the first of those as large), and a note says so.
+fn keep_largest_series(slices: &mut Vec<Slice>, notes: &mut Vec<String>) {
+    let mut series: Vec<(String, usize)> = Vec::new();
+    for s in slices.iter() {
+        match series.iter_mut().find(|(uid, _)| *uid == s.series) {
+            Some((_, n)) => *n += 1,
+            None => series.push((s.series.clone(), 1)),
+        }
+    }
+    if series.len() > 1 {
+        series.sort_by_key(|s| std::cmp::Reverse(s.1));
+        let chosen = series[0].0.clone();
+        notes.push(format!(
+            "the folder holds {} series; the largest ({} slices, SeriesInstanceUID {}) is loaded",
+            series.len(),
+            series[0].1,
+            clip(&chosen)
+        ));
+        slices.retain(|s| s.series == chosen);
+    }
 }
 
 #[cfg(test)]

@@ -63,6 +63,17 @@ pub(super) struct Slice {
     pub(super) temporal: Option<i64>,
 }
 
+impl Slice {
+    /// Where the slice's header places it.
+    pub(super) fn placed(&self) -> Placed {
+        Placed {
+            position: self.position,
+            orientation: self.orientation,
+            instance: self.instance,
+        }
+    }
+}
+
 fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
     let v = obj.element_opt(tag).ok().flatten()?.to_multi_float64().ok()?;
     v.iter().all(|x| x.is_finite()).then_some(v)
