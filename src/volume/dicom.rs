@@ -15,6 +15,7 @@ pub(crate) mod codec;
 mod geometry;
 mod lengths;
 mod pixels;
+mod slice;
 mod temporal;
 
 use super::decode::Progress;
@@ -22,232 +23,21 @@ use super::format::{self, clip, header_error};
 use super::{check_dims, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
 use codec::Kind;
 use dicom_object::file::ReadPreamble;
-use dicom_object::{DefaultDicomObject, InMemDicomObject, OpenFileOptions, Tag};
+use dicom_object::{DefaultDicomObject, OpenFileOptions, Tag};
 use geometry::Placed;
 use lengths::check_lengths;
 use pixels::{append_file, check_backed, empty_data, load_planned};
+use slice::{slice_info, Slice};
 use std::path::{Path, PathBuf};
 
 const FORMAT: &str = "DICOM";
-const ROWS: Tag = Tag(0x0028, 0x0010);
-const COLUMNS: Tag = Tag(0x0028, 0x0011);
-const SAMPLES_PER_PIXEL: Tag = Tag(0x0028, 0x0002);
-const NUMBER_OF_FRAMES: Tag = Tag(0x0028, 0x0008);
-const BITS_ALLOCATED: Tag = Tag(0x0028, 0x0100);
-const BITS_STORED: Tag = Tag(0x0028, 0x0101);
-const PIXEL_REPRESENTATION: Tag = Tag(0x0028, 0x0103);
-const PIXEL_SPACING: Tag = Tag(0x0028, 0x0030);
-const RESCALE_INTERCEPT: Tag = Tag(0x0028, 0x1052);
-const RESCALE_SLOPE: Tag = Tag(0x0028, 0x1053);
-const IMAGE_POSITION: Tag = Tag(0x0020, 0x0032);
-const IMAGE_ORIENTATION: Tag = Tag(0x0020, 0x0037);
-const SERIES_UID: Tag = Tag(0x0020, 0x000E);
-const MODALITY: Tag = Tag(0x0008, 0x0060);
-const INSTANCE_NUMBER: Tag = Tag(0x0020, 0x0013);
-const SLICE_THICKNESS: Tag = Tag(0x0018, 0x0050);
-const SPACING_BETWEEN_SLICES: Tag = Tag(0x0018, 0x0088);
 const PIXEL_DATA: Tag = Tag(0x7FE0, 0x0010);
-const TEMPORAL_POSITION: Tag = Tag(0x0020, 0x0100);
-const SHARED_GROUPS: Tag = Tag(0x5200, 0x9229);
-const PER_FRAME_GROUPS: Tag = Tag(0x5200, 0x9230);
-const PLANE_POSITION: Tag = Tag(0x0020, 0x9113);
-const PLANE_ORIENTATION: Tag = Tag(0x0020, 0x9116);
-const PIXEL_MEASURES: Tag = Tag(0x0028, 0x9110);
-const PIXEL_VALUE_TRANSFORMATION: Tag = Tag(0x0028, 0x9145);
 
 /// Most files looked at in a folder: more slices than [`super::MAX_DIM`] cannot make a volume anyway.
 const MAX_FILES: usize = 20_000;
 
 pub(crate) fn is_dicom(prefix: &[u8]) -> bool {
     prefix.len() >= 132 && &prefix[128..132] == b"DICM"
-}
-
-/// What one file says about its slice.
-#[derive(Clone, Debug)]
-struct Slice {
-    source: usize,
-    rows: u32,
-    columns: u32,
-    frames: u32,
-    bits_allocated: u16,
-    bits_stored: u16,
-    signed: bool,
-    scaling: Scaling,
-    pixel_spacing: Option<[f64; 2]>,
-    position: Option<[f64; 3]>,
-    orientation: Option<[f64; 6]>,
-    series: String,
-    /// Modality (0008,0060): "CT", "MR", ...; empty when absent.
-    modality: String,
-    instance: i64,
-    slice_step: Option<f64>,
-    /// Implicit or explicit VR little endian: pixel bytes in the file are the values, little-endian.
-    native_little_endian: bool,
-    /// How the pixel data is encoded, and the transfer syntax UID.
-    kind: Kind,
-    transfer_syntax: String,
-    /// A multi-frame object's per-frame places (PerFrameFunctionalGroupsSequence), one per frame; empty when the
-    /// frames are placed by one position and the slice step.
-    frame_places: Vec<Placed>,
-    /// TemporalPositionIdentifier: slices of one series at several times (cine, perfusion, 4-D CT).
-    temporal: Option<i64>,
-}
-
-fn floats(obj: &InMemDicomObject, tag: Tag) -> Option<Vec<f64>> {
-    let v = obj.element_opt(tag).ok().flatten()?.to_multi_float64().ok()?;
-    v.iter().all(|x| x.is_finite()).then_some(v)
-}
-
-fn int(obj: &InMemDicomObject, tag: Tag) -> Option<i64> {
-    obj.element_opt(tag).ok().flatten()?.to_int::<i64>().ok()
-}
-
-/// The first item of sequence `tag` in `obj`.
-fn item(obj: &InMemDicomObject, tag: Tag) -> Option<&InMemDicomObject> {
-    obj.element_opt(tag).ok().flatten()?.items()?.first()
-}
-
-/// `tag` inside the functional group macro `group` (e.g. PlanePositionSequence), looked up in one frame's
-/// group item and then in the shared one.
-fn in_groups(
-    frame: Option<&InMemDicomObject>,
-    shared: Option<&InMemDicomObject>,
-    group: Tag,
-    tag: Tag,
-) -> Option<Vec<f64>> {
-    let from = |g: Option<&InMemDicomObject>| g.and_then(|g| item(g, group)).and_then(|m| floats(m, tag));
-    from(frame).or_else(|| from(shared))
-}
-
-fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -> Result<Slice, VolumeError> {
-    let err = |problem: String| header_error(label, problem);
-    let required = |tag: Tag, name: &str| int(obj, tag).ok_or_else(|| err(format!("no {name} element")));
-    let samples = int(obj, SAMPLES_PER_PIXEL).unwrap_or(1);
-    if samples != 1 {
-        return Err(err(format!(
-            "SamplesPerPixel = {samples}: colour DICOM is not supported, only one value per voxel"
-        )));
-    }
-    let rows = required(ROWS, "Rows")?;
-    let columns = required(COLUMNS, "Columns")?;
-    let frames = int(obj, NUMBER_OF_FRAMES).unwrap_or(1);
-    let dims = format::dims_from(label, "Columns/Rows/NumberOfFrames", &[columns, rows, frames])?;
-    let bits_allocated = required(BITS_ALLOCATED, "BitsAllocated")?;
-    if bits_allocated != 8 && bits_allocated != 16 {
-        return Err(err(format!(
-            "BitsAllocated = {bits_allocated}: volcast reads 8- and 16-bit DICOM"
-        )));
-    }
-    let bits_stored = int(obj, BITS_STORED).unwrap_or(bits_allocated);
-    if !(1..=bits_allocated).contains(&bits_stored) {
-        return Err(err(format!(
-            "BitsStored = {bits_stored} does not fit BitsAllocated = {bits_allocated}"
-        )));
-    }
-    let slope = floats(obj, RESCALE_SLOPE)
-        .and_then(|v| v.first().copied())
-        .unwrap_or(1.0);
-    let intercept = floats(obj, RESCALE_INTERCEPT)
-        .and_then(|v| v.first().copied())
-        .unwrap_or(0.0);
-    let shared = item(obj, SHARED_GROUPS);
-    let per_frame: &[InMemDicomObject] = obj
-        .element_opt(PER_FRAME_GROUPS)
-        .ok()
-        .flatten()
-        .and_then(|e| e.items())
-        .unwrap_or(&[]);
-    let first_frame = per_frame.first();
-    // An enhanced object's rescale lives in PixelValueTransformationSequence; volcast needs one for all frames.
-    let rescale = |frame: Option<&InMemDicomObject>| {
-        let pick =
-            |tag: Tag| in_groups(frame, shared, PIXEL_VALUE_TRANSFORMATION, tag).and_then(|v| v.first().copied());
-        (pick(RESCALE_SLOPE), pick(RESCALE_INTERCEPT))
-    };
-    let (group_slope, group_intercept) = rescale(first_frame);
-    if per_frame
-        .iter()
-        .any(|f| rescale(Some(f)) != (group_slope, group_intercept))
-    {
-        return Err(err(
-            "frames have different rescale slope/intercept (PixelValueTransformationSequence); volcast needs one per \
-             series"
-                .into(),
-        ));
-    }
-    let slope = group_slope.unwrap_or(slope);
-    let intercept = group_intercept.unwrap_or(intercept);
-    let three = |v: Vec<f64>| (v.len() == 3).then(|| [v[0], v[1], v[2]]);
-    let six = |v: Vec<f64>| (v.len() == 6).then(|| [v[0], v[1], v[2], v[3], v[4], v[5]]);
-    let two = |v: Vec<f64>| (v.len() == 2 && v.iter().all(|&s| s > 0.0)).then(|| [v[0], v[1]]);
-    let pixel_spacing =
-        in_groups(first_frame, shared, PIXEL_MEASURES, PIXEL_SPACING).or_else(|| floats(obj, PIXEL_SPACING));
-    let orientation =
-        in_groups(first_frame, shared, PLANE_ORIENTATION, IMAGE_ORIENTATION).or_else(|| floats(obj, IMAGE_ORIENTATION));
-    let slice_step = in_groups(first_frame, shared, PIXEL_MEASURES, SPACING_BETWEEN_SLICES)
-        .or_else(|| floats(obj, SPACING_BETWEEN_SLICES))
-        .or_else(|| in_groups(first_frame, shared, PIXEL_MEASURES, SLICE_THICKNESS))
-        .or_else(|| floats(obj, SLICE_THICKNESS));
-    // Per-frame positions (and orientations) place each frame of an enhanced object; all or none are used.
-    let mut frame_places = Vec::new();
-    if dims[2] > 1 && per_frame.len() == dims[2] as usize {
-        let places: Vec<Placed> = per_frame
-            .iter()
-            .enumerate()
-            .map(|(k, f)| Placed {
-                position: in_groups(Some(f), shared, PLANE_POSITION, IMAGE_POSITION).and_then(three),
-                orientation: in_groups(Some(f), shared, PLANE_ORIENTATION, IMAGE_ORIENTATION)
-                    .and_then(six)
-                    .or_else(|| orientation.clone().and_then(six)),
-                instance: k as i64,
-            })
-            .collect();
-        if places.iter().all(|p| p.position.is_some()) {
-            frame_places = places;
-        }
-    }
-    let transfer_syntax = obj.meta().transfer_syntax().trim_end_matches(['\0', ' ']).to_string();
-    let kind = codec::codec(&transfer_syntax).map_err(err)?;
-    let series = obj
-        .element_opt(SERIES_UID)
-        .ok()
-        .flatten()
-        .and_then(|e| e.to_str().ok().map(|s| s.trim().to_string()))
-        .unwrap_or_default();
-    let modality = obj
-        .element_opt(MODALITY)
-        .ok()
-        .flatten()
-        .and_then(|e| e.to_str().ok().map(|s| s.trim().to_ascii_uppercase()))
-        .unwrap_or_default();
-    Ok(Slice {
-        source,
-        rows: dims[1],
-        columns: dims[0],
-        frames: dims[2],
-        bits_allocated: bits_allocated as u16,
-        bits_stored: bits_stored as u16,
-        signed: int(obj, PIXEL_REPRESENTATION).unwrap_or(0) == 1,
-        scaling: Scaling { slope, intercept },
-        pixel_spacing: pixel_spacing.and_then(two),
-        position: frame_places
-            .first()
-            .and_then(|p| p.position)
-            .or_else(|| floats(obj, IMAGE_POSITION).and_then(three)),
-        orientation: orientation.and_then(six),
-        series,
-        modality,
-        instance: int(obj, INSTANCE_NUMBER).unwrap_or(0),
-        temporal: int(obj, TEMPORAL_POSITION),
-        native_little_endian: matches!(
-            obj.meta().transfer_syntax().trim_end_matches('\0'),
-            "1.2.840.10008.1.2" | "1.2.840.10008.1.2.1"
-        ),
-        slice_step: slice_step.and_then(|v| v.first().copied()).filter(|&s| s > 0.0),
-        kind,
-        transfer_syntax,
-        frame_places,
-    })
 }
 
 struct Plan {
@@ -277,29 +67,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
             "a folder of several multi-frame files is not supported: open one file".into(),
         ));
     }
-    for s in &slices {
-        let same = (s.rows, s.columns, s.bits_allocated, s.signed)
-            == (first.rows, first.columns, first.bits_allocated, first.signed);
-        if !same {
-            return Err(err(format!(
-                "slices differ: {}x{} {}-bit{} against {}x{} {}-bit{} in the first; one series must share one layout",
-                s.columns,
-                s.rows,
-                s.bits_allocated,
-                if s.signed { " signed" } else { "" },
-                first.columns,
-                first.rows,
-                first.bits_allocated,
-                if first.signed { " signed" } else { "" },
-            )));
-        }
-        if s.scaling != first.scaling {
-            return Err(err(format!(
-                "slices have different rescale slope/intercept ({} {} and {} {}); volcast needs one per series",
-                s.scaling.slope, s.scaling.intercept, first.scaling.slope, first.scaling.intercept
-            )));
-        }
-    }
+    check_one_layout(&slices, &first, label)?;
     let depth = if first.frames > 1 {
         first.frames
     } else {
@@ -307,22 +75,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
     };
     let dims = [first.columns, first.rows, depth];
     check_dims(dims)?;
-    if first.kind != Kind::Native {
-        let lossy = matches!(
-            first.transfer_syntax.as_str(),
-            "1.2.840.10008.1.2.4.50" | "1.2.840.10008.1.2.4.51" | "1.2.840.10008.1.2.4.91"
-        );
-        notes.push(format!(
-            "pixel data compressed as {} ({}), decoded{}",
-            codec::name(&first.transfer_syntax),
-            clip(&first.transfer_syntax),
-            if lossy {
-                "; this syntax can be lossy, so values may differ from the original scan"
-            } else {
-                ""
-            }
-        ));
-    }
+    notes.extend(compression_note(&first));
     let pixel_spacing = first.pixel_spacing.unwrap_or_else(|| {
         notes.push("no PixelSpacing: in-plane spacing 1 is used".into());
         [1.0, 1.0]
@@ -331,14 +84,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
     let placed: Vec<Placed> = if per_frame {
         first.frame_places.clone()
     } else {
-        slices
-            .iter()
-            .map(|s| Placed {
-                position: s.position,
-                orientation: s.orientation,
-                instance: s.instance,
-            })
-            .collect()
+        slices.iter().map(Slice::placed).collect()
     };
     let arrangement = geometry::arrange(&placed, pixel_spacing, first.slice_step).map_err(err)?;
     notes.extend(arrangement.notes);
@@ -366,6 +112,62 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
         modality: first.modality.clone(),
         notes,
     })
+}
+
+/// Every slice must share the first one's size, bit depth, signedness and rescale.
+fn check_one_layout(slices: &[Slice], first: &Slice, label: &str) -> Result<(), VolumeError> {
+    for s in slices {
+        let same = (s.rows, s.columns, s.bits_allocated, s.signed)
+            == (first.rows, first.columns, first.bits_allocated, first.signed);
+        if !same {
+            return Err(header_error(
+                label,
+                format!(
+                    "slices differ: {}x{} {}-bit{} against {}x{} {}-bit{} in the first; one series must share one \
+                     layout",
+                    s.columns,
+                    s.rows,
+                    s.bits_allocated,
+                    if s.signed { " signed" } else { "" },
+                    first.columns,
+                    first.rows,
+                    first.bits_allocated,
+                    if first.signed { " signed" } else { "" },
+                ),
+            ));
+        }
+        if s.scaling != first.scaling {
+            return Err(header_error(
+                label,
+                format!(
+                    "slices have different rescale slope/intercept ({} {} and {} {}); volcast needs one per series",
+                    s.scaling.slope, s.scaling.intercept, first.scaling.slope, first.scaling.intercept
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Says how compressed pixel data were decoded, and warns of a syntax that can be lossy.
+fn compression_note(first: &Slice) -> Option<String> {
+    if first.kind == Kind::Native {
+        return None;
+    }
+    let lossy = matches!(
+        first.transfer_syntax.as_str(),
+        "1.2.840.10008.1.2.4.50" | "1.2.840.10008.1.2.4.51" | "1.2.840.10008.1.2.4.91"
+    );
+    Some(format!(
+        "pixel data compressed as {} ({}), decoded{}",
+        codec::name(&first.transfer_syntax),
+        clip(&first.transfer_syntax),
+        if lossy {
+            "; this syntax can be lossy, so values may differ from the original scan"
+        } else {
+            ""
+        }
+    ))
 }
 
 /// The volume from the assembled pixels, placed and (for uneven spacing) resampled as `plan` says.
@@ -424,28 +226,8 @@ fn open_dicom(path: &Path, header_only: bool) -> Result<DefaultDicomObject, Volu
 /// slices; pass 2 reads the pixels slice by slice into the final buffer, so the peak is one volume plus one slice.
 pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, VolumeError> {
     let label = format::file_label(path);
-    let io = |source| VolumeError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
     let files: Vec<PathBuf> = if path.is_dir() {
-        let mut files = Vec::new();
-        for entry in std::fs::read_dir(path).map_err(io)? {
-            let entry = entry.map_err(io)?;
-            let p = entry.path();
-            let hidden = p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
-            if p.is_file() && !hidden {
-                files.push(p);
-                if files.len() > MAX_FILES {
-                    return Err(header_error(
-                        &label,
-                        format!("more than {MAX_FILES} files in the folder"),
-                    ));
-                }
-            }
-        }
-        files.sort();
-        files
+        list_folder(path, &label)?
     } else {
         vec![path.to_path_buf()]
     };
@@ -472,25 +254,7 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
             "{skipped} file(s) in the folder are not DICOM images and were skipped"
         ));
     }
-    // More than one series: the largest is loaded.
-    let mut series: Vec<(String, usize)> = Vec::new();
-    for s in &slices {
-        match series.iter_mut().find(|(uid, _)| *uid == s.series) {
-            Some((_, n)) => *n += 1,
-            None => series.push((s.series.clone(), 1)),
-        }
-    }
-    if series.len() > 1 {
-        series.sort_by_key(|s| std::cmp::Reverse(s.1));
-        let chosen = series[0].0.clone();
-        notes.push(format!(
-            "the folder holds {} series; the largest ({} slices, SeriesInstanceUID {}) is loaded",
-            series.len(),
-            series[0].1,
-            clip(&chosen)
-        ));
-        slices.retain(|s| s.series == chosen);
-    }
+    keep_largest_series(&mut slices, &mut notes);
     // Several temporal positions (TemporalPositionIdentifier): one volume per position, as time steps.
     let mut times: Vec<i64> = slices.iter().filter_map(|s| s.temporal).collect();
     times.sort_unstable();
@@ -510,6 +274,53 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         notes,
         progress,
     )
+}
+
+/// The visible files of a folder, sorted by name; at most [`MAX_FILES`].
+fn list_folder(path: &Path, label: &str) -> Result<Vec<PathBuf>, VolumeError> {
+    let io = |source| VolumeError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(path).map_err(io)? {
+        let entry = entry.map_err(io)?;
+        let p = entry.path();
+        let hidden = p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
+        if p.is_file() && !hidden {
+            files.push(p);
+            if files.len() > MAX_FILES {
+                return Err(header_error(
+                    label,
+                    format!("more than {MAX_FILES} files in the folder"),
+                ));
+            }
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+/// More than one series: the largest is kept (the first of those as large), and a note says so.
+fn keep_largest_series(slices: &mut Vec<Slice>, notes: &mut Vec<String>) {
+    let mut series: Vec<(String, usize)> = Vec::new();
+    for s in slices.iter() {
+        match series.iter_mut().find(|(uid, _)| *uid == s.series) {
+            Some((_, n)) => *n += 1,
+            None => series.push((s.series.clone(), 1)),
+        }
+    }
+    if series.len() > 1 {
+        series.sort_by_key(|s| std::cmp::Reverse(s.1));
+        let chosen = series[0].0.clone();
+        notes.push(format!(
+            "the folder holds {} series; the largest ({} slices, SeriesInstanceUID {}) is loaded",
+            series.len(),
+            series[0].1,
+            clip(&chosen)
+        ));
+        slices.retain(|s| s.series == chosen);
+    }
 }
 
 #[cfg(test)]

@@ -90,19 +90,7 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
         ));
     }
     let mut h = Header::new(FORMAT);
-    let mut ndims = None;
-    let mut dim_size: Option<Vec<i64>> = None;
-    let mut element_type = None;
-    let mut spacing = None;
-    let mut element_size = None;
-    let mut compressed = false;
-    let mut compressed_size: Option<u64> = None;
-    let mut binary = true;
-    let mut header_size: Option<Option<u64>> = None;
-    let mut channels = 1u32;
-    let mut data_file = None;
-    let mut matrix: Option<Vec<f64>> = None;
-    let mut anatomical_code: Option<[DVec3; 3]> = None;
+    let mut keys = Keys::default();
     for &(line, end) in &lines {
         if line.trim().is_empty() {
             continue;
@@ -110,26 +98,93 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
         let Some((key, value)) = line.split_once('=') else {
             return Err(err(format!("line '{}' is not 'Key = Value'", clip(line))));
         };
-        let value = value.trim();
-        let key = key.trim();
+        keys.read(file, key.trim(), value.trim(), end, &mut h)?;
+    }
+    let ndims = keys.size(file, &mut h)?;
+    h.voxel_type = keys.element_type.ok_or_else(|| err("no ElementType line".into()))?;
+    if let Some(text) = keys.spacing.take().or(keys.element_size.take()) {
+        let s: Vec<f64> = numbers(file, "ElementSpacing", &text, ndims as usize)?;
+        let mut sp = [1.0; 3];
+        for (i, v) in s.iter().take(3).enumerate() {
+            sp[i] = *v;
+        }
+        signed_spacing(&mut h, sp);
+    }
+    keys.place(ndims, &mut h);
+    h.encoding = match (keys.binary, keys.compressed) {
+        (true, false) => Encoding::Raw,
+        (true, true) => Encoding::Zlib,
+        (false, false) => Encoding::Ascii,
+        (false, true) => return Err(err("CompressedData = True needs BinaryData = True".into())),
+    };
+    if keys.compressed_size.is_some_and(|c| c == 0) {
+        return Err(err("CompressedDataSize = 0".into()));
+    }
+    h.location = keys.location(file, h.encoding)?;
+    Ok(h)
+}
+
+/// The header's keys that are checked against each other once all are read; the others go straight to the header.
+struct Keys {
+    ndims: Option<u32>,
+    dim_size: Option<Vec<i64>>,
+    element_type: Option<VoxelType>,
+    spacing: Option<String>,
+    element_size: Option<String>,
+    compressed: bool,
+    compressed_size: Option<u64>,
+    binary: bool,
+    /// `HeaderSize`: None if absent, Some(None) for -1 (the data end the file).
+    header_size: Option<Option<u64>>,
+    channels: u32,
+    /// `ElementDataFile` and the byte after its line.
+    data_file: Option<(String, usize)>,
+    matrix: Option<Vec<f64>>,
+    anatomical_code: Option<[DVec3; 3]>,
+}
+
+impl Default for Keys {
+    fn default() -> Self {
+        Self {
+            ndims: None,
+            dim_size: None,
+            element_type: None,
+            spacing: None,
+            element_size: None,
+            compressed: false,
+            compressed_size: None,
+            binary: true,
+            header_size: None,
+            channels: 1,
+            data_file: None,
+            matrix: None,
+            anatomical_code: None,
+        }
+    }
+}
+
+impl Keys {
+    /// One `Key = Value` line ending at byte `end`. A table: each arm reads one key (in any case).
+    fn read(&mut self, file: &str, key: &str, value: &str, end: usize, h: &mut Header) -> Result<(), VolumeError> {
+        let err = |problem: String| header_error(file, problem);
         match key.to_ascii_lowercase().as_str() {
             "objecttype" if !value.eq_ignore_ascii_case("image") => {
                 return Err(err(format!("ObjectType = {}: volcast reads images", clip(value))))
             }
-            "ndims" => ndims = Some(number::<u32>(file, "NDims", value)?),
+            "ndims" => self.ndims = Some(number::<u32>(file, "NDims", value)?),
             "dimsize" => {
                 let d: Result<Vec<i64>, _> = value.split_whitespace().map(|v| number(file, "DimSize", v)).collect();
-                dim_size = Some(d?);
+                self.dim_size = Some(d?);
             }
             "elementtype" => {
-                element_type = Some(voxel_type(value).ok_or_else(|| VolumeError::UnsupportedType {
+                self.element_type = Some(voxel_type(value).ok_or_else(|| VolumeError::UnsupportedType {
                     file: file.to_string(),
                     format: FORMAT,
                     given: clip(value),
                 })?)
             }
-            "elementspacing" => spacing = Some(value.to_string()),
-            "elementsize" => element_size = Some(value.to_string()),
+            "elementspacing" => self.spacing = Some(value.to_string()),
+            "elementsize" => self.element_size = Some(value.to_string()),
             "offset" | "origin" | "position" => {
                 let parts: Vec<f64> = value.split_whitespace().filter_map(|p| p.parse().ok()).collect();
                 if parts.len() >= 3 {
@@ -143,113 +198,113 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
                     Endian::Little
                 }
             }
-            "binarydata" => binary = truth(file, key, value)?,
-            "compresseddata" => compressed = truth(file, key, value)?,
-            "compresseddatasize" => compressed_size = Some(number(file, "CompressedDataSize", value)?),
+            "binarydata" => self.binary = truth(file, key, value)?,
+            "compresseddata" => self.compressed = truth(file, key, value)?,
+            "compresseddatasize" => self.compressed_size = Some(number(file, "CompressedDataSize", value)?),
             "headersize" => {
-                header_size = Some(match number::<i64>(file, "HeaderSize", value)? {
+                self.header_size = Some(match number::<i64>(file, "HeaderSize", value)? {
                     -1 => None,
                     n => Some(u64::try_from(n).map_err(|_| err(format!("HeaderSize {n} must be -1 or at least 0")))?),
                 })
             }
-            "elementnumberofchannels" => channels = number(file, "ElementNumberOfChannels", value)?,
-            "transformmatrix" | "rotation" | "orientation" => {
-                let m: Vec<f64> = value.split_whitespace().filter_map(|p| p.parse().ok()).collect();
-                if m.len() < 9 || m.iter().any(|v| !v.is_finite()) {
-                    return Err(err(format!(
-                        "{key} '{}' is not nine numbers (a 3-D direction matrix)",
-                        clip(value)
-                    )));
-                }
-                matrix = Some(m);
-            }
+            "elementnumberofchannels" => self.channels = number(file, "ElementNumberOfChannels", value)?,
+            "transformmatrix" | "rotation" | "orientation" => self.matrix = Some(direction_matrix(file, key, value)?),
             // ITK writes '????' (one '?' per axis) where it has no code: 4-D images, oblique directions.
             "anatomicalorientation" if !value.is_empty() && value.chars().all(|c| c == '?') => {}
             "anatomicalorientation" => {
-                anatomical_code = Some(from_orientation_code(value).ok_or_else(|| {
+                self.anatomical_code = Some(from_orientation_code(value).ok_or_else(|| {
                     err(format!(
                         "AnatomicalOrientation '{}' is not three of R/L, A/P, S/I, one of each",
                         clip(value)
                     ))
                 })?)
             }
-            "elementdatafile" => data_file = Some((value.to_string(), end)),
+            "elementdatafile" => self.data_file = Some((value.to_string(), end)),
             _ => {}
         }
+        Ok(())
     }
-    let ndims = ndims.ok_or_else(|| err("no NDims line".into()))?;
-    if !(1..=4).contains(&ndims) {
-        return Err(err(format!("NDims = {ndims} is not supported: volcast reads 1 to 4")));
-    }
-    let dim_size = dim_size.ok_or_else(|| err("no DimSize line".into()))?;
-    if dim_size.len() != ndims as usize {
-        return Err(err(format!(
-            "DimSize has {} values but NDims is {ndims}",
-            dim_size.len()
-        )));
-    }
-    h.dims = format::dims_from(file, "DimSize", &dim_size)?;
-    // The fourth (slowest) axis is time: every step is loaded.
-    if ndims == 4 {
-        h.timesteps = dim_size[3].max(1) as u32;
-    }
-    if channels != 1 {
-        return Err(err(format!(
-            "ElementNumberOfChannels = {channels}: volcast reads one value per voxel"
-        )));
-    }
-    h.voxel_type = element_type.ok_or_else(|| err("no ElementType line".into()))?;
-    if let Some(text) = spacing.or(element_size) {
-        let s: Vec<f64> = numbers(file, "ElementSpacing", &text, ndims as usize)?;
-        let mut sp = [1.0; 3];
-        for (i, v) in s.iter().take(3).enumerate() {
-            sp[i] = *v;
+
+    /// Checks NDims, DimSize and the channels and sets the header's size; returns NDims.
+    fn size(&self, file: &str, h: &mut Header) -> Result<u32, VolumeError> {
+        let err = |problem: String| header_error(file, problem);
+        let ndims = self.ndims.ok_or_else(|| err("no NDims line".into()))?;
+        if !(1..=4).contains(&ndims) {
+            return Err(err(format!("NDims = {ndims} is not supported: volcast reads 1 to 4")));
         }
-        signed_spacing(&mut h, sp);
-    }
-    // ITK's physical space is LPS. The direction matrix holds axis i's direction in its i-th triple (ITK's
-    // MetaImageIO::Read: SetDirection(i, m[3i..3i + 3])); without one, AnatomicalOrientation names the axes.
-    let directions = match (&matrix, anatomical_code) {
-        // A 4-D image's matrix is 4x4 (ITK writes NDims x NDims); its spatial part is the first three of the
-        // first three rows.
-        (Some(m), _) => {
-            let n = if ndims == 4 && m.len() >= 16 { 4 } else { 3 };
-            Some([0, 1, 2].map(|i| DVec3::new(m[n * i], m[n * i + 1], m[n * i + 2])))
+        let dim_size = self.dim_size.as_deref().ok_or_else(|| err("no DimSize line".into()))?;
+        if dim_size.len() != ndims as usize {
+            return Err(err(format!(
+                "DimSize has {} values but NDims is {ndims}",
+                dim_size.len()
+            )));
         }
-        (None, code) => code,
-    };
-    if let Some(directions) = directions {
-        let columns = [0, 1, 2].map(|i| directions[i].normalize_or_zero() * h.spacing[i]);
-        let origin = DVec3::from_array(h.origin.unwrap_or([0.0; 3]));
-        h.geometry = Some(Geometry::anatomical(
-            geometry::LPS_TO_RAS * geometry::from_columns(columns, origin),
+        h.dims = format::dims_from(file, "DimSize", dim_size)?;
+        // The fourth (slowest) axis is time: every step is loaded.
+        if ndims == 4 {
+            h.timesteps = dim_size[3].max(1) as u32;
+        }
+        if self.channels != 1 {
+            return Err(err(format!(
+                "ElementNumberOfChannels = {}: volcast reads one value per voxel",
+                self.channels
+            )));
+        }
+        Ok(ndims)
+    }
+
+    /// ITK's physical space is LPS. The direction matrix holds axis i's direction in its i-th triple (ITK's
+    /// MetaImageIO::Read: SetDirection(i, m[3i..3i + 3])); without one, AnatomicalOrientation names the axes.
+    fn place(&self, ndims: u32, h: &mut Header) {
+        let directions = match (&self.matrix, self.anatomical_code) {
+            // A 4-D image's matrix is 4x4 (ITK writes NDims x NDims); its spatial part is the first three of the
+            // first three rows.
+            (Some(m), _) => {
+                let n = if ndims == 4 && m.len() >= 16 { 4 } else { 3 };
+                Some([0, 1, 2].map(|i| DVec3::new(m[n * i], m[n * i + 1], m[n * i + 2])))
+            }
+            (None, code) => code,
+        };
+        if let Some(directions) = directions {
+            let columns = [0, 1, 2].map(|i| directions[i].normalize_or_zero() * h.spacing[i]);
+            let origin = DVec3::from_array(h.origin.unwrap_or([0.0; 3]));
+            h.geometry = Some(Geometry::anatomical(
+                geometry::LPS_TO_RAS * geometry::from_columns(columns, origin),
+            ));
+        }
+    }
+
+    /// Where the voxels are: after the header (`LOCAL`) or in the one file named, after `HeaderSize` bytes.
+    fn location(self, file: &str, encoding: Encoding) -> Result<DataLocation, VolumeError> {
+        let err = |problem: String| header_error(file, problem);
+        let (name, end) = self.data_file.ok_or_else(|| err("no ElementDataFile line".into()))?;
+        let skip = self.header_size.unwrap_or(Some(0));
+        if skip.is_none() && encoding != Encoding::Raw {
+            return Err(err("HeaderSize = -1 only works with uncompressed binary data".into()));
+        }
+        if name.eq_ignore_ascii_case("LOCAL") {
+            Ok(DataLocation::Inline(Some(end as u64)))
+        } else if name.eq_ignore_ascii_case("LIST") || name.contains('%') || name.split_whitespace().count() > 1 {
+            Err(err(format!(
+                "ElementDataFile = {}: lists and numbered file patterns are not supported, only LOCAL or one file",
+                clip(&name)
+            )))
+        } else {
+            Ok(DataLocation::Detached { name, skip })
+        }
+    }
+}
+
+/// `TransformMatrix` (or its synonyms `Rotation`, `Orientation`): at least nine finite numbers.
+fn direction_matrix(file: &str, key: &str, value: &str) -> Result<Vec<f64>, VolumeError> {
+    let m: Vec<f64> = value.split_whitespace().filter_map(|p| p.parse().ok()).collect();
+    if m.len() < 9 || m.iter().any(|v| !v.is_finite()) {
+        return Err(header_error(
+            file,
+            format!("{key} '{}' is not nine numbers (a 3-D direction matrix)", clip(value)),
         ));
     }
-    h.encoding = match (binary, compressed) {
-        (true, false) => Encoding::Raw,
-        (true, true) => Encoding::Zlib,
-        (false, false) => Encoding::Ascii,
-        (false, true) => return Err(err("CompressedData = True needs BinaryData = True".into())),
-    };
-    if compressed_size.is_some_and(|c| c == 0) {
-        return Err(err("CompressedDataSize = 0".into()));
-    }
-    let (name, end) = data_file.ok_or_else(|| err("no ElementDataFile line".into()))?;
-    let skip = header_size.unwrap_or(Some(0));
-    if skip.is_none() && h.encoding != Encoding::Raw {
-        return Err(err("HeaderSize = -1 only works with uncompressed binary data".into()));
-    }
-    h.location = if name.eq_ignore_ascii_case("LOCAL") {
-        DataLocation::Inline(Some(end as u64))
-    } else if name.eq_ignore_ascii_case("LIST") || name.contains('%') || name.split_whitespace().count() > 1 {
-        return Err(err(format!(
-            "ElementDataFile = {}: lists and numbered file patterns are not supported, only LOCAL or one file",
-            clip(&name)
-        )));
-    } else {
-        DataLocation::Detached { name, skip }
-    };
-    Ok(h)
+    Ok(m)
 }
 
 /// Loads a MetaImage with `ElementDataFile = LOCAL` held in memory.

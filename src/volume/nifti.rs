@@ -9,7 +9,7 @@ use super::decode::{self, DecodeError, Endian, Progress};
 use super::format::{self, header_error, DataLocation, Encoding, Header, Source};
 use super::geometry::{self, Geometry};
 use super::{Scaling, Volume, VolumeError, VoxelType};
-use glam::DMat3;
+use glam::{DMat3, DMat4};
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::Path;
@@ -59,23 +59,7 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, VolumeError> {
 
 fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let err = |problem: String| header_error(file, problem);
-    if bytes.len() < HEADER_SIZE {
-        return Err(err(format!(
-            "{} bytes is too short for a NIfTI-1 header (348 bytes)",
-            bytes.len()
-        )));
-    }
-    let endian = if bytes[..4] == 348i32.to_le_bytes() {
-        Endian::Little
-    } else if bytes[..4] == 348i32.to_be_bytes() {
-        Endian::Big
-    } else if bytes[..4] == 540i32.to_le_bytes() || bytes[..4] == 540i32.to_be_bytes() {
-        return Err(err(
-            "NIfTI-2 is not supported; convert to NIfTI-1 (e.g. nibabel, c3d)".into()
-        ));
-    } else {
-        return Err(err("not a NIfTI-1 file: sizeof_hdr is not 348".into()));
-    };
+    let endian = byte_order(bytes, file)?;
     let magic = &bytes[344..348];
     let single_file = match magic {
         b"n+1\0" => true,
@@ -85,9 +69,68 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let f = Fields { bytes, endian };
     let mut h = Header::new(FORMAT);
     h.endian = endian;
+    let ndim = read_size(&f, file, &mut h)?;
+    h.voxel_type = voxel_type(file, f.i16(70))?;
+    let spacing = read_spacing(&f, ndim, &mut h);
+    let vox_offset = f.f32(108);
+    if !(0.0..1e12).contains(&vox_offset) {
+        return Err(err(format!("vox_offset {vox_offset} is not a valid byte offset")));
+    }
+    let vox_offset = vox_offset as u64;
+    if single_file && vox_offset < HEADER_SIZE as u64 {
+        return Err(err(format!(
+            "vox_offset {vox_offset} points inside the 348-byte header"
+        )));
+    }
+    let (slope, intercept) = (f64::from(f.f32(112)), f64::from(f.f32(116)));
+    // The standard: scl_slope == 0 means no scaling; non-finite values are treated the same.
+    if slope != 0.0 && slope.is_finite() && intercept.is_finite() && (slope != 1.0 || intercept != 0.0) {
+        h.scaling = Scaling { slope, intercept };
+    }
+    let affine = best_affine(&f, file, spacing, &mut h)?;
+    h.geometry = Some(Geometry::anatomical(affine));
+    h.spacing = Geometry::anatomical(affine).spacing();
+    h.location = if single_file {
+        DataLocation::Inline(Some(vox_offset))
+    } else {
+        DataLocation::Detached {
+            name: String::new(),
+            skip: Some(vox_offset),
+        }
+    };
+    Ok(h)
+}
+
+/// The byte order that makes sizeof_hdr 348; refuses short headers, NIfTI-2 and other files.
+fn byte_order(bytes: &[u8], file: &str) -> Result<Endian, VolumeError> {
+    let err = |problem: String| header_error(file, problem);
+    if bytes.len() < HEADER_SIZE {
+        return Err(err(format!(
+            "{} bytes is too short for a NIfTI-1 header (348 bytes)",
+            bytes.len()
+        )));
+    }
+    if bytes[..4] == 348i32.to_le_bytes() {
+        Ok(Endian::Little)
+    } else if bytes[..4] == 348i32.to_be_bytes() {
+        Ok(Endian::Big)
+    } else if bytes[..4] == 540i32.to_le_bytes() || bytes[..4] == 540i32.to_be_bytes() {
+        Err(err(
+            "NIfTI-2 is not supported; convert to NIfTI-1 (e.g. nibabel, c3d)".into()
+        ))
+    } else {
+        Err(err("not a NIfTI-1 file: sizeof_hdr is not 348".into()))
+    }
+}
+
+/// Sets the header's dimensions and time steps from `dim`; returns dim[0], the number of dimensions.
+fn read_size(f: &Fields, file: &str, h: &mut Header) -> Result<i16, VolumeError> {
     let ndim = f.i16(40);
     if !(1..=7).contains(&ndim) {
-        return Err(err(format!("dim[0] = {ndim}: the number of dimensions must be 1 to 7")));
+        return Err(header_error(
+            file,
+            format!("dim[0] = {ndim}: the number of dimensions must be 1 to 7"),
+        ));
     }
     let dim: Vec<i64> = (1..=ndim as usize).map(|i| i64::from(f.i16(40 + 2 * i))).collect();
     h.dims = format::dims_from(file, "dim", &dim)?;
@@ -99,8 +142,12 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
             "{ndim}-D NIfTI: only the first of {extra} groups along dim[5..{ndim}] is loaded"
         ));
     }
-    let datatype = f.i16(70);
-    h.voxel_type = match datatype {
+    Ok(ndim)
+}
+
+/// The voxel type of a NIfTI `datatype` code; the types volcast cannot read are named in the error.
+fn voxel_type(file: &str, datatype: i16) -> Result<VoxelType, VolumeError> {
+    Ok(match datatype {
         2 => VoxelType::U8,
         4 => VoxelType::I16,
         8 => VoxelType::I32,
@@ -128,7 +175,11 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
                 given: format!("datatype {other} ({name})"),
             });
         }
-    };
+    })
+}
+
+/// The spacing from pixdim (1 where it is unusable), noting a unit other than mm; sets and returns it.
+fn read_spacing(f: &Fields, ndim: i16, h: &mut Header) -> [f64; 3] {
     let mut spacing = [1.0f64; 3];
     for (i, s) in spacing.iter_mut().enumerate() {
         if i < ndim as usize {
@@ -142,7 +193,7 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
         }
     }
     h.spacing = spacing;
-    let units = match bytes[123] & 0x07 {
+    let units = match f.bytes[123] & 0x07 {
         1 => Some("m"),
         2 => Some("mm"),
         3 => Some("µm"),
@@ -152,23 +203,12 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
         h.notes
             .push(format!("spacing is in {u}, as the header says (not converted to mm)"));
     }
-    let vox_offset = f.f32(108);
-    if !(0.0..1e12).contains(&vox_offset) {
-        return Err(err(format!("vox_offset {vox_offset} is not a valid byte offset")));
-    }
-    let vox_offset = vox_offset as u64;
-    if single_file && vox_offset < HEADER_SIZE as u64 {
-        return Err(err(format!(
-            "vox_offset {vox_offset} points inside the 348-byte header"
-        )));
-    }
-    let (slope, intercept) = (f64::from(f.f32(112)), f64::from(f.f32(116)));
-    // The standard: scl_slope == 0 means no scaling; non-finite values are treated the same.
-    if slope != 0.0 && slope.is_finite() && intercept.is_finite() && (slope != 1.0 || intercept != 0.0) {
-        h.scaling = Scaling { slope, intercept };
-    }
-    // nibabel's precedence (Nifti1Header.get_best_affine): the sform if its code is set, else the qform, else
-    // the "base" affine of an Analyze image: pixdim with x flipped (radiological storage), centred on the volume.
+    spacing
+}
+
+/// nibabel's precedence (Nifti1Header.get_best_affine): the sform if its code is set, else the qform, else the
+/// "base" affine of an Analyze image: pixdim with x flipped (radiological storage), centred on the volume.
+fn best_affine(f: &Fields, file: &str, spacing: [f64; 3], h: &mut Header) -> Result<DMat4, VolumeError> {
     let (qform, sform) = (f.i16(252), f.i16(254));
     let affine = if sform > 0 {
         let row = |at: usize| [0, 1, 2, 3].map(|c| f64::from(f.f32(at + 4 * c)));
@@ -190,22 +230,15 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
         ])
     };
     if affine.to_cols_array().iter().any(|v| !v.is_finite()) || DMat3::from_mat4(affine).determinant() == 0.0 {
-        return Err(err(format!(
-            "its {} gives no valid voxel-to-world affine (not finite, or axes that are zero or parallel)",
-            if sform > 0 { "sform" } else { "qform" }
-        )));
+        return Err(header_error(
+            file,
+            format!(
+                "its {} gives no valid voxel-to-world affine (not finite, or axes that are zero or parallel)",
+                if sform > 0 { "sform" } else { "qform" }
+            ),
+        ));
     }
-    h.geometry = Some(Geometry::anatomical(affine));
-    h.spacing = Geometry::anatomical(affine).spacing();
-    h.location = if single_file {
-        DataLocation::Inline(Some(vox_offset))
-    } else {
-        DataLocation::Detached {
-            name: String::new(),
-            skip: Some(vox_offset),
-        }
-    };
-    Ok(h)
+    Ok(affine)
 }
 
 /// Loads an uncompressed or gzip-compressed single-file NIfTI-1 held in memory.

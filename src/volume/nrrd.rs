@@ -43,16 +43,7 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let (lines, blank_found) = format::header_lines(bytes, |line| line.is_empty());
     let header_end = lines.last().map_or(0, |&(_, end)| end);
     let mut h = Header::new(FORMAT);
-    let mut dimension = None;
-    let mut sizes: Option<Vec<i64>> = None;
-    let mut voxel_type = None;
-    let mut spacings: Option<Vec<f64>> = None;
-    let mut directions: Option<Vec<Option<[f64; 3]>>> = None;
-    let mut space: Option<Space> = None;
-    let mut encoding = None;
-    let mut data_file = None;
-    let mut line_skip = 0u64;
-    let mut byte_skip = Some(0u64);
+    let mut f = Fields::default();
     for &(line, _) in lines.iter().skip(1) {
         if line.is_empty() || line.starts_with('#') || line.contains(":=") {
             continue;
@@ -60,11 +51,95 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
         let Some((field, value)) = line.split_once(':') else {
             return Err(err(format!("line '{}' is not 'field: value'", clip(line))));
         };
-        let value = value.trim();
-        match field.trim().to_ascii_lowercase().as_str() {
-            "dimension" => dimension = Some(number::<u32>(file, "dimension", value)?),
+        f.read(file, &field.trim().to_ascii_lowercase(), value.trim(), &mut h)?;
+    }
+    let dimension = f.dimension.ok_or_else(|| err("no 'dimension' field".into()))?;
+    let sizes = f.sizes.as_deref().ok_or_else(|| err("no 'sizes' field".into()))?;
+    if !(1..=4).contains(&dimension) {
+        return Err(err(format!(
+            "dimension {dimension} is not supported: volcast reads 1 to 4"
+        )));
+    }
+    if sizes.len() != dimension as usize {
+        return Err(err(format!(
+            "'sizes' has {} values but dimension is {dimension}",
+            sizes.len()
+        )));
+    }
+    h.dims = format::dims_from(file, "sizes", sizes)?;
+    // The fourth (slowest) axis is time or a list of volumes: every step is loaded.
+    if dimension == 4 {
+        h.timesteps = sizes[3].max(1) as u32;
+    }
+    h.voxel_type = f.voxel_type.ok_or_else(|| err("no 'type' field".into()))?;
+    h.encoding = f.encoding.ok_or_else(|| err("no 'encoding' field".into()))?;
+    let spacing = f.place(file, dimension as usize, &mut h)?;
+    signed_spacing(&mut h, spacing);
+    if h.voxel_type.size() == 1 {
+        h.endian = Endian::Little;
+    }
+    let skip = |base: u64| f.byte_skip.map(|b| base.saturating_add(b));
+    if f.line_skip > 0 {
+        return Err(err("'line skip' is not supported; use 'byte skip'".into()));
+    }
+    h.location = match f.data_file.take() {
+        Some(name) => DataLocation::Detached { name, skip: skip(0) },
+        None => {
+            if !blank_found {
+                return Err(err(
+                    "no blank line ends the header and no 'data file' is named: where are the voxels?".into(),
+                ));
+            }
+            DataLocation::Inline(skip(header_end as u64))
+        }
+    };
+    if f.byte_skip.is_none() && h.encoding != Encoding::Raw {
+        return Err(err("'byte skip: -1' only works with raw encoding".into()));
+    }
+    Ok(h)
+}
+
+/// The header's fields that are checked against each other once all are read; the others go straight to the
+/// header.
+struct Fields {
+    dimension: Option<u32>,
+    sizes: Option<Vec<i64>>,
+    voxel_type: Option<VoxelType>,
+    spacings: Option<Vec<f64>>,
+    directions: Option<Vec<Option<[f64; 3]>>>,
+    space: Option<Space>,
+    encoding: Option<Encoding>,
+    data_file: Option<String>,
+    line_skip: u64,
+    /// None for `byte skip: -1` (the data end the file).
+    byte_skip: Option<u64>,
+}
+
+impl Default for Fields {
+    fn default() -> Self {
+        Self {
+            dimension: None,
+            sizes: None,
+            voxel_type: None,
+            spacings: None,
+            directions: None,
+            space: None,
+            encoding: None,
+            data_file: None,
+            line_skip: 0,
+            byte_skip: Some(0),
+        }
+    }
+}
+
+impl Fields {
+    /// One `field: value` line (field in lower case). A table: each arm reads one field.
+    fn read(&mut self, file: &str, field: &str, value: &str, h: &mut Header) -> Result<(), VolumeError> {
+        let err = |problem: String| header_error(file, problem);
+        match field {
+            "dimension" => self.dimension = Some(number::<u32>(file, "dimension", value)?),
             "type" => {
-                voxel_type = Some(voxel_type_of(value).ok_or_else(|| VolumeError::UnsupportedType {
+                self.voxel_type = Some(voxel_type_of(value).ok_or_else(|| VolumeError::UnsupportedType {
                     file: file.to_string(),
                     format: FORMAT,
                     given: clip(value),
@@ -72,12 +147,12 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
             }
             "sizes" => {
                 let s: Result<Vec<i64>, _> = value.split_whitespace().map(|v| number(file, "sizes", v)).collect();
-                sizes = Some(s?);
+                self.sizes = Some(s?);
             }
-            "spacings" => spacings = Some(value.split_whitespace().map(nrrd_float).collect()),
-            "space directions" => directions = Some(parse_directions(file, value)?),
+            "spacings" => self.spacings = Some(value.split_whitespace().map(nrrd_float).collect()),
+            "space directions" => self.directions = Some(parse_directions(file, value)?),
             "space" => {
-                space = Some(Space::parse(value).ok_or_else(|| {
+                self.space = Some(Space::parse(value).ok_or_else(|| {
                     err(format!(
                         "space '{}' is not one the NRRD format names (e.g. right-anterior-superior, \
                          left-posterior-superior, scanner-xyz, 3D-right-handed)",
@@ -90,19 +165,7 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
                     parse_vector(value).ok_or_else(|| err(format!("space origin '{}' is not (x,y,z)", clip(value))))?;
                 h.origin = Some(v);
             }
-            "encoding" => {
-                encoding = Some(match value.to_ascii_lowercase().as_str() {
-                    "raw" => Encoding::Raw,
-                    "gzip" | "gz" => Encoding::Gzip,
-                    "ascii" | "text" | "txt" => Encoding::Ascii,
-                    other => {
-                        return Err(err(format!(
-                            "encoding '{}' is not supported: use raw, gzip or ascii",
-                            clip(other)
-                        )))
-                    }
-                })
-            }
+            "encoding" => self.encoding = Some(encoding_of(file, value)?),
             "endian" => {
                 h.endian = Endian::parse(value)
                     .ok_or_else(|| err(format!("endian '{}' must be little or big", clip(value))))?
@@ -114,11 +177,11 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
                         clip(value)
                     )));
                 }
-                data_file = Some(value.to_string());
+                self.data_file = Some(value.to_string());
             }
-            "line skip" | "lineskip" => line_skip = number(file, "line skip", value)?,
+            "line skip" | "lineskip" => self.line_skip = number(file, "line skip", value)?,
             "byte skip" | "byteskip" => {
-                byte_skip = match number::<i64>(file, "byte skip", value)? {
+                self.byte_skip = match number::<i64>(file, "byte skip", value)? {
                     -1 => None,
                     n => Some(u64::try_from(n).map_err(|_| err(format!("byte skip {n} must be -1 or at least 0")))?),
                 }
@@ -129,95 +192,75 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
             | "thicknesses" | "number" => {}
             other => h.notes.push(format!("NRRD field '{}' ignored", clip(other))),
         }
+        Ok(())
     }
-    let dimension = dimension.ok_or_else(|| err("no 'dimension' field".into()))?;
-    let sizes = sizes.ok_or_else(|| err("no 'sizes' field".into()))?;
-    if !(1..=4).contains(&dimension) {
-        return Err(err(format!(
-            "dimension {dimension} is not supported: volcast reads 1 to 4"
-        )));
-    }
-    if sizes.len() != dimension as usize {
-        return Err(err(format!(
-            "'sizes' has {} values but dimension is {dimension}",
-            sizes.len()
-        )));
-    }
-    h.dims = format::dims_from(file, "sizes", &sizes)?;
-    // The fourth (slowest) axis is time or a list of volumes: every step is loaded.
-    if dimension == 4 {
-        h.timesteps = sizes[3].max(1) as u32;
-    }
-    h.voxel_type = voxel_type.ok_or_else(|| err("no 'type' field".into()))?;
-    h.encoding = encoding.ok_or_else(|| err("no 'encoding' field".into()))?;
-    let mut spacing = [1.0; 3];
-    if let Some(dirs) = &directions {
-        if dirs.len() != dimension as usize {
-            return Err(err(format!(
-                "'space directions' has {} entries but dimension is {dimension}",
-                dirs.len()
-            )));
-        }
-        // Columns of the voxel-to-space matrix; a non-spatial axis ("none") keeps a unit step along its own axis.
-        let mut columns = [DVec3::X, DVec3::Y, DVec3::Z];
-        for (i, d) in dirs.iter().take(3).enumerate() {
-            if let Some(v) = d {
-                columns[i] = DVec3::from_array(*v);
-                spacing[i] = columns[i].length();
+
+    /// Places the axes by `space directions` (in `space`), else sizes them by `spacings`; returns the spacing.
+    fn place(&self, file: &str, dimension: usize, h: &mut Header) -> Result<[f64; 3], VolumeError> {
+        let err = |problem: String| header_error(file, problem);
+        let mut spacing = [1.0; 3];
+        if let Some(dirs) = &self.directions {
+            if dirs.len() != dimension {
+                return Err(err(format!(
+                    "'space directions' has {} entries but dimension is {dimension}",
+                    dirs.len()
+                )));
+            }
+            // Columns of the voxel-to-space matrix; a non-spatial axis ("none") keeps a unit step along its own
+            // axis.
+            let mut columns = [DVec3::X, DVec3::Y, DVec3::Z];
+            for (i, d) in dirs.iter().take(3).enumerate() {
+                if let Some(v) = d {
+                    columns[i] = DVec3::from_array(*v);
+                    spacing[i] = columns[i].length();
+                }
+            }
+            let space = self.space.unwrap_or(Space::Unnamed);
+            let origin = DVec3::from_array(h.origin.unwrap_or([0.0; 3]));
+            let affine = space.to_world() * geometry::from_columns(columns, origin);
+            h.geometry = Some(Geometry {
+                affine,
+                anatomical: space.anatomical(),
+            });
+            if space == Space::LeftHanded {
+                h.notes
+                    .push("space 3D-left-handed: x is mirrored to place it in volcast's right-handed world".into());
+            }
+        } else if let Some(s) = &self.spacings {
+            if s.len() != dimension {
+                return Err(err(format!(
+                    "'spacings' has {} values but dimension is {dimension}",
+                    s.len()
+                )));
+            }
+            for (i, v) in s.iter().take(3).enumerate() {
+                // NaN marks a non-spatial axis in NRRD.
+                if !v.is_nan() {
+                    spacing[i] = *v;
+                }
+            }
+            if self.space.is_some_and(|s| s.anatomical()) {
+                h.notes.push(
+                    "a space is named but no 'space directions' place the axes in it: no orientation applied".into(),
+                );
             }
         }
-        let space = space.unwrap_or(Space::Unnamed);
-        let origin = DVec3::from_array(h.origin.unwrap_or([0.0; 3]));
-        let affine = space.to_world() * geometry::from_columns(columns, origin);
-        h.geometry = Some(Geometry {
-            affine,
-            anatomical: space.anatomical(),
-        });
-        if space == Space::LeftHanded {
-            h.notes
-                .push("space 3D-left-handed: x is mirrored to place it in volcast's right-handed world".into());
-        }
-    } else if let Some(s) = &spacings {
-        if s.len() != dimension as usize {
-            return Err(err(format!(
-                "'spacings' has {} values but dimension is {dimension}",
-                s.len()
-            )));
-        }
-        for (i, v) in s.iter().take(3).enumerate() {
-            // NaN marks a non-spatial axis in NRRD.
-            if !v.is_nan() {
-                spacing[i] = *v;
-            }
-        }
-        if space.is_some_and(|s| s.anatomical()) {
-            h.notes
-                .push("a space is named but no 'space directions' place the axes in it: no orientation applied".into());
-        }
+        Ok(spacing)
     }
-    signed_spacing(&mut h, spacing);
-    if h.voxel_type.size() == 1 {
-        h.endian = Endian::Little;
-    }
-    let skip = |base: u64| byte_skip.map(|b| base.saturating_add(b));
-    if line_skip > 0 {
-        return Err(err("'line skip' is not supported; use 'byte skip'".into()));
-    }
-    h.location = match data_file {
-        Some(name) => DataLocation::Detached { name, skip: skip(0) },
-        None => {
-            if !blank_found {
-                return Err(err(
-                    "no blank line ends the header and no 'data file' is named: where are the voxels?".into(),
-                ));
-            }
-            DataLocation::Inline(skip(header_end as u64))
+}
+
+fn encoding_of(file: &str, value: &str) -> Result<Encoding, VolumeError> {
+    Ok(match value.to_ascii_lowercase().as_str() {
+        "raw" => Encoding::Raw,
+        "gzip" | "gz" => Encoding::Gzip,
+        "ascii" | "text" | "txt" => Encoding::Ascii,
+        other => {
+            return Err(header_error(
+                file,
+                format!("encoding '{}' is not supported: use raw, gzip or ascii", clip(other)),
+            ))
         }
-    };
-    if byte_skip.is_none() && h.encoding != Encoding::Raw {
-        return Err(err("'byte skip: -1' only works with raw encoding".into()));
-    }
-    Ok(h)
+    })
 }
 
 /// The NRRD format's `space` values (teem's nrrdSpace), and how each maps to volcast's world.

@@ -76,92 +76,18 @@ pub(crate) fn load_raw_with_progress(
         Some(n) => n.to_string_lossy().into_owned(),
         None => path.display().to_string(),
     };
-    let from_name = split_scivis_name(&file_name);
-
-    let dims = opts.dims.or(from_name.as_ref().map(|(_, dims, _)| *dims));
-    let voxel_type = match (opts.voxel_type, &from_name) {
-        (Some(t), _) => Some(t),
-        (None, Some((_, _, type_text))) => {
-            Some(
-                VoxelType::parse(type_text).ok_or_else(|| VolumeError::UnknownTypeInName {
-                    file: file_name.clone(),
-                    given: type_text.to_string(),
-                })?,
-            )
-        }
-        (None, None) => None,
-    };
-    let (dims, voxel_type) = match (dims, voxel_type) {
-        (Some(d), Some(t)) => (d, t),
-        (d, t) => {
-            let missing = match (d, t) {
-                (None, None) => "dimensions and voxel type",
-                (None, _) => "dimensions",
-                _ => "voxel type",
-            };
-            return Err(VolumeError::MissingLayout {
-                file: file_name,
-                missing,
-            });
-        }
-    };
+    let (name, dims, voxel_type) = layout(path, &file_name, opts)?;
     let spacing = opts.spacing.unwrap_or([1.0; 3]);
-    let name = match &from_name {
-        Some((name, _, _)) => name.clone(),
-        None => path
-            .file_stem()
-            .map_or_else(|| file_name.clone(), |s| s.to_string_lossy().into_owned()),
-    };
-
-    let count = check_dims(dims)?;
-    check_spacing(dims, spacing)?;
-    let too_large = || VolumeError::TooLarge {
-        dims,
-        voxel_type,
-        bytes: count.saturating_mul(voxel_type.size() as u64),
-    };
-    let expected = count.checked_mul(voxel_type.size() as u64).ok_or_else(too_large)?;
-    // On a 32-bit host a legal volume can still be unaddressable.
-    let count_usize = usize::try_from(count).map_err(|_| too_large())?;
-    usize::try_from(expected).map_err(|_| too_large())?;
+    let (count, expected) = sizes(dims, voxel_type, spacing)?;
+    check_file_size(path, &file_name, extras, dims, voxel_type, expected)?;
 
     let io_error = |source| VolumeError::Io {
         path: path.to_path_buf(),
         source,
     };
-    let metadata = std::fs::metadata(path).map_err(io_error)?;
-    if !metadata.is_file() {
-        return Err(VolumeError::NotAFile {
-            path: path.to_path_buf(),
-        });
-    }
-    if metadata.len().checked_sub(extras.header_bytes) != Some(expected) {
-        if extras.header_bytes > 0 {
-            return Err(VolumeError::Header {
-                file: file_name,
-                problem: format!(
-                    "the file is {} bytes but a {}-byte header plus {}x{}x{} {voxel_type} needs {}",
-                    metadata.len(),
-                    extras.header_bytes,
-                    dims[0],
-                    dims[1],
-                    dims[2],
-                    u128::from(extras.header_bytes) + u128::from(expected)
-                ),
-            });
-        }
-        return Err(VolumeError::SizeMismatch {
-            file: file_name,
-            actual: metadata.len(),
-            dims,
-            voxel_type,
-            expected,
-        });
-    }
-
     let file = File::open(path).map_err(io_error)?;
     let (offset, endian) = (extras.header_bytes, extras.endian);
-    let data = decode::read_file_at(&file, offset, voxel_type, endian, count_usize, progress).map_err(|e| match e {
+    let data = decode::read_file_at(&file, offset, voxel_type, endian, count, progress).map_err(|e| match e {
         DecodeError::Io(source) => io_error(source),
         DecodeError::OutOfMemory => VolumeError::OutOfMemory { dims, bytes: expected },
         // The size was checked, so only a file that shrank while being read gets here.
@@ -179,6 +105,105 @@ pub(crate) fn load_raw_with_progress(
     let mut volume = Volume::new(name, dims, spacing, voxel_type, data)?;
     volume.format = "raw".into();
     Ok(volume)
+}
+
+/// The volume's name, dimensions and voxel type: from `opts` where given, else from the file name.
+fn layout(path: &Path, file_name: &str, opts: &RawOptions) -> Result<(String, [u32; 3], VoxelType), VolumeError> {
+    let from_name = split_scivis_name(file_name);
+    let dims = opts.dims.or(from_name.as_ref().map(|(_, dims, _)| *dims));
+    let voxel_type = match (opts.voxel_type, &from_name) {
+        (Some(t), _) => Some(t),
+        (None, Some((_, _, type_text))) => {
+            Some(
+                VoxelType::parse(type_text).ok_or_else(|| VolumeError::UnknownTypeInName {
+                    file: file_name.to_string(),
+                    given: type_text.to_string(),
+                })?,
+            )
+        }
+        (None, None) => None,
+    };
+    let (dims, voxel_type) = match (dims, voxel_type) {
+        (Some(d), Some(t)) => (d, t),
+        (d, t) => {
+            let missing = match (d, t) {
+                (None, None) => "dimensions and voxel type",
+                (None, _) => "dimensions",
+                _ => "voxel type",
+            };
+            return Err(VolumeError::MissingLayout {
+                file: file_name.to_string(),
+                missing,
+            });
+        }
+    };
+    let name = match from_name {
+        Some((name, _, _)) => name,
+        None => path
+            .file_stem()
+            .map_or_else(|| file_name.to_string(), |s| s.to_string_lossy().into_owned()),
+    };
+    Ok((name, dims, voxel_type))
+}
+
+/// Checks dimensions and spacing; returns the voxel count and the data's bytes, both addressable on this host.
+fn sizes(dims: [u32; 3], voxel_type: VoxelType, spacing: [f32; 3]) -> Result<(usize, u64), VolumeError> {
+    let count = check_dims(dims)?;
+    check_spacing(dims, spacing)?;
+    let too_large = || VolumeError::TooLarge {
+        dims,
+        voxel_type,
+        bytes: count.saturating_mul(voxel_type.size() as u64),
+    };
+    let expected = count.checked_mul(voxel_type.size() as u64).ok_or_else(too_large)?;
+    // On a 32-bit host a legal volume can still be unaddressable.
+    let count_usize = usize::try_from(count).map_err(|_| too_large())?;
+    usize::try_from(expected).map_err(|_| too_large())?;
+    Ok((count_usize, expected))
+}
+
+/// The file must be a plain file of exactly the header plus `expected` bytes, checked before anything is read.
+fn check_file_size(
+    path: &Path,
+    file_name: &str,
+    extras: RawExtras,
+    dims: [u32; 3],
+    voxel_type: VoxelType,
+    expected: u64,
+) -> Result<(), VolumeError> {
+    let metadata = std::fs::metadata(path).map_err(|source| VolumeError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if !metadata.is_file() {
+        return Err(VolumeError::NotAFile {
+            path: path.to_path_buf(),
+        });
+    }
+    if metadata.len().checked_sub(extras.header_bytes) == Some(expected) {
+        return Ok(());
+    }
+    if extras.header_bytes > 0 {
+        return Err(VolumeError::Header {
+            file: file_name.to_string(),
+            problem: format!(
+                "the file is {} bytes but a {}-byte header plus {}x{}x{} {voxel_type} needs {}",
+                metadata.len(),
+                extras.header_bytes,
+                dims[0],
+                dims[1],
+                dims[2],
+                u128::from(extras.header_bytes) + u128::from(expected)
+            ),
+        });
+    }
+    Err(VolumeError::SizeMismatch {
+        file: file_name.to_string(),
+        actual: metadata.len(),
+        dims,
+        voxel_type,
+        expected,
+    })
 }
 
 #[cfg(test)]

@@ -79,23 +79,57 @@ fn page_info<R: Read + Seek>(
     index: usize,
     len: u64,
 ) -> Result<(Page, u64), VolumeError> {
-    let err = |e| tiff_error(file, e);
-    let (width, height) = dec.dimensions().map_err(err)?;
-    let page_name = || format!("page {}", index + 1);
+    let page_name = format!("page {}", index + 1);
+    let (width, height) = page_size(dec, file, &page_name)?;
+    let voxel_type = page_voxel_type(dec, file, index)?;
+    let compression = dec
+        .find_tag_unsigned::<u16>(Tag::Compression)
+        .map_err(|e| tiff_error(file, e))?
+        .unwrap_or(1);
+    let (compressed, pieces) = page_data_bytes(dec, file, &page_name, len)?;
+    let needed = u64::from(width) * u64::from(height) * voxel_type.size() as u64;
+    if needed
+        > compressed
+            .saturating_mul(max_expansion(compression))
+            .saturating_add(1024)
+    {
+        return Err(header_error(
+            file,
+            format!(
+                "{page_name} claims {width}x{height} {voxel_type} ({needed} bytes) but holds only {compressed} bytes \
+                 of image data (compression {compression}); the sizes are wrong or the file is truncated"
+            ),
+        ));
+    }
+    Ok((
+        Page {
+            width,
+            height,
+            voxel_type,
+        },
+        pieces,
+    ))
+}
+
+/// The page's width and height, each 1 to MAX_DIM.
+fn page_size<R: Read + Seek>(dec: &mut Decoder<R>, file: &str, page_name: &str) -> Result<(u32, u32), VolumeError> {
+    let (width, height) = dec.dimensions().map_err(|e| tiff_error(file, e))?;
     check_dims([width.max(1), height.max(1), 1]).map_err(|_| {
         header_error(
             file,
-            format!(
-                "{} is {width}x{height}, beyond the limit of {MAX_DIM} per axis",
-                page_name()
-            ),
+            format!("{page_name} is {width}x{height}, beyond the limit of {MAX_DIM} per axis"),
         )
     })?;
     if width == 0 || height == 0 {
-        return Err(header_error(file, format!("{} is {width}x{height}", page_name())));
+        return Err(header_error(file, format!("{page_name} is {width}x{height}")));
     }
-    let color = dec.colortype().map_err(err)?;
-    let bits = match color {
+    Ok((width, height))
+}
+
+/// The page's voxel type: grey, one sample per pixel, of a bit depth and sample format volcast reads.
+fn page_voxel_type<R: Read + Seek>(dec: &mut Decoder<R>, file: &str, index: usize) -> Result<VoxelType, VolumeError> {
+    let err = |e| tiff_error(file, e);
+    let bits = match dec.colortype().map_err(err)? {
         ColorType::Gray(bits) => bits,
         other => {
             let what = match other {
@@ -111,8 +145,9 @@ fn page_info<R: Read + Seek>(
             return Err(header_error(
                 file,
                 format!(
-                    "{} is {what}; volcast reads grey TIFFs (one sample per pixel) only: split the channels first",
-                    page_name()
+                    "page {} is {what}; volcast reads grey TIFFs (one sample per pixel) only: split the channels \
+                     first",
+                    index + 1
                 ),
             ));
         }
@@ -122,7 +157,7 @@ fn page_info<R: Read + Seek>(
         .map_err(err)?
         .and_then(|v| v.first().copied())
         .unwrap_or(1);
-    let voxel_type = match (bits, sample_format) {
+    Ok(match (bits, sample_format) {
         (8, 1) => VoxelType::U8,
         (8, 2) => VoxelType::I8,
         (16, 1) => VoxelType::U16,
@@ -144,11 +179,18 @@ fn page_info<R: Read + Seek>(
                 given: format!("{bits}-bit {kind} (page {})", index + 1),
             });
         }
-    };
-    let compression = dec
-        .find_tag_unsigned::<u16>(Tag::Compression)
-        .map_err(err)?
-        .unwrap_or(1);
+    })
+}
+
+/// The page's compressed bytes, every strip or tile checked to lie inside the file of `len` bytes, and how many
+/// strips or tiles there are.
+fn page_data_bytes<R: Read + Seek>(
+    dec: &mut Decoder<R>,
+    file: &str,
+    page_name: &str,
+    len: u64,
+) -> Result<(u64, u64), VolumeError> {
+    let err = |e| tiff_error(file, e);
     let tiled = dec.find_tag(Tag::TileWidth).map_err(err)?.is_some();
     let (offsets_tag, counts_tag) = if tiled {
         (Tag::TileOffsets, Tag::TileByteCounts)
@@ -167,8 +209,7 @@ fn page_info<R: Read + Seek>(
         return Err(header_error(
             file,
             format!(
-                "{} has {} strip/tile offsets and {} byte counts",
-                page_name(),
+                "{page_name} has {} strip/tile offsets and {} byte counts",
                 offsets.len(),
                 counts.len()
             ),
@@ -180,36 +221,14 @@ fn page_info<R: Read + Seek>(
             return Err(header_error(
                 file,
                 format!(
-                    "{} has a strip/tile of {c} bytes at offset {o}, beyond the end of the file ({len} bytes; truncated?)",
-                    page_name()
+                    "{page_name} has a strip/tile of {c} bytes at offset {o}, beyond the end of the file ({len} \
+                     bytes; truncated?)"
                 ),
             ));
         }
         compressed += c;
     }
-    let needed = u64::from(width) * u64::from(height) * voxel_type.size() as u64;
-    if needed
-        > compressed
-            .saturating_mul(max_expansion(compression))
-            .saturating_add(1024)
-    {
-        return Err(header_error(
-            file,
-            format!(
-                "{} claims {width}x{height} {voxel_type} ({needed} bytes) but holds only {compressed} bytes of \
-                 image data (compression {compression}); the sizes are wrong or the file is truncated",
-                page_name()
-            ),
-        ));
-    }
-    Ok((
-        Page {
-            width,
-            height,
-            voxel_type,
-        },
-        offsets.len() as u64,
-    ))
+    Ok((compressed, offsets.len() as u64))
 }
 
 fn limits(page_bytes: usize) -> Limits {

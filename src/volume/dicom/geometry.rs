@@ -38,26 +38,13 @@ pub(super) fn arrange(
     pixel_spacing: [f64; 2],
     slice_step: Option<f64>,
 ) -> Result<Arrangement, String> {
-    let mut notes = Vec::new();
     let [row_spacing, column_spacing] = pixel_spacing;
     let step = slice_step.unwrap_or(1.0);
-    let mut order: Vec<usize> = (0..slices.len()).collect();
-    let first = slices[0];
-    let Some(o) = first.orientation else {
-        if slices.len() > 1 {
-            order.sort_by_key(|&i| slices[i].instance);
-            notes.push(format!(
-                "no ImageOrientationPatient: slices ordered by InstanceNumber, {step} apart \
-                 (SpacingBetweenSlices/SliceThickness), and no anatomical orientation"
-            ));
-        }
-        return Ok(Arrangement {
-            order,
-            geometry: Geometry::from_spacing([column_spacing, row_spacing, step]),
-            resample: None,
-            notes,
-        });
+    let Some(o) = slices[0].orientation else {
+        return Ok(unoriented(slices, pixel_spacing, step));
     };
+    let mut notes = Vec::new();
+    let mut order: Vec<usize> = (0..slices.len()).collect();
     // Column index i runs along the row direction (the first triple), row index j along the column direction.
     let row_dir = DVec3::new(o[0], o[1], o[2]);
     let column_dir = DVec3::new(o[3], o[4], o[5]);
@@ -74,49 +61,7 @@ pub(super) fn arrange(
             if slices.iter().any(|s| s.orientation.is_some_and(|so| differs(so, o))) {
                 return Err("the slices have different ImageOrientationPatient: not one stack".into());
             }
-            let along = |i: usize| p[i].dot(normal);
-            order.sort_by(|&a, &b| along(a).total_cmp(&along(b)));
-            let d: Vec<f64> = order.iter().map(|&i| along(i)).collect();
-            let n = d.len();
-            let mean = (d[n - 1] - d[0]) / (n - 1) as f64;
-            if mean.is_nan() || mean <= 1e-6 {
-                return Err("the slices all lie at the same position along the slice normal".into());
-            }
-            if d.windows(2).any(|w| w[1] - w[0] < 1e-6 * mean) {
-                return Err("two slices share a position: the folder holds more than one acquisition".into());
-            }
-            let (first_p, last_p) = (p[order[0]], p[order[n - 1]]);
-            // The mean step between slices, as a vector: along the normal, or tilted off it (gantry tilt). A
-            // sideways drift over the whole stack under half a pixel is rounding in the positions, not a tilt:
-            // the step is then taken along the normal (as ITK takes it).
-            let span = last_p - first_p;
-            let drift = (span - normal * span.dot(normal)).length();
-            let k_step = if drift < 0.5 * column_spacing.min(row_spacing) {
-                normal * mean
-            } else {
-                span / (n - 1) as f64
-            };
-            let off_grid = (0..n)
-                .map(|k| (d[k] - (d[0] + k as f64 * mean)).abs())
-                .fold(0.0, f64::max);
-            let steps: Vec<f64> = d.windows(2).map(|w| w[1] - w[0]).collect();
-            let lo = steps.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = steps.iter().copied().fold(0.0, f64::max);
-            let uneven = format!(
-                "uneven slice spacing ({lo:.4} to {hi:.4} mm; a slice lies {off_grid:.3} mm off the regular grid)"
-            );
-            let resample = if off_grid > UNEVEN_TOLERANCE * mean {
-                notes.push(format!(
-                    "{uneven}: resampled linearly onto {n} slices {mean:.4} mm apart"
-                ));
-                Some((0..n).map(|k| fractional_index(&d, d[0] + k as f64 * mean)).collect())
-            } else {
-                if off_grid > 1e-3 * mean {
-                    notes.push(format!("{uneven}: within rounding, the mean step {mean:.4} mm is used"));
-                }
-                None
-            };
-            (first_p, k_step, resample)
+            stack(&p, normal, pixel_spacing, &mut order, &mut notes)?
         }
         Some(p) => (p[0], normal * step, None),
         None => {
@@ -143,6 +88,85 @@ pub(super) fn arrange(
         resample,
         notes,
     })
+}
+
+/// Slices without ImageOrientationPatient: ordered by InstanceNumber, `step` apart, with no anatomical place.
+fn unoriented(slices: &[Placed], [row_spacing, column_spacing]: [f64; 2], step: f64) -> Arrangement {
+    let mut notes = Vec::new();
+    let mut order: Vec<usize> = (0..slices.len()).collect();
+    if slices.len() > 1 {
+        order.sort_by_key(|&i| slices[i].instance);
+        notes.push(format!(
+            "no ImageOrientationPatient: slices ordered by InstanceNumber, {step} apart \
+             (SpacingBetweenSlices/SliceThickness), and no anatomical orientation"
+        ));
+    }
+    Arrangement {
+        order,
+        geometry: Geometry::from_spacing([column_spacing, row_spacing, step]),
+        resample: None,
+        notes,
+    }
+}
+
+/// Two or more slices at positions `p`: sorts `order` along `normal` and returns the first slice's position, the
+/// step from slice to slice as a vector, and (for uneven spacing) where to resample.
+fn stack(
+    p: &[DVec3],
+    normal: DVec3,
+    [row_spacing, column_spacing]: [f64; 2],
+    order: &mut [usize],
+    notes: &mut Vec<String>,
+) -> Result<(DVec3, DVec3, Option<Vec<f64>>), String> {
+    let along = |i: usize| p[i].dot(normal);
+    order.sort_by(|&a, &b| along(a).total_cmp(&along(b)));
+    let d: Vec<f64> = order.iter().map(|&i| along(i)).collect();
+    let n = d.len();
+    let mean = (d[n - 1] - d[0]) / (n - 1) as f64;
+    if mean.is_nan() || mean <= 1e-6 {
+        return Err("the slices all lie at the same position along the slice normal".into());
+    }
+    if d.windows(2).any(|w| w[1] - w[0] < 1e-6 * mean) {
+        return Err("two slices share a position: the folder holds more than one acquisition".into());
+    }
+    let (first_p, last_p) = (p[order[0]], p[order[n - 1]]);
+    // The mean step between slices, as a vector: along the normal, or tilted off it (gantry tilt). A sideways
+    // drift over the whole stack under half a pixel is rounding in the positions, not a tilt: the step is then
+    // taken along the normal (as ITK takes it).
+    let span = last_p - first_p;
+    let drift = (span - normal * span.dot(normal)).length();
+    let k_step = if drift < 0.5 * column_spacing.min(row_spacing) {
+        normal * mean
+    } else {
+        span / (n - 1) as f64
+    };
+    Ok((first_p, k_step, resample_if_uneven(&d, mean, notes)))
+}
+
+/// For slices at sorted distances `d` along the normal, `mean` apart on average: where to resample them if one lies
+/// off the regular grid by more than [`UNEVEN_TOLERANCE`] of a step (None if not), with a note either way once
+/// the spacing is not exactly even.
+fn resample_if_uneven(d: &[f64], mean: f64, notes: &mut Vec<String>) -> Option<Vec<f64>> {
+    let n = d.len();
+    let off_grid = (0..n)
+        .map(|k| (d[k] - (d[0] + k as f64 * mean)).abs())
+        .fold(0.0, f64::max);
+    let steps: Vec<f64> = d.windows(2).map(|w| w[1] - w[0]).collect();
+    let lo = steps.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = steps.iter().copied().fold(0.0, f64::max);
+    let uneven =
+        format!("uneven slice spacing ({lo:.4} to {hi:.4} mm; a slice lies {off_grid:.3} mm off the regular grid)");
+    if off_grid > UNEVEN_TOLERANCE * mean {
+        notes.push(format!(
+            "{uneven}: resampled linearly onto {n} slices {mean:.4} mm apart"
+        ));
+        Some((0..n).map(|k| fractional_index(d, d[0] + k as f64 * mean)).collect())
+    } else {
+        if off_grid > 1e-3 * mean {
+            notes.push(format!("{uneven}: within rounding, the mean step {mean:.4} mm is used"));
+        }
+        None
+    }
 }
 
 fn differs(a: [f64; 6], b: [f64; 6]) -> bool {

@@ -44,7 +44,7 @@ pub(super) fn short_length_vr(vr: [u8; 2]) -> bool {
 /// set in its transfer syntax, descending into sequences and items; returns where parsing should stop: the end of
 /// PixelData (bytes after it, such as the junk in one GE slice of the test data, are never parsed) or the end.
 pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
-    let mut pos = if is_dicom(bytes) {
+    let pos = if is_dicom(bytes) {
         132
     } else if bytes.starts_with(b"DICM") {
         4
@@ -54,18 +54,27 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
             "not a readable DICOM file: no 'DICM' marker at byte 128 (not a DICOM Part 10 file)".into(),
         ));
     };
-    // The file meta group, as dicom-object reads it: (0002,0000) gives its length, its elements are explicit VR
-    // little endian, and the data set starts right after it in the transfer syntax of (0002,0010).
-    let meta_error = || {
-        header_error(
-            label,
-            "not a readable DICOM file: the file meta group is malformed".into(),
-        )
-    };
+    let (data_set, transfer_syntax) = walk_meta_group(bytes, pos, label)?;
+    let explicit = is_explicit_vr(&transfer_syntax, label)?;
+    walk_data_set(bytes, data_set, explicit, label)
+}
+
+fn meta_error(label: &str) -> VolumeError {
+    header_error(
+        label,
+        "not a readable DICOM file: the file meta group is malformed".into(),
+    )
+}
+
+/// The file meta group, as dicom-object reads it: (0002,0000) gives its length, its elements are explicit VR
+/// little endian, and the data set starts right after it in the transfer syntax of (0002,0010). Returns where the
+/// data set starts and that transfer syntax (empty if the group has none).
+fn walk_meta_group(bytes: &[u8], start: usize, label: &str) -> Result<(usize, String), VolumeError> {
+    let mut pos = start;
     if bytes.get(pos..pos + 8) != Some(&[0x02, 0x00, 0x00, 0x00, b'U', b'L', 0x04, 0x00][..]) {
-        return Err(meta_error());
+        return Err(meta_error(label));
     }
-    let group_length = bytes.get(pos + 8..pos + 12).ok_or_else(meta_error)?;
+    let group_length = bytes.get(pos + 8..pos + 12).ok_or_else(|| meta_error(label))?;
     let group_length = u32::from_le_bytes([group_length[0], group_length[1], group_length[2], group_length[3]]);
     // dicom-object reads elements while fewer than `group_length` bytes were read, so the last one may run past
     // the claimed length, and the data set starts where that element ends. Walked the same way here.
@@ -73,7 +82,7 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
     pos += 12;
     let mut consumed = 0u64;
     while consumed < u64::from(group_length) {
-        let head = bytes.get(pos..pos + 8).ok_or_else(meta_error)?;
+        let head = bytes.get(pos..pos + 8).ok_or_else(|| meta_error(label))?;
         let (group, element) = (
             u16::from_le_bytes([head[0], head[1]]),
             u16::from_le_bytes([head[2], head[3]]),
@@ -96,7 +105,7 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
         let (length, header) = if short {
             (u32::from(u16::from_le_bytes([head[6], head[7]])), 8)
         } else {
-            let l = bytes.get(pos + 8..pos + 12).ok_or_else(meta_error)?;
+            let l = bytes.get(pos + 8..pos + 12).ok_or_else(|| meta_error(label))?;
             (u32::from_le_bytes([l[0], l[1], l[2], l[3]]), 12)
         };
         let value = pos + header;
@@ -118,36 +127,42 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
         pos = value + length;
         consumed += (header + length) as u64;
     }
-    let explicit = match transfer_syntax.as_str() {
-        "1.2.840.10008.1.2" => false,
+    Ok((pos, transfer_syntax))
+}
+
+/// Whether the data set in this transfer syntax has explicit VRs; refuses the syntaxes volcast cannot read.
+fn is_explicit_vr(transfer_syntax: &str, label: &str) -> Result<bool, VolumeError> {
+    match transfer_syntax {
+        "1.2.840.10008.1.2" => Ok(false),
         "1.2.840.10008.1.2.1"
         | "1.2.840.10008.1.2.4.50"
         | "1.2.840.10008.1.2.4.70"
         | "1.2.840.10008.1.2.4.90"
         | "1.2.840.10008.1.2.4.91"
-        | "1.2.840.10008.1.2.5" => true,
+        | "1.2.840.10008.1.2.5" => Ok(true),
         // Big endian is retired and rare, deflate needs a codec volcast does not build; both are refused.
-        "1.2.840.10008.1.2.2" => {
-            return Err(header_error(
-                label,
-                "explicit VR big endian (a retired transfer syntax) is not supported; convert to little endian \
-                 (e.g. `gdcmconv --explicit`)"
-                    .into(),
-            ))
-        }
-        other if other.starts_with("1.2.840.10008.1.2.4.") => true,
-        other => {
-            return Err(header_error(
-                label,
-                format!(
-                    "uses {} ({}); volcast cannot decode it",
-                    codec::name(other),
-                    clip(other)
-                ),
-            ))
-        }
-    };
-    let big = false;
+        "1.2.840.10008.1.2.2" => Err(header_error(
+            label,
+            "explicit VR big endian (a retired transfer syntax) is not supported; convert to little endian \
+             (e.g. `gdcmconv --explicit`)"
+                .into(),
+        )),
+        other if other.starts_with("1.2.840.10008.1.2.4.") => Ok(true),
+        other => Err(header_error(
+            label,
+            format!(
+                "uses {} ({}); volcast cannot decode it",
+                codec::name(other),
+                clip(other)
+            ),
+        )),
+    }
+}
+
+/// The data set's elements in little endian (big endian is refused before the walk), descending into sequences
+/// and items; returns where parsing should stop.
+fn walk_data_set(bytes: &[u8], start: usize, explicit: bool, label: &str) -> Result<usize, VolumeError> {
+    let mut pos = start;
     let mut encapsulated = false;
     // The sequences the walk is inside: where a defined-length one ends, None for an undefined length (ended by
     // its delimiter). An item outside every sequence is refused: dicom-parser reads it otherwise than this walk (a
@@ -157,62 +172,13 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
         while matches!(open.last(), Some(Some(end)) if pos >= *end) {
             open.pop();
         }
-        let at16 = |i: usize, big: bool| {
-            let b = [bytes[i], bytes[i + 1]];
-            if big {
-                u16::from_be_bytes(b)
-            } else {
-                u16::from_le_bytes(b)
-            }
+        let Some(head) = ElementHeader::read(bytes, pos, explicit) else {
+            break;
         };
-        let at32 = |i: usize, big: bool| {
-            let b = [bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]];
-            if big {
-                u32::from_be_bytes(b)
-            } else {
-                u32::from_le_bytes(b)
-            }
-        };
-        let (group, element) = (at16(pos, big), at16(pos + 2, big));
-        // The VR as dicom-parser resolves it: read from the data in explicit VR (items and delimiters have none);
-        // in implicit VR looked up in the standard dictionary (pixel and overlay data are OW, unknown tags UN).
-        let vr = if group == 0xFFFE {
-            None
-        } else if explicit {
-            Some([bytes[pos + 4], bytes[pos + 5]])
-        } else if (group, element) == (0x7FE0, 0x0010) || (group >> 8 == 0x60 && element == 0x3000) {
-            Some(*b"OW")
-        } else {
-            Some(
-                StandardDataDictionary
-                    .by_tag(Tag(group, element))
-                    .map_or(VR::UN, |entry| entry.vr().relaxed())
-                    .to_bytes(),
-            )
-        };
-        let long_vr = explicit && vr.is_some_and(|v| !short_length_vr(v));
-        let (length, header) = if long_vr {
-            if pos + 12 > bytes.len() {
-                break;
-            }
-            (at32(pos + 8, big), 12)
-        } else if explicit && vr.is_some() {
-            (u32::from(at16(pos + 6, big)), 8)
-        } else {
-            (at32(pos + 4, big), 8)
-        };
-        pos += header;
-        // Delimiters (item and sequence delimitation) must have length 0 (PS3.5 7.5). dicom-parser ignores the
-        // field inside a sequence but reads a value of that length at the top level, so no walk can follow both:
-        // a non-zero one is refused (two fuzz findings: a delimiter claiming 47 bytes inside a sequence, one
-        // claiming 4 GB outside).
-        if group == 0xFFFE && matches!(element, 0xE00D | 0xE0DD) && length != 0 {
-            return Err(header_error(
-                label,
-                format!("a delimiter (FFFE,{element:04X}) has length {length}; it must be 0 (corrupt file)"),
-            ));
-        }
-        if length == u32::MAX {
+        let (group, element) = (head.group, head.element);
+        pos += head.size;
+        head.check_delimiter_length(label)?;
+        if head.length == u32::MAX {
             // Undefined length: encapsulated pixel data (its items hold fragments) or, for any other element,
             // a sequence whose items are data sets (dicom-parser discards the VR then): descend.
             if (group, element) == (0x7FE0, 0x0010) {
@@ -222,40 +188,8 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
             }
             continue;
         }
-        let length = length as usize;
-        if length > bytes.len() - pos && encapsulated && (group, element) == (0xFFFE, 0xE000) {
-            return Err(header_error(
-                label,
-                format!(
-                    "a compressed pixel data fragment claims {length} bytes but only {} follow (truncated or corrupt \
-                     file)",
-                    bytes.len() - pos
-                ),
-            ));
-        }
-        if length > bytes.len() - pos {
-            return Err(header_error(
-                label,
-                format!(
-                    "element ({group:04X},{element:04X}) claims {length} bytes but only {} follow (truncated or corrupt file)",
-                    bytes.len() - pos
-                ),
-            ));
-        }
-        // dicom-parser reads binary numbers as whole values (length / size of them), so a length that is not a
-        // multiple would leave it misaligned with this walk.
-        let value_size = match vr.as_ref().map(|v| &v[..]) {
-            Some(b"SS" | b"US" | b"OW") => 2,
-            Some(b"AT" | b"FL" | b"OF" | b"OL" | b"SL" | b"UL") => 4,
-            Some(b"FD" | b"OD" | b"OV" | b"SV" | b"UV") => 8,
-            _ => 1,
-        };
-        if !length.is_multiple_of(value_size) {
-            return Err(header_error(
-                label,
-                format!("element ({group:04X},{element:04X}) has length {length}, not a multiple of {value_size}"),
-            ));
-        }
+        let length = head.length as usize;
+        head.check_value_length(length, bytes.len() - pos, encapsulated, label)?;
         if group == 0xFFFE {
             if element == 0xE0DD {
                 if encapsulated {
@@ -274,7 +208,7 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
                 continue;
             }
         }
-        if vr.is_some_and(|v| &v == b"SQ") {
+        if head.vr.is_some_and(|v| &v == b"SQ") {
             open.push(Some(pos + length));
             continue;
         }
@@ -284,6 +218,123 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
         }
     }
     Ok(bytes.len())
+}
+
+/// One data set element's header, read as dicom-parser reads it.
+struct ElementHeader {
+    group: u16,
+    element: u16,
+    /// None for items and delimiters, which have no VR.
+    vr: Option<[u8; 2]>,
+    /// The claimed value length; `u32::MAX` is an undefined length.
+    length: u32,
+    /// The header's own size in bytes: 8, or 12 for explicit VRs with a 4-byte length.
+    size: usize,
+}
+
+impl ElementHeader {
+    /// The header at `pos`, which has at least 8 bytes after it; None when a 12-byte header runs past the end.
+    fn read(bytes: &[u8], pos: usize, explicit: bool) -> Option<Self> {
+        let at16 = |i: usize| u16::from_le_bytes([bytes[i], bytes[i + 1]]);
+        let at32 = |i: usize| u32::from_le_bytes([bytes[i], bytes[i + 1], bytes[i + 2], bytes[i + 3]]);
+        let (group, element) = (at16(pos), at16(pos + 2));
+        // The VR as dicom-parser resolves it: read from the data in explicit VR (items and delimiters have none);
+        // in implicit VR looked up in the standard dictionary (pixel and overlay data are OW, unknown tags UN).
+        let vr = if group == 0xFFFE {
+            None
+        } else if explicit {
+            Some([bytes[pos + 4], bytes[pos + 5]])
+        } else if (group, element) == (0x7FE0, 0x0010) || (group >> 8 == 0x60 && element == 0x3000) {
+            Some(*b"OW")
+        } else {
+            Some(
+                StandardDataDictionary
+                    .by_tag(Tag(group, element))
+                    .map_or(VR::UN, |entry| entry.vr().relaxed())
+                    .to_bytes(),
+            )
+        };
+        let long_vr = explicit && vr.is_some_and(|v| !short_length_vr(v));
+        let (length, size) = if long_vr {
+            if pos + 12 > bytes.len() {
+                return None;
+            }
+            (at32(pos + 8), 12)
+        } else if explicit && vr.is_some() {
+            (u32::from(at16(pos + 6)), 8)
+        } else {
+            (at32(pos + 4), 8)
+        };
+        Some(Self {
+            group,
+            element,
+            vr,
+            length,
+            size,
+        })
+    }
+
+    /// Delimiters (item and sequence delimitation) must have length 0 (PS3.5 7.5). dicom-parser ignores the field
+    /// inside a sequence but reads a value of that length at the top level, so no walk can follow both: a non-zero
+    /// one is refused (two fuzz findings: a delimiter claiming 47 bytes inside a sequence, one claiming 4 GB
+    /// outside).
+    fn check_delimiter_length(&self, label: &str) -> Result<(), VolumeError> {
+        let (group, element) = (self.group, self.element);
+        if group == 0xFFFE && matches!(element, 0xE00D | 0xE0DD) && self.length != 0 {
+            return Err(header_error(
+                label,
+                format!(
+                    "a delimiter (FFFE,{element:04X}) has length {}; it must be 0 (corrupt file)",
+                    self.length
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Refuses a defined `length` that runs past the `available` bytes or that dicom-parser would read
+    /// misaligned with this walk.
+    fn check_value_length(
+        &self,
+        length: usize,
+        available: usize,
+        encapsulated: bool,
+        label: &str,
+    ) -> Result<(), VolumeError> {
+        let (group, element) = (self.group, self.element);
+        if length > available && encapsulated && (group, element) == (0xFFFE, 0xE000) {
+            return Err(header_error(
+                label,
+                format!(
+                    "a compressed pixel data fragment claims {length} bytes but only {available} follow (truncated \
+                     or corrupt file)"
+                ),
+            ));
+        }
+        if length > available {
+            return Err(header_error(
+                label,
+                format!(
+                    "element ({group:04X},{element:04X}) claims {length} bytes but only {available} follow (truncated or corrupt file)"
+                ),
+            ));
+        }
+        // dicom-parser reads binary numbers as whole values (length / size of them), so a length that is not a
+        // multiple would leave it misaligned with this walk.
+        let value_size = match self.vr.as_ref().map(|v| &v[..]) {
+            Some(b"SS" | b"US" | b"OW") => 2,
+            Some(b"AT" | b"FL" | b"OF" | b"OL" | b"SL" | b"UL") => 4,
+            Some(b"FD" | b"OD" | b"OV" | b"SV" | b"UV") => 8,
+            _ => 1,
+        };
+        if !length.is_multiple_of(value_size) {
+            return Err(header_error(
+                label,
+                format!("element ({group:04X},{element:04X}) has length {length}, not a multiple of {value_size}"),
+            ));
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

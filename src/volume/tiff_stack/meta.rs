@@ -115,13 +115,39 @@ pub(super) fn positive(text: &str) -> Option<f64> {
 }
 
 pub(super) fn layout(meta: &Metadata, pages: usize) -> Layout {
-    let mut notes = Vec::new();
-    let mut slices: Vec<usize> = (0..pages).collect();
+    let mut l = Layout {
+        slices: (0..pages).collect(),
+        spacing: [1.0; 3],
+        notes: Vec::new(),
+    };
     let description = meta.description.as_deref().unwrap_or("");
-    let mut z_spacing = None;
-    let mut unit_mm = None;
-    let mut have_unit_word = false;
+    let mut imagej = ImageJSpacing::default();
     if let Some(fields) = imagej_fields(description) {
+        imagej = l.imagej_pages(&fields, pages);
+    }
+    if let Some(pixels) = ome_pixels(description) {
+        l.ome_pages(pixels, pages);
+        if let Some(spacing) = ome_spacing(pixels, &mut l.notes) {
+            l.spacing = spacing;
+            return l;
+        }
+    }
+    let imagej_file = description.starts_with("ImageJ=");
+    l.spacing = resolution_spacing(meta, imagej, imagej_file, &mut l.notes);
+    l
+}
+
+/// What ImageJ fields say about the spacing: z in the file's unit, and the unit if a `unit=` is given (in mm;
+/// None for a word that is no length).
+#[derive(Default)]
+struct ImageJSpacing {
+    z: Option<f64>,
+    unit_mm: Option<Option<f64>>,
+}
+
+impl Layout {
+    /// Picks the slices of an ImageJ hyperstack; returns what the fields say about the spacing.
+    fn imagej_pages(&mut self, fields: &[(&str, &str)], pages: usize) -> ImageJSpacing {
         let get = |k: &str| fields.iter().find(|(key, _)| *key == k).map(|(_, v)| *v);
         let count = |k: &str| get(k).and_then(|v| v.parse::<usize>().ok()).filter(|&n| n >= 1);
         let (c, z, t) = (
@@ -133,25 +159,26 @@ pub(super) fn layout(meta: &Metadata, pages: usize) -> Layout {
         if c > 1 || t > 1 {
             if c.checked_mul(z).and_then(|n| n.checked_mul(t)) == Some(pages) {
                 // ImageJ's page order is channel fastest, then slice, then frame.
-                slices = (0..z).map(|i| i * c).collect();
-                notes.push(format!(
+                self.slices = (0..z).map(|i| i * c).collect();
+                self.notes.push(format!(
                     "ImageJ hyperstack of {c} channel(s) × {z} slices × {t} frame(s): the first channel of the first \
                      frame is loaded"
                 ));
             } else {
-                notes.push(format!(
+                self.notes.push(format!(
                     "ImageJ says {c} channel(s) × {z} slices × {t} frame(s) but the file has {pages} pages: every \
                      page is taken as a slice"
                 ));
             }
         }
-        z_spacing = get("spacing").and_then(positive);
-        if let Some(u) = get("unit") {
-            unit_mm = unit_to_mm(u);
-            have_unit_word = true;
+        ImageJSpacing {
+            z: get("spacing").and_then(positive),
+            unit_mm: get("unit").map(unit_to_mm),
         }
     }
-    if let Some(pixels) = ome_pixels(description) {
+
+    /// Picks the slices of an OME-TIFF with several channels or time points, by its DimensionOrder.
+    fn ome_pages(&mut self, pixels: &str, pages: usize) {
         let size = |k: &str| {
             xml_attr(pixels, k)
                 .and_then(|v| v.parse::<usize>().ok())
@@ -173,53 +200,60 @@ pub(super) fn layout(meta: &Metadata, pages: usize) -> Layout {
                     _ => {}
                 }
             }
-            slices = (0..z).map(|i| i * stride).collect();
-            notes.push(format!(
+            self.slices = (0..z).map(|i| i * stride).collect();
+            self.notes.push(format!(
                 "OME-TIFF of {c} channel(s) × {z} slices × {t} time point(s): the first channel and time point are loaded"
             ));
         } else if c > 1 || t > 1 {
-            notes.push(format!(
+            self.notes.push(format!(
                 "OME-XML says {z} slices × {c} channel(s) × {t} time point(s) but the file has {pages} pages: every \
                  page is taken as a slice"
             ));
         }
-        let physical = |k: &str| {
-            let v = xml_attr(pixels, k).and_then(positive)?;
-            let unit = xml_attr(pixels, &format!("{k}Unit")).unwrap_or("µm");
-            unit_to_mm(unit).map(|f| v * f)
-        };
-        let (x, y, zs) = (
-            physical("PhysicalSizeX"),
-            physical("PhysicalSizeY"),
-            physical("PhysicalSizeZ"),
-        );
-        if let (Some(x), Some(y)) = (x, y) {
-            let z = zs.unwrap_or_else(|| {
-                notes.push("the OME-XML gives no PhysicalSizeZ: z spacing taken equal to x".into());
-                x
-            });
-            notes.push("spacing from OME-XML PhysicalSize, in mm".into());
-            return Layout {
-                slices,
-                spacing: [x, y, z],
-                notes,
-            };
-        }
     }
-    if !have_unit_word {
-        unit_mm = match meta.resolution_unit {
+}
+
+/// The spacing in mm from OME-XML `PhysicalSize*` (µm unless a unit is given); None without both x and y.
+fn ome_spacing(pixels: &str, notes: &mut Vec<String>) -> Option<[f64; 3]> {
+    let physical = |k: &str| {
+        let v = xml_attr(pixels, k).and_then(positive)?;
+        let unit = xml_attr(pixels, &format!("{k}Unit")).unwrap_or("µm");
+        unit_to_mm(unit).map(|f| v * f)
+    };
+    let (x, y, zs) = (
+        physical("PhysicalSizeX"),
+        physical("PhysicalSizeY"),
+        physical("PhysicalSizeZ"),
+    );
+    let (Some(x), Some(y)) = (x, y) else {
+        return None;
+    };
+    let z = zs.unwrap_or_else(|| {
+        notes.push("the OME-XML gives no PhysicalSizeZ: z spacing taken equal to x".into());
+        x
+    });
+    notes.push("spacing from OME-XML PhysicalSize, in mm".into());
+    Some([x, y, z])
+}
+
+/// The spacing from the resolution tags (pixels per unit) and ImageJ's z spacing, in mm where a unit is known:
+/// ImageJ's `unit=`, else the TIFF ResolutionUnit. Without a unit, ImageJ's figures are used as written and
+/// anything else is spacing 1.
+fn resolution_spacing(meta: &Metadata, imagej: ImageJSpacing, imagej_file: bool, notes: &mut Vec<String>) -> [f64; 3] {
+    let unit_mm = match imagej.unit_mm {
+        Some(unit_mm) => unit_mm,
+        None => match meta.resolution_unit {
             Some(2) => Some(25.4),
             Some(3) => Some(10.0),
             _ => None,
-        };
-    }
+        },
+    };
     let in_units = [
         meta.x_resolution.map(|r| 1.0 / r),
         meta.y_resolution.map(|r| 1.0 / r),
-        z_spacing,
+        imagej.z,
     ];
-    let imagej = description.starts_with("ImageJ=");
-    let spacing = match unit_mm {
+    match unit_mm {
         Some(f) => {
             let x = in_units[0].unwrap_or(1.0);
             let y = in_units[1].unwrap_or(x);
@@ -230,7 +264,7 @@ pub(super) fn layout(meta: &Metadata, pages: usize) -> Layout {
             notes.push("spacing from the TIFF resolution / ImageJ metadata, converted to mm".into());
             [x * f, y * f, z * f]
         }
-        None if imagej => {
+        None if imagej_file => {
             let x = in_units[0].unwrap_or(1.0);
             let y = in_units[1].unwrap_or(x);
             let z = in_units[2].unwrap_or(x);
@@ -238,8 +272,7 @@ pub(super) fn layout(meta: &Metadata, pages: usize) -> Layout {
             [x, y, z]
         }
         None => [1.0; 3],
-    };
-    Layout { slices, spacing, notes }
+    }
 }
 
 #[cfg(test)]

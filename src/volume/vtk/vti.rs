@@ -134,30 +134,7 @@ fn parse_xml(bytes: &[u8], file: &str) -> Result<Parsed, VolumeError> {
                 p.scalars = get(&attrs, "Scalars");
             }
             "DataArray" if in_point_data => {
-                let format = match get(&attrs, "format").unwrap_or_default().as_str() {
-                    "ascii" => ArrayFormat::Ascii,
-                    "binary" => ArrayFormat::Binary,
-                    "appended" => ArrayFormat::Appended,
-                    other => {
-                        return Err(header_error(
-                            file,
-                            format!("DataArray format '{}' is not ascii, binary or appended", clip(other)),
-                        ))
-                    }
-                };
-                let components = match get(&attrs, "NumberOfComponents") {
-                    Some(c) => format::number::<u32>(file, "NumberOfComponents", &c)?,
-                    None => 1,
-                };
-                let end = reader.buffer_position() as usize;
-                let a = XmlArray {
-                    name: get(&attrs, "Name").unwrap_or_default(),
-                    type_name: get(&attrs, "type").unwrap_or_default(),
-                    components,
-                    format,
-                    offset: get(&attrs, "offset"),
-                    text: (end, end),
-                };
+                let a = data_array(&attrs, file, reader.buffer_position() as usize)?;
                 if is_start {
                     open_array = Some(a);
                 } else {
@@ -173,6 +150,33 @@ fn parse_xml(bytes: &[u8], file: &str) -> Result<Parsed, VolumeError> {
         }
     }
     Ok(p)
+}
+
+/// A `<DataArray>` start tag whose text starts at `text_start`.
+fn data_array(attrs: &[(String, String)], file: &str, text_start: usize) -> Result<XmlArray, VolumeError> {
+    let format = match get(attrs, "format").unwrap_or_default().as_str() {
+        "ascii" => ArrayFormat::Ascii,
+        "binary" => ArrayFormat::Binary,
+        "appended" => ArrayFormat::Appended,
+        other => {
+            return Err(header_error(
+                file,
+                format!("DataArray format '{}' is not ascii, binary or appended", clip(other)),
+            ))
+        }
+    };
+    let components = match get(attrs, "NumberOfComponents") {
+        Some(c) => format::number::<u32>(file, "NumberOfComponents", &c)?,
+        None => 1,
+    };
+    Ok(XmlArray {
+        name: get(attrs, "Name").unwrap_or_default(),
+        type_name: get(attrs, "type").unwrap_or_default(),
+        components,
+        format,
+        offset: get(attrs, "offset"),
+        text: (text_start, text_start),
+    })
 }
 
 fn voxel_type(name: &str) -> Option<VoxelType> {
@@ -254,8 +258,55 @@ fn read(
     wanted: Option<&str>,
     progress: &mut Progress,
 ) -> Result<Volume, VolumeError> {
-    let err = |problem: String| header_error(file, problem);
     let p = parse_xml(bytes, file)?;
+    check_single_image(&p, file)?;
+    let (endian, word, compressor) = encoding(&p, file)?;
+    let (extent, dims) = extent(&p, file)?;
+    let count = crate::volume::check_dims(dims).map_err(|e| named(file, e))?;
+    let (spacing, geometry) = placement(&p, file, &extent)?;
+    let chosen = select(&p, wanted, file)?;
+    let voxel_type = voxel_type(&chosen.type_name).ok_or_else(|| VolumeError::UnsupportedType {
+        file: file.to_string(),
+        format: FORMAT,
+        given: clip(&chosen.type_name),
+    })?;
+    let mut h = Header::new(FORMAT);
+    h.dims = dims;
+    h.voxel_type = voxel_type;
+    h.endian = endian;
+    h.spacing = spacing.map(f64::abs);
+    h.geometry = Some(geometry);
+    if p.piece_extent.is_some() && p.whole_extent.is_some() && p.piece_extent != p.whole_extent {
+        h.notes
+            .push("the piece's Extent differs from WholeExtent; the piece is read".into());
+    }
+    h.arrays = p
+        .arrays
+        .iter()
+        .map(|a| ArrayInfo {
+            name: a.name.clone(),
+            type_name: a.type_name.clone(),
+            components: a.components,
+            loaded: std::ptr::eq(a, chosen),
+        })
+        .collect();
+    let location = location(bytes, &p, chosen, file)?;
+    let layout = Layout {
+        file,
+        word,
+        endian,
+        compressor,
+        voxel_type,
+        dims,
+        count,
+    };
+    let data = vti_data::decode(&layout, location, progress)?;
+    h.into_volume(name, data).map_err(|e| named(file, e))
+}
+
+/// Refuses VTK XML files other than ImageData, and ImageData of no or several pieces.
+fn check_single_image(p: &Parsed, file: &str) -> Result<(), VolumeError> {
+    let err = |problem: String| header_error(file, problem);
     match p.file_type.as_deref() {
         Some("ImageData") => {}
         Some(other) => {
@@ -267,14 +318,17 @@ fn read(
         None => return Err(err("no <VTKFile> element: not a VTK XML file".into())),
     }
     match p.pieces {
-        0 => return Err(err("no <Piece>: the file holds no data".into())),
-        1 => {}
-        n => {
-            return Err(err(format!(
-                "{n} pieces: volcast reads single-piece ImageData (save the data set again as one piece)"
-            )))
-        }
+        0 => Err(err("no <Piece>: the file holds no data".into())),
+        1 => Ok(()),
+        n => Err(err(format!(
+            "{n} pieces: volcast reads single-piece ImageData (save the data set again as one piece)"
+        ))),
     }
+}
+
+/// How the binary data are stored: byte order, the block headers' word size in bytes, and the compressor.
+fn encoding(p: &Parsed, file: &str) -> Result<(Endian, usize, Option<Compressor>), VolumeError> {
+    let err = |problem: String| header_error(file, problem);
     let endian = match p.byte_order.as_deref() {
         None | Some("LittleEndian") => Endian::Little,
         Some("BigEndian") => Endian::Big,
@@ -303,11 +357,16 @@ fn read(
             )))
         }
     };
+    Ok((endian, word, compressor))
+}
+
+/// The piece's extent (the whole extent if the piece has none) and the dimensions it spans.
+fn extent(p: &Parsed, file: &str) -> Result<(Vec<i64>, [u32; 3]), VolumeError> {
     let extent_text = p
         .piece_extent
         .as_deref()
         .or(p.whole_extent.as_deref())
-        .ok_or_else(|| err("no Extent on the Piece and no WholeExtent".into()))?;
+        .ok_or_else(|| header_error(file, "no Extent on the Piece and no WholeExtent".into()))?;
     let extent: Vec<i64> = format::numbers(file, "Extent", extent_text, 6)?;
     let sizes: Vec<i64> = (0..3)
         .map(|a| {
@@ -318,7 +377,11 @@ fn read(
         })
         .collect();
     let dims = format::dims_from(file, "Extent sizes", &sizes)?;
-    let count = crate::volume::check_dims(dims).map_err(|e| named(file, e))?;
+    Ok((extent, dims))
+}
+
+/// The spacing as written and where the voxels sit in VTK's world, the extent's start counted in.
+fn placement(p: &Parsed, file: &str, extent: &[i64]) -> Result<([f64; 3], Geometry), VolumeError> {
     let spacing = floats(file, "Spacing", p.spacing.as_deref(), [1.0; 3])?;
     let origin = floats(file, "Origin", p.origin.as_deref(), [0.0; 3])?;
     let d = floats(
@@ -336,93 +399,58 @@ fn read(
     let start = DVec3::new(extent[0] as f64, extent[2] as f64, extent[4] as f64);
     let first_voxel = DVec3::from(origin) + direction * (start * DVec3::from(spacing));
     let columns = [0, 1, 2].map(|a| direction.col(a) * spacing[a]);
-
-    let chosen = select(&p, wanted, file)?;
-    let voxel_type = voxel_type(&chosen.type_name).ok_or_else(|| VolumeError::UnsupportedType {
-        file: file.to_string(),
-        format: FORMAT,
-        given: clip(&chosen.type_name),
-    })?;
-    let mut h = Header::new(FORMAT);
-    h.dims = dims;
-    h.voxel_type = voxel_type;
-    h.endian = endian;
-    h.spacing = spacing.map(f64::abs);
-    h.geometry = Some(Geometry {
+    let geometry = Geometry {
         affine: from_columns(columns, first_voxel),
         anatomical: false,
-    });
-    if p.piece_extent.is_some() && p.whole_extent.is_some() && p.piece_extent != p.whole_extent {
-        h.notes
-            .push("the piece's Extent differs from WholeExtent; the piece is read".into());
-    }
-    h.arrays = p
-        .arrays
+    };
+    Ok((spacing, geometry))
+}
+
+/// Where the chosen array's values are: its element's text, or its offset into `<AppendedData>`.
+fn location<'b>(bytes: &'b [u8], p: &Parsed, chosen: &XmlArray, file: &str) -> Result<Location<'b>, VolumeError> {
+    let err = |problem: String| header_error(file, problem);
+    let (encoding, after_tag) = match chosen.format {
+        ArrayFormat::Ascii => return Ok(Location::Ascii(&bytes[chosen.text.0..chosen.text.1])),
+        ArrayFormat::Binary => return Ok(Location::Base64(&bytes[chosen.text.0..chosen.text.1])),
+        ArrayFormat::Appended => p.appended.as_ref().ok_or_else(|| {
+            err(format!(
+                "array '{}' is appended but there is no <AppendedData>",
+                clip(&chosen.name)
+            ))
+        })?,
+    };
+    let offset_text = chosen
+        .offset
+        .as_deref()
+        .ok_or_else(|| err(format!("appended array '{}' has no offset", clip(&chosen.name))))?;
+    let offset: i64 = format::number(file, "DataArray offset", offset_text)?;
+    let rest = &bytes[*after_tag..];
+    // The appended bytes start after an underscore (whitespace before it).
+    let underscore = rest
         .iter()
-        .map(|a| ArrayInfo {
-            name: a.name.clone(),
-            type_name: a.type_name.clone(),
-            components: a.components,
-            loaded: std::ptr::eq(a, chosen),
-        })
-        .collect();
-    let location = match chosen.format {
-        ArrayFormat::Ascii => Location::Ascii(&bytes[chosen.text.0..chosen.text.1]),
-        ArrayFormat::Binary => Location::Base64(&bytes[chosen.text.0..chosen.text.1]),
-        ArrayFormat::Appended => {
-            let (encoding, after_tag) = p.appended.as_ref().ok_or_else(|| {
-                err(format!(
-                    "array '{}' is appended but there is no <AppendedData>",
-                    clip(&chosen.name)
-                ))
-            })?;
-            let offset_text = chosen
-                .offset
-                .as_deref()
-                .ok_or_else(|| err(format!("appended array '{}' has no offset", clip(&chosen.name))))?;
-            let offset: i64 = format::number(file, "DataArray offset", offset_text)?;
-            let rest = &bytes[*after_tag..];
-            // The appended bytes start after an underscore (whitespace before it).
-            let underscore = rest
-                .iter()
-                .position(|&b| !b.is_ascii_whitespace())
-                .filter(|&i| rest[i] == b'_')
-                .ok_or_else(|| err("<AppendedData> must start with '_'".into()))?;
-            let data = &rest[underscore + 1..];
-            let offset = u64::try_from(offset)
-                .ok()
-                .and_then(|o| usize::try_from(o).ok())
-                .filter(|&o| o <= data.len())
-                .ok_or_else(|| {
-                    err(format!(
-                        "array '{}' has offset {offset}, outside the {} bytes of appended data",
-                        clip(&chosen.name),
-                        data.len()
-                    ))
-                })?;
-            match encoding.as_str() {
-                "raw" => Location::Raw(&data[offset..]),
-                "base64" => Location::Base64(&data[offset..]),
-                other => {
-                    return Err(err(format!(
-                        "AppendedData encoding '{}' is not raw or base64",
-                        clip(other)
-                    )))
-                }
-            }
-        }
-    };
-    let layout = Layout {
-        file,
-        word,
-        endian,
-        compressor,
-        voxel_type,
-        dims,
-        count,
-    };
-    let data = vti_data::decode(&layout, location, progress)?;
-    h.into_volume(name, data).map_err(|e| named(file, e))
+        .position(|&b| !b.is_ascii_whitespace())
+        .filter(|&i| rest[i] == b'_')
+        .ok_or_else(|| err("<AppendedData> must start with '_'".into()))?;
+    let data = &rest[underscore + 1..];
+    let offset = u64::try_from(offset)
+        .ok()
+        .and_then(|o| usize::try_from(o).ok())
+        .filter(|&o| o <= data.len())
+        .ok_or_else(|| {
+            err(format!(
+                "array '{}' has offset {offset}, outside the {} bytes of appended data",
+                clip(&chosen.name),
+                data.len()
+            ))
+        })?;
+    match encoding.as_str() {
+        "raw" => Ok(Location::Raw(&data[offset..])),
+        "base64" => Ok(Location::Base64(&data[offset..])),
+        other => Err(err(format!(
+            "AppendedData encoding '{}' is not raw or base64",
+            clip(other)
+        ))),
+    }
 }
 
 /// Loads a `.vti` held in memory.
