@@ -65,24 +65,27 @@ impl Info {
 
     /// The same in words, as `volcast info` prints it.
     pub fn text(&self, v: &Volume) -> String {
-        let mut out = String::new();
-        let mut line = |key: &str, value: String| {
-            let key = if key.is_empty() {
-                String::new()
-            } else {
-                format!("{key}:")
-            };
-            out.push_str(&format!("{key:<10} {value}\n"))
-        };
-        line("name", self.name.clone());
-        line("format", self.format.clone());
-        line(
+        let mut out = Lines(String::new());
+        self.write_shape(v, &mut out);
+        self.write_values(v, &mut out);
+        out.line("axes", self.axes_in_words(v));
+        self.write_affine(&mut out);
+        write_gpu_memory(v, &mut out);
+        self.write_arrays_and_notes(&mut out);
+        out.0
+    }
+
+    /// Name, file format, dimensions, voxel type, time steps, spacing and size.
+    fn write_shape(&self, v: &Volume, out: &mut Lines) {
+        out.line("name", self.name.clone());
+        out.line("format", self.format.clone());
+        out.line(
             "dims",
             format!("{} x {} x {}", self.dims[0], self.dims[1], self.dims[2]),
         );
-        line("type", self.voxel_type.clone());
+        out.line("type", self.voxel_type.clone());
         if self.timesteps > 1 {
-            line(
+            out.line(
                 "timesteps",
                 format!(
                     "{} (showing {}; the range below is over all of them; --time N picks one)",
@@ -92,21 +95,25 @@ impl Info {
             );
         }
         let s = v.spacing();
-        line("spacing", format!("{} x {} x {}", s[0], s[1], s[2]));
+        out.line("spacing", format!("{} x {} x {}", s[0], s[1], s[2]));
         let e = v.extent();
         let size = [0, 1, 2].map(|i| f64::from(self.dims[i]) * self.spacing[i]);
-        line(
+        out.line(
             "size",
             format!(
                 "{:.1} x {:.1} x {:.1} mm; box {:.3} x {:.3} x {:.3}",
                 size[0], size[1], size[2], e.x, e.y, e.z
             ),
         );
+    }
+
+    /// The value range; stored and scaled apart when the file rescales its values.
+    fn write_values(&self, v: &Volume, out: &mut Lines) {
         if v.scaling.is_identity() {
-            line("range", format!("{} .. {}", self.scaled_range[0], self.scaled_range[1]));
+            out.line("range", format!("{} .. {}", self.scaled_range[0], self.scaled_range[1]));
         } else {
-            line("stored", format!("{} .. {}", self.value_range[0], self.value_range[1]));
-            line(
+            out.line("stored", format!("{} .. {}", self.value_range[0], self.value_range[1]));
+            out.line(
                 "scaled",
                 format!(
                     "{} .. {} (value = {} * stored + {})",
@@ -114,62 +121,28 @@ impl Info {
                 ),
             );
         }
-        line("axes", self.axes_in_words(v));
+    }
+
+    /// The affine's first three rows (the fourth is always 0 0 0 1).
+    fn write_affine(&self, out: &mut Lines) {
         for (i, row) in self.affine_ras.iter().take(3).enumerate() {
             let key = if i == 0 { "affine" } else { "" };
             let cells: Vec<String> = row.iter().map(|c| format!("{c:>11.5}")).collect();
-            line(key, cells.join(" "));
+            out.line(key, cells.join(" "));
         }
-        let gpu_format = match v.gpu_texel_size() {
-            1 => "R8_UNORM",
-            2 => "R16_UNORM",
-            _ => "R32_SFLOAT",
-        };
-        let mib = |bytes: usize| bytes as f64 / (1 << 20) as f64;
-        line(
-            "gpu",
-            format!("{gpu_format}, {:.1} MiB", mib(v.gpu_memory_bytes() as usize)),
-        );
-        if v.gpu_texel_size() < 4 {
-            line(
-                "",
-                format!(
-                    "on CPU devices (lavapipe), --texture auto: corners{}, {:.1} MiB, while under 1 GiB (else \
-                     R32_SFLOAT, {:.1} MiB)",
-                    8 * v.gpu_texel_size(),
-                    mib(v.voxel_count() * 4 * v.gpu_texel_size()),
-                    mib(v.voxel_count() * 4)
-                ),
-            );
-        }
-        let voxels = v.voxel_count() as u64;
-        let gradient_bytes = Gradients::texture_bytes(voxels);
-        line(
-            "",
-            if Gradients::texture_fits(voxels) {
-                format!(
-                    "shaded frames, --gradients auto: + gradient texture (RGBA16 SNORM), {:.1} MiB",
-                    mib(gradient_bytes as usize)
-                )
-            } else {
-                format!(
-                    "shaded frames, --gradients auto: six samples per gradient (a gradient texture would take \
-                     {:.1} MiB, over 1 GiB)",
-                    mib(gradient_bytes as usize)
-                )
-            },
-        );
+    }
+
+    fn write_arrays_and_notes(&self, out: &mut Lines) {
         for (i, a) in self.arrays.iter().enumerate() {
             let loaded = if a.loaded { " (loaded)" } else { "" };
-            line(
+            out.line(
                 if i == 0 { "arrays" } else { "" },
                 format!("{}: {}, {} component(s){loaded}", a.name, a.type_name, a.components),
             );
         }
         for note in &self.notes {
-            line("note", note.clone());
+            out.line("note", note.clone());
         }
-        out
     }
 
     fn axes_in_words(&self, v: &Volume) -> String {
@@ -193,6 +166,66 @@ impl Info {
         }
         words
     }
+}
+
+/// `volcast info`'s text: `key: value` lines with the values aligned; an empty key continues the line above.
+struct Lines(String);
+
+impl Lines {
+    fn line(&mut self, key: &str, value: String) {
+        let key = if key.is_empty() {
+            String::new()
+        } else {
+            format!("{key}:")
+        };
+        self.0.push_str(&format!("{key:<10} {value}\n"))
+    }
+}
+
+fn mib(bytes: usize) -> f64 {
+    bytes as f64 / (1 << 20) as f64
+}
+
+/// What the volume takes on the GPU: its texture, the corner textures CPU devices get, the gradient texture.
+fn write_gpu_memory(v: &Volume, out: &mut Lines) {
+    let gpu_format = match v.gpu_texel_size() {
+        1 => "R8_UNORM",
+        2 => "R16_UNORM",
+        _ => "R32_SFLOAT",
+    };
+    out.line(
+        "gpu",
+        format!("{gpu_format}, {:.1} MiB", mib(v.gpu_memory_bytes() as usize)),
+    );
+    if v.gpu_texel_size() < 4 {
+        out.line(
+            "",
+            format!(
+                "on CPU devices (lavapipe), --texture auto: corners{}, {:.1} MiB, while under 1 GiB (else \
+                 R32_SFLOAT, {:.1} MiB)",
+                8 * v.gpu_texel_size(),
+                mib(v.voxel_count() * 4 * v.gpu_texel_size()),
+                mib(v.voxel_count() * 4)
+            ),
+        );
+    }
+    let voxels = v.voxel_count() as u64;
+    let gradient_bytes = Gradients::texture_bytes(voxels);
+    out.line(
+        "",
+        if Gradients::texture_fits(voxels) {
+            format!(
+                "shaded frames, --gradients auto: + gradient texture (RGBA16 SNORM), {:.1} MiB",
+                mib(gradient_bytes as usize)
+            )
+        } else {
+            format!(
+                "shaded frames, --gradients auto: six samples per gradient (a gradient texture would take \
+                 {:.1} MiB, over 1 GiB)",
+                mib(gradient_bytes as usize)
+            )
+        },
+    );
 }
 
 /// A RAS axis code's name.

@@ -1,6 +1,7 @@
 //! The frame's uniform block and what it is computed from: the volume's GPU facts and the render settings.
 
 use super::skip;
+use crate::scene::lighting::IsoSurface;
 use crate::scene::settings::RenderSettings;
 use crate::transfer::function::srgb_to_linear;
 use crate::volume::Geometry;
@@ -95,58 +96,131 @@ pub fn mirrors(tex_to_world: DMat4) -> bool {
     DMat3::from_mat4(tex_to_world).determinant() < 0.0
 }
 
-impl FrameUniforms {
-    /// Pure: computes the uniforms for `s` (unit-tested without a GPU).
-    pub fn new(s: &RenderSettings, v: &VolumeInfo) -> FrameUniforms {
-        let aspect = s.width as f32 / s.height as f32;
+/// The camera's rays in the world: its basis, the half-height of the view at unit distance (`tan`), the
+/// image's aspect, and how much of the view widens with distance (`fan`, 1 perspective) or is laid out over the
+/// eye's plane (`spread`, the orthographic view's distance).
+struct CameraRays {
+    forward: DVec3,
+    right: DVec3,
+    up: DVec3,
+    tan: f64,
+    aspect: f64,
+    fan: f64,
+    spread: f64,
+}
+
+impl CameraRays {
+    fn of(s: &RenderSettings) -> CameraRays {
         let cam = &s.camera;
-        let model = v.tex_to_world(s);
-        let linear = DMat3::from_mat4(model);
-        let to_tex = linear.inverse();
-        let tex_to_clip = cam.projection(aspect).as_dmat4() * cam.view().as_dmat4() * model;
         let forward = cam.forward().as_dvec3();
         let right = forward.cross(cam.up.as_dvec3()).normalize();
-        let up = right.cross(forward);
-        let tan = f64::from((cam.fov_y_deg.to_radians() * 0.5).tan());
-        let eye_tex = model.inverse().transform_point3(cam.eye.as_dvec3());
         // Perspective rays fan out from the eye; orthographic rays start spread over the eye's plane.
         let (fan, spread) = if cam.ortho {
             (0.0, f64::from((cam.eye - cam.target).length()))
         } else {
             (1.0, 0.0)
         };
-        let aspect = f64::from(aspect);
+        CameraRays {
+            forward,
+            right,
+            up: right.cross(forward),
+            tan: f64::from((cam.fov_y_deg.to_radians() * 0.5).tan()),
+            aspect: f64::from(aspect(s)),
+            fan,
+            spread,
+        }
+    }
+}
+
+/// The image's width over its height, as the projection takes it (f32).
+fn aspect(s: &RenderSettings) -> f32 {
+    s.width as f32 / s.height as f32
+}
+
+/// The most steps a ray can take at world step `h`: the box's longest diagonal (under `linear`, texture space to
+/// the world) in steps, and two to spare.
+fn max_steps(linear: DMat3, h: f32) -> f32 {
+    let diagonal = [
+        DVec3::ONE,
+        DVec3::new(-1.0, 1.0, 1.0),
+        DVec3::new(1.0, -1.0, 1.0),
+        DVec3::new(1.0, 1.0, -1.0),
+    ]
+    .iter()
+    .map(|d| (linear * *d).length())
+    .fold(0.0, f64::max) as f32;
+    (diagonal / h).ceil() + 2.0
+}
+
+/// Rule 7's surfaces (the first four): their values, and per surface its linear colour and opacity.
+fn iso_tables(surfaces: &[IsoSurface]) -> ([f32; 4], [[f32; 4]; 4]) {
+    let mut iso_values = [0.0; 4];
+    let mut iso_colors = [[0.0; 4]; 4];
+    for (i, surface) in surfaces.iter().take(4).enumerate() {
+        iso_values[i] = surface.value;
+        let rgb = surface.color.map_or([-1.0; 3], |c| [c.x, c.y, c.z].map(srgb_to_linear));
+        iso_colors[i] = [rgb[0], rgb[1], rgb[2], surface.opacity];
+    }
+    (iso_values, iso_colors)
+}
+
+/// The light's direction (w 1) where it has one, else zero (the headlight).
+fn light_dir(s: &RenderSettings) -> [f32; 4] {
+    s.light_direction().map_or([0.0; 4], |d| {
+        let d = d.normalize();
+        [d.x, d.y, d.z, 1.0]
+    })
+}
+
+fn light_color(s: &RenderSettings) -> [f32; 4] {
+    let c = s.light.color;
+    let rgb = [c.x, c.y, c.z].map(|v| srgb_to_linear(v) * s.light.intensity);
+    [rgb[0], rgb[1], rgb[2], 0.0]
+}
+
+/// Rule 9's light grid: the shadow read's offset and which of shadows and occlusion are on.
+fn light_grid(s: &RenderSettings, v: &VolumeInfo) -> [f32; 4] {
+    if s.uses_light_volume() {
+        let offset = super::light_volume::grid_for(s, v).read_offset();
+        let bits = u32::from(s.shadows) + 2 * u32::from(s.ambient_occlusion);
+        v4(offset, bits as f32)
+    } else {
+        [0.0; 4]
+    }
+}
+
+fn v4(a: DVec3, w: f32) -> [f32; 4] {
+    [a.x as f32, a.y as f32, a.z as f32, w]
+}
+
+fn m4(m: DMat4) -> [f32; 16] {
+    m.as_mat4().to_cols_array()
+}
+
+impl FrameUniforms {
+    /// Pure: computes the uniforms for `s` (unit-tested without a GPU).
+    pub fn new(s: &RenderSettings, v: &VolumeInfo) -> FrameUniforms {
+        let cam = &s.camera;
+        let model = v.tex_to_world(s);
+        let linear = DMat3::from_mat4(model);
+        let to_tex = linear.inverse();
+        let tex_to_clip = cam.projection(aspect(s)).as_dmat4() * cam.view().as_dmat4() * model;
+        let CameraRays {
+            forward,
+            right,
+            up,
+            tan,
+            aspect,
+            fan,
+            spread,
+        } = CameraRays::of(s);
+        let eye_tex = model.inverse().transform_point3(cam.eye.as_dvec3());
         let dims = DVec3::from_array(v.dims.map(f64::from));
         let index_to_world = v.index_to_world(s);
         let h = s.step_length * v.smallest_voxel(s) as f32;
-        // The longest path through the box: its longest diagonal.
-        let diagonal = [
-            DVec3::ONE,
-            DVec3::new(-1.0, 1.0, 1.0),
-            DVec3::new(1.0, -1.0, 1.0),
-            DVec3::new(1.0, 1.0, -1.0),
-        ]
-        .iter()
-        .map(|d| (linear * *d).length())
-        .fold(0.0, f64::max) as f32;
-        let max_steps = (diagonal / h).ceil() + 2.0;
-        let v4 = |a: DVec3, w: f32| [a.x as f32, a.y as f32, a.z as f32, w];
-        let m4 = |m: DMat4| m.as_mat4().to_cols_array();
         let shading = s.shading.unwrap_or_default();
         let surfaces = s.isosurfaces();
-        let mut iso_values = [0.0; 4];
-        let mut iso_colors = [[0.0; 4]; 4];
-        for (i, surface) in surfaces.iter().take(4).enumerate() {
-            iso_values[i] = surface.value;
-            let rgb = surface.color.map_or([-1.0; 3], |c| [c.x, c.y, c.z].map(srgb_to_linear));
-            iso_colors[i] = [rgb[0], rgb[1], rgb[2], surface.opacity];
-        }
-        let light_dir = s.light_direction().map_or([0.0; 4], |d| {
-            let d = d.normalize();
-            [d.x, d.y, d.z, 1.0]
-        });
-        let c = s.light.color;
-        let light_color = [c.x, c.y, c.z].map(|v| srgb_to_linear(v) * s.light.intensity);
+        let (iso_values, iso_colors) = iso_tables(&surfaces);
         FrameUniforms {
             tex_to_clip: m4(tex_to_clip),
             tex_to_world: m4(model),
@@ -177,7 +251,7 @@ impl FrameUniforms {
             viewport: [
                 s.width as f32,
                 s.height as f32,
-                max_steps,
+                max_steps(linear, h),
                 s.count_samples as u32 as f32,
             ],
             texel: v4(1.0 / dims, 0.0),
@@ -199,15 +273,9 @@ impl FrameUniforms {
             ],
             iso_values,
             iso_colors,
-            light_dir,
-            light_color: [light_color[0], light_color[1], light_color[2], 0.0],
-            light_grid: if s.uses_light_volume() {
-                let offset = super::light_volume::grid_for(s, v).read_offset();
-                let bits = u32::from(s.shadows) + 2 * u32::from(s.ambient_occlusion);
-                v4(offset, bits as f32)
-            } else {
-                [0.0; 4]
-            },
+            light_dir: light_dir(s),
+            light_color: light_color(s),
+            light_grid: light_grid(s, v),
             clip_plane: v.clip_plane(s),
         }
     }

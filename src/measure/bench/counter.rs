@@ -72,6 +72,92 @@ const GRADIENT_SAMPLES: u64 = 6;
 /// Bisection steps of the isosurface mode.
 const ISO_BISECTIONS: u64 = 8;
 
+/// Where one pixel's ray crosses the slab box, in texture space (`FrameUniforms`' analytic setup); named as
+/// march.glsl names its ray.
+struct PixelRay {
+    /// Where the ray enters the box (or starts, past the near plane).
+    a: Vec3,
+    /// From `a` to where the ray leaves the box.
+    d: Vec3,
+    /// The length of `d` in the world.
+    len: f32,
+    /// The samples' offset: sample k lies at `(k + o)·h` (0.5, or the pixel's jitter).
+    o: f32,
+}
+
+impl PixelRay {
+    /// Pixel (x, y)'s ray; None where it misses the box.
+    fn of(f: &RayFrame, x: u32, y: u32) -> Option<PixelRay> {
+        let ndc_x = (x as f32 + 0.5) / f.viewport[0] * 2.0 - 1.0;
+        let ndc_y = (y as f32 + 0.5) / f.viewport[1] * 2.0 - 1.0;
+        let dir = f.forward + ndc_x * f.right + ndc_y * f.down;
+        let inv = Vec3::ONE / dir;
+        let t_lo = (f.slab_lo - f.eye) * inv;
+        let t_hi = (f.slab_hi - f.eye) * inv;
+        let t0 = t_lo.min(t_hi).max_element().max(f.near);
+        let t1 = t_lo.max(t_hi).min_element();
+        // NaN (a ray along a face) misses, as in the shader's `!(t1 > t0)`.
+        if t1.is_nan() || t0.is_nan() || t1 <= t0 {
+            return None;
+        }
+        let d = dir * (t1 - t0);
+        Some(PixelRay {
+            a: f.eye + dir * t0,
+            d,
+            len: (f.to_world * d).length(),
+            o: f.jitter.map_or(0.5, |seed| settings::jitter_offset(x, y, seed)),
+        })
+    }
+
+    /// The point at world distance `t` from the ray's start.
+    fn at(&self, t: f32) -> Vec3 {
+        self.a + self.d * (t / self.len)
+    }
+}
+
+/// The march's state between the samples it takes.
+struct Replay {
+    opacity: f32,
+    taken: u64,
+    /// The previous point (the segment's start): its value, where it is, whether the march took it and whether
+    /// its brick was occupied.
+    previous: f32,
+    t_prev: f32,
+    previous_taken: bool,
+    previous_occupied: bool,
+}
+
+impl Replay {
+    /// The isosurface march's step from value `vp` to `v` at sample `k`; true where the ray ends.
+    fn cross_surfaces(&mut self, f: &RayFrame, k: u64, vp: f32, v: f32, had_previous: bool) -> bool {
+        // Every surface crossed (NaN, and samples leapt over, below all) costs its bisection and gradient, and
+        // adds its opacity.
+        let below = |v: f32| if v.is_nan() { f32::NEG_INFINITY } else { v };
+        let (vp, v) = (if had_previous { below(vp) } else { f32::NEG_INFINITY }, below(v));
+        for &(iso, alpha) in &f.surfaces {
+            if (vp < iso) != (v < iso) {
+                self.taken += if k > 0 { ISO_BISECTIONS } else { 0 } + GRADIENT_SAMPLES;
+                self.opacity += (1.0 - self.opacity) * alpha;
+            }
+        }
+        self.opacity >= f.early_termination
+    }
+
+    /// The emission/density march's segment from value `vp` to `v`, `length` steps long; true where the ray ends.
+    fn absorb(&mut self, f: &RayFrame, vp: f32, v: f32, length: f32) -> bool {
+        let mean = preintegrate::segment_mean(&f.integrals, f.window, vp, v);
+        if v.is_nan() || vp.is_nan() || mean[3] <= 0.0 {
+            return false;
+        }
+        if f.gradients {
+            self.taken += GRADIENT_SAMPLES;
+        }
+        let (_, a_step) = preintegrate::segment(mean, length, f.mode == CompositeMode::Density);
+        self.opacity += (1.0 - self.opacity) * a_step;
+        self.opacity >= f.early_termination
+    }
+}
+
 impl SampleCounter {
     pub fn new(volume: &Volume) -> SampleCounter {
         let [nx, ny, nz] = volume.dims;
@@ -168,40 +254,33 @@ impl SampleCounter {
 
     /// (segment, taken) samples of pixel (x, y); mirrors march_analytic.frag and march.glsl.
     fn pixel(&self, f: &RayFrame, x: u32, y: u32) -> (u64, u64) {
-        let ndc_x = (x as f32 + 0.5) / f.viewport[0] * 2.0 - 1.0;
-        let ndc_y = (y as f32 + 0.5) / f.viewport[1] * 2.0 - 1.0;
-        let dir = f.forward + ndc_x * f.right + ndc_y * f.down;
-        let inv = Vec3::ONE / dir;
-        let t_lo = (f.slab_lo - f.eye) * inv;
-        let t_hi = (f.slab_hi - f.eye) * inv;
-        let t0 = t_lo.min(t_hi).max_element().max(f.near);
-        let t1 = t_lo.max(t_hi).min_element();
-        // NaN (a ray along a face) misses, as in the shader's `!(t1 > t0)`.
-        if t1.is_nan() || t0.is_nan() || t1 <= t0 {
+        let Some(ray) = PixelRay::of(f, x, y) else {
             return (0, 0);
-        }
-        let a = f.eye + dir * t0;
-        let d = dir * (t1 - t0);
-        let len = (f.to_world * d).length();
-        let o = f.jitter.map_or(0.5, |seed| settings::jitter_offset(x, y, seed));
-        let segment = ((len / f.h - o).ceil().max(0.0) as u64).min(f.max_steps);
-        let mut opacity = 0f32;
-        let mut taken = 0u64;
+        };
+        let segment = ((ray.len / f.h - ray.o).ceil().max(0.0) as u64).min(f.max_steps);
+        (segment, self.taken(f, &ray))
+    }
+
+    /// The samples the march takes on `ray`: the march loop of march.glsl, replayed.
+    fn taken(&self, f: &RayFrame, ray: &PixelRay) -> u64 {
         // The emission/density march composites segments between the ray's start, its samples and its end.
         let absorbing = matches!(f.mode, CompositeMode::Emission | CompositeMode::Density);
-        // The previous point (the segment's start), where it is, and whether the march took it.
-        let (mut previous, mut t_prev, mut previous_taken, mut previous_occupied) = (self.sample(a), 0f32, true, true);
-        if absorbing {
-            taken += 1;
-        }
+        let mut m = Replay {
+            opacity: 0.0,
+            taken: u64::from(absorbing),
+            previous: self.sample(ray.a),
+            t_prev: 0.0,
+            previous_taken: true,
+            previous_occupied: true,
+        };
         let mut reached_end = false;
         for k in 0..f.max_steps {
-            let t = (k as f32 + o) * f.h;
-            if t >= len {
+            let t = (k as f32 + ray.o) * f.h;
+            if t >= ray.len {
                 reached_end = true;
                 break;
             }
-            let p = a + d * (t / len);
+            let p = ray.at(t);
             let class = self.brick_class(f, p);
             let occupied = class != 0;
             // A stride's samples are those whose index is its multiple; the others are passed, not leapt over.
@@ -209,72 +288,54 @@ impl SampleCounter {
                 continue;
             }
             // The emission/density march takes the first sample past occupied bricks (its segment), then leaps.
-            let exit_sample = absorbing && previous_taken && previous_occupied;
+            let exit_sample = absorbing && m.previous_taken && m.previous_occupied;
             if !(occupied || exit_sample) {
                 // Leapt over: nothing there can be visible (nor reach the iso value), so the replay goes on.
-                previous_taken = false;
+                m.previous_taken = false;
                 continue;
             }
-            previous_occupied = occupied;
-            taken += 1;
+            m.previous_occupied = occupied;
+            m.taken += 1;
             let v = self.sample(p);
             // The emission/density march samples the segment's start again where it leapt: the last sample
             // leapt over.
-            if !previous_taken {
-                let first = ((k + 1).saturating_sub(u64::from(class))..=k)
-                    .find(|&i| self.brick_class(f, a + d * ((i as f32 + o) * f.h / len)) != 0)
-                    .unwrap_or(k);
-                t_prev = if first == 0 {
-                    0.0
-                } else {
-                    (first as f32 - 1.0 + o) * f.h
-                };
-                previous = self.sample(a + d * (t_prev / len));
+            if !m.previous_taken {
+                m.t_prev = self.resumed_at(f, ray, k, class);
+                m.previous = self.sample(ray.at(m.t_prev));
                 if absorbing {
-                    taken += 1;
+                    m.taken += 1;
                 }
             }
-            let (vp, length) = (previous, f.step_length * (t - t_prev) / f.h);
-            let had_previous = previous_taken && k > 0;
-            (previous, t_prev, previous_taken) = (v, t, true);
-            match f.mode {
-                CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => continue,
-                CompositeMode::Isosurface => {
-                    // Every surface crossed (NaN, and samples leapt over, below all) costs its bisection and
-                    // gradient, and adds its opacity.
-                    let below = |v: f32| if v.is_nan() { f32::NEG_INFINITY } else { v };
-                    let (vp, v) = (if had_previous { below(vp) } else { f32::NEG_INFINITY }, below(v));
-                    for &(iso, alpha) in &f.surfaces {
-                        if (vp < iso) != (v < iso) {
-                            taken += if k > 0 { ISO_BISECTIONS } else { 0 } + GRADIENT_SAMPLES;
-                            opacity += (1.0 - opacity) * alpha;
-                        }
-                    }
-                    if opacity >= f.early_termination {
-                        return (segment, taken);
-                    }
-                    continue;
-                }
-                CompositeMode::Emission | CompositeMode::Density => {}
-            }
-            let mean = preintegrate::segment_mean(&f.integrals, f.window, vp, v);
-            if v.is_nan() || vp.is_nan() || mean[3] <= 0.0 {
-                continue;
-            }
-            if f.gradients {
-                taken += GRADIENT_SAMPLES;
-            }
-            let (_, a_step) = preintegrate::segment(mean, length, f.mode == CompositeMode::Density);
-            opacity += (1.0 - opacity) * a_step;
-            if opacity >= f.early_termination {
-                return (segment, taken);
+            let (vp, length) = (m.previous, f.step_length * (t - m.t_prev) / f.h);
+            let had_previous = m.previous_taken && k > 0;
+            (m.previous, m.t_prev, m.previous_taken) = (v, t, true);
+            let ended = match f.mode {
+                CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average => false,
+                CompositeMode::Isosurface => m.cross_surfaces(f, k, vp, v, had_previous),
+                CompositeMode::Emission | CompositeMode::Density => m.absorb(f, vp, v, length),
+            };
+            if ended {
+                return m.taken;
             }
         }
         // The last segment, to the ray's end, unless the march leapt over what lies before it.
-        if absorbing && reached_end && previous_taken && previous_occupied {
-            taken += 1;
+        if absorbing && reached_end && m.previous_taken && m.previous_occupied {
+            m.taken += 1;
         }
-        (segment, taken)
+        m.taken
+    }
+
+    /// Where the march resumes after a leap that ends at sample `k` (of a brick of class `class`): the last
+    /// sample leapt over, the segment's start (0 at the ray's start).
+    fn resumed_at(&self, f: &RayFrame, ray: &PixelRay, k: u64, class: u8) -> f32 {
+        let first = ((k + 1).saturating_sub(u64::from(class))..=k)
+            .find(|&i| self.brick_class(f, ray.at((i as f32 + ray.o) * f.h)) != 0)
+            .unwrap_or(k);
+        if first == 0 {
+            0.0
+        } else {
+            (first as f32 - 1.0 + ray.o) * f.h
+        }
     }
 
     /// Counts over the whole image of `s`, rows split across the available cores.

@@ -28,6 +28,7 @@ use crate::scene::quality::CONVERGED_STEP;
 use crate::scene::settings::RenderSettings;
 use crate::volume::{self, RawOptions, Volume, VolumeError};
 use ash::vk;
+use image::RgbaImage;
 use std::path::Path;
 use std::time::Instant;
 
@@ -139,160 +140,269 @@ pub fn run(gpu: &Gpu, opts: &BenchOptions, log: &mut dyn FnMut(&str)) -> Result<
     // Every format: which one a scene's volume is stored in depends on the data and on `TexelPolicy::Auto`.
     let formats = TexelFormat::ALL;
     report.sample_only = sample_only(gpu, &formats, sample_cfg, log)?;
-    if opts.sample_only {
-        report.load_after = load_average();
-        report.peak_rss_bytes = peak_rss_bytes();
-        return Ok(report);
+    if !opts.sample_only {
+        let mut bench = Bench {
+            gpu,
+            opts,
+            headless: Headless::new(gpu)?,
+            report,
+            log,
+        };
+        let result = chosen.iter().try_for_each(|scene| bench.scene(scene));
+        bench.headless.destroy(gpu);
+        result?;
+        report = bench.report;
     }
-
-    let mut headless = Headless::new(gpu)?;
-    let result = (|| -> Result<(), BenchError> {
-        for scene in &chosen {
-            let volume = match load_scene_volume(scene, opts)? {
-                Ok(v) => v,
-                Err(reason) => {
-                    log(&format!("{}: skipped: {reason}", scene.name));
-                    report.skipped.push(Skipped {
-                        scene: scene.name.into(),
-                        reason,
-                    });
-                    continue;
-                }
-            };
-            headless.set_volume(gpu, &volume)?;
-            // The layout the renderer chose (TexelPolicy::Auto: corner or float textures on CPU devices).
-            // Corner textures bypass the sampler; their rate is stated against the fastest texture format's.
-            let layout = headless.renderer.volume_layout();
-            let format = layout.map_or("none", |l| l.name());
-            let raw_format = match layout {
-                Some(VolumeLayout::Texture(vk::Format::R8_UNORM)) => TexelFormat::R8Unorm,
-                Some(VolumeLayout::Texture(vk::Format::R16_UNORM)) => TexelFormat::R16Unorm,
-                _ => TexelFormat::R32Sfloat,
-            };
-            let described = format!(
-                "{} {}x{}x{} {}",
-                volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type
-            );
-            let raw_rate = report
-                .sample_only
-                .iter()
-                .find(|r| r.format == raw_format)
-                .map(|r| r.gsamples_per_s);
-            let counter = SampleCounter::new(&volume);
-            let sizes: Vec<u32> = scene
-                .sizes
-                .iter()
-                .copied()
-                .filter(|s| opts.sizes.is_empty() || opts.sizes.contains(s))
-                .collect();
-            for &size in &sizes {
-                let mut base = RenderSettings::new(size, size, volume.extent());
-                (scene.configure)(&mut base, &volume);
-                opts.quality.apply(&mut base, volume.range);
-                if let Some(step) = opts.step_length {
-                    base.step_length = step;
-                    base.max_stride = 1;
-                }
-                let shadings = scene
-                    .shadings
-                    .iter()
-                    .filter(|v| opts.shadings.is_empty() || opts.shadings.iter().any(|w| w == v.name()));
-                for &shading in shadings {
-                    let mut s = base.clone();
-                    shading.apply(&mut s);
-                    opts.gradients.apply(&mut s, volume.voxel_count() as u64);
-                    if s.gradient_texture {
-                        headless.renderer.enable_gradient_texture(gpu, &volume)?;
-                    }
-                    // Counted before timing, so the count's CPU work never overlaps a timed frame.
-                    let count = counter.count(&s);
-                    log(&format!(
-                        "{} {size}x{size} shading {}: converged image (step {CONVERGED_STEP})",
-                        scene.name,
-                        shading.name()
-                    ));
-                    let converged_image = headless.render(gpu, &converged(&s))?.image;
-                    // The converged frame made rule 9's light grid (the step is not part of it): its cost, once per
-                    // transfer function, light or volume.
-                    let light_grid_ms = s
-                        .uses_light_volume()
-                        .then(|| headless.renderer.light_grid_ms())
-                        .flatten();
-                    if let Some(ms) = light_grid_ms {
-                        log(&format!("{} {size}x{size}: light grid {ms:.0} ms", scene.name));
-                    }
-                    let methods = Method::ALL
-                        .into_iter()
-                        .filter(|m| opts.methods.is_empty() || opts.methods.iter().any(|n| n == m.name()));
-                    for method in methods {
-                        method.apply(&mut s);
-                        log(&format!(
-                            "{} {size}x{size} {} shading {}: {} warm-up + {} frames",
-                            scene.name,
-                            method.name(),
-                            shading.name(),
-                            opts.warmup,
-                            opts.frames
-                        ));
-                        let (mut wall, mut total, mut entry, mut exit, mut march) =
-                            (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-                        let mut last = None;
-                        for i in 0..opts.warmup + opts.frames {
-                            let t = Instant::now();
-                            let frame = headless.render(gpu, &s)?;
-                            let ms = t.elapsed().as_secs_f64() * 1e3;
-                            if i < opts.warmup {
-                                continue;
-                            }
-                            wall.push(ms);
-                            if let Some(tm) = frame.timings {
-                                total.push(tm.total_ms);
-                                march.push(tm.march_ms);
-                                entry.extend(tm.entry_ms);
-                                exit.extend(tm.exit_ms);
-                            }
-                            last = Some(frame.image);
-                        }
-                        let wall_ms = Stats::of(&wall).ok_or(GpuError::Lost("no frames timed"))?;
-                        let gpu_ms = Stats::of(&total);
-                        let frame_ms = gpu_ms.map_or(wall_ms.median, |g| g.median).max(1e-6);
-                        let pixels = f64::from(size) * f64::from(size);
-                        let effective = count.taken_per_pixel * pixels / (frame_ms * 1e-3) / 1e9;
-                        let (allocated, _) = gpu_allocated(gpu)?;
-                        report.results.push(SceneResult {
-                            scene: scene.name.into(),
-                            volume: described.clone(),
-                            format,
-                            width: size,
-                            height: size,
-                            method,
-                            shading,
-                            frames: wall.len() as u32,
-                            wall_ms,
-                            gpu_ms,
-                            entry_ms: median(&entry),
-                            exit_ms: median(&exit),
-                            march_ms: median(&march),
-                            segment_samples_per_pixel: count.segment_per_pixel,
-                            samples_per_pixel: count.taken_per_pixel,
-                            effective_gsamples_per_s: effective,
-                            fraction_of_raw: raw_rate.map(|r| effective / r),
-                            gpu_allocated_bytes: allocated,
-                            load: load_average(),
-                            step_length: s.step_length,
-                            max_stride: s.max_stride,
-                            light_grid_ms,
-                            error: Fidelity::of(&last.ok_or(GpuError::Lost("no frames timed"))?, &converged_image, &s),
-                        });
-                    }
-                }
-            }
-        }
-        Ok(())
-    })();
-    headless.destroy(gpu);
-    result?;
     report.load_after = load_average();
     report.peak_rss_bytes = peak_rss_bytes();
     Ok(report)
+}
+
+/// A run through the scenes: the renderer that times them, the report it fills and where progress goes.
+struct Bench<'a> {
+    gpu: &'a Gpu,
+    opts: &'a BenchOptions,
+    headless: Headless,
+    report: BenchReport,
+    log: &'a mut dyn FnMut(&str),
+}
+
+/// A scene's volume on the GPU, and what all its configurations share.
+struct LoadedScene<'a> {
+    scene: &'a Scene,
+    volume: Volume,
+    /// Name, dims and voxel type, as the report states them.
+    described: String,
+    /// The layout the renderer chose (`VolumeLayout::name`).
+    format: &'static str,
+    /// The sample-only rate the frames are stated against (None when it was not measured).
+    raw_rate: Option<f64>,
+    counter: SampleCounter,
+}
+
+/// What a scene × size × shading's frames under each method are measured against.
+struct Reference {
+    size: u32,
+    shading: Shading,
+    count: SampleCount,
+    converged_image: RgbaImage,
+    /// How long rule 9's light grid took to fill, for scenes with shadows or occlusion.
+    light_grid_ms: Option<f64>,
+}
+
+/// What the timed frames of one configuration measured, in ms (GPU passes from timestamps, where the device has
+/// them), and the last frame.
+struct TimedFrames {
+    wall: Vec<f64>,
+    total: Vec<f64>,
+    entry: Vec<f64>,
+    exit: Vec<f64>,
+    march: Vec<f64>,
+    last: Option<RgbaImage>,
+}
+
+impl Bench<'_> {
+    /// Every size × shading × method of `scene`; a scene whose file is missing is logged and listed as skipped.
+    fn scene(&mut self, scene: &Scene) -> Result<(), BenchError> {
+        let volume = match load_scene_volume(scene, self.opts)? {
+            Ok(v) => v,
+            Err(reason) => {
+                (self.log)(&format!("{}: skipped: {reason}", scene.name));
+                self.report.skipped.push(Skipped {
+                    scene: scene.name.into(),
+                    reason,
+                });
+                return Ok(());
+            }
+        };
+        self.headless.set_volume(self.gpu, &volume)?;
+        let loaded = self.loaded(scene, volume);
+        let opts = self.opts;
+        let sizes = scene
+            .sizes
+            .iter()
+            .copied()
+            .filter(|s| opts.sizes.is_empty() || opts.sizes.contains(s));
+        for size in sizes {
+            let mut base = RenderSettings::new(size, size, loaded.volume.extent());
+            (scene.configure)(&mut base, &loaded.volume);
+            opts.quality.apply(&mut base, loaded.volume.range);
+            if let Some(step) = opts.step_length {
+                base.step_length = step;
+                base.max_stride = 1;
+            }
+            let shadings = scene
+                .shadings
+                .iter()
+                .filter(|v| opts.shadings.is_empty() || opts.shadings.iter().any(|w| w == v.name()));
+            for &shading in shadings {
+                self.shading(&loaded, size, base.clone(), shading)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// What every configuration of the scene just uploaded shares.
+    fn loaded<'s>(&self, scene: &'s Scene, volume: Volume) -> LoadedScene<'s> {
+        // The layout the renderer chose (TexelPolicy::Auto: corner or float textures on CPU devices).
+        // Corner textures bypass the sampler; their rate is stated against the fastest texture format's.
+        let layout = self.headless.renderer.volume_layout();
+        let raw_format = match layout {
+            Some(VolumeLayout::Texture(vk::Format::R8_UNORM)) => TexelFormat::R8Unorm,
+            Some(VolumeLayout::Texture(vk::Format::R16_UNORM)) => TexelFormat::R16Unorm,
+            _ => TexelFormat::R32Sfloat,
+        };
+        LoadedScene {
+            scene,
+            described: format!(
+                "{} {}x{}x{} {}",
+                volume.name, volume.dims[0], volume.dims[1], volume.dims[2], volume.source_type
+            ),
+            format: layout.map_or("none", |l| l.name()),
+            raw_rate: self
+                .report
+                .sample_only
+                .iter()
+                .find(|r| r.format == raw_format)
+                .map(|r| r.gsamples_per_s),
+            counter: SampleCounter::new(&volume),
+            volume,
+        }
+    }
+
+    /// One shading variant of a scene at one size: its reference (sample count, converged image), then each
+    /// method's timed frames.
+    fn shading(
+        &mut self,
+        loaded: &LoadedScene,
+        size: u32,
+        mut s: RenderSettings,
+        shading: Shading,
+    ) -> Result<(), BenchError> {
+        let (gpu, name) = (self.gpu, loaded.scene.name);
+        shading.apply(&mut s);
+        self.opts.gradients.apply(&mut s, loaded.volume.voxel_count() as u64);
+        if s.gradient_texture {
+            self.headless.renderer.enable_gradient_texture(gpu, &loaded.volume)?;
+        }
+        // Counted before timing, so the count's CPU work never overlaps a timed frame.
+        let count = loaded.counter.count(&s);
+        (self.log)(&format!(
+            "{name} {size}x{size} shading {}: converged image (step {CONVERGED_STEP})",
+            shading.name()
+        ));
+        let converged_image = self.headless.render(gpu, &converged(&s))?.image;
+        // The converged frame made rule 9's light grid (the step is not part of it): its cost, once per
+        // transfer function, light or volume.
+        let light_grid_ms = s
+            .uses_light_volume()
+            .then(|| self.headless.renderer.light_grid_ms())
+            .flatten();
+        if let Some(ms) = light_grid_ms {
+            (self.log)(&format!("{name} {size}x{size}: light grid {ms:.0} ms"));
+        }
+        let reference = Reference {
+            size,
+            shading,
+            count,
+            converged_image,
+            light_grid_ms,
+        };
+        let opts = self.opts;
+        let methods = Method::ALL
+            .into_iter()
+            .filter(|m| opts.methods.is_empty() || opts.methods.iter().any(|n| n == m.name()));
+        for method in methods {
+            method.apply(&mut s);
+            (self.log)(&format!(
+                "{name} {size}x{size} {} shading {}: {} warm-up + {} frames",
+                method.name(),
+                shading.name(),
+                opts.warmup,
+                opts.frames
+            ));
+            let frames = self.time_frames(&s)?;
+            let result = self.result(loaded, &reference, method, &s, frames)?;
+            self.report.results.push(result);
+        }
+        Ok(())
+    }
+
+    /// Renders `s` `warmup` times untimed, then `frames` times timed.
+    fn time_frames(&mut self, s: &RenderSettings) -> Result<TimedFrames, BenchError> {
+        let opts = self.opts;
+        let mut timed = TimedFrames {
+            wall: Vec::new(),
+            total: Vec::new(),
+            entry: Vec::new(),
+            exit: Vec::new(),
+            march: Vec::new(),
+            last: None,
+        };
+        for i in 0..opts.warmup + opts.frames {
+            let t = Instant::now();
+            let frame = self.headless.render(self.gpu, s)?;
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            if i < opts.warmup {
+                continue;
+            }
+            timed.wall.push(ms);
+            if let Some(tm) = frame.timings {
+                timed.total.push(tm.total_ms);
+                timed.march.push(tm.march_ms);
+                timed.entry.extend(tm.entry_ms);
+                timed.exit.extend(tm.exit_ms);
+            }
+            timed.last = Some(frame.image);
+        }
+        Ok(timed)
+    }
+
+    /// One configuration's row: its times, sample rates, memory and error against the converged image.
+    fn result(
+        &self,
+        loaded: &LoadedScene,
+        reference: &Reference,
+        method: Method,
+        s: &RenderSettings,
+        frames: TimedFrames,
+    ) -> Result<SceneResult, BenchError> {
+        let size = reference.size;
+        let count = reference.count;
+        let wall_ms = Stats::of(&frames.wall).ok_or(GpuError::Lost("no frames timed"))?;
+        let gpu_ms = Stats::of(&frames.total);
+        let frame_ms = gpu_ms.map_or(wall_ms.median, |g| g.median).max(1e-6);
+        let pixels = f64::from(size) * f64::from(size);
+        let effective = count.taken_per_pixel * pixels / (frame_ms * 1e-3) / 1e9;
+        let (allocated, _) = gpu_allocated(self.gpu)?;
+        Ok(SceneResult {
+            scene: loaded.scene.name.into(),
+            volume: loaded.described.clone(),
+            format: loaded.format,
+            width: size,
+            height: size,
+            method,
+            shading: reference.shading,
+            frames: frames.wall.len() as u32,
+            wall_ms,
+            gpu_ms,
+            entry_ms: median(&frames.entry),
+            exit_ms: median(&frames.exit),
+            march_ms: median(&frames.march),
+            segment_samples_per_pixel: count.segment_per_pixel,
+            samples_per_pixel: count.taken_per_pixel,
+            effective_gsamples_per_s: effective,
+            fraction_of_raw: loaded.raw_rate.map(|r| effective / r),
+            gpu_allocated_bytes: allocated,
+            load: load_average(),
+            step_length: s.step_length,
+            max_stride: s.max_stride,
+            light_grid_ms: reference.light_grid_ms,
+            error: Fidelity::of(
+                &frames.last.ok_or(GpuError::Lost("no frames timed"))?,
+                &reference.converged_image,
+                s,
+            ),
+        })
+    }
 }

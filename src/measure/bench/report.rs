@@ -158,99 +158,28 @@ pub const TABLE_COLUMNS: [&str; 22] = [
     "err_max",
 ];
 
+/// Each column's width in [`BenchReport::text`]'s table (a cell that is wider pushes the rest of its row along).
+const TABLE_WIDTHS: [usize; 22] = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7, 6, 6, 8, 7, 7];
+
+/// What the table's columns mean, printed above it.
+const TABLE_LEGEND: &str = "\nms per frame (wall: render + readback; gpu: timestamps, entry + exit + march); \
+    seg_spp: samples on the ray segments per pixel, before early termination; spp: 3D-texture \
+    samples taken per pixel, gradients included (CPU replay of the march rules); Gsamples/s: spp x pixels / gpu_med; of_raw: that / \
+    sample-only rate of the volume's format; step: in voxels; stride: the longest brick stride; err_mean/p99/max: the last frame \
+    against the same scene converged (1/8-voxel steps, approximations off), in 1/255 over object \
+    pixels\n";
+
 impl BenchReport {
     /// A human-readable report: the sample-only rates, then one table row per configuration.
     pub fn text(&self) -> String {
-        let mut out = String::new();
-        let load = |l: Option<[f64; 3]>| match l {
-            Some([a, b, c]) => format!("{a:.2} {b:.2} {c:.2}"),
-            None => "unknown".into(),
-        };
-        out += &format!(
-            "volcast bench on {}: {} timed frames after {} warm-up; load average before {}, after {}\n",
-            self.device,
-            self.frames,
-            self.warmup,
-            load(self.load_before),
-            load(self.load_after)
-        );
+        let mut out = self.heading();
         if !self.sample_only.is_empty() {
-            out += "\nsample-only (raw trilinear 3D-texture samples, nothing else):\n";
-            for r in &self.sample_only {
-                out += &format!(
-                    "  {:<10} {}^3 texture, {}x{} x {} samples: {:.3} G samples/s (GPU median {:.1} ms, min {:.1}, max {:.1})\n",
-                    r.format.name(),
-                    r.texture,
-                    r.width,
-                    r.height,
-                    r.samples_per_pixel,
-                    r.gsamples_per_s,
-                    r.gpu_ms.median,
-                    r.gpu_ms.min,
-                    r.gpu_ms.max
-                );
-            }
+            out += &self.sample_only_text();
         }
         if !self.results.is_empty() {
-            out += "\nms per frame (wall: render + readback; gpu: timestamps, entry + exit + march); \
-                    seg_spp: samples on the ray segments per pixel, before early termination; spp: 3D-texture \
-                    samples taken per pixel, gradients included (CPU replay of the march rules); Gsamples/s: spp x pixels / gpu_med; of_raw: that / \
-                    sample-only rate of the volume's format; step: in voxels; stride: the longest brick stride; err_mean/p99/max: the last frame \
-                    against the same scene converged (1/8-voxel steps, approximations off), in 1/255 over object \
-                    pixels\n";
-            let widths = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7, 6, 6, 8, 7, 7];
-            let row = |cells: Vec<String>| -> String {
-                let mut line = String::new();
-                for (c, w) in cells.iter().zip(widths) {
-                    line += &format!("{c:<w$} ");
-                }
-                line.trim_end().to_string() + "\n"
-            };
-            out += &row(TABLE_COLUMNS.iter().map(|s| s.to_string()).collect());
-            let opt = |v: Option<f64>, prec: usize| v.map_or("-".to_string(), |x| format!("{x:.prec$}"));
-            for r in &self.results {
-                let gpu = r.gpu_ms;
-                out += &row(vec![
-                    r.scene.clone(),
-                    format!("{}", r.width),
-                    r.method.name().into(),
-                    r.shading.name().into(),
-                    format!("{:.2}", r.wall_ms.median),
-                    format!("{:.2}", r.wall_ms.min),
-                    format!("{:.2}", r.wall_ms.max),
-                    opt(gpu.map(|g| g.median), 2),
-                    opt(gpu.map(|g| g.min), 2),
-                    opt(gpu.map(|g| g.max), 2),
-                    opt(r.entry_ms, 2),
-                    opt(r.exit_ms, 2),
-                    opt(r.march_ms, 2),
-                    format!("{:.1}", r.segment_samples_per_pixel),
-                    format!("{:.1}", r.samples_per_pixel),
-                    format!("{:.4}", r.effective_gsamples_per_s),
-                    opt(r.fraction_of_raw, 3),
-                    format!("{}", r.step_length),
-                    format!("{}", r.max_stride),
-                    format!("{:.3}", r.error.mean),
-                    format!("{:.0}", r.error.p99),
-                    format!("{:.0}", r.error.max),
-                ]);
-            }
-            out += "\nvolumes and GPU memory:\n";
-            let mut seen = Vec::new();
-            for r in &self.results {
-                if !seen.contains(&(&r.scene, r.width, r.method)) {
-                    seen.push((&r.scene, r.width, r.method));
-                    out += &format!(
-                        "  {:<12} {:<5} {:<9} {} ({}); GPU allocated {:.1} MiB\n",
-                        r.scene,
-                        r.width,
-                        r.method.name(),
-                        r.volume,
-                        r.format,
-                        r.gpu_allocated_bytes as f64 / MIB
-                    );
-                }
-            }
+            out += TABLE_LEGEND;
+            out += &self.table();
+            out += &self.memory_text();
         }
         for s in &self.skipped {
             out += &format!("skipped {}: {}\n", s.scene, s.reason);
@@ -259,6 +188,112 @@ impl BenchReport {
             out += &format!("peak resident memory of this run (VmHWM): {:.1} MiB\n", p as f64 / MIB);
         }
         out
+    }
+
+    /// The device, the frame counts and the load average around the run.
+    fn heading(&self) -> String {
+        let load = |l: Option<[f64; 3]>| match l {
+            Some([a, b, c]) => format!("{a:.2} {b:.2} {c:.2}"),
+            None => "unknown".into(),
+        };
+        format!(
+            "volcast bench on {}: {} timed frames after {} warm-up; load average before {}, after {}\n",
+            self.device,
+            self.frames,
+            self.warmup,
+            load(self.load_before),
+            load(self.load_after)
+        )
+    }
+
+    fn sample_only_text(&self) -> String {
+        let mut out = String::from("\nsample-only (raw trilinear 3D-texture samples, nothing else):\n");
+        for r in &self.sample_only {
+            out += &format!(
+                "  {:<10} {}^3 texture, {}x{} x {} samples: {:.3} G samples/s (GPU median {:.1} ms, min {:.1}, max {:.1})\n",
+                r.format.name(),
+                r.texture,
+                r.width,
+                r.height,
+                r.samples_per_pixel,
+                r.gsamples_per_s,
+                r.gpu_ms.median,
+                r.gpu_ms.min,
+                r.gpu_ms.max
+            );
+        }
+        out
+    }
+
+    /// The header row of [`TABLE_COLUMNS`], then one row per result.
+    fn table(&self) -> String {
+        let mut out = table_row(TABLE_COLUMNS.iter().map(|s| s.to_string()).collect());
+        for r in &self.results {
+            out += &table_row(r.table_cells());
+        }
+        out
+    }
+
+    /// Each scene × size × method's volume, its GPU layout and the GPU memory allocated, once.
+    fn memory_text(&self) -> String {
+        let mut out = String::from("\nvolumes and GPU memory:\n");
+        let mut seen = Vec::new();
+        for r in &self.results {
+            if !seen.contains(&(&r.scene, r.width, r.method)) {
+                seen.push((&r.scene, r.width, r.method));
+                out += &format!(
+                    "  {:<12} {:<5} {:<9} {} ({}); GPU allocated {:.1} MiB\n",
+                    r.scene,
+                    r.width,
+                    r.method.name(),
+                    r.volume,
+                    r.format,
+                    r.gpu_allocated_bytes as f64 / MIB
+                );
+            }
+        }
+        out
+    }
+}
+
+/// One line of the table: each cell left-aligned in its column's width.
+fn table_row(cells: Vec<String>) -> String {
+    let mut line = String::new();
+    for (c, w) in cells.iter().zip(TABLE_WIDTHS) {
+        line += &format!("{c:<w$} ");
+    }
+    line.trim_end().to_string() + "\n"
+}
+
+impl SceneResult {
+    /// This result's cells under [`TABLE_COLUMNS`], in order.
+    fn table_cells(&self) -> Vec<String> {
+        let opt = |v: Option<f64>, prec: usize| v.map_or("-".to_string(), |x| format!("{x:.prec$}"));
+        let gpu = self.gpu_ms;
+        vec![
+            self.scene.clone(),
+            format!("{}", self.width),
+            self.method.name().into(),
+            self.shading.name().into(),
+            format!("{:.2}", self.wall_ms.median),
+            format!("{:.2}", self.wall_ms.min),
+            format!("{:.2}", self.wall_ms.max),
+            opt(gpu.map(|g| g.median), 2),
+            opt(gpu.map(|g| g.min), 2),
+            opt(gpu.map(|g| g.max), 2),
+            opt(self.entry_ms, 2),
+            opt(self.exit_ms, 2),
+            opt(self.march_ms, 2),
+            format!("{:.1}", self.segment_samples_per_pixel),
+            format!("{:.1}", self.samples_per_pixel),
+            format!("{:.4}", self.effective_gsamples_per_s),
+            opt(self.fraction_of_raw, 3),
+            format!("{}", self.step_length),
+            format!("{}", self.max_stride),
+            format!("{:.3}", self.error.mean),
+            format!("{:.0}", self.error.p99),
+            format!("{:.0}", self.error.max),
+        ]
     }
 }
 
