@@ -68,6 +68,59 @@ fn choose_format(formats: &[vk::SurfaceFormatKHR]) -> Option<vk::SurfaceFormatKH
     })
 }
 
+/// What the surface supports on this device.
+struct SurfaceSupport {
+    caps: vk::SurfaceCapabilitiesKHR,
+    formats: Vec<vk::SurfaceFormatKHR>,
+    modes: Vec<vk::PresentModeKHR>,
+}
+
+impl SurfaceSupport {
+    fn query(gpu: &Gpu, surface: &Surface) -> Result<SurfaceSupport, GpuError> {
+        let loader = &surface.loader;
+        // SAFETY: queries on a live surface and device.
+        unsafe {
+            Ok(SurfaceSupport {
+                caps: loader
+                    .get_physical_device_surface_capabilities(gpu.physical, surface.raw)
+                    .ctx("surface caps")?,
+                formats: loader
+                    .get_physical_device_surface_formats(gpu.physical, surface.raw)
+                    .ctx("surface formats")?,
+                modes: loader
+                    .get_physical_device_surface_present_modes(gpu.physical, surface.raw)
+                    .ctx("present modes")?,
+            })
+        }
+    }
+}
+
+/// The surface's own extent when it fixes one, else the asked size clamped to what it allows.
+fn choose_extent(caps: &vk::SurfaceCapabilitiesKHR, desc: &SwapchainDesc) -> vk::Extent2D {
+    if caps.current_extent.width != u32::MAX {
+        return caps.current_extent;
+    }
+    vk::Extent2D {
+        width: desc
+            .width
+            .clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+        height: desc
+            .height
+            .clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+    }
+}
+
+/// FIFO with vsync; otherwise MAILBOX or IMMEDIATE where offered (FIFO is always there).
+fn choose_present_mode(modes: &[vk::PresentModeKHR], vsync: bool) -> vk::PresentModeKHR {
+    if vsync {
+        return vk::PresentModeKHR::FIFO;
+    }
+    [vk::PresentModeKHR::MAILBOX, vk::PresentModeKHR::IMMEDIATE]
+        .into_iter()
+        .find(|m| modes.contains(m))
+        .unwrap_or(vk::PresentModeKHR::FIFO)
+}
+
 impl Swapchain {
     /// Creates a swapchain for `surface`, retiring `old` if given (its images may still be presenting).
     pub fn new(
@@ -76,26 +129,12 @@ impl Swapchain {
         desc: SwapchainDesc,
         old: Option<&Swapchain>,
     ) -> Result<Swapchain, GpuError> {
-        // SAFETY: queries on a live surface and device.
-        let (caps, formats, modes) = unsafe {
-            (
-                surface
-                    .loader
-                    .get_physical_device_surface_capabilities(gpu.physical, surface.raw)
-                    .ctx("surface caps")?,
-                surface
-                    .loader
-                    .get_physical_device_surface_formats(gpu.physical, surface.raw)
-                    .ctx("surface formats")?,
-                surface
-                    .loader
-                    .get_physical_device_surface_present_modes(gpu.physical, surface.raw)
-                    .ctx("present modes")?,
-            )
-        };
-        let format = choose_format(&formats).ok_or_else(|| {
+        let support = SurfaceSupport::query(gpu, surface)?;
+        let caps = support.caps;
+        let format = choose_format(&support.formats).ok_or_else(|| {
             GpuError::NoDevice(format!(
-                "the window offers no 8-bit UNORM surface format (it offers {formats:?})"
+                "the window offers no 8-bit UNORM surface format (it offers {:?})",
+                support.formats
             ))
         })?;
         let needed = vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::COLOR_ATTACHMENT;
@@ -104,26 +143,8 @@ impl Swapchain {
                 "the swapchain cannot be a blit target and colour attachment".into(),
             ));
         }
-        let extent = if caps.current_extent.width != u32::MAX {
-            caps.current_extent
-        } else {
-            vk::Extent2D {
-                width: desc
-                    .width
-                    .clamp(caps.min_image_extent.width, caps.max_image_extent.width),
-                height: desc
-                    .height
-                    .clamp(caps.min_image_extent.height, caps.max_image_extent.height),
-            }
-        };
-        let mode = if desc.vsync {
-            vk::PresentModeKHR::FIFO
-        } else {
-            [vk::PresentModeKHR::MAILBOX, vk::PresentModeKHR::IMMEDIATE]
-                .into_iter()
-                .find(|m| modes.contains(m))
-                .unwrap_or(vk::PresentModeKHR::FIFO)
-        };
+        let extent = choose_extent(&caps, &desc);
+        let mode = choose_present_mode(&support.modes, desc.vsync);
         let mut count = caps.min_image_count + 1;
         if caps.max_image_count > 0 {
             count = count.min(caps.max_image_count);
@@ -163,22 +184,27 @@ impl Swapchain {
             views: Vec::new(),
             desc,
         };
-        for &image in &chain.images.clone() {
+        if let Err(e) = chain.create_views(gpu) {
+            chain.destroy(gpu);
+            return Err(e);
+        }
+        Ok(chain)
+    }
+
+    /// One colour view per swapchain image, pushed onto `views` as made (so a
+    /// failure leaves only views that `destroy` frees).
+    fn create_views(&mut self, gpu: &Gpu) -> Result<(), GpuError> {
+        for &image in &self.images {
             let view_info = vk::ImageViewCreateInfo::default()
                 .image(image)
                 .view_type(vk::ImageViewType::TYPE_2D)
-                .format(chain.format)
+                .format(self.format)
                 .subresource_range(super::sync::COLOR_RANGE);
             // SAFETY: the image belongs to the swapchain and the view matches its format.
-            match unsafe { gpu.device.create_image_view(&view_info, None) } {
-                Ok(v) => chain.views.push(v),
-                Err(e) => {
-                    chain.destroy(gpu);
-                    return Err(GpuError::vk("vkCreateImageView", e));
-                }
-            }
+            let view = unsafe { gpu.device.create_image_view(&view_info, None) }.ctx("vkCreateImageView")?;
+            self.views.push(view);
         }
-        Ok(chain)
+        Ok(())
     }
 
     /// Callers wait for the device to be idle (or at least for every frame using these images) first.

@@ -131,6 +131,34 @@ impl Renderer {
         frag: vk::ShaderStageFlags,
         slots: usize,
     ) -> Result<(), GpuError> {
+        self.create_layouts(gpu, all, frag)?;
+        let light_pass = super::light_volume::LightPass::new(gpu, self.frame_set_layout, self.volume_set_layout)?;
+        self.light_pass = Some(light_pass);
+        self.linear_sampler = sampler(gpu, vk::Filter::LINEAR)?;
+        self.point_sampler = sampler(gpu, vk::Filter::NEAREST)?;
+        self.create_position_pipelines(gpu)?;
+        let sets = self.allocate_sets(gpu, slots)?;
+        (self.volume_set, self.positions_set) = (sets[0], sets[1]);
+        if let Some(pass) = &mut self.light_pass {
+            pass.set = sets[2];
+        }
+        for (&set, &storage_set) in sets[3..3 + slots].iter().zip(&sets[3 + slots..]) {
+            let slot = frame_slot(gpu, set, storage_set)?;
+            self.slots.push(slot);
+        }
+        let initial = RenderSettings::default();
+        self.upload_lut(&initial, [0.0, 1.0])?;
+        Ok(())
+    }
+
+    /// The descriptor-set layouts (frame, volume, positions, storage) and the
+    /// pipeline layouts built from them.
+    fn create_layouts(
+        &mut self,
+        gpu: &Gpu,
+        all: vk::ShaderStageFlags,
+        frag: vk::ShaderStageFlags,
+    ) -> Result<(), GpuError> {
         use vk::DescriptorType as D;
         self.frame_set_layout = set_layout(gpu, &[(D::UNIFORM_BUFFER, all)])?;
         self.volume_set_layout = set_layout(
@@ -161,12 +189,11 @@ impl Renderer {
             gpu,
             &[self.frame_set_layout, self.volume_set_layout, self.storage_set_layout],
         )?;
-        let light_pass = super::light_volume::LightPass::new(gpu, self.frame_set_layout, self.volume_set_layout)?;
-        let light_set_layout = light_pass.set_layout();
-        self.light_pass = Some(light_pass);
-        self.linear_sampler = sampler(gpu, vk::Filter::LINEAR)?;
-        self.point_sampler = sampler(gpu, vk::Filter::NEAREST)?;
+        Ok(())
+    }
 
+    /// The box-face pipelines: one per position format, front and back culling.
+    fn create_position_pipelines(&mut self, gpu: &Gpu) -> Result<(), GpuError> {
         let faces_vert = shader!("faces.vert");
         let faces_frag = shader!("faces.frag");
         for (i, format) in [PositionFormat::Rgba32f, PositionFormat::Rgba16f]
@@ -189,28 +216,21 @@ impl Renderer {
                 )?;
             }
         }
+        Ok(())
+    }
+
+    /// The descriptor pool and its sets, in this order: volume, positions,
+    /// light, then `slots` frame sets and `slots` storage sets.
+    fn allocate_sets(&mut self, gpu: &Gpu, slots: usize) -> Result<Vec<vk::DescriptorSet>, GpuError> {
+        use vk::DescriptorType as D;
         let n = slots as u32;
+        let size = |ty, descriptor_count| vk::DescriptorPoolSize { ty, descriptor_count };
         let sizes = [
-            vk::DescriptorPoolSize {
-                ty: D::UNIFORM_BUFFER,
-                descriptor_count: n + 1,
-            },
-            vk::DescriptorPoolSize {
-                ty: D::SAMPLED_IMAGE,
-                descriptor_count: 8,
-            },
-            vk::DescriptorPoolSize {
-                ty: D::SAMPLER,
-                descriptor_count: 2,
-            },
-            vk::DescriptorPoolSize {
-                ty: D::STORAGE_IMAGE,
-                descriptor_count: n + 1,
-            },
-            vk::DescriptorPoolSize {
-                ty: D::STORAGE_BUFFER,
-                descriptor_count: 2,
-            },
+            size(D::UNIFORM_BUFFER, n + 1),
+            size(D::SAMPLED_IMAGE, 8),
+            size(D::SAMPLER, 2),
+            size(D::STORAGE_IMAGE, n + 1),
+            size(D::STORAGE_BUFFER, 2),
         ];
         let pool_info = vk::DescriptorPoolCreateInfo::default()
             .max_sets(3 + 2 * n)
@@ -218,6 +238,7 @@ impl Renderer {
         // SAFETY: valid create info on a live device.
         self.descriptor_pool =
             unsafe { gpu.device.create_descriptor_pool(&pool_info, None) }.ctx("vkCreateDescriptorPool")?;
+        let light_set_layout = self.light_pass.as_ref().map(|p| p.set_layout()).unwrap_or_default();
         let mut layouts = vec![self.volume_set_layout, self.positions_set_layout, light_set_layout];
         layouts.extend(std::iter::repeat_n(self.frame_set_layout, slots));
         layouts.extend(std::iter::repeat_n(self.storage_set_layout, slots));
@@ -225,52 +246,48 @@ impl Renderer {
             .descriptor_pool(self.descriptor_pool)
             .set_layouts(&layouts);
         // SAFETY: the pool has room for exactly these sets.
-        let sets = unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")?;
-        (self.volume_set, self.positions_set) = (sets[0], sets[1]);
-        if let Some(pass) = &mut self.light_pass {
-            pass.set = sets[2];
-        }
-        for (&set, &storage_set) in sets[3..3 + slots].iter().zip(&sets[3 + slots..]) {
-            let uniforms = Buffer::new(
-                gpu,
-                std::mem::size_of::<FrameUniforms>() as u64,
-                vk::BufferUsageFlags::UNIFORM_BUFFER,
-                MemoryLocation::CpuToGpu,
-                "frame uniforms",
-            )?;
-            let query_info = vk::QueryPoolCreateInfo::default()
-                .query_type(vk::QueryType::TIMESTAMP)
-                .query_count(QUERIES);
-            // SAFETY: valid create info on a live device.
-            let query_pool = match unsafe { gpu.device.create_query_pool(&query_info, None) } {
-                Ok(q) => q,
-                Err(e) => {
-                    uniforms.destroy(gpu);
-                    return Err(GpuError::vk("vkCreateQueryPool", e));
-                }
-            };
-            let buffer_info = [vk::DescriptorBufferInfo {
-                buffer: uniforms.raw,
-                offset: 0,
-                range: vk::WHOLE_SIZE,
-            }];
-            let write = vk::WriteDescriptorSet::default()
-                .dst_set(set)
-                .dst_binding(0)
-                .descriptor_type(D::UNIFORM_BUFFER)
-                .buffer_info(&buffer_info);
-            // SAFETY: the set is not in use by any command buffer.
-            unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
-            self.slots.push(FrameSlot {
-                uniforms,
-                set,
-                query_pool,
-                storage_set,
-                recorded: None,
-            });
-        }
-        let initial = RenderSettings::default();
-        self.upload_lut(&initial, [0.0, 1.0])?;
-        Ok(())
+        unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")
     }
+}
+
+/// One frame in flight: its uniform buffer (written into `set`), its
+/// timestamp queries and its storage-image set.
+fn frame_slot(gpu: &Gpu, set: vk::DescriptorSet, storage_set: vk::DescriptorSet) -> Result<FrameSlot, GpuError> {
+    let uniforms = Buffer::new(
+        gpu,
+        std::mem::size_of::<FrameUniforms>() as u64,
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+        MemoryLocation::CpuToGpu,
+        "frame uniforms",
+    )?;
+    let query_info = vk::QueryPoolCreateInfo::default()
+        .query_type(vk::QueryType::TIMESTAMP)
+        .query_count(QUERIES);
+    // SAFETY: valid create info on a live device.
+    let query_pool = match unsafe { gpu.device.create_query_pool(&query_info, None) } {
+        Ok(q) => q,
+        Err(e) => {
+            uniforms.destroy(gpu);
+            return Err(GpuError::vk("vkCreateQueryPool", e));
+        }
+    };
+    let buffer_info = [vk::DescriptorBufferInfo {
+        buffer: uniforms.raw,
+        offset: 0,
+        range: vk::WHOLE_SIZE,
+    }];
+    let write = vk::WriteDescriptorSet::default()
+        .dst_set(set)
+        .dst_binding(0)
+        .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+        .buffer_info(&buffer_info);
+    // SAFETY: the set is not in use by any command buffer.
+    unsafe { gpu.device.update_descriptor_sets(&[write], &[]) };
+    Ok(FrameSlot {
+        uniforms,
+        set,
+        query_pool,
+        storage_set,
+        recorded: None,
+    })
 }
