@@ -2,6 +2,9 @@
 //! between files (a `mod.rs` that re-exports a child counts as importing it), and no pure room (`volume`,
 //! `transfer`, `scene`) importing one that drives the GPU. Also the size rule: no source file over 650 lines.
 
+mod functions;
+mod links;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
