@@ -11,11 +11,11 @@ use std::time::{Duration, Instant};
 use volcast::scene::settings::RenderSettings;
 use volcast::scene::view_state::ViewState;
 
-/// How long the viewer keeps its window open for the test's input (`wait:` script step). The input and captures
-/// took 2.3 s on a 2-core machine with lavapipe; the rest is margin for a loaded one. The test spends what is
-/// left of it rendering the headless images, then waits for the viewer to exit (xdotool 3.2016 cannot close a
-/// window gracefully, and there is no window manager to ask).
-pub const WAIT_MS: u64 = 20_000;
+/// The script step that keeps the viewer's window open for the test's input: `hold` lasts until the viewer's
+/// standard input ends, which [`Viewer::finish`] brings about once the test's input is done. (A fixed `wait:`
+/// ran out under the test's hands on a loaded machine; xdotool 3.2016 cannot close a window gracefully, and
+/// there is no window manager to ask.)
+pub const HOLD: &str = "hold";
 
 pub struct Xvfb {
     child: Child,
@@ -179,6 +179,8 @@ pub fn parse_xwd(b: &[u8]) -> Result<RgbaImage, String> {
 /// The viewer process, its stderr read line by line as it comes. Killed if the test fails before it ends.
 pub struct Viewer {
     child: Child,
+    /// Closed by [`Viewer::finish`] to end the script's `hold`.
+    stdin: Option<std::process::ChildStdin>,
     lines: Receiver<String>,
     pub stderr: String,
 }
@@ -189,6 +191,8 @@ impl Viewer {
         let runtime = dir.join("xdg");
         std::fs::create_dir_all(&runtime).expect("XDG_RUNTIME_DIR");
         let mut child = super::volcast_command()
+            // Held open by the test: the end of stdin ends a script's `hold`.
+            .stdin(Stdio::piped())
             .arg("view")
             .args(volume)
             .args(["--validate", "--size", "900x600", "--script", script])
@@ -202,6 +206,7 @@ impl Viewer {
             .stderr(Stdio::piped())
             .spawn()
             .expect("run the viewer");
+        let stdin = child.stdin.take();
         let stderr = child.stderr.take().expect("piped stderr");
         let (tx, lines) = std::sync::mpsc::channel();
         std::thread::spawn(move || {
@@ -211,6 +216,7 @@ impl Viewer {
         });
         Viewer {
             child,
+            stdin,
             lines,
             stderr: String::new(),
         }
@@ -236,15 +242,17 @@ impl Viewer {
                     )
                 }
                 Err(RecvTimeoutError::Disconnected) => panic!(
-                    "the viewer ended before '{needle}' (its wait:{WAIT_MS} ran out, or it failed); stderr:\n{}",
+                    "the viewer ended before '{needle}' (it failed, or its script ended); stderr:\n{}",
                     self.stderr
                 ),
             }
         }
     }
 
-    /// Waits for the viewer to exit (its script ends the session) and collects the rest of its stderr.
+    /// Ends the script's `hold` (closes the viewer's stdin), waits for the viewer to exit (the script ends the
+    /// session) and collects the rest of its stderr.
     pub fn finish(&mut self) -> ExitStatus {
+        drop(self.stdin.take());
         let status = self.child.wait().expect("wait for the viewer");
         while let Ok(line) = self.lines.recv_timeout(Duration::from_secs(10)) {
             self.stderr.push_str(&line);

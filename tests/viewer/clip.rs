@@ -14,7 +14,7 @@
 
 use crate::common;
 
-use common::x11::{capture, drag, four_up_rects, read_screenshot, render_state, type_keys, x_session, Viewer, WAIT_MS};
+use common::x11::{capture, drag, four_up_rects, read_screenshot, render_state, type_keys, x_session, Viewer, HOLD};
 use image::RgbaImage;
 use std::path::Path;
 use std::time::Duration;
@@ -62,9 +62,9 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
     let Some((x, dir)) = x_session("viewer-clip") else {
         return;
     };
-    let script = format!("frames:3;wait:{};exit", WAIT_MS * 2);
+    let script = format!("frames:3;{HOLD};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &[phantom.to_str().unwrap(), "--slices"], &script);
-    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    viewer.wait_for("script: Hold", Duration::from_secs(180));
     let window = &viewer.window(&x.display);
     type_keys(&x.display, window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));

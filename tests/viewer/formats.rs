@@ -10,7 +10,7 @@
 use crate::common;
 
 use common::compare::diff;
-use common::x11::{have, read_screenshot, type_keys, xvfb, Viewer, WAIT_MS};
+use common::x11::{have, read_screenshot, type_keys, xvfb, Viewer, HOLD};
 use std::path::Path;
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
@@ -95,9 +95,9 @@ fn viewer_loads_a_file_dropped_by_xdnd() {
     }
     let dir = common::scratch("viewer-xdnd");
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk/vti_zlib.vti");
-    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let script = format!("frames:3;{HOLD};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);
-    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    viewer.wait_for("script: Hold", Duration::from_secs(180));
     let window = viewer.window(&x.display);
     let id: u32 = window.parse().expect("window id");
     let accepted = common::xdnd::drop_file(&x.display, id, (600, 300), &file).expect("XDND drop");

@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::x11::{read_screenshot, type_keys, x_client, x_session, Viewer, WAIT_MS};
+use common::x11::{read_screenshot, type_keys, x_client, x_session, Viewer, HOLD};
 use glam::Vec2;
 use std::time::Duration;
 use volcast::viewer::model::orbit::OrbitView;
@@ -15,14 +15,14 @@ fn shortcuts_keep_working_after_tab_hides_the_panel() {
     let Some((x, dir)) = x_session("viewer-keys") else {
         return;
     };
-    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let script = format!("frames:3;{HOLD};exit");
     let mut viewer = Viewer::start(
         &x.display,
         &dir,
         &["--builtin", "helix", "--builtin-size", "64"],
         &script,
     );
-    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    viewer.wait_for("script: Hold", Duration::from_secs(180));
     let window = &viewer.window(&x.display);
     let mut shot = |keys: &[&str]| {
         let mut all = keys.to_vec();
@@ -70,12 +70,12 @@ fn a_file_from_the_command_line_loads_behind_the_window() {
     let Some((x, dir)) = x_session("viewer-cli-load") else {
         return;
     };
-    let script = format!("frames:2;wait:{WAIT_MS};exit");
+    let script = format!("frames:2;{HOLD};exit");
     let ct = ct.to_str().unwrap();
     let mut viewer = Viewer::start(&x.display, &dir, &[ct], &script);
     let loaded = viewer.wait_for("loaded ", Duration::from_secs(180));
     assert!(loaded.contains("cranium_ct"), "{loaded}");
-    viewer.wait_for("script: Wait(", Duration::from_secs(60));
+    viewer.wait_for("script: Hold", Duration::from_secs(60));
     let window = &viewer.window(&x.display);
     type_keys(&x.display, window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
@@ -110,9 +110,9 @@ fn a_quick_drag_within_one_frame_turns_the_camera() {
         return;
     };
     // The full-size helix: frames of tens of milliseconds on lavapipe, and the drag below takes a few.
-    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let script = format!("frames:3;{HOLD};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "helix"], &script);
-    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    viewer.wait_for("script: Hold", Duration::from_secs(180));
     let window = &viewer.window(&x.display);
     type_keys(&x.display, window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));

@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::x11::{capture, read_screenshot, type_keys, x_client, x_session, Viewer, WAIT_MS};
+use common::x11::{capture, read_screenshot, type_keys, x_client, x_session, Viewer, HOLD};
 use glam::Vec2;
 use std::time::Duration;
 use volcast::viewer::model::orbit::OrbitView;
@@ -27,9 +27,9 @@ fn dragging_the_light_gizmo_places_a_directional_light() {
     let Some((x, dir)) = x_session("viewer-light") else {
         return;
     };
-    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let script = format!("frames:3;{HOLD};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "helix"], &script);
-    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    viewer.wait_for("script: Hold", Duration::from_secs(180));
     let window = &viewer.window(&x.display);
 
     // Shading on: the gizmo shows; the headlight is the default.

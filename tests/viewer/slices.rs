@@ -7,7 +7,7 @@
 
 use crate::common;
 
-use common::x11::{button, capture, four_up_rects, pointer, read_state, type_keys, x_session, Viewer, WAIT_MS};
+use common::x11::{button, capture, four_up_rects, pointer, read_state, type_keys, x_session, Viewer, HOLD};
 use glam::{DVec2, DVec3};
 use image::RgbaImage;
 use std::path::Path;
@@ -35,10 +35,10 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     let Some((x, dir)) = x_session("viewer-slices") else {
         return;
     };
-    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let script = format!("frames:3;{HOLD};exit");
     let path = phantom.to_str().unwrap();
     let mut viewer = Viewer::start(&x.display, &dir, &[path, "--slices"], &script);
-    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    viewer.wait_for("script: Hold", Duration::from_secs(180));
     let window = &viewer.window(&x.display);
 
     // Where the views are: the 3D view (F12's image) is the top-right quadrant of the area right of the panel.
@@ -137,9 +137,9 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
         &x.display,
         &dir,
         &["--state", session_file.to_str().unwrap()],
-        &format!("frames:3;wait:{WAIT_MS};exit"),
+        &format!("frames:3;{HOLD};exit"),
     );
-    again.wait_for("script: Wait(", Duration::from_secs(180));
+    again.wait_for("script: Hold", Duration::from_secs(180));
     let window = &again.window(&x.display);
     type_keys(&x.display, window, &["F12"]);
     let saved = again.wait_for("saved screenshot ", Duration::from_secs(60));

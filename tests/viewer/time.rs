@@ -11,7 +11,7 @@
 use crate::common;
 
 use common::compare::diff;
-use common::x11::{have, read_screenshot, screenshot_step, type_keys, xvfb, Viewer, WAIT_MS};
+use common::x11::{have, read_screenshot, screenshot_step, type_keys, xvfb, Viewer, HOLD};
 use std::path::Path;
 use std::time::Duration;
 use volcast::gpu::{Gpu, GpuOptions};
@@ -28,7 +28,7 @@ fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
     }
     let dir = common::scratch("viewer-time");
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/time/sim_u16.nrrd");
-    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let script = format!("frames:3;{HOLD};exit");
     // A transfer function over the whole range (3..293), so that every step looks different: the automatic one
     // (a faint ramp over the upper percentiles of all steps) leaves the early steps of this tiny series clear.
     let tf = dir.join("tf.json");
@@ -40,7 +40,7 @@ fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
     .unwrap();
     let args = [file.to_str().unwrap(), "--time", "2", "--tf", tf.to_str().unwrap()];
     let mut viewer = Viewer::start(&x.display, &dir, &args, &script);
-    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    viewer.wait_for("script: Hold", Duration::from_secs(180));
     let window = viewer.window(&x.display);
 
     type_keys(&x.display, &window, &["F12"]);

@@ -24,12 +24,13 @@ use std::sync::Arc;
 use std::time::Instant;
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
-use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
 use winit::window::WindowId;
 
 /// Runs the event loop until the window closes. Returns the validation log for the caller to report.
 pub(super) fn run(event_loop: EventLoop<()>, opts: ViewerOptions) -> Result<Arc<ValidationLog>, ViewerError> {
     let mut app = App {
+        waker: event_loop.create_proxy(),
         opts,
         running: None,
         error: None,
@@ -57,6 +58,8 @@ enum Flow {
 
 struct App {
     opts: ViewerOptions,
+    /// For a script's `hold`, whose end arrives on another thread.
+    waker: EventLoopProxy<()>,
     running: Option<Running>,
     error: Option<ViewerError>,
     log: Option<Arc<ValidationLog>>,
@@ -67,7 +70,7 @@ impl ApplicationHandler for App {
         if self.running.is_some() {
             return;
         }
-        match Running::new(event_loop, &self.opts) {
+        match Running::new(event_loop, &self.opts, self.waker.clone()) {
             Ok(r) => {
                 self.log = Some(r.presenter.validation_log());
                 r.window.request_redraw();
@@ -104,6 +107,13 @@ impl ApplicationHandler for App {
             _ => {}
         }
         if repaint {
+            r.window.request_redraw();
+        }
+    }
+
+    /// Only a script's `hold` sends events: it has ended, and the next frame takes the script's next step.
+    fn user_event(&mut self, _event_loop: &ActiveEventLoop, _event: ()) {
+        if let Some(r) = &self.running {
             r.window.request_redraw();
         }
     }

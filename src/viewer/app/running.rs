@@ -11,7 +11,7 @@ use crate::viewer::model::Model;
 use crate::viewer::present::Presenter;
 use crate::viewer::{ViewerError, ViewerOptions, VolumeSource};
 use crate::volume::{Volume, VoxelData, VoxelType};
-use winit::event_loop::ActiveEventLoop;
+use winit::event_loop::{ActiveEventLoop, EventLoopProxy};
 use winit::window::Window;
 
 pub(super) struct Running {
@@ -28,7 +28,11 @@ pub(super) struct Running {
 }
 
 impl Running {
-    pub(super) fn new(event_loop: &ActiveEventLoop, opts: &ViewerOptions) -> Result<Running, ViewerError> {
+    pub(super) fn new(
+        event_loop: &ActiveEventLoop,
+        opts: &ViewerOptions,
+        waker: EventLoopProxy<()>,
+    ) -> Result<Running, ViewerError> {
         let attributes = Window::default_attributes()
             .with_title("volcast")
             .with_inner_size(winit::dpi::PhysicalSize::new(opts.size.0, opts.size.1));
@@ -45,7 +49,7 @@ impl Running {
             model,
             shown: Shown::default(),
             capture: Capture::default(),
-            script: (!opts.script.is_empty()).then(|| Script::new(&opts.script)),
+            script: (!opts.script.is_empty()).then(|| Script::new(&opts.script, waker)),
             pacing: Pacing::new(),
         };
         // On error `r` is torn down properly before the error is returned.

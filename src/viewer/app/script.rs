@@ -7,7 +7,22 @@ use crate::viewer::model::Model;
 use crate::viewer::ViewerError;
 use std::collections::VecDeque;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
+use winit::event_loop::EventLoopProxy;
+
+/// Reads standard input to its end on a thread of its own, then sets the flag it returns and wakes the loop.
+fn watch_stdin(waker: EventLoopProxy<()>) -> Arc<AtomicBool> {
+    let ended = Arc::new(AtomicBool::new(false));
+    let flag = ended.clone();
+    std::thread::spawn(move || {
+        let _ = std::io::copy(&mut std::io::stdin().lock(), &mut std::io::sink());
+        flag.store(true, Ordering::Release);
+        let _ = waker.send_event(());
+    });
+    ended
+}
 
 /// One step of a scripted session (`--script`, used by the tests to drive a real window under Xvfb).
 #[derive(Clone, Debug, PartialEq)]
@@ -17,6 +32,10 @@ pub enum ScriptStep {
     /// Keep the window open for this long, so that a test can drive it with real X input meanwhile (the viewer
     /// draws as it would untouched: when input or an animation asks for a frame).
     Wait(Duration),
+    /// Keep the window open until standard input ends (the test closes its end when its input is done): the
+    /// test, not a clock, decides when the window may go, so a slow machine cannot end it under a test's hands.
+    /// The viewer sleeps meanwhile as it would untouched.
+    Hold,
     /// Rotate the view a little each frame for this many frames, as a drag would, and report the frame times.
     Drag(u32),
     /// Interactive level of detail on or off.
@@ -39,7 +58,7 @@ pub enum ScriptStep {
     Exit,
 }
 
-/// Parses `frames:3;wait:500;resize:320x240;minimize;restore;zero-size;key:tab;screenshot:PATH;drop:PATH;exit` (wait in
+/// Parses `frames:3;wait:500;hold;resize:320x240;minimize;restore;zero-size;key:tab;screenshot:PATH;drop:PATH;exit` (wait in
 /// milliseconds).
 pub fn parse_script(s: &str) -> Result<Vec<ScriptStep>, String> {
     s.split(';')
@@ -51,6 +70,7 @@ pub fn parse_script(s: &str) -> Result<Vec<ScriptStep>, String> {
             Ok(match cmd {
                 "frames" => ScriptStep::Frames(arg.parse().map_err(|_| bad())?),
                 "wait" => ScriptStep::Wait(Duration::from_millis(arg.parse().map_err(|_| bad())?)),
+                "hold" if arg.is_empty() => ScriptStep::Hold,
                 "drag" => ScriptStep::Drag(arg.parse().map_err(|_| bad())?),
                 "lod" if arg == "on" || arg == "off" => ScriptStep::Lod(arg == "on"),
                 "dialog" => ScriptStep::Dialog,
@@ -111,6 +131,10 @@ pub(super) struct Script {
     /// A resize asked for: width, height, frames left to wait for it.
     waiting_for_size: Option<(u32, u32, u32)>,
     wait_until: Option<Instant>,
+    /// A `hold` under way: set when standard input has ended.
+    hold: Option<Arc<AtomicBool>>,
+    /// Wakes the event loop when a hold ends.
+    waker: EventLoopProxy<()>,
     started: Instant,
     /// A load (the command line's, or a `drop:` step's) is under way.
     pub(super) waiting_for_load: bool,
@@ -121,13 +145,15 @@ pub(super) struct Script {
 }
 
 impl Script {
-    pub(super) fn new(steps: &[ScriptStep]) -> Script {
+    pub(super) fn new(steps: &[ScriptStep], waker: EventLoopProxy<()>) -> Script {
         Script {
             steps: steps.iter().cloned().collect(),
             frames_left: 0,
             drag_left: 0,
             waiting_for_size: None,
             wait_until: None,
+            hold: None,
+            waker,
             started: Instant::now(),
             waiting_for_load: false,
             zero_size: false,
@@ -140,7 +166,17 @@ impl Script {
     pub(super) fn waiting_until(&self) -> Option<Instant> {
         let busy =
             self.frames_left > 0 || self.drag_left > 0 || self.waiting_for_size.is_some() || self.waiting_for_load;
-        self.wait_until.filter(|_| !busy)
+        let until = match self.holding() {
+            // Until input or the end of the hold (whose thread wakes the loop) asks for a frame.
+            true => Some(Instant::now() + Duration::from_secs(3600)),
+            false => self.wait_until,
+        };
+        until.filter(|_| !busy)
+    }
+
+    /// A `hold` step waits for standard input to end.
+    fn holding(&self) -> bool {
+        self.hold.as_ref().is_some_and(|ended| !ended.load(Ordering::Acquire))
     }
 
     /// A scripted drag is turning the view.
@@ -172,6 +208,10 @@ impl Script {
     /// Advances the script after a frame: counts down frames and drags (a drag turns `model`'s view), waits for a
     /// time, a resize or a load, then takes the next step.
     pub(super) fn advance(&mut self, model: &mut Model, seen: Seen) -> Result<Next, ViewerError> {
+        if self.holding() {
+            return Ok(Next::Continue);
+        }
+        self.hold = None;
         if self.started.elapsed() > Duration::from_secs(300) {
             return Err(ViewerError::Other(format!(
                 "script timed out with steps left: {:?}",
@@ -247,6 +287,10 @@ impl Script {
                 self.wait_until = Some(Instant::now() + d);
                 return Ok(Next::Continue);
             }
+            ScriptStep::Hold => {
+                self.hold = Some(watch_stdin(self.waker.clone()));
+                return Ok(Next::Continue);
+            }
             ScriptStep::Drag(n) => {
                 self.drag_left = n;
                 return Ok(Next::Continue);
@@ -314,11 +358,12 @@ mod tests {
             ]
         );
         assert_eq!(
-            parse_script("drag:5;lod:off;wait:1500").unwrap(),
+            parse_script("drag:5;lod:off;wait:1500;hold").unwrap(),
             vec![
                 ScriptStep::Drag(5),
                 ScriptStep::Lod(false),
-                ScriptStep::Wait(Duration::from_millis(1500))
+                ScriptStep::Wait(Duration::from_millis(1500)),
+                ScriptStep::Hold
             ]
         );
         for bad in [
@@ -331,6 +376,7 @@ mod tests {
             "wait:",
             "wait:-1",
             "wait:2s",
+            "hold:5",
         ] {
             assert!(parse_script(bad).is_err(), "{bad}");
         }
