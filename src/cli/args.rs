@@ -71,7 +71,18 @@ impl VolumeArgs {
         a
     }
 
+    /// The volume, its notes (uneven spacing, skipped files, ...) said on stderr.
     pub(crate) fn load(&self) -> Result<Volume> {
+        let v = self.load_without_notes()?;
+        for note in &v.notes {
+            eprintln!("note: {note}");
+        }
+        Ok(v)
+    }
+
+    /// The volume, its notes left to the caller: `info` prints them with the rest, so saying them on stderr too
+    /// showed each twice.
+    pub(crate) fn load_without_notes(&self) -> Result<Volume> {
         if let Some(name) = &self.builtin {
             let mut v = volume::builtin(name, self.builtin_size)?;
             // --spacing overrides every volume's own, the built-ins' included.
@@ -114,9 +125,6 @@ impl VolumeArgs {
         let loaded = volume::open_with_progress(path, &opts, &mut |f| bar.set_position((f * 1000.0) as u64));
         bar.finish_and_clear();
         let mut v = loaded?;
-        for note in &v.notes {
-            eprintln!("note: {note}");
-        }
         if let Some(t) = self.time {
             v.show_step(t)?;
         }
