@@ -10,6 +10,7 @@ pub mod common;
 mod bench;
 mod clip;
 mod colorbar;
+mod info_notes;
 mod movie;
 mod options;
 mod render_and_errors;
