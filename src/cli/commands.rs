@@ -33,6 +33,7 @@ pub(crate) fn view(args: &ViewArgs) -> Result<()> {
     };
     let opts = ViewerOptions {
         source,
+        series: args.volume.series.clone(),
         gpu: args.gpu.options(),
         size: args.size,
         script,

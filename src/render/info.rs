@@ -39,6 +39,8 @@ pub struct Info {
     pub notes: Vec<String>,
     /// The file's point-data arrays (VTK files hold several; `--array NAME` picks one); empty for other formats.
     pub arrays: Vec<crate::volume::ArrayInfo>,
+    /// The series of a DICOM folder holding several (`--series N|UID` picks one); empty otherwise.
+    pub series: Vec<crate::volume::SeriesInfo>,
 }
 
 impl Info {
@@ -61,6 +63,7 @@ impl Info {
             shear_deg: g.shear_deg(),
             notes: v.notes.clone(),
             arrays: v.arrays.clone(),
+            series: v.series.clone(),
         }
     }
 
@@ -140,6 +143,10 @@ impl Info {
                 if i == 0 { "arrays" } else { "" },
                 format!("{}: {}, {} component(s){loaded}", a.name, a.type_name, a.components),
             );
+        }
+        for (i, s) in self.series.iter().enumerate() {
+            let loaded = if s.loaded { " (loaded)" } else { "" };
+            out.line(if i == 0 { "series" } else { "" }, format!("{}{loaded}", s.line()));
         }
         for note in &self.notes {
             out.line("note", note.clone());

@@ -14,5 +14,6 @@ mod info_notes;
 mod movie;
 mod options;
 mod render_and_errors;
+mod series;
 mod state;
 mod tools;

@@ -9,6 +9,7 @@ pub mod bounds;
 pub mod cases;
 pub mod classify;
 pub mod compare;
+pub mod dicom_series;
 pub mod gpu;
 pub mod light;
 pub mod march;

@@ -67,14 +67,14 @@ impl Running {
                 .map_err(|e| ViewerError::Other(e.to_string()))?;
             (self.shown).install(&mut self.presenter, &mut self.model, placeholder, Vec::new(), false)?;
             self.model.volume.label = "loading…".into();
-            self.loader.start(opts.source.clone(), &mut self.model.messages);
+            (self.loader).start_series(opts.source.clone(), opts.series.clone(), &mut self.model.messages);
             self.loader.initial = Some(opts.time);
             if let Some(script) = &mut self.script {
                 script.waiting_for_load = true;
             }
             return Ok(());
         }
-        let first = open_source(&opts.source, self.loader.max_dim(), &mut |_| {}).map_err(ViewerError::Other)?;
+        let first = open_source(&opts.source, self.loader.max_dim(), None, &mut |_| {}).map_err(ViewerError::Other)?;
         let histogram = value_histogram(&first);
         (self.shown).install(&mut self.presenter, &mut self.model, first, histogram, false)?;
         self.shown.source = Some(opts.source.clone());
