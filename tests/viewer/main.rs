@@ -12,6 +12,7 @@ mod formats;
 mod idle;
 mod keys;
 mod lighting;
+mod recent;
 mod series;
 mod slices;
 mod tf;

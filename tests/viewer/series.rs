@@ -6,22 +6,9 @@
 use crate::common;
 
 use common::dicom_series;
+use common::ui_wait::settled_rect;
 use common::x11::{button, pointer, x_session, Viewer, WAIT_MS};
-use std::time::{Duration, Instant};
-
-/// The rectangle of `name` once the viewer has drawn it (the popup's items come a frame after the click).
-fn rect_when_drawn(viewer: &mut Viewer, name: &str) -> egui::Rect {
-    let deadline = Instant::now() + Duration::from_secs(30);
-    let prefix = format!("ui rect {name} ");
-    loop {
-        viewer.drain();
-        if viewer.stderr.lines().any(|l| l.starts_with(&prefix)) {
-            return viewer.ui_rect(name);
-        }
-        assert!(Instant::now() < deadline, "{name} was never drawn:\n{}", viewer.stderr);
-        std::thread::sleep(Duration::from_millis(100));
-    }
-}
+use std::time::Duration;
 
 #[test]
 fn the_chooser_lists_the_series_and_loads_the_one_clicked() {
@@ -41,16 +28,16 @@ fn the_chooser_lists_the_series_and_loads_the_one_clicked() {
     let window = &viewer.window(&x.display);
     let (d, w) = (x.display.as_str(), window.as_str());
 
-    let combo = rect_when_drawn(&mut viewer, "series-combo");
+    let combo = settled_rect(&mut viewer, "series-combo");
     pointer(d, w, combo.center());
     button(d, "click", "1");
     // Items in the series' number order: 901 (4 slices), 902 (6), 903 (2).
-    let item = rect_when_drawn(&mut viewer, "series-item-0");
+    let item = settled_rect(&mut viewer, "series-item-0");
     assert!(
         item.top() >= combo.bottom() - 1.0,
         "the list opens below the box: {item:?} {combo:?}"
     );
-    assert!(rect_when_drawn(&mut viewer, "series-item-2").top() > item.top());
+    assert!(settled_rect(&mut viewer, "series-item-2").top() > item.top());
     pointer(d, w, item.center());
     button(d, "click", "1");
     let picked = viewer.wait_for("loaded ", Duration::from_secs(120));

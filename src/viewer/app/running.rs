@@ -108,6 +108,9 @@ impl Running {
         }
         eprintln!("loaded {label}");
         self.model.messages.status = Some(format!("loaded {label}"));
+        if let VolumeSource::File(path, _) = &source {
+            self.model.recent.remember(path);
+        }
         self.shown.source = Some(source);
         if let Some(time) = initial {
             self.start_at(time)?;
@@ -152,6 +155,7 @@ fn initial_model(opts: &ViewerOptions) -> Model {
     let mut model = Model::new(glam::Vec3::ONE, "loading…".into());
     model.sampling.quality = Some(opts.quality);
     model.slices.shown = opts.slices;
+    model.recent = crate::viewer::model::recent::RecentFiles::from_env();
     if let Some(tf) = &opts.transfer_function {
         // Locked, so that loading the volume does not replace it with the automatic one.
         model.look.transfer_function = Some(tf.clone());

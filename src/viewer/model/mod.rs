@@ -10,6 +10,7 @@
 pub mod actions;
 pub mod files;
 pub mod orbit;
+pub mod recent;
 pub mod session;
 pub mod settings;
 pub mod slices;
@@ -52,6 +53,8 @@ pub struct Model {
     pub time: TimeControl,
     pub display: Display,
     pub files: FileFields,
+    /// The files opened last (the panel's Recent menu).
+    pub recent: recent::RecentFiles,
     pub messages: Messages,
     pub stats: FrameStats,
     pub interaction: Interaction,
@@ -188,6 +191,7 @@ impl Model {
                 vsync: true,
             },
             files: FileFields::default(),
+            recent: recent::RecentFiles::default(),
             messages: Messages::default(),
             stats: FrameStats::default(),
             interaction: Interaction::default(),

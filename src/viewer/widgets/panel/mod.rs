@@ -2,6 +2,7 @@
 //! concern (a module each). Sections edit the [`Model`] and push [`UiAction`]s for what needs the app.
 
 pub mod lighting;
+pub mod recent;
 pub mod rendering;
 pub mod series;
 pub mod slicing;
