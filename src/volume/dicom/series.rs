@@ -116,11 +116,17 @@ pub(super) fn choose(
 /// Which series was loaded and that others exist; none for a folder of one series.
 pub(super) fn note(series: &[SeriesInfo]) -> Option<String> {
     let loaded = series.iter().find(|s| s.loaded)?;
+    let description = if loaded.description.is_empty() {
+        String::new()
+    } else {
+        format!("'{}', ", loaded.description)
+    };
     Some(format!(
-        "the folder holds {} series; loaded series {} ({}); --series N or UID picks another (volcast info lists them)",
+        "the folder holds {} series; loaded series {} ({description}{} slices); --series N or UID picks another \
+         (volcast info lists them)",
         series.len(),
         loaded.selector(series),
-        loaded.line()
+        loaded.slices
     ))
 }
 
@@ -152,7 +158,10 @@ mod tests {
         assert_eq!(order, ["1.2.7", "1.2.5", "1.2.9"]);
         assert!(list[1].loaded && !list[0].loaded && !list[2].loaded);
         let n = note(&list).unwrap();
-        assert!(n.contains("holds 3 series; loaded series 2 (2: "), "{n}");
+        assert!(
+            n.contains("holds 3 series; loaded series 2 (2 slices); --series"),
+            "{n}"
+        );
         let (kept, list) = choose(slices(), Some("3"), "x").unwrap();
         assert_eq!((kept.len(), kept[0].series.as_str()), (1, "1.2.9"));
         assert!(list[2].loaded);
