@@ -102,6 +102,7 @@ fn main() -> ExitCode {
                 max_dim: 2048,
                 no_downsample: false,
                 array: None,
+                series: None,
                 time: None,
             },
             gpu: GpuArgs {

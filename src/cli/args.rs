@@ -49,6 +49,10 @@ pub(crate) struct VolumeArgs {
     /// one-component array); `volcast info` lists them.
     #[arg(long, value_name = "NAME")]
     pub(crate) array: Option<String>,
+    /// The series to load from a DICOM folder holding several: its SeriesNumber or SeriesInstanceUID (default: the
+    /// one with the most slices); `volcast info FOLDER` lists them.
+    #[arg(long, value_name = "N|UID")]
+    pub(crate) series: Option<String>,
     /// The time step of a 4-D series to show, from 0 (default 0); the value range stays the whole series'.
     #[arg(long, value_name = "N")]
     pub(crate) time: Option<u32>,
@@ -71,7 +75,18 @@ impl VolumeArgs {
         a
     }
 
+    /// The volume, its notes (uneven spacing, skipped files, ...) said on stderr.
     pub(crate) fn load(&self) -> Result<Volume> {
+        let v = self.load_without_notes()?;
+        for note in &v.notes {
+            eprintln!("note: {note}");
+        }
+        Ok(v)
+    }
+
+    /// The volume, its notes left to the caller: `info` prints them with the rest, so saying them on stderr too
+    /// showed each twice.
+    pub(crate) fn load_without_notes(&self) -> Result<Volume> {
         if let Some(name) = &self.builtin {
             let mut v = volume::builtin(name, self.builtin_size)?;
             // --spacing overrides every volume's own, the built-ins' included.
@@ -99,6 +114,7 @@ impl VolumeArgs {
             max_dim: Some(self.max_dim),
             no_downsample: self.no_downsample,
             array: self.array.clone(),
+            series: self.series.clone(),
         };
         // A progress bar only where loading takes long enough to watch (files over 8 MiB).
         let big = std::fs::metadata(path).is_ok_and(|m| m.len() > 8 << 20);
@@ -113,10 +129,11 @@ impl VolumeArgs {
         bar.set_message(format!("loading {}", path.display()));
         let loaded = volume::open_with_progress(path, &opts, &mut |f| bar.set_position((f * 1000.0) as u64));
         bar.finish_and_clear();
-        let mut v = loaded?;
-        for note in &v.notes {
-            eprintln!("note: {note}");
-        }
+        // A --series the folder does not hold is a usage error (exit 64), its message listing those it does.
+        let mut v = loaded.map_err(|e| match e {
+            volume::VolumeError::UnknownSeries { .. } => anyhow::Error::new(super::UsageError(e.to_string())),
+            e => e.into(),
+        })?;
         if let Some(t) = self.time {
             v.show_step(t)?;
         }

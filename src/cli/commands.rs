@@ -33,6 +33,7 @@ pub(crate) fn view(args: &ViewArgs) -> Result<()> {
     };
     let opts = ViewerOptions {
         source,
+        series: args.volume.series.clone(),
         gpu: args.gpu.options(),
         size: args.size,
         script,
@@ -160,7 +161,7 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
 }
 
 pub(crate) fn info(args: &InfoArgs) -> Result<()> {
-    let v = args.volume.load()?;
+    let v = args.volume.load_without_notes()?;
     let info = volcast::render::info::Info::of(&v);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&info)?);

@@ -1,5 +1,6 @@
 //! What `volcast info` says about a volume, in words and as JSON. Pure formatting of a loaded [`Volume`].
 
+use super::AUTO_LIMIT;
 use crate::scene::quality::Gradients;
 use crate::volume::geometry::Handedness;
 use crate::volume::Volume;
@@ -38,6 +39,8 @@ pub struct Info {
     pub notes: Vec<String>,
     /// The file's point-data arrays (VTK files hold several; `--array NAME` picks one); empty for other formats.
     pub arrays: Vec<crate::volume::ArrayInfo>,
+    /// The series of a DICOM folder holding several (`--series N|UID` picks one); empty otherwise.
+    pub series: Vec<crate::volume::SeriesInfo>,
 }
 
 impl Info {
@@ -60,6 +63,7 @@ impl Info {
             shear_deg: g.shear_deg(),
             notes: v.notes.clone(),
             arrays: v.arrays.clone(),
+            series: v.series.clone(),
         }
     }
 
@@ -140,6 +144,10 @@ impl Info {
                 format!("{}: {}, {} component(s){loaded}", a.name, a.type_name, a.components),
             );
         }
+        for (i, s) in self.series.iter().enumerate() {
+            let loaded = if s.loaded { " (loaded)" } else { "" };
+            out.line(if i == 0 { "series" } else { "" }, format!("{}{loaded}", s.line()));
+        }
         for note in &self.notes {
             out.line("note", note.clone());
         }
@@ -200,13 +208,7 @@ fn write_gpu_memory(v: &Volume, out: &mut Lines) {
     if v.gpu_texel_size() < 4 {
         out.line(
             "",
-            format!(
-                "on CPU devices (lavapipe), --texture auto: corners{}, {:.1} MiB, while under 1 GiB (else \
-                 R32_SFLOAT, {:.1} MiB)",
-                8 * v.gpu_texel_size(),
-                mib(v.voxel_count() * 4 * v.gpu_texel_size()),
-                mib(v.voxel_count() * 4)
-            ),
+            cpu_auto_layout(v.voxel_count() as u64, v.gpu_texel_size() as u64, gpu_format),
         );
     }
     let voxels = v.voxel_count() as u64;
@@ -226,6 +228,39 @@ fn write_gpu_memory(v: &Volume, out: &mut Lines) {
             )
         },
     );
+}
+
+/// What `--texture auto` gives 8- and 16-bit data on a CPU device, as `gpu_volume::choose_layout` decides it: the
+/// corner layout, else a float texture, else the data's own format, each only while it stays within
+/// [`AUTO_LIMIT`] (and a quarter of the device's memory). Says the limit and the sizes that passed it, so a large
+/// volume's line reads as what happens rather than as a condition.
+fn cpu_auto_layout(voxels: u64, texel_size: u64, native_format: &str) -> String {
+    let corners = format!("corners{}", 8 * texel_size);
+    let (corner_bytes, float_bytes) = (voxels * 4 * texel_size, voxels * 4);
+    let limit = format!("{} GiB", AUTO_LIMIT >> 30);
+    let head = "on CPU devices (lavapipe), --texture auto:";
+    let mib = |b: u64| mib(b as usize);
+    if corner_bytes <= AUTO_LIMIT {
+        format!(
+            "{head} {corners}, {:.1} MiB (the fastest layout to sample, used while within {limit} and a quarter of \
+             the device's memory)",
+            mib(corner_bytes)
+        )
+    } else if float_bytes <= AUTO_LIMIT {
+        format!(
+            "{head} R32_SFLOAT, {:.1} MiB ({corners} would take {:.1} MiB, over the {limit} limit on faster \
+             layouts)",
+            mib(float_bytes),
+            mib(corner_bytes)
+        )
+    } else {
+        format!(
+            "{head} {native_format} as above ({corners} would take {:.1} MiB and R32_SFLOAT {:.1} MiB, both over the \
+             {limit} limit on faster layouts)",
+            mib(corner_bytes),
+            mib(float_bytes)
+        )
+    }
 }
 
 /// A RAS axis code's name.

@@ -46,6 +46,8 @@ pub enum VolumeSource {
 
 pub struct ViewerOptions {
     pub source: VolumeSource,
+    /// The series to load from a DICOM folder holding several (`--series`; `None`: the largest).
+    pub series: Option<String>,
     pub gpu: GpuOptions,
     pub size: (u32, u32),
     pub script: Vec<ScriptStep>,

@@ -15,6 +15,7 @@ pub(crate) mod codec;
 mod geometry;
 mod lengths;
 mod pixels;
+pub(crate) mod series;
 mod slice;
 mod temporal;
 
@@ -224,7 +225,7 @@ fn open_dicom(path: &Path, header_only: bool) -> Result<DefaultDicomObject, Volu
 
 /// Loads a folder of slices (or one file). Pass 1 reads every header (stopping before the pixels) to sort the
 /// slices; pass 2 reads the pixels slice by slice into the final buffer, so the peak is one volume plus one slice.
-pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, VolumeError> {
+pub(crate) fn load(path: &Path, series: Option<&str>, progress: &mut Progress) -> Result<Volume, VolumeError> {
     let label = format::file_label(path);
     let files: Vec<PathBuf> = if path.is_dir() {
         list_folder(path, &label)?
@@ -254,7 +255,9 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
             "{skipped} file(s) in the folder are not DICOM images and were skipped"
         ));
     }
-    keep_largest_series(&mut slices, &mut notes);
+    let (kept, listed) = series::choose(slices, series, &label)?;
+    slices = kept;
+    notes.extend(series::note(&listed));
     // Several temporal positions (TemporalPositionIdentifier): one volume per position, as time steps.
     let mut times: Vec<i64> = slices.iter().filter_map(|s| s.temporal).collect();
     times.sort_unstable();
@@ -263,9 +266,11 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         let mut plan = plan(slices, &label)?;
         notes.append(&mut plan.notes);
         plan.notes = notes;
-        return load_planned(plan, &files, format::volume_name(path), &label, progress);
+        let mut v = load_planned(plan, &files, format::volume_name(path), &label, progress)?;
+        v.series = listed;
+        return Ok(v);
     }
-    temporal::load_steps(
+    let mut v = temporal::load_steps(
         slices,
         &times,
         &files,
@@ -273,7 +278,9 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         &label,
         notes,
         progress,
-    )
+    )?;
+    v.series = listed;
+    Ok(v)
 }
 
 /// The visible files of a folder, sorted by name; at most [`MAX_FILES`].
@@ -301,33 +308,11 @@ fn list_folder(path: &Path, label: &str) -> Result<Vec<PathBuf>, VolumeError> {
     Ok(files)
 }
 
-/// More than one series: the largest is kept (the first of those as large), and a note says so.
-fn keep_largest_series(slices: &mut Vec<Slice>, notes: &mut Vec<String>) {
-    let mut series: Vec<(String, usize)> = Vec::new();
-    for s in slices.iter() {
-        match series.iter_mut().find(|(uid, _)| *uid == s.series) {
-            Some((_, n)) => *n += 1,
-            None => series.push((s.series.clone(), 1)),
-        }
-    }
-    if series.len() > 1 {
-        series.sort_by_key(|s| std::cmp::Reverse(s.1));
-        let chosen = series[0].0.clone();
-        notes.push(format!(
-            "the folder holds {} series; the largest ({} slices, SeriesInstanceUID {}) is loaded",
-            series.len(),
-            series[0].1,
-            clip(&chosen)
-        ));
-        slices.retain(|s| s.series == chosen);
-    }
-}
-
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn slice(pos: f64, instance: i64) -> Slice {
+    pub(super) fn slice(pos: f64, instance: i64) -> Slice {
         Slice {
             source: instance as usize,
             rows: 2,
@@ -341,6 +326,8 @@ mod tests {
             position: Some([0.0, 0.0, pos]),
             orientation: Some([1.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
             series: "1".into(),
+            series_number: Some(1),
+            series_description: String::new(),
             modality: "CT".into(),
             instance,
             slice_step: Some(9.0),

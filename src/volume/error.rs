@@ -127,4 +127,6 @@ pub enum VolumeError {
          as raw)"
     )]
     Unsupported { file: String, kind: String, what: String },
+    #[error("{file}: no series '{given}' in the folder; pass --series with a number or UID of one it holds:\n{list}")]
+    UnknownSeries { file: String, given: String, list: String },
 }

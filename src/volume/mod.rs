@@ -32,6 +32,7 @@ mod vtk;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use decode::Endian;
+pub use dicom::series::SeriesInfo;
 pub use downsample::downsample_to;
 pub use error::VolumeError;
 pub use open::{detect_format, open, open_with_progress, Format, OpenOptions};
@@ -87,6 +88,8 @@ pub struct Volume {
     pub notes: Vec<String>,
     /// Every point-data array the file holds (VTK files can hold several); empty for single-array formats.
     pub arrays: Vec<ArrayInfo>,
+    /// The series of a DICOM folder holding several, the loaded one marked; empty otherwise.
+    pub series: Vec<SeriesInfo>,
     /// A time series' other steps ([`Volume::timesteps`], [`Volume::show_step`]); `data` is the step shown.
     pub time: TimeSteps,
 }
@@ -142,6 +145,7 @@ impl Volume {
             modality: None,
             notes: Vec::new(),
             arrays: Vec::new(),
+            series: Vec::new(),
             time: TimeSteps::default(),
         })
     }

@@ -49,6 +49,9 @@ pub struct OpenOptions {
     /// The data array to load from a file holding several (VTK legacy and `.vti`); `None`: the file's active
     /// scalars, else its first one-component array.
     pub array: Option<String>,
+    /// The series to load from a DICOM folder holding several: a SeriesNumber or SeriesInstanceUID (`None`: the
+    /// largest).
+    pub series: Option<String>,
 }
 
 /// Which reader a path needs. A folder is decided by its files: TIFFs make a TIFF stack, DICOM files a DICOM
@@ -211,7 +214,7 @@ fn open_unnamed(path: &Path, opts: &OpenOptions, progress: &mut dyn FnMut(f32)) 
         Format::Nrrd => nrrd::load(path, &mut progress)?,
         Format::Nifti => nifti::load(path, &mut progress)?,
         Format::MetaImage => metaimage::load(path, &mut progress)?,
-        Format::Dicom => dicom::load(path, &mut progress)?,
+        Format::Dicom => dicom::load(path, opts.series.as_deref(), &mut progress)?,
         Format::Tiff => tiff_stack::load(path, &mut progress)?,
     };
     if format != Format::Raw {

@@ -9,6 +9,7 @@ pub mod bounds;
 pub mod cases;
 pub mod classify;
 pub mod compare;
+pub mod dicom_series;
 pub mod gpu;
 pub mod light;
 pub mod march;
@@ -19,6 +20,7 @@ pub mod run;
 pub mod scratch;
 pub mod segments;
 pub mod strides;
+pub mod ui_wait;
 pub mod x11;
 pub mod xdnd;
 

@@ -4,8 +4,12 @@ use std::fmt::Debug;
 use std::process::{Command, Output};
 
 /// `volcast`, for a test that sets more than arguments (environment, working folder, streams) before it runs.
+/// Its config folder is one of the tests' own, so that no test reads or writes the user's (the viewer's recent
+/// files); a test may set another.
 pub fn volcast_command() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_volcast"))
+    let mut command = Command::new(env!("CARGO_BIN_EXE_volcast"));
+    command.env("XDG_CONFIG_HOME", concat!(env!("CARGO_TARGET_TMPDIR"), "/xdg-config"));
+    command
 }
 
 /// Runs `volcast ARGS` and returns what it did; asserts nothing.

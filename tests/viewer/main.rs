@@ -12,6 +12,8 @@ mod formats;
 mod idle;
 mod keys;
 mod lighting;
+mod recent;
+mod series;
 mod slices;
 mod tf;
 mod time;

@@ -13,6 +13,7 @@ impl Running {
             match action {
                 UiAction::LoadFile(path, opts) => self.loader.start(VolumeSource::File(path, opts), messages),
                 UiAction::LoadBuiltin(name) => self.loader.start(VolumeSource::Builtin(name, None), messages),
+                UiAction::LoadSeries(series) => self.load_series(series),
                 UiAction::Screenshot => {
                     let path = PathBuf::from(format!("volcast-{}.png", time_stamp()));
                     self.capture.request_screenshot(path);
@@ -26,6 +27,13 @@ impl Running {
                 UiAction::OpenSession(path) => self.open_session(&path),
                 UiAction::OpenDialog => self.loader.open_dialog(),
             }
+        }
+    }
+
+    /// Another series of the DICOM folder shown.
+    fn load_series(&mut self, series: String) {
+        if let Some(source @ VolumeSource::File(..)) = self.shown.source.clone() {
+            (self.loader).start_series(source, Some(series), &mut self.model.messages);
         }
     }
 

@@ -55,6 +55,7 @@ pub(super) fn value_histogram(v: &Volume) -> Vec<u64> {
 pub(super) fn open_source(
     source: &VolumeSource,
     max_dim: u32,
+    series: Option<&str>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Volume, String> {
     match source {
@@ -63,6 +64,7 @@ pub(super) fn open_source(
             let opts = volume::OpenOptions {
                 raw: raw.clone(),
                 max_dim: Some(max_dim),
+                series: series.map(str::to_string),
                 ..Default::default()
             };
             volume::open_with_progress(path, &opts, progress).map_err(|e| e.to_string())
@@ -70,10 +72,11 @@ pub(super) fn open_source(
     }
 }
 
-fn load_in_background(source: VolumeSource, max_dim: u32) -> Loading {
-    let label = match &source {
-        VolumeSource::Builtin(name, _) => name.clone(),
-        VolumeSource::File(path, _) => path.display().to_string(),
+fn load_in_background(source: VolumeSource, max_dim: u32, series: Option<String>) -> Loading {
+    let label = match (&source, &series) {
+        (VolumeSource::Builtin(name, _), _) => name.clone(),
+        (VolumeSource::File(path, _), None) => path.display().to_string(),
+        (VolumeSource::File(path, _), Some(s)) => format!("{} (series {s})", path.display()),
     };
     let progress = Arc::new(AtomicU32::new(0));
     let (tx, rx) = std::sync::mpsc::channel();
@@ -81,7 +84,7 @@ fn load_in_background(source: VolumeSource, max_dim: u32) -> Loading {
     let recorded = source.clone();
     std::thread::spawn(move || {
         // Reading is 90% of the bar, the histogram the rest.
-        let result = open_source(&source, max_dim, &mut |f| {
+        let result = open_source(&source, max_dim, series.as_deref(), &mut |f| {
             p.store((0.9 * f).to_bits(), Ordering::Relaxed)
         });
         p.store(0.9f32.to_bits(), Ordering::Relaxed);
@@ -127,12 +130,18 @@ impl Loader {
 
     /// Starts loading `source` unless a load is under way.
     pub(super) fn start(&mut self, source: VolumeSource, messages: &mut Messages) {
+        self.start_series(source, None, messages);
+    }
+
+    /// Starts loading `source`, from a DICOM folder holding several series the one `series` names (a number or
+    /// UID; `None`: the largest), unless a load is under way.
+    pub(super) fn start_series(&mut self, source: VolumeSource, series: Option<String>, messages: &mut Messages) {
         if self.loading.is_some() {
             messages.status = Some("a volume is already loading".into());
             return;
         }
         messages.error = None;
-        self.loading = Some(load_in_background(source, self.max_dim));
+        self.loading = Some(load_in_background(source, self.max_dim, series));
     }
 
     /// Shows the platform's file dialog (unless one is open); it blocks until the user answers, so it runs on

@@ -71,14 +71,14 @@ impl Running {
                 .map_err(|e| ViewerError::Other(e.to_string()))?;
             (self.shown).install(&mut self.presenter, &mut self.model, placeholder, Vec::new(), false)?;
             self.model.volume.label = "loading…".into();
-            self.loader.start(opts.source.clone(), &mut self.model.messages);
+            (self.loader).start_series(opts.source.clone(), opts.series.clone(), &mut self.model.messages);
             self.loader.initial = Some(opts.time);
             if let Some(script) = &mut self.script {
                 script.waiting_for_load = true;
             }
             return Ok(());
         }
-        let first = open_source(&opts.source, self.loader.max_dim(), &mut |_| {}).map_err(ViewerError::Other)?;
+        let first = open_source(&opts.source, self.loader.max_dim(), None, &mut |_| {}).map_err(ViewerError::Other)?;
         let histogram = value_histogram(&first);
         (self.shown).install(&mut self.presenter, &mut self.model, first, histogram, false)?;
         self.shown.source = Some(opts.source.clone());
@@ -112,6 +112,9 @@ impl Running {
         }
         eprintln!("loaded {label}");
         self.model.messages.status = Some(format!("loaded {label}"));
+        if let VolumeSource::File(path, _) = &source {
+            self.model.recent.remember(path);
+        }
         self.shown.source = Some(source);
         if let Some(time) = initial {
             self.start_at(time)?;
@@ -156,6 +159,7 @@ fn initial_model(opts: &ViewerOptions) -> Model {
     let mut model = Model::new(glam::Vec3::ONE, "loading…".into());
     model.sampling.quality = Some(opts.quality);
     model.slices.shown = opts.slices;
+    model.recent = crate::viewer::model::recent::RecentFiles::from_env();
     if let Some(tf) = &opts.transfer_function {
         // Locked, so that loading the volume does not replace it with the automatic one.
         model.look.transfer_function = Some(tf.clone());

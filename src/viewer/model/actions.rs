@@ -9,6 +9,8 @@ use std::path::PathBuf;
 pub enum UiAction {
     LoadFile(PathBuf, RawOptions),
     LoadBuiltin(String),
+    /// Load another series (its number or UID) from the DICOM folder shown.
+    LoadSeries(String),
     /// Write the session to `FileFields::session_path`.
     SaveSession,
     /// Restore a session file (loading its volume if another is shown).

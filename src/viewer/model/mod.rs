@@ -10,6 +10,7 @@
 pub mod actions;
 pub mod files;
 pub mod orbit;
+pub mod recent;
 pub mod session;
 pub mod settings;
 pub mod slices;
@@ -52,6 +53,8 @@ pub struct Model {
     pub time: TimeControl,
     pub display: Display,
     pub files: FileFields,
+    /// The files opened last (the panel's Recent menu).
+    pub recent: recent::RecentFiles,
     pub messages: Messages,
     pub stats: FrameStats,
     pub interaction: Interaction,
@@ -81,6 +84,8 @@ pub struct VolumeInfo {
     pub range: [f64; 2],
     /// The unit of the values, for the probe and the colour bar ("HU" for CT; empty when unknown).
     pub unit: String,
+    /// The series of the DICOM folder shown, if it holds several (the panel's chooser); empty otherwise.
+    pub series: Vec<crate::volume::SeriesInfo>,
 }
 
 /// How finely frames are sampled.
@@ -169,6 +174,7 @@ impl Model {
                 histogram: Arc::from([]),
                 range: [0.0, 1.0],
                 unit: String::new(),
+                series: Vec::new(),
             },
             sampling: Sampling {
                 quality: Some(Quality::Normal),
@@ -185,6 +191,7 @@ impl Model {
                 vsync: true,
             },
             files: FileFields::default(),
+            recent: recent::RecentFiles::default(),
             messages: Messages::default(),
             stats: FrameStats::default(),
             interaction: Interaction::default(),
@@ -246,6 +253,7 @@ impl Model {
         self.slices.reset(v.dims, &histogram, v.range);
         self.volume.histogram = histogram.clone();
         self.volume.range = v.range;
+        self.volume.series = v.series.clone();
         self.tf_editor.set_volume(v, histogram);
         self.volume.unit = self.tf_editor.unit().unwrap_or_default().to_string();
         if !self.tf_editor.locked && from_file {

@@ -20,6 +20,8 @@ const RESCALE_SLOPE: Tag = Tag(0x0028, 0x1053);
 const IMAGE_POSITION: Tag = Tag(0x0020, 0x0032);
 const IMAGE_ORIENTATION: Tag = Tag(0x0020, 0x0037);
 const SERIES_UID: Tag = Tag(0x0020, 0x000E);
+const SERIES_NUMBER: Tag = Tag(0x0020, 0x0011);
+const SERIES_DESCRIPTION: Tag = Tag(0x0008, 0x103E);
 const MODALITY: Tag = Tag(0x0008, 0x0060);
 const INSTANCE_NUMBER: Tag = Tag(0x0020, 0x0013);
 const SLICE_THICKNESS: Tag = Tag(0x0018, 0x0050);
@@ -47,6 +49,10 @@ pub(super) struct Slice {
     pub(super) position: Option<[f64; 3]>,
     pub(super) orientation: Option<[f64; 6]>,
     pub(super) series: String,
+    /// SeriesNumber (0020,0011), if the file gives one.
+    pub(super) series_number: Option<i64>,
+    /// SeriesDescription (0008,103E); empty when absent.
+    pub(super) series_description: String,
     /// Modality (0008,0060): "CT", "MR", ...; empty when absent.
     pub(super) modality: String,
     pub(super) instance: i64,
@@ -141,6 +147,8 @@ pub(super) fn slice_info(obj: &DefaultDicomObject, source: usize, label: &str) -
             .or_else(|| floats(obj, IMAGE_POSITION).and_then(three)),
         orientation: orientation.and_then(six),
         series: text(obj, SERIES_UID).unwrap_or_default(),
+        series_number: int(obj, SERIES_NUMBER),
+        series_description: text(obj, SERIES_DESCRIPTION).unwrap_or_default(),
         modality: text(obj, MODALITY).map(|m| m.to_ascii_uppercase()).unwrap_or_default(),
         instance: int(obj, INSTANCE_NUMBER).unwrap_or(0),
         temporal: int(obj, TEMPORAL_POSITION),

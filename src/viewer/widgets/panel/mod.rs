@@ -2,7 +2,9 @@
 //! concern (a module each). Sections edit the [`Model`] and push [`UiAction`]s for what needs the app.
 
 pub mod lighting;
+pub mod recent;
 pub mod rendering;
+pub mod series;
 pub mod slicing;
 pub mod time;
 pub mod transfer;
@@ -22,6 +24,7 @@ pub fn settings_panel(ui: &mut egui::Ui, model: &mut Model) -> Vec<UiAction> {
     let mut actions = Vec::new();
     ui.heading("volcast");
     ui.label(&model.volume.label);
+    series::series_chooser(ui, model, &mut actions);
     messages(ui, model);
     time::time_controls(ui, &mut model.time);
     ui.separator();

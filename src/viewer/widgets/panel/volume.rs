@@ -22,6 +22,7 @@ pub fn volume_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<Ui
             }
             ui.label("or a path (or drop a file on the window):");
         });
+        super::recent::recent_menu(ui, model, actions);
         // A fixed width: a long path scrolls inside the field instead of widening the panel for good.
         let path_field =
             egui::TextEdit::singleline(&mut model.files.load_path).desired_width(ui.available_width().min(250.0));

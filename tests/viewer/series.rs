@@ -1,0 +1,46 @@
+//! The series chooser through real X input (xdotool under Xvfb): a DICOM folder holding three series (made at run
+//! time from the shared MRI series, `common::dicom_series`) opens with the series `--series` names, the panel
+//! shows a combo box of the three, and a click on another series in it loads that one. Where the combo box and
+//! its items are comes from the viewer's `ui rect` lines; the input is X's. Validation reports 0 messages.
+
+use crate::common;
+
+use common::dicom_series;
+use common::ui_wait::settled_rect;
+use common::x11::{button, pointer, x_session, Viewer, WAIT_MS};
+use std::time::Duration;
+
+#[test]
+fn the_chooser_lists_the_series_and_loads_the_one_clicked() {
+    let Some((x, dir)) = x_session("viewer-series") else {
+        return;
+    };
+    let Some(folder) = dicom_series::make(&dir.join("mixed")) else {
+        common::skip("no shared DICOM series (../shared/data/native/brain_pd_mr)");
+        return;
+    };
+    let folder = folder.to_string_lossy().into_owned();
+    let script = format!("frames:3;wait:{};exit", WAIT_MS * 2);
+    let mut viewer = Viewer::start(&x.display, &dir, &[&folder, "--series", "903"], &script);
+    let first = viewer.wait_for("loaded ", Duration::from_secs(180));
+    assert!(first.ends_with("mixed (series 903)"), "{first}");
+    viewer.wait_for("script: Wait(", Duration::from_secs(60));
+    let window = &viewer.window(&x.display);
+    let (d, w) = (x.display.as_str(), window.as_str());
+
+    let combo = settled_rect(&mut viewer, "series-combo");
+    pointer(d, w, combo.center());
+    button(d, "click", "1");
+    // Items in the series' number order: 901 (4 slices), 902 (6), 903 (2).
+    let item = settled_rect(&mut viewer, "series-item-0");
+    assert!(
+        item.top() >= combo.bottom() - 1.0,
+        "the list opens below the box: {item:?} {combo:?}"
+    );
+    assert!(settled_rect(&mut viewer, "series-item-2").top() > item.top());
+    pointer(d, w, item.center());
+    button(d, "click", "1");
+    let picked = viewer.wait_for("loaded ", Duration::from_secs(120));
+    assert!(picked.ends_with("mixed (series 901)"), "{picked}");
+    viewer.finish_clean();
+}
