@@ -7,6 +7,7 @@
 #[path = "../common/mod.rs"]
 pub mod common;
 
+mod captures;
 mod clip;
 mod formats;
 mod idle;

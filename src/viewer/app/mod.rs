@@ -5,6 +5,7 @@
 
 mod actions;
 mod capture;
+mod file_names;
 mod frame;
 mod gui;
 pub mod input;
@@ -14,6 +15,7 @@ mod recording;
 mod running;
 pub mod script;
 mod session;
+mod title;
 mod volumes;
 
 use crate::gpu::ValidationLog;
