@@ -3,6 +3,7 @@
 //! the march alone. The same code serves headless rendering and (later) the window.
 
 mod gpu_volume;
+pub mod figure;
 pub mod gradients;
 pub mod headless;
 pub mod info;

@@ -9,6 +9,7 @@ pub mod common;
 
 mod captures;
 mod clip;
+mod export;
 mod formats;
 mod idle;
 mod keys;

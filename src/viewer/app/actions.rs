@@ -16,6 +16,7 @@ impl Running {
                 UiAction::ScreenshotAsShown => self.capture.screenshot_now(true),
                 UiAction::ToggleRecording => self.capture.toggle_recording(false, messages),
                 UiAction::ToggleRecordingAsShown => self.capture.toggle_recording(true, messages),
+                UiAction::ExportFigure => self.export_figure(),
                 UiAction::VsyncChanged => self.presenter.invalidate_swapchain(),
                 UiAction::SaveSession => {
                     let path = PathBuf::from(self.model.files.session_path.trim());

@@ -22,6 +22,8 @@ pub enum UiAction {
     /// Shift+F9: the same, recording the view as shown.
     ToggleRecordingAsShown,
     VsyncChanged,
+    /// Render the 3D view offscreen at the export fields' size (the colour bar included when asked) into a PNG.
+    ExportFigure,
     /// Show the platform's file dialog (off the render thread).
     OpenDialog,
 }

@@ -8,6 +8,7 @@
 //! `camera.orbit` for the view).
 
 pub mod actions;
+pub mod export;
 pub mod files;
 pub mod orbit;
 pub mod session;
@@ -55,6 +56,8 @@ pub struct Model {
     pub messages: Messages,
     pub stats: FrameStats,
     pub interaction: Interaction,
+    /// The "Export figure" section's fields.
+    pub export: export::FigureExport,
 }
 
 /// The 3D view's camera and its motion.
@@ -188,6 +191,7 @@ impl Model {
             messages: Messages::default(),
             stats: FrameStats::default(),
             interaction: Interaction::default(),
+            export: Default::default(),
         }
     }
 

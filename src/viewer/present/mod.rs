@@ -5,6 +5,7 @@
 //! volumes; the slice textures are keyed by what their image shows (`model::slices::SliceImage`).
 
 mod draw;
+mod figure;
 mod readback;
 mod record;
 mod screen;
