@@ -31,9 +31,19 @@ fn export(viewer: &mut Viewer, display: &str, window: &str, dir: &std::path::Pat
     pointer(display, window, viewer.ui_rect("export-button").center());
     button(display, "click", "1");
     let line = viewer.wait_for("exported figure ", Duration::from_secs(120));
-    let name = line.split_once("exported figure ").unwrap().1.split(" (").next().unwrap().trim().to_string();
+    let name = line
+        .split_once("exported figure ")
+        .unwrap()
+        .1
+        .split(" (")
+        .next()
+        .unwrap()
+        .trim()
+        .to_string();
     assert!(name.starts_with("volcast-20") && name.ends_with(".png"), "{line}");
-    image::open(dir.join(&name)).unwrap_or_else(|e| panic!("{name}: {e}")).to_rgba8()
+    image::open(dir.join(&name))
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
+        .to_rgba8()
 }
 
 #[test]

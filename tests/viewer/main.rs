@@ -15,6 +15,7 @@ mod idle;
 mod keys;
 mod lighting;
 mod slices;
+mod small_window;
 mod tf;
 mod time;
 mod turns;

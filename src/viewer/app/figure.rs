@@ -29,7 +29,9 @@ impl Running {
             0
         };
         if bar >= width {
-            return Err(format!("{width} pixels leave no room beside the colour bar ({bar} pixels)"));
+            return Err(format!(
+                "{width} pixels leave no room beside the colour bar ({bar} pixels)"
+            ));
         }
         let s = self.model.render_settings(width - bar, height);
         let image = self.presenter.render_offscreen(volume, &s).map_err(|e| e.to_string())?;

@@ -28,7 +28,10 @@ impl FigureExport {
     pub fn size(&self, limit: u32) -> Result<(u32, u32), String> {
         let side = |text: &str, what: &str| match text.trim().parse::<u32>() {
             Ok(v) if (1..=limit).contains(&v) => Ok(v),
-            _ => Err(format!("{what} '{}' is not a whole number from 1 to {limit}", text.trim())),
+            _ => Err(format!(
+                "{what} '{}' is not a whole number from 1 to {limit}",
+                text.trim()
+            )),
         };
         Ok((side(&self.width, "width")?, side(&self.height, "height")?))
     }

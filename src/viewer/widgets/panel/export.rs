@@ -24,7 +24,10 @@ pub fn export_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<Ui
             let colorbar = ui.checkbox(&mut export.colorbar, "colour bar (data units, inside the width)");
             rects::log("export-colorbar", colorbar.rect);
             if colorbar.changed() {
-                eprintln!("export figure: colour bar {}", if export.colorbar { "on" } else { "off" });
+                eprintln!(
+                    "export figure: colour bar {}",
+                    if export.colorbar { "on" } else { "off" }
+                );
             }
             let button = ui.button("Export");
             rects::log("export-button", button.rect);
