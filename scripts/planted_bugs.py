@@ -138,7 +138,7 @@ BUGS = [
     ("colorbar-upside-down", "the colour bar puts the window's lower end at the top",
      [("src/transfer/colorbar.rs", "        hi - t * (hi - lo)\n", "        lo + t * (hi - lo)\n")]),
     ("colorbar-unit-dropped", "render --colorbar labels a CT's ticks without HU",
-     [("src/cli/render.rs", "unit: volcast::transfer::auto::VolumeFacts::of(volume).kind().unit(),", "unit: None,")]),
+     [("src/render/figure.rs", "unit: VolumeFacts::of(volume).kind().unit(),", "unit: None,")]),
     ("auto-ct-needs-huge-max", "the auto preset misses CT without a modality tag (bone threshold 10x too high)",
      [("src/transfer/auto.rs", "max >= 1000.0", "max >= 10000.0")]),
     ("viewer-redraws-forever", "the viewer honours egui-winit's repaint on every RedrawRequested (it never goes idle)",

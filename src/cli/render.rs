@@ -143,7 +143,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 }
             }
             if args.colorbar {
-                frame.image = with_colorbar(&frame.image, &s, &volume);
+                frame.image = volcast::render::figure::with_colorbar(&frame.image, &s, &volume);
             }
             volcast::render::png::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
             println!(
@@ -185,20 +185,6 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         headless.destroy(gpu);
         result
     })
-}
-
-/// `image` with the colour bar of `s`'s classification appended (unit "HU" for CT).
-fn with_colorbar(image: &image::RgbaImage, s: &RenderSettings, volume: &Volume) -> image::RgbaImage {
-    let classification = s.classification();
-    let to_u8 = |c: f32| (c.clamp(0.0, 1.0) * 255.0).round() as u8;
-    let spec = volcast::transfer::colorbar::ColorbarSpec {
-        classification: &classification,
-        window: s.window,
-        range: volume.range,
-        unit: volcast::transfer::auto::VolumeFacts::of(volume).kind().unit(),
-        background: [to_u8(s.background.x), to_u8(s.background.y), to_u8(s.background.z)],
-    };
-    volcast::transfer::colorbar::append_colorbar(image, &spec)
 }
 
 /// What `s` classifies with, in words: the transfer function's name, or the colormap model's parts.

@@ -54,6 +54,8 @@ pub struct Swapchain {
     pub images: Vec<vk::Image>,
     pub views: Vec<vk::ImageView>,
     pub desc: SwapchainDesc,
+    /// The images can be copied from (the viewer's "as shown" screenshots read the presented pixels).
+    pub readable: bool,
 }
 
 /// UNORM first: volcast writes display-encoded 8-bit values and egui-ash-renderer encodes to sRGB itself for a
@@ -143,6 +145,13 @@ impl Swapchain {
                 "the swapchain cannot be a blit target and colour attachment".into(),
             ));
         }
+        // Readable where the surface allows it: a screenshot as shown copies the image after egui drew on it.
+        let readable = caps.supported_usage_flags.contains(vk::ImageUsageFlags::TRANSFER_SRC);
+        let usage = if readable {
+            needed | vk::ImageUsageFlags::TRANSFER_SRC
+        } else {
+            needed
+        };
         let extent = choose_extent(&caps, &desc);
         let mode = choose_present_mode(&support.modes, desc.vsync);
         let mut count = caps.min_image_count + 1;
@@ -157,7 +166,7 @@ impl Swapchain {
             .image_color_space(format.color_space)
             .image_extent(extent)
             .image_array_layers(1)
-            .image_usage(needed)
+            .image_usage(usage)
             .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
             .pre_transform(caps.current_transform)
             .composite_alpha(vk::CompositeAlphaFlagsKHR::OPAQUE)
@@ -183,6 +192,7 @@ impl Swapchain {
             images,
             views: Vec::new(),
             desc,
+            readable,
         };
         if let Err(e) = chain.create_views(gpu) {
             chain.destroy(gpu);

@@ -2,6 +2,7 @@
 //! faces → entry positions), pass 2 (back faces → exit positions) and pass 3 (march); for the analytic method
 //! the march alone. The same code serves headless rendering and (later) the window.
 
+pub mod figure;
 mod gpu_volume;
 pub mod gradients;
 pub mod headless;

@@ -306,12 +306,13 @@ impl Viewer {
         self.child.id().to_string()
     }
 
-    /// The viewer's one window on `display` (xdotool's id), asserting there is exactly one.
+    /// The viewer's one window on `display` (xdotool's id), asserting there is exactly one: the window of its
+    /// process whose title ends in "volcast" (`helix — volcast`; the title names the volume shown).
     pub fn window(&self, display: &str) -> String {
         let found = x_client(
             display,
             "xdotool",
-            &["search", "--all", "--pid", &self.pid(), "--name", "^volcast$"],
+            &["search", "--all", "--pid", &self.pid(), "--name", "volcast$"],
         );
         let found = String::from_utf8_lossy(&found);
         let windows: Vec<&str> = found.split_whitespace().collect();

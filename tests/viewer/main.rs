@@ -7,7 +7,9 @@
 #[path = "../common/mod.rs"]
 pub mod common;
 
+mod captures;
 mod clip;
+mod export;
 mod formats;
 mod idle;
 mod keys;
@@ -15,6 +17,7 @@ mod lighting;
 mod recent;
 mod series;
 mod slices;
+mod small_window;
 mod tf;
 mod time;
 mod turns;

@@ -6,7 +6,7 @@
 use crate::common;
 
 use common::ui_wait::settled_rect;
-use common::x11::{button, pointer, x_session, Viewer, WAIT_MS};
+use common::x11::{button, pointer, x_session, Viewer, HOLD};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -43,9 +43,9 @@ fn recent_files_survive_a_restart_and_open_from_the_menu() {
     );
 
     // Again, with the same config: Recent offers both, newest first; the older one loads.
-    let script = format!("frames:3;wait:{};exit", WAIT_MS * 4);
+    let script = format!("frames:3;{HOLD};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);
-    viewer.wait_for("script: Wait(", Duration::from_secs(120));
+    viewer.wait_for("script: Hold", Duration::from_secs(120));
     let window = &viewer.window(&x.display);
     let (d, w) = (x.display.as_str(), window.as_str());
     let mut combo = settled_rect(&mut viewer, "recent-combo");

@@ -7,7 +7,7 @@ use crate::common;
 
 use common::dicom_series;
 use common::ui_wait::settled_rect;
-use common::x11::{button, pointer, x_session, Viewer, WAIT_MS};
+use common::x11::{button, pointer, x_session, Viewer, HOLD};
 use std::time::Duration;
 
 #[test]
@@ -20,11 +20,11 @@ fn the_chooser_lists_the_series_and_loads_the_one_clicked() {
         return;
     };
     let folder = folder.to_string_lossy().into_owned();
-    let script = format!("frames:3;wait:{};exit", WAIT_MS * 2);
+    let script = format!("frames:3;{HOLD};exit");
     let mut viewer = Viewer::start(&x.display, &dir, &[&folder, "--series", "903"], &script);
     let first = viewer.wait_for("loaded ", Duration::from_secs(180));
     assert!(first.ends_with("mixed (series 903)"), "{first}");
-    viewer.wait_for("script: Wait(", Duration::from_secs(60));
+    viewer.wait_for("script: Hold", Duration::from_secs(60));
     let window = &viewer.window(&x.display);
     let (d, w) = (x.display.as_str(), window.as_str());
 

@@ -1,6 +1,5 @@
 //! What the widgets ask of the app ([`UiAction`]), carried out: loads, captures, sessions, the file dialog.
 
-use super::capture::time_stamp;
 use super::running::Running;
 use crate::viewer::model::actions::UiAction;
 use crate::viewer::VolumeSource;
@@ -14,11 +13,11 @@ impl Running {
                 UiAction::LoadFile(path, opts) => self.loader.start(VolumeSource::File(path, opts), messages),
                 UiAction::LoadBuiltin(name) => self.loader.start(VolumeSource::Builtin(name, None), messages),
                 UiAction::LoadSeries(series) => self.load_series(series),
-                UiAction::Screenshot => {
-                    let path = PathBuf::from(format!("volcast-{}.png", time_stamp()));
-                    self.capture.request_screenshot(path);
-                }
-                UiAction::ToggleRecording => self.capture.toggle_recording(messages),
+                UiAction::Screenshot => self.capture.screenshot_now(false),
+                UiAction::ScreenshotAsShown => self.capture.screenshot_now(true),
+                UiAction::ToggleRecording => self.capture.toggle_recording(false, messages),
+                UiAction::ToggleRecordingAsShown => self.capture.toggle_recording(true, messages),
+                UiAction::ExportFigure => self.export_figure(),
                 UiAction::VsyncChanged => self.presenter.invalidate_swapchain(),
                 UiAction::SaveSession => {
                     let path = PathBuf::from(self.model.files.session_path.trim());

@@ -1,63 +1,97 @@
 //! What the viewer captures of its view: the F12 screenshot (the view image's pixels, and beside it the view
-//! state that `volcast render --state` renders again), the session saved with a frame's settings (Ctrl+S), and
-//! the GIF recording (F9). Captures are requested here and served after a frame is presented.
+//! state that `volcast render --state` renders again; Shift+F12 the view as shown, overlays included), the
+//! session saved with a frame's settings (Ctrl+S), and the GIF recording (F9, Shift+F9 as shown). Captures are
+//! requested here and served after a frame is presented; their files are named by [`file_names`].
 
+use super::file_names;
 use super::recording::Recorder;
 use crate::scene::view_state::ViewState;
 use crate::viewer::model::Messages;
+use crate::viewer::present::{Pixels, Wanted};
 use crate::viewer::session::write_session;
 use crate::viewer::ViewerError;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// A screenshot asked for: where, and whether of the view as shown (else the clean render).
+pub(super) struct Shot {
+    pub(super) path: PathBuf,
+    pub(super) as_shown: bool,
+}
+
 /// The captures asked for.
 #[derive(Default)]
 pub(super) struct Capture {
-    /// Save the next full frame here.
-    screenshot: Option<PathBuf>,
+    /// Save the next full frame here (each press its own file, even when two come within one frame).
+    screenshots: Vec<Shot>,
     /// Save the session here with the next frame's settings.
     session: Option<PathBuf>,
-    /// The GIF being recorded.
-    recorder: Option<Recorder>,
+    /// The GIF being recorded, and whether of the view as shown.
+    recorder: Option<(Recorder, bool)>,
+    /// Names handed out this session (a screenshot's file does not exist until its frame is read back).
+    named: Vec<PathBuf>,
 }
 
 impl Capture {
-    pub(super) fn request_screenshot(&mut self, path: PathBuf) {
-        self.screenshot = Some(path);
+    pub(super) fn request_screenshot(&mut self, path: PathBuf, as_shown: bool) {
+        self.screenshots.push(Shot { path, as_shown });
+    }
+
+    /// F12 (clean) or Shift+F12 (as shown): a screenshot under a new readable name.
+    pub(super) fn screenshot_now(&mut self, as_shown: bool) {
+        let path = self.new_name("png");
+        self.request_screenshot(path, as_shown);
+    }
+
+    /// `volcast-<local date and time>.EXT`, unused on disk and in this session.
+    pub(super) fn new_name(&mut self, ext: &str) -> PathBuf {
+        let path = file_names::capture_path(ext, |p| p.exists() || self.named.iter().any(|n| n == p));
+        self.named.push(path.clone());
+        path
     }
 
     pub(super) fn request_session(&mut self, path: PathBuf) {
         self.session = Some(path);
     }
 
-    /// The next frame is captured (so it must be a full-detail one) and its view image read back.
+    /// Which pixels the next frame must read back; any: it is captured, so it must be a full-detail one.
+    pub(super) fn wants(&self) -> Wanted {
+        let recording = self.recorder.as_ref().map(|(_, shown)| *shown);
+        Wanted {
+            clean: self.screenshots.iter().any(|s| !s.as_shown) || recording == Some(false),
+            shown: self.screenshots.iter().any(|s| s.as_shown) || recording == Some(true),
+        }
+    }
+
     pub(super) fn wants_pixels(&self) -> bool {
-        self.screenshot.is_some() || self.recorder.is_some()
+        self.wants().any()
     }
 
     pub(super) fn take_session(&mut self) -> Option<PathBuf> {
         self.session.take()
     }
 
-    pub(super) fn take_screenshot(&mut self) -> Option<PathBuf> {
-        self.screenshot.take()
+    pub(super) fn take_screenshots(&mut self) -> Vec<Shot> {
+        std::mem::take(&mut self.screenshots)
     }
 
-    /// F9: starts a recording into `volcast-<time>.gif`, or stops the one running and writes it.
-    pub(super) fn toggle_recording(&mut self, messages: &mut Messages) {
+    /// F9 (clean) or Shift+F9 (as shown): starts a recording into `volcast-<date and time>.gif`, or stops the
+    /// one running and writes it.
+    pub(super) fn toggle_recording(&mut self, as_shown: bool, messages: &mut Messages) {
         if self.recorder.is_some() {
             self.stop_recording(messages);
             return;
         }
-        let path = PathBuf::from(format!("volcast-{}.gif", time_stamp()));
-        eprintln!("recording {}", path.display());
+        let path = self.new_name("gif");
+        let kind = if as_shown { " (as shown)" } else { "" };
+        eprintln!("recording {}{kind}", path.display());
         messages.recording = Some(path.display().to_string());
-        self.recorder = Some(Recorder::new(path));
+        self.recorder = Some((Recorder::new(path), as_shown));
     }
 
     /// Ends a recording (if one runs): writes its GIF, or says why not.
     pub(super) fn stop_recording(&mut self, messages: &mut Messages) {
-        let Some(r) = self.recorder.take() else { return };
+        let Some((r, _)) = self.recorder.take() else { return };
         let path = r.path().display().to_string();
         messages.recording = None;
         match r.finish(Instant::now()) {
@@ -72,15 +106,14 @@ impl Capture {
         }
     }
 
-    /// Adds a frame shown at `at` (`width`×`height` RGBA8) to the recording, if one runs; an error stops it.
-    pub(super) fn record(
-        &mut self,
-        pixels: Result<Vec<u8>, String>,
-        (width, height): (u32, u32),
-        at: Instant,
-        messages: &mut Messages,
-    ) {
-        let Some(recorder) = self.recorder.as_mut() else { return };
+    /// Adds a frame shown at `at` (`width`×`height` RGBA8, of the kind it records) to the recording, if one runs;
+    /// an error stops it.
+    pub(super) fn record(&mut self, pixels: Pixels, (width, height): (u32, u32), at: Instant, messages: &mut Messages) {
+        let Some((recorder, as_shown)) = self.recorder.as_mut() else {
+            return;
+        };
+        let pixels = if *as_shown { pixels.shown } else { pixels.clean };
+        let pixels = pixels.unwrap_or_else(|| Err("the frame was not read back".into()));
         if let Err(e) = pixels.and_then(|p| recorder.push(width, height, p, at)) {
             messages.error = Some(format!("recording: {e}"));
             self.stop_recording(messages);
@@ -131,12 +164,4 @@ fn save_screenshot(path: &Path, pixels: Vec<u8>, state: &ViewState, step: Option
         None => eprintln!("saved screenshot {}", path.display()),
     }
     Ok(())
-}
-
-/// Seconds since 1970, for the names of screenshots and recordings.
-pub(super) fn time_stamp() -> u64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0)
 }

@@ -141,21 +141,30 @@ impl Running {
             view_offset: planned.view_offset,
             view_size: planned.view_size,
             egui: &ui.painted,
-            readback: self.capture.wants_pixels(),
+            readback: self.capture.wants(),
         })
     }
 
     /// After a presented frame: the next step of a playing series uploaded while the GPU draws, then the frame's
     /// pixels to the screenshot and the recording that asked for them.
-    fn after_present(&mut self, readback: Option<Readback>, planned: &Planned, tick: &Tick) -> Result<(), ViewerError> {
+    fn after_present(
+        &mut self,
+        readback: Option<Box<Readback>>,
+        planned: &Planned,
+        tick: &Tick,
+    ) -> Result<(), ViewerError> {
         self.shown.upload_ahead(&mut self.presenter, &self.model)?;
         let Some(readback) = readback else { return Ok(()) };
-        let pixels = self.presenter.pixels(readback);
+        let pixels = self.presenter.pixels(*readback);
         // F12 is rare and takes a copy; the recording takes the pixels.
-        if let Some(path) = self.capture.take_screenshot() {
+        for shot in self.capture.take_screenshots() {
             let state = self.view_state(&planned.settings);
             let step = self.shown.series_step();
-            capture::screenshot(&path, pixels.clone(), &state, step, &mut self.model.messages);
+            let kind = if shot.as_shown { &pixels.shown } else { &pixels.clean };
+            let shot_pixels = kind
+                .clone()
+                .unwrap_or_else(|| Err("the frame was not read back".into()));
+            capture::screenshot(&shot.path, shot_pixels, &state, step, &mut self.model.messages);
         }
         let size = (planned.view_size.width, planned.view_size.height);
         self.capture.record(pixels, size, tick.now, &mut self.model.messages);
@@ -193,7 +202,7 @@ impl Running {
                 let actions = self.gui.press_key(key, &mut self.model);
                 self.apply(actions);
             }
-            Command::Screenshot(path) => self.capture.request_screenshot(path),
+            Command::Screenshot(path) => self.capture.request_screenshot(path, false),
         }
     }
 }

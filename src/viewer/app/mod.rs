@@ -5,6 +5,8 @@
 
 mod actions;
 mod capture;
+mod figure;
+mod file_names;
 mod frame;
 mod gui;
 pub mod input;
@@ -14,6 +16,7 @@ mod recording;
 mod running;
 pub mod script;
 mod session;
+mod title;
 mod volumes;
 
 use crate::gpu::ValidationLog;

@@ -6,6 +6,7 @@ use super::gui::Gui;
 use super::loading::{open_source, value_histogram, Arrived, Loader};
 use super::pacing::{Activity, Pacing};
 use super::script::Script;
+use super::title;
 use super::volumes::Shown;
 use crate::viewer::model::Model;
 use crate::viewer::present::Presenter;
@@ -82,6 +83,7 @@ impl Running {
         let histogram = value_histogram(&first);
         (self.shown).install(&mut self.presenter, &mut self.model, first, histogram, false)?;
         self.shown.source = Some(opts.source.clone());
+        self.window.set_title(&title::window_title(self.shown.source.as_ref()));
         self.start_at(opts.time)?;
         if let Some(session) = self.loader.pending_restore.take() {
             self.model.restore(&session);
@@ -116,6 +118,7 @@ impl Running {
             self.model.recent.remember(path);
         }
         self.shown.source = Some(source);
+        self.window.set_title(&title::window_title(self.shown.source.as_ref()));
         if let Some(time) = initial {
             self.start_at(time)?;
         }

@@ -15,10 +15,17 @@ pub enum UiAction {
     SaveSession,
     /// Restore a session file (loading its volume if another is shown).
     OpenSession(PathBuf),
+    /// F12: the clean render of the 3D view (what `render --state` renders again).
     Screenshot,
+    /// Shift+F12: the 3D view as shown, with its outlines, labels and gizmos.
+    ScreenshotAsShown,
     /// Start recording the 3D view into a GIF, or stop and write it.
     ToggleRecording,
+    /// Shift+F9: the same, recording the view as shown.
+    ToggleRecordingAsShown,
     VsyncChanged,
+    /// Render the 3D view offscreen at the export fields' size (the colour bar included when asked) into a PNG.
+    ExportFigure,
     /// Show the platform's file dialog (off the render thread).
     OpenDialog,
 }

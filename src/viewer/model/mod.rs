@@ -8,7 +8,9 @@
 //! `camera.orbit` for the view).
 
 pub mod actions;
+pub mod export;
 pub mod files;
+pub mod framing;
 pub mod orbit;
 pub mod recent;
 pub mod session;
@@ -58,6 +60,8 @@ pub struct Model {
     pub messages: Messages,
     pub stats: FrameStats,
     pub interaction: Interaction,
+    /// The "Export figure" section's fields.
+    pub export: export::FigureExport,
 }
 
 /// The 3D view's camera and its motion.
@@ -195,6 +199,7 @@ impl Model {
             messages: Messages::default(),
             stats: FrameStats::default(),
             interaction: Interaction::default(),
+            export: Default::default(),
         }
     }
 
@@ -273,15 +278,32 @@ impl Model {
     }
 
     /// The camera the 3D view renders with.
-    pub fn view_camera(&self) -> Camera {
-        let mut camera = self.camera.orbit.camera();
+    pub fn view_camera(&self, width: f32, height: f32) -> Camera {
+        let mut orbit = self.camera.orbit;
+        orbit.distance *= self.fit_factor(width, height);
+        let mut camera = orbit.camera();
         camera.ortho = self.camera.ortho;
         camera
     }
 
+    /// How much farther the camera stands in a `width`×`height` view than the orbit says
+    /// ([`framing::fit_factor`]): the 3D view's (its shape in points, with the gizmo), or an image of another
+    /// shape (an exported figure: no gizmo).
+    pub fn fit_factor(&self, width: f32, height: f32) -> f32 {
+        let fov = self.camera.orbit.fov_y_deg;
+        let aspect = width / height.max(1.0);
+        match self.interaction.view_rect {
+            Some(r) if (r.width() / r.height().max(1.0) - aspect).abs() < 0.02 => {
+                framing::fit_factor(r.width(), r.height(), true, fov, self.camera.ortho)
+            }
+            Some(_) => framing::fit_factor(width, height, false, fov, self.camera.ortho),
+            None => framing::fit_factor(width, height, true, fov, self.camera.ortho),
+        }
+    }
+
     /// The render world to clip space for the 3D view `rect`: what overlays project their shapes with.
     pub fn view_projection(&self, rect: egui::Rect) -> Mat4 {
-        let camera = self.view_camera();
+        let camera = self.view_camera(rect.width(), rect.height());
         camera.projection(rect.width() / rect.height().max(1.0)) * camera.view()
     }
 

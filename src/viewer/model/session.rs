@@ -1,6 +1,7 @@
 //! The model in a session file: its part of a [`ViewState`] (the `viewer` part: layout, crosshair,
 //! window/level, quality) and how a saved view state is restored into it.
 
+use super::framing;
 use super::orbit::OrbitView;
 use super::Model;
 use crate::scene::view_state::{ViewState, ViewerSession};
@@ -29,6 +30,9 @@ impl Model {
         (self.look.width, self.look.height) = (width, height);
         self.camera.orbit = OrbitView::from_camera(&s.camera);
         self.camera.ortho = s.camera.ortho;
+        // The saved camera stood back by the view's fit factor; the orbit holds the distance before it.
+        let fov = self.camera.orbit.fov_y_deg;
+        self.camera.orbit.distance /= framing::fit_factor(s.width as f32, s.height as f32, true, fov, s.camera.ortho);
         self.camera.animation = None;
         self.camera.auto_rotate = false;
         for axis in 0..3 {

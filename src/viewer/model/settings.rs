@@ -11,7 +11,7 @@ impl Model {
         let mut s = self.look.clone();
         s.width = width.max(1);
         s.height = height.max(1);
-        s.camera = self.view_camera();
+        s.camera = self.view_camera(s.width as f32, s.height as f32);
         for (axis, &(pos, width)) in self.slabs.iter().enumerate() {
             s.set_slab(axis, pos, width);
             // A slab thinner than the slider's resolution would be empty: keep a sliver.

@@ -1,7 +1,8 @@
 //! One frame on the GPU: wait for its slot, acquire a swapchain image, record [march into the view image → blit
-//! into the swapchain image → egui over it (→ read the view image back)], submit, present.
+//! into the swapchain image → egui over it (→ read the view image and/or the view as shown back)], submit, present.
 
-use super::record::{record_blit, record_egui, Blit, Readback};
+use super::readback::{Place, Readback, Wanted};
+use super::record::{record_blit, record_egui, Blit};
 use super::screen::Acquired;
 use super::Presenter;
 use crate::gpu::{GpuError, VkContext};
@@ -25,8 +26,8 @@ pub struct Frame<'a> {
     pub view_offset: vk::Offset2D,
     pub view_size: vk::Extent2D,
     pub egui: &'a EguiFrame,
-    /// Read the view image back (for a screenshot or the recording).
-    pub readback: bool,
+    /// The pixels to read back (for a screenshot or the recording).
+    pub readback: Wanted,
 }
 
 /// What the GPU measured of the frame a slot last held.
@@ -41,7 +42,7 @@ pub enum Drawn {
     /// The swapchain was out of date: nothing was drawn; it is made again for the next frame.
     OutOfDate,
     /// Presented, with the view image's pixels when asked for.
-    Presented(Option<Readback>),
+    Presented(Option<Box<Readback>>),
 }
 
 impl Presenter {
@@ -91,12 +92,18 @@ impl Presenter {
             frame.egui.pixels_per_point,
             &frame.egui.primitives,
         )?;
-        // The view image is read back once for whoever wants this frame: F12 and the recording.
-        let readback = if frame.readback {
-            Some(Readback::record(&self.gpu, cb, view)?)
-        } else {
-            None
+        // Each kind is read back once for whoever wants this frame: the screenshots and the recording.
+        let mut readback = Readback::record_clean(&self.gpu, cb, view, frame.readback)?;
+        let swapchain = self.screen.swapchain()?;
+        let place = Place {
+            wanted: frame.readback.shown,
+            readable: swapchain.readable,
+            format: swapchain.format,
+            offset: frame.view_offset,
+            size: frame.view_size,
         };
+        readback.record_shown(&self.gpu, cb, target.image, place)?;
+        let readback = frame.readback.any().then(|| Box::new(readback));
         self.submit(cb, fence, image_available, &target)?;
         self.screen.present(&self.gpu, &target)?;
         self.slots.advance();

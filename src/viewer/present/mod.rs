@@ -5,6 +5,8 @@
 //! volumes; the slice textures are keyed by what their image shows (`model::slices::SliceImage`).
 
 mod draw;
+mod figure;
+mod readback;
 mod record;
 mod screen;
 pub mod slice_textures;
@@ -12,7 +14,8 @@ mod slots;
 mod volume_pass;
 
 pub use draw::{Drawn, EguiFrame, Frame};
-pub use record::{view_pixels, Readback};
+pub use readback::{Pixels, Readback, Wanted};
+pub use record::view_pixels;
 pub use slots::FRAMES_IN_FLIGHT;
 
 use crate::gpu::swapchain::Surface;
@@ -170,7 +173,7 @@ impl Presenter {
     }
 
     /// Waits for the device, then takes a frame's read-back pixels (RGBA8).
-    pub fn pixels(&self, readback: Readback) -> Result<Vec<u8>, String> {
+    pub fn pixels(&self, readback: Readback) -> Pixels {
         readback.pixels(&self.gpu)
     }
 

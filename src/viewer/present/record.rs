@@ -1,11 +1,9 @@
 //! What a frame records after the march: the swapchain image cleared, the view image blitted into the view's place
-//! in it ([`view_pixels`]), egui drawn over it, and the view image copied to a buffer when a screenshot or
-//! recording wants it.
+//! in it ([`view_pixels`]) and egui drawn over it (the copies for captures are in [`super::readback`]).
 
 use super::screen::Acquired;
-use crate::gpu::resources::{record_readback, Buffer, Image};
+use crate::gpu::resources::Image;
 use crate::gpu::sync::{image_barrier, memory_barrier, Access, COLOR_RANGE};
-use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::viewer::ViewerError;
 use ash::vk;
 
@@ -119,7 +117,7 @@ pub(super) fn record_blit(dev: &ash::Device, cb: vk::CommandBuffer, view: &Image
     image_barrier(dev, cb, target, Access::TransferWrite, Access::ColorAttachmentWrite);
 }
 
-/// egui's shapes over the whole swapchain image `target` (`extent`), then `target` made ready to present.
+/// egui's shapes over the whole swapchain image `target` (`extent`); `target` is left a colour attachment.
 pub(super) fn record_egui(
     dev: &ash::Device,
     cb: vk::CommandBuffer,
@@ -148,41 +146,5 @@ pub(super) fn record_egui(
         .map_err(|e| ViewerError::Other(format!("egui draw: {e}")))?;
     // SAFETY: rendering was begun above.
     unsafe { dev.cmd_end_rendering(cb) };
-    image_barrier(dev, cb, target.image, Access::ColorAttachmentWrite, Access::Present);
     Ok(())
-}
-
-/// The view image's pixels of one frame, copied to a host-visible buffer: read them once the frame is done.
-pub struct Readback(Buffer);
-
-impl Readback {
-    /// Records the copy of `view` (after the blit read it) into a new buffer.
-    pub(super) fn record(gpu: &Gpu, cb: vk::CommandBuffer, view: &Image) -> Result<Readback, GpuError> {
-        let extent = view.desc.extent;
-        let buffer = Buffer::new(
-            gpu,
-            extent.width as u64 * extent.height as u64 * 4,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            gpu_allocator::MemoryLocation::GpuToCpu,
-            "view readback",
-        )?;
-        record_readback(gpu, cb, view, Access::TransferRead, &buffer);
-        Ok(Readback(buffer))
-    }
-
-    /// Waits for the device, then takes the pixels (RGBA8) and frees the buffer.
-    pub(super) fn pixels(self, gpu: &Gpu) -> Result<Vec<u8>, String> {
-        // SAFETY: plain wait on a live device.
-        let idle = unsafe { gpu.device.device_wait_idle() }
-            .ctx("vkDeviceWaitIdle")
-            .map_err(|e| e.to_string());
-        let pixels = idle.and_then(|_| {
-            self.0
-                .mapped()
-                .map(<[u8]>::to_vec)
-                .ok_or_else(|| "the view's readback buffer is not mapped".to_string())
-        });
-        self.0.destroy(gpu);
-        pixels
-    }
 }

@@ -7,7 +7,7 @@ use crate::viewer::model::Model;
 use crate::viewer::widgets::clip_plane;
 
 /// Keyboard shortcuts: R reset, Space auto-rotate, L slice views, Tab panel (scripted keys; the app takes a
-/// real Tab from egui's input), F12 screenshot, F9 record, C clipping plane, F flip it, P play, Q quality, S shading,
+/// real Tab from egui's input), F12 screenshot and F9 record (Shift: as shown), C clipping plane, F flip it, P play, Q quality, S shading,
 /// Ctrl+S session.
 pub fn shortcuts(ctx: &egui::Context, model: &mut Model) -> Vec<UiAction> {
     let mut actions = Vec::new();
@@ -24,8 +24,14 @@ pub fn shortcuts(ctx: &egui::Context, model: &mut Model) -> Vec<UiAction> {
         if i.key_pressed(egui::Key::Tab) {
             model.display.panel_visible = !model.display.panel_visible;
         }
-        if i.key_pressed(egui::Key::F12) {
-            actions.push(UiAction::Screenshot);
+        // Each press its own capture, Shift for the view as shown: two quick presses may arrive in one frame.
+        for (key, shift) in presses(i, &[egui::Key::F12, egui::Key::F9]) {
+            actions.push(match (key, shift) {
+                (egui::Key::F12, false) => UiAction::Screenshot,
+                (egui::Key::F12, true) => UiAction::ScreenshotAsShown,
+                (_, false) => UiAction::ToggleRecording,
+                (_, true) => UiAction::ToggleRecordingAsShown,
+            });
         }
         if i.key_pressed(egui::Key::L) {
             model.slices.shown = !model.slices.shown;
@@ -41,9 +47,6 @@ pub fn shortcuts(ctx: &egui::Context, model: &mut Model) -> Vec<UiAction> {
         }
         if i.key_pressed(egui::Key::F) {
             model.look.clip_plane = model.look.clip_plane.map(|p| p.flipped());
-        }
-        if i.key_pressed(egui::Key::F9) {
-            actions.push(UiAction::ToggleRecording);
         }
         if i.key_pressed(egui::Key::Q) {
             model.sampling.quality = Some(next_lower(model.sampling.quality));
@@ -67,4 +70,21 @@ pub fn shortcuts(ctx: &egui::Context, model: &mut Model) -> Vec<UiAction> {
         }
     });
     actions
+}
+
+/// Each press (not repeat) of one of `keys` this frame, in order, with whether Shift was held.
+fn presses(i: &egui::InputState, keys: &[egui::Key]) -> Vec<(egui::Key, bool)> {
+    i.events
+        .iter()
+        .filter_map(|e| match e {
+            egui::Event::Key {
+                key,
+                pressed: true,
+                repeat: false,
+                modifiers,
+                ..
+            } if keys.contains(key) => Some((*key, modifiers.shift)),
+            _ => None,
+        })
+        .collect()
 }

@@ -1,17 +1,21 @@
 //! The orientation gizmo in the 3D view's bottom-right corner: the world axes as the camera sees them (named R/L,
-//! A/P, S/I in patient space); a click on an axis end flies the view to look along it.
+//! A/P, S/I in patient space); a click on an axis end flies the view to look along it. It shrinks in small views,
+//! and the view frames the volume clear of it ([`framing`]).
+
+use crate::viewer::model::framing::{self, gizmo_place};
+use crate::viewer::widgets::rects;
 
 use crate::viewer::model::orbit::{look_along, RotationAnimation};
 use crate::viewer::model::Model;
 use egui::{Color32, Pos2, Stroke};
 use glam::{Quat, Vec2, Vec3};
 
-/// The axes' arm length, points.
+/// The axes' arm length at full size, points.
 pub const RADIUS: f32 = 40.0;
 
-/// The gizmo's centre for a view `rect`: 60 points in from its bottom-right corner.
+/// The gizmo's centre for a view `rect`: 60 points in from its bottom-right corner at full size.
 pub fn center(rect: egui::Rect) -> Vec2 {
-    Vec2::new(rect.right() - 60.0, rect.bottom() - 60.0)
+    gizmo_place(rect).centre
 }
 
 /// One of the gizmo's six axis ends (±x, ±y, ±z).
@@ -67,7 +71,8 @@ pub fn take_click(model: &mut Model, rect: egui::Rect, response: &egui::Response
     };
     let rotation = model.camera.orbit.rotation;
     let axes = gizmo_axes(rotation);
-    if let Some(a) = pick_axis(Vec2::new(pos.x, pos.y), center(rect), RADIUS, 10.0, &axes) {
+    let g = gizmo_place(rect);
+    if let Some(a) = pick_axis(Vec2::new(pos.x, pos.y), g.centre, g.arm, 10.0, &axes) {
         model.camera.animation = Some(RotationAnimation::new(rotation, look_along(a.axis, a.positive)));
     }
 }
@@ -79,11 +84,16 @@ pub fn paint(painter: &egui::Painter, model: &Model, rect: egui::Rect) {
         Color32::from_rgb(90, 200, 90),
         Color32::from_rgb(80, 130, 240),
     ];
-    let centre = center(rect);
-    let c = Pos2::new(centre.x, centre.y);
-    painter.circle_filled(c, RADIUS + 12.0, Color32::from_black_alpha(90));
+    let g: framing::GizmoPlace = gizmo_place(rect);
+    let c = Pos2::new(g.centre.x, g.centre.y);
+    rects::log("view-3d", rect);
+    rects::log(
+        "orientation-gizmo",
+        egui::Rect::from_center_size(c, egui::Vec2::splat(2.0 * g.disc)),
+    );
+    painter.circle_filled(c, g.disc, Color32::from_black_alpha(90));
     for a in gizmo_axes(model.camera.orbit.rotation) {
-        let end = Pos2::new(c.x + a.screen.x * RADIUS, c.y + a.screen.y * RADIUS);
+        let end = Pos2::new(c.x + a.screen.x * g.arm, c.y + a.screen.y * g.arm);
         let color = if a.positive {
             colors[a.axis]
         } else {
@@ -92,7 +102,7 @@ pub fn paint(painter: &egui::Painter, model: &Model, rect: egui::Rect) {
         if a.positive {
             painter.line_segment([c, end], Stroke::new(2.0, color));
         }
-        painter.circle_filled(end, 8.0, color);
+        painter.circle_filled(end, 8.0 * g.scale, color);
         // In patient space every end is named (R/L, A/P, S/I); otherwise the positive ends X, Y, Z.
         let label = if model.anatomical() {
             Some([['L', 'R'], ['P', 'A'], ['I', 'S']][a.axis][usize::from(a.positive)])
@@ -104,7 +114,7 @@ pub fn paint(painter: &egui::Painter, model: &Model, rect: egui::Rect) {
                 end,
                 egui::Align2::CENTER_CENTER,
                 label,
-                egui::FontId::proportional(11.0),
+                egui::FontId::proportional(11.0 * g.scale.max(0.8)),
                 Color32::BLACK,
             );
         }

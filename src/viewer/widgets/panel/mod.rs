@@ -1,6 +1,7 @@
 //! The settings panel: the volume's label and the messages, the time controls, then one collapsing section per
 //! concern (a module each). Sections edit the [`Model`] and push [`UiAction`]s for what needs the app.
 
+pub mod export;
 pub mod lighting;
 pub mod recent;
 pub mod rendering;
@@ -34,6 +35,7 @@ pub fn settings_panel(ui: &mut egui::Ui, model: &mut Model) -> Vec<UiAction> {
     lighting::lighting_section(ui, &mut model.look);
     slicing::slicing_section(ui, model);
     view::view_section(ui, model, &mut actions);
+    export::export_section(ui, model, &mut actions);
     volume::volume_section(ui, model, &mut actions);
     session_section(ui, model, &mut actions);
     performance_section(ui, model);
