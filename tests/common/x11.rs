@@ -51,8 +51,19 @@ pub fn xvfb() -> Option<Xvfb> {
     let turn = X_TESTS.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     // -displayfd: Xvfb picks a free display itself and writes its number once it accepts connections (a fixed
     // number can collide with another server or a stale lock, and a socket file can exist before it is ready).
+    // -noreset: by default the server resets when its last client leaves, and a test that starts a second
+    // viewer after the first has exited raced that reset ("no display to open a window on" under load).
     let mut child = match Command::new("Xvfb")
-        .args(["-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"])
+        .args([
+            "-displayfd",
+            "1",
+            "-screen",
+            "0",
+            "1280x1024x24",
+            "-nolisten",
+            "tcp",
+            "-noreset",
+        ])
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
