@@ -9,9 +9,11 @@ pub mod common;
 
 mod clip;
 mod formats;
+mod history;
 mod idle;
 mod keys;
 mod lighting;
+mod shortcut_overlay;
 mod slices;
 mod tf;
 mod time;

@@ -9,6 +9,7 @@
 
 pub mod actions;
 pub mod files;
+pub mod history;
 pub mod orbit;
 pub mod session;
 pub mod settings;
@@ -23,6 +24,7 @@ use crate::scene::settings::RenderSettings;
 use crate::volume::{Geometry, Volume};
 use files::FileFields;
 use glam::{Mat4, Vec3};
+use history::History;
 use orbit::{OrbitView, RotationAnimation};
 use slices::SliceViews;
 use std::sync::Arc;
@@ -55,6 +57,8 @@ pub struct Model {
     pub messages: Messages,
     pub stats: FrameStats,
     pub interaction: Interaction,
+    /// Undo and redo of transfer-function, clipping-plane and camera edits.
+    pub history: History,
 }
 
 /// The 3D view's camera and its motion.
@@ -105,6 +109,8 @@ pub struct Display {
     /// Draw the colour bar over the 3D view.
     pub show_colorbar: bool,
     pub vsync: bool,
+    /// The list of keyboard and mouse shortcuts over the window (F1 or ?).
+    pub show_shortcuts: bool,
 }
 
 /// What the panel tells the user.
@@ -183,11 +189,13 @@ impl Model {
                 show_boxes: true,
                 show_colorbar: false,
                 vsync: true,
+                show_shortcuts: false,
             },
             files: FileFields::default(),
             messages: Messages::default(),
             stats: FrameStats::default(),
             interaction: Interaction::default(),
+            history: History::default(),
         }
     }
 
