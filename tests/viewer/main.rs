@@ -14,6 +14,7 @@ mod idle;
 mod keys;
 mod lighting;
 mod shortcut_overlay;
+mod slice_tools;
 mod slices;
 mod tf;
 mod time;

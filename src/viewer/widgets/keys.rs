@@ -25,6 +25,7 @@ pub enum Shortcut {
     Undo,
     Redo,
     ShortcutOverlay,
+    Ruler,
     Dismiss,
 }
 
@@ -75,6 +76,7 @@ pub const KEYS: &[Binding] = {
         bind(R, Any, ResetView, "R", "reset the view"),
         bind(Space, Any, AutoRotate, "Space", "turn the view by itself"),
         bind(L, Any, SliceViews, "L", "slice views (four-up) on or off"),
+        bind(M, Any, Ruler, "M", "ruler tool in the slice views"),
         bind(C, Any, ClipPlane, "C", "clipping plane on or off"),
         bind(F, Any, FlipClipPlane, "F", "flip the clipping plane"),
         bind(S, Plain, Shading, "S", "shading on or off"),
@@ -92,7 +94,7 @@ pub const KEYS: &[Binding] = {
         bind(S, Command, SaveSession, "Ctrl+S", "save the session"),
         bind(F12, Any, Screenshot, "F12", "screenshot of the 3D view"),
         bind(F9, Any, Record, "F9", "start or stop recording a GIF"),
-        bind(Escape, Any, Dismiss, "Esc", "close this list"),
+        bind(Escape, Any, Dismiss, "Esc", "close this list; clear the ruler"),
     ]
 };
 
@@ -111,6 +113,11 @@ pub const MOUSE: &[(&str, &str, &str)] = &[
     ("slice view", "left click or drag", "move the crosshair"),
     ("slice view", "wheel", "step the slice"),
     ("slice view", "right drag", "window (across) and level (up and down)"),
+    (
+        "slice view",
+        "ruler tool (M): click, click",
+        "measure in mm; right click or Esc clears",
+    ),
     (
         "transfer function",
         "click / drag / right click",
@@ -198,7 +205,11 @@ fn act(shortcut: Shortcut, model: &mut Model, actions: &mut Vec<UiAction>) {
             model.redo();
         }
         Shortcut::ShortcutOverlay => model.display.show_shortcuts = !model.display.show_shortcuts,
-        Shortcut::Dismiss => model.display.show_shortcuts = false,
+        Shortcut::Ruler => model.slices.ruler.toggle_tool(),
+        Shortcut::Dismiss => {
+            model.display.show_shortcuts = false;
+            model.slices.ruler.clear();
+        }
     }
 }
 
