@@ -11,6 +11,7 @@ pub mod actions;
 pub mod export;
 pub mod files;
 pub mod framing;
+pub mod history;
 pub mod orbit;
 pub mod recent;
 pub mod session;
@@ -26,6 +27,7 @@ use crate::scene::settings::RenderSettings;
 use crate::volume::{Geometry, Volume};
 use files::FileFields;
 use glam::{Mat4, Vec3};
+use history::History;
 use orbit::{OrbitView, RotationAnimation};
 use slices::SliceViews;
 use std::sync::Arc;
@@ -62,6 +64,8 @@ pub struct Model {
     pub interaction: Interaction,
     /// The "Export figure" section's fields.
     pub export: export::FigureExport,
+    /// Undo and redo of transfer-function, clipping-plane and camera edits.
+    pub history: History,
 }
 
 /// The 3D view's camera and its motion.
@@ -114,6 +118,8 @@ pub struct Display {
     /// Draw the colour bar over the 3D view.
     pub show_colorbar: bool,
     pub vsync: bool,
+    /// The list of keyboard and mouse shortcuts over the window (F1 or ?).
+    pub show_shortcuts: bool,
 }
 
 /// What the panel tells the user.
@@ -193,6 +199,7 @@ impl Model {
                 show_boxes: true,
                 show_colorbar: false,
                 vsync: true,
+                show_shortcuts: false,
             },
             files: FileFields::default(),
             recent: recent::RecentFiles::default(),
@@ -200,6 +207,7 @@ impl Model {
             stats: FrameStats::default(),
             interaction: Interaction::default(),
             export: Default::default(),
+            history: History::default(),
         }
     }
 

@@ -28,6 +28,71 @@ pub struct SliceViews {
     pub probe: Option<Probe>,
     /// Changes whenever the volume or its shown time step does: the images are made again.
     pub generation: u64,
+    /// The ruler tool and the line it measures.
+    pub ruler: Ruler,
+}
+
+/// The ruler (3D Slicer's line markup): with the tool on (M), a left click in a slice view places one end and the
+/// next click the other; the length is in millimetres of the world (the volume's spacing and affine).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Ruler {
+    /// Left clicks in the slice views place ruler ends instead of moving the crosshair.
+    pub active: bool,
+    pub line: Option<RulerLine>,
+}
+
+/// A ruler line in one slice view, its ends in continuous voxel index coordinates (as the crosshair: it stays
+/// on the same anatomy whether the view is in patient space or voxel axes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RulerLine {
+    pub view: SliceView,
+    pub start: DVec3,
+    /// `None` while only the first end is placed.
+    pub end: Option<DVec3>,
+}
+
+impl Ruler {
+    pub fn toggle_tool(&mut self) {
+        self.active = !self.active;
+    }
+
+    pub fn clear(&mut self) {
+        self.line = None;
+    }
+
+    /// A click at voxel index point `at` in `view`: the first end of a new line, or the second end of the line
+    /// begun in this view. Returns the finished line.
+    pub fn place(&mut self, view: SliceView, at: DVec3) -> Option<RulerLine> {
+        match &mut self.line {
+            Some(line) if line.view == view && line.end.is_none() => {
+                line.end = Some(at);
+                Some(*line)
+            }
+            _ => {
+                self.line = Some(RulerLine {
+                    view,
+                    start: at,
+                    end: None,
+                });
+                None
+            }
+        }
+    }
+}
+
+impl RulerLine {
+    /// The finished line's length in world millimetres, through `mm_from_index` (the volume's affine).
+    pub fn length_mm(&self, mm_from_index: DMat4) -> Option<f64> {
+        self.end.map(|end| distance_mm(mm_from_index, self.start, end))
+    }
+}
+
+/// The distance in millimetres between two voxel index points, through `mm_from_index`: with anisotropic
+/// spacing (or a sheared affine) a voxel step along each axis is a different length.
+pub fn distance_mm(mm_from_index: DMat4, a: DVec3, b: DVec3) -> f64 {
+    mm_from_index
+        .transform_point3(a)
+        .distance(mm_from_index.transform_point3(b))
 }
 
 /// What one slice view's image shows: it is resampled (`slice::render`) only when this changes.
@@ -60,6 +125,7 @@ impl SliceViews {
         ) * 0.5;
         self.wl = Some(percentile_window(histogram, range));
         self.probe = None;
+        self.ruler.line = None;
         self.generation += 1;
     }
 
@@ -69,6 +135,55 @@ impl SliceViews {
             window: range[1] - range[0],
             level: (range[0] + range[1]) / 2.0,
         })
+    }
+}
+
+/// A window/level preset of the slice views, in Hounsfield units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WlPreset {
+    pub name: &'static str,
+    /// Its name in the tests' widget log (`ui rect wl-…`).
+    pub id: &'static str,
+    pub wl: WindowLevel,
+}
+
+const fn preset(name: &'static str, id: &'static str, window: f64, level: f64) -> WlPreset {
+    WlPreset {
+        name,
+        id,
+        wl: WindowLevel { window, level },
+    }
+}
+
+/// The CT presets, with 3D Slicer's values (its Volumes module's CT-Brain, CT-Bone, CT-Lung and CT-Abdomen), so
+/// the same names show the same images here: the textbook values (brain W80/L40, bone W1800/L400, lung
+/// W1500/L−600, abdomen W400/L40) differ a little.
+pub const CT_PRESETS: [WlPreset; 4] = [
+    preset("Brain", "wl-brain", 100.0, 50.0),
+    preset("Bone", "wl-bone", 1000.0, 400.0),
+    preset("Lung", "wl-lung", 1400.0, -500.0),
+    preset("Abdomen", "wl-abdomen", 350.0, 40.0),
+];
+
+/// Whether the CT presets fit the shown volume's values.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PresetFit {
+    /// A CT (by its modality, or by values that look like Hounsfield units): offered as they are.
+    Hounsfield,
+    /// Nothing says what the values are: offered, labelled as assuming HU.
+    Unknown,
+    /// Another modality: its values are not HU, so the presets are disabled with this note.
+    NotHounsfield(String),
+}
+
+/// What the presets mean for a volume of `modality` (as its file says) whose values' unit is `unit` ("HU" when
+/// its values look like CT's).
+pub fn preset_fit(modality: Option<&str>, unit: &str) -> PresetFit {
+    match modality {
+        Some("CT") => PresetFit::Hounsfield,
+        Some(other) => PresetFit::NotHounsfield(format!("{other} values are not Hounsfield units")),
+        None if unit == "HU" => PresetFit::Hounsfield,
+        None => PresetFit::Unknown,
     }
 }
 
@@ -98,6 +213,38 @@ pub fn percentile_window(histogram: &[u64], range: [f64; 2]) -> WindowLevel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ct_presets_are_offered_by_modality() {
+        assert_eq!(preset_fit(Some("CT"), ""), PresetFit::Hounsfield);
+        assert_eq!(preset_fit(None, "HU"), PresetFit::Hounsfield);
+        assert_eq!(preset_fit(None, ""), PresetFit::Unknown);
+        assert!(matches!(preset_fit(Some("MR"), ""), PresetFit::NotHounsfield(n) if n.starts_with("MR")));
+        let bone = CT_PRESETS.iter().find(|p| p.name == "Bone").unwrap();
+        assert_eq!((bone.wl.window, bone.wl.level), (1000.0, 400.0), "3D Slicer's CT-Bone");
+    }
+
+    #[test]
+    fn the_ruler_measures_world_millimetres_with_anisotropic_spacing() {
+        // Spacing 0.5 × 2 × 3 mm: 4 voxels along i and 3 along j are 2 mm and 6 mm.
+        let mm = DMat4::from_scale(DVec3::new(0.5, 2.0, 3.0)) * DMat4::from_translation(DVec3::splat(7.0));
+        let d = distance_mm(mm, DVec3::new(1.0, 2.0, 5.0), DVec3::new(5.0, 5.0, 5.0));
+        assert!((d - 40f64.sqrt()).abs() < 1e-12, "{d}");
+        // Along k only: 2 slices are 6 mm.
+        assert!((distance_mm(mm, DVec3::ZERO, DVec3::new(0.0, 0.0, 2.0)) - 6.0).abs() < 1e-12);
+        let mut ruler = Ruler::default();
+        assert_eq!(ruler.place(SliceView::Axial, DVec3::new(1.0, 2.0, 5.0)), None);
+        let line = ruler
+            .place(SliceView::Axial, DVec3::new(5.0, 5.0, 5.0))
+            .expect("two ends");
+        assert!((line.length_mm(mm).unwrap() - 40f64.sqrt()).abs() < 1e-12);
+        // A third click starts a new line; one in another view does too.
+        assert_eq!(ruler.place(SliceView::Axial, DVec3::ZERO), None);
+        assert_eq!(ruler.place(SliceView::Coronal, DVec3::ONE), None);
+        assert_eq!(ruler.line.unwrap().view, SliceView::Coronal);
+        ruler.clear();
+        assert_eq!(ruler.line, None);
+    }
 
     #[test]
     fn percentiles_ignore_outliers_and_map_to_data_units() {

@@ -51,6 +51,8 @@ pub fn frame_ui(
             });
     }
     egui::CentralPanel::no_frame().show(ui, |ui| view_area(ui, model, volume, images));
+    overlay::shortcut_overlay(ui.ctx(), model);
+    model.observe_history(keys::gesture_under_way(ui.ctx(), model));
     actions
 }
 

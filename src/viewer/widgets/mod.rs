@@ -16,6 +16,8 @@ pub mod orientation;
 pub mod overlay;
 pub mod panel;
 pub mod rects;
+pub mod ruler;
 pub mod screen;
+pub mod shown_slice;
 pub mod slice_view;
 pub mod tf_editor;

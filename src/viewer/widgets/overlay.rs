@@ -6,7 +6,7 @@ use crate::scene::camera::edge_labels;
 use crate::scene::slice::{SliceView, BOX_EDGES};
 use crate::viewer::model::Model;
 use crate::viewer::widgets::screen::{box_corners, project};
-use crate::viewer::widgets::{clip_plane, colorbar, light_gizmo, marks, orientation};
+use crate::viewer::widgets::{clip_plane, colorbar, keys, light_gizmo, marks, orientation, rects};
 use egui::{Color32, Stroke};
 use glam::{Vec2, Vec3};
 
@@ -116,4 +116,55 @@ fn paint_colorbar(painter: &egui::Painter, model: &Model, rect: egui::Rect) {
         model.volume.range,
         unit,
     );
+}
+
+/// The list of every keyboard shortcut ([`keys::KEYS`]) and mouse gesture ([`keys::MOUSE`]), over the middle of
+/// the window while `model.display.show_shortcuts` (F1 or ?; Esc closes it). Its rect is logged as `shortcuts`
+/// (empty while hidden) for the tests.
+pub fn shortcut_overlay(ctx: &egui::Context, model: &Model) {
+    if !model.display.show_shortcuts {
+        rects::log("shortcuts", egui::Rect::ZERO);
+        return;
+    }
+    // A box of one size, centred, placed where it belongs from its first frame (egui places an area anchored
+    // by its size only a frame later); however small the window, the list fits it and scrolls.
+    let screen = ctx.content_rect();
+    let size = egui::vec2(600.0, 520.0)
+        .min(screen.size() - egui::vec2(40.0, 40.0))
+        .max(egui::vec2(120.0, 80.0));
+    let shown = egui::Area::new(egui::Id::new("shortcut overlay"))
+        .order(egui::Order::Foreground)
+        .fixed_pos(screen.center() - size / 2.0)
+        .show(ctx, |ui| {
+            egui::Frame::popup(ui.style()).inner_margin(8.0).show(ui, |ui| {
+                ui.set_width(size.x - 16.0);
+                egui::ScrollArea::vertical()
+                    .max_height(size.y - 16.0)
+                    .min_scrolled_height(size.y - 16.0)
+                    .show(ui, shortcut_list);
+            });
+        });
+    let rect = shown.response.rect;
+    rects::log("shortcuts", rect);
+}
+
+/// The overlay's content: the keys, then the mouse gestures by where they are made.
+fn shortcut_list(ui: &mut egui::Ui) {
+    ui.strong("Keyboard (F1, ? or Esc closes this)");
+    egui::Grid::new("shortcut keys").num_columns(2).show(ui, |ui| {
+        for binding in keys::listed_keys() {
+            ui.monospace(binding.label);
+            ui.label(binding.does);
+            ui.end_row();
+        }
+    });
+    ui.separator();
+    ui.strong("Mouse");
+    egui::Grid::new("shortcut mouse").num_columns(2).show(ui, |ui| {
+        for (place, gesture, does) in keys::MOUSE {
+            ui.monospace(format!("{place}: {gesture}"));
+            ui.label(*does);
+            ui.end_row();
+        }
+    });
 }

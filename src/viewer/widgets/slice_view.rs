@@ -7,12 +7,13 @@
 //! textures ([`SliceImages`]), only when what they show ([`SliceImage`]) changed.
 
 use crate::scene::slice::{self, SliceFrame, SliceView, WindowLevel};
-use crate::viewer::model::slices::{Probe, SliceImage};
+use crate::viewer::model::slices::{self as slice_state, PresetFit, Probe, SliceImage, CT_PRESETS};
 use crate::viewer::model::Model;
-use crate::viewer::widgets::{clip_plane, marks};
+use crate::viewer::widgets::shown_slice::ShownSlice;
+use crate::viewer::widgets::{clip_plane, marks, rects, ruler};
 use crate::volume::Volume;
 use egui::{Color32, Pos2, Stroke};
-use glam::{DMat4, DVec2, DVec3};
+use glam::{DMat4, DVec3};
 
 /// Where a slice view's image comes from: the texture showing a [`SliceImage`], made again from `volume` only
 /// when the image changed; with no volume to resample, the last one made (if any).
@@ -31,35 +32,6 @@ pub fn frame_of(model: &Model, view: SliceView, rect: egui::Rect, pixels_per_poi
     let through = mm.transform_point3(model.slices.crosshair);
     let side = (rect.width().max(rect.height()) * pixels_per_point).clamp(16.0, 1024.0) as u32;
     SliceFrame::new(view, model.anatomical(), mm, model.dims, through, side)
-}
-
-/// A slice as this frame shows it: its pixel grid in the world, and the image's place on screen.
-#[derive(Clone, Copy)]
-struct ShownSlice {
-    frame: SliceFrame,
-    /// Voxel index to world millimetres.
-    mm: DMat4,
-    /// Where the image is drawn (points).
-    shown: egui::Rect,
-    /// Points per image pixel.
-    scale: f32,
-}
-
-impl ShownSlice {
-    fn to_screen(self, p: DVec2) -> Pos2 {
-        Pos2::new(
-            self.shown.left() + p.x as f32 * self.scale,
-            self.shown.top() + p.y as f32 * self.scale,
-        )
-    }
-
-    /// The world point (mm) under screen point `p`.
-    fn world_at(self, p: Pos2) -> DVec3 {
-        self.frame.world(DVec2::new(
-            f64::from((p.x - self.shown.left()) / self.scale),
-            f64::from((p.y - self.shown.top()) / self.scale),
-        ))
-    }
 }
 
 /// One slice view in `rect`: its image, the crosshair, slab and clip plane over it, the probe, and its input.
@@ -105,8 +77,68 @@ pub fn slice_view(
         ui.id().with(("slice view", image.slot())),
         egui::Sense::click_and_drag(),
     );
-    take_input(ui, model, &slice, wl, &response);
+    let ruler_took = ruler::take_input(model, &slice, &response);
+    take_input(ui, model, &slice, wl, &response, ruler_took);
     probe(&painter, rect, model, &slice, volume, &response);
+    ruler::paint(&painter, model, &slice, response.hover_pos());
+    tools(ui, rect, model, view);
+}
+
+/// The view's tool row, top right: the ruler tool's toggle and the window/level presets.
+fn tools(ui: &mut egui::Ui, rect: egui::Rect, model: &mut Model, view: SliceView) {
+    let row = egui::Rect::from_min_size(rect.right_top() + egui::vec2(-132.0, 2.0), egui::vec2(130.0, 20.0));
+    let mut tools_ui = ui.new_child(
+        egui::UiBuilder::new()
+            .max_rect(row)
+            .layout(egui::Layout::right_to_left(egui::Align::Center)),
+    );
+    let ui = &mut tools_ui;
+    // The tests click the axial view's tools; the other two views' are the same.
+    let logged = view == SliceView::Axial;
+    let menu = ui.menu_button("W/L", |ui| wl_presets(ui, model, logged)).response;
+    let ruler = ui
+        .selectable_label(model.slices.ruler.active, "ruler")
+        .on_hover_text("M: click two points to measure (mm); right click or Esc clears");
+    if ruler.clicked() {
+        model.slices.ruler.toggle_tool();
+    }
+    if logged {
+        rects::log("wl-menu", menu.rect);
+        rects::log("ruler-tool", ruler.rect);
+    }
+}
+
+/// The window/level presets: "auto" (the percentile window a volume opens with) and the CT presets in HU,
+/// disabled with a note for a modality whose values are not HU.
+fn wl_presets(ui: &mut egui::Ui, model: &mut Model, logged: bool) {
+    let auto = ui.button("auto (0.5–99.5th percentile)");
+    if auto.clicked() {
+        model.slices.wl = Some(slice_state::percentile_window(
+            &model.volume.histogram,
+            model.volume.range,
+        ));
+        ui.close();
+    }
+    let modality = model.tf_editor.volume.as_ref().and_then(|(f, _)| f.modality.clone());
+    let fit = slice_state::preset_fit(modality.as_deref(), &model.volume.unit);
+    if let PresetFit::NotHounsfield(note) = &fit {
+        ui.weak(note);
+    }
+    let suffix = if fit == PresetFit::Unknown { " (HU)" } else { "" };
+    for p in CT_PRESETS {
+        let text = format!("{}  W{} L{}{suffix}", p.name, p.wl.window, p.wl.level);
+        let item = ui.add_enabled(!matches!(fit, PresetFit::NotHounsfield(_)), egui::Button::new(text));
+        if item.clicked() {
+            model.slices.wl = Some(p.wl);
+            ui.close();
+        }
+        if logged {
+            rects::log(p.id, item.rect);
+        }
+    }
+    if logged {
+        rects::log("wl-auto", auto.rect);
+    }
 }
 
 /// What cuts the slice: the other two views' planes through the crosshair (in their colours), the slab box and
@@ -145,12 +177,20 @@ fn paint_cuts(painter: &egui::Painter, model: &Model, slice: &ShownSlice) {
     }
 }
 
-/// A left click or drag moves the crosshair there, a right drag changes window/level, the wheel steps the slice.
-fn take_input(ui: &egui::Ui, model: &mut Model, slice: &ShownSlice, wl: WindowLevel, response: &egui::Response) {
+/// A left click or drag moves the crosshair there (unless the ruler took it), a right drag changes window/level,
+/// the wheel steps the slice.
+fn take_input(
+    ui: &egui::Ui,
+    model: &mut Model,
+    slice: &ShownSlice,
+    wl: WindowLevel,
+    response: &egui::Response,
+    ruler_took: bool,
+) {
     let (frame, mm) = (&slice.frame, slice.mm);
     let index_from_mm = mm.inverse();
     if let Some(pos) = response.interact_pointer_pos() {
-        if response.dragged_by(egui::PointerButton::Primary) || response.clicked() {
+        if !ruler_took && (response.dragged_by(egui::PointerButton::Primary) || response.clicked()) {
             let w = slice.world_at(pos);
             model.slices.crosshair = index_from_mm.transform_point3(w);
         }

@@ -1,0 +1,130 @@
+//! The slice views' tools through real X input (xdotool under Xvfb), on a CT (DICOM, Modality CT):
+//! - the W/L menu's CT presets set the slices' window/level in Hounsfield units (Bone: 3D Slicer's W1000 L400),
+//!   and "auto" brings back the window the CT opened with;
+//! - with the ruler tool on (M), two clicks in the axial view measure the distance between them in world
+//!   millimetres (the length the viewer logs equals the one computed here from the volume's affine) and leave
+//!   the crosshair where it was; a right click clears the ruler.
+//!
+//! Validation reports 0 messages.
+
+use crate::common;
+
+use common::x11::{button, four_up_rects, pointer, read_screenshot, type_keys, x_session, Viewer, HOLD};
+use glam::{DVec2, DVec3};
+use std::path::Path;
+use std::time::Duration;
+use volcast::scene::slice::{SliceView, WindowLevel};
+use volcast::viewer::model::Model;
+use volcast::viewer::widgets::slice_view;
+
+/// Moves the pointer onto the widget `name` once it stays put: egui lays out a new popup in its first frame and
+/// may place it elsewhere in the next (the pointer's motion brings that frame).
+fn point_at(viewer: &mut Viewer, display: &str, window: &str, name: &str) {
+    let mut at = viewer.ui_rect(name);
+    for _ in 0..10 {
+        pointer(display, window, at.center());
+        std::thread::sleep(Duration::from_millis(300));
+        let now = viewer.ui_rect(name);
+        if now == at {
+            return;
+        }
+        at = now;
+    }
+    panic!("{name} keeps moving: {at:?}");
+}
+
+#[test]
+fn window_level_presets_and_the_ruler_in_the_slice_views() {
+    let ct = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom/enhanced_ct_native.dcm");
+    let volume = volcast::volume::open(&ct, &Default::default()).expect("the CT");
+    let Some((x, dir)) = x_session("viewer-slice-tools") else {
+        return;
+    };
+    let script = format!("frames:3;{HOLD};exit");
+    let mut viewer = Viewer::start(&x.display, &dir, &[ct.to_str().unwrap(), "--slices"], &script);
+    viewer.wait_for("script: Hold", Duration::from_secs(180));
+    let window = &viewer.window(&x.display);
+    let (d, w) = (x.display.as_str(), window.as_str());
+    let opened = viewer.save_session(d, w, &dir).viewer.expect("the viewer's part");
+    let wl0 = opened.window_level.expect("the CT's own window");
+
+    // W/L ▸ Bone: 3D Slicer's CT-Bone, in HU.
+    std::thread::sleep(Duration::from_millis(300));
+    pointer(d, w, viewer.ui_rect("wl-menu").center());
+    button(d, "click", "1");
+    viewer.wait_for("ui rect wl-bone ", Duration::from_secs(30));
+    point_at(&mut viewer, d, w, "wl-bone");
+    button(d, "click", "1");
+    let bone = viewer.save_session(d, w, &dir).viewer.unwrap().window_level;
+    let expected = WindowLevel {
+        window: 1000.0,
+        level: 400.0,
+    };
+    assert_eq!(bone, Some(expected), "the Bone preset");
+    // W/L ▸ auto: the window the CT opened with.
+    pointer(d, w, viewer.ui_rect("wl-menu").center());
+    button(d, "click", "1");
+    std::thread::sleep(Duration::from_millis(300));
+    point_at(&mut viewer, d, w, "wl-auto");
+    button(d, "click", "1");
+    let auto = viewer.save_session(d, w, &dir).viewer.unwrap().window_level.unwrap();
+    assert!(
+        (auto.window - wl0.window).abs() < 1e-9 && (auto.level - wl0.level).abs() < 1e-9,
+        "auto {auto:?}, opened with {wl0:?}"
+    );
+
+    // Where the axial view's image is, as the slices test finds it.
+    type_keys(d, w, &["F12"]);
+    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+    let (shot, _) = read_screenshot(&dir, &saved);
+    let [axial_rect, ..] = four_up_rects((900.0, 600.0), shot.width());
+    let session = viewer.save_session(d, w, &dir).viewer.unwrap();
+    let mut state = Model::new(volume.extent(), "ct".into());
+    state.set_volume(volume.extent(), volume.geometry, volume.dims, "ct".into());
+    state.slices.crosshair = DVec3::from_array(session.crosshair);
+    let frame = slice_view::frame_of(&state, SliceView::Axial, axial_rect, 1.0);
+    let shown = slice_view::image_rect(&frame, axial_rect);
+    let (a, b) = (
+        shown.lerp_inside(egui::vec2(0.25, 0.4)),
+        shown.lerp_inside(egui::vec2(0.7, 0.75)),
+    );
+    let world = |p: egui::Pos2| {
+        let scale = f64::from(shown.width()) / f64::from(frame.width);
+        frame.world(DVec2::new(
+            f64::from(p.x.round() - shown.left()) / scale,
+            f64::from(p.y.round() - shown.top()) / scale,
+        ))
+    };
+    let expected_mm = world(a).distance(world(b));
+
+    // M, then two clicks: the ruler's length in mm.
+    pointer(d, w, a);
+    type_keys(d, w, &["m"]);
+    pointer(d, w, a);
+    button(d, "click", "1");
+    pointer(d, w, b);
+    button(d, "click", "1");
+    let line = viewer.wait_for("ruler: ", Duration::from_secs(30));
+    let mm: f64 = line
+        .split_whitespace()
+        .nth(1)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("a length in {line}"));
+    assert!(
+        (mm - expected_mm).abs() < 1e-3 + 1e-6 * expected_mm,
+        "ruler {mm} mm, expected {expected_mm} mm"
+    );
+    assert!(expected_mm > 2.0, "a real distance: {expected_mm}");
+    let after = viewer.save_session(d, w, &dir).viewer.unwrap();
+    assert_eq!(
+        after.crosshair, session.crosshair,
+        "the ruler's clicks leave the crosshair"
+    );
+
+    // A right click clears it.
+    button(d, "click", "3");
+    viewer.wait_for("ruler: cleared", Duration::from_secs(30));
+
+    viewer.finish_clean();
+    let _ = std::fs::remove_dir_all(&dir);
+}
