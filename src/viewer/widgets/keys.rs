@@ -328,7 +328,19 @@ mod tests {
     #[test]
     fn each_capture_press_counts_and_shift_captures_the_view_as_shown() {
         use egui::Key;
-        let twice = vec![key_event(Key::F12, false, false), key_event(Key::F12, false, false)];
+        let release = egui::Event::Key {
+            key: Key::F12,
+            physical_key: None,
+            pressed: false,
+            repeat: false,
+            modifiers: Default::default(),
+        };
+        let twice = vec![
+            key_event(Key::F12, false, false),
+            release.clone(),
+            key_event(Key::F12, false, false),
+            release,
+        ];
         assert_eq!(fired(twice), [Shortcut::Screenshot, Shortcut::Screenshot]);
         assert_eq!(
             fired(vec![key_event(Key::F12, false, true)]),
