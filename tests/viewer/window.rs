@@ -28,7 +28,8 @@ use volcast::scene::settings::RenderSettings;
 
 /// Which pixels of the view (`view` in window pixels; 1 pixel per point under Xvfb) show the volume alone, and
 /// not egui's overlay (`widgets::overlay::view_overlay`): the bounding box's 1-point lines (plus anti-aliasing
-/// feather, hence 3 px), the gizmo's disc of radius 52 centred 60 px from the bottom-right corner and the light
+/// feather, hence 3 px), the orientation gizmo's disc (`framing::gizmo_place`: radius 52 centred 60 px from the
+/// bottom-right corner at full size, smaller in small views) and the light
 /// gizmo's from the top-right. The box is projected as the overlay projects it, from the frame's own camera.
 fn volume_only(settings: &RenderSettings, extent: glam::Vec3, view: egui::Rect) -> Vec<bool> {
     let cam = &settings.camera;
@@ -57,14 +58,18 @@ fn volume_only(settings: &RenderSettings, extent: glam::Vec3, view: egui::Rect) 
         let t = ((p - a).dot(ab) / ab.length_sq().max(1e-6)).clamp(0.0, 1.0);
         (p - (a + t * ab)).length()
     };
-    let gizmo = egui::pos2(view.right() - 60.0, view.bottom() - 60.0);
+    // The orientation gizmo where the viewer places it (smaller in small views), plus 3 px of feather.
+    let place = volcast::viewer::model::framing::gizmo_place(view);
+    let (gizmo, gizmo_radius) = (egui::pos2(place.centre.x, place.centre.y), place.disc + 3.0);
     // The light gizmo (`light_gizmo`, shown on lit frames): a disc of radius 36 in the top-right corner.
     let light = egui::pos2(view.right() - 60.0, view.top() + 60.0);
     let (w, h) = (view.width() as u32, view.height() as u32);
     (0..w * h)
         .map(|i| {
             let p = egui::pos2(view.left() + (i % w) as f32 + 0.5, view.top() + (i / w) as f32 + 0.5);
-            (p - gizmo).length() > 55.0 && (p - light).length() > 52.0 && edges.iter().all(|&e| distance(p, e) > 3.0)
+            (p - gizmo).length() > gizmo_radius
+                && (p - light).length() > 52.0
+                && edges.iter().all(|&e| distance(p, e) > 3.0)
         })
         .collect()
 }
