@@ -12,6 +12,7 @@ mod formats;
 mod idle;
 mod keys;
 mod lighting;
+mod panel;
 mod slices;
 mod tf;
 mod time;

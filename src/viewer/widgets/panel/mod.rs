@@ -96,3 +96,6 @@ fn session_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<UiAct
             });
         });
 }
+
+#[cfg(test)]
+mod tests;
