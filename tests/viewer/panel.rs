@@ -61,3 +61,46 @@ fn enter_in_the_path_field_loads_the_file() {
     viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Pixels of `image` inside `rect` (window points, 1 pixel each under Xvfb) in the panel's error colour.
+fn error_coloured_pixels(image: &image::RgbaImage, rect: egui::Rect) -> usize {
+    let (x0, y0) = (rect.left().max(0.0) as u32, rect.top().max(0.0) as u32);
+    let (x1, y1) = (rect.right() as u32, (rect.bottom() as u32).min(image.height()));
+    (y0..y1)
+        .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let p = image.get_pixel(x, y);
+            p[0] > 180 && p[1] < 140 && p[2] < 140 && p[0] > p[1] + 60
+        })
+        .count()
+}
+
+/// `volcast view BAD_FILE`: the window opens (on the empty scene) and shows the load's error under the path field,
+/// which names the file, as a load from the panel does; closing it exits 0. (It used to flash and exit 1.)
+#[test]
+fn a_bad_file_on_the_command_line_opens_the_viewer_with_its_error() {
+    let Some((x, dir)) = x_session("viewer-panel-bad-file") else {
+        return;
+    };
+    std::fs::create_dir_all(&dir).expect("scratch");
+    let bad = dir.join("broken.nii");
+    std::fs::write(&bad, b"not a NIfTI header at all").expect("write the bad file");
+    let script = format!("frames:3;wait:{WAIT_MS};exit");
+    let mut viewer = Viewer::start(&x.display, &dir, &[bad.to_str().expect("UTF-8")], &script);
+    let said = viewer.wait_for("could not load ", Duration::from_secs(180));
+    assert!(said.contains("broken.nii"), "{said}");
+    viewer.wait_for("script: Wait(", Duration::from_secs(60));
+    let window = &viewer.window(&x.display);
+    let (d, w) = (x.display.as_str(), window.as_str());
+    let error = scroll_to(&mut viewer, d, w, "load-error");
+    let field = viewer.ui_rect("load-path");
+    assert!(
+        error.top() >= field.bottom(),
+        "the error {error:?} shows under the path field {field:?}"
+    );
+    let shown = common::x11::capture(d, w);
+    let red = error_coloured_pixels(&shown, error);
+    assert!(red > 50, "the error is drawn in the error colour ({red} pixels)");
+    viewer.finish_clean();
+    let _ = std::fs::remove_dir_all(&dir);
+}

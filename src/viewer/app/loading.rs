@@ -3,8 +3,8 @@
 //! (`volumes`).
 
 use crate::scene::view_state::ViewState;
-use crate::viewer::model::Messages;
-use crate::viewer::{ViewerError, VolumeSource};
+use crate::viewer::model::{Messages, Model};
+use crate::viewer::VolumeSource;
 use crate::volume::{self, Volume};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -33,8 +33,8 @@ pub(super) struct Arrived {
 /// Loads in the background, one at a time, and what waits for them.
 pub(super) struct Loader {
     loading: Option<Loading>,
-    /// The volume named on the command line is loading: its failure ends the session (there is nothing else to
-    /// show), and `--time` applies once it is there.
+    /// The volume named on the command line is loading: `--time` applies once it is there (if it fails, the
+    /// window stays open on an empty scene, showing the error).
     pub(super) initial: Option<Option<u32>>,
     /// A session to restore once its volume is shown.
     pub(super) pending_restore: Option<ViewState>,
@@ -162,29 +162,31 @@ impl Loader {
         answer
     }
 
-    /// Takes a finished load, or shows the progress of one under way. A failed load leaves the old volume
-    /// (the command line's ends the session).
-    pub(super) fn poll(&mut self, messages: &mut Messages) -> Result<Option<Arrived>, ViewerError> {
-        let Some(loading) = &self.loading else { return Ok(None) };
+    /// Takes a finished load, or shows the progress of one under way. A failed load leaves the old volume (for
+    /// the command line's, the empty placeholder) and says why in the panel and on stderr.
+    pub(super) fn poll(&mut self, model: &mut Model) -> Option<Arrived> {
+        let messages = &mut model.messages;
+        let Some(loading) = &self.loading else { return None };
         match loading.rx.try_recv() {
             Ok(Ok((volume, histogram))) => {
                 let (label, source) = (loading.label.clone(), loading.source.clone());
                 self.loading = None;
                 messages.loading = None;
                 let initial = self.initial.take();
-                return Ok(Some(Arrived {
+                return Some(Arrived {
                     volume,
                     histogram,
                     source,
                     label,
                     initial,
-                }));
+                });
             }
             Ok(Err(e)) => {
                 self.pending_restore = None;
                 if self.initial.take().is_some() {
-                    // The command line's volume: nothing else to show, so the session ends with its error.
-                    return Err(ViewerError::Other(e));
+                    // The command line's volume: the window stays open on the empty placeholder, with the error
+                    // where a load from the panel shows it, so that another file can be opened.
+                    model.volume.label = "no volume: open one below".into();
                 }
                 eprintln!("could not load {}: {e}", loading.label);
                 messages.error = Some(format!("{}: {e}", loading.label));
@@ -201,7 +203,7 @@ impl Loader {
                 messages.loading = None;
             }
         }
-        Ok(None)
+        None
     }
 }
 

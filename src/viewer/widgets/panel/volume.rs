@@ -71,7 +71,7 @@ pub fn volume_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<Ui
         }
         // A load's error beside the button that caused it (it also shows at the top of the panel).
         if let Some(err) = &model.messages.error {
-            ui.colored_label(ERROR_COLOR, err);
+            rects::log("load-error", ui.colored_label(ERROR_COLOR, err).rect);
         }
     });
 }
