@@ -104,3 +104,63 @@ fn a_bad_file_on_the_command_line_opens_the_viewer_with_its_error() {
     viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Waits until the viewer has logged a rect for `name` and returns it.
+fn wait_for_rect(viewer: &mut Viewer, name: &str) -> egui::Rect {
+    let prefix = format!("ui rect {name} ");
+    viewer.wait_for(&prefix, Duration::from_secs(30));
+    viewer.ui_rect(name)
+}
+
+/// Double-clicks `at` with the left button.
+fn double_click(d: &str, w: &str, at: egui::Pos2) {
+    pointer(d, w, at);
+    x_client(d, "xdotool", &["click", "--repeat", "2", "--delay", "60", "1"]);
+    std::thread::sleep(Duration::from_millis(800));
+}
+
+/// Open… with no desktop portal (none under Xvfb) opens the viewer's own chooser: a double click enters a folder,
+/// Parent folder goes back, a double click on a file loads it. A load's error shows under the path field, so the
+/// Open… button the user clicked has not moved (the panel's top used to show it and push everything down).
+#[test]
+fn open_without_a_portal_uses_the_built_in_chooser() {
+    let Some((x, dir)) = x_session("viewer-panel-chooser") else {
+        return;
+    };
+    let folder = dir.join("a-vols");
+    std::fs::create_dir_all(&folder).expect("a folder to navigate to");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk/vti_zlib.vti");
+    std::fs::copy(&data, folder.join("head.vti")).expect("copy a volume");
+    std::fs::write(folder.join("bad.nii"), b"not a NIfTI header").expect("a broken file");
+    let script = format!("frames:3;wait:{};exit", WAIT_MS * 2);
+    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);
+    viewer.wait_for("script: Wait(", Duration::from_secs(180));
+    let window = &viewer.window(&x.display);
+    let (d, w) = (x.display.as_str(), window.as_str());
+
+    let open = scroll_to(&mut viewer, d, w, "open");
+    click(d, w, open.center());
+    // The chooser opens on the working folder: a-vols/ first (folders first), then xdg/ (the test's runtime dir).
+    let first = wait_for_rect(&mut viewer, "chooser-0");
+    std::thread::sleep(Duration::from_millis(500));
+    double_click(d, w, first.center());
+    click(d, w, viewer.ui_rect("chooser-up").center());
+    std::thread::sleep(Duration::from_millis(500));
+    double_click(d, w, viewer.ui_rect("chooser-0").center());
+    std::thread::sleep(Duration::from_millis(500));
+    // a-vols/: bad.nii, then head.vti. The broken file's error shows under the path field; Open… stays put.
+    double_click(d, w, viewer.ui_rect("chooser-0").center());
+    let said = viewer.wait_for("could not load ", Duration::from_secs(60));
+    assert!(said.contains("a-vols/bad.nii"), "{said}");
+    std::thread::sleep(Duration::from_millis(800));
+    assert_eq!(viewer.ui_rect("open"), open, "Open… stayed where it was clicked");
+    assert!(viewer.ui_rect("load-error").top() >= viewer.ui_rect("load-path").bottom());
+    // Again: the chooser opens on the folder of the path field's file.
+    click(d, w, open.center());
+    std::thread::sleep(Duration::from_millis(1500));
+    double_click(d, w, viewer.ui_rect("chooser-1").center());
+    let loaded = viewer.wait_for("loaded ", Duration::from_secs(60));
+    assert!(loaded.ends_with("a-vols/head.vti"), "{loaded}");
+    viewer.finish_clean();
+    let _ = std::fs::remove_dir_all(&dir);
+}

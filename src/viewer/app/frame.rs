@@ -49,7 +49,7 @@ impl Running {
         if let Some(arrived) = self.loader.poll(&mut self.model) {
             self.install_arrived(arrived)?;
         }
-        if let Some(path) = self.loader.poll_dialog(&mut self.model.messages) {
+        if let Some(path) = self.loader.poll_dialog(&mut self.model) {
             self.drop_file(path);
         }
         self.model.animate(tick.dt);

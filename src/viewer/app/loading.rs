@@ -3,13 +3,20 @@
 //! (`volumes`).
 
 use crate::scene::view_state::ViewState;
-use crate::viewer::model::{Messages, Model};
+use crate::viewer::model::chooser::FileChooser;
+use crate::viewer::model::{Messages, Model, Topic};
 use crate::viewer::VolumeSource;
 use crate::volume::{self, Volume};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// No file from the desktop's dialog this soon after *Open…*: no dialog was shown (rfd found no xdg-desktop-portal
+/// and no zenity, as under Xvfb, and says so only in its log), so the viewer's own chooser opens instead. A person
+/// who cancels a real dialog this fast gets the chooser too, and can cancel it as well.
+const NO_DIALOG_WITHIN: Duration = Duration::from_millis(1000);
 
 /// A load under way.
 struct Loading {
@@ -40,6 +47,8 @@ pub(super) struct Loader {
     pub(super) pending_restore: Option<ViewState>,
     /// An open file dialog's answer (None inside: cancelled, or no dialog available, e.g. no desktop portal).
     dialog: Option<Receiver<Option<PathBuf>>>,
+    /// When the dialog was asked for: an answer of no file sooner than [`NO_DIALOG_WITHIN`] means none was shown.
+    dialog_asked: Instant,
     /// The device's 3D texture limit: larger volumes are downsampled.
     max_dim: u32,
 }
@@ -107,6 +116,7 @@ impl Loader {
             initial: None,
             pending_restore: restore,
             dialog: None,
+            dialog_asked: Instant::now(),
             max_dim,
         }
     }
@@ -132,6 +142,7 @@ impl Loader {
             return;
         }
         messages.error = None;
+        messages.about = Topic::Volume;
         self.loading = Some(load_in_background(source, self.max_dim));
     }
 
@@ -142,22 +153,30 @@ impl Loader {
             return;
         }
         let (tx, rx) = std::sync::mpsc::channel();
+        self.dialog_asked = Instant::now();
         std::thread::spawn(move || {
             let _ = tx.send(rfd::FileDialog::new().set_title("Load volume").pick_file());
         });
         self.dialog = Some(rx);
     }
 
-    /// The file the dialog's user chose, once they have.
-    pub(super) fn poll_dialog(&mut self, messages: &mut Messages) -> Option<PathBuf> {
+    /// The file the dialog's user chose, once they have. No dialog shown (an answer of none within
+    /// [`NO_DIALOG_WITHIN`]): the viewer's own chooser opens in its place.
+    pub(super) fn poll_dialog(&mut self, model: &mut Model) -> Option<PathBuf> {
         let answer = match self.dialog.as_ref()?.try_recv() {
             Err(TryRecvError::Empty) => return None,
             Ok(answer) => answer,
             Err(TryRecvError::Disconnected) => None,
         };
         self.dialog = None;
+        let files = &mut model.files;
+        files.open_note = None;
         if answer.is_none() {
-            messages.status = Some("no file chosen (or no file dialog here: type a path)".into());
+            if self.dialog_asked.elapsed() < NO_DIALOG_WITHIN {
+                files.chooser = Some(FileChooser::near(&files.load_path));
+            } else {
+                files.open_note = Some("no file chosen".into());
+            }
         }
         answer
     }
@@ -166,6 +185,9 @@ impl Loader {
     /// the command line's, the empty placeholder) and says why in the panel and on stderr.
     pub(super) fn poll(&mut self, model: &mut Model) -> Option<Arrived> {
         let messages = &mut model.messages;
+        if self.loading.is_some() {
+            messages.about = Topic::Volume;
+        }
         let Some(loading) = &self.loading else { return None };
         match loading.rx.try_recv() {
             Ok(Ok((volume, histogram))) => {

@@ -2,6 +2,7 @@
 //! a path given to the viewer — typed, dropped or picked — asks it to do.
 
 use super::actions::UiAction;
+use super::chooser::FileChooser;
 use crate::volume::{parse_scivis_name, RawOptions, VoxelType};
 use std::path::{Path, PathBuf};
 
@@ -18,6 +19,10 @@ pub struct FileFields {
     pub path_is_raw: bool,
     /// Where Ctrl+S and "Save session" write, and "Open session" reads.
     pub session_path: String,
+    /// The viewer's own file chooser, while open (when no desktop file dialog answered *Open…*).
+    pub chooser: Option<FileChooser>,
+    /// What *Open…* has to say (the dialog was closed without a file), shown beside it.
+    pub open_note: Option<String>,
 }
 
 impl Default for FileFields {
@@ -29,6 +34,8 @@ impl Default for FileFields {
             raw_spacing: [1.0; 3],
             path_is_raw: false,
             session_path: "volcast-session.json".into(),
+            chooser: None,
+            open_note: None,
         }
     }
 }

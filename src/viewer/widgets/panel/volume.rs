@@ -3,7 +3,8 @@
 
 use crate::viewer::model::actions::UiAction;
 use crate::viewer::model::Model;
-use crate::viewer::widgets::panel::ERROR_COLOR;
+use crate::viewer::model::Topic;
+use crate::viewer::widgets::panel::{chooser, messages_about};
 use crate::viewer::widgets::rects;
 use crate::volume::{VoxelType, BUILTIN_NAMES};
 
@@ -47,10 +48,16 @@ pub fn volume_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<Ui
             }
         });
         ui.horizontal(|ui| {
-            if ui.button("Open…").clicked() {
+            let open = ui.button("Open…");
+            rects::log("open", open.rect);
+            if open.clicked() {
                 actions.push(UiAction::OpenDialog);
             }
-            ui.label("or a path (or drop a file on the window):");
+            // Open…'s own message on its row, in place of the hint: nothing below moves.
+            match &model.files.open_note {
+                Some(note) => ui.label(note),
+                None => ui.label("or a path:"),
+            }
         });
         // A fixed width: a long path scrolls inside the field instead of widening the panel for good.
         let path_field =
@@ -69,9 +76,18 @@ pub fn volume_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<Ui
         if ui.add_enabled(can_load, egui::Button::new("Load volume")).clicked() || (entered && can_load) {
             actions.push(model.files.load_field_action());
         }
-        // A load's error beside the button that caused it (it also shows at the top of the panel).
-        if let Some(err) = &model.messages.error {
-            rects::log("load-error", ui.colored_label(ERROR_COLOR, err).rect);
+        // A load's progress, error and result under the button (and the field) that started it.
+        if let Some((label, progress)) = &model.messages.loading {
+            ui.horizontal(|ui| {
+                ui.spinner();
+                ui.label(format!("loading {label}"));
+            });
+            ui.add(egui::ProgressBar::new(*progress).show_percentage());
         }
+        if let Some(error) = messages_about(ui, &model.messages, Topic::Volume) {
+            rects::log("load-error", error.rect);
+        }
+        ui.weak("or drop a file on the window");
     });
+    chooser::chooser_window(ui.ctx(), &mut model.files, actions);
 }
