@@ -165,8 +165,10 @@ mod tests {
         // Existing files are decided by content, as the loader decides: a DICOM folder and a DICOM file
         // without an extension are not raw.
         assert!(!read_as_raw(&data.join("dicom/u16_j2k")));
-        let mut files = FileFields::default();
-        files.load_path = "/nowhere/x.bin".into();
+        let mut files = FileFields {
+            load_path: "/nowhere/x.bin".into(),
+            ..Default::default()
+        };
         files.path_edited();
         assert!(files.path_is_raw);
         files.load_path = "/nowhere/x.nii.gz".into();
