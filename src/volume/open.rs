@@ -82,6 +82,28 @@ pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     if tiff_stack::is_tiff(&prefix) {
         return Ok(Format::Tiff);
     }
+    if let Some(f) = format_by_name(path) {
+        return Ok(f);
+    }
+    let name = format::file_label(path).to_ascii_lowercase();
+    if metaimage::is_metaimage(&prefix) {
+        return Ok(Format::MetaImage);
+    }
+    let named_raw = name.ends_with(".raw") || raw::parse_scivis_name(&name).is_some();
+    if !named_raw {
+        if let Some(k) = unsupported::identify(path, &prefix) {
+            return Err(VolumeError::Unsupported {
+                file: format::file_label(path),
+                kind: k.kind,
+                what: k.what,
+            });
+        }
+    }
+    Ok(Format::Raw)
+}
+
+/// The format a file's extension names, if it names one (raw files have none of their own).
+pub fn format_by_name(path: &Path) -> Option<Format> {
     let name = format::file_label(path).to_ascii_lowercase();
     let by_extension = [
         (".vtk", Format::Vtk),
@@ -98,23 +120,10 @@ pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
         (".tif", Format::Tiff),
         (".tiff", Format::Tiff),
     ];
-    if let Some((_, f)) = by_extension.iter().find(|(ext, _)| name.ends_with(ext)) {
-        return Ok(*f);
-    }
-    if metaimage::is_metaimage(&prefix) {
-        return Ok(Format::MetaImage);
-    }
-    let named_raw = name.ends_with(".raw") || raw::parse_scivis_name(&name).is_some();
-    if !named_raw {
-        if let Some(k) = unsupported::identify(path, &prefix) {
-            return Err(VolumeError::Unsupported {
-                file: format::file_label(path),
-                kind: k.kind,
-                what: k.what,
-            });
-        }
-    }
-    Ok(Format::Raw)
+    by_extension
+        .iter()
+        .find(|(ext, _)| name.ends_with(ext))
+        .map(|(_, f)| *f)
 }
 
 /// A folder: a Zarr store is named; otherwise its files decide (TIFF stack or DICOM series, never both).

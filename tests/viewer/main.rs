@@ -15,6 +15,7 @@ mod history;
 mod idle;
 mod keys;
 mod lighting;
+mod panel;
 mod recent;
 mod series;
 mod shortcut_overlay;

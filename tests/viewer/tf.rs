@@ -43,9 +43,8 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     let tf0 = tf_of(&opened);
     assert_eq!(tf0.name, "auto: ct-bone", "the CT opens with its modality's preset");
 
-    // A click on the plot, away from the existing points: a point at that value and opacity. (The rect is read
-    // once the panel has shown the session's status line, which moves what is below it.)
-    std::thread::sleep(Duration::from_millis(600));
+    // A click on the plot, away from the existing points: a point at that value and opacity. (The session's
+    // message shows under the Session buttons, below the editor, so saving moves nothing above it.)
     let plot = viewer.ui_rect("tf-plot");
     let at = |u: f32, a: f32| egui::pos2(plot.left() + u * plot.width(), plot.bottom() - a * plot.height());
     let (u, a) = (0.12, 0.6);

@@ -9,6 +9,7 @@ impl Running {
     pub(super) fn apply(&mut self, actions: Vec<UiAction>) {
         for action in actions {
             let messages = &mut self.model.messages;
+            messages.about = action.topic().unwrap_or(messages.about);
             match action {
                 UiAction::LoadFile(path, opts) => self.loader.start(VolumeSource::File(path, opts), messages),
                 UiAction::LoadBuiltin(name) => self.loader.start(VolumeSource::Builtin(name, None), messages),

@@ -46,10 +46,10 @@ impl Running {
     /// What happened since the last frame: a load finished (or progressed), the file dialog answered, animations
     /// advanced by the tick's capped step, playback by the real time passed (its rate is measured on it).
     fn poll(&mut self, tick: &Tick) -> Result<(), ViewerError> {
-        if let Some(arrived) = self.loader.poll(&mut self.model.messages)? {
+        if let Some(arrived) = self.loader.poll(&mut self.model) {
             self.install_arrived(arrived)?;
         }
-        if let Some(path) = self.loader.poll_dialog(&mut self.model.messages) {
+        if let Some(path) = self.loader.poll_dialog(&mut self.model) {
             self.drop_file(path);
         }
         self.model.animate(tick.dt);

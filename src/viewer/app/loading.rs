@@ -3,13 +3,20 @@
 //! (`volumes`).
 
 use crate::scene::view_state::ViewState;
-use crate::viewer::model::Messages;
-use crate::viewer::{ViewerError, VolumeSource};
+use crate::viewer::model::chooser::FileChooser;
+use crate::viewer::model::{Messages, Model, Topic};
+use crate::viewer::VolumeSource;
 use crate::volume::{self, Volume};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// No file from the desktop's dialog this soon after *Open…*: no dialog was shown (rfd found no xdg-desktop-portal
+/// and no zenity, as under Xvfb, and says so only in its log), so the viewer's own chooser opens instead. A person
+/// who cancels a real dialog this fast gets the chooser too, and can cancel it as well.
+const NO_DIALOG_WITHIN: Duration = Duration::from_millis(1000);
 
 /// A load under way.
 struct Loading {
@@ -33,13 +40,15 @@ pub(super) struct Arrived {
 /// Loads in the background, one at a time, and what waits for them.
 pub(super) struct Loader {
     loading: Option<Loading>,
-    /// The volume named on the command line is loading: its failure ends the session (there is nothing else to
-    /// show), and `--time` applies once it is there.
+    /// The volume named on the command line is loading: `--time` applies once it is there (if it fails, the
+    /// window stays open on an empty scene, showing the error).
     pub(super) initial: Option<Option<u32>>,
     /// A session to restore once its volume is shown.
     pub(super) pending_restore: Option<ViewState>,
     /// An open file dialog's answer (None inside: cancelled, or no dialog available, e.g. no desktop portal).
     dialog: Option<Receiver<Option<PathBuf>>>,
+    /// When the dialog was asked for: an answer of no file sooner than [`NO_DIALOG_WITHIN`] means none was shown.
+    dialog_asked: Instant,
     /// The device's 3D texture limit: larger volumes are downsampled.
     max_dim: u32,
 }
@@ -110,6 +119,7 @@ impl Loader {
             initial: None,
             pending_restore: restore,
             dialog: None,
+            dialog_asked: Instant::now(),
             max_dim,
         }
     }
@@ -141,6 +151,7 @@ impl Loader {
             return;
         }
         messages.error = None;
+        messages.about = Topic::Volume;
         self.loading = Some(load_in_background(source, self.max_dim, series));
     }
 
@@ -151,49 +162,62 @@ impl Loader {
             return;
         }
         let (tx, rx) = std::sync::mpsc::channel();
+        self.dialog_asked = Instant::now();
         std::thread::spawn(move || {
             let _ = tx.send(rfd::FileDialog::new().set_title("Load volume").pick_file());
         });
         self.dialog = Some(rx);
     }
 
-    /// The file the dialog's user chose, once they have.
-    pub(super) fn poll_dialog(&mut self, messages: &mut Messages) -> Option<PathBuf> {
+    /// The file the dialog's user chose, once they have. No dialog shown (an answer of none within
+    /// [`NO_DIALOG_WITHIN`]): the viewer's own chooser opens in its place.
+    pub(super) fn poll_dialog(&mut self, model: &mut Model) -> Option<PathBuf> {
         let answer = match self.dialog.as_ref()?.try_recv() {
             Err(TryRecvError::Empty) => return None,
             Ok(answer) => answer,
             Err(TryRecvError::Disconnected) => None,
         };
         self.dialog = None;
+        let files = &mut model.files;
+        files.open_note = None;
         if answer.is_none() {
-            messages.status = Some("no file chosen (or no file dialog here: type a path)".into());
+            if self.dialog_asked.elapsed() < NO_DIALOG_WITHIN {
+                files.chooser = Some(FileChooser::near(&files.load_path));
+            } else {
+                files.open_note = Some("no file chosen".into());
+            }
         }
         answer
     }
 
-    /// Takes a finished load, or shows the progress of one under way. A failed load leaves the old volume
-    /// (the command line's ends the session).
-    pub(super) fn poll(&mut self, messages: &mut Messages) -> Result<Option<Arrived>, ViewerError> {
-        let Some(loading) = &self.loading else { return Ok(None) };
+    /// Takes a finished load, or shows the progress of one under way. A failed load leaves the old volume (for
+    /// the command line's, the empty placeholder) and says why in the panel and on stderr.
+    pub(super) fn poll(&mut self, model: &mut Model) -> Option<Arrived> {
+        let messages = &mut model.messages;
+        if self.loading.is_some() {
+            messages.about = Topic::Volume;
+        }
+        let Some(loading) = &self.loading else { return None };
         match loading.rx.try_recv() {
             Ok(Ok((volume, histogram))) => {
                 let (label, source) = (loading.label.clone(), loading.source.clone());
                 self.loading = None;
                 messages.loading = None;
                 let initial = self.initial.take();
-                return Ok(Some(Arrived {
+                return Some(Arrived {
                     volume,
                     histogram,
                     source,
                     label,
                     initial,
-                }));
+                });
             }
             Ok(Err(e)) => {
                 self.pending_restore = None;
                 if self.initial.take().is_some() {
-                    // The command line's volume: nothing else to show, so the session ends with its error.
-                    return Err(ViewerError::Other(e));
+                    // The command line's volume: the window stays open on the empty placeholder, with the error
+                    // where a load from the panel shows it, so that another file can be opened.
+                    model.volume.label = "no volume: open one below".into();
                 }
                 eprintln!("could not load {}: {e}", loading.label);
                 messages.error = Some(format!("{}: {e}", loading.label));
@@ -210,7 +234,7 @@ impl Loader {
                 messages.loading = None;
             }
         }
-        Ok(None)
+        None
     }
 }
 

@@ -67,7 +67,10 @@ impl Running {
     /// once (a 1 GiB volume took 20 s with no window at all): until it is there an empty placeholder (all below
     /// the value window) stands in, and a script waits for it.
     fn show_first_volume(&mut self, opts: &ViewerOptions) -> Result<(), ViewerError> {
-        if let VolumeSource::File(..) = &opts.source {
+        if let VolumeSource::File(path, _) = &opts.source {
+            // The path field names the file, so that a failed load can be corrected and loaded again.
+            self.model.files.load_path = path.display().to_string();
+            self.model.files.path_edited();
             let placeholder = Volume::new("loading", [2; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![0; 8]))
                 .map_err(|e| ViewerError::Other(e.to_string()))?;
             (self.shown).install(&mut self.presenter, &mut self.model, placeholder, Vec::new(), false)?;
@@ -91,8 +94,8 @@ impl Running {
         Ok(())
     }
 
-    /// Installs a volume that finished loading; the command line's: a failure ends the session, and `--time`
-    /// applies. A session waiting for it is restored.
+    /// Installs a volume that finished loading; the command line's: `--time` applies, and a failure to show it
+    /// ends the session. A session waiting for it is restored.
     pub(super) fn install_arrived(&mut self, arrived: Arrived) -> Result<(), ViewerError> {
         let Arrived {
             volume,

@@ -29,3 +29,16 @@ pub enum UiAction {
     /// Show the platform's file dialog (off the render thread).
     OpenDialog,
 }
+
+impl UiAction {
+    /// Which controls the messages this action causes show beside (`None`: it leaves them where they are).
+    pub fn topic(&self) -> Option<super::Topic> {
+        use super::Topic;
+        match self {
+            UiAction::LoadFile(..) | UiAction::LoadBuiltin(_) | UiAction::OpenDialog => Some(Topic::Volume),
+            UiAction::SaveSession | UiAction::OpenSession(_) => Some(Topic::Session),
+            UiAction::Screenshot | UiAction::ToggleRecording => Some(Topic::Capture),
+            _ => None,
+        }
+    }
+}

@@ -2,6 +2,7 @@
 //! a path given to the viewer — typed, dropped or picked — asks it to do.
 
 use super::actions::UiAction;
+use super::chooser::FileChooser;
 use crate::volume::{parse_scivis_name, RawOptions, VoxelType};
 use std::path::{Path, PathBuf};
 
@@ -12,8 +13,16 @@ pub struct FileFields {
     pub raw_dims: [u32; 3],
     pub raw_type: VoxelType,
     pub raw_spacing: [f32; 3],
+    /// The path typed names a file that would be read as raw: the panel shows the raw fields (for any other
+    /// format they would only show the last raw file's values, which the load ignores). Kept up to date by
+    /// [`FileFields::path_edited`].
+    pub path_is_raw: bool,
     /// Where Ctrl+S and "Save session" write, and "Open session" reads.
     pub session_path: String,
+    /// The viewer's own file chooser, while open (when no desktop file dialog answered *Open…*).
+    pub chooser: Option<FileChooser>,
+    /// What *Open…* has to say (the dialog was closed without a file), shown beside it.
+    pub open_note: Option<String>,
 }
 
 impl Default for FileFields {
@@ -23,7 +32,10 @@ impl Default for FileFields {
             raw_dims: [256, 256, 256],
             raw_type: VoxelType::U8,
             raw_spacing: [1.0; 3],
+            path_is_raw: false,
             session_path: "volcast-session.json".into(),
+            chooser: None,
+            open_note: None,
         }
     }
 }
@@ -44,6 +56,13 @@ impl FileFields {
         }
     }
 
+    /// The path field changed (typed, dropped, picked): dims and type from a scivis name, and whether the raw
+    /// fields apply. Not done per frame: deciding may read the file's first bytes.
+    pub fn path_edited(&mut self) {
+        self.take_dims_from_name();
+        self.path_is_raw = read_as_raw(Path::new(self.load_path.trim()));
+    }
+
     pub fn raw_options(&self) -> RawOptions {
         RawOptions {
             dims: Some(self.raw_dims),
@@ -60,7 +79,7 @@ impl FileFields {
         }
         self.load_path = path.display().to_string();
         let named = parse_scivis_name(&self.load_path).is_some();
-        self.take_dims_from_name();
+        self.path_edited();
         let mut opts = self.raw_options();
         if named {
             opts.dims = None;
@@ -83,6 +102,19 @@ pub fn raw_only(path: &Path, opts: RawOptions) -> RawOptions {
     match crate::volume::detect_format(path) {
         Ok(crate::volume::Format::Raw) | Err(_) => opts,
         Ok(_) => RawOptions::default(),
+    }
+}
+
+/// Whether the loader would read `path` as raw, so that the raw fields apply: by its content where it exists (as
+/// the loader decides), else by its name while it is being typed (a name without a format's extension is raw).
+pub fn read_as_raw(path: &Path) -> bool {
+    if path.as_os_str().is_empty() || is_session_file(path) || path.is_dir() {
+        return false;
+    }
+    match crate::volume::detect_format(path) {
+        Ok(format) => format == crate::volume::Format::Raw,
+        Err(crate::volume::VolumeError::Unsupported { .. }) => false,
+        Err(_) => crate::volume::format_by_name(path).is_none(),
     }
 }
 
@@ -113,5 +145,34 @@ mod tests {
             UiAction::OpenSession(_)
         ));
         assert!(is_session_file(Path::new("a/volcast-1.JSON")) && !is_session_file(Path::new("a.nii")));
+    }
+
+    #[test]
+    fn only_a_path_read_as_raw_takes_the_raw_fields() {
+        let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+        for (path, raw) in [
+            ("", false),
+            ("/nowhere/head.nii.gz", false),
+            ("/nowhere/head.NRRD", false),
+            ("/nowhere/ct.dcm", false),
+            ("/nowhere/session.json", false),
+            ("/nowhere/skull_64x32x16_int16.raw", true),
+            ("/nowhere/volume.bin", true),
+            ("/nowhere/volume", true),
+        ] {
+            assert_eq!(read_as_raw(Path::new(path)), raw, "{path:?}");
+        }
+        // Existing files are decided by content, as the loader decides: a DICOM folder and a DICOM file
+        // without an extension are not raw.
+        assert!(!read_as_raw(&data.join("dicom/u16_j2k")));
+        let mut files = FileFields {
+            load_path: "/nowhere/x.bin".into(),
+            ..Default::default()
+        };
+        files.path_edited();
+        assert!(files.path_is_raw);
+        files.load_path = "/nowhere/x.nii.gz".into();
+        files.path_edited();
+        assert!(!files.path_is_raw);
     }
 }

@@ -8,6 +8,7 @@
 //! `camera.orbit` for the view).
 
 pub mod actions;
+pub mod chooser;
 pub mod export;
 pub mod files;
 pub mod framing;
@@ -132,6 +133,20 @@ pub struct Messages {
     pub loading: Option<(String, f32)>,
     /// The GIF being recorded (F9 or the panel's Record).
     pub recording: Option<String>,
+    /// What `error` and `status` are about: the panel shows them beside the controls of that action.
+    pub about: Topic,
+}
+
+/// Which action's controls a message shows beside.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Topic {
+    /// Loads (the Volume section, under *Load volume*).
+    #[default]
+    Volume,
+    /// Saving and opening sessions (the Session section).
+    Session,
+    /// Screenshots and recordings (the View section, under their buttons).
+    Capture,
 }
 
 /// What the last frames measured.

@@ -1,6 +1,7 @@
-//! The settings panel: the volume's label and the messages, the time controls, then one collapsing section per
-//! concern (a module each). Sections edit the [`Model`] and push [`UiAction`]s for what needs the app.
+//! The settings panel: the volume's label, the time controls, then one collapsing section per concern (a module
+//! each); a message shows in the section of the action that caused it. Sections edit the [`Model`] and push [`UiAction`]s for what needs the app.
 
+pub mod chooser;
 pub mod export;
 pub mod lighting;
 pub mod recent;
@@ -13,7 +14,7 @@ pub mod view;
 pub mod volume;
 
 use crate::viewer::model::actions::UiAction;
-use crate::viewer::model::Model;
+use crate::viewer::model::{Messages, Model, Topic};
 use egui::Color32;
 use std::path::PathBuf;
 
@@ -24,9 +25,8 @@ pub const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 110);
 pub fn settings_panel(ui: &mut egui::Ui, model: &mut Model) -> Vec<UiAction> {
     let mut actions = Vec::new();
     ui.heading("volcast");
-    ui.label(&model.volume.label);
+    volume_label(ui, &model.volume.label);
     series::series_chooser(ui, model, &mut actions);
-    messages(ui, model);
     time::time_controls(ui, &mut model.time);
     ui.separator();
 
@@ -42,22 +42,35 @@ pub fn settings_panel(ui: &mut egui::Ui, model: &mut Model) -> Vec<UiAction> {
     actions
 }
 
-/// A load's progress, the last error and the last status line.
-fn messages(ui: &mut egui::Ui, model: &Model) {
-    let messages = &model.messages;
-    if let Some((label, progress)) = &messages.loading {
-        ui.horizontal(|ui| {
-            ui.spinner();
-            ui.label(format!("loading {label}"));
-        });
-        ui.add(egui::ProgressBar::new(*progress).show_percentage());
+/// The last error and status line if they are about `topic`: shown beside the controls of the action that
+/// caused them, so that nothing above those controls changes height (the panel used to show them at its top, and
+/// every message moved the whole panel under the pointer).
+pub fn messages_about(ui: &mut egui::Ui, messages: &Messages, topic: Topic) -> Option<egui::Response> {
+    if messages.about != topic {
+        return None;
     }
-    if let Some(err) = &messages.error {
-        ui.colored_label(ERROR_COLOR, err);
-    }
+    let error = messages.error.as_ref().map(|err| ui.colored_label(ERROR_COLOR, err));
     if let Some(status) = &messages.status {
         ui.label(status);
     }
+    error
+}
+
+/// The volume's description at the top of the panel, in a space of fixed height (three lines; a longer one is
+/// cut, whole on hover), so that loading another volume does not move what is below.
+fn volume_label(ui: &mut egui::Ui, label: &str) {
+    let rows = 3;
+    let height = rows as f32 * ui.text_style_height(&egui::TextStyle::Body) + (rows - 1) as f32 * 2.0;
+    let size = egui::vec2(ui.available_width(), height);
+    ui.allocate_ui_with_layout(size, egui::Layout::top_down(egui::Align::Min), |ui| {
+        ui.set_min_size(size);
+        let mut text = egui::text::LayoutJob::single_section(label.to_string(), Default::default());
+        text.wrap = egui::text::TextWrapping {
+            max_rows: rows,
+            ..Default::default()
+        };
+        ui.add(egui::Label::new(text)).on_hover_text(label);
+    });
 }
 
 /// Frame and GPU times.
@@ -99,5 +112,9 @@ fn session_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<UiAct
                     actions.push(UiAction::OpenSession(PathBuf::from(path.trim())));
                 }
             });
+            messages_about(ui, &model.messages, Topic::Session);
         });
 }
+
+#[cfg(test)]
+mod tests;

@@ -65,6 +65,7 @@ pub fn view_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<UiAc
         if let Some(path) = &model.messages.recording {
             ui.colored_label(ERROR_COLOR, format!("recording {path}"));
         }
+        super::messages_about(ui, &model.messages, crate::viewer::model::Topic::Capture);
         ui.label("Hide this panel: Tab");
     });
 }
