@@ -21,7 +21,9 @@ pub fn export_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<Ui
                 rects::log("export-height", height.rect);
                 ui.label("pixels");
             });
-            let colorbar = ui.checkbox(&mut export.colorbar, "colour bar (data units, inside the width)");
+            let colorbar = ui
+                .checkbox(&mut export.colorbar, "colour bar")
+                .on_hover_text("in data units, drawn inside the width");
             rects::log("export-colorbar", colorbar.rect);
             if colorbar.changed() {
                 eprintln!(

@@ -55,7 +55,7 @@ pub fn lighting_section(ui: &mut egui::Ui, look: &mut RenderSettings) {
             }
             ui.horizontal(|ui| {
                 color_edit(ui, &mut look.light.color);
-                ui.add(egui::Slider::new(&mut look.light.intensity, 0.0..=4.0).text("light intensity"));
+                ui.add(egui::Slider::new(&mut look.light.intensity, 0.0..=4.0).text("intensity"));
             });
             let projection = look.mode.is_projection();
             ui.add_enabled_ui(!projection, |ui| {

@@ -24,6 +24,10 @@ pub const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 110);
 /// The settings panel. Returns what the viewer must do beyond editing `model`.
 pub fn settings_panel(ui: &mut egui::Ui, model: &mut Model) -> Vec<UiAction> {
     let mut actions = Vec::new();
+    // A slider's label sits right of it and never wraps: egui's default 100-point slider left too little of the
+    // panel's width for labels such as "i (R->L) position", and the widest row widened every row, so that
+    // wrapped text ran past the panel's edge too (tests.rs lays the panel out and finds no text cut).
+    ui.spacing_mut().slider_width = 80.0;
     ui.heading("volcast");
     volume_label(ui, &model.volume.label);
     series::series_chooser(ui, model, &mut actions);

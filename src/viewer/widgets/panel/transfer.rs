@@ -82,7 +82,7 @@ pub fn transfer_function_section(ui: &mut egui::Ui, model: &mut Model) {
                 model.sampling.quality.is_none(),
                 egui::Slider::new(&mut model.look.step_length, 0.1..=4.0)
                     .logarithmic(true)
-                    .text("step length (voxels)"),
+                    .text("step (voxels)"),
             );
         });
 }

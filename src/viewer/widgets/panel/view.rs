@@ -22,7 +22,8 @@ pub fn view_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<UiAc
         });
         if model.geometry.anatomical {
             let voxel_axes = model.look.voxel_axes;
-            ui.checkbox(&mut model.look.voxel_axes, "voxel axes (ignore the file's orientation)");
+            ui.checkbox(&mut model.look.voxel_axes, "voxel axes")
+                .on_hover_text("ignore the file's orientation: show the voxel grid's own axes");
             if voxel_axes != model.look.voxel_axes {
                 model.reset_view();
             }
