@@ -235,6 +235,15 @@ impl Viewer {
         }
     }
 
+    /// Starts the viewer on `volume` with its window held open for the test's input (`frames:3;hold;exit`), waits
+    /// until it holds, and returns it with its window.
+    pub fn held(display: &str, dir: &Path, volume: &[&str]) -> (Viewer, String) {
+        let mut viewer = Viewer::start(display, dir, volume, &format!("frames:3;{HOLD};exit"));
+        viewer.wait_for("script: Hold", Duration::from_secs(180));
+        let window = viewer.window(display);
+        (viewer, window)
+    }
+
     /// Waits for a stderr line containing `needle` and returns it.
     pub fn wait_for(&mut self, needle: &str, timeout: Duration) -> String {
         let deadline = Instant::now() + timeout;

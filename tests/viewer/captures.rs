@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::x11::{read_screenshot, type_keys, x_client, x_session, Viewer, HOLD};
+use common::x11::{read_screenshot, type_keys, x_client, x_session, Viewer};
 use image::RgbaImage;
 use std::path::Path;
 use std::time::Duration;
@@ -54,15 +54,8 @@ fn captures_have_readable_names_and_the_title_names_the_volume() {
     let Some((x, dir)) = x_session("viewer-capture-names") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(
-        &x.display,
-        &dir,
-        &["--builtin", "helix", "--builtin-size", "64"],
-        &script,
-    );
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "helix", "--builtin-size", "64"]);
+    let window = &window;
     assert_eq!(window_name(&x.display, window), "helix — volcast");
 
     // Two quick presses: two files, both named by the time, the second numbered when in the same second.
@@ -111,15 +104,8 @@ fn shift_captures_the_view_as_shown() {
     let Some((x, dir)) = x_session("viewer-capture-shown") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(
-        &x.display,
-        &dir,
-        &["--builtin", "helix", "--builtin-size", "64"],
-        &script,
-    );
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "helix", "--builtin-size", "64"]);
+    let window = &window;
     type_keys(&x.display, window, &["F12", "shift+F12"]);
     let clean_line = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let shown_line = viewer.wait_for("saved screenshot ", Duration::from_secs(60));

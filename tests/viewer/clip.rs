@@ -14,7 +14,7 @@
 
 use crate::common;
 
-use common::x11::{capture, drag, four_up_rects, read_screenshot, render_state, type_keys, x_session, Viewer, HOLD};
+use common::x11::{capture, drag, four_up_rects, read_screenshot, render_state, type_keys, x_session, Viewer};
 use image::RgbaImage;
 use std::path::Path;
 use std::time::Duration;
@@ -62,10 +62,8 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
     let Some((x, dir)) = x_session("viewer-clip") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &[phantom.to_str().unwrap(), "--slices"], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &[phantom.to_str().unwrap(), "--slices"]);
+    let window = &window;
     type_keys(&x.display, window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (shot, _) = read_screenshot(&dir, &saved);

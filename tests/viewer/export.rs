@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use common::x11::{button, pointer, read_screenshot, type_keys, worst_channel_diff, x_session, Viewer, HOLD};
+use common::x11::{button, pointer, read_screenshot, type_keys, worst_channel_diff, x_session, Viewer};
 use image::RgbaImage;
 use std::time::Duration;
 
@@ -51,15 +51,8 @@ fn export_figure_renders_the_view_at_the_typed_size_with_the_colour_bar() {
     let Some((x, dir)) = x_session("viewer-export") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(
-        &x.display,
-        &dir,
-        &["--builtin", "helix", "--builtin-size", "64"],
-        &script,
-    );
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "helix", "--builtin-size", "64"]);
+    let window = &window;
     type_keys(&x.display, window, &["F12"]);
     let (shot, _) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
     let (w, h) = shot.dimensions();

@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::x11::{button, drag, pointer, type_keys, x_session, Viewer, HOLD};
+use common::x11::{button, drag, pointer, type_keys, x_session, Viewer};
 use std::path::Path;
 use std::time::Duration;
 use volcast::scene::camera::Camera;
@@ -29,10 +29,8 @@ fn ctrl_z_undoes_a_point_a_drag_and_a_turn_and_ctrl_shift_z_redoes_them() {
     let Some((x, dir)) = x_session("viewer-history") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &[ct.to_str().unwrap()], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &[ct.to_str().unwrap()]);
+    let window = &window;
     let (d, w) = (x.display.as_str(), window.as_str());
     let state = |viewer: &mut Viewer, keys: &[&str]| {
         if !keys.is_empty() {

@@ -15,15 +15,8 @@ fn shortcuts_keep_working_after_tab_hides_the_panel() {
     let Some((x, dir)) = x_session("viewer-keys") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(
-        &x.display,
-        &dir,
-        &["--builtin", "helix", "--builtin-size", "64"],
-        &script,
-    );
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "helix", "--builtin-size", "64"]);
+    let window = &window;
     let mut shot = |keys: &[&str]| {
         let mut all = keys.to_vec();
         all.push("F12");
@@ -115,10 +108,8 @@ fn a_quick_drag_within_one_frame_turns_the_camera() {
         return;
     };
     // The full-size helix: frames of tens of milliseconds on lavapipe, and the drag below takes a few.
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "helix"], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "helix"]);
+    let window = &window;
     type_keys(&x.display, window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (shot, before) = read_screenshot(&dir, &saved);

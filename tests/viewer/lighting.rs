@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::x11::{capture, read_screenshot, type_keys, x_client, x_session, Viewer, HOLD};
+use common::x11::{capture, read_screenshot, type_keys, x_client, x_session, Viewer};
 use glam::Vec2;
 use std::time::Duration;
 use volcast::viewer::model::orbit::OrbitView;
@@ -27,10 +27,8 @@ fn dragging_the_light_gizmo_places_a_directional_light() {
     let Some((x, dir)) = x_session("viewer-light") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "helix"], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "helix"]);
+    let window = &window;
 
     // Shading on: the gizmo shows; the headlight is the default.
     type_keys(&x.display, window, &["s", "F12"]);

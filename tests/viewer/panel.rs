@@ -46,10 +46,8 @@ fn enter_in_the_path_field_loads_the_file() {
         return;
     };
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk/vti_zlib.vti");
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"]);
+    let window = &window;
     let (d, w) = (x.display.as_str(), window.as_str());
 
     let field = scroll_to(&mut viewer, d, w, "load-path");
@@ -132,10 +130,8 @@ fn open_without_a_portal_uses_the_built_in_chooser() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk/vti_zlib.vti");
     std::fs::copy(&data, folder.join("head.vti")).expect("copy a volume");
     std::fs::write(folder.join("bad.nii"), b"not a NIfTI header").expect("a broken file");
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"]);
+    let window = &window;
     let (d, w) = (x.display.as_str(), window.as_str());
 
     let open = scroll_to(&mut viewer, d, w, "open");

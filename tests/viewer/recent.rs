@@ -6,7 +6,7 @@
 use crate::common;
 
 use common::ui_wait::settled_rect;
-use common::x11::{button, pointer, x_session, Viewer, HOLD};
+use common::x11::{button, pointer, x_session, Viewer};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -43,10 +43,8 @@ fn recent_files_survive_a_restart_and_open_from_the_menu() {
     );
 
     // Again, with the same config: Recent offers both, newest first; the older one loads.
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(120));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"]);
+    let window = &window;
     let (d, w) = (x.display.as_str(), window.as_str());
     let mut combo = settled_rect(&mut viewer, "recent-combo");
     // The Volume section is below the fold of the 900x600 window: the wheel over the panel brings it up.

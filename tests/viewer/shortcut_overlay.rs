@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use common::x11::{type_keys, x_session, Viewer, HOLD};
+use common::x11::{type_keys, x_session, Viewer};
 use std::time::Duration;
 
 /// Presses `key` and returns the overlay's rect once the frames after it logged it (egui sizes a new area in
@@ -22,15 +22,8 @@ fn f1_and_question_mark_show_the_shortcuts_and_f1_or_esc_hide_them() {
     let Some((x, dir)) = x_session("viewer-shortcut-overlay") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(
-        &x.display,
-        &dir,
-        &["--builtin", "helix", "--builtin-size", "64"],
-        &script,
-    );
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "helix", "--builtin-size", "64"]);
+    let window = &window;
     let d = x.display.as_str();
 
     let shown = press(&mut viewer, d, window, "F1");

@@ -9,7 +9,7 @@
 
 use crate::common;
 
-use common::x11::{button, four_up_rects, pointer, read_screenshot, type_keys, x_session, Viewer, HOLD};
+use common::x11::{button, four_up_rects, pointer, read_screenshot, type_keys, x_session, Viewer};
 use glam::{DVec2, DVec3};
 use std::path::Path;
 use std::time::Duration;
@@ -40,10 +40,8 @@ fn window_level_presets_and_the_ruler_in_the_slice_views() {
     let Some((x, dir)) = x_session("viewer-slice-tools") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &[ct.to_str().unwrap(), "--slices"], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &[ct.to_str().unwrap(), "--slices"]);
+    let window = &window;
     let (d, w) = (x.display.as_str(), window.as_str());
     let opened = viewer.save_session(d, w, &dir).viewer.expect("the viewer's part");
     let wl0 = opened.window_level.expect("the CT's own window");

@@ -12,8 +12,8 @@
 
 use crate::common;
 
+use common::x11::worst_channel_diff;
 use common::x11::{button, drag, pointer, read_screenshot, render_state, type_keys, x_client, x_session, Viewer};
-use common::x11::{worst_channel_diff, HOLD};
 use std::path::Path;
 use std::time::Duration;
 use volcast::scene::view_state::ViewState;
@@ -32,10 +32,8 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     let Some((x, dir)) = x_session("viewer-tf") else {
         return;
     };
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &[ct.to_str().unwrap()], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = &viewer.window(&x.display);
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &[ct.to_str().unwrap()]);
+    let window = &window;
     let (d, w) = (x.display.as_str(), window.as_str());
 
     // The CT's own preset, in HU.
