@@ -2,6 +2,9 @@
 //! play/pause, steps per second and looping (the panel's time controls edit it). The app uploads the step asked for
 //! ([`TimeControl::wanted`]); the transfer function and value range stay the series'.
 
+/// The real time the rate reached is measured over.
+const RATE_WINDOW_S: f32 = 2.0;
+
 /// Where playback is.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TimeControl {
@@ -18,6 +21,10 @@ pub struct TimeControl {
     since_shown: f32,
     /// The rate playback reaches (steps per second, smoothed), once it has taken a step; None when paused.
     pub reached: Option<f32>,
+    /// The times between the last steps, covering about the last two seconds: `reached` is their count over
+    /// their sum (a smoothed mean of rates instead overstated the rate when frames were uneven, since a short
+    /// interval weighs more as a rate than a long one).
+    intervals: std::collections::VecDeque<f32>,
 }
 
 /// Fastest playback offered: beyond it frames would be dropped on most machines anyway.
@@ -33,6 +40,7 @@ impl TimeControl {
             since_step: 0.0,
             since_shown: 0.0,
             reached: None,
+            intervals: Default::default(),
         }
     }
 
@@ -43,6 +51,7 @@ impl TimeControl {
             self.since_step = 0.0;
             self.since_shown = 0.0;
             self.reached = None;
+            self.intervals.clear();
             return false;
         }
         self.since_step += dt;
@@ -53,8 +62,12 @@ impl TimeControl {
         }
         self.since_step = (self.since_step - period).min(period);
         self.wanted = (self.wanted + 1) % self.steps;
-        let rate = 1.0 / self.since_shown.max(1e-3);
-        self.reached = Some(self.reached.map_or(rate, |r| 0.7 * r + 0.3 * rate));
+        self.intervals.push_back(self.since_shown);
+        let mut sum: f32 = self.intervals.iter().sum();
+        while self.intervals.len() > 1 && sum - self.intervals[0] >= RATE_WINDOW_S {
+            sum -= self.intervals.pop_front().unwrap_or_default();
+        }
+        self.reached = Some(self.intervals.len() as f32 / sum.max(1e-3));
         self.since_shown = 0.0;
         true
     }
@@ -108,6 +121,25 @@ mod tests {
         t.toggle_play();
         t.advance(0.1);
         assert_eq!(t.reached, None, "paused: no rate");
+    }
+
+    #[test]
+    fn uneven_frames_do_not_inflate_the_rate_reached() {
+        // Frames of 0.06 and 0.09 s at 10 steps/s asked: some steps come after one frame, some after two, and
+        // in the long run exactly 10 a second (no step skipped, the remainder carried). A mean of the
+        // reciprocal intervals made that look faster than asked.
+        let mut t = TimeControl::new(5, 0);
+        t.toggle_play();
+        t.fps = 10.0;
+        let (mut steps, mut time) = (0, 0.0);
+        for k in 0..600 {
+            let dt = if k % 2 == 0 { 0.06 } else { 0.09 };
+            time += dt;
+            steps += t.advance(dt) as u32;
+        }
+        let true_rate = steps as f32 / time;
+        let reached = t.reached.unwrap();
+        assert!((reached - true_rate).abs() < 0.3, "reached {reached}, true {true_rate}");
     }
 
     #[test]
