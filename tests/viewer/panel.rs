@@ -6,6 +6,7 @@
 
 use crate::common;
 
+use common::ui_wait::settled_rect;
 use common::x11::{button, pointer, type_keys, x_client, x_session, Viewer, HOLD};
 use std::path::Path;
 use std::time::Duration;
@@ -18,9 +19,8 @@ pub fn scroll_to(viewer: &mut Viewer, d: &str, w: &str, name: &str) -> egui::Rec
     for _ in 0..60 {
         let r = viewer.ui_rect(name);
         if r.top() >= 0.0 && r.bottom() <= WINDOW_HEIGHT - 20.0 {
-            // Let a smooth scroll come to rest, then read where it stopped.
-            std::thread::sleep(Duration::from_millis(600));
-            return viewer.ui_rect(name);
+            // Where a smooth scroll comes to rest, however slowly the machine draws its frames.
+            return settled_rect(viewer, name);
         }
         pointer(d, w, egui::pos2(130.0, 300.0));
         button(d, "click", if r.top() < 0.0 { "4" } else { "5" });
@@ -148,8 +148,11 @@ fn open_without_a_portal_uses_the_built_in_chooser() {
     double_click(d, w, viewer.ui_rect("chooser-0").center());
     let said = viewer.wait_for("could not load ", Duration::from_secs(60));
     assert!(said.contains("a-vols/bad.nii"), "{said}");
-    std::thread::sleep(Duration::from_millis(800));
-    assert_eq!(viewer.ui_rect("open"), open, "Open… stayed where it was clicked");
+    assert_eq!(
+        settled_rect(&mut viewer, "open"),
+        open,
+        "Open… stayed where it was clicked"
+    );
     assert!(viewer.ui_rect("load-error").top() >= viewer.ui_rect("load-path").bottom());
     // Again: the chooser opens on the folder of the path field's file.
     click(d, w, open.center());
