@@ -46,6 +46,22 @@ pub fn shared_data(rel: &str) -> Option<PathBuf> {
     None
 }
 
+/// The pinned Python environment with zarr-python and ome-zarr-py (`.ci/python-env` builds it): `VOLCAST_TEST_PYTHON`,
+/// else `.venv-tests/bin/python` in the repository; `None` after [`skip`] if neither exists.
+pub fn test_python() -> Option<PathBuf> {
+    let path = std::env::var_os("VOLCAST_TEST_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv-tests/bin/python"));
+    if path.exists() {
+        return Some(path);
+    }
+    skip(&format!(
+        "no test Python at {} (run `bash .ci/python-env`)",
+        path.display()
+    ));
+    None
+}
+
 static SKIPPED: Mutex<Vec<String>> = Mutex::new(Vec::new());
 static SUMMARY: Once = Once::new();
 
