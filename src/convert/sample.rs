@@ -5,7 +5,7 @@ use crate::volume::VoxelType;
 
 /// A voxel value as it is written. `from_f64` rounds half away from zero and saturates for integers (a mean of
 /// integers, or a scaled value the type was chosen to hold exactly).
-pub trait Sample: zarrs::array::Element + Copy + Send + Sync + PartialOrd + Default + 'static {
+pub trait Sample: zarrs::array::Element + bytemuck::Pod + Send + Sync + PartialOrd + Default + 'static {
     const TYPE: VoxelType;
     fn to_f64(self) -> f64;
     fn from_f64(v: f64) -> Self;

@@ -130,6 +130,15 @@ impl Source {
                     VoxelType::I8 => 128.0,
                     _ => 0.0,
                 };
+                // Values held as written (no bias, no rescale): a plain copy.
+                if T::TYPE == v.source_type && offset == 0.0 && scaling.is_identity() {
+                    let held: &[u8] = match data {
+                        VoxelData::U8(d) => &d[start..start + len],
+                        VoxelData::U16(d) => bytemuck::cast_slice(&d[start..start + len]),
+                        VoxelData::F32(d) => bytemuck::cast_slice(&d[start..start + len]),
+                    };
+                    return Ok(bytemuck::cast_slice(held).to_vec());
+                }
                 let mut out = vec![T::default(); len];
                 let convert = |out: &mut [T], get: &(dyn Fn(usize) -> f64 + Sync)| {
                     out.par_chunks_mut(1 << 16).enumerate().for_each(|(c, block)| {
@@ -148,12 +157,19 @@ impl Source {
             Source::InPlace(v, file) => {
                 let size = v.voxel_type.size();
                 let at = v.offset + (u64::from(t) * v.step_bytes()) + (start * size) as u64;
-                let mut bytes = vec![0u8; len * size];
-                file.read_exact_at(&mut bytes, at).map_err(|source| VolumeError::Io {
+                let io = |source| VolumeError::Io {
                     path: v.data_file.clone(),
                     source,
-                })?;
+                };
                 let (vt, big) = (v.voxel_type, v.endian == Endian::Big);
+                // The file's bytes are the values as written: read straight into the slab.
+                if T::TYPE == vt && big == cfg!(target_endian = "big") && scaling.is_identity() {
+                    let mut out = vec![T::default(); len];
+                    file.read_exact_at(bytemuck::cast_slice_mut(&mut out), at).map_err(io)?;
+                    return Ok(out);
+                }
+                let mut bytes = vec![0u8; len * size];
+                file.read_exact_at(&mut bytes, at).map_err(io)?;
                 let mut out = vec![T::default(); len];
                 out.par_chunks_mut(1 << 16)
                     .zip(bytes.par_chunks(size << 16))
