@@ -13,7 +13,7 @@ pub enum Source {
     /// Loaded whole (held once; its steps are read from memory).
     Loaded(Box<Volume>),
     /// Read slab by slab from the file.
-    InPlace(InPlace, File),
+    InPlace(Box<InPlace>, File),
 }
 
 impl Source {
@@ -23,7 +23,7 @@ impl Source {
             path: v.data_file.clone(),
             source,
         })?;
-        Ok(Source::InPlace(v, file))
+        Ok(Source::InPlace(Box::new(v), file))
     }
 
     pub fn name(&self) -> &str {
