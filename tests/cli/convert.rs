@@ -371,3 +371,43 @@ fn existing_unwritable_and_truncated() {
     ]);
     assert_eq!(o.status.code(), Some(64), "{}", stderr(&o));
 }
+
+/// A 4-D NRRD (read in place, big-endian int16, LPS space) writes a leading t axis; each step goes through the same
+/// pipeline, and `--time N` writes that step alone as a 3-D store.
+#[test]
+fn time_series_gets_a_t_axis() {
+    let dir = common::scratch("cli-convert-series");
+    let (w, h, d, t) = (70usize, 66usize, 3usize, 2usize);
+    let values: Vec<i16> = (0..w * h * d * t).map(|i| ((i * 131) % 4001) as i16 - 2000).collect();
+    let mut bytes = format!(
+        "NRRD0004\ntype: int16\ndimension: 4\nsizes: {w} {h} {d} {t}\nencoding: raw\nendian: big\n\
+         space: left-posterior-superior\nspace directions: (1,0,0) (0,2,0) (0,0,3) none\nspace origin: (10,20,30)\n\n"
+    )
+    .into_bytes();
+    bytes.extend(values.iter().flat_map(|v| v.to_be_bytes()));
+    let nrrd = dir.write("series.nrrd", &bytes);
+    let store = dir.join("series.ome.zarr");
+    let said = convert_ok(&[&nrrd.to_string_lossy(), &store.to_string_lossy()]);
+    assert!(said.contains("x 2 time steps"), "{said}");
+    let Some((json, levels)) = read_back(&store) else { return };
+    let names: Vec<&str> = json["axes"].as_array().unwrap().iter().map(|a| a["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["t", "z", "y", "x"]);
+    assert_eq!(json["axes"][0]["type"], "time");
+    let l = json["levels"].as_array().unwrap();
+    assert_eq!(l[0]["shape"], serde_json::json!([2, 3, 66, 70]));
+    assert_eq!(l[0]["dtype"], "int16");
+    let fine: Vec<f64> = values.iter().map(|&v| f64::from(v)).collect();
+    assert!(levels[0] == fine);
+    let step = w * h * d;
+    let mut l1 = expected_mean(&fine[..step], [w, h, d], true);
+    l1.extend(expected_mean(&fine[step..], [w, h, d], true));
+    assert!(levels[1] == l1, "each step's level 1 is its own mean");
+    // LPS → RAS: x and y flipped, so the placement is the nearest axis-aligned one; the affine says all.
+    assert_eq!(json["volcast"]["frame"], "RAS");
+    assert_eq!(json["volcast"]["affine"][0][0], -1.0);
+    let one = dir.join("step1.ome.zarr");
+    convert_ok(&[&nrrd.to_string_lossy(), &one.to_string_lossy(), "--time", "1"]);
+    let (json, levels) = read_back(&one).unwrap();
+    assert_eq!(json["levels"][0]["shape"], serde_json::json!([3, 66, 70]));
+    assert!(levels[0] == fine[step..]);
+}
