@@ -262,3 +262,30 @@ fn write_group(
     };
     group.store_metadata().map_err(|e| zarr(&e))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::{Scaling, Volume, VoxelData};
+
+    fn scaled(slope: f64, intercept: f64) -> VoxelType {
+        // int16 -1000 and 3000, held biased by +32768.
+        let data = VoxelData::U16(vec![31768, 35768]);
+        let v = Volume::new("v", [2, 1, 1], [1.0; 3], VoxelType::I16, data).unwrap();
+        let v = v.with_scaling(Scaling { slope, intercept }).unwrap();
+        output_type(&Source::Loaded(Box::new(v))).unwrap().0
+    }
+
+    #[test]
+    fn the_type_holds_the_rescaled_values() {
+        assert_eq!(scaled(1.0, 0.0), VoxelType::I16, "no rescale: the file's type");
+        assert_eq!(scaled(1.0, -1024.0), VoxelType::I16, "-2024..1976");
+        assert_eq!(scaled(20.0, 0.0), VoxelType::I32, "-20000..60000");
+        assert_eq!(scaled(-20.0, 5.0), VoxelType::I32);
+        assert_eq!(scaled(0.5, 0.0), VoxelType::F32, "a fractional slope");
+        assert_eq!(scaled(1.0, 0.25), VoxelType::F32, "a fractional intercept");
+        let f = Volume::new("f", [1, 1, 1], [1.0; 3], VoxelType::F64, VoxelData::F32(vec![1.5])).unwrap();
+        let (t, why) = output_type(&Source::Loaded(Box::new(f))).unwrap();
+        assert_eq!(t, VoxelType::F32, "{why}");
+    }
+}

@@ -389,8 +389,15 @@ fn time_series_gets_a_t_axis() {
     let store = dir.join("series.ome.zarr");
     let said = convert_ok(&[&nrrd.to_string_lossy(), &store.to_string_lossy()]);
     assert!(said.contains("x 2 time steps"), "{said}");
-    let Some((json, levels)) = read_back(&store) else { return };
-    let names: Vec<&str> = json["axes"].as_array().unwrap().iter().map(|a| a["name"].as_str().unwrap()).collect();
+    let Some((json, levels)) = read_back(&store) else {
+        return;
+    };
+    let names: Vec<&str> = json["axes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["name"].as_str().unwrap())
+        .collect();
     assert_eq!(names, ["t", "z", "y", "x"]);
     assert_eq!(json["axes"][0]["type"], "time");
     let l = json["levels"].as_array().unwrap();
