@@ -373,7 +373,7 @@ pub(crate) struct ConvertArgs {
     /// Shard edge in voxels (shards of N³ holding --chunk chunks; a multiple of --chunk; OME-Zarr 0.5 only).
     #[arg(long, value_name = "N")]
     pub(crate) shard: Option<u64>,
-    /// Chunk compression: zstd (level 3), blosc (blosc with zstd inside, level 5, byte shuffle for multi-byte
+    /// Chunk compression: zstd (level 1), blosc (blosc with lz4 inside, level 5, byte shuffle for multi-byte
     /// types) or none.
     #[arg(long, default_value = "zstd", value_parser = ["zstd", "blosc", "none"])]
     pub(crate) compression: String,

@@ -24,7 +24,7 @@ use zarrs::filesystem::FilesystemStore;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Compression {
     Zstd,
-    /// Blosc with zstd inside, byte-shuffled for multi-byte types.
+    /// Blosc with lz4 inside, byte-shuffled for multi-byte types.
     Blosc,
     None,
 }
