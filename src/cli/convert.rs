@@ -103,6 +103,7 @@ fn open_source(args: &ConvertArgs) -> Result<Source> {
             for note in &v.notes {
                 eprintln!("note: {note}");
             }
+            println!("reading {} in place (slab by slab)", v.data_file.display());
             return Ok(Source::in_place(v)?);
         }
     }

@@ -418,3 +418,32 @@ fn time_series_gets_a_t_axis() {
     assert_eq!(json["levels"][0]["shape"], serde_json::json!([3, 66, 70]));
     assert!(levels[0] == fine[step..]);
 }
+
+/// A MetaImage header with a detached data file is read in place from that file; so is a raw file, while a
+/// compressed NIfTI is loaded.
+#[test]
+fn uncompressed_files_are_read_in_place() {
+    let dir = common::scratch("cli-convert-in-place");
+    let values: Vec<i16> = (0..5 * 4 * 3).map(|i| i * 97 - 2000).collect();
+    dir.write(
+        "vol.raw",
+        &values.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>(),
+    );
+    let mhd = dir.write(
+        "vol.mhd",
+        b"ObjectType = Image\nNDims = 3\nDimSize = 5 4 3\nElementType = MET_SHORT\nElementSpacing = 0.5 1 2\n\
+          BinaryData = True\nBinaryDataByteOrderMSB = False\nElementDataFile = vol.raw\n",
+    );
+    let store = dir.join("mhd.ome.zarr");
+    let said = convert_ok(&[&mhd.to_string_lossy(), &store.to_string_lossy()]);
+    assert!(said.contains("vol.raw in place"), "{said}");
+    let Some((json, levels)) = read_back(&store) else {
+        return;
+    };
+    assert_eq!(json["levels"][0]["dtype"], "int16");
+    assert!(levels[0] == values.iter().map(|&v| f64::from(v)).collect::<Vec<_>>());
+    if let Some(gz) = common::shared_data("native/motor_zmap/image_10426.nii.gz") {
+        let said = convert_ok(&[&gz.to_string_lossy(), &dir.join("gz.ome.zarr").to_string_lossy()]);
+        assert!(!said.contains("in place"), "{said}");
+    }
+}
