@@ -311,15 +311,31 @@ fn labels_take_the_mode_or_the_first_voxel() {
         }
         best.1
     };
-    for (flag, rule) in [
-        (vec!["--labels"], &mode as &dyn Fn(&[f64]) -> f64),
-        (vec!["--labels", "nearest"], &|b: &[f64]| b[0]),
+    // Also Zarr v3 without compression and with blosc (lz4).
+    for (flag, rule, compressor) in [
+        (
+            vec!["--compression", "none", "--labels"],
+            &mode as &dyn Fn(&[f64]) -> f64,
+            None,
+        ),
+        (
+            vec!["--compression", "blosc", "--labels", "nearest"],
+            &|b: &[f64]| b[0],
+            Some("Blosc"),
+        ),
     ] {
         let store = dir.join(format!("labels-{}.ome.zarr", flag.len()));
         let mut args = vec![raw.to_str().unwrap(), store.to_str().unwrap()];
         args.extend(flag);
         convert_ok(&args);
-        let Some((_, levels)) = read_back(&store) else { return };
+        let Some((json, levels)) = read_back(&store) else {
+            return;
+        };
+        let compressors = json["levels"][0]["compressors"].as_array().unwrap();
+        match compressor {
+            None => assert!(compressors.is_empty(), "{compressors:?}"),
+            Some(name) => assert!(compressors[0].as_str().unwrap().contains(name), "{compressors:?}"),
+        }
         assert!(levels[0] == fine);
         assert!(levels[1] == reduce_blocks(&fine, [w, h, d], rule), "{args:?}");
     }
