@@ -4,7 +4,7 @@
 mod cli;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use cli::args::{BenchArgs, CompareArgs, GpuArgs, InfoArgs, RenderArgs, ViewArgs, VolumeArgs};
+use cli::args::{BenchArgs, CompareArgs, ConvertArgs, GpuArgs, InfoArgs, RenderArgs, ViewArgs, VolumeArgs};
 use cli::commands::{bench, compare, devices, info, view};
 use cli::render::render;
 use std::process::ExitCode;
@@ -37,6 +37,8 @@ enum Command {
     Compare(Box<CompareArgs>),
     /// Time a fixed set of scenes and the raw 3D-texture sample rate (docs/performance.md).
     Bench(Box<BenchArgs>),
+    /// Write a volume as an OME-Zarr store with a multiscale pyramid (docs/cli.md, convert).
+    Convert(Box<ConvertArgs>),
     /// List the Vulkan devices and which one volcast would pick.
     Devices,
 }
@@ -123,6 +125,7 @@ fn main() -> ExitCode {
         Some(Command::Compare(a)) => compare(a),
         Some(Command::Bench(a)) => bench(a),
         Some(Command::Info(a)) => info(a),
+        Some(Command::Convert(a)) => cli::convert::convert(a),
         Some(Command::Devices) => devices(),
     };
     match result {

@@ -104,18 +104,7 @@ impl VolumeArgs {
                 volume::BUILTIN_NAMES.join(", ")
             );
         };
-        let opts = volume::OpenOptions {
-            raw: self.raw_options()?,
-            endian: match self.endian.as_deref() {
-                Some("big") => volume::Endian::Big,
-                _ => volume::Endian::Little,
-            },
-            header_bytes: self.header_bytes.unwrap_or(0),
-            max_dim: Some(self.max_dim),
-            no_downsample: self.no_downsample,
-            array: self.array.clone(),
-            series: self.series.clone(),
-        };
+        let opts = self.open_options()?;
         // A progress bar only where loading takes long enough to watch (files over 8 MiB).
         let big = std::fs::metadata(path).is_ok_and(|m| m.len() > 8 << 20);
         let bar = indicatif::ProgressBar::new(1000);
@@ -138,6 +127,22 @@ impl VolumeArgs {
             v.show_step(t)?;
         }
         Ok(v)
+    }
+
+    /// How to open the file these arguments name.
+    pub(crate) fn open_options(&self) -> Result<volume::OpenOptions> {
+        Ok(volume::OpenOptions {
+            raw: self.raw_options()?,
+            endian: match self.endian.as_deref() {
+                Some("big") => volume::Endian::Big,
+                _ => volume::Endian::Little,
+            },
+            header_bytes: self.header_bytes.unwrap_or(0),
+            max_dim: Some(self.max_dim),
+            no_downsample: self.no_downsample,
+            array: self.array.clone(),
+            series: self.series.clone(),
+        })
     }
 
     pub(crate) fn raw_options(&self) -> Result<RawOptions> {
@@ -343,4 +348,50 @@ pub(crate) struct CompareArgs {
     /// Timed frames per method and view after a warm-up frame (medians are reported).
     #[arg(long, default_value_t = 3)]
     pub(crate) frames: u32,
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct ConvertArgs {
+    #[command(flatten)]
+    pub(crate) volume: VolumeArgs,
+    /// The OME-Zarr store to write (a folder, conventionally NAME.ome.zarr); refused if it exists.
+    #[arg(
+        value_name = "OUT.ome.zarr",
+        required_unless_present = "output_option",
+        conflicts_with = "output_option"
+    )]
+    pub(crate) output: Option<PathBuf>,
+    /// The store to write, as an option: needed with --builtin, which takes no FILE (so one path would be FILE).
+    #[arg(short = 'o', long = "output", value_name = "OUT.ome.zarr")]
+    pub(crate) output_option: Option<PathBuf>,
+    /// OME-Zarr version: 0.5 (Zarr v3) or 0.4 (Zarr v2).
+    #[arg(long, default_value = "0.5", value_parser = ["0.5", "0.4"])]
+    pub(crate) ome_zarr_version: String,
+    /// Chunk edge in voxels (chunks of N³).
+    #[arg(long, value_name = "N", default_value_t = 64)]
+    pub(crate) chunk: u64,
+    /// Shard edge in voxels (shards of N³ holding --chunk chunks; a multiple of --chunk; OME-Zarr 0.5 only).
+    #[arg(long, value_name = "N")]
+    pub(crate) shard: Option<u64>,
+    /// Chunk compression: zstd (level 1), blosc (blosc with lz4 inside, level 5, byte shuffle for multi-byte
+    /// types) or none.
+    #[arg(long, default_value = "zstd", value_parser = ["zstd", "blosc", "none"])]
+    pub(crate) compression: String,
+    /// Label data: coarser levels take each 2x2x2 block's most common value (ties: the smallest), or with
+    /// `--labels nearest` the block's first voxel, instead of the mean.
+    #[arg(long, value_name = "RULE", num_args = 0..=1, default_missing_value = "mode", value_parser = ["mode", "nearest"])]
+    pub(crate) labels: Option<String>,
+    /// Replace OUT if it is a Zarr store (nothing else is ever removed).
+    #[arg(long)]
+    pub(crate) overwrite: bool,
+}
+
+impl ConvertArgs {
+    /// The store to write, given either way.
+    pub(crate) fn out(&self) -> &std::path::Path {
+        self.output
+            .as_deref()
+            .or(self.output_option.as_deref())
+            .expect("clap requires one")
+    }
 }

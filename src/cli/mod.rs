@@ -2,6 +2,7 @@
 
 pub(crate) mod args;
 pub(crate) mod commands;
+pub(crate) mod convert;
 pub(crate) mod frame;
 pub(crate) mod parse;
 pub(crate) mod render;

@@ -77,7 +77,7 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, VolumeError> {
     parse(bytes, "MetaImage data")
 }
 
-fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
+pub(crate) fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let err = |problem: String| header_error(file, problem);
     let (lines, complete) = format::header_lines(bytes, |line| {
         line.split('=')

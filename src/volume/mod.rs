@@ -19,6 +19,7 @@ mod error;
 mod format;
 pub mod geometry;
 pub mod huge_pages;
+pub mod in_place;
 mod metaimage;
 mod nifti;
 mod nrrd;

@@ -57,7 +57,7 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, VolumeError> {
     parse(bytes, "NIfTI data")
 }
 
-fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
+pub(crate) fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let err = |problem: String| header_error(file, problem);
     let endian = byte_order(bytes, file)?;
     let magic = &bytes[344..348];

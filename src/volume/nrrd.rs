@@ -35,7 +35,7 @@ pub fn parse_header(bytes: &[u8]) -> Result<Header, VolumeError> {
     parse(bytes, "NRRD data")
 }
 
-fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
+pub(crate) fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let err = |problem: String| header_error(file, problem);
     if !is_nrrd(bytes) {
         return Err(err("not a NRRD file: it must start with 'NRRD000'".into()));

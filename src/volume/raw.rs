@@ -108,7 +108,11 @@ pub(crate) fn load_raw_with_progress(
 }
 
 /// The volume's name, dimensions and voxel type: from `opts` where given, else from the file name.
-fn layout(path: &Path, file_name: &str, opts: &RawOptions) -> Result<(String, [u32; 3], VoxelType), VolumeError> {
+pub(crate) fn layout(
+    path: &Path,
+    file_name: &str,
+    opts: &RawOptions,
+) -> Result<(String, [u32; 3], VoxelType), VolumeError> {
     let from_name = split_scivis_name(file_name);
     let dims = opts.dims.or(from_name.as_ref().map(|(_, dims, _)| *dims));
     let voxel_type = match (opts.voxel_type, &from_name) {
@@ -147,7 +151,7 @@ fn layout(path: &Path, file_name: &str, opts: &RawOptions) -> Result<(String, [u
 }
 
 /// Checks dimensions and spacing; returns the voxel count and the data's bytes, both addressable on this host.
-fn sizes(dims: [u32; 3], voxel_type: VoxelType, spacing: [f32; 3]) -> Result<(usize, u64), VolumeError> {
+pub(crate) fn sizes(dims: [u32; 3], voxel_type: VoxelType, spacing: [f32; 3]) -> Result<(usize, u64), VolumeError> {
     let count = check_dims(dims)?;
     check_spacing(dims, spacing)?;
     let too_large = || VolumeError::TooLarge {
@@ -163,7 +167,7 @@ fn sizes(dims: [u32; 3], voxel_type: VoxelType, spacing: [f32; 3]) -> Result<(us
 }
 
 /// The file must be a plain file of exactly the header plus `expected` bytes, checked before anything is read.
-fn check_file_size(
+pub(crate) fn check_file_size(
     path: &Path,
     file_name: &str,
     extras: RawExtras,

@@ -10,6 +10,7 @@ pub mod common;
 mod bench;
 mod clip;
 mod colorbar;
+mod convert;
 mod info_notes;
 mod movie;
 mod options;

@@ -1,0 +1,141 @@
+//! Volumes whose voxels lie on disk as they are used (raw files; NRRD, NIfTI-1 and MetaImage with uncompressed
+//! data): where they start, so a converter can read them slab by slab with positioned reads instead of loading them
+//! whole. The formats' own header parsers decide everything; this only says where the bytes are.
+
+use super::decode::Endian;
+use super::format::{self, DataLocation, Encoding, Header};
+use super::open::{detect_format, Format};
+use super::{check_dims, metaimage, nifti, nrrd, raw, Geometry, OpenOptions, Scaling, VolumeError, VoxelType};
+use std::path::{Path, PathBuf};
+
+/// A volume read in place: `timesteps` steps of `dims` voxels of `voxel_type`, one after another from `offset` in
+/// `data_file`, x fastest.
+#[derive(Clone, Debug)]
+pub struct InPlace {
+    pub name: String,
+    pub format: &'static str,
+    pub data_file: PathBuf,
+    pub offset: u64,
+    pub dims: [u32; 3],
+    pub voxel_type: VoxelType,
+    pub endian: Endian,
+    pub geometry: Geometry,
+    pub scaling: Scaling,
+    pub timesteps: u32,
+    pub notes: Vec<String>,
+}
+
+impl InPlace {
+    /// Bytes of one time step.
+    pub fn step_bytes(&self) -> u64 {
+        self.dims.iter().map(|&d| u64::from(d)).product::<u64>() * self.voxel_type.size() as u64
+    }
+}
+
+/// `path` as an [`InPlace`] volume if its voxels lie uncompressed on disk; `None` for every other format or
+/// encoding (those are loaded whole). Sizes are checked: a data file shorter than its header claims is refused.
+pub fn in_place(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, VolumeError> {
+    let explicit_raw = opts.raw.dims.is_some() && opts.raw.voxel_type.is_some();
+    let format = match detect_format(path) {
+        Err(VolumeError::Unsupported { .. }) if explicit_raw && !path.is_dir() => Format::Raw,
+        other => other?,
+    };
+    let file = format::file_label(path);
+    let header = match format {
+        Format::Raw => return raw_in_place(path, opts).map(Some),
+        Format::Nrrd => nrrd::parse(&format::read_prefix(path, format::HEADER_LIMIT)?, &file)?,
+        Format::MetaImage => metaimage::parse(&format::read_prefix(path, format::HEADER_LIMIT)?, &file)?,
+        Format::Nifti => {
+            let prefix = format::read_prefix(path, 352)?;
+            if nifti::is_gzip(&prefix) {
+                return Ok(None);
+            }
+            let mut h = nifti::parse(&prefix, &file)?;
+            if let DataLocation::Detached { skip, .. } = h.location {
+                // A .hdr/.img pair, as the loader reads it.
+                let img = path.with_extension("img");
+                h.location = DataLocation::Detached {
+                    name: format::file_label(&img),
+                    skip,
+                };
+            }
+            h
+        }
+        _ => return Ok(None),
+    };
+    if header.encoding != Encoding::Raw {
+        return Ok(None);
+    }
+    header_in_place(path, header, opts).map(Some)
+}
+
+fn header_in_place(path: &Path, header: Header, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
+    let step = check_dims(header.dims)?;
+    let needed = step * header.voxel_type.size() as u64 * u64::from(header.timesteps.max(1));
+    let (data_file, offset) = match &header.location {
+        DataLocation::Inline(offset) => (path.to_path_buf(), *offset),
+        DataLocation::Detached { name, skip } => (format::resolve_data_file(path, name)?, *skip),
+    };
+    let len = std::fs::metadata(&data_file)
+        .map_err(|source| VolumeError::Io {
+            path: data_file.clone(),
+            source,
+        })?
+        .len();
+    let truncated = |actual| VolumeError::Truncated {
+        file: format::file_label(&data_file),
+        actual,
+        expected: needed,
+        dims: header.dims,
+        voxel_type: header.voxel_type,
+    };
+    let offset = match offset {
+        Some(o) => o,
+        None => len.checked_sub(needed).ok_or_else(|| truncated(len))?,
+    };
+    if len < offset.saturating_add(needed) {
+        return Err(truncated(len.saturating_sub(offset)));
+    }
+    let mut geometry = header.placement();
+    if let Some(s) = opts.raw.spacing {
+        geometry = geometry.with_spacing(s.map(f64::from));
+    }
+    Ok(InPlace {
+        name: format::volume_name(path),
+        format: header.format,
+        data_file,
+        offset,
+        dims: header.dims,
+        voxel_type: header.voxel_type,
+        endian: header.endian,
+        geometry,
+        scaling: header.scaling,
+        timesteps: header.timesteps.max(1),
+        notes: header.notes,
+    })
+}
+
+fn raw_in_place(path: &Path, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
+    let file = format::file_label(path);
+    let (name, dims, voxel_type) = raw::layout(path, &file, &opts.raw)?;
+    let spacing = opts.raw.spacing.unwrap_or([1.0; 3]);
+    let (_, expected) = raw::sizes(dims, voxel_type, spacing)?;
+    let extras = raw::RawExtras {
+        endian: opts.endian,
+        header_bytes: opts.header_bytes,
+    };
+    raw::check_file_size(path, &file, extras, dims, voxel_type, expected)?;
+    Ok(InPlace {
+        name,
+        format: "raw",
+        data_file: path.to_path_buf(),
+        offset: opts.header_bytes,
+        dims,
+        voxel_type,
+        endian: opts.endian,
+        geometry: Geometry::from_spacing(spacing.map(f64::from)),
+        scaling: Scaling::IDENTITY,
+        timesteps: 1,
+        notes: Vec::new(),
+    })
+}
