@@ -47,6 +47,21 @@ fn header_len(bytes: &[u8]) -> usize {
     }
 }
 
+/// [`parse`] for a file named `file`: a header without NIfTI-1's magic is Analyze 7.5 only in a `.hdr`, as nibabel
+/// has it; in a `.nii` it is a broken NIfTI-1.
+fn parse_file(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
+    let header = parse(bytes, file)?;
+    if header.format == analyze::FORMAT && !file.to_ascii_lowercase().ends_with(".hdr") {
+        return Err(header_error(
+            file,
+            "not a NIfTI-1 file: the magic is neither 'n+1' nor 'ni1' (a header without it is read as Analyze 7.5 \
+             only from a .hdr)"
+                .into(),
+        ));
+    }
+    Ok(header)
+}
+
 /// Picks the layout by sizeof_hdr and magic: 540 is NIfTI-2; 348 is NIfTI-1 with its magic, else Analyze 7.5.
 fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let err = |problem: String| header_error(file, problem);
@@ -155,7 +170,7 @@ fn load_gzip(
         .take(rest as u64)
         .read_to_end(&mut head)
         .map_err(corrupt)?;
-    let mut header = parse(&head, file)?;
+    let mut header = parse_file(&head, file)?;
     let offset = header_offset(&header);
     if offset == u64::MAX {
         return Err(header_error(
@@ -220,7 +235,7 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         let mut f = File::open(path).map_err(io)?;
         return load_gzip(&mut f, len, name, &file, progress);
     }
-    let mut header = parse(&prefix, &file)?;
+    let mut header = parse_file(&prefix, &file)?;
     let mut data_file = file;
     if let DataLocation::Detached { skip, .. } = header.location {
         // A .hdr/.img pair: the voxels are in the .img beside the header, which the errors from here on name (the

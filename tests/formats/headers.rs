@@ -270,6 +270,17 @@ fn hostile_analyze_headers_are_refused_clearly() {
         e.contains("complex.hdr") && e.contains("datatype 32 (complex64)"),
         "{e}"
     );
+    // Without the magic a .nii is a broken NIfTI-1, not Analyze (nibabel reads Analyze only from .hdr/.img).
+    let mut nii = std::fs::read(data("../time/cine_i16.nii")).expect("a NIfTI-1 file");
+    nii[344..348].copy_from_slice(b"abc\0");
+    for name in ["nomagic.nii", "nomagic.nii.gz"] {
+        let bytes = if name.ends_with(".gz") { gzip(&nii) } else { nii.clone() };
+        let e = err(&dir.write(name, &bytes));
+        assert!(
+            e.contains(&format!("{name}: not a NIfTI-1 file: the magic is neither")),
+            "{e}"
+        );
+    }
     let e = err(&dir.write("lonely.hdr", &hdr));
     assert!(e.contains("lonely.img"), "{e}");
 }

@@ -7,11 +7,13 @@ use crate::volume::decode::Endian;
 use crate::volume::format::Header;
 use crate::volume::{Scaling, VolumeError};
 
+pub(super) const FORMAT: &str = "Analyze 7.5";
+
 /// The caller has checked sizeof_hdr (348, which gave `endian`), the length and that NIfTI-1's magic is absent.
 pub(super) fn parse(bytes: &[u8], endian: Endian, file: &str) -> Result<Header, VolumeError> {
     let r = Reader { bytes, endian };
     let fields = Fields {
-        format: "Analyze 7.5",
+        format: FORMAT,
         header_size: super::HEADER_SIZE,
         single_file: false,
         dim: [0, 1, 2, 3, 4, 5, 6, 7].map(|i| i64::from(r.i16(40 + 2 * i))),
