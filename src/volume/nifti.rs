@@ -1,9 +1,9 @@
 //! NIfTI-1 and NIfTI-2 `.nii` and `.nii.gz` (and `.hdr`/`.img` pairs), and Analyze 7.5 `.hdr`/`.img` pairs, either
 //! byte order. The three share one reader: only the header's layout differs ([`common`] does the rest).
 //!
-//! The header is parsed by hand rather than with the `nifti` crate: it is 348 fixed-layout bytes, and the crate
-//! reads the whole volume into an `ndarray` (the file's bytes plus a converted copy plus a shaped copy), pulls in
-//! ndarray/nalgebra/num, and sizes its allocations from the header alone — the opposite of the one-pass,
+//! The header is parsed by hand rather than with the `nifti` crate: it is 348 (or 540) fixed-layout bytes, and the
+//! crate reads the whole volume into an `ndarray` (the file's bytes plus a converted copy plus a shaped copy), pulls
+//! in ndarray/nalgebra/num, and sizes its allocations from the header alone — the opposite of the one-pass,
 //! size-checked loading volcast needs for multi-gigabyte and hostile files.
 
 mod analyze;
@@ -106,7 +106,7 @@ fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     common::build(&fields, endian, file)
 }
 
-/// Loads an uncompressed or gzip-compressed single-file NIfTI-1 held in memory.
+/// Loads an uncompressed or gzip-compressed single-file NIfTI-1 or NIfTI-2 held in memory.
 pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
     let file = "NIfTI data";
     if is_gzip(bytes) {
