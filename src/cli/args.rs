@@ -14,9 +14,9 @@ use volcast::volume::{self, RawOptions, Volume, VoxelType};
 
 #[derive(Args, Clone)]
 pub(crate) struct VolumeArgs {
-    /// A volume file: raw, VTK (.vtk, .vti), NRRD (.nrrd/.nhdr), NIfTI-1 (.nii/.nii.gz), MetaImage (.mha/.mhd), DICOM
-    /// (a folder of slices or one file), TIFF stack (.tif/.tiff, one multi-page file or a folder). Raw files take
-    /// dims and type from --dims/--type or a NAME_WxHxD_TYPE name.
+    /// A volume file: raw, VTK (.vtk, .vti), NRRD (.nrrd/.nhdr), NIfTI-1 and NIfTI-2 (.nii/.nii.gz/.hdr), Analyze 7.5
+    /// (.hdr/.img), MetaImage (.mha/.mhd), DICOM (a folder of slices or one file), TIFF stack (.tif/.tiff, one
+    /// multi-page file or a folder). Raw files take dims and type from --dims/--type or a NAME_WxHxD_TYPE name.
     pub(crate) file: Option<PathBuf>,
     /// A built-in volume: helix, box, colormap or marschner-lobb.
     #[arg(long, conflicts_with = "file", value_parser = parse_builtin)]

@@ -46,11 +46,12 @@ pub fn in_place(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, Volu
         Format::Nrrd => nrrd::parse(&format::read_prefix(path, format::HEADER_LIMIT)?, &file)?,
         Format::MetaImage => metaimage::parse(&format::read_prefix(path, format::HEADER_LIMIT)?, &file)?,
         Format::Nifti => {
-            let prefix = format::read_prefix(path, 352)?;
+            // 544 bytes: NIfTI-2's 540-byte header and its extension flag; NIfTI-1 and Analyze need 348.
+            let prefix = format::read_prefix(path, 544)?;
             if nifti::is_gzip(&prefix) {
                 return Ok(None);
             }
-            let mut h = nifti::parse(&prefix, &file)?;
+            let mut h = nifti::parse_file(&prefix, &file)?;
             if let DataLocation::Detached { skip, .. } = h.location {
                 // A .hdr/.img pair, as the loader reads it.
                 let img = path.with_extension("img");

@@ -140,7 +140,8 @@ struct Keys {
     /// `ElementDataFile` and the byte after its line.
     data_file: Option<(String, usize)>,
     matrix: Option<Vec<f64>>,
-    anatomical_code: Option<[DVec3; 3]>,
+    /// `AnatomicalOrientation` as written and the axis directions (LPS) it names.
+    anatomical_code: Option<(String, [DVec3; 3])>,
 }
 
 impl Default for Keys {
@@ -212,12 +213,13 @@ impl Keys {
             // ITK writes '????' (one '?' per axis) where it has no code: 4-D images, oblique directions.
             "anatomicalorientation" if !value.is_empty() && value.chars().all(|c| c == '?') => {}
             "anatomicalorientation" => {
-                self.anatomical_code = Some(from_orientation_code(value).ok_or_else(|| {
+                let stated = from_orientation_code(value).ok_or_else(|| {
                     err(format!(
                         "AnatomicalOrientation '{}' is not three of R/L, A/P, S/I, one of each",
                         clip(value)
                     ))
-                })?)
+                })?;
+                self.anatomical_code = Some((value.to_ascii_uppercase(), stated));
             }
             "elementdatafile" => self.data_file = Some((value.to_string(), end)),
             _ => {}
@@ -253,25 +255,39 @@ impl Keys {
         Ok(ndims)
     }
 
-    /// ITK's physical space is LPS. The direction matrix holds axis i's direction in its i-th triple (ITK's
-    /// MetaImageIO::Read: SetDirection(i, m[3i..3i + 3])); without one, AnatomicalOrientation names the axes.
+    /// ITK's physical space is LPS, and ITK (so SimpleITK and 3D Slicer) reads every MetaImage in it: the direction
+    /// matrix holds axis i's direction in its i-th triple (MetaImageIO::Read: SetDirection(i, m[3i..3i + 3])), and
+    /// is the identity when the file has none. AnatomicalOrientation does not enter: ITK's reader ignores it
+    /// (SimpleITK 2.5.7 reads `AnatomicalOrientation = RAS` without a matrix as the identity), so it is only noted
+    /// where it disagrees.
     fn place(&self, ndims: u32, h: &mut Header) {
-        let directions = match (&self.matrix, self.anatomical_code) {
+        let directions = match &self.matrix {
             // A 4-D image's matrix is 4x4 (ITK writes NDims x NDims); its spatial part is the first three of the
             // first three rows.
-            (Some(m), _) => {
+            Some(m) => {
                 let n = if ndims == 4 && m.len() >= 16 { 4 } else { 3 };
-                Some([0, 1, 2].map(|i| DVec3::new(m[n * i], m[n * i + 1], m[n * i + 2])))
+                [0, 1, 2].map(|i| DVec3::new(m[n * i], m[n * i + 1], m[n * i + 2]))
             }
-            (None, code) => code,
+            None => [DVec3::X, DVec3::Y, DVec3::Z],
         };
-        if let Some(directions) = directions {
-            let columns = [0, 1, 2].map(|i| directions[i].normalize_or_zero() * h.spacing[i]);
-            let origin = DVec3::from_array(h.origin.unwrap_or([0.0; 3]));
-            h.geometry = Some(Geometry::anatomical(
-                geometry::LPS_TO_RAS * geometry::from_columns(columns, origin),
-            ));
+        if let Some((code, stated)) = &self.anatomical_code {
+            let agrees = (0..3).all(|i| directions[i].normalize_or_zero().dot(stated[i]) > 1.0 - 1e-6);
+            if !agrees {
+                h.notes.push(format!(
+                    "AnatomicalOrientation {code} disagrees with the direction ({}): ignored, as ITK does",
+                    if self.matrix.is_some() {
+                        "TransformMatrix"
+                    } else {
+                        "the identity, as the file has no TransformMatrix"
+                    }
+                ));
+            }
         }
+        let columns = [0, 1, 2].map(|i| directions[i].normalize_or_zero() * h.spacing[i]);
+        let origin = DVec3::from_array(h.origin.unwrap_or([0.0; 3]));
+        h.geometry = Some(Geometry::anatomical(
+            geometry::LPS_TO_RAS * geometry::from_columns(columns, origin),
+        ));
     }
 
     /// Where the voxels are: after the header (`LOCAL`) or in the one file named, after `HeaderSize` bytes.
@@ -371,10 +387,12 @@ mod tests {
             let v = from_bytes(&bytes).unwrap();
             assert_eq!(v.dims, [3, 2, 2]);
             assert_eq!(v.spacing(), [0.5, 1.0, 1.5]);
-            assert_eq!(v.geometry.origin().to_array(), [10.0, 20.0, 30.0]);
-            assert!(
-                !v.geometry.anatomical,
-                "no TransformMatrix or AnatomicalOrientation: no orientation"
+            // No TransformMatrix: ITK's identity direction in LPS, so x and y run to the right and front.
+            assert!(v.geometry.anatomical);
+            assert_eq!(v.geometry.origin().to_array(), [-10.0, -20.0, 30.0]);
+            assert_eq!(
+                v.geometry.linear(),
+                glam::DMat3::from_diagonal(DVec3::new(-0.5, -1.0, 1.5))
             );
             assert_eq!(v.source_type, VoxelType::F32);
             assert_eq!(v.value(2, 1, 1), 4.5);
@@ -386,6 +404,41 @@ mod tests {
         assert_eq!(v.range, [-128.0, 127.0]);
         assert!(is_metaimage(HEADER.as_bytes()));
         assert!(!is_metaimage(b"NRRD0004\n"));
+    }
+
+    /// ITK reads the direction from TransformMatrix alone (identity without one): AnatomicalOrientation changes
+    /// nothing and is noted where it disagrees.
+    #[test]
+    fn anatomical_orientation_is_ignored_as_itk_does() {
+        let le: Vec<u8> = values().iter().flat_map(|v| v.to_le_bytes()).collect();
+        let plain = from_bytes(&mha(HEADER, &le)).unwrap();
+        let with = |extra: &str| {
+            let header = HEADER.replace("DimSize", &format!("{extra}\nDimSize"));
+            from_bytes(&mha(&header, &le)).unwrap()
+        };
+        let ras = with("AnatomicalOrientation = RAS");
+        assert_eq!(ras.geometry.affine, plain.geometry.affine);
+        assert!(
+            ras.notes
+                .iter()
+                .any(|n| n.contains("AnatomicalOrientation RAS disagrees")),
+            "{:?}",
+            ras.notes
+        );
+        let rai = with("AnatomicalOrientation = RAI");
+        assert!(
+            rai.notes.is_empty(),
+            "RAI is ITK's name for the identity: {:?}",
+            rai.notes
+        );
+        let turned = with("TransformMatrix = 0 1 0 -1 0 0 0 0 1\nAnatomicalOrientation = RAI");
+        // Axis i along LPS +y (posterior) is RAS −y; axis j along LPS −x (right) is RAS +x.
+        assert_eq!(turned.geometry.linear().x_axis, DVec3::new(0.0, -0.5, 0.0));
+        assert_eq!(turned.geometry.linear().y_axis, DVec3::new(1.0, 0.0, 0.0));
+        assert!(turned
+            .notes
+            .iter()
+            .any(|n| n.contains("disagrees with the direction (TransformMatrix)")));
     }
 
     #[test]

@@ -81,7 +81,8 @@ pub struct Volume {
     pub stored_range: [f64; 2],
     /// Applied to every source value by [`Volume::value`]; identity unless the file asked for a rescale.
     pub scaling: Scaling,
-    /// Where the volume came from: "raw", "VTK legacy", "NRRD", "NIfTI-1", "MetaImage", "DICOM", "TIFF", "built-in".
+    /// Where the volume came from: "raw", "VTK legacy", "NRRD", "NIfTI-1", "NIfTI-2", "Analyze 7.5", "MetaImage",
+    /// "DICOM", "TIFF", "built-in".
     pub format: String,
     /// The acquisition's modality as the file names it ("CT", "MR", ... from DICOM's Modality), if it does.
     pub modality: Option<String>,

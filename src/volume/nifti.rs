@@ -1,247 +1,112 @@
-//! NIfTI-1 `.nii` and `.nii.gz` (and `.hdr`/`.img` pairs), either byte order.
+//! NIfTI-1 and NIfTI-2 `.nii` and `.nii.gz` (and `.hdr`/`.img` pairs), and Analyze 7.5 `.hdr`/`.img` pairs, either
+//! byte order. The three share one reader: only the header's layout differs ([`common`] does the rest).
 //!
-//! The header is parsed by hand rather than with the `nifti` crate: it is 348 fixed-layout bytes, and the crate
-//! reads the whole volume into an `ndarray` (the file's bytes plus a converted copy plus a shaped copy), pulls in
-//! ndarray/nalgebra/num, and sizes its allocations from the header alone — the opposite of the one-pass,
+//! The header is parsed by hand rather than with the `nifti` crate: it is 348 (or 540) fixed-layout bytes, and the
+//! crate reads the whole volume into an `ndarray` (the file's bytes plus a converted copy plus a shaped copy), pulls
+//! in ndarray/nalgebra/num, and sizes its allocations from the header alone — the opposite of the one-pass,
 //! size-checked loading volcast needs for multi-gigabyte and hostile files.
 
-use super::decode::{self, DecodeError, Endian, Progress};
+mod analyze;
+mod common;
+mod nifti2;
+
+use super::decode::{self, DecodeError, Progress};
 use super::format::{self, header_error, DataLocation, Encoding, Header, Source};
-use super::geometry::{self, Geometry};
-use super::{Scaling, Volume, VolumeError, VoxelType};
-use glam::{DMat3, DMat4};
+use super::{Volume, VolumeError};
+use common::{Fields, Placement, Reader};
 use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::Path;
 
-const FORMAT: &str = "NIfTI-1";
 pub(crate) const HEADER_SIZE: usize = 348;
 
-/// True if `prefix` starts with a NIfTI-1 header (sizeof_hdr 348 in either byte order, magic at 344).
+/// True if `prefix` starts with a NIfTI-1 header (sizeof_hdr 348 in either byte order, magic at 344) or a NIfTI-2
+/// one (540, magic at 4). Analyze 7.5 has no magic: its `.hdr` name decides.
 pub(crate) fn is_nifti(prefix: &[u8]) -> bool {
-    prefix.len() >= HEADER_SIZE
-        && (prefix[..4] == 348i32.to_le_bytes() || prefix[..4] == 348i32.to_be_bytes())
-        && (&prefix[344..348] == b"n+1\0" || &prefix[344..348] == b"ni1\0")
+    let nifti1 = prefix.len() >= HEADER_SIZE
+        && common::endian_of(prefix, 348).is_some()
+        && (&prefix[344..348] == b"n+1\0" || &prefix[344..348] == b"ni1\0");
+    nifti1 || nifti2::is_nifti2(prefix)
 }
 
 pub(crate) fn is_gzip(prefix: &[u8]) -> bool {
     prefix.starts_with(&[0x1f, 0x8b])
 }
 
-struct Fields<'a> {
-    bytes: &'a [u8],
-    endian: Endian,
-}
-
-impl Fields<'_> {
-    fn i16(&self, at: usize) -> i16 {
-        let b = [self.bytes[at], self.bytes[at + 1]];
-        match self.endian {
-            Endian::Little => i16::from_le_bytes(b),
-            Endian::Big => i16::from_be_bytes(b),
-        }
-    }
-
-    fn f32(&self, at: usize) -> f32 {
-        let mut b = [0u8; 4];
-        b.copy_from_slice(&self.bytes[at..at + 4]);
-        match self.endian {
-            Endian::Little => f32::from_le_bytes(b),
-            Endian::Big => f32::from_be_bytes(b),
-        }
-    }
-}
-
-/// Parses the 348-byte NIfTI-1 header at the start of `bytes`.
+/// Parses the NIfTI-1, NIfTI-2 or Analyze 7.5 header at the start of `bytes`.
 pub fn parse_header(bytes: &[u8]) -> Result<Header, VolumeError> {
     parse(bytes, "NIfTI data")
 }
 
-pub(crate) fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
-    let err = |problem: String| header_error(file, problem);
-    let endian = byte_order(bytes, file)?;
-    let magic = &bytes[344..348];
-    let single_file = match magic {
-        b"n+1\0" => true,
-        b"ni1\0" => false,
-        _ => return Err(err("not a NIfTI-1 file: the magic is neither 'n+1' nor 'ni1'".into())),
-    };
-    let f = Fields { bytes, endian };
-    let mut h = Header::new(FORMAT);
-    h.endian = endian;
-    let ndim = read_size(&f, file, &mut h)?;
-    h.voxel_type = voxel_type(file, f.i16(70))?;
-    let spacing = read_spacing(&f, ndim, &mut h);
-    let vox_offset = f.f32(108);
-    if !(0.0..1e12).contains(&vox_offset) {
-        return Err(err(format!("vox_offset {vox_offset} is not a valid byte offset")));
-    }
-    let vox_offset = vox_offset as u64;
-    if single_file && vox_offset < HEADER_SIZE as u64 {
-        return Err(err(format!(
-            "vox_offset {vox_offset} points inside the 348-byte header"
-        )));
-    }
-    let (slope, intercept) = (f64::from(f.f32(112)), f64::from(f.f32(116)));
-    // The standard: scl_slope == 0 means no scaling; non-finite values are treated the same.
-    if slope != 0.0 && slope.is_finite() && intercept.is_finite() && (slope != 1.0 || intercept != 0.0) {
-        h.scaling = Scaling { slope, intercept };
-    }
-    let affine = best_affine(&f, file, spacing, &mut h)?;
-    h.geometry = Some(Geometry::anatomical(affine));
-    h.spacing = Geometry::anatomical(affine).spacing();
-    h.location = if single_file {
-        DataLocation::Inline(Some(vox_offset))
+/// The header's length, told by sizeof_hdr (348 for NIfTI-1 and Analyze, 540 for NIfTI-2); 348 if it is neither.
+fn header_len(bytes: &[u8]) -> usize {
+    if common::endian_of(bytes, nifti2::HEADER_SIZE as i32).is_some() {
+        nifti2::HEADER_SIZE
     } else {
-        DataLocation::Detached {
-            name: String::new(),
-            skip: Some(vox_offset),
-        }
-    };
-    Ok(h)
+        HEADER_SIZE
+    }
 }
 
-/// The byte order that makes sizeof_hdr 348; refuses short headers, NIfTI-2 and other files.
-fn byte_order(bytes: &[u8], file: &str) -> Result<Endian, VolumeError> {
+/// [`parse`] for a file named `file`: a header without NIfTI-1's magic is Analyze 7.5 only in a `.hdr`, as nibabel
+/// has it; in a `.nii` it is a broken NIfTI-1.
+pub(crate) fn parse_file(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
+    let header = parse(bytes, file)?;
+    if header.format == analyze::FORMAT && !file.to_ascii_lowercase().ends_with(".hdr") {
+        return Err(header_error(
+            file,
+            "not a NIfTI-1 file: the magic is neither 'n+1' nor 'ni1' (a header without it is read as Analyze 7.5 \
+             only from a .hdr)"
+                .into(),
+        ));
+    }
+    Ok(header)
+}
+
+/// Picks the layout by sizeof_hdr and magic: 540 is NIfTI-2; 348 is NIfTI-1 with its magic, else Analyze 7.5.
+fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
     let err = |problem: String| header_error(file, problem);
+    if header_len(bytes) == nifti2::HEADER_SIZE {
+        return nifti2::parse(bytes, file);
+    }
     if bytes.len() < HEADER_SIZE {
         return Err(err(format!(
             "{} bytes is too short for a NIfTI-1 header (348 bytes)",
             bytes.len()
         )));
     }
-    if bytes[..4] == 348i32.to_le_bytes() {
-        Ok(Endian::Little)
-    } else if bytes[..4] == 348i32.to_be_bytes() {
-        Ok(Endian::Big)
-    } else if bytes[..4] == 540i32.to_le_bytes() || bytes[..4] == 540i32.to_be_bytes() {
-        Err(err(
-            "NIfTI-2 is not supported; convert to NIfTI-1 (e.g. nibabel, c3d)".into()
-        ))
-    } else {
-        Err(err("not a NIfTI-1 file: sizeof_hdr is not 348".into()))
-    }
-}
-
-/// Sets the header's dimensions and time steps from `dim`; returns dim[0], the number of dimensions.
-fn read_size(f: &Fields, file: &str, h: &mut Header) -> Result<i16, VolumeError> {
-    let ndim = f.i16(40);
-    if !(1..=7).contains(&ndim) {
-        return Err(header_error(
-            file,
-            format!("dim[0] = {ndim}: the number of dimensions must be 1 to 7"),
+    let Some(endian) = common::endian_of(bytes, 348) else {
+        return Err(err(
+            "not a NIfTI or Analyze file: sizeof_hdr is neither 348 (NIfTI-1, Analyze 7.5) nor 540 (NIfTI-2)".into(),
         ));
-    }
-    let dim: Vec<i64> = (1..=ndim as usize).map(|i| i64::from(f.i16(40 + 2 * i))).collect();
-    h.dims = format::dims_from(file, "dim", &dim)?;
-    // dim[4] is time: every step is loaded. Higher axes (dim[5..7]) are not: the first of them.
-    h.timesteps = dim.get(3).map_or(1, |&t| t.max(1) as u32);
-    let extra: i64 = dim.iter().skip(4).product();
-    if extra > 1 {
-        h.notes.push(format!(
-            "{ndim}-D NIfTI: only the first of {extra} groups along dim[5..{ndim}] is loaded"
-        ));
-    }
-    Ok(ndim)
-}
-
-/// The voxel type of a NIfTI `datatype` code; the types volcast cannot read are named in the error.
-fn voxel_type(file: &str, datatype: i16) -> Result<VoxelType, VolumeError> {
-    Ok(match datatype {
-        2 => VoxelType::U8,
-        4 => VoxelType::I16,
-        8 => VoxelType::I32,
-        16 => VoxelType::F32,
-        64 => VoxelType::F64,
-        256 => VoxelType::I8,
-        512 => VoxelType::U16,
-        768 => VoxelType::U32,
-        other => {
-            let name = match other {
-                1 => "binary (1 bit)",
-                32 => "complex64",
-                128 => "rgb24",
-                1024 => "int64",
-                1280 => "uint64",
-                1536 => "float128",
-                1792 => "complex128",
-                2048 => "complex256",
-                2304 => "rgba32",
-                _ => "unknown",
-            };
-            return Err(VolumeError::UnsupportedType {
-                file: file.to_string(),
-                format: FORMAT,
-                given: format!("datatype {other} ({name})"),
-            });
-        }
-    })
-}
-
-/// The spacing from pixdim (1 where it is unusable), noting a unit other than mm; sets and returns it.
-fn read_spacing(f: &Fields, ndim: i16, h: &mut Header) -> [f64; 3] {
-    let mut spacing = [1.0f64; 3];
-    for (i, s) in spacing.iter_mut().enumerate() {
-        if i < ndim as usize {
-            let p = f64::from(f.f32(80 + 4 * i));
-            // pixdim of 0 is common for unused or 2-D axes.
-            if p.is_finite() && p != 0.0 {
-                *s = p.abs();
-            } else {
-                h.notes.push(format!("pixdim[{}] is {p}: spacing 1 is used", i + 1));
-            }
-        }
-    }
-    h.spacing = spacing;
-    let units = match f.bytes[123] & 0x07 {
-        1 => Some("m"),
-        2 => Some("mm"),
-        3 => Some("µm"),
-        _ => None,
     };
-    if let Some(u) = units.filter(|&u| u != "mm") {
-        h.notes
-            .push(format!("spacing is in {u}, as the header says (not converted to mm)"));
-    }
-    spacing
-}
-
-/// nibabel's precedence (Nifti1Header.get_best_affine): the sform if its code is set, else the qform, else the
-/// "base" affine of an Analyze image: pixdim with x flipped (radiological storage), centred on the volume.
-fn best_affine(f: &Fields, file: &str, spacing: [f64; 3], h: &mut Header) -> Result<DMat4, VolumeError> {
-    let (qform, sform) = (f.i16(252), f.i16(254));
-    let affine = if sform > 0 {
-        let row = |at: usize| [0, 1, 2, 3].map(|c| f64::from(f.f32(at + 4 * c)));
-        geometry::from_rows([row(280), row(296), row(312)])
-    } else if qform > 0 {
-        let quaternion = [256, 260, 264].map(|at| f64::from(f.f32(at)));
-        let offset = [268, 272, 276].map(|at| f64::from(f.f32(at)));
-        // pixdim[0] is qfac: −1 negates the third axis; 0 counts as 1 (nifti1.h).
-        let qfac = f64::from(f.f32(76));
-        geometry::nifti_qform(quaternion, qfac, spacing, offset)
-    } else {
-        h.notes
-            .push("no qform or sform: placed as nibabel does (pixdim, x flipped as Analyze stores it, centred)".into());
-        let centre = h.dims.map(|d| (f64::from(d) - 1.0) / 2.0);
-        geometry::from_rows([
-            [-spacing[0], 0.0, 0.0, centre[0] * spacing[0]],
-            [0.0, spacing[1], 0.0, -centre[1] * spacing[1]],
-            [0.0, 0.0, spacing[2], -centre[2] * spacing[2]],
-        ])
+    let single_file = match &bytes[344..348] {
+        b"n+1\0" => true,
+        b"ni1\0" => false,
+        _ => return analyze::parse(bytes, endian, file),
     };
-    if affine.to_cols_array().iter().any(|v| !v.is_finite()) || DMat3::from_mat4(affine).determinant() == 0.0 {
-        return Err(header_error(
-            file,
-            format!(
-                "its {} gives no valid voxel-to-world affine (not finite, or axes that are zero or parallel)",
-                if sform > 0 { "sform" } else { "qform" }
-            ),
-        ));
-    }
-    Ok(affine)
+    let r = Reader { bytes, endian };
+    let fields = Fields {
+        format: "NIfTI-1",
+        header_size: HEADER_SIZE,
+        single_file,
+        dim: [0, 1, 2, 3, 4, 5, 6, 7].map(|i| i64::from(r.i16(40 + 2 * i))),
+        datatype: r.i16(70),
+        pixdim: [76, 80, 84, 88].map(|at| r.f32(at)),
+        vox_offset: r.f32(108),
+        scaling: common::nifti_scaling(r.f32(112), r.f32(116)),
+        xyzt_units: bytes[123],
+        placement: Placement::Nifti {
+            qform_code: i32::from(r.i16(252)),
+            sform_code: i32::from(r.i16(254)),
+            quatern: [256, 260, 264].map(|at| r.f32(at)),
+            qoffset: [268, 272, 276].map(|at| r.f32(at)),
+            srow: [280, 296, 312].map(|at| [0, 1, 2, 3].map(|c| r.f32(at + 4 * c))),
+        },
+    };
+    common::build(&fields, endian, file)
 }
 
-/// Loads an uncompressed or gzip-compressed single-file NIfTI-1 held in memory.
+/// Loads an uncompressed or gzip-compressed single-file NIfTI-1 or NIfTI-2 held in memory.
 pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
     let file = "NIfTI data";
     if is_gzip(bytes) {
@@ -257,7 +122,10 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
     if header.location != DataLocation::Inline(Some(header_offset(&header))) {
         return Err(header_error(
             file,
-            "a 'ni1' header needs its .img file, which cannot be read from memory".into(),
+            format!(
+                "a {} .hdr/.img pair needs its .img file, which cannot be read from memory",
+                header.format
+            ),
         ));
     }
     format::load(
@@ -291,21 +159,30 @@ fn load_gzip(
         what: "gzip",
         source,
     };
-    let mut head = Vec::with_capacity(HEADER_SIZE);
+    let mut head = Vec::with_capacity(nifti2::HEADER_SIZE);
     (&mut inflated)
         .take(HEADER_SIZE as u64)
         .read_to_end(&mut head)
         .map_err(corrupt)?;
-    let mut header = parse(&head, file)?;
+    // A NIfTI-2 header is longer; its first bytes say so.
+    let rest = header_len(&head) - HEADER_SIZE;
+    (&mut inflated)
+        .take(rest as u64)
+        .read_to_end(&mut head)
+        .map_err(corrupt)?;
+    let mut header = parse_file(&head, file)?;
     let offset = header_offset(&header);
     if offset == u64::MAX {
         return Err(header_error(
             file,
-            "a compressed NIfTI must be single-file ('n+1')".into(),
+            format!(
+                "a compressed {} must be a single file ('n+1' or 'n+2'), not a .hdr/.img pair",
+                header.format
+            ),
         ));
     }
     // Skip the extensions between the header and the voxels.
-    let skip = offset - HEADER_SIZE as u64;
+    let skip = offset - head.len() as u64;
     if skip > compressed_len.saturating_mul(1032) {
         return Err(header_error(
             file,
@@ -347,7 +224,7 @@ fn load_gzip(
 
 pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, VolumeError> {
     let file = format::file_label(path);
-    let prefix = format::read_prefix(path, HEADER_SIZE)?;
+    let prefix = format::read_prefix(path, nifti2::HEADER_SIZE)?;
     let name = format::volume_name(path);
     if is_gzip(&prefix) {
         let io = |source| VolumeError::Io {
@@ -358,22 +235,24 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         let mut f = File::open(path).map_err(io)?;
         return load_gzip(&mut f, len, name, &file, progress);
     }
-    let mut header = parse(&prefix, &file)?;
+    let mut header = parse_file(&prefix, &file)?;
+    let mut data_file = file;
     if let DataLocation::Detached { skip, .. } = header.location {
-        // A .hdr/.img pair: the voxels are in the .img beside the header.
-        let img = path.with_extension("img");
+        // A .hdr/.img pair: the voxels are in the .img beside the header, which the errors from here on name (the
+        // caller adds the header's path).
+        data_file = format::file_label(&path.with_extension("img"));
         header.location = DataLocation::Detached {
-            name: format::file_label(&img),
+            name: data_file.clone(),
             skip,
         };
     }
-    format::load(header, name, &file, Source::File(path), progress)
+    format::load(header, name, &data_file, Source::File(path), progress)
 }
 
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::volume::VoxelData;
+    use crate::volume::{VoxelData, VoxelType};
 
     /// A minimal NIfTI-1 header + data, for tests here and in the fuzz seeds.
     pub(crate) fn nifti_bytes(
@@ -511,7 +390,25 @@ pub(crate) mod tests {
         assert!(e(&b).contains("vox_offset NaN"), "{}", e(&b));
         let mut b = ok.clone();
         b[0..4].copy_from_slice(&540i32.to_le_bytes());
-        assert!(e(&b).contains("NIfTI-2 is not supported"));
+        assert!(
+            e(&b).contains("360 bytes is too short for a NIfTI-2 header (540 bytes)"),
+            "{}",
+            e(&b)
+        );
+        b.resize(600, 0);
+        assert!(
+            e(&b).contains("not a NIfTI-2 file: the magic is neither 'n+2' nor 'ni2'"),
+            "{}",
+            e(&b)
+        );
+        let mut b = ok.clone();
+        b[0..4].copy_from_slice(&347i32.to_le_bytes());
+        assert!(e(&b).contains("sizeof_hdr is neither 348"), "{}", e(&b));
+        // Without NIfTI-1's magic a 348-byte header is Analyze 7.5, whose voxels are always in a separate .img.
+        let mut b = ok.clone();
+        b[344..348].copy_from_slice(b"\0\0\0\0");
+        assert!(e(&b).contains("cannot be read from memory"), "{}", e(&b));
+        assert_eq!(parse_header(&b).unwrap().format, "Analyze 7.5");
         let mut b = ok.clone();
         b[80..84].copy_from_slice(&f32::NAN.to_le_bytes());
         let v = from_bytes(&b).unwrap();

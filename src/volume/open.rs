@@ -12,6 +12,7 @@ pub enum Format {
     Vtk,
     Vti,
     Nrrd,
+    /// NIfTI-1, NIfTI-2 and Analyze 7.5: one reader, the header tells which ([`Volume::format`] names it).
     Nifti,
     MetaImage,
     Dicom,
@@ -25,7 +26,7 @@ impl Format {
             Format::Vtk => "VTK legacy",
             Format::Vti => "VTK XML ImageData",
             Format::Nrrd => "NRRD",
-            Format::Nifti => "NIfTI-1",
+            Format::Nifti => "NIfTI / Analyze 7.5",
             Format::MetaImage => "MetaImage",
             Format::Dicom => "DICOM",
             Format::Tiff => "TIFF",
@@ -56,8 +57,9 @@ pub struct OpenOptions {
 
 /// Which reader a path needs. A folder is decided by its files: TIFFs make a TIFF stack, DICOM files a DICOM
 /// series (a Zarr store is named as unsupported). For a file, content decides where it can (magic bytes of VTK,
-/// VTK XML, NRRD, NIfTI-1, DICOM, TIFF; gzip only means NIfTI when the name says so); then the extension; then a format
-/// volcast does not read is named ([`VolumeError::Unsupported`]); anything else is raw. A file named like a raw
+/// VTK XML, NRRD, NIfTI-1/2, DICOM, TIFF; gzip only means NIfTI when the name says so); then the extension (an
+/// Analyze `.hdr` has no magic); then a format volcast does not read is named ([`VolumeError::Unsupported`]);
+/// anything else is raw. A file named like a raw
 /// file (`NAME_WxHxD_TYPE`, `.raw`) is raw whatever its first bytes.
 pub fn detect_format(path: &Path) -> Result<Format, VolumeError> {
     if path.is_dir() {

@@ -7,6 +7,7 @@
 pub mod common;
 
 mod dicom;
+mod headers;
 mod open;
 mod tiff;
 mod time;
