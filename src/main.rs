@@ -103,6 +103,7 @@ fn main() -> ExitCode {
                 no_downsample: false,
                 array: None,
                 series: None,
+                channel: None,
                 time: None,
             },
             gpu: GpuArgs {

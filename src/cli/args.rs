@@ -53,6 +53,10 @@ pub(crate) struct VolumeArgs {
     /// one with the most slices); `volcast info FOLDER` lists them.
     #[arg(long, value_name = "N|UID")]
     pub(crate) series: Option<String>,
+    /// The channel to load from an OME-Zarr image with a `c` axis, from 0 (default 0); `volcast info STORE`
+    /// lists them.
+    #[arg(long, value_name = "N")]
+    pub(crate) channel: Option<u32>,
     /// The time step of a 4-D series to show, from 0 (default 0); the value range stays the whole series'.
     #[arg(long, value_name = "N")]
     pub(crate) time: Option<u32>,
@@ -115,6 +119,7 @@ impl VolumeArgs {
             no_downsample: self.no_downsample,
             array: self.array.clone(),
             series: self.series.clone(),
+            channel: self.channel,
         };
         // A progress bar only where loading takes long enough to watch (files over 8 MiB).
         let big = std::fs::metadata(path).is_ok_and(|m| m.len() > 8 << 20);

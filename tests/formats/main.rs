@@ -12,3 +12,4 @@ mod tiff;
 mod time;
 mod vtk;
 mod world;
+mod zarr;
