@@ -53,6 +53,7 @@ pub mod from_bytes {
     pub use super::tiff_stack::from_bytes as tiff;
     pub use super::vtk::vti::from_bytes as vti;
     pub use super::vtk::{from_bytes as vtk, parse_header as vtk_header};
+    pub use super::zarr::from_bytes::{zarr_chunk, zarr_meta};
 }
 
 pub use geometry::Geometry;

@@ -250,3 +250,72 @@ fn frame_note(ms: &Multiscale) -> String {
         name(1)
     )
 }
+
+/// In-memory entry points for the fuzz targets (`volume::from_bytes`).
+pub mod from_bytes {
+    use super::*;
+    use zarrs::storage::store::MemoryStore;
+    use zarrs::storage::{StoreKey, WritableStorageTraits};
+
+    /// Interprets group attributes (JSON bytes) as OME multiscales metadata; the error says what is wrong.
+    pub fn zarr_meta(data: &[u8]) -> Result<(), String> {
+        let attrs: serde_json::Value = serde_json::from_slice(data).map_err(|e| e.to_string())?;
+        metadata::parse(&attrs).map(|_| ())
+    }
+
+    /// Reads a one-level zyx image whose level array has the metadata `array_json` (Zarr v3 `zarr.json`) and whose
+    /// first chunk is `chunk`, as a store on disk would be read. Levels over 2^22 voxels are refused first, so the
+    /// fuzzer spends its time in decoding rather than in filling large arrays with the fill value.
+    pub fn zarr_chunk(array_json: &[u8], chunk: &[u8]) -> Result<Volume, VolumeError> {
+        let bad = |problem: String| format::header_error("fuzz.zarr", problem);
+        let meta: serde_json::Value = serde_json::from_slice(array_json).map_err(|e| bad(e.to_string()))?;
+        let voxels = meta
+            .get("shape")
+            .and_then(serde_json::Value::as_array)
+            .map(|s| {
+                s.iter()
+                    .map(|d| d.as_u64().unwrap_or(u64::MAX))
+                    .fold(1u64, u64::saturating_mul)
+            })
+            .unwrap_or(0);
+        if voxels > 1 << 22 {
+            return Err(bad(format!("{voxels} voxels: too many for a fuzz input")));
+        }
+        let group = serde_json::json!({"zarr_format": 3, "node_type": "group", "attributes": {"ome": {
+            "version": "0.5", "multiscales": [{"axes": [
+                {"name": "z", "type": "space"}, {"name": "y", "type": "space"}, {"name": "x", "type": "space"}],
+                "datasets": [{"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [1.0, 1.0, 1.0]}]}]}]}}});
+        let store = MemoryStore::new();
+        let files: [(&str, Vec<u8>); 4] = [
+            ("zarr.json", group.to_string().into_bytes()),
+            ("0/zarr.json", array_json.to_vec()),
+            ("0/c/0/0/0", chunk.to_vec()),
+            ("0/0.0.0", chunk.to_vec()),
+        ];
+        for (key, bytes) in files {
+            let key = StoreKey::new(key).map_err(|e| bad(e.to_string()))?;
+            store.set(&key, bytes.into()).map_err(|e| bad(e.to_string()))?;
+        }
+        let opts = ZarrOptions {
+            channel: None,
+            max_dim: Some(256),
+        };
+        load_store("fuzz.zarr", "fuzz", Arc::new(store), opts, &mut Progress::none())
+    }
+
+    #[cfg(test)]
+    mod tests {
+        #[test]
+        fn the_fuzz_entry_reads_a_chunk_and_refuses_garbage() {
+            let meta = std::fs::read("tests/data/zarr/dtype_uint16.zarr/s0/zarr.json").unwrap();
+            let chunk = std::fs::read("tests/data/zarr/dtype_uint16.zarr/s0/c/0/0/0").unwrap();
+            let v = super::zarr_chunk(&meta, &chunk).unwrap();
+            assert_eq!(v.dims, [4, 3, 2]);
+            assert!(super::zarr_chunk(&meta, &chunk[..5]).is_err());
+            assert!(super::zarr_chunk(b"{", &chunk).is_err());
+            let attrs = std::fs::read("tests/data/zarr/v04_blosc.zarr/.zattrs").unwrap();
+            super::zarr_meta(&attrs).unwrap();
+            assert!(super::zarr_meta(b"[]").is_err());
+        }
+    }
+}
