@@ -17,3 +17,4 @@ mod render_and_errors;
 mod series;
 mod state;
 mod tools;
+mod zarr;

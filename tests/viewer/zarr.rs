@@ -32,6 +32,9 @@ fn viewer_loads_a_dropped_zarr_folder() {
         loaded.starts_with("loaded ") && loaded.ends_with("tests/data/zarr/napari_czyx.zarr"),
         "{loaded}"
     );
+    // The level shown is named (the store's finest fits the device, so level 0 of its two).
+    let level = viewer.wait_for("showing", Duration::from_secs(10));
+    assert_eq!(level, "showing level 0 of 2 (8x6x4)");
     type_keys(&x.display, &window, &["F12"]);
     let (shot, settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
 
