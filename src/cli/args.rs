@@ -76,6 +76,7 @@ impl VolumeArgs {
         a.voxel_type = a.voxel_type.or(r.raw_type.clone());
         a.spacing = a.spacing.or(r.raw_spacing.map(|s| s.to_vec()));
         a.time = a.time.or((r.time > 0).then_some(r.time));
+        a.channel = a.channel.or(r.channel);
         a
     }
 

@@ -67,3 +67,45 @@ fn a_store_renders() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.is_file());
 }
+
+/// A view state names the store and its channel: `render --state` shows that channel, as `--channel` does.
+#[test]
+fn a_state_keeps_the_channel() {
+    let dir = common::scratch("cli-zarr-state");
+    let path = std::path::PathBuf::from(store("sharded_tczyx.zarr"));
+    let png = |name: &str, args: &[&str]| {
+        let out = dir.join(name);
+        let mut all = vec!["render", "--size", "48x40", "-o", out.to_str().unwrap()];
+        all.extend_from_slice(args);
+        let o = volcast(&all);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(out).unwrap()
+    };
+    let extent = volcast::volume::open(&path, &Default::default()).unwrap().extent();
+    let state = volcast::scene::view_state::ViewState {
+        volume: volcast::scene::view_state::VolumeRef {
+            path: Some(path.clone()),
+            channel: Some(1),
+            ..Default::default()
+        },
+        settings: volcast::scene::settings::RenderSettings::new(48, 40, extent),
+        viewer: None,
+    };
+    let write = |name: &str, state: &volcast::scene::view_state::ViewState| {
+        let file = dir.join(name);
+        std::fs::write(&file, state.to_json()).unwrap();
+        file.to_str().unwrap().to_string()
+    };
+    let with_channel = write("state1.json", &state);
+    assert!(std::fs::read_to_string(&with_channel)
+        .unwrap()
+        .contains("\"channel\": 1"));
+    let mut plain = state.clone();
+    plain.volume.channel = None;
+    let without = write("state0.json", &plain);
+    let from_state = png("state.png", &["--state", &with_channel]);
+    let asked = png("asked.png", &["--state", &without, "--channel", "1"]);
+    let channel0 = png("c0.png", &["--state", &without]);
+    assert_eq!(from_state, asked);
+    assert_ne!(from_state, channel0);
+}
