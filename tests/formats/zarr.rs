@@ -299,6 +299,40 @@ fn hostile_chunks_are_refused() {
             )
         },
     );
+    // A shard whose second inner chunk is a zstd frame claiming a terabyte (the first is a real 8-byte chunk).
+    hostile(
+        &dir,
+        "shard_bomb.zarr",
+        &["zstd frame claims", "decompression bomb"],
+        |d, n| {
+            let inner = json!([{"name": "bytes", "configuration": {"endian": "little"}}, {"name": "zstd", "configuration": {"level": 3, "checksum": false}}]);
+            let codecs = json!([{"name": "sharding_indexed", "configuration": {"chunk_shape": [2, 2, 2], "codecs": inner,
+            "index_codecs": [{"name": "bytes", "configuration": {"endian": "little"}}], "index_location": "end"}}]);
+            let good = zstd::bulk::compress(&[5u8; 8], 3).unwrap();
+            let mut bomb = vec![0x28, 0xB5, 0x2F, 0xFD, 0xE0];
+            bomb.extend((1u64 << 40).to_le_bytes());
+            bomb.extend([1, 0, 0, 0]);
+            let mut shard = good.clone();
+            shard.extend(&bomb);
+            let mut index = Vec::new();
+            for (offset, len) in [(0, good.len()), (good.len(), bomb.len())] {
+                index.extend((offset as u64).to_le_bytes());
+                index.extend((len as u64).to_le_bytes());
+            }
+            for _ in 2..8 {
+                index.extend(u64::MAX.to_le_bytes());
+                index.extend(u64::MAX.to_le_bytes());
+            }
+            shard.extend(index);
+            v3_store(
+                d,
+                n,
+                ome(&["0"]),
+                &[("0", array([4, 4, 4], "uint8", codecs))],
+                &[("0/c/0/0/0", shard)],
+            )
+        },
+    );
     // An uncompressed chunk of the wrong size.
     hostile(&dir, "short_chunk.zarr", &["level 0"], |d, n| {
         v3_store(

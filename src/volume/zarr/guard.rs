@@ -3,7 +3,7 @@
 //! without a content size), so a tiny chunk could ask for terabytes. Every value read for a level is checked
 //! against the level's largest chunk (or shard): stored bytes, a zstd or blosc header's claimed size, and for
 //! streams that claim nothing (gzip, zstd without a size) a decode into a bounded sink that stops one byte past
-//! the limit.
+//! the limit. Every stream start in a value is checked, so the inner chunks of a shard read whole are too.
 
 use std::io::Read;
 use std::sync::Arc;
@@ -71,20 +71,24 @@ impl Guarded {
                 format!("{} stored bytes for a chunk of at most {limit}", bytes.len()),
             ));
         }
-        if self.codecs.zstd && bytes.starts_with(&[0x28, 0xB5, 0x2F, 0xFD]) {
-            return match zstd_content_size(bytes) {
-                Some(claimed) if claimed > limit => Err(refuse(
-                    name,
-                    format!(
-                        "its zstd frame claims {claimed} bytes, more than the chunk's {limit} (a decompression bomb?)"
-                    ),
-                )),
-                Some(_) => Ok(()),
-                None => bounded(name, zstd::stream::read::Decoder::new(bytes).ok(), limit, "zstd"),
-            };
+        // A shard read whole holds its inner chunks one after another: every stream start in it is checked.
+        if self.codecs.zstd {
+            for at in starts(bytes, &[0x28, 0xB5, 0x2F, 0xFD]) {
+                let frame = &bytes[at..];
+                match zstd_content_size(frame) {
+                    Some(claimed) if claimed > limit => {
+                        let what = format!("its zstd frame claims {claimed} bytes, more than the chunk's {limit}");
+                        return Err(refuse(name, format!("{what} (a decompression bomb?)")));
+                    }
+                    Some(_) => {}
+                    None => bounded(name, zstd::stream::read::Decoder::new(frame).ok(), limit, "zstd")?,
+                }
+            }
         }
-        if self.codecs.gzip && bytes.starts_with(&[0x1F, 0x8B]) {
-            return bounded(name, Some(flate2::read::GzDecoder::new(bytes)), limit, "gzip");
+        if self.codecs.gzip {
+            for at in starts(bytes, &[0x1F, 0x8B, 0x08]) {
+                bounded(name, Some(flate2::read::GzDecoder::new(&bytes[at..])), limit, "gzip")?;
+            }
         }
         if self.codecs.blosc && bytes.len() >= 16 {
             let claimed = u64::from(u32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]));
@@ -111,6 +115,15 @@ fn bounded(name: &str, reader: Option<impl Read>, limit: u64, codec: &str) -> Re
         ));
     }
     Ok(())
+}
+
+/// Where `magic` occurs in `bytes`.
+fn starts<'a>(bytes: &'a [u8], magic: &'a [u8]) -> impl Iterator<Item = usize> + 'a {
+    bytes
+        .windows(magic.len())
+        .enumerate()
+        .filter(move |(_, w)| *w == magic)
+        .map(|(i, _)| i)
 }
 
 /// The content size a zstd frame header states, if it states one.
