@@ -420,3 +420,36 @@ fn hostile_metadata_is_refused() {
         },
     );
 }
+
+/// volcast's own placement (`metadata.volcast`, as `volcast convert` writes it) makes the volume anatomical with
+/// that affine and scaling; one whose voxel sizes disagree with the scale is ignored with a note.
+#[test]
+fn volcast_placement_metadata_is_used_when_it_agrees() {
+    let dir = common::scratch("formats-zarr-volcast_placement");
+    let make = |name: &str, x_step: f64| {
+        let mut o = ome(&["0"]);
+        o["multiscales"][0]["datasets"][0]["coordinateTransformations"][0]["scale"] = json!([3.0, 2.0, 1.0]);
+        o["multiscales"][0]["metadata"] = json!({"volcast": {
+            "affine": [[-x_step, 0.0, 0.0, 10.0], [0.0, 2.0, 0.0, -5.0], [0.0, 0.0, 3.0, 7.0], [0.0, 0.0, 0.0, 1.0]],
+            "frame": "RAS", "scaling": {"slope": 2.0, "intercept": -1.0}}});
+        let chunk: Vec<u8> = (0..8).collect();
+        v3_store(
+            &dir,
+            name,
+            o,
+            &[("0", array([2, 2, 2], "uint8", bytes_codec()))],
+            &[("0/c/0/0/0", chunk)],
+        )
+    };
+    let v = open_with(&make("agrees.zarr", 1.0), &OpenOptions::default());
+    assert!(v.geometry.anatomical);
+    assert_eq!(v.geometry.rows()[0], [-1.0, 0.0, 0.0, 10.0]);
+    assert_eq!(v.value(1, 0, 0), 2.0 * 1.0 - 1.0);
+    let v = open_with(&make("disagrees.zarr", 4.0), &OpenOptions::default());
+    assert!(!v.geometry.anatomical);
+    assert!(
+        v.notes.iter().any(|n| n.contains("volcast placement metadata ignored")),
+        "{:?}",
+        v.notes
+    );
+}
