@@ -105,6 +105,7 @@ fn main() -> ExitCode {
                 no_downsample: false,
                 array: None,
                 series: None,
+                channel: None,
                 time: None,
             },
             gpu: GpuArgs {

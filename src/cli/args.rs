@@ -53,6 +53,10 @@ pub(crate) struct VolumeArgs {
     /// one with the most slices); `volcast info FOLDER` lists them.
     #[arg(long, value_name = "N|UID")]
     pub(crate) series: Option<String>,
+    /// The channel to load from an OME-Zarr image with a `c` axis, from 0 (default 0); `volcast info STORE`
+    /// lists them.
+    #[arg(long, value_name = "N")]
+    pub(crate) channel: Option<u32>,
     /// The time step of a 4-D series to show, from 0 (default 0); the value range stays the whole series'.
     #[arg(long, value_name = "N")]
     pub(crate) time: Option<u32>,
@@ -72,6 +76,7 @@ impl VolumeArgs {
         a.voxel_type = a.voxel_type.or(r.raw_type.clone());
         a.spacing = a.spacing.or(r.raw_spacing.map(|s| s.to_vec()));
         a.time = a.time.or((r.time > 0).then_some(r.time));
+        a.channel = a.channel.or(r.channel);
         a
     }
 
@@ -142,6 +147,7 @@ impl VolumeArgs {
             no_downsample: self.no_downsample,
             array: self.array.clone(),
             series: self.series.clone(),
+            channel: self.channel,
         })
     }
 

@@ -34,6 +34,7 @@ pub(crate) fn view(args: &ViewArgs) -> Result<()> {
     let opts = ViewerOptions {
         source,
         series: args.volume.series.clone(),
+        channel: args.volume.channel,
         gpu: args.gpu.options(),
         size: args.size,
         script,

@@ -41,6 +41,9 @@ pub struct Info {
     pub arrays: Vec<crate::volume::ArrayInfo>,
     /// The series of a DICOM folder holding several (`--series N|UID` picks one); empty otherwise.
     pub series: Vec<crate::volume::SeriesInfo>,
+    /// The channels of an OME-Zarr image (`--channel N` picks one); absent for other formats.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub channels: Vec<crate::volume::ChannelInfo>,
 }
 
 impl Info {
@@ -64,6 +67,7 @@ impl Info {
             notes: v.notes.clone(),
             arrays: v.arrays.clone(),
             series: v.series.clone(),
+            channels: v.channels.clone(),
         }
     }
 
@@ -147,6 +151,17 @@ impl Info {
         for (i, s) in self.series.iter().enumerate() {
             let loaded = if s.loaded { " (loaded)" } else { "" };
             out.line(if i == 0 { "series" } else { "" }, format!("{}{loaded}", s.line()));
+        }
+        for (i, c) in self.channels.iter().enumerate() {
+            let loaded = if c.loaded { " (loaded)" } else { "" };
+            let [r, g, b] = c.color;
+            out.line(
+                if i == 0 { "channels" } else { "" },
+                format!(
+                    "{i}: {}, window {} .. {}, colour #{r:02X}{g:02X}{b:02X}{loaded}",
+                    c.name, c.window[0], c.window[1]
+                ),
+            );
         }
         for note in &self.notes {
             out.line("note", note.clone());

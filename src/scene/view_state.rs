@@ -21,6 +21,9 @@ pub struct VolumeRef {
     pub spacing: [f32; 3],
     /// The time step shown (0 for a single volume).
     pub time: u32,
+    /// The channel of an OME-Zarr image (`--channel`); absent for other volumes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub channel: Option<u32>,
 }
 
 /// What the viewer shows beyond the rendered view, for a session to restore it (`render` ignores it).

@@ -59,6 +59,8 @@ pub struct VolumeFacts {
     pub integer: bool,
     /// The modality the file names, upper case ("CT", "MR"), if any.
     pub modality: Option<String>,
+    /// The display window (data units) and colour the file gives the loaded channel (OME-Zarr omero), if any.
+    pub display: Option<([f64; 2], [u8; 3])>,
 }
 
 impl VolumeFacts {
@@ -70,6 +72,7 @@ impl VolumeFacts {
             range: volume.range,
             integer: integer_type && integer_scale,
             modality: volume.modality.as_ref().map(|m| m.trim().to_ascii_uppercase()),
+            display: volume.channels.iter().find(|c| c.loaded).map(|c| (c.window, c.color)),
         }
     }
 
@@ -143,6 +146,12 @@ pub fn auto_transfer_function(facts: &VolumeFacts, histogram: &[u64]) -> Transfe
         tf.name = format!("auto: {CT_PRESET}");
         return tf;
     }
+    if let Some((window, color)) = facts
+        .display
+        .filter(|(w, _)| w[0].is_finite() && w[1].is_finite() && w[1] > w[0])
+    {
+        return channel_ramp(window, color);
+    }
     let from = background_end(histogram);
     let lo = percentile(histogram, from, RAMP_PERCENTILES[0]);
     let hi = percentile(histogram, from, RAMP_PERCENTILES[1]);
@@ -167,6 +176,20 @@ fn ramp(facts: &VolumeFacts, [lo, hi]: [f64; 2]) -> TransferFunction {
     }
 }
 
+/// A channel's own display (OME-Zarr omero): opacity rising over its window, from black to its colour, as
+/// napari and OMERO show a channel (its window is its contrast limits).
+fn channel_ramp([a, b]: [f64; 2], [r, g, bl]: [u8; 3]) -> TransferFunction {
+    let (a, b) = (a as f32, b as f32);
+    let c = |v: u8| f32::from(v) / 255.0;
+    TransferFunction {
+        name: "auto: channel window".into(),
+        units: TfUnits::Data,
+        colors: vec![[a, 0.0, 0.0, 0.0], [b, c(r), c(g), c(bl)]],
+        colormap: Colormap::Grayscale,
+        opacity: vec![[a, 0.0], [b, RAMP_ALPHA]],
+    }
+}
+
 /// The bins of the histogram the automatic transfer function reads (its percentiles' resolution).
 pub const AUTO_BINS: usize = 1024;
 
@@ -185,7 +208,20 @@ mod tests {
             range,
             integer,
             modality: modality.map(str::to_string),
+            display: None,
         }
+    }
+
+    #[test]
+    fn a_channel_window_seeds_the_ramp() {
+        let mut f = facts([0.0, 1000.0], true, None);
+        f.display = Some(([50.0, 240.0], [0, 255, 0]));
+        let tf = auto_transfer_function(&f, &[1; 16]);
+        assert_eq!(tf.opacity, vec![[50.0, 0.0], [240.0, RAMP_ALPHA]]);
+        assert_eq!(tf.colors[1], [240.0, 0.0, 1.0, 0.0]);
+        // A window that is empty is no window.
+        f.display = Some(([5.0, 5.0], [0, 255, 0]));
+        assert_eq!(auto_transfer_function(&f, &[1; 16]).name, "auto: percentile ramp");
     }
 
     #[test]

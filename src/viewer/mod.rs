@@ -48,6 +48,8 @@ pub struct ViewerOptions {
     pub source: VolumeSource,
     /// The series to load from a DICOM folder holding several (`--series`; `None`: the largest).
     pub series: Option<String>,
+    /// The channel of an OME-Zarr image (`--channel`; `None`: channel 0); it applies to every store the viewer opens.
+    pub channel: Option<u32>,
     pub gpu: GpuOptions,
     pub size: (u32, u32),
     pub script: Vec<ScriptStep>,

@@ -30,6 +30,7 @@ mod time;
 mod unsupported;
 mod voxel;
 mod vtk;
+mod zarr;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use decode::Endian;
@@ -41,6 +42,7 @@ pub use raw::{load_raw, parse_scivis_name, RawOptions};
 pub use time::TimeSteps;
 use voxel::{compute_range, compute_range_of, stored_offset, stored_value};
 pub use voxel::{Scaling, VoxelData, VoxelType};
+pub use zarr::ChannelInfo;
 
 /// Parsers that read from memory and never touch the file system: the fuzz targets drive these.
 pub mod from_bytes {
@@ -52,6 +54,7 @@ pub mod from_bytes {
     pub use super::tiff_stack::from_bytes as tiff;
     pub use super::vtk::vti::from_bytes as vti;
     pub use super::vtk::{from_bytes as vtk, parse_header as vtk_header};
+    pub use super::zarr::from_bytes::{zarr_chunk, zarr_meta};
 }
 
 pub use geometry::Geometry;
@@ -94,6 +97,9 @@ pub struct Volume {
     pub series: Vec<SeriesInfo>,
     /// A time series' other steps ([`Volume::timesteps`], [`Volume::show_step`]); `data` is the step shown.
     pub time: TimeSteps,
+    /// The channels of an OME-Zarr image (names, omero windows and colours), the loaded one marked; empty
+    /// otherwise. The loaded channel's window and colour seed the default transfer function.
+    pub channels: Vec<ChannelInfo>,
 }
 
 /// One data array of a multi-array file, as `volcast info` lists it.
@@ -149,6 +155,7 @@ impl Volume {
             arrays: Vec::new(),
             series: Vec::new(),
             time: TimeSteps::default(),
+            channels: Vec::new(),
         })
     }
 

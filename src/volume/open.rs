@@ -2,7 +2,7 @@
 //! extension second, then applies the caller's overrides and the maximum dimension.
 
 use super::decode::{Endian, Progress};
-use super::{dicom, downsample, format, metaimage, nifti, nrrd, raw, tiff_stack, unsupported, vtk};
+use super::{dicom, downsample, format, metaimage, nifti, nrrd, raw, tiff_stack, unsupported, vtk, zarr};
 use super::{RawOptions, Volume, VolumeError};
 use std::path::Path;
 
@@ -17,6 +17,7 @@ pub enum Format {
     MetaImage,
     Dicom,
     Tiff,
+    OmeZarr,
 }
 
 impl Format {
@@ -30,6 +31,7 @@ impl Format {
             Format::MetaImage => "MetaImage",
             Format::Dicom => "DICOM",
             Format::Tiff => "TIFF",
+            Format::OmeZarr => "OME-Zarr",
         }
     }
 }
@@ -53,10 +55,12 @@ pub struct OpenOptions {
     /// The series to load from a DICOM folder holding several: a SeriesNumber or SeriesInstanceUID (`None`: the
     /// largest).
     pub series: Option<String>,
+    /// The channel to load from an OME-Zarr image with a `c` axis (`None`: channel 0).
+    pub channel: Option<u32>,
 }
 
 /// Which reader a path needs. A folder is decided by its files: TIFFs make a TIFF stack, DICOM files a DICOM
-/// series (a Zarr store is named as unsupported). For a file, content decides where it can (magic bytes of VTK,
+/// series, a Zarr store OME-Zarr. For a file, content decides where it can (magic bytes of VTK,
 /// VTK XML, NRRD, NIfTI-1/2, DICOM, TIFF; gzip only means NIfTI when the name says so); then the extension (an
 /// Analyze `.hdr` has no magic); then a format volcast does not read is named ([`VolumeError::Unsupported`]);
 /// anything else is raw. A file named like a raw
@@ -128,15 +132,12 @@ pub fn format_by_name(path: &Path) -> Option<Format> {
         .map(|(_, f)| *f)
 }
 
-/// A folder: a Zarr store is named; otherwise its files decide (TIFF stack or DICOM series, never both).
+/// A folder: a Zarr store is OME-Zarr (whether it holds OME metadata is checked when it opens); otherwise its
+/// files decide (TIFF stack or DICOM series, never both).
 fn folder_format(path: &Path) -> Result<Format, VolumeError> {
     let label = format::file_label(path);
-    if let Some(k) = unsupported::identify_folder(path) {
-        return Err(VolumeError::Unsupported {
-            file: label,
-            kind: k.kind,
-            what: k.what,
-        });
+    if zarr::is_zarr_folder(path) {
+        return Ok(Format::OmeZarr);
     }
     let io = |source| VolumeError::Io {
         path: path.to_path_buf(),
@@ -227,6 +228,13 @@ fn open_unnamed(path: &Path, opts: &OpenOptions, progress: &mut dyn FnMut(f32)) 
         Format::MetaImage => metaimage::load(path, &mut progress)?,
         Format::Dicom => dicom::load(path, opts.series.as_deref(), &mut progress)?,
         Format::Tiff => tiff_stack::load(path, &mut progress)?,
+        Format::OmeZarr => {
+            let zarr_opts = zarr::ZarrOptions {
+                channel: opts.channel,
+                max_dim: opts.max_dim,
+            };
+            zarr::load(path, zarr_opts, &mut progress)?
+        }
     };
     if format != Format::Raw {
         if let Some(spacing) = opts.raw.spacing {

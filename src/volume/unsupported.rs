@@ -20,17 +20,6 @@ fn kind(kind: &str, what: &str) -> Option<Kind> {
 
 const HDF5_MAGIC: &[u8] = b"\x89HDF\r\n\x1a\n";
 
-/// A folder that is a Zarr store (v2 `.zarray`/`.zgroup`/`.zattrs`, v3 `zarr.json`), OME-Zarr included.
-pub(crate) fn identify_folder(path: &Path) -> Option<Kind> {
-    let zarr = [".zarray", ".zgroup", ".zattrs", "zarr.json"]
-        .iter()
-        .any(|m| path.join(m).is_file());
-    if zarr {
-        return kind("a Zarr store (OME-Zarr)", "Zarr");
-    }
-    None
-}
-
 /// A file whose first bytes (`prefix`, up to 512) or name say it is a format volcast does not read.
 pub(crate) fn identify(path: &Path, prefix: &[u8]) -> Option<Kind> {
     let name = path

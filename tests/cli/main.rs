@@ -18,3 +18,4 @@ mod render_and_errors;
 mod series;
 mod state;
 mod tools;
+mod zarr;

@@ -13,3 +13,4 @@ mod tiff;
 mod time;
 mod vtk;
 mod world;
+mod zarr;

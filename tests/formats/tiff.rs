@@ -375,18 +375,18 @@ fn unsupported_formats_are_named_by_open_and_the_cli() {
         assert!(stderr.contains(want), "{name}: {stderr}");
         assert!(!stderr.contains("panicked"), "{name}: {stderr}");
     }
-    // Zarr stores are folders.
+    // Zarr stores are folders, read as OME-Zarr: one without OME metadata is refused, naming the store.
     for (i, marker) in [".zarray", ".zgroup", "zarr.json", ".zattrs"].iter().enumerate() {
         let store = dir.join(format!("img{i}.zarr"));
         dir.write(&format!("img{i}.zarr/{marker}"), b"{}");
         let e = err(&store);
         assert!(
-            e.contains("is a Zarr store (OME-Zarr); volcast cannot read Zarr"),
+            e.contains(&format!("img{i}.zarr")) && e.contains("Zarr"),
             "{marker}: {e}"
         );
         let o = common::volcast(&["info", store.to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(1));
-        assert!(String::from_utf8_lossy(&o.stderr).contains("Zarr store"));
+        assert!(String::from_utf8_lossy(&o.stderr).contains("Zarr"));
     }
     // The data half of an Analyze pair.
     dir.write("pair.hdr", &[0u8; 10]);

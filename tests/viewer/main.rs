@@ -26,3 +26,4 @@ mod tf;
 mod time;
 mod turns;
 mod window;
+mod zarr;

@@ -51,6 +51,8 @@ pub(super) struct Loader {
     dialog_asked: Instant,
     /// The device's 3D texture limit: larger volumes are downsampled.
     max_dim: u32,
+    /// The channel of an OME-Zarr image to load (`--channel`; `None`: channel 0).
+    pub(super) channel: Option<u32>,
 }
 
 /// The viewer's histogram of normalised values, over every step of a series (as its range is): the automatic
@@ -65,6 +67,7 @@ pub(super) fn open_source(
     source: &VolumeSource,
     max_dim: u32,
     series: Option<&str>,
+    channel: Option<u32>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Volume, String> {
     match source {
@@ -74,6 +77,7 @@ pub(super) fn open_source(
                 raw: raw.clone(),
                 max_dim: Some(max_dim),
                 series: series.map(str::to_string),
+                channel,
                 ..Default::default()
             };
             volume::open_with_progress(path, &opts, progress).map_err(|e| e.to_string())
@@ -81,7 +85,7 @@ pub(super) fn open_source(
     }
 }
 
-fn load_in_background(source: VolumeSource, max_dim: u32, series: Option<String>) -> Loading {
+fn load_in_background(source: VolumeSource, max_dim: u32, series: Option<String>, channel: Option<u32>) -> Loading {
     let label = match (&source, &series) {
         (VolumeSource::Builtin(name, _), _) => name.clone(),
         (VolumeSource::File(path, _), None) => path.display().to_string(),
@@ -93,7 +97,7 @@ fn load_in_background(source: VolumeSource, max_dim: u32, series: Option<String>
     let recorded = source.clone();
     std::thread::spawn(move || {
         // Reading is 90% of the bar, the histogram the rest.
-        let result = open_source(&source, max_dim, series.as_deref(), &mut |f| {
+        let result = open_source(&source, max_dim, series.as_deref(), channel, &mut |f| {
             p.store((0.9 * f).to_bits(), Ordering::Relaxed)
         });
         p.store(0.9f32.to_bits(), Ordering::Relaxed);
@@ -121,6 +125,7 @@ impl Loader {
             dialog: None,
             dialog_asked: Instant::now(),
             max_dim,
+            channel: None,
         }
     }
 
@@ -152,7 +157,7 @@ impl Loader {
         }
         messages.error = None;
         messages.about = Topic::Volume;
-        self.loading = Some(load_in_background(source, self.max_dim, series));
+        self.loading = Some(load_in_background(source, self.max_dim, series, self.channel));
     }
 
     /// Shows the platform's file dialog (unless one is open); it blocks until the user answers, so it runs on

@@ -75,6 +75,7 @@ impl Running {
                 .map_err(|e| ViewerError::Other(e.to_string()))?;
             (self.shown).install(&mut self.presenter, &mut self.model, placeholder, Vec::new(), false)?;
             self.model.volume.label = "loading…".into();
+            self.loader.channel = opts.channel;
             (self.loader).start_series(opts.source.clone(), opts.series.clone(), &mut self.model.messages);
             self.loader.initial = Some(opts.time);
             if let Some(script) = &mut self.script {
@@ -82,7 +83,8 @@ impl Running {
             }
             return Ok(());
         }
-        let first = open_source(&opts.source, self.loader.max_dim(), None, &mut |_| {}).map_err(ViewerError::Other)?;
+        let first = open_source(&opts.source, self.loader.max_dim(), None, opts.channel, &mut |_| {})
+            .map_err(ViewerError::Other)?;
         let histogram = value_histogram(&first);
         (self.shown).install(&mut self.presenter, &mut self.model, first, histogram, false)?;
         self.shown.source = Some(opts.source.clone());
@@ -105,6 +107,12 @@ impl Running {
             initial,
         } = arrived;
         let from_file = matches!(source, VolumeSource::File(..));
+        // A multiscale image (OME-Zarr) says which of its levels it shows, and why not a finer one.
+        let level = volume
+            .notes
+            .iter()
+            .find(|n| n.starts_with("level ") && n.contains(" of "))
+            .cloned();
         let installed = (self.shown).install(&mut self.presenter, &mut self.model, volume, histogram, from_file);
         // Logged too: a load from the panel or a drop has no other trace outside the window.
         if let Err(e) = installed {
@@ -117,6 +125,10 @@ impl Running {
         }
         eprintln!("loaded {label}");
         self.model.messages.status = Some(format!("loaded {label}"));
+        if let Some(level) = level {
+            eprintln!("showing {level}");
+            self.model.messages.status = Some(format!("loaded {label}: {level}"));
+        }
         if let VolumeSource::File(path, _) = &source {
             self.model.recent.remember(path);
         }

@@ -10,12 +10,14 @@ use std::path::Path;
 impl Running {
     /// The whole state as a view state with the given render settings (those of the frame drawn).
     pub(super) fn view_state(&self, settings: &RenderSettings) -> ViewState {
+        let mut volume = volume_ref(
+            self.shown.source.as_ref(),
+            self.model.files.raw_spacing,
+            self.shown.series_step().unwrap_or(0),
+        );
+        volume.channel = self.loader.channel;
         ViewState {
-            volume: volume_ref(
-                self.shown.source.as_ref(),
-                self.model.files.raw_spacing,
-                self.shown.series_step().unwrap_or(0),
-            ),
+            volume,
             settings: settings.clone(),
             viewer: Some(self.model.session()),
         }
@@ -35,6 +37,9 @@ impl Running {
             messages.error = Some(format!("session {}: it names no volume", path.display()));
             return;
         };
+        if state.volume.channel.is_some() {
+            self.loader.channel = state.volume.channel;
+        }
         let shown = (self.shown.source.as_ref()).map(|s| volume_ref(Some(s), self.model.files.raw_spacing, 0));
         let same = shown.is_some_and(|r| {
             (r.path.as_ref(), r.builtin.as_ref(), r.builtin_size)

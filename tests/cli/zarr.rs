@@ -1,0 +1,111 @@
+//! `volcast info` and `render` on OME-Zarr stores through the binary: the channels with their omero names, windows
+//! and colours, the level chosen under `--max-dim`, `--channel` and its error, the JSON's `channels`.
+
+use crate::common;
+
+use common::{stderr, stdout, volcast};
+
+fn store(name: &str) -> String {
+    format!("{}/tests/data/zarr/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn info_lists_channels_and_the_level() {
+    let o = volcast(&["info", &store("sharded_tczyx.zarr"), "--channel", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("format:    OME-Zarr"), "{text}");
+    assert!(
+        text.contains("channels:  0: DAPI, window 10 .. 200, colour #0000FF\n"),
+        "{text}"
+    );
+    assert!(
+        text.contains("1: GFP, window 50 .. 240, colour #00FF00 (loaded)"),
+        "{text}"
+    );
+    assert!(text.contains("timesteps: 2"), "{text}");
+    let o = volcast(&["info", &store("v04_blosc.zarr"), "--max-dim", "8"]);
+    let text = stdout(&o);
+    assert!(text.contains("dims:      8 x 6 x 4"), "{text}");
+    assert!(
+        text.contains(
+            "note:      level 1 of 3 (8x6x4); level 0 (16x12x8) is too large: 16 exceeds the maximum dimension 8"
+        ),
+        "{text}"
+    );
+    let o = volcast(&["info", "--json", &store("napari_czyx.zarr")]);
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let channels = &json["channels"];
+    assert_eq!(channels[1]["name"], "nuclei");
+    assert_eq!(channels[0]["loaded"], true);
+    assert_eq!(channels[0]["color"], serde_json::json!([255, 0, 255]));
+}
+
+#[test]
+fn a_missing_channel_is_refused_with_the_list() {
+    let o = volcast(&["info", &store("sharded_tczyx.zarr"), "--channel", "3"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("sharded_tczyx.zarr") && e.contains("channel 3 does not exist") && e.contains("0 (DAPI), 1 (GFP)"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_store_renders() {
+    let dir = common::scratch("cli-zarr-render");
+    let out = dir.join("v05.png");
+    let o = volcast(&[
+        "render",
+        &store("v05.zarr"),
+        "-o",
+        out.to_str().unwrap(),
+        "--size",
+        "64x64",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.is_file());
+}
+
+/// A view state names the store and its channel: `render --state` shows that channel, as `--channel` does.
+#[test]
+fn a_state_keeps_the_channel() {
+    let dir = common::scratch("cli-zarr-state");
+    let path = std::path::PathBuf::from(store("sharded_tczyx.zarr"));
+    let png = |name: &str, args: &[&str]| {
+        let out = dir.join(name);
+        let mut all = vec!["render", "--size", "48x40", "-o", out.to_str().unwrap()];
+        all.extend_from_slice(args);
+        let o = volcast(&all);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(out).unwrap()
+    };
+    let extent = volcast::volume::open(&path, &Default::default()).unwrap().extent();
+    let state = volcast::scene::view_state::ViewState {
+        volume: volcast::scene::view_state::VolumeRef {
+            path: Some(path.clone()),
+            channel: Some(1),
+            ..Default::default()
+        },
+        settings: volcast::scene::settings::RenderSettings::new(48, 40, extent),
+        viewer: None,
+    };
+    let write = |name: &str, state: &volcast::scene::view_state::ViewState| {
+        let file = dir.join(name);
+        std::fs::write(&file, state.to_json()).unwrap();
+        file.to_str().unwrap().to_string()
+    };
+    let with_channel = write("state1.json", &state);
+    assert!(std::fs::read_to_string(&with_channel)
+        .unwrap()
+        .contains("\"channel\": 1"));
+    let mut plain = state.clone();
+    plain.volume.channel = None;
+    let without = write("state0.json", &plain);
+    let from_state = png("state.png", &["--state", &with_channel]);
+    let asked = png("asked.png", &["--state", &without, "--channel", "1"]);
+    let channel0 = png("c0.png", &["--state", &without]);
+    assert_eq!(from_state, asked);
+    assert_ne!(from_state, channel0);
+}
