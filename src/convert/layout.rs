@@ -5,7 +5,7 @@
 //! scale is the affine's column lengths and its translation the world position of voxel (0, 0, 0), both in z, y, x
 //! order. A level k voxel covers `f` fine voxels per axis (`f` = 2^k, less along an axis that reached length 1):
 //! scale_k = f * scale_0 and translation_k = translation_0 + (f - 1) / 2 * scale_0, the centre of its block.
-//! The full affine is always stored too, under the multiscale's "volcast" key, with the anatomical frame.
+//! The full affine is always stored too, under the multiscale's `metadata.volcast` key, with the anatomical frame.
 
 use crate::volume::Geometry;
 use serde_json::{json, Map, Value};
@@ -100,7 +100,9 @@ pub fn multiscale(name: &str, version: OmeVersion, series: bool, p: &Placement, 
         "name": name,
         "axes": axes,
         "datasets": datasets,
-        "volcast": {"affine": p.rows, "frame": if p.anatomical { json!("RAS") } else { Value::Null }},
+        // Under the spec's free-form "metadata" dictionary: ome_zarr_metadata's 0.4 types refuse an unknown key
+        // on the multiscale itself.
+        "metadata": {"volcast": {"affine": p.rows, "frame": if p.anatomical { json!("RAS") } else { Value::Null }}},
     });
     if version == OmeVersion::V04 {
         m["version"] = json!("0.4");
@@ -142,7 +144,7 @@ mod tests {
         assert!(!p.axis_aligned);
         assert_eq!(p.scale, [3.0, 3.0, 3.0]);
         let m = multiscale("v", OmeVersion::V05, false, &p, &[[2, 2, 2]]);
-        assert_eq!(m["volcast"]["frame"], "RAS");
-        assert_eq!(m["volcast"]["affine"][0][0], -3.0);
+        assert_eq!(m["metadata"]["volcast"]["frame"], "RAS");
+        assert_eq!(m["metadata"]["volcast"]["affine"][0][0], -3.0);
     }
 }

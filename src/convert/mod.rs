@@ -183,7 +183,7 @@ pub fn convert(
         notes.push(
             "the volume's affine is not a positive axis-aligned scale (a flipped, permuted, oblique or sheared \
              axis): the scale and translation written are the nearest axis-aligned placement; the full affine is \
-             in the multiscale's \"volcast\" attributes"
+             in the multiscale's metadata, under \"volcast\""
                 .to_string(),
         );
     }

@@ -40,7 +40,7 @@ def main():
         "ome_version": version,
         "name": multiscale.get("name"),
         "axes": multiscale["axes"],
-        "volcast": multiscale.get("volcast"),
+        "volcast": (multiscale.get("metadata") or {}).get("volcast"),
         "levels": [],
     }
     arrays = []

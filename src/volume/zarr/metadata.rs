@@ -417,14 +417,21 @@ fn channels(omero: Option<Value>, notes: &mut Vec<String>) -> Vec<ChannelInfo> {
     }
 }
 
-/// volcast's hint, from the multiscale's `metadata.volcast` or the group attributes' `volcast` (top or under `ome`).
+/// volcast's hint: where `volcast convert` writes it, the first multiscale's own `volcast` key (0.4's top-level
+/// `multiscales` or 0.5's under `ome`); also its `metadata.volcast`, or the group attributes' `volcast` (top or
+/// under `ome`).
 fn hint(
     attrs: &Value,
     metadata: Option<&serde_json::Map<String, Value>>,
     notes: &mut Vec<String>,
 ) -> Option<VolcastHint> {
-    let json = metadata
+    let multiscale = attrs
+        .get("multiscales")
+        .or_else(|| attrs.get("ome").and_then(|o| o.get("multiscales")))
+        .and_then(|m| m.get(0));
+    let json = multiscale
         .and_then(|m| m.get("volcast"))
+        .or_else(|| metadata.and_then(|m| m.get("volcast")))
         .or_else(|| attrs.get("volcast"))
         .or_else(|| attrs.get("ome").and_then(|o| o.get("volcast")))?;
     match parse_hint(json) {
