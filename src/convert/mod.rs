@@ -9,6 +9,7 @@ pub mod layout;
 pub mod pyramid;
 pub mod sample;
 pub mod source;
+mod store;
 mod write;
 
 use crate::volume::{VolumeError, VoxelType};
@@ -17,8 +18,8 @@ use pyramid::Reduce;
 use source::Source;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use store::ChunkStore;
 use write::{ArrayLayout, Cascade};
-use zarrs::filesystem::FilesystemStore;
 
 /// The chunks' compressor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -203,7 +204,7 @@ fn write_store<T: sample::Sample>(
     opts: &ConvertOptions,
     progress: &mut dyn FnMut(f32),
 ) -> Result<(Vec<[u64; 3]>, u32), ConvertError> {
-    let store = Arc::new(FilesystemStore::new(out).map_err(|e| ConvertError::Zarr(e.to_string()))?);
+    let store = Arc::new(ChunkStore::new(out.to_path_buf()).map_err(ConvertError::Zarr)?);
     let dims = source.dims().map(u64::from);
     let levels = pyramid::level_dims(dims);
     let steps: Vec<u32> = match opts.step {
@@ -245,7 +246,7 @@ fn write_store<T: sample::Sample>(
 }
 
 fn write_group(
-    store: &Arc<FilesystemStore>,
+    store: &Arc<ChunkStore>,
     version: OmeVersion,
     attributes: serde_json::Map<String, serde_json::Value>,
 ) -> Result<(), ConvertError> {

@@ -5,12 +5,12 @@
 use super::layout::OmeVersion;
 use super::pyramid::{self, Reduce};
 use super::sample::{numpy_dtype, zarr_data_type, Sample};
+use super::store::ChunkStore;
 use super::{Compression, ConvertError};
 use std::num::NonZeroU64;
 use std::sync::Arc;
 use zarrs::array::codec::{BloscCodec, BloscCompressionLevel, BloscCompressor, BloscShuffleMode, ZstdCodec};
 use zarrs::array::{Array, ArrayBuilder, ArrayMetadataV2, ArraySubset, ChunkKeySeparator, FillValueMetadata};
-use zarrs::filesystem::FilesystemStore;
 
 /// zstd's level in both Zarr versions: its fastest strategy. Level 3 (zstd's default) took twice the CPU time on
 /// a 1 GiB CT-like volume for a few percent smaller chunks, and compression is most of a conversion's time.
@@ -62,11 +62,11 @@ fn fill<T: Sample>() -> FillValueMetadata {
 
 /// Creates level `path`'s array of `dims` (x, y, z) and stores its metadata.
 pub fn create_array<T: Sample>(
-    store: &Arc<FilesystemStore>,
+    store: &Arc<ChunkStore>,
     path: &str,
     dims: [u64; 3],
     layout: &ArrayLayout,
-) -> Result<Array<FilesystemStore>, ConvertError> {
+) -> Result<Array<ChunkStore>, ConvertError> {
     let array = match layout.version {
         OmeVersion::V05 => {
             let mut b = ArrayBuilder::new(
@@ -136,7 +136,7 @@ pub fn create_array<T: Sample>(
 
 /// One level being written: its array and the slices received but not yet written.
 struct Level<T> {
-    array: Array<FilesystemStore>,
+    array: Array<ChunkStore>,
     dims: [u64; 3],
     pending: Vec<T>,
     next_z: u64,
@@ -151,7 +151,7 @@ pub struct Cascade<T> {
 }
 
 impl<T: Sample> Cascade<T> {
-    pub fn new(arrays: Vec<(Array<FilesystemStore>, [u64; 3])>, depth: u64, reduce: Reduce, step: Option<u64>) -> Self {
+    pub fn new(arrays: Vec<(Array<ChunkStore>, [u64; 3])>, depth: u64, reduce: Reduce, step: Option<u64>) -> Self {
         let levels = arrays
             .into_iter()
             .map(|(array, dims)| Level {
@@ -170,7 +170,7 @@ impl<T: Sample> Cascade<T> {
     }
 
     /// Gives back the arrays, for the next time step.
-    pub fn into_arrays(self) -> Vec<(Array<FilesystemStore>, [u64; 3])> {
+    pub fn into_arrays(self) -> Vec<(Array<ChunkStore>, [u64; 3])> {
         self.levels.into_iter().map(|l| (l.array, l.dims)).collect()
     }
 
