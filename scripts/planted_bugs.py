@@ -150,6 +150,17 @@ BUGS = [
        "Event::Text(_) | Event::Paste(_) | Event::Key { pressed: true, .. } if after_click.is_some() && false => {")]),
     ("tf-drag-picks-at-pointer", "a drag in the transfer-function editor picks the point under the pointer when egui starts it, not under the press",
      [("src/viewer/widgets/tf_editor/mod.rs", "let origin = press_origin(ctx, pos);", "let origin = pos;")]),
+    ("pyramid-mean-over-eight", "convert's pyramid divides every block's sum by 8, so partial blocks at odd edges come out dark",
+     [("src/convert/pyramid.rs", "sum::<f64>() / block.len() as f64),", "sum::<f64>() / 8.0),")]),
+    ("pyramid-translation-not-centred", "convert's coarser levels keep level 0's translation instead of their blocks' centres",
+     [("src/convert/layout.rs", "self.translation[i] + (f[i] - 1.0) / 2.0 * self.scale[i]", "self.translation[i]")]),
+    ("zarr-micrometre-as-mm", "an OME-Zarr axis in micrometres is read as millimetres",
+     [("src/volume/zarr/metadata.rs", "U::Micrometer => 1e-3,", "U::Micrometer => 1.0,")]),
+    ("zarr-own-placement-ignored", "the reader ignores the exact affine that convert writes (a flipped axis and the RAS frame are lost)",
+     [("src/volume/zarr/metadata.rs", "let json = multiscale\n        .and_then(|m| m.get(\"volcast\"))\n        .or_else(|| metadata.and_then(|m| m.get(\"volcast\")))",
+       "let json = multiscale\n        .and_then(|m| m.get(\"volcast-\"))\n        .or_else(|| metadata.and_then(|m| m.get(\"volcast-\")))")]),
+    ("metaimage-not-lps", "a MetaImage is placed as if its world were RAS, not ITK's LPS (mirrored in x and y against Slicer)",
+     [("src/volume/metaimage.rs", "geometry::LPS_TO_RAS * geometry::from_columns(columns, origin),", "geometry::from_columns(columns, origin),")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent
