@@ -453,3 +453,15 @@ fn volcast_placement_metadata_is_used_when_it_agrees() {
         v.notes
     );
 }
+
+/// The zarr_meta fuzzer's finding, kept as its seed: an omero colour with a two-byte character made
+/// ome_zarr_metadata panic slicing it; the metadata now parses with the channels dropped and a note.
+#[test]
+fn fuzz_finding_non_ascii_colour_is_not_a_panic() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fuzz/seeds/zarr_meta/fuzz-non-ascii-colour.json"
+    );
+    let bytes = std::fs::read(path).unwrap();
+    let _ = volume::from_bytes::zarr_meta(&bytes);
+}

@@ -394,6 +394,12 @@ pub(crate) fn check_level_path(path: &str) -> Result<(), String> {
 
 fn channels(omero: Option<Value>, notes: &mut Vec<String>) -> Vec<ChannelInfo> {
     let Some(json) = omero else { return Vec::new() };
+    if let Some(colour) = non_ascii_colour(&json) {
+        notes.push(format!(
+            "omero channel metadata ignored: colour {colour:?} is not six hexadecimal digits"
+        ));
+        return Vec::new();
+    }
     match serde_json::from_value::<Omero>(json.clone()) {
         Ok(o) => o
             .channels
@@ -415,6 +421,17 @@ fn channels(omero: Option<Value>, notes: &mut Vec<String>) -> Vec<ChannelInfo> {
             Vec::new()
         }
     }
+}
+
+/// A channel colour that is a string with a character outside ASCII: ome_zarr_metadata 0.3.1 slices colours by byte
+/// index and panics inside such a character (found by the `zarr_meta` fuzzer), so they never reach it.
+fn non_ascii_colour(omero: &Value) -> Option<&str> {
+    omero
+        .get("channels")?
+        .as_array()?
+        .iter()
+        .filter_map(|c| c.get("color")?.as_str())
+        .find(|c| !c.is_ascii())
 }
 
 /// volcast's hint: where `volcast convert` writes it, the first multiscale's own `volcast` key (0.4's top-level
@@ -514,6 +531,24 @@ mod tests {
     fn a_group_without_multiscales_is_named() {
         let e = parse(&json!({"foo": 1})).unwrap_err();
         assert!(e.contains("without OME-Zarr metadata") && e.contains("foo"), "{e}");
+    }
+
+    #[test]
+    fn a_non_ascii_colour_is_a_note_not_a_panic() {
+        // The zarr_meta fuzzer's finding: a two-byte character across the crate's byte slice of the colour.
+        let mut attrs = v04(
+            json!([{"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [1.0, 1.0, 1.0]}]}]),
+            json!({}),
+        );
+        attrs["omero"] = json!({"channels": [{"label": "a", "color": "0\u{279}0000",
+            "window": {"start": 0.0, "end": 1.0, "min": 0.0, "max": 1.0}}]});
+        let m = parse(&attrs).unwrap();
+        assert!(m.channels.is_empty(), "{:?}", m.channels);
+        assert!(
+            m.notes.iter().any(|n| n.contains("not six hexadecimal digits")),
+            "{:?}",
+            m.notes
+        );
     }
 
     #[test]
