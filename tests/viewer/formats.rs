@@ -95,38 +95,46 @@ fn viewer_loads_a_file_dropped_by_xdnd() {
     }
     let dir = common::scratch("viewer-xdnd");
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk/vti_zlib.vti");
-    let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &["--builtin", "box", "--builtin-size", "16"], &script);
-    viewer.wait_for("script: Hold", Duration::from_secs(180));
-    let window = viewer.window(&x.display);
-    let id: u32 = window.parse().expect("window id");
-    let accepted = common::xdnd::drop_file(&x.display, id, (600, 300), &file).expect("XDND drop");
-    assert!(accepted, "the window accepts the drop (XdndFinished)");
-    let loaded = viewer.wait_for("load", Duration::from_secs(60));
-    assert!(
-        loaded.starts_with("loaded ") && loaded.ends_with("tests/data/vtk/vti_zlib.vti"),
-        "{loaded}"
-    );
+    let (mut viewer, window) = drop_for_real(&x.display, &dir, &file, "tests/data/vtk/vti_zlib.vti");
     type_keys(&x.display, &window, &["F12"]);
     let (shot, settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
+    let volume = volcast::volume::open(&file, &Default::default()).expect("volume");
+    let d = diff(&shot, &headless_render(&volume, &settings));
+    assert!(
+        d.max <= 1.0,
+        "the dropped file's view differs from its headless render: {d}"
+    );
+    viewer.finish_clean();
+}
 
+/// Starts a viewer on a tiny box, drops `path` on its window with a real XDND source (`common::xdnd`, what a file
+/// manager is) and waits until it says it loaded the path ending in `suffix`; returns the viewer and its window.
+pub(crate) fn drop_for_real(display: &str, dir: &Path, path: &Path, suffix: &str) -> (Viewer, String) {
+    let script = format!("frames:3;{HOLD};exit");
+    let mut viewer = Viewer::start(display, dir, &["--builtin", "box", "--builtin-size", "16"], &script);
+    viewer.wait_for("script: Hold", Duration::from_secs(180));
+    let window = viewer.window(display);
+    let id: u32 = window.parse().expect("window id");
+    let accepted = common::xdnd::drop_file(display, id, (600, 300), path).expect("XDND drop");
+    assert!(accepted, "the window accepts the drop (XdndFinished)");
+    let loaded = viewer.wait_for("load", Duration::from_secs(60));
+    assert!(loaded.starts_with("loaded ") && loaded.ends_with(suffix), "{loaded}");
+    (viewer, window)
+}
+
+/// `volume` rendered headless under `settings`, with validation, which must report nothing.
+pub(crate) fn headless_render(volume: &volcast::volume::Volume, settings: &RenderSettings) -> image::RgbaImage {
     let gpu = Gpu::new(&GpuOptions {
         validation: true,
         ..Default::default()
     })
     .expect("Vulkan");
     let mut headless = Headless::new(&gpu).expect("renderer");
-    let volume = volcast::volume::open(&file, &Default::default()).expect("volume");
-    headless.set_volume(&gpu, &volume).expect("upload");
-    let expected = headless.render(&gpu, &settings).expect("render").image;
+    headless.set_volume(&gpu, volume).expect("upload");
+    let expected = headless.render(&gpu, settings).expect("render").image;
     headless.destroy(&gpu);
     let log = gpu.log.clone();
     drop(gpu);
     assert!(log.problems().is_empty(), "{:#?}", log.problems());
-    let d = diff(&shot, &expected);
-    assert!(
-        d.max <= 1.0,
-        "the dropped file's view differs from its headless render: {d}"
-    );
-    viewer.finish_clean();
+    expected
 }
