@@ -93,6 +93,16 @@ fn info(args: &[&str]) -> Value {
     serde_json::from_str(&stdout(&o)).unwrap()
 }
 
+/// The store's axis names, slowest first.
+fn axis_names(json: &Value) -> Vec<&str> {
+    json["axes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["name"].as_str().unwrap())
+        .collect()
+}
+
 fn floats(v: &Value) -> Vec<f64> {
     v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
 }
@@ -139,13 +149,7 @@ fn ct_head_raw_to_ome_zarr_04_with_blosc() {
     assert_eq!(json["zarr_format"], 2);
     assert_eq!(json["ome_version"], "0.4");
     assert_eq!(json["name"], "cranium_ct");
-    let names: Vec<&str> = json["axes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|a| a["name"].as_str().unwrap())
-        .collect();
-    assert_eq!(names, ["z", "y", "x"]);
+    assert_eq!(axis_names(&json), ["z", "y", "x"]);
     assert!(json["axes"]
         .as_array()
         .unwrap()
@@ -408,13 +412,7 @@ fn time_series_gets_a_t_axis() {
     let Some((json, levels)) = read_back(&store) else {
         return;
     };
-    let names: Vec<&str> = json["axes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|a| a["name"].as_str().unwrap())
-        .collect();
-    assert_eq!(names, ["t", "z", "y", "x"]);
+    assert_eq!(axis_names(&json), ["t", "z", "y", "x"]);
     assert_eq!(json["axes"][0]["type"], "time");
     let l = json["levels"].as_array().unwrap();
     assert_eq!(l[0]["shape"], serde_json::json!([2, 3, 66, 70]));

@@ -533,13 +533,18 @@ mod tests {
         assert!(e.contains("without OME-Zarr metadata") && e.contains("foo"), "{e}");
     }
 
+    /// A 0.4 image of one level at unit scale: the ground the omero tests put their channels on.
+    fn one_level() -> Value {
+        v04(
+            json!([{"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [1.0, 1.0, 1.0]}]}]),
+            json!({}),
+        )
+    }
+
     #[test]
     fn a_non_ascii_colour_is_a_note_not_a_panic() {
         // The zarr_meta fuzzer's finding: a two-byte character across the crate's byte slice of the colour.
-        let mut attrs = v04(
-            json!([{"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [1.0, 1.0, 1.0]}]}]),
-            json!({}),
-        );
+        let mut attrs = one_level();
         attrs["omero"] = json!({"channels": [{"label": "a", "color": "0\u{279}0000",
             "window": {"start": 0.0, "end": 1.0, "min": 0.0, "max": 1.0}}]});
         let m = parse(&attrs).unwrap();
@@ -553,10 +558,7 @@ mod tests {
 
     #[test]
     fn loose_omero_is_a_note_and_channels_read() {
-        let mut attrs = v04(
-            json!([{"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [1.0, 1.0, 1.0]}]}]),
-            json!({}),
-        );
+        let mut attrs = one_level();
         attrs["omero"] = json!({"channels": [{"label": "DAPI", "color": "0000FF",
             "window": {"min": 0.0, "max": 255.0, "start": 10.0, "end": 200.0}}]});
         let m = parse(&attrs).unwrap();
