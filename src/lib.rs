@@ -10,6 +10,7 @@ pub mod gpu;
 pub mod measure;
 pub mod movie;
 pub mod render;
+pub mod scale;
 pub mod scene;
 pub mod transfer;
 pub mod viewer;

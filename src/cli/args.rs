@@ -3,7 +3,7 @@
 
 use super::frame::FrameArgs;
 use super::parse::{
-    parse_builtin, parse_fps, parse_gradients, parse_preset, parse_quality, parse_size, parse_turntable,
+    parse_builtin, parse_bytes, parse_fps, parse_gradients, parse_preset, parse_quality, parse_size, parse_turntable,
 };
 use anyhow::{bail, Result};
 use clap::Args;
@@ -39,10 +39,20 @@ pub(crate) struct VolumeArgs {
     /// Bytes to skip at the start of a raw file (a header volcast does not read).
     #[arg(long, value_name = "N")]
     pub(crate) header_bytes: Option<u64>,
-    /// Largest dimension: a larger volume is downsampled 2x per axis until it fits (with a warning).
-    #[arg(long, value_name = "N", default_value_t = 2048)]
-    pub(crate) max_dim: u32,
-    /// Refuse a volume larger than --max-dim instead of downsampling it.
+    /// Largest dimension: a larger volume is downsampled 2x per axis until it fits (with a warning). Default: no
+    /// limit but the budgets' and the device's.
+    #[arg(long, value_name = "N")]
+    pub(crate) max_dim: Option<u32>,
+    /// Host memory the voxels may take, like 6G or 512M (default: a quarter of the machine's memory). A larger
+    /// volume is shown at the finest pyramid level that fits, read level by level from files whose voxels lie on
+    /// disk.
+    #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
+    pub(crate) host_budget: Option<u64>,
+    /// Device memory the volume may take, upload included, like 1G (default: the device's largest heap). A larger
+    /// volume is shown at the finest pyramid level that fits.
+    #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
+    pub(crate) gpu_budget: Option<u64>,
+    /// Refuse a volume larger than --max-dim or the budgets instead of downsampling it.
     #[arg(long)]
     pub(crate) no_downsample: bool,
     /// The point array to load from a VTK file holding several (default: its active scalars, else the first
@@ -80,9 +90,44 @@ impl VolumeArgs {
         a
     }
 
+    /// The host budget (no device known yet).
+    pub(crate) fn budgets(&self) -> volume::budget::Budgets {
+        volume::budget::Budgets::host(self.host_budget)
+    }
+
+    /// The budgets on `gpu`: the host's, and `--gpu-budget` (default the device's largest heap) with the device's
+    /// 3-D texture limit.
+    pub(crate) fn budgets_on(&self, gpu: &volcast::gpu::Gpu) -> volume::budget::Budgets {
+        self.budgets().with_gpu(volume::budget::GpuBudget {
+            bytes: self.gpu_budget.unwrap_or(gpu.device_local_bytes),
+            max_dim: gpu.properties.limits.max_image_dimension3_d,
+        })
+    }
+
+    /// `v` at the finest pyramid level that `gpu` and the budgets take, its note said on stderr when that is not
+    /// full resolution.
+    pub(crate) fn fit_device(&self, gpu: &volcast::gpu::Gpu, v: Volume) -> Result<Volume> {
+        let before = v.notes.len();
+        let v = volcast::scale::fit(v, &self.budgets_on(gpu), self.no_downsample)?;
+        for note in &v.notes[before.min(v.notes.len())..] {
+            eprintln!("note: {note}");
+        }
+        Ok(v)
+    }
+
     /// The volume, its notes (uneven spacing, skipped files, ...) said on stderr.
     pub(crate) fn load(&self) -> Result<Volume> {
-        let v = self.load_without_notes()?;
+        self.load_within(self.budgets())
+    }
+
+    /// [`VolumeArgs::load`] within `gpu`'s budgets too: a volume larger than the device takes is read at the
+    /// level it takes, never at full resolution first.
+    pub(crate) fn load_on(&self, gpu: &volcast::gpu::Gpu) -> Result<Volume> {
+        self.load_within(self.budgets_on(gpu))
+    }
+
+    fn load_within(&self, budgets: volume::budget::Budgets) -> Result<Volume> {
+        let v = self.load_without_notes_within(budgets)?;
         for note in &v.notes {
             eprintln!("note: {note}");
         }
@@ -92,12 +137,17 @@ impl VolumeArgs {
     /// The volume, its notes left to the caller: `info` prints them with the rest, so saying them on stderr too
     /// showed each twice.
     pub(crate) fn load_without_notes(&self) -> Result<Volume> {
+        self.load_without_notes_within(self.budgets())
+    }
+
+    fn load_without_notes_within(&self, budgets: volume::budget::Budgets) -> Result<Volume> {
         if let Some(name) = &self.builtin {
             let mut v = volume::builtin(name, self.builtin_size)?;
             // --spacing overrides every volume's own, the built-ins' included.
             if let Some(s) = &self.spacing {
                 v = v.with_spacing([s[0], s[1], s[2]])?;
             }
+            v = volcast::scale::fit(v, &budgets, self.no_downsample)?;
             if let Some(t) = self.time {
                 v.show_step(t)?;
             }
@@ -121,7 +171,7 @@ impl VolumeArgs {
             bar.set_style(style.progress_chars("=> "));
         }
         bar.set_message(format!("loading {}", path.display()));
-        let loaded = volume::open_with_progress(path, &opts, &mut |f| bar.set_position((f * 1000.0) as u64));
+        let loaded = volcast::scale::open(path, &opts, budgets, &mut |f| bar.set_position((f * 1000.0) as u64));
         bar.finish_and_clear();
         // A --series the folder does not hold is a usage error (exit 64), its message listing those it does.
         let mut v = loaded.map_err(|e| match e {
@@ -143,7 +193,8 @@ impl VolumeArgs {
                 _ => volume::Endian::Little,
             },
             header_bytes: self.header_bytes.unwrap_or(0),
-            max_dim: Some(self.max_dim),
+            max_dim: self.max_dim,
+            budgets: Some(self.budgets()),
             no_downsample: self.no_downsample,
             array: self.array.clone(),
             series: self.series.clone(),

@@ -39,6 +39,9 @@ pub(crate) fn view(args: &ViewArgs) -> Result<()> {
         size: args.size,
         script,
         time: args.volume.time.or(restore.as_ref().map(|s| s.volume.time)),
+        host_budget: args.volume.host_budget,
+        gpu_budget: args.volume.gpu_budget,
+        max_dim: args.volume.max_dim,
         quality: args.quality,
         slices: args.slices,
         restore,
@@ -67,6 +70,7 @@ pub(crate) fn compare(args: &CompareArgs) -> Result<()> {
     }
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     with_gpu(&args.gpu, |gpu| {
+        let volume = args.volume.fit_device(gpu, volume)?;
         let mut headless = Headless::new(gpu)?;
         let result = (|| -> Result<Vec<compare::Row>> {
             headless.set_volume(gpu, &volume)?;

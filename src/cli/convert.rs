@@ -107,5 +107,8 @@ fn open_source(args: &ConvertArgs) -> Result<Source> {
             return Ok(Source::in_place(v)?);
         }
     }
-    Ok(Source::Loaded(Box::new(args.volume.load()?)))
+    // Converted at full resolution: no host budget (a volume held whole is still within volcast's voxel limit).
+    let mut full = args.volume.clone();
+    full.host_budget = Some(u64::MAX);
+    Ok(Source::Loaded(Box::new(full.load()?)))
 }

@@ -4,6 +4,11 @@
 use glam::Vec3;
 use volcast::scene::quality::{Gradients, Quality};
 
+/// A memory size for --host-budget and --gpu-budget (`volume::budget::parse_size`).
+pub(crate) fn parse_bytes(s: &str) -> Result<u64, String> {
+    volcast::volume::budget::parse_size(s)
+}
+
 pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])

@@ -15,7 +15,8 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 /// The volume and settings `render` shows: a saved view's, or the options'.
-fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
+/// With `gpu`, the volume is read within the device's budgets too.
+fn render_view(args: &RenderArgs, gpu: Option<&volcast::gpu::Gpu>) -> Result<(Volume, RenderSettings)> {
     let state = match &args.state {
         Some(path) => {
             let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
@@ -26,9 +27,13 @@ fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
         }
         None => None,
     };
-    let volume = match &state {
-        Some(st) => args.volume.or_from(&st.volume).load()?,
-        None => args.volume.load()?,
+    let volume_args = match &state {
+        Some(st) => args.volume.or_from(&st.volume),
+        None => args.volume.clone(),
+    };
+    let volume = match gpu {
+        Some(gpu) => volume_args.load_on(gpu)?,
+        None => volume_args.load()?,
     };
     let mut s = match state {
         // The saved view (its method included), with the options given here over it.
@@ -57,7 +62,7 @@ fn movie(args: &RenderArgs) -> Result<()> {
     let (volume, plan) = if args.keyframes.is_empty() {
         let frames = args.turntable.unwrap_or(1);
         MovieFiles::new(&args.output, frames)?;
-        let (volume, base) = render_view(args)?;
+        let (volume, base) = render_view(args, None)?;
         (
             volume,
             Plan::Turntable {
@@ -83,6 +88,7 @@ fn movie(args: &RenderArgs) -> Result<()> {
         "keyframes"
     };
     with_gpu(&args.gpu, |gpu| {
+        let volume = args.volume.fit_device(gpu, volume)?;
         let mut headless = Headless::new(gpu)?;
         let mut progress = volcast::movie::Progress::stderr(label, plan.frame_count());
         let done = volcast::movie::record(gpu, &mut headless, &volume, &plan, &files, args.fps, &mut |k| {
@@ -100,13 +106,21 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         return movie(args);
     }
     volcast::render::png::check_name(&args.output).map_err(anyhow::Error::msg)?;
-    let t_load = Instant::now();
-    let (volume, s) = render_view(args)?;
-    let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
     let t_device = Instant::now();
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
         let device_ms = t_device.elapsed().as_secs_f64() * 1e3;
+        // Read once the device is known, at the level its budget takes.
+        let t_load = Instant::now();
+        let loaded = render_view(args, Some(gpu));
+        let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
+        let (volume, s) = match loaded {
+            Ok(v) => v,
+            Err(e) => {
+                headless.destroy(gpu);
+                return Err(e);
+            }
+        };
         let result = (|| -> Result<()> {
             let t_upload = Instant::now();
             headless.set_volume(gpu, &volume)?;

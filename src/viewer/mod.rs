@@ -55,6 +55,11 @@ pub struct ViewerOptions {
     pub script: Vec<ScriptStep>,
     /// The step of a time series to show first (`--time`).
     pub time: Option<u32>,
+    /// Host and device memory the volume may take (`--host-budget`, `--gpu-budget`; `None`: a quarter of the
+    /// machine's memory, the device's largest heap) and `--max-dim`.
+    pub host_budget: Option<u64>,
+    pub gpu_budget: Option<u64>,
+    pub max_dim: Option<u32>,
     /// Sampling quality of still frames (`--quality`; the panel and Q change it).
     pub quality: crate::scene::quality::Quality,
     /// Start in the four-up layout with the slice views (`--slices`; L toggles it).

@@ -5,7 +5,7 @@
 use super::decode::Endian;
 use super::format::{self, DataLocation, Encoding, Header};
 use super::open::{detect_format, Format};
-use super::{check_dims, metaimage, nifti, nrrd, raw, Geometry, OpenOptions, Scaling, VolumeError, VoxelType};
+use super::{check_extent, metaimage, nifti, nrrd, raw, Geometry, OpenOptions, Scaling, VolumeError, VoxelType};
 use std::path::{Path, PathBuf};
 
 /// A volume read in place: `timesteps` steps of `dims` voxels of `voxel_type`, one after another from `offset` in
@@ -71,7 +71,7 @@ pub fn in_place(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, Volu
 }
 
 fn header_in_place(path: &Path, header: Header, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
-    let step = check_dims(header.dims)?;
+    let step = check_extent(header.dims)?;
     let needed = step * header.voxel_type.size() as u64 * u64::from(header.timesteps.max(1));
     let (data_file, offset) = match &header.location {
         DataLocation::Inline(offset) => (path.to_path_buf(), *offset),
@@ -120,7 +120,10 @@ fn raw_in_place(path: &Path, opts: &OpenOptions) -> Result<InPlace, VolumeError>
     let file = format::file_label(path);
     let (name, dims, voxel_type) = raw::layout(path, &file, &opts.raw)?;
     let spacing = opts.raw.spacing.unwrap_or([1.0; 3]);
-    let (_, expected) = raw::sizes(dims, voxel_type, spacing)?;
+    let expected = check_extent(dims)? * voxel_type.size() as u64;
+    if !spacing.iter().all(|s| s.is_finite() && *s > 0.0) {
+        return Err(VolumeError::BadSpacing { spacing });
+    }
     let extras = raw::RawExtras {
         endian: opts.endian,
         header_bytes: opts.header_bytes,

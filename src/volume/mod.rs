@@ -11,6 +11,7 @@
 //! [`Volume::range`] and [`Volume::gpu_scale_bias`], so a 12-bit CT with an intercept of -1024 still takes two
 //! bytes per voxel on the GPU and no precision is lost.
 
+pub mod budget;
 mod builtin;
 mod decode;
 mod dicom;
@@ -305,6 +306,19 @@ impl Volume {
             ((intercept - slope * offset - min) / span) as f32,
         )
     }
+}
+
+/// Checks the dims of a file read in place (never held whole): no zero and none above [`MAX_DIM`], with no voxel
+/// limit. Returns the voxel count.
+pub(crate) fn check_extent(dims: [u32; 3]) -> Result<u64, VolumeError> {
+    if dims.contains(&0) {
+        return Err(VolumeError::ZeroDimension { dims });
+    }
+    if dims.iter().any(|&d| d > MAX_DIM) {
+        return Err(VolumeError::DimensionTooLarge { dims });
+    }
+    // Each factor is at most 2^14, so the product (at most 2^42) fits easily in u64.
+    Ok(dims.iter().map(|&d| u64::from(d)).product::<u64>())
 }
 
 /// Checks dims and returns the voxel count.

@@ -57,6 +57,9 @@ pub struct OpenOptions {
     pub series: Option<String>,
     /// The channel to load from an OME-Zarr image with a `c` axis (`None`: channel 0).
     pub channel: Option<u32>,
+    /// The memory budgets an OME-Zarr level must fit to be chosen (`None`: none). Other formats are read whole
+    /// here; `crate::scale::open` reads them within the budgets.
+    pub budgets: Option<super::budget::Budgets>,
 }
 
 /// Which reader a path needs. A folder is decided by its files: TIFFs make a TIFF stack, DICOM files a DICOM
@@ -232,6 +235,7 @@ fn open_unnamed(path: &Path, opts: &OpenOptions, progress: &mut dyn FnMut(f32)) 
             let zarr_opts = zarr::ZarrOptions {
                 channel: opts.channel,
                 max_dim: opts.max_dim,
+                budgets: opts.budgets,
             };
             zarr::load(path, zarr_opts, &mut progress)?
         }

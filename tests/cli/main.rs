@@ -15,6 +15,7 @@ mod info_notes;
 mod movie;
 mod options;
 mod render_and_errors;
+mod scale;
 mod series;
 mod state;
 mod tools;

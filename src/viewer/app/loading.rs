@@ -49,8 +49,8 @@ pub(super) struct Loader {
     dialog: Option<Receiver<Option<PathBuf>>>,
     /// When the dialog was asked for: an answer of no file sooner than [`NO_DIALOG_WITHIN`] means none was shown.
     dialog_asked: Instant,
-    /// The device's 3D texture limit: larger volumes are downsampled.
-    max_dim: u32,
+    /// The budgets and `--max-dim`: a larger volume is shown at a coarser pyramid level.
+    limits: Limits,
     /// The channel of an OME-Zarr image to load (`--channel`; `None`: channel 0).
     pub(super) channel: Option<u32>,
 }
@@ -61,31 +61,41 @@ pub(super) fn value_histogram(v: &Volume) -> Vec<u64> {
     crate::transfer::auto::value_histogram(v, crate::transfer::auto::AUTO_BINS)
 }
 
-/// Loads any format `volume::open` reads (raw with the given options); a volume larger than `max_dim` (the
-/// device's 3D texture limit) is downsampled with a warning rather than refused.
+/// What a volume is shown within: the host and GPU budgets (the device's 3-D texture limit with them) and the
+/// user's `--max-dim`.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Limits {
+    pub(super) budgets: volume::budget::Budgets,
+    pub(super) max_dim: Option<u32>,
+}
+
+/// Loads any format `volume::open` reads (raw with the given options) within `limits`: a volume larger than they
+/// allow is shown at a coarser pyramid level, with a note, rather than refused.
 pub(super) fn open_source(
     source: &VolumeSource,
-    max_dim: u32,
+    limits: Limits,
     series: Option<&str>,
     channel: Option<u32>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Volume, String> {
     match source {
-        VolumeSource::Builtin(name, size) => volume::builtin(name, *size).map_err(|e| e.to_string()),
+        VolumeSource::Builtin(name, size) => volume::builtin(name, *size)
+            .and_then(|v| crate::scale::fit(v, &limits.budgets, false))
+            .map_err(|e| e.to_string()),
         VolumeSource::File(path, raw) => {
             let opts = volume::OpenOptions {
                 raw: raw.clone(),
-                max_dim: Some(max_dim),
+                max_dim: limits.max_dim,
                 series: series.map(str::to_string),
                 channel,
                 ..Default::default()
             };
-            volume::open_with_progress(path, &opts, progress).map_err(|e| e.to_string())
+            crate::scale::open(path, &opts, limits.budgets, progress).map_err(|e| e.to_string())
         }
     }
 }
 
-fn load_in_background(source: VolumeSource, max_dim: u32, series: Option<String>, channel: Option<u32>) -> Loading {
+fn load_in_background(source: VolumeSource, limits: Limits, series: Option<String>, channel: Option<u32>) -> Loading {
     let label = match (&source, &series) {
         (VolumeSource::Builtin(name, _), _) => name.clone(),
         (VolumeSource::File(path, _), None) => path.display().to_string(),
@@ -97,7 +107,7 @@ fn load_in_background(source: VolumeSource, max_dim: u32, series: Option<String>
     let recorded = source.clone();
     std::thread::spawn(move || {
         // Reading is 90% of the bar, the histogram the rest.
-        let result = open_source(&source, max_dim, series.as_deref(), channel, &mut |f| {
+        let result = open_source(&source, limits, series.as_deref(), channel, &mut |f| {
             p.store((0.9 * f).to_bits(), Ordering::Relaxed)
         });
         p.store(0.9f32.to_bits(), Ordering::Relaxed);
@@ -117,20 +127,20 @@ fn load_in_background(source: VolumeSource, max_dim: u32, series: Option<String>
 }
 
 impl Loader {
-    pub(super) fn new(max_dim: u32, restore: Option<ViewState>) -> Loader {
+    pub(super) fn new(limits: Limits, restore: Option<ViewState>) -> Loader {
         Loader {
             loading: None,
             initial: None,
             pending_restore: restore,
             dialog: None,
             dialog_asked: Instant::now(),
-            max_dim,
+            limits,
             channel: None,
         }
     }
 
-    pub(super) fn max_dim(&self) -> u32 {
-        self.max_dim
+    pub(super) fn limits(&self) -> Limits {
+        self.limits
     }
 
     /// A load is under way.
@@ -157,7 +167,7 @@ impl Loader {
         }
         messages.error = None;
         messages.about = Topic::Volume;
-        self.loading = Some(load_in_background(source, self.max_dim, series, self.channel));
+        self.loading = Some(load_in_background(source, self.limits, series, self.channel));
     }
 
     /// Shows the platform's file dialog (unless one is open); it blocks until the user answers, so it runs on

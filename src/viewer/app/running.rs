@@ -3,7 +3,7 @@
 
 use super::capture::Capture;
 use super::gui::Gui;
-use super::loading::{open_source, value_histogram, Arrived, Loader};
+use super::loading::{open_source, value_histogram, Arrived, Limits, Loader};
 use super::pacing::{Activity, Pacing};
 use super::script::Script;
 use super::title;
@@ -11,6 +11,7 @@ use super::volumes::Shown;
 use crate::viewer::model::Model;
 use crate::viewer::present::Presenter;
 use crate::viewer::{ViewerError, ViewerOptions, VolumeSource};
+use crate::volume::budget::Budgets;
 use crate::volume::{Volume, VoxelData, VoxelType};
 use winit::event_loop::{ActiveEventLoop, EventLoopProxy};
 use winit::window::Window;
@@ -44,7 +45,13 @@ impl Running {
         let presenter = Presenter::new(&window, &opts.gpu, model.display.vsync)?;
         let mut r = Running {
             gui: Gui::new(&window, presenter.max_texture_side()),
-            loader: Loader::new(presenter.max_volume_dim(), opts.restore.clone()),
+            loader: Loader::new(
+                Limits {
+                    budgets: Budgets::host(opts.host_budget).with_gpu(presenter.gpu_budget(opts.gpu_budget)),
+                    max_dim: opts.max_dim,
+                },
+                opts.restore.clone(),
+            ),
             window,
             presenter,
             model,
@@ -83,7 +90,7 @@ impl Running {
             }
             return Ok(());
         }
-        let first = open_source(&opts.source, self.loader.max_dim(), None, opts.channel, &mut |_| {})
+        let first = open_source(&opts.source, self.loader.limits(), None, opts.channel, &mut |_| {})
             .map_err(ViewerError::Other)?;
         let histogram = value_histogram(&first);
         (self.shown).install(&mut self.presenter, &mut self.model, first, histogram, false)?;

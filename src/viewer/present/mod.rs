@@ -121,9 +121,13 @@ impl Presenter {
         self.gpu.properties.limits.max_image_dimension2_d as usize
     }
 
-    /// The largest 3D texture side: larger volumes are downsampled when loaded.
-    pub fn max_volume_dim(&self) -> u32 {
-        self.gpu.properties.limits.max_image_dimension3_d
+    /// What the device takes: `bytes` (default its largest heap) and its 3-D texture side limit. Larger volumes
+    /// are shown at a coarser pyramid level.
+    pub fn gpu_budget(&self, bytes: Option<u64>) -> crate::volume::budget::GpuBudget {
+        crate::volume::budget::GpuBudget {
+            bytes: bytes.unwrap_or(self.gpu.device_local_bytes),
+            max_dim: self.gpu.properties.limits.max_image_dimension3_d,
+        }
     }
 
     /// Makes the swapchain fit a window of `width`×`height` (or take a new vsync) if it no longer does; returns

@@ -66,8 +66,13 @@ impl LevelSize {
 
 /// The level to load among `sizes` (finest first, read up to the first that fits, of `count` levels) and a note
 /// naming it and why finer ones were passed over. `Err` when even the coarsest cannot be loaded at all.
-pub(crate) fn choose(sizes: &[LevelSize], count: usize, max_dim: u32) -> Result<(usize, Option<String>), String> {
-    let fits = sizes.iter().position(|s| s.too_large(max_dim).is_none());
+pub(crate) fn choose(
+    sizes: &[LevelSize],
+    misfits: &[Option<String>],
+    count: usize,
+    max_dim: u32,
+) -> Result<(usize, Option<String>), String> {
+    let fits = (0..sizes.len()).position(|i| sizes[i].too_large(max_dim).is_none() && misfits[i].is_none());
     let index = match fits {
         Some(i) => i,
         None => {
@@ -86,7 +91,10 @@ pub(crate) fn choose(sizes: &[LevelSize], count: usize, max_dim: u32) -> Result<
     };
     let mut note = format!("level {index} of {count} ({})", sizes[index].text());
     if index > 0 {
-        let why = sizes[0].too_large(max_dim).unwrap_or_default();
+        let why = sizes[0]
+            .too_large(max_dim)
+            .or_else(|| misfits[0].clone())
+            .unwrap_or_default();
         note.push_str(&format!("; level 0 ({}) is too large: {why}", sizes[0].text()));
     }
     if fits.is_none() {
@@ -110,12 +118,15 @@ mod tests {
     #[test]
     fn the_finest_level_that_fits_is_chosen() {
         let sizes = [size(1024, 1024, 512), size(512, 512, 256), size(256, 256, 128)];
-        let (i, note) = choose(&sizes, sizes.len(), 512).unwrap();
+        let (i, note) = choose(&sizes, &[None, None, None][..sizes.len()], sizes.len(), 512).unwrap();
         assert_eq!(i, 1);
         let note = note.unwrap();
         assert!(note.starts_with("level 1 of 3 (512x512x256); level 0 (1024x1024x512) is too large: 1024 exceeds the maximum dimension 512"), "{note}");
-        assert_eq!(choose(&sizes, sizes.len(), 2048).unwrap().0, 0);
-        let (i, note) = choose(&sizes, sizes.len(), 100).unwrap();
+        assert_eq!(
+            choose(&sizes, &vec![None; sizes.len()], sizes.len(), 2048).unwrap().0,
+            0
+        );
+        let (i, note) = choose(&sizes, &[None, None, None][..sizes.len()], sizes.len(), 100).unwrap();
         assert_eq!(i, 2);
         assert!(note.unwrap().contains("downsampled"));
     }
@@ -123,9 +134,9 @@ mod tests {
     #[test]
     fn petabyte_levels_are_refused() {
         let sizes = [size(1 << 30, 1 << 30, 1 << 30)];
-        let e = choose(&sizes, sizes.len(), 2048).unwrap_err();
+        let e = choose(&sizes, &vec![None; sizes.len()], sizes.len(), 2048).unwrap_err();
         assert!(e.contains("too large to load"), "{e}");
         let voxels = [size(16384, 16384, 16384)];
-        assert!(choose(&voxels, 1, 16384).is_err());
+        assert!(choose(&voxels, &[None], 1, 16384).is_err());
     }
 }

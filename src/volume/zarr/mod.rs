@@ -8,6 +8,7 @@ pub(crate) mod metadata;
 mod place;
 mod read;
 
+use super::budget::{self, Budgets, Shape};
 use super::decode::Progress;
 use super::{format, Scaling, Volume, VolumeError, VoxelType, MAX_DIM};
 use levels::LevelSize;
@@ -26,6 +27,8 @@ pub(crate) struct ZarrOptions {
     pub channel: Option<u32>,
     /// Largest dimension a level may have to be chosen.
     pub max_dim: Option<u32>,
+    /// The memory budgets a level must fit to be chosen (`volume::budget`); `None`: no budget.
+    pub budgets: Option<Budgets>,
 }
 
 /// Whether a folder is a Zarr node (v3 `zarr.json`, v2 `.zgroup`/`.zattrs`/`.zarray`).
@@ -60,7 +63,7 @@ pub(crate) fn load_store(
         array,
         size,
         note: level_note,
-    } = open_level(&store, &ms, opts.max_dim).map_err(bad)?;
+    } = open_level(&store, &ms, opts.max_dim, opts.budgets).map_err(bad)?;
     let voxel_type = read::voxel_type(&array).map_err(|given| VolumeError::UnsupportedType {
         file: file.to_string(),
         format: "OME-Zarr",
@@ -121,9 +124,15 @@ struct Chosen {
 }
 
 /// Opens the level to load: each level's array metadata is read finest first until one fits.
-fn open_level(store: &ReadableStorage, ms: &Multiscale, max_dim: Option<u32>) -> Result<Chosen, String> {
+fn open_level(
+    store: &ReadableStorage,
+    ms: &Multiscale,
+    max_dim: Option<u32>,
+    budgets: Option<Budgets>,
+) -> Result<Chosen, String> {
     let max_dim = max_dim.unwrap_or(MAX_DIM);
     let mut sizes = Vec::with_capacity(ms.levels.len());
+    let mut misfits = Vec::with_capacity(ms.levels.len());
     let mut arrays = Vec::with_capacity(ms.levels.len());
     for (k, level) in ms.levels.iter().enumerate() {
         let array = Array::open(store.clone(), &format!("/{}", level.path)).map_err(|e| {
@@ -152,14 +161,16 @@ fn open_level(store: &ReadableStorage, ms: &Multiscale, max_dim: Option<u32>) ->
                 array.shape()
             ));
         }
-        let fits = size.too_large(max_dim).is_none();
+        let misfit = budgets.and_then(|b| over_budget(&size, &array, &b));
+        let fits = size.too_large(max_dim).is_none() && misfit.is_none();
         sizes.push(size);
+        misfits.push(misfit);
         arrays.push(array);
         if fits {
             break;
         }
     }
-    let (k, note) = levels::choose(&sizes, ms.levels.len(), max_dim)?;
+    let (k, note) = levels::choose(&sizes, &misfits, ms.levels.len(), max_dim)?;
     let array = arrays.swap_remove(k);
     Ok(Chosen {
         index: k,
@@ -167,6 +178,19 @@ fn open_level(store: &ReadableStorage, ms: &Multiscale, max_dim: Option<u32>) ->
         size: sizes[k],
         note,
     })
+}
+
+/// Why a level of `size` does not fit `budgets` (one channel, every time step held), or `None` if it does or its
+/// type is one volcast does not read (refused later, by name).
+fn over_budget(size: &LevelSize, array: &Array<dyn ReadableStorageTraits>, budgets: &Budgets) -> Option<String> {
+    let voxel_type = read::voxel_type(array).ok()?;
+    let dims = size.dims.map(|d| u32::try_from(d).unwrap_or(u32::MAX));
+    let shape = Shape {
+        dims,
+        voxel_type,
+        steps: u32::try_from(size.timesteps).unwrap_or(u32::MAX),
+    };
+    budget::misfit(&shape, 0, budgets)
 }
 
 /// The channel to load, checked against the `c` axis; the message lists the channels.
@@ -299,6 +323,7 @@ pub mod from_bytes {
         let opts = ZarrOptions {
             channel: None,
             max_dim: Some(256),
+            budgets: None,
         };
         load_store("fuzz.zarr", "fuzz", Arc::new(store), opts, &mut Progress::none())
     }

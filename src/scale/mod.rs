@@ -1,0 +1,115 @@
+//! Volumes larger than memory or the device, shown within budgets (`volume::budget`): the level of the resolution
+//! pyramid that fits is read, never the full resolution first. A file whose voxels lie in place on disk (raw,
+//! uncompressed NRRD, NIfTI, Analyze and MetaImage) is read level by level from the file with positioned reads, on
+//! every core ([`read`]); an OME-Zarr store gives its own level; any other file is read whole and then reduced.
+//! docs/large-volumes.md states the rules and what is still to come (bricks behind a page table).
+
+pub mod read;
+
+use crate::convert::source::Source;
+use crate::volume::budget::{self, Budgets, Shape};
+use crate::volume::in_place::in_place;
+use crate::volume::{self, OpenOptions, Volume, VolumeError};
+use std::path::Path;
+
+/// Opens `path` as [`volume::open`] does, within `budgets`: the finest level that fits them, with a note saying
+/// why when that is not full resolution. A volume that fits no budget (not even one voxel) is refused before it is
+/// read; `--no-downsample` (`opts.no_downsample`) refuses any level but full resolution.
+pub fn open(
+    path: &Path,
+    opts: &OpenOptions,
+    budgets: Budgets,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Volume, VolumeError> {
+    let opts = OpenOptions {
+        budgets: Some(budgets),
+        ..opts.clone()
+    };
+    let named = |problem: String| VolumeError::Header {
+        file: path.display().to_string(),
+        problem,
+    };
+    if let Some(place) = in_place(path, &opts)? {
+        let shape = Shape {
+            dims: place.dims,
+            voxel_type: place.voxel_type,
+            steps: place.timesteps,
+        };
+        let level = budget::choose(&shape, &budgets).map_err(named)?;
+        if level.level > 0 {
+            refuse_if_asked(&opts, shape.dims, &level).map_err(named)?;
+            let mut notes = place.notes.clone();
+            notes.push(budget::level_note(shape.dims, &level));
+            let format = place.format;
+            let source = Source::in_place(place)?;
+            let mut v = read::read_level(&source, level.level, budgets.host, notes, progress)?;
+            v.format = format.to_string();
+            return Ok(after_level(v, &opts));
+        }
+    }
+    let v = volume::open_with_progress(path, &opts, progress)?;
+    fit(v, &budgets, opts.no_downsample).map_err(|e| match e {
+        VolumeError::Header { problem, .. } => named(problem),
+        e => e,
+    })
+}
+
+/// `--max-dim`, where given, still applies to a level read from a file.
+fn after_level(v: Volume, opts: &OpenOptions) -> Volume {
+    match opts.max_dim {
+        Some(m) if v.dims.iter().any(|&d| d > m) => v.map_steps(|s| volume::downsample_to(s, m)),
+        _ => v,
+    }
+}
+
+fn refuse_if_asked(opts: &OpenOptions, dims: [u32; 3], level: &budget::Level) -> Result<(), String> {
+    if !opts.no_downsample {
+        return Ok(());
+    }
+    let [x, y, z] = dims;
+    Err(format!(
+        "{x}x{y}x{z} does not fit at full resolution ({}), and --no-downsample refuses a coarser level; raise \
+         --host-budget or --gpu-budget, or drop --no-downsample to see pyramid level {}",
+        level.why.as_deref().unwrap_or("over budget"),
+        level.level
+    ))
+}
+
+/// `v` reduced to the finest pyramid level that fits `budgets` (itself if full resolution fits), every time step,
+/// keeping what the file said (format, modality, arrays, series, channels, notes) and the shown step.
+pub fn fit(v: Volume, budgets: &Budgets, no_downsample: bool) -> Result<Volume, VolumeError> {
+    let shape = Shape {
+        dims: v.dims,
+        voxel_type: v.source_type,
+        steps: v.timesteps(),
+    };
+    let named = |problem: String| VolumeError::Header {
+        file: v.name.clone(),
+        problem,
+    };
+    let level = budget::choose(&shape, budgets).map_err(named)?;
+    if level.level == 0 {
+        return Ok(v);
+    }
+    if no_downsample {
+        return Err(named(format!(
+            "it does not fit at full resolution ({}), and --no-downsample refuses a coarser level",
+            level.why.as_deref().unwrap_or("over budget")
+        )));
+    }
+    let mut notes = v.notes.clone();
+    notes.push(budget::level_note(shape.dims, &level));
+    let shown = v.shown_step();
+    let (format, modality) = (v.format.clone(), v.modality.clone());
+    let (arrays, series, channels) = (v.arrays.clone(), v.series.clone(), v.channels.clone());
+    let source = Source::Loaded(Box::new(v));
+    let mut out = read::read_level(&source, level.level, budgets.host, notes, &mut |_| {})?;
+    drop(source);
+    out.format = format;
+    out.modality = modality;
+    out.arrays = arrays;
+    out.series = series;
+    out.channels = channels;
+    out.show_step(shown)?;
+    Ok(out)
+}

@@ -1,0 +1,196 @@
+//! Reading one level of the resolution pyramid without holding the level above it: output slices are made on every
+//! core, each from the 2^L source slices under it (read with positioned reads from a file in place, or copied from a
+//! loaded volume), reduced level by level with `convert::pyramid`'s mean. Because the slab is aligned to 2^L, the
+//! cascade inside it is exactly the pyramid's: the result equals level L of `volcast convert`'s store.
+
+use super::budget::level_dims;
+use crate::convert::pyramid::{downsample, factors, Reduce};
+use crate::convert::sample::Sample;
+use crate::convert::source::Source;
+use crate::volume::{Geometry, Volume, VolumeError, VoxelData, VoxelType};
+use rayon::prelude::*;
+
+/// Output slices made at once: enough to keep every core busy, few enough to bound the slabs held.
+fn batch(threads: usize, slab_bytes: u64, host_budget: u64) -> usize {
+    let by_memory = (host_budget / 4 / slab_bytes.max(1)).max(1) as usize;
+    (threads * 2).min(by_memory).max(1)
+}
+
+/// Level `level` of time step `t` of `source`, held as volcast holds the type (biased 8/16-bit integers, float32
+/// for wider types). `progress` gets the fraction of output slices made.
+fn level_step<T: Sample>(
+    source: &Source,
+    t: u32,
+    level: u32,
+    host_budget: u64,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Vec<T>, VolumeError> {
+    let full = source.dims();
+    let out = level_dims(full, level);
+    let slice = out[0] as usize * out[1] as usize;
+    let span = 1u32 << level;
+    let slab_bytes = u64::from(full[0]) * u64::from(full[1]) * u64::from(span) * std::mem::size_of::<T>() as u64;
+    let step = batch(rayon::current_num_threads(), slab_bytes, host_budget);
+    let mut dst = vec![T::default(); slice * out[2] as usize];
+    for first in (0..out[2] as usize).step_by(step) {
+        let last = (first + step).min(out[2] as usize);
+        dst[first * slice..last * slice]
+            .par_chunks_mut(slice)
+            .zip(first..last)
+            .try_for_each(|(into, oz)| {
+                let z0 = oz as u32 * span;
+                let n = span.min(full[2] - z0);
+                let mut slab: Vec<T> = source.read_slab(t, z0, n, crate::volume::Scaling::IDENTITY)?;
+                let mut dims = [full[0] as usize, full[1] as usize, n as usize];
+                for l in 0..level {
+                    // The factors of the whole level, not of the slab: an axis of length 1 is not halved.
+                    let f = factors(level_dims(full, l).map(u64::from));
+                    slab = downsample(&slab, dims, f, Reduce::Mean);
+                    dims = [0, 1, 2].map(|i| dims[i].div_ceil(f[i]));
+                }
+                into.copy_from_slice(&slab);
+                Ok::<(), VolumeError>(())
+            })?;
+        progress(last as f32 / out[2] as f32);
+    }
+    Ok(dst)
+}
+
+/// One step of level `level` as [`VoxelData`] in the representation `voxel_type` is held in.
+fn level_data(
+    source: &Source,
+    t: u32,
+    level: u32,
+    host_budget: u64,
+    progress: &mut dyn FnMut(f32),
+) -> Result<VoxelData, VolumeError> {
+    Ok(match source.held_type() {
+        VoxelType::U8 => VoxelData::U8(level_step::<u8>(source, t, level, host_budget, progress)?),
+        VoxelType::I8 => VoxelData::U8(
+            level_step::<i8>(source, t, level, host_budget, progress)?
+                .into_par_iter()
+                .map(|v| (i16::from(v) + 128) as u8)
+                .collect(),
+        ),
+        VoxelType::U16 => VoxelData::U16(level_step::<u16>(source, t, level, host_budget, progress)?),
+        VoxelType::I16 => VoxelData::U16(
+            level_step::<i16>(source, t, level, host_budget, progress)?
+                .into_par_iter()
+                .map(|v| (i32::from(v) + 32768) as u16)
+                .collect(),
+        ),
+        _ => VoxelData::F32(level_step::<f32>(source, t, level, host_budget, progress)?),
+    })
+}
+
+/// The geometry of level `level`: each level's voxel spans the 2 (or 1) voxels of the level below along each
+/// axis, centred on them, as `volcast convert` places its levels.
+pub fn level_geometry(geometry: Geometry, full: [u32; 3], level: u32) -> Geometry {
+    (0..level).fold(geometry, |g, l| {
+        let f = factors(level_dims(full, l).map(u64::from));
+        g.downsampled(f.map(|v| v as u32))
+    })
+}
+
+/// Level `level` of every time step of `source` as a volume (named, placed and rescaled like the source), with
+/// `notes` added. Level 0 of a loaded source is a copy; callers keep the loaded volume instead.
+pub fn read_level(
+    source: &Source,
+    level: u32,
+    host_budget: u64,
+    notes: Vec<String>,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Volume, VolumeError> {
+    let steps = source.timesteps().max(1);
+    let mut data = Vec::with_capacity(steps as usize);
+    for t in 0..steps {
+        let (t0, n) = (t as f32, steps as f32);
+        data.push(level_data(source, t, level, host_budget, &mut |f| {
+            progress((t0 + f) / n)
+        })?);
+    }
+    let dims = level_dims(source.dims(), level);
+    let first = data.remove(0);
+    let mut v = Volume::new(source.name(), dims, [1.0; 3], source.source_type(), first)?
+        .with_geometry(level_geometry(source.geometry(), source.dims(), level))?
+        .with_time_steps(data)?;
+    let scaling = source.scaling();
+    if !scaling.is_identity() {
+        v = v.with_scaling(scaling)?;
+    }
+    v.notes = notes;
+    Ok(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::in_place::in_place;
+    use crate::volume::{OpenOptions, RawOptions};
+
+    /// Level `l` voxel (x, y, z) by the pyramid's definition, recursively: the mean of the up-to-8 voxels of level
+    /// `l - 1` it covers (an axis of length 1 is not halved), rounded half away from zero.
+    fn by_definition(src: &[i16], dims: [u32; 3], l: u32, at: [u32; 3]) -> f64 {
+        if l == 0 {
+            let [x, y, z] = at.map(|v| v as usize);
+            return f64::from(src[x + dims[0] as usize * (y + dims[1] as usize * z)]);
+        }
+        let below = crate::volume::budget::level_dims(dims, l - 1);
+        let f = below.map(|n| if n > 1 { 2 } else { 1 });
+        let mut values = Vec::new();
+        for dz in 0..f[2] {
+            for dy in 0..f[1] {
+                for dx in 0..f[0] {
+                    let c = [at[0] * f[0] + dx, at[1] * f[1] + dy, at[2] * f[2] + dz];
+                    if (0..3).all(|i| c[i] < below[i]) {
+                        values.push(by_definition(src, dims, l - 1, c));
+                    }
+                }
+            }
+        }
+        (values.iter().sum::<f64>() / values.len() as f64).round()
+    }
+
+    #[test]
+    fn levels_read_in_place_and_from_memory_match_the_definition() {
+        let dims = [7u32, 5, 6];
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        let src: Vec<i16> = (0..n).map(|i| ((i * 7919) % 601) as i16 - 300).collect();
+        let dir = std::env::temp_dir().join(format!("volcast-level-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("v.raw");
+        std::fs::write(&path, bytemuck::cast_slice::<i16, u8>(&src)).unwrap();
+        let opts = OpenOptions {
+            raw: RawOptions {
+                dims: Some(dims),
+                voxel_type: Some(VoxelType::I16),
+                spacing: None,
+            },
+            ..Default::default()
+        };
+        let place = in_place(&path, &opts).unwrap().expect("raw is read in place");
+        let from_file = Source::in_place(place).unwrap();
+        let loaded = Source::Loaded(Box::new(crate::volume::open(&path, &opts).unwrap()));
+        for level in 1..=3 {
+            let a = read_level(&from_file, level, 1 << 30, Vec::new(), &mut |_| {}).unwrap();
+            let b = read_level(&loaded, level, 1 << 30, Vec::new(), &mut |_| {}).unwrap();
+            let out = crate::volume::budget::level_dims(dims, level);
+            assert_eq!(a.dims, out);
+            for z in 0..out[2] {
+                for y in 0..out[1] {
+                    for x in 0..out[0] {
+                        let want = by_definition(&src, dims, level, [x, y, z]);
+                        assert_eq!(a.value(x, y, z), want, "level {level} at ({x}, {y}, {z})");
+                        assert_eq!(b.value(x, y, z), want, "loaded, level {level} at ({x}, {y}, {z})");
+                    }
+                }
+            }
+            // Level 1's first voxel is centred between voxels 0 and 1 of level 0 on every halved axis.
+            if level == 1 {
+                let centre = a.geometry.affine.transform_point3(glam::DVec3::ZERO);
+                assert_eq!(centre, glam::DVec3::splat(0.5));
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

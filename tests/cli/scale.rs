@@ -1,0 +1,124 @@
+//! Volumes larger than the budgets, through the binary (docs/large-volumes.md): a file over `--gpu-budget` is shown
+//! at the pyramid level that fits, read level by level from the file, and that level is the one `volcast convert`
+//! writes (the two renders are the same image); a budget that holds nothing, `--no-downsample`, a header that
+//! claims terabytes; and a file past 2^31 voxels, once refused, opens at a coarser level.
+
+use crate::common;
+
+use common::{stderr, stdout, volcast, volcast_ok};
+use std::path::Path;
+
+/// A 160x96x80 int16 raw file (levels 160x96x80, 80x48x40, 40x24x20) with negative values and structure.
+fn write_volume(dir: &Path) -> String {
+    let [w, h, d] = [160usize, 96, 80];
+    let mut bytes = Vec::with_capacity(w * h * d * 2);
+    for z in 0..d {
+        for y in 0..h {
+            for x in 0..w {
+                let (fx, fy, fz) = (
+                    x as f64 / w as f64 - 0.5,
+                    y as f64 / h as f64 - 0.5,
+                    z as f64 / d as f64 - 0.5,
+                );
+                let r = (fx * fx + fy * fy + fz * fz).sqrt();
+                let v = (3000.0 * (1.0 - 2.5 * r)).round() as i16 - 500 + ((x * 7 + y * 3 + z) % 5) as i16;
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    let path = dir.join("ball_160x96x80_int16.raw");
+    std::fs::write(&path, bytes).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+#[test]
+fn over_the_gpu_budget_a_file_shows_the_level_convert_writes() {
+    let dir = common::scratch("cli-scale-level");
+    let raw = write_volume(&dir);
+    // Level 1 takes 80x48x40x2 = 300 KiB, twice that with the upload; level 0 takes 2.3 MiB.
+    let a = dir.join("budget.png");
+    let o = volcast_ok(&["render", &raw, "--gpu-budget", "700K", "-o", &a.to_string_lossy()]);
+    let err = stderr(&o);
+    assert!(
+        err.contains(
+            "note: shown at pyramid level 1 (80x48x40, 1/2 of 160x96x80 per axis, the mean of each block): at full \
+             resolution its texture needs 3 MiB"
+        ),
+        "{err}"
+    );
+    assert!(stdout(&o).contains("(80x48x40 int16"), "{}", stdout(&o));
+    let store = dir.join("ball.ome.zarr");
+    let o = volcast(&["convert", &raw, &store.to_string_lossy()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let b = dir.join("store.png");
+    volcast_ok(&[
+        "render",
+        &store.to_string_lossy(),
+        "--max-dim",
+        "80",
+        "-o",
+        &b.to_string_lossy(),
+    ]);
+    let (a, b) = (image::open(&a).unwrap().to_rgba8(), image::open(&b).unwrap().to_rgba8());
+    assert!(a == b, "the budget's level and the store's level 1 render differently");
+    // The host budget alone (info has no device): level 2.
+    let o = volcast(&["info", &raw, "--host-budget", "100K"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("dims:      40 x 24 x 20"), "{text}");
+    assert!(text.contains("the host budget is 100 KiB (--host-budget)"), "{text}");
+}
+
+#[test]
+fn budgets_that_hold_nothing_and_refusals_name_the_numbers() {
+    let dir = common::scratch("cli-scale-refusals");
+    let raw = write_volume(&dir);
+    let o = volcast(&["info", &raw, "--host-budget", "1"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("ball_160x96x80_int16.raw"), "{err}");
+    assert!(err.contains("not even one voxel per step fits"), "{err}");
+    let o = volcast(&["info", &raw, "--host-budget", "1M", "--no-downsample"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("--no-downsample refuses a coarser level"), "{err}");
+    assert!(
+        err.contains("needs 3 MiB of memory and the host budget is 1 MiB"),
+        "{err}"
+    );
+    let o = volcast(&["info", &raw, "--host-budget", "lots"]);
+    assert_eq!(o.status.code(), Some(64), "{}", stderr(&o));
+    assert!(stderr(&o).contains("'lots' is not a size"), "{}", stderr(&o));
+    // A header claiming 16384^3 float32 (16 TiB) over a few bytes: refused before anything is read.
+    let nrrd = dir.join("huge.nrrd");
+    let header = "NRRD0004\ntype: float\ndimension: 3\nsizes: 16384 16384 16384\nencoding: raw\n\n";
+    std::fs::write(&nrrd, [header.as_bytes(), &[0u8; 64]].concat()).unwrap();
+    let o = volcast(&["info", &nrrd.to_string_lossy()]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("huge.nrrd") && err.contains("17592186044416"), "{err}");
+}
+
+#[test]
+fn past_two_to_the_31_voxels_a_file_opens_at_a_coarser_level() {
+    let dir = common::scratch("cli-scale-sparse");
+    // 2048x1024x1025 uint8 (2^31 + 2^21 voxels), sparse: it takes no disk and reads as zeros but one marked voxel
+    // block near the far corner.
+    let path = dir.join("sparse_2048x1024x1025_uint8.raw");
+    let file = std::fs::File::create(&path).unwrap();
+    file.set_len(2048 * 1024 * 1025).unwrap();
+    use std::os::unix::fs::FileExt;
+    let last = 2048u64 * 1024 * 1024;
+    file.write_all_at(&[200, 200], last + 2046).unwrap();
+    drop(file);
+    let o = volcast(&["info", &path.to_string_lossy(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(json["dims"], serde_json::json!([1024, 512, 513]), "{json}");
+    let notes = json["notes"].to_string();
+    assert!(notes.contains("shown at pyramid level 1"), "{notes}");
+    assert!(notes.contains("2147483648 volcast holds as one volume"), "{notes}");
+    // Voxel (1023, 0, 512) of level 1 is the mean of the block holding the two 200s: 400 / 4 (the last slice
+    // has one fine slice under it, so 4 voxels), exactly 100.
+    assert_eq!(json["value_range"], serde_json::json!([0.0, 100.0]), "{json}");
+}
