@@ -185,7 +185,7 @@ impl Source {
 }
 
 /// One voxel's bytes as its value.
-fn decode(t: VoxelType, big: bool, b: &[u8]) -> f64 {
+pub(crate) fn decode(t: VoxelType, big: bool, b: &[u8]) -> f64 {
     macro_rules! num {
         ($ty:ty, $n:expr) => {{
             let a: [u8; $n] = b.try_into().expect("voxel size");

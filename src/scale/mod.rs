@@ -4,6 +4,7 @@
 //! every core ([`read`]); an OME-Zarr store gives its own level; any other file is read whole and then reduced.
 //! docs/large-volumes.md states the rules and what is still to come (bricks behind a page table).
 
+pub mod preview;
 pub mod read;
 
 use crate::convert::source::Source;
@@ -52,6 +53,23 @@ pub fn open(
         VolumeError::Header { problem, .. } => named(problem),
         e => e,
     })
+}
+
+/// A strided preview of `path` ([`preview::preview`]) when it is a file read in place that is large at the level
+/// `budgets` give it; `None` for everything else.
+pub fn preview_within(path: &Path, opts: &OpenOptions, budgets: Budgets) -> Result<Option<Volume>, VolumeError> {
+    let Some(place) = in_place(path, opts)? else {
+        return Ok(None);
+    };
+    let shape = Shape {
+        dims: place.dims,
+        voxel_type: place.voxel_type,
+        steps: place.timesteps,
+    };
+    match budget::choose(&shape, &budgets) {
+        Ok(level) => preview::preview(path, opts, level.level),
+        Err(_) => Ok(None),
+    }
 }
 
 /// `--max-dim`, where given, still applies to a level read from a file.

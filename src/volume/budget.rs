@@ -189,8 +189,8 @@ pub fn level_note(full: [u32; 3], level: &Level) -> String {
     let [a, b, c] = full;
     let [x, y, z] = level.dims;
     format!(
-        "shown at pyramid level {} ({x}x{y}x{z}, 1/{} of {a}x{b}x{c} per axis, the mean of each block): at full \
-         resolution {}",
+        "pyramid level {} ({x}x{y}x{z}, 1/{} of {a}x{b}x{c} per axis, the mean of each block): at full resolution \
+         {}",
         level.level,
         1u32 << level.level,
         level.why.as_deref().unwrap_or("it does not fit")

@@ -41,7 +41,7 @@ fn over_the_gpu_budget_a_file_shows_the_level_convert_writes() {
     let err = stderr(&o);
     assert!(
         err.contains(
-            "note: shown at pyramid level 1 (80x48x40, 1/2 of 160x96x80 per axis, the mean of each block): at full \
+            "note: pyramid level 1 (80x48x40, 1/2 of 160x96x80 per axis, the mean of each block): at full \
              resolution its texture needs 3 MiB"
         ),
         "{err}"
@@ -116,7 +116,7 @@ fn past_two_to_the_31_voxels_a_file_opens_at_a_coarser_level() {
     let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(json["dims"], serde_json::json!([1024, 512, 513]), "{json}");
     let notes = json["notes"].to_string();
-    assert!(notes.contains("shown at pyramid level 1"), "{notes}");
+    assert!(notes.contains("pyramid level 1 (1024x512x513"), "{notes}");
     assert!(notes.contains("2147483648 volcast holds as one volume"), "{notes}");
     // Voxel (1023, 0, 512) of level 1 is the mean of the block holding the two 200s: 400 / 4 (the last slice
     // has one fine slice under it, so 4 voxels), exactly 100.

@@ -14,6 +14,7 @@ mod formats;
 mod history;
 mod idle;
 mod keys;
+mod large;
 mod lighting;
 mod panel;
 mod recent;

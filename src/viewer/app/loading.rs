@@ -24,7 +24,13 @@ struct Loading {
     /// What is loading (recorded for the view state once shown).
     source: VolumeSource,
     progress: Arc<AtomicU32>,
-    rx: Receiver<Result<(Volume, Vec<u64>), String>>,
+    rx: Receiver<Delivery>,
+}
+
+/// What the loading thread sends: for a large file read in place, first a strided preview, then the volume.
+enum Delivery {
+    Preview(Volume, Vec<u64>),
+    Done(Result<(Volume, Vec<u64>), String>),
 }
 
 /// A volume that finished loading.
@@ -35,6 +41,8 @@ pub(super) struct Arrived {
     pub(super) label: String,
     /// It is the command line's volume: `Some(--time)`.
     pub(super) initial: Option<Option<u32>>,
+    /// A strided preview shown while the volume itself is read (its load goes on).
+    pub(super) preview: bool,
 }
 
 /// Loads in the background, one at a time, and what waits for them.
@@ -106,6 +114,17 @@ fn load_in_background(source: VolumeSource, limits: Limits, series: Option<Strin
     let p = progress.clone();
     let recorded = source.clone();
     std::thread::spawn(move || {
+        // A large file read in place is shown first from every k-th voxel (scale::preview), then refined.
+        if let VolumeSource::File(path, raw) = &source {
+            let opts = volume::OpenOptions {
+                raw: raw.clone(),
+                ..Default::default()
+            };
+            if let Ok(Some(v)) = crate::scale::preview_within(path, &opts, limits.budgets) {
+                let h = value_histogram(&v);
+                let _ = tx.send(Delivery::Preview(v, h));
+            }
+        }
         // Reading is 90% of the bar, the histogram the rest.
         let result = open_source(&source, limits, series.as_deref(), channel, &mut |f| {
             p.store((0.9 * f).to_bits(), Ordering::Relaxed)
@@ -116,7 +135,7 @@ fn load_in_background(source: VolumeSource, limits: Limits, series: Option<Strin
             (v, h)
         });
         p.store(1.0f32.to_bits(), Ordering::Relaxed);
-        let _ = tx.send(analysed);
+        let _ = tx.send(Delivery::Done(analysed));
     });
     Loading {
         label,
@@ -214,7 +233,17 @@ impl Loader {
         }
         let Some(loading) = &self.loading else { return None };
         match loading.rx.try_recv() {
-            Ok(Ok((volume, histogram))) => {
+            Ok(Delivery::Preview(volume, histogram)) => {
+                return Some(Arrived {
+                    volume,
+                    histogram,
+                    source: loading.source.clone(),
+                    label: loading.label.clone(),
+                    initial: None,
+                    preview: true,
+                });
+            }
+            Ok(Delivery::Done(Ok((volume, histogram)))) => {
                 let (label, source) = (loading.label.clone(), loading.source.clone());
                 self.loading = None;
                 messages.loading = None;
@@ -225,9 +254,10 @@ impl Loader {
                     source,
                     label,
                     initial,
+                    preview: false,
                 });
             }
-            Ok(Err(e)) => {
+            Ok(Delivery::Done(Err(e))) => {
                 self.pending_restore = None;
                 if self.initial.take().is_some() {
                     // The command line's volume: the window stays open on the empty placeholder, with the error

@@ -8,6 +8,7 @@ use super::pacing::{Activity, Pacing};
 use super::script::Script;
 use super::title;
 use super::volumes::Shown;
+use crate::viewer::model::history::Snapshot;
 use crate::viewer::model::Model;
 use crate::viewer::present::Presenter;
 use crate::viewer::{ViewerError, ViewerOptions, VolumeSource};
@@ -112,14 +113,29 @@ impl Running {
             source,
             label,
             initial,
+            preview,
         } = arrived;
         let from_file = matches!(source, VolumeSource::File(..));
-        // A multiscale image (OME-Zarr) says which of its levels it shows, and why not a finer one.
+        // A multiscale image (OME-Zarr) says which of its levels it shows, and why not a finer one; so does a volume
+        // shown at a coarser level than its file's, and a preview.
         let level = volume
             .notes
             .iter()
-            .find(|n| n.starts_with("level ") && n.contains(" of "))
+            .find(|n| {
+                (n.starts_with("level ") && n.contains(" of "))
+                    || n.starts_with("pyramid level")
+                    || n.starts_with("a preview")
+            })
             .cloned();
+        if preview {
+            return self.install_preview(volume, histogram, &label, level);
+        }
+        // After a preview, the volume replaces it in the view the user has: the camera and clipping plane, and the
+        // transfer function if they changed it (else the volume's own automatic one, from its full histogram).
+        let after_preview = self.shown.preview_tf.is_some();
+        let edited = self.shown.preview_edited(&self.model);
+        let before = after_preview.then(|| Snapshot::of(&self.model));
+        let from_file = from_file && !edited;
         let installed = (self.shown).install(&mut self.presenter, &mut self.model, volume, histogram, from_file);
         // Logged too: a load from the panel or a drop has no other trace outside the window.
         if let Err(e) = installed {
@@ -129,6 +145,14 @@ impl Running {
                 Some(_) => Err(e.into()),
                 None => Ok(()),
             };
+        }
+        if let Some(mut view) = before {
+            if !edited {
+                let look = &self.model.look;
+                (view.transfer_function, view.window, view.colormap) =
+                    (look.transfer_function.clone(), look.window, look.colormap);
+            }
+            view.restore(&mut self.model);
         }
         eprintln!("loaded {label}");
         self.model.messages.status = Some(format!("loaded {label}"));
@@ -147,6 +171,27 @@ impl Running {
         if let Some(session) = self.loader.pending_restore.take() {
             self.model.restore(&session);
         }
+        Ok(())
+    }
+
+    /// Shows a strided preview while its volume is read; the load goes on, and a script waiting for it waits on.
+    fn install_preview(
+        &mut self,
+        volume: Volume,
+        histogram: Vec<u64>,
+        label: &str,
+        note: Option<String>,
+    ) -> Result<(), ViewerError> {
+        let installed = (self.shown).install(&mut self.presenter, &mut self.model, volume, histogram, true);
+        if let Err(e) = installed {
+            // The volume itself may still fit where its preview did not: say so and wait for it.
+            eprintln!("could not show a preview of {label}: {e}");
+            return Ok(());
+        }
+        self.shown.preview_tf = Some(self.model.look.transfer_function.clone());
+        let note = note.unwrap_or_default();
+        eprintln!("previewing {label}: {note}");
+        self.model.messages.status = Some(format!("refining {label}: {note}"));
         Ok(())
     }
 
