@@ -376,6 +376,19 @@ pub(crate) struct BenchArgs {
     /// of 24³ at 64²); each step is uploaded and rendered, the two timed apart.
     #[arg(long, conflicts_with_all = ["sample_only", "scenes"])]
     pub(crate) playback: bool,
+    /// Only the scale scenes (docs/large-volumes.md): a procedural field at 256³, 1024³ and 2048³ uint8 and 2048³
+    /// uint16, generated once into --cache, opened cold and warm within the default budgets at 512² (or --size).
+    #[arg(long, conflicts_with_all = ["sample_only", "scenes", "playback"])]
+    pub(crate) scale: bool,
+    /// With --scale: only these edges (repeatable), e.g. --scale-edge 1024, of --scale-type voxels.
+    #[arg(long = "scale-edge", requires = "scale")]
+    pub(crate) scale_edges: Vec<u32>,
+    /// With --scale-edge: the voxel type, uint8 or uint16.
+    #[arg(long, requires = "scale_edges", value_parser = ["uint8", "uint16"], default_value = "uint8")]
+    pub(crate) scale_type: String,
+    /// Where --scale keeps its generated files (default: $XDG_CACHE_HOME/volcast/bench, else ~/.cache/volcast/bench).
+    #[arg(long, requires = "scale")]
+    pub(crate) cache: Option<PathBuf>,
     /// Sampling quality of every scene, as `render --quality`: draft, fast, normal or converged.
     #[arg(long, default_value = "normal", value_parser = parse_quality)]
     pub(crate) quality: Quality,

@@ -3,6 +3,7 @@
 use super::args::{BenchArgs, CompareArgs, InfoArgs, ViewArgs};
 use super::with_gpu;
 use anyhow::{bail, Context, Result};
+use std::path::PathBuf;
 use volcast::gpu::GpuError;
 use volcast::measure::compare;
 use volcast::render::headless::Headless;
@@ -138,6 +139,9 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
         gradients: args.gradients,
         step_length: args.step_length,
     };
+    if args.scale {
+        return scale_bench(args);
+    }
     if args.playback {
         let play = if args.quick {
             volcast::measure::playback::PlaybackOptions::QUICK
@@ -160,6 +164,44 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
             println!("{}", serde_json::to_string_pretty(&report)?);
         } else {
             print!("{}", report.text());
+        }
+        Ok(())
+    })
+}
+
+/// `bench --scale`.
+fn scale_bench(args: &BenchArgs) -> Result<()> {
+    use volcast::measure::scale_bench::{self, ScaleScene};
+    let scenes: Vec<ScaleScene> = if args.scale_edges.is_empty() {
+        ScaleScene::DEFAULT.to_vec()
+    } else {
+        let t = if args.scale_type == "uint16" {
+            volcast::volume::VoxelType::U16
+        } else {
+            volcast::volume::VoxelType::U8
+        };
+        args.scale_edges
+            .iter()
+            .map(|&e| ScaleScene::new(e.clamp(16, 16384), t))
+            .collect()
+    };
+    let dir = match &args.cache {
+        Some(d) => d.clone(),
+        None => std::env::var_os("XDG_CACHE_HOME")
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+            .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+            .unwrap_or_else(std::env::temp_dir)
+            .join("volcast/bench"),
+    };
+    let size = args.sizes.first().copied().unwrap_or(512);
+    with_gpu(&args.gpu, |gpu| {
+        let rows = scale_bench::run(gpu, &scenes, &dir, size, args.frames, &mut |l| eprintln!("{l}"))
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        if args.json {
+            println!("{}", serde_json::to_string_pretty(&rows)?);
+        } else {
+            print!("{}", scale_bench::table(&rows, &gpu.device_name, size));
         }
         Ok(())
     })

@@ -6,3 +6,4 @@ pub mod compare;
 pub mod fidelity;
 pub mod image_diff;
 pub mod playback;
+pub mod scale_bench;

@@ -1,0 +1,282 @@
+//! `volcast bench --scale`: volumes from 256³ to 2048³ (8 and 16 GiB), opened as a user opens them, within the
+//! default budgets (docs/large-volumes.md). Each scene is one procedural field (rings in a ball), generated once
+//! into a cache folder as a raw file (never committed) and read in place from there.
+//!
+//! Per scene, in this process, after evicting the file from the page cache (`posix_fadvise(DONTNEED)`, a cold
+//! read) and resetting the peak-RSS mark (`/proc/self/clear_refs`): time to the first image (the strided preview
+//! the viewer shows, where the file gets one, else the volume), time to the volume at the level the budgets take
+//! (read, uploaded, rendered), frame times at 512² at rest and as the viewer draws while dragging (half the
+//! resolution, draft steps), peak RSS, GPU memory, and the bytes read from files (`rchar`) and from the disk
+//! (`read_bytes`). Then the same open again with the file in the page cache (warm).
+
+use crate::gpu::{Gpu, GpuError};
+use crate::measure::bench::{gpu_allocated, peak_rss_bytes, Stats};
+use crate::render::headless::Headless;
+use crate::scene::quality::Quality;
+use crate::scene::settings::RenderSettings;
+use crate::volume::budget::{Budgets, GpuBudget};
+use crate::volume::{OpenOptions, Volume, VoxelType};
+use rayon::prelude::*;
+use std::fs::File;
+use std::os::unix::fs::FileExt;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A scale scene: the field at `edge`³ voxels of `voxel_type`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScaleScene {
+    pub edge: u32,
+    pub voxel_type: VoxelType,
+}
+
+impl ScaleScene {
+    /// The default scenes: 256³, 1024³ and 2048³ uint8, and 2048³ uint16.
+    pub const DEFAULT: [ScaleScene; 4] = [
+        ScaleScene::new(256, VoxelType::U8),
+        ScaleScene::new(1024, VoxelType::U8),
+        ScaleScene::new(2048, VoxelType::U8),
+        ScaleScene::new(2048, VoxelType::U16),
+    ];
+
+    pub const fn new(edge: u32, voxel_type: VoxelType) -> ScaleScene {
+        ScaleScene { edge, voxel_type }
+    }
+
+    /// `field_NxNxN_TYPE.raw`: a name volcast reads the layout from.
+    pub fn file_name(&self) -> String {
+        let n = self.edge;
+        format!("field_{n}x{n}x{n}_{}.raw", self.voxel_type.name())
+    }
+
+    pub fn bytes(&self) -> u64 {
+        u64::from(self.edge).pow(3) * self.voxel_type.size() as u64
+    }
+}
+
+/// The field at normalised position p in [-1, 1]³: 0.3 of a ball's radial ramp plus rings (a tube of radius 0.08
+/// about the circle of radius 0.55 around z, repeated along z), in [0, 1].
+pub fn field(x: f32, y: f32, z: f32) -> f32 {
+    let ball = (1.0 - (x * x + y * y + z * z).sqrt() / 0.9).clamp(0.0, 1.0);
+    let ring_z = (z * 4.0).fract().abs() - 0.5;
+    let d2 = ((x * x + y * y).sqrt() - 0.55).powi(2) + (ring_z * 0.25).powi(2);
+    let tube = (1.0 - d2 / (0.08 * 0.08)).max(0.0);
+    (0.3 * ball + 0.7 * tube * tube).min(1.0)
+}
+
+/// Writes `scene`'s file into `dir` unless it is there at its size; slabs of slices made on every core.
+pub fn generate(scene: ScaleScene, dir: &Path, log: &mut dyn FnMut(&str)) -> std::io::Result<PathBuf> {
+    let path = dir.join(scene.file_name());
+    if std::fs::metadata(&path).is_ok_and(|m| m.len() == scene.bytes()) {
+        return Ok(path);
+    }
+    std::fs::create_dir_all(dir)?;
+    log(&format!(
+        "scale: generating {} ({} MiB)",
+        path.display(),
+        scene.bytes() >> 20
+    ));
+    let n = scene.edge as usize;
+    let size = scene.voxel_type.size();
+    let file = File::create(&path)?;
+    let coord = |i: usize| (i as f32 + 0.5) / n as f32 * 2.0 - 1.0;
+    for z0 in (0..n).step_by(16) {
+        let slices = 16.min(n - z0);
+        let mut slab = vec![0u8; slices * n * n * size];
+        slab.par_chunks_mut(n * size).enumerate().for_each(|(row, out)| {
+            let (y, z) = (row % n, z0 + row / n);
+            for x in 0..n {
+                let v = field(coord(x), coord(y), coord(z));
+                match scene.voxel_type {
+                    VoxelType::U16 => out[2 * x..2 * x + 2].copy_from_slice(&((v * 65535.0) as u16).to_le_bytes()),
+                    _ => out[x] = (v * 255.0) as u8,
+                }
+            }
+        });
+        file.write_all_at(&slab, (z0 * n * n * size) as u64)?;
+    }
+    Ok(path)
+}
+
+/// One scene's measurements (times in seconds, frames in ms, bytes).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ScaleRow {
+    pub scene: String,
+    pub file_bytes: u64,
+    /// "cold" (evicted from the page cache first) or "warm".
+    pub cache: &'static str,
+    /// The dims shown and the pyramid level (0: full resolution).
+    pub shown: [u32; 3],
+    pub level: u32,
+    pub first_image_s: f64,
+    /// Whether the first image was the strided preview.
+    pub preview: bool,
+    pub refined_s: f64,
+    pub rest_ms: Stats,
+    pub drag_ms: Stats,
+    pub peak_rss_bytes: Option<u64>,
+    pub gpu_bytes: u64,
+    pub read_from_files: Option<u64>,
+    pub read_from_disk: Option<u64>,
+}
+
+/// (rchar, read_bytes) of this process.
+fn io_counters() -> Option<(u64, u64)> {
+    let text = std::fs::read_to_string("/proc/self/io").ok()?;
+    let field = |name: &str| -> Option<u64> {
+        let line = text.lines().find(|l| l.starts_with(name))?;
+        line.split_whitespace().nth(1)?.parse().ok()
+    };
+    Some((field("rchar:")?, field("read_bytes:")?))
+}
+
+/// Drops `path` from the page cache, so the next read comes from the disk.
+fn evict(path: &Path) {
+    if let Ok(f) = File::open(path) {
+        use std::os::fd::AsRawFd;
+        // SAFETY: fadvise only advises the kernel about an open descriptor's cached pages; no memory is touched.
+        unsafe {
+            libc::posix_fadvise(f.as_raw_fd(), 0, 0, libc::POSIX_FADV_DONTNEED);
+        }
+    }
+}
+
+/// Resets this process's peak-RSS mark (Linux: writing 5 to /proc/self/clear_refs); false where it cannot.
+fn reset_peak_rss() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+fn timed_frames(gpu: &Gpu, headless: &mut Headless, s: &RenderSettings, frames: u32) -> Result<Stats, GpuError> {
+    headless.render(gpu, s)?;
+    let mut ms = Vec::new();
+    for _ in 0..frames.max(1) {
+        let t = Instant::now();
+        headless.render(gpu, s)?;
+        ms.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    Stats::of(&ms).ok_or(GpuError::Lost("no frames timed"))
+}
+
+/// The settings at `size`² for `v`: normal quality at rest; dragging as the viewer draws it (half the resolution,
+/// the draft step and strides).
+fn settings(v: &Volume, size: u32) -> (RenderSettings, RenderSettings) {
+    let mut rest = RenderSettings::new(size, size, v.extent());
+    Quality::Normal.apply(&mut rest, v.range);
+    let mut drag = rest.clone();
+    drag.width = size / 2;
+    drag.height = size / 2;
+    drag.step_length = drag.step_length.max(Quality::Draft.step_length(&drag, v.range));
+    drag.max_stride = drag.max_stride.max(Quality::Draft.max_stride());
+    (rest, drag)
+}
+
+/// Opens, shows and times `path` once (see the module's description).
+pub fn measure(
+    gpu: &Gpu,
+    path: &Path,
+    cache: &'static str,
+    size: u32,
+    frames: u32,
+) -> Result<ScaleRow, Box<dyn std::error::Error>> {
+    if cache == "cold" {
+        evict(path);
+    }
+    let peak_known = reset_peak_rss();
+    let io0 = io_counters();
+    let budgets = Budgets::host(None).with_gpu(GpuBudget {
+        bytes: gpu.device_local_bytes,
+        max_dim: gpu.properties.limits.max_image_dimension3_d,
+    });
+    let opts = OpenOptions::default();
+    let mut headless = Headless::new(gpu)?;
+    let result = (|| -> Result<ScaleRow, Box<dyn std::error::Error>> {
+        let start = Instant::now();
+        let preview = crate::scale::preview_within(path, &opts, budgets)?;
+        let had_preview = preview.is_some();
+        if let Some(p) = preview {
+            headless.set_volume(gpu, &p)?;
+            headless.render(gpu, &settings(&p, size).0)?;
+        }
+        let first = start.elapsed().as_secs_f64();
+        let v = crate::scale::open(path, &opts, budgets, &mut |_| {})?;
+        headless.set_volume(gpu, &v)?;
+        let (rest, drag) = settings(&v, size);
+        headless.render(gpu, &rest)?;
+        let refined = start.elapsed().as_secs_f64();
+        let io1 = io_counters();
+        let level = v
+            .notes
+            .iter()
+            .find_map(|n| n.strip_prefix("pyramid level ")?.split(' ').next()?.parse().ok());
+        Ok(ScaleRow {
+            scene: path
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+            file_bytes: std::fs::metadata(path)?.len(),
+            cache,
+            shown: v.dims,
+            level: level.unwrap_or(0),
+            first_image_s: if had_preview { first } else { refined },
+            preview: had_preview,
+            refined_s: refined,
+            rest_ms: timed_frames(gpu, &mut headless, &rest, frames)?,
+            drag_ms: timed_frames(gpu, &mut headless, &drag, frames)?,
+            peak_rss_bytes: if peak_known { peak_rss_bytes() } else { None },
+            gpu_bytes: gpu_allocated(gpu)?.0,
+            read_from_files: io0.zip(io1).map(|(a, b)| b.0 - a.0),
+            read_from_disk: io0.zip(io1).map(|(a, b)| b.1 - a.1),
+        })
+    })();
+    headless.destroy(gpu);
+    result
+}
+
+/// Every scene, cold and then warm, at `size`²: files generated into `dir` where missing.
+pub fn run(
+    gpu: &Gpu,
+    scenes: &[ScaleScene],
+    dir: &Path,
+    size: u32,
+    frames: u32,
+    log: &mut dyn FnMut(&str),
+) -> Result<Vec<ScaleRow>, Box<dyn std::error::Error>> {
+    let mut rows = Vec::new();
+    for scene in scenes {
+        let path = generate(*scene, dir, log)?;
+        for cache in ["cold", "warm"] {
+            log(&format!("scale: {} ({cache})", scene.file_name()));
+            rows.push(measure(gpu, &path, cache, size, frames)?);
+        }
+    }
+    Ok(rows)
+}
+
+/// The table `bench --scale` prints.
+pub fn table(rows: &[ScaleRow], device: &str, size: u32) -> String {
+    let mib = |b: u64| format!("{}", b >> 20);
+    let opt = |b: Option<u64>| b.map_or("-".to_string(), mib);
+    let mut out = format!(
+        "scale scenes on {device} at {size}x{size}, default budgets (host {} MiB)\n\
+         | scene | cache | shown (level) | first image s | refined s | rest ms | drag ms | peak RSS MiB | GPU MiB | read MiB (disk) |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
+        crate::volume::budget::default_host() >> 20
+    );
+    for r in rows {
+        let [x, y, z] = r.shown;
+        out += &format!(
+            "| {} | {} | {x}x{y}x{z} ({}) | {:.2}{} | {:.2} | {:.0} | {:.0} | {} | {} | {} ({}) |\n",
+            r.scene,
+            r.cache,
+            r.level,
+            r.first_image_s,
+            if r.preview { " (preview)" } else { "" },
+            r.refined_s,
+            r.rest_ms.median,
+            r.drag_ms.median,
+            opt(r.peak_rss_bytes),
+            mib(r.gpu_bytes),
+            opt(r.read_from_files),
+            opt(r.read_from_disk),
+        );
+    }
+    out
+}
