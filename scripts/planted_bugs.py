@@ -161,6 +161,18 @@ BUGS = [
        "let json = multiscale\n        .and_then(|m| m.get(\"volcast-\"))\n        .or_else(|| metadata.and_then(|m| m.get(\"volcast-\")))")]),
     ("metaimage-not-lps", "a MetaImage is placed as if its world were RAS, not ITK's LPS (mirrored in x and y against Slicer)",
      [("src/volume/metaimage.rs", "geometry::LPS_TO_RAS * geometry::from_columns(columns, origin),", "geometry::from_columns(columns, origin),")]),
+    ("level-not-centred", "a pyramid level read within the budgets keeps level 0's voxel positions instead of its blocks' centres",
+     [("src/scale/read.rs", "g.downsampled(f.map(|v| v as u32))",
+       "Geometry { affine: g.affine * glam::DMat4::from_scale(glam::DVec3::new(f[0] as f64, f[1] as f64, f[2] as f64)), ..g }")]),
+    ("level-budget-upload-ignored", "the level rule lets a texture take the whole GPU budget, leaving nothing for its upload",
+     [("src/volume/budget.rs", "(texture > gpu.bytes / 2).then(|| {", "(texture > gpu.bytes).then(|| {")]),
+    ("level-int16-bias", "a pyramid level of int16 data is re-biased by 32767 instead of 32768",
+     [("src/scale/read.rs", ".map(|v| (i32::from(v) + 32768) as u16)", ".map(|v| (i32::from(v) + 32767) as u16)")]),
+    ("preview-not-strided", "the strided preview is placed as if its voxels were the file's, so it fills a corner of the box",
+     [("src/scale/preview.rs", "affine: place.geometry.affine * DMat4::from_diagonal(DVec4::new(kf, kf, kf, 1.0)),",
+       "affine: place.geometry.affine * DMat4::from_diagonal(DVec4::new(1.0, 1.0, 1.0, 1.0 + 0.0 * kf)),")]),
+    ("histogram-element-raw", "the parallel histogram bins 8/16-bit elements by their raw value, not their normalised one",
+     [("src/transfer/auto.rs", "let v = volume.normalize_element(e as f64);", "let v = e as f64 / 65535.0;")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent

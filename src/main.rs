@@ -4,7 +4,7 @@
 mod cli;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
-use cli::args::{BenchArgs, CompareArgs, ConvertArgs, GpuArgs, InfoArgs, RenderArgs, ViewArgs, VolumeArgs};
+use cli::args::{BenchArgs, CacheArgs, CompareArgs, ConvertArgs, GpuArgs, InfoArgs, RenderArgs, ViewArgs, VolumeArgs};
 use cli::commands::{bench, compare, devices, info, view};
 use cli::render::render;
 use std::process::ExitCode;
@@ -39,6 +39,8 @@ enum Command {
     Bench(Box<BenchArgs>),
     /// Write a volume as an OME-Zarr store with a multiscale pyramid (docs/cli.md, convert).
     Convert(Box<ConvertArgs>),
+    /// Show or empty the pyramid cache (levels of large files kept for the next open; docs/large-volumes.md).
+    Cache(Box<CacheArgs>),
     /// List the Vulkan devices and which one volcast would pick.
     Devices,
 }
@@ -104,6 +106,8 @@ fn main() -> ExitCode {
                 max_dim: None,
                 host_budget: None,
                 gpu_budget: None,
+                cache_dir: None,
+                no_cache: false,
                 no_downsample: false,
                 array: None,
                 series: None,
@@ -129,6 +133,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(a)) => bench(a),
         Some(Command::Info(a)) => info(a),
         Some(Command::Convert(a)) => cli::convert::convert(a),
+        Some(Command::Cache(a)) => cli::commands::cache(a),
         Some(Command::Devices) => devices(),
     };
     match result {

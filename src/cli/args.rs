@@ -52,6 +52,13 @@ pub(crate) struct VolumeArgs {
     /// volume is shown at the finest pyramid level that fits.
     #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
     pub(crate) gpu_budget: Option<u64>,
+    /// Where levels read from large files are kept for the next open, as OME-Zarr stores (default:
+    /// $XDG_CACHE_HOME/volcast, else ~/.cache/volcast); `volcast cache` shows and empties it.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) cache_dir: Option<PathBuf>,
+    /// Neither read nor write the pyramid cache.
+    #[arg(long)]
+    pub(crate) no_cache: bool,
     /// Refuse a volume larger than --max-dim or the budgets instead of downsampling it.
     #[arg(long)]
     pub(crate) no_downsample: bool,
@@ -171,7 +178,10 @@ impl VolumeArgs {
             bar.set_style(style.progress_chars("=> "));
         }
         bar.set_message(format!("loading {}", path.display()));
-        let loaded = volcast::scale::open(path, &opts, budgets, &mut |f| bar.set_position((f * 1000.0) as u64));
+        let cache = (!self.no_cache).then(|| volcast::scale::cache::PyramidCache::new(self.cache_dir.clone()));
+        let loaded = volcast::scale::open(path, &opts, budgets, cache.as_ref(), &mut |f| {
+            bar.set_position((f * 1000.0) as u64)
+        });
         bar.finish_and_clear();
         // A --series the folder does not hold is a usage error (exit 64), its message listing those it does.
         let mut v = loaded.map_err(|e| match e {
@@ -213,6 +223,16 @@ impl VolumeArgs {
             spacing: self.spacing.as_ref().map(|s| [s[0], s[1], s[2]]),
         })
     }
+}
+
+#[derive(Args, Clone)]
+pub(crate) struct CacheArgs {
+    /// The cache folder (default: $XDG_CACHE_HOME/volcast, else ~/.cache/volcast).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) cache_dir: Option<PathBuf>,
+    /// Empty it.
+    #[arg(long)]
+    pub(crate) clear: bool,
 }
 
 #[derive(Args, Clone)]

@@ -1,6 +1,6 @@
 //! The other subcommands' bodies: `view`, `compare`, `bench`, `info` and `devices`.
 
-use super::args::{BenchArgs, CompareArgs, InfoArgs, ViewArgs};
+use super::args::{BenchArgs, CacheArgs, CompareArgs, InfoArgs, ViewArgs};
 use super::with_gpu;
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
@@ -43,6 +43,8 @@ pub(crate) fn view(args: &ViewArgs) -> Result<()> {
         host_budget: args.volume.host_budget,
         gpu_budget: args.volume.gpu_budget,
         max_dim: args.volume.max_dim,
+        cache_dir: args.volume.cache_dir.clone(),
+        no_cache: args.volume.no_cache,
         quality: args.quality,
         slices: args.slices,
         restore,
@@ -205,6 +207,25 @@ fn scale_bench(args: &BenchArgs) -> Result<()> {
         }
         Ok(())
     })
+}
+
+/// `volcast cache`: where the pyramid cache is, what it holds, and `--clear`.
+pub(crate) fn cache(args: &CacheArgs) -> Result<()> {
+    let cache = volcast::scale::cache::PyramidCache::new(args.cache_dir.clone());
+    let (entries, bytes) = cache.usage();
+    println!(
+        "pyramid cache: {} ({entries} entr{}, {} MiB)",
+        cache.root.join("pyramids").display(),
+        if entries == 1 { "y" } else { "ies" },
+        bytes >> 20
+    );
+    if args.clear {
+        let freed = cache
+            .clear()
+            .with_context(|| format!("emptying {}", cache.root.join("pyramids").display()))?;
+        println!("emptied: {} MiB freed", freed >> 20);
+    }
+    Ok(())
 }
 
 pub(crate) fn info(args: &InfoArgs) -> Result<()> {

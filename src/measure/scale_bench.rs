@@ -7,11 +7,14 @@
 //! the viewer shows, where the file gets one, else the volume), time to the volume at the level the budgets take
 //! (read, uploaded, rendered), frame times at 512² at rest and as the viewer draws while dragging (half the
 //! resolution, draft steps), peak RSS, GPU memory, and the bytes read from files (`rchar`) and from the disk
-//! (`read_bytes`). Then the same open again with the file in the page cache (warm).
+//! (`read_bytes`). Then the same open again with the file in the page cache (warm), both with an empty pyramid
+//! cache (the time to write the level into it is reported apart), and once more from the pyramid cache, file and
+//! cache evicted (cached).
 
 use crate::gpu::{Gpu, GpuError};
 use crate::measure::bench::{gpu_allocated, peak_rss_bytes, Stats};
 use crate::render::headless::Headless;
+use crate::scale::cache::PyramidCache;
 use crate::scene::quality::Quality;
 use crate::scene::settings::RenderSettings;
 use crate::volume::budget::{Budgets, GpuBudget};
@@ -102,7 +105,8 @@ pub fn generate(scene: ScaleScene, dir: &Path, log: &mut dyn FnMut(&str)) -> std
 pub struct ScaleRow {
     pub scene: String,
     pub file_bytes: u64,
-    /// "cold" (evicted from the page cache first) or "warm".
+    /// "cold" (evicted from the page cache first), "warm" (in the page cache) or "cached" (read from the pyramid
+    /// cache, evicted from the page cache first).
     pub cache: &'static str,
     /// The dims shown and the pyramid level (0: full resolution).
     pub shown: [u32; 3],
@@ -117,6 +121,8 @@ pub struct ScaleRow {
     pub gpu_bytes: u64,
     pub read_from_files: Option<u64>,
     pub read_from_disk: Option<u64>,
+    /// Seconds to write the level into the pyramid cache, after it was shown (none when read from it).
+    pub cache_write_s: Option<f64>,
 }
 
 /// (rchar, read_bytes) of this process.
@@ -127,6 +133,18 @@ fn io_counters() -> Option<(u64, u64)> {
         line.split_whitespace().nth(1)?.parse().ok()
     };
     Some((field("rchar:")?, field("read_bytes:")?))
+}
+
+/// Drops every file under `dir` from the page cache.
+fn evict_tree(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for e in entries.flatten() {
+        match e.file_type() {
+            Ok(t) if t.is_dir() => evict_tree(&e.path()),
+            Ok(_) => evict(&e.path()),
+            Err(_) => {}
+        }
+    }
 }
 
 /// Drops `path` from the page cache, so the next read comes from the disk.
@@ -174,11 +192,17 @@ pub fn measure(
     gpu: &Gpu,
     path: &Path,
     cache: &'static str,
+    pyramids: &PyramidCache,
     size: u32,
     frames: u32,
 ) -> Result<ScaleRow, Box<dyn std::error::Error>> {
-    if cache == "cold" {
+    if cache != "warm" {
         evict(path);
+    }
+    if cache == "cached" {
+        evict_tree(&pyramids.root);
+    } else {
+        pyramids.clear()?;
     }
     let peak_known = reset_peak_rss();
     let io0 = io_counters();
@@ -197,7 +221,8 @@ pub fn measure(
             headless.render(gpu, &settings(&p, size).0)?;
         }
         let first = start.elapsed().as_secs_f64();
-        let v = crate::scale::open(path, &opts, budgets, &mut |_| {})?;
+        let opened = crate::scale::open_deferred(path, &opts, budgets, Some(pyramids), &mut |_| {})?;
+        let v = opened.volume;
         headless.set_volume(gpu, &v)?;
         let (rest, drag) = settings(&v, size);
         headless.render(gpu, &rest)?;
@@ -207,6 +232,16 @@ pub fn measure(
             .notes
             .iter()
             .find_map(|n| n.strip_prefix("pyramid level ")?.split(' ').next()?.parse().ok());
+        let (rest_ms, drag_ms) = (
+            timed_frames(gpu, &mut headless, &rest, frames)?,
+            timed_frames(gpu, &mut headless, &drag, frames)?,
+        );
+        let peak = if peak_known { peak_rss_bytes() } else { None };
+        let write = Instant::now();
+        let cache_write_s = opened.keep.map(|k| {
+            drop(k.write(v.clone()));
+            write.elapsed().as_secs_f64()
+        });
         Ok(ScaleRow {
             scene: path
                 .file_name()
@@ -218,12 +253,13 @@ pub fn measure(
             first_image_s: if had_preview { first } else { refined },
             preview: had_preview,
             refined_s: refined,
-            rest_ms: timed_frames(gpu, &mut headless, &rest, frames)?,
-            drag_ms: timed_frames(gpu, &mut headless, &drag, frames)?,
-            peak_rss_bytes: if peak_known { peak_rss_bytes() } else { None },
+            rest_ms,
+            drag_ms,
+            peak_rss_bytes: peak,
             gpu_bytes: gpu_allocated(gpu)?.0,
             read_from_files: io0.zip(io1).map(|(a, b)| b.0 - a.0),
             read_from_disk: io0.zip(io1).map(|(a, b)| b.1 - a.1),
+            cache_write_s,
         })
     })();
     headless.destroy(gpu);
@@ -240,13 +276,15 @@ pub fn run(
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<ScaleRow>, Box<dyn std::error::Error>> {
     let mut rows = Vec::new();
+    let pyramids = PyramidCache::new(Some(dir.join("pyramid-cache")));
     for scene in scenes {
         let path = generate(*scene, dir, log)?;
-        for cache in ["cold", "warm"] {
+        for cache in ["cold", "warm", "cached"] {
             log(&format!("scale: {} ({cache})", scene.file_name()));
-            rows.push(measure(gpu, &path, cache, size, frames)?);
+            rows.push(measure(gpu, &path, cache, &pyramids, size, frames)?);
         }
     }
+    pyramids.clear()?;
     Ok(rows)
 }
 
@@ -256,14 +294,14 @@ pub fn table(rows: &[ScaleRow], device: &str, size: u32) -> String {
     let opt = |b: Option<u64>| b.map_or("-".to_string(), mib);
     let mut out = format!(
         "scale scenes on {device} at {size}x{size}, default budgets (host {} MiB)\n\
-         | scene | cache | shown (level) | first image s | refined s | rest ms | drag ms | peak RSS MiB | GPU MiB | read MiB (disk) |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n",
+         | scene | cache | shown (level) | first image s | refined s | rest ms | drag ms | peak RSS MiB | GPU MiB | read MiB (disk) | cache write s |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
         crate::volume::budget::default_host() >> 20
     );
     for r in rows {
         let [x, y, z] = r.shown;
         out += &format!(
-            "| {} | {} | {x}x{y}x{z} ({}) | {:.2}{} | {:.2} | {:.0} | {:.0} | {} | {} | {} ({}) |\n",
+            "| {} | {} | {x}x{y}x{z} ({}) | {:.2}{} | {:.2} | {:.0} | {:.0} | {} | {} | {} ({}) | {} |\n",
             r.scene,
             r.cache,
             r.level,
@@ -276,6 +314,7 @@ pub fn table(rows: &[ScaleRow], device: &str, size: u32) -> String {
             mib(r.gpu_bytes),
             opt(r.read_from_files),
             opt(r.read_from_disk),
+            r.cache_write_s.map_or("-".to_string(), |s| format!("{s:.1}")),
         );
     }
     out

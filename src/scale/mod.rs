@@ -4,24 +4,67 @@
 //! every core ([`read`]); an OME-Zarr store gives its own level; any other file is read whole and then reduced.
 //! docs/large-volumes.md states the rules and what is still to come (bricks behind a page table).
 
+pub mod cache;
 pub mod preview;
 pub mod read;
 
 use crate::convert::source::Source;
 use crate::volume::budget::{self, Budgets, Shape};
-use crate::volume::in_place::in_place;
+use crate::volume::in_place::{in_place, InPlace};
 use crate::volume::{self, OpenOptions, Volume, VolumeError};
+use cache::{Lookup, PyramidCache};
 use std::path::Path;
 
 /// Opens `path` as [`volume::open`] does, within `budgets`: the finest level that fits them, with a note saying
 /// why when that is not full resolution. A volume that fits no budget (not even one voxel) is refused before it is
-/// read; `--no-downsample` (`opts.no_downsample`) refuses any level but full resolution.
+/// read; `--no-downsample` (`opts.no_downsample`) refuses any level but full resolution. With `cache`, a level of a
+/// file read in place is read from the pyramid cache where it is there, and kept there where it is not.
 pub fn open(
     path: &Path,
     opts: &OpenOptions,
     budgets: Budgets,
+    cache: Option<&PyramidCache>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Volume, VolumeError> {
+    let opened = open_deferred(path, opts, budgets, cache, progress)?;
+    Ok(match opened.keep {
+        Some(keep) => keep.write(opened.volume),
+        None => opened.volume,
+    })
+}
+
+/// What [`open_deferred`] opened, and the cache write it left to the caller.
+pub struct Opened {
+    pub volume: Volume,
+    pub keep: Option<Keep>,
+}
+
+/// A level read from its file, to keep in the pyramid cache.
+pub struct Keep {
+    cache: PyramidCache,
+    place: InPlace,
+    level: u32,
+}
+
+impl Keep {
+    /// Writes `v` into the cache and gives it back, with a note if the cache could not be written.
+    pub fn write(self, v: Volume) -> Volume {
+        let (mut v, kept) = self.cache.store(&self.place, self.level, v);
+        if let Err(e) = kept {
+            v.notes.push(format!("the pyramid cache was not written: {e}"));
+        }
+        v
+    }
+}
+
+/// [`open`], leaving the cache write to the caller (the viewer shows the volume first).
+pub fn open_deferred(
+    path: &Path,
+    opts: &OpenOptions,
+    budgets: Budgets,
+    cache: Option<&PyramidCache>,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Opened, VolumeError> {
     let opts = OpenOptions {
         budgets: Some(budgets),
         ..opts.clone()
@@ -41,18 +84,39 @@ pub fn open(
             refuse_if_asked(&opts, shape.dims, &level).map_err(named)?;
             let mut notes = place.notes.clone();
             notes.push(budget::level_note(shape.dims, &level));
-            let format = place.format;
-            let source = Source::in_place(place)?;
+            let miss_note = match cache.map(|c| c.lookup(&place, level.level)) {
+                Some(Lookup::Hit(mut v)) => {
+                    notes.append(&mut v.notes);
+                    v.notes = notes;
+                    return Ok(Opened {
+                        volume: after_level(*v, &opts),
+                        keep: None,
+                    });
+                }
+                Some(Lookup::Miss { note }) => note,
+                None => None,
+            };
+            notes.extend(miss_note);
+            let source = Source::in_place(place.clone())?;
             let mut v = read::read_level(&source, level.level, budgets.host, notes, progress)?;
-            v.format = format.to_string();
-            return Ok(after_level(v, &opts));
+            v.format = place.format.to_string();
+            let keep = cache.map(|c| Keep {
+                cache: c.clone(),
+                place,
+                level: level.level,
+            });
+            return Ok(Opened {
+                volume: after_level(v, &opts),
+                keep,
+            });
         }
     }
     let v = volume::open_with_progress(path, &opts, progress)?;
-    fit(v, &budgets, opts.no_downsample).map_err(|e| match e {
+    let volume = fit(v, &budgets, opts.no_downsample).map_err(|e| match e {
         VolumeError::Header { problem, .. } => named(problem),
         e => e,
-    })
+    })?;
+    Ok(Opened { volume, keep: None })
 }
 
 /// A strided preview of `path` ([`preview::preview`]) when it is a file read in place that is large at the level

@@ -60,6 +60,9 @@ pub struct ViewerOptions {
     pub host_budget: Option<u64>,
     pub gpu_budget: Option<u64>,
     pub max_dim: Option<u32>,
+    /// The pyramid cache's folder (`--cache-dir`; `None`: the default) and `--no-cache`.
+    pub cache_dir: Option<std::path::PathBuf>,
+    pub no_cache: bool,
     /// Sampling quality of still frames (`--quality`; the panel and Q change it).
     pub quality: crate::scene::quality::Quality,
     /// Start in the four-up layout with the slice views (`--slices`; L toggles it).

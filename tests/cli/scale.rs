@@ -122,3 +122,95 @@ fn past_two_to_the_31_voxels_a_file_opens_at_a_coarser_level() {
     // has one fine slice under it, so 4 voxels), exactly 100.
     assert_eq!(json["value_range"], serde_json::json!([0.0, 100.0]), "{json}");
 }
+
+#[test]
+fn the_pyramid_cache_is_used_rebuilt_when_stale_or_corrupt_and_never_fatal() {
+    let dir = common::scratch("cli-scale-cache");
+    let raw = write_volume(&dir);
+    let cache = dir.join("cache").to_string_lossy().into_owned();
+    let render = |name: &str| {
+        let out = dir.join(name);
+        let o = volcast_ok(&[
+            "render",
+            &raw,
+            "--gpu-budget",
+            "700K",
+            "--cache-dir",
+            &cache,
+            "-o",
+            &out.to_string_lossy(),
+        ]);
+        (stderr(&o), image::open(&out).unwrap().to_rgba8())
+    };
+    let (first, a) = render("miss.png");
+    assert!(!first.contains("pyramid cache"), "{first}");
+    let o = volcast(&["cache", "--cache-dir", &cache]);
+    assert!(stdout(&o).contains("(1 entry,"), "{}", stdout(&o));
+    // The second open reads the level from the cache: the same image.
+    let (second, b) = render("hit.png");
+    assert!(second.contains("note: read from the pyramid cache ("), "{second}");
+    assert!(a == b, "the cached level renders differently");
+    // The file changes (rewritten with the same bytes: its time changes): rebuilt.
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    std::fs::write(&raw, std::fs::read(&raw).unwrap()).unwrap();
+    let (stale, c) = render("stale.png");
+    assert!(
+        stale.contains("(the file changed since it was made): rebuilt"),
+        "{stale}"
+    );
+    assert!(a == c);
+    // A store whose metadata is garbage: rebuilt.
+    let store = std::fs::read_dir(dir.join("cache/pyramids"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|x| x == "zarr"))
+        .expect("an entry");
+    std::fs::write(store.join("zarr.json"), b"{ not json").unwrap();
+    let (corrupt, d) = render("corrupt.png");
+    assert!(
+        corrupt.contains("is corrupt (") && corrupt.contains("rebuilt"),
+        "{corrupt}"
+    );
+    assert!(a == d);
+    let (again, _) = render("again.png");
+    assert!(again.contains("read from the pyramid cache"), "{again}");
+    // A cache folder that cannot be made (under a file) is a note, not an error.
+    let blocked = dir.join("a-file");
+    std::fs::write(&blocked, b"x").unwrap();
+    let o = volcast(&[
+        "info",
+        &raw,
+        "--host-budget",
+        "1M",
+        "--cache-dir",
+        &blocked.join("cache").to_string_lossy(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("the pyramid cache was not written: cannot make the folder of"),
+        "{}",
+        stdout(&o)
+    );
+    // --no-cache neither reads nor writes; `cache --clear` empties it.
+    let (none, _) = render_no_cache(&raw, &dir);
+    assert!(!none.contains("pyramid cache"), "{none}");
+    let o = volcast(&["cache", "--cache-dir", &cache, "--clear"]);
+    assert!(stdout(&o).contains("emptied"), "{}", stdout(&o));
+    let o = volcast(&["cache", "--cache-dir", &cache]);
+    assert!(stdout(&o).contains("(0 entries, 0 MiB)"), "{}", stdout(&o));
+}
+
+fn render_no_cache(raw: &str, dir: &Path) -> (String, ()) {
+    let out = dir.join("none.png");
+    let o = volcast_ok(&[
+        "render",
+        raw,
+        "--gpu-budget",
+        "700K",
+        "--no-cache",
+        "-o",
+        &out.to_string_lossy(),
+    ]);
+    (stderr(&o), ())
+}

@@ -9,6 +9,8 @@ use std::process::{Command, Output};
 pub fn volcast_command() -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_volcast"));
     command.env("XDG_CONFIG_HOME", concat!(env!("CARGO_TARGET_TMPDIR"), "/xdg-config"));
+    // The pyramid cache too: never the user's ~/.cache.
+    command.env("XDG_CACHE_HOME", concat!(env!("CARGO_TARGET_TMPDIR"), "/xdg-cache"));
     command
 }
 

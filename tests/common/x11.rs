@@ -213,6 +213,7 @@ impl Viewer {
             .env("XDG_RUNTIME_DIR", &runtime)
             // Its own config (the recent-files list) in the test's folder: a second start in it sees the first's.
             .env("XDG_CONFIG_HOME", dir.join("config"))
+            .env("XDG_CACHE_HOME", dir.join("cache"))
             // The panel's widgets say where they are (`ui rect NAME L T R B`), for tests that click them.
             .env("VOLCAST_UI_RECTS", "1")
             .stdout(Stdio::null())

@@ -79,7 +79,7 @@ fn viewer_previews_a_large_file_then_shows_it_and_its_budget_level() {
         bytes: 40 << 20,
         max_dim: 16384,
     });
-    let level = volcast::scale::open(&path, &Default::default(), budgets, &mut |_| {}).expect("level 1");
+    let level = volcast::scale::open(&path, &Default::default(), budgets, None, &mut |_| {}).expect("level 1");
     assert_eq!(level.dims, [256, 256, 128]);
     shot_matches(
         &x.display,

@@ -71,24 +71,28 @@ pub(super) fn value_histogram(v: &Volume) -> Vec<u64> {
 
 /// What a volume is shown within: the host and GPU budgets (the device's 3-D texture limit with them) and the
 /// user's `--max-dim`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(super) struct Limits {
     pub(super) budgets: volume::budget::Budgets,
     pub(super) max_dim: Option<u32>,
+    /// Where levels read from files are kept (`None`: `--no-cache`).
+    pub(super) cache: Option<crate::scale::cache::PyramidCache>,
 }
 
 /// Loads any format `volume::open` reads (raw with the given options) within `limits`: a volume larger than they
-/// allow is shown at a coarser pyramid level, with a note, rather than refused.
+/// allow is shown at a coarser pyramid level, with a note, rather than refused. A level read from its file comes
+/// with its pyramid-cache write, left to the caller.
 pub(super) fn open_source(
     source: &VolumeSource,
-    limits: Limits,
+    limits: &Limits,
     series: Option<&str>,
     channel: Option<u32>,
     progress: &mut dyn FnMut(f32),
-) -> Result<Volume, String> {
+) -> Result<crate::scale::Opened, String> {
     match source {
         VolumeSource::Builtin(name, size) => volume::builtin(name, *size)
             .and_then(|v| crate::scale::fit(v, &limits.budgets, false))
+            .map(|volume| crate::scale::Opened { volume, keep: None })
             .map_err(|e| e.to_string()),
         VolumeSource::File(path, raw) => {
             let opts = volume::OpenOptions {
@@ -98,7 +102,8 @@ pub(super) fn open_source(
                 channel,
                 ..Default::default()
             };
-            crate::scale::open(path, &opts, limits.budgets, progress).map_err(|e| e.to_string())
+            crate::scale::open_deferred(path, &opts, limits.budgets, limits.cache.as_ref(), progress)
+                .map_err(|e| e.to_string())
         }
     }
 }
@@ -126,16 +131,29 @@ fn load_in_background(source: VolumeSource, limits: Limits, series: Option<Strin
             }
         }
         // Reading is 90% of the bar, the histogram the rest.
-        let result = open_source(&source, limits, series.as_deref(), channel, &mut |f| {
+        let result = open_source(&source, &limits, series.as_deref(), channel, &mut |f| {
             p.store((0.9 * f).to_bits(), Ordering::Relaxed)
         });
         p.store(0.9f32.to_bits(), Ordering::Relaxed);
-        let analysed: Result<(Volume, Vec<u64>), String> = result.map(|v| {
-            let h = value_histogram(&v);
-            (v, h)
+        let mut keep = None;
+        let analysed: Result<(Volume, Vec<u64>), String> = result.map(|opened| {
+            let h = value_histogram(&opened.volume);
+            // The cache is written once the volume is shown, from a copy.
+            keep = opened.keep.map(|k| (k, opened.volume.clone()));
+            (opened.volume, h)
         });
         p.store(1.0f32.to_bits(), Ordering::Relaxed);
         let _ = tx.send(Delivery::Done(analysed));
+        if let Some((k, copy)) = keep {
+            let written = k.write(copy);
+            if let Some(note) = written
+                .notes
+                .iter()
+                .find(|n| n.starts_with("the pyramid cache was not written"))
+            {
+                eprintln!("note: {note}");
+            }
+        }
     });
     Loading {
         label,
@@ -158,8 +176,8 @@ impl Loader {
         }
     }
 
-    pub(super) fn limits(&self) -> Limits {
-        self.limits
+    pub(super) fn limits(&self) -> &Limits {
+        &self.limits
     }
 
     /// A load is under way.
@@ -186,7 +204,7 @@ impl Loader {
         }
         messages.error = None;
         messages.about = Topic::Volume;
-        self.loading = Some(load_in_background(source, self.limits, series, self.channel));
+        self.loading = Some(load_in_background(source, self.limits.clone(), series, self.channel));
     }
 
     /// Shows the platform's file dialog (unless one is open); it blocks until the user answers, so it runs on

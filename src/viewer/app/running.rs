@@ -8,6 +8,7 @@ use super::pacing::{Activity, Pacing};
 use super::script::Script;
 use super::title;
 use super::volumes::Shown;
+use crate::scale::cache::PyramidCache;
 use crate::viewer::model::history::Snapshot;
 use crate::viewer::model::Model;
 use crate::viewer::present::Presenter;
@@ -50,6 +51,7 @@ impl Running {
                 Limits {
                     budgets: Budgets::host(opts.host_budget).with_gpu(presenter.gpu_budget(opts.gpu_budget)),
                     max_dim: opts.max_dim,
+                    cache: (!opts.no_cache).then(|| PyramidCache::new(opts.cache_dir.clone())),
                 },
                 opts.restore.clone(),
             ),
@@ -91,8 +93,12 @@ impl Running {
             }
             return Ok(());
         }
-        let first = open_source(&opts.source, self.loader.limits(), None, opts.channel, &mut |_| {})
+        let opened = open_source(&opts.source, self.loader.limits(), None, opts.channel, &mut |_| {})
             .map_err(ViewerError::Other)?;
+        let first = match opened.keep {
+            Some(keep) => keep.write(opened.volume),
+            None => opened.volume,
+        };
         let histogram = value_histogram(&first);
         (self.shown).install(&mut self.presenter, &mut self.model, first, histogram, false)?;
         self.shown.source = Some(opts.source.clone());

@@ -1,0 +1,240 @@
+//! The pyramid cache: a level that a file read in place was shown at, kept on disk as an OME-Zarr store (written by
+//! `volcast convert`'s writer: zstd, 64³ chunks, with its own coarser levels), so the next open of the same file at
+//! that level reads the store instead of the file. Napari, neuroglancer and Fiji open the store too.
+//!
+//! An entry is `<cache>/pyramids/<key>.ome.zarr` and its stamp `<key>.json`. The key hashes what makes the level (the
+//! data file's canonical path, where its voxels start, their layout, the level); the stamp records what says the
+//! file is unchanged (its length and modification time) and the cache's version, and is written last, so an
+//! entry without one is unfinished. A stale, corrupt or other-version entry is rebuilt with a note; a cache folder
+//! that cannot be written is a note, never an error: the volume is shown all the same.
+
+use crate::convert::layout::OmeVersion;
+use crate::convert::pyramid::Reduce;
+use crate::convert::source::Source;
+use crate::convert::{convert, Compression, ConvertOptions};
+use crate::volume::in_place::InPlace;
+use crate::volume::{self, OpenOptions, Volume};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::UNIX_EPOCH;
+
+/// Changes whenever what a cached level holds would change (the pyramid's rule, the store's layout).
+pub const CACHE_VERSION: u32 = 1;
+
+/// Where the cache lives: `--cache-dir`, else `$XDG_CACHE_HOME/volcast`, else `~/.cache/volcast`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PyramidCache {
+    pub root: PathBuf,
+}
+
+/// What a stamp says of the file its entry was made from.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+struct Stamp {
+    version: u32,
+    file: String,
+    len: u64,
+    modified_ns: u128,
+    level: u32,
+    dims: [u32; 3],
+}
+
+/// What looking a level up found.
+pub enum Lookup {
+    /// The level, read from the store.
+    Hit(Box<Volume>),
+    /// No usable entry; `note` says why an entry that was there was not used.
+    Miss { note: Option<String> },
+}
+
+impl PyramidCache {
+    /// The default folder (see the type's description).
+    pub fn default_root() -> PathBuf {
+        let base = std::env::var_os("XDG_CACHE_HOME")
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+            .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+            .unwrap_or_else(std::env::temp_dir);
+        base.join("volcast")
+    }
+
+    pub fn new(root: Option<PathBuf>) -> PyramidCache {
+        PyramidCache {
+            root: root.unwrap_or_else(PyramidCache::default_root),
+        }
+    }
+
+    fn folder(&self) -> PathBuf {
+        self.root.join("pyramids")
+    }
+
+    /// The entry's store and stamp for level `level` of `place`.
+    fn entry(&self, place: &InPlace, level: u32) -> (PathBuf, PathBuf) {
+        let path = std::fs::canonicalize(&place.data_file).unwrap_or_else(|_| place.data_file.clone());
+        let what = format!(
+            "{}|{}|{:?}|{:?}|{:?}|{}|{level}|{CACHE_VERSION}",
+            path.display(),
+            place.offset,
+            place.dims,
+            place.voxel_type,
+            place.endian,
+            place.timesteps
+        );
+        let key = format!("{:016x}", fnv1a(what.as_bytes()));
+        let dir = self.folder();
+        (dir.join(format!("{key}.ome.zarr")), dir.join(format!("{key}.json")))
+    }
+
+    /// What the stamp of level `level` of `place` must say now.
+    fn stamp(place: &InPlace, level: u32) -> Option<Stamp> {
+        let meta = std::fs::metadata(&place.data_file).ok()?;
+        let modified_ns = meta.modified().ok()?.duration_since(UNIX_EPOCH).ok()?.as_nanos();
+        Some(Stamp {
+            version: CACHE_VERSION,
+            file: place.data_file.display().to_string(),
+            len: meta.len(),
+            modified_ns,
+            level,
+            dims: crate::volume::budget::level_dims(place.dims, level),
+        })
+    }
+
+    /// Level `level` of `place` from the cache, if an entry for the file as it is now is there and reads back.
+    pub fn lookup(&self, place: &InPlace, level: u32) -> Lookup {
+        let (store, stamp_path) = self.entry(place, level);
+        let Ok(text) = std::fs::read_to_string(&stamp_path) else {
+            return Lookup::Miss { note: None };
+        };
+        let found: Option<Stamp> = serde_json::from_str(&text).ok();
+        let now = PyramidCache::stamp(place, level);
+        let why = match (&found, &now) {
+            (None, _) => Some("its stamp is unreadable"),
+            (Some(f), _) if f.version != CACHE_VERSION => Some("it was written by another version of volcast"),
+            (Some(f), Some(n)) if f != n => Some("the file changed since it was made"),
+            (_, None) => Some("the file's size and time cannot be read"),
+            _ => None,
+        };
+        let store_label = store.display();
+        if let Some(why) = why {
+            return Lookup::Miss {
+                note: Some(format!(
+                    "the pyramid cache's entry {store_label} was not used ({why}): rebuilt"
+                )),
+            };
+        }
+        match volume::open(&store, &OpenOptions::default()) {
+            Ok(mut v) if v.dims == found.as_ref().map_or([0; 3], |f| f.dims) => {
+                v.name = place.name.clone();
+                v.format = place.format.to_string();
+                v.notes = vec![format!("read from the pyramid cache ({store_label})")];
+                Lookup::Hit(Box::new(v))
+            }
+            Ok(v) => Lookup::Miss {
+                note: Some(format!(
+                    "the pyramid cache's entry {store_label} holds {:?}, not the level's size: rebuilt",
+                    v.dims
+                )),
+            },
+            Err(e) => Lookup::Miss {
+                note: Some(format!(
+                    "the pyramid cache's entry {store_label} is corrupt ({e}): rebuilt"
+                )),
+            },
+        }
+    }
+
+    /// Keeps `v`, level `level` of `place`, in the cache, and gives it back; the error says why it could not (the
+    /// caller notes it). A rescaled file is not kept: the store would hold rescaled values in another type.
+    pub fn store(&self, place: &InPlace, level: u32, v: Volume) -> (Volume, Result<(), String>) {
+        if !place.scaling.is_identity() {
+            return (v, Err("a rescaled file's levels are not cached".into()));
+        }
+        let (store, stamp_path) = self.entry(place, level);
+        let Some(stamp) = PyramidCache::stamp(place, level) else {
+            return (v, Err("the file's size and time cannot be read".into()));
+        };
+        let fail = |what: &str, e: &dyn std::fmt::Display| format!("{what} {}: {e}", store.display());
+        let made = std::fs::create_dir_all(self.folder())
+            .map_err(|e| fail("cannot make the folder of", &e))
+            .and_then(|_| {
+                let _ = std::fs::remove_file(&stamp_path);
+                if store.exists() {
+                    std::fs::remove_dir_all(&store).map_err(|e| fail("cannot remove the old entry", &e))?;
+                }
+                std::fs::create_dir(&store).map_err(|e| fail("cannot write", &e))
+            });
+        if let Err(e) = made {
+            return (v, Err(e));
+        }
+        let opts = ConvertOptions {
+            version: OmeVersion::V05,
+            chunk: 64,
+            shard: None,
+            compression: Compression::Zstd,
+            reduce: Reduce::Mean,
+            step: None,
+        };
+        let source = Source::Loaded(Box::new(v));
+        let written = convert(&source, &store, &opts, &mut |_| {}).map_err(|e| fail("cannot write", &e));
+        let Source::Loaded(v) = source else {
+            unreachable!("the source was made loaded above")
+        };
+        let stamped = written.and_then(|_| {
+            let text = serde_json::to_string_pretty(&stamp).map_err(|e| fail("cannot stamp", &e))?;
+            // The stamp last, through a rename: an entry without one (a full disk, a killed process) is not used.
+            let partial = stamp_path.with_extension("json.partial");
+            std::fs::write(&partial, text)
+                .and_then(|_| std::fs::rename(&partial, &stamp_path))
+                .map_err(|e| {
+                    let _ = std::fs::remove_file(&partial);
+                    fail("cannot stamp", &e)
+                })
+        });
+        if stamped.is_err() {
+            let _ = std::fs::remove_dir_all(&store);
+        }
+        (*v, stamped)
+    }
+
+    /// Empties the cache's pyramids; returns the bytes freed.
+    pub fn clear(&self) -> std::io::Result<u64> {
+        let dir = self.folder();
+        if !dir.exists() {
+            return Ok(0);
+        }
+        let bytes = folder_bytes(&dir);
+        std::fs::remove_dir_all(&dir)?;
+        Ok(bytes)
+    }
+
+    /// The entries (stores) and the bytes they take.
+    pub fn usage(&self) -> (usize, u64) {
+        let dir = self.folder();
+        let entries = std::fs::read_dir(&dir)
+            .map(|d| {
+                d.flatten()
+                    .filter(|e| e.path().extension().is_some_and(|x| x == "zarr"))
+                    .count()
+            })
+            .unwrap_or(0);
+        (entries, folder_bytes(&dir))
+    }
+}
+
+fn folder_bytes(dir: &Path) -> u64 {
+    let Ok(entries) = std::fs::read_dir(dir) else { return 0 };
+    entries
+        .flatten()
+        .map(|e| match e.file_type() {
+            Ok(t) if t.is_dir() => folder_bytes(&e.path()),
+            Ok(_) => e.metadata().map_or(0, |m| m.len()),
+            Err(_) => 0,
+        })
+        .sum()
+}
+
+/// 64-bit FNV-1a: a stable hash (std's is not stable across Rust versions, and the key must be).
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
