@@ -1,8 +1,9 @@
 //! volcast: a volume ray caster on raw Vulkan. The binary (`src/main.rs`, `src/cli/`) and the tests drive this
 //! library, so both exercise one render path. ARCHITECTURE.md draws the map of these rooms.
 //!
-//! Pure rooms (no Vulkan): `volume` (files to a `Volume`), `convert` (volumes to OME-Zarr stores), `transfer` (values to colour and opacity), `scene`
-//! (what a frame shows, as plain data). Rooms that drive the GPU: `gpu` (the Vulkan layer), `render` (the passes
+//! Pure rooms (no Vulkan): `volume` (files to a `Volume`), `convert` (volumes to OME-Zarr stores), `scale` (volumes
+//! within memory budgets: pyramid levels, the preview, the pyramid cache), `transfer` (values to colour and opacity),
+//! `scene` (what a frame shows, as plain data). Rooms that drive the GPU: `gpu` (the Vulkan layer), `render` (the passes
 //! and the headless path), `measure` (compare, fidelity, bench, playback), `movie` and `viewer`.
 
 pub mod convert;

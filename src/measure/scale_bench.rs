@@ -214,7 +214,7 @@ pub fn measure(
     let mut headless = Headless::new(gpu)?;
     let result = (|| -> Result<ScaleRow, Box<dyn std::error::Error>> {
         let start = Instant::now();
-        let preview = crate::scale::preview_within(path, &opts, budgets)?;
+        let preview = crate::scale::preview_within(path, &opts, budgets, Some(pyramids))?;
         let had_preview = preview.is_some();
         if let Some(p) = preview {
             headless.set_volume(gpu, &p)?;

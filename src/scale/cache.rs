@@ -98,31 +98,35 @@ impl PyramidCache {
         })
     }
 
-    /// Level `level` of `place` from the cache, if an entry for the file as it is now is there and reads back.
-    pub fn lookup(&self, place: &InPlace, level: u32) -> Lookup {
+    /// The store of level `level` of `place` and the level's size, if its entry's stamp says it was made from the file
+    /// as it is now; else why not (`None`: there is no entry).
+    fn valid(&self, place: &InPlace, level: u32) -> Result<(PathBuf, [u32; 3]), Option<String>> {
         let (store, stamp_path) = self.entry(place, level);
-        let Ok(text) = std::fs::read_to_string(&stamp_path) else {
-            return Lookup::Miss { note: None };
-        };
+        let text = std::fs::read_to_string(&stamp_path).map_err(|_| None)?;
         let found: Option<Stamp> = serde_json::from_str(&text).ok();
         let now = PyramidCache::stamp(place, level);
         let why = match (&found, &now) {
-            (None, _) => Some("its stamp is unreadable"),
-            (Some(f), _) if f.version != CACHE_VERSION => Some("it was written by another version of volcast"),
-            (Some(f), Some(n)) if f != n => Some("the file changed since it was made"),
-            (_, None) => Some("the file's size and time cannot be read"),
-            _ => None,
+            (None, _) => "its stamp is unreadable",
+            (Some(f), _) if f.version != CACHE_VERSION => "it was written by another version of volcast",
+            (Some(f), Some(n)) if f != n => "the file changed since it was made",
+            (Some(f), Some(_)) => return Ok((store, f.dims)),
+            (_, None) => "the file's size and time cannot be read",
+        };
+        Err(Some(format!(
+            "the pyramid cache's entry {} was not used ({why}): rebuilt",
+            store.display()
+        )))
+    }
+
+    /// Level `level` of `place` from the cache, if an entry for the file as it is now is there and reads back.
+    pub fn lookup(&self, place: &InPlace, level: u32) -> Lookup {
+        let (store, dims) = match self.valid(place, level) {
+            Ok(found) => found,
+            Err(note) => return Lookup::Miss { note },
         };
         let store_label = store.display();
-        if let Some(why) = why {
-            return Lookup::Miss {
-                note: Some(format!(
-                    "the pyramid cache's entry {store_label} was not used ({why}): rebuilt"
-                )),
-            };
-        }
         match volume::open(&store, &OpenOptions::default()) {
-            Ok(mut v) if v.dims == found.as_ref().map_or([0; 3], |f| f.dims) => {
+            Ok(mut v) if v.dims == dims => {
                 v.name = place.name.clone();
                 v.format = place.format.to_string();
                 v.notes = vec![format!("read from the pyramid cache ({store_label})")];
@@ -140,6 +144,24 @@ impl PyramidCache {
                 )),
             },
         }
+    }
+
+    /// A preview of level `level` of `place` from its cache entry's own coarser levels: the finest of them with at
+    /// most `side` voxels per axis, if the entry is valid and reads.
+    pub fn preview(&self, place: &InPlace, level: u32, side: u32) -> Option<Volume> {
+        let (store, _) = self.valid(place, level).ok()?;
+        let opts = OpenOptions {
+            max_dim: Some(side),
+            ..Default::default()
+        };
+        let mut v = volume::open(&store, &opts).ok()?;
+        let [x, y, z] = v.dims;
+        v.name = place.name.clone();
+        v.format = place.format.to_string();
+        v.notes = vec![format!(
+            "a preview from the pyramid cache ({x}x{y}x{z}) while the level is read"
+        )];
+        Some(v)
     }
 
     /// Keeps `v`, level `level` of `place`, in the cache, and gives it back; the error says why it could not (the
@@ -237,4 +259,40 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::volume::in_place::in_place;
+
+    #[test]
+    fn a_kept_level_reads_back_whole_and_as_a_preview() {
+        let dims = [40u32, 30, 20];
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        let src: Vec<i16> = (0..n).map(|i| ((i * 31) % 997) as i16 - 400).collect();
+        let (path, opts) = crate::scale::test_file::int16_raw("cache", dims, &src, Some([0.5, 1.0, 2.0]));
+        let folder = path.parent().unwrap().to_path_buf();
+        let cache = PyramidCache::new(Some(folder.join("cache")));
+        let place = in_place(&path, &opts).unwrap().unwrap();
+        let source = Source::in_place(place.clone()).unwrap();
+        let level = crate::scale::read::read_level(&source, 1, 1 << 30, Vec::new(), &mut |_| {}).unwrap();
+        assert!(matches!(cache.lookup(&place, 1), Lookup::Miss { note: None }));
+        let (level, kept) = cache.store(&place, 1, level);
+        kept.unwrap();
+        let Lookup::Hit(back) = cache.lookup(&place, 1) else {
+            panic!("no hit after the store")
+        };
+        assert_eq!(back.dims, level.dims);
+        assert_eq!(back.geometry, level.geometry);
+        let [w, h, d] = level.dims;
+        for (x, y, z) in [(0, 0, 0), (w - 1, h - 1, d - 1), (7, 3, 5)] {
+            assert_eq!(back.value(x, y, z), level.value(x, y, z), "({x}, {y}, {z})");
+        }
+        // Level 1 is 20x15x10, the store's only level (it is under 64³): a preview of at most 8 per axis is it, halved.
+        let preview = cache.preview(&place, 1, 8).expect("a preview");
+        assert!(preview.dims.iter().all(|&s| s <= 8), "{:?}", preview.dims);
+        assert!(preview.notes[0].starts_with("a preview from the pyramid cache"));
+        std::fs::remove_dir_all(&folder).ok();
+    }
 }

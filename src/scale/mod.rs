@@ -111,6 +111,7 @@ pub fn open_deferred(
             });
         }
     }
+    refuse_whole_over_budget(path, &budgets).map_err(named)?;
     let v = volume::open_with_progress(path, &opts, progress)?;
     let volume = fit(v, &budgets, opts.no_downsample).map_err(|e| match e {
         VolumeError::Header { problem, .. } => named(problem),
@@ -119,9 +120,15 @@ pub fn open_deferred(
     Ok(Opened { volume, keep: None })
 }
 
-/// A strided preview of `path` ([`preview::preview`]) when it is a file read in place that is large at the level
-/// `budgets` give it; `None` for everything else.
-pub fn preview_within(path: &Path, opts: &OpenOptions, budgets: Budgets) -> Result<Option<Volume>, VolumeError> {
+/// A preview of `path` when it is a file read in place that is large at the level `budgets` give it: from the
+/// pyramid cache's coarser levels where `cache` holds that level, else strided from the file
+/// ([`preview::preview`]); `None` for everything else.
+pub fn preview_within(
+    path: &Path,
+    opts: &OpenOptions,
+    budgets: Budgets,
+    cache: Option<&PyramidCache>,
+) -> Result<Option<Volume>, VolumeError> {
     let Some(place) = in_place(path, opts)? else {
         return Ok(None);
     };
@@ -130,10 +137,44 @@ pub fn preview_within(path: &Path, opts: &OpenOptions, budgets: Budgets) -> Resu
         voxel_type: place.voxel_type,
         steps: place.timesteps,
     };
-    match budget::choose(&shape, &budgets) {
-        Ok(level) => preview::preview(path, opts, level.level),
-        Err(_) => Ok(None),
+    let Ok(level) = budget::choose(&shape, &budgets) else {
+        return Ok(None);
+    };
+    let cached = cache.filter(|_| level.level > 0 && place.timesteps == 1);
+    if let Some(v) = cached.and_then(|c| c.preview(&place, level.level, preview::PREVIEW_SIDE)) {
+        return Ok(Some(v));
     }
+    preview::preview(path, opts, level.level)
+}
+
+/// A compressed file is read whole before it can be reduced: one whose header claims more than the host budget is
+/// refused before anything else is read, saying what to do.
+fn refuse_whole_over_budget(path: &Path, budgets: &Budgets) -> Result<(), String> {
+    let Some((dims, voxel_type, steps)) = crate::volume::in_place::claimed_shape(path) else {
+        return Ok(());
+    };
+    let shape = Shape {
+        dims,
+        voxel_type,
+        steps,
+    };
+    let (bytes, _) = shape.level_bytes(0);
+    if bytes <= budgets.host {
+        return Ok(());
+    }
+    let [x, y, z] = dims;
+    Err(format!(
+        "its {x}x{y}x{z} {voxel_type} voxels{} need {} of memory to decompress, and the host budget is {} \
+         (--host-budget); a compressed file is read whole: raise --host-budget, or store it uncompressed (volcast \
+         reads uncompressed NIfTI, NRRD and MetaImage in place, level by level, at any size)",
+        if steps > 1 {
+            format!(" x {steps} steps")
+        } else {
+            String::new()
+        },
+        budget::show(bytes),
+        budget::show(budgets.host)
+    ))
 }
 
 /// `--max-dim`, where given, still applies to a level read from a file.
@@ -194,4 +235,29 @@ pub fn fit(v: Volume, budgets: &Budgets, no_downsample: bool) -> Result<Volume, 
     out.channels = channels;
     out.show_step(shown)?;
     Ok(out)
+}
+
+/// What the unit tests of this room share.
+#[cfg(test)]
+pub(crate) mod test_file {
+    use crate::volume::{OpenOptions, RawOptions, VoxelType};
+    use std::path::PathBuf;
+
+    /// `values` (x fastest) as an int16 raw file in a fresh temporary folder named by `tag`, and the options that
+    /// open it; the folder is the caller's to remove.
+    pub fn int16_raw(tag: &str, dims: [u32; 3], values: &[i16], spacing: Option<[f32; 3]>) -> (PathBuf, OpenOptions) {
+        let dir = std::env::temp_dir().join(format!("volcast-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("v.raw");
+        std::fs::write(&path, bytemuck::cast_slice::<i16, u8>(values)).unwrap();
+        let opts = OpenOptions {
+            raw: RawOptions {
+                dims: Some(dims),
+                voxel_type: Some(VoxelType::I16),
+                spacing,
+            },
+            ..Default::default()
+        };
+        (path, opts)
+    }
 }

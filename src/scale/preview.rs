@@ -103,7 +103,6 @@ pub fn strided(place: &InPlace, k: u32) -> Result<Volume, VolumeError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::RawOptions;
 
     #[test]
     fn strides_keep_every_kth_voxel_where_it_lies() {
@@ -113,18 +112,7 @@ mod tests {
         let dims = [9u32, 7, 5];
         let n = (dims[0] * dims[1] * dims[2]) as usize;
         let src: Vec<i16> = (0..n).map(|i| (i as i16) * 3 - 200).collect();
-        let dir = std::env::temp_dir().join(format!("volcast-preview-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("v.raw");
-        std::fs::write(&path, bytemuck::cast_slice::<i16, u8>(&src)).unwrap();
-        let opts = OpenOptions {
-            raw: RawOptions {
-                dims: Some(dims),
-                voxel_type: Some(VoxelType::I16),
-                spacing: Some([0.5, 1.0, 2.0]),
-            },
-            ..Default::default()
-        };
+        let (path, opts) = crate::scale::test_file::int16_raw("preview", dims, &src, Some([0.5, 1.0, 2.0]));
         let place = in_place(&path, &opts).unwrap().unwrap();
         let v = strided(&place, 4).unwrap();
         assert_eq!(v.dims, [3, 2, 2]);
@@ -141,6 +129,6 @@ mod tests {
                     .transform_point3(glam::DVec3::new(x as f64 * 4.0, y as f64 * 4.0, z as f64 * 4.0));
             assert_eq!(p, q);
         }
-        std::fs::remove_dir_all(&dir).ok();
+        std::fs::remove_dir_all(path.parent().unwrap()).ok();
     }
 }

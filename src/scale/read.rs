@@ -126,7 +126,6 @@ pub fn read_level(
 mod tests {
     use super::*;
     use crate::volume::in_place::in_place;
-    use crate::volume::{OpenOptions, RawOptions};
 
     /// Level `l` voxel (x, y, z) by the pyramid's definition, recursively: the mean of the up-to-8 voxels of level
     /// `l - 1` it covers (an axis of length 1 is not halved), rounded half away from zero.
@@ -156,18 +155,7 @@ mod tests {
         let dims = [7u32, 5, 6];
         let n = (dims[0] * dims[1] * dims[2]) as usize;
         let src: Vec<i16> = (0..n).map(|i| ((i * 7919) % 601) as i16 - 300).collect();
-        let dir = std::env::temp_dir().join(format!("volcast-level-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("v.raw");
-        std::fs::write(&path, bytemuck::cast_slice::<i16, u8>(&src)).unwrap();
-        let opts = OpenOptions {
-            raw: RawOptions {
-                dims: Some(dims),
-                voxel_type: Some(VoxelType::I16),
-                spacing: None,
-            },
-            ..Default::default()
-        };
+        let (path, opts) = crate::scale::test_file::int16_raw("level", dims, &src, None);
         let place = in_place(&path, &opts).unwrap().expect("raw is read in place");
         let from_file = Source::in_place(place).unwrap();
         let loaded = Source::Loaded(Box::new(crate::volume::open(&path, &opts).unwrap()));
@@ -191,6 +179,6 @@ mod tests {
                 assert_eq!(centre, glam::DVec3::splat(0.5));
             }
         }
-        std::fs::remove_dir_all(&dir).ok();
+        std::fs::remove_dir_all(path.parent().unwrap()).ok();
     }
 }

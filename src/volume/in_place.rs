@@ -70,6 +70,32 @@ pub fn in_place(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, Volu
     header_in_place(path, header, opts).map(Some)
 }
 
+/// What a NRRD, MetaImage, NIfTI or Analyze header claims (dims, voxel type, time steps) whatever its encoding, a
+/// gzip NIfTI's header decompressed from the file's first bytes: what reading the file whole would need, known before
+/// anything else is read. `None` for other formats and for headers that do not parse (the loader says why).
+pub fn claimed_shape(path: &Path) -> Option<([u32; 3], VoxelType, u32)> {
+    let file = format::file_label(path);
+    let header = match detect_format(path).ok()? {
+        Format::Nrrd => nrrd::parse(&format::read_prefix(path, format::HEADER_LIMIT).ok()?, &file).ok()?,
+        Format::MetaImage => metaimage::parse(&format::read_prefix(path, format::HEADER_LIMIT).ok()?, &file).ok()?,
+        Format::Nifti => {
+            let prefix = format::read_prefix(path, 544).ok()?;
+            let prefix = if nifti::is_gzip(&prefix) {
+                use std::io::Read;
+                let mut head = Vec::with_capacity(544);
+                let gz = flate2::read::GzDecoder::new(std::fs::File::open(path).ok()?);
+                gz.take(544).read_to_end(&mut head).ok()?;
+                head
+            } else {
+                prefix
+            };
+            nifti::parse_file(&prefix, &file).ok()?
+        }
+        _ => return None,
+    };
+    Some((header.dims, header.voxel_type, header.timesteps.max(1)))
+}
+
 fn header_in_place(path: &Path, header: Header, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
     let step = check_extent(header.dims)?;
     let needed = step * header.voxel_type.size() as u64 * u64::from(header.timesteps.max(1));

@@ -1,7 +1,8 @@
 //! Volumes larger than the budgets, through the binary (docs/large-volumes.md): a file over `--gpu-budget` is shown
 //! at the pyramid level that fits, read level by level from the file, and that level is the one `volcast convert`
-//! writes (the two renders are the same image); a budget that holds nothing, `--no-downsample`, a header that
-//! claims terabytes; and a file past 2^31 voxels, once refused, opens at a coarser level.
+//! writes (the two renders are the same image); a budget that holds nothing, `--no-downsample`, a compressed file
+//! over the host budget, a header that claims terabytes; a file past 2^31 voxels, once refused, opens at a coarser
+//! level; and the pyramid cache (used, rebuilt when stale or corrupt, never fatal).
 
 use crate::common;
 
@@ -10,24 +11,12 @@ use std::path::Path;
 
 /// A 160x96x80 int16 raw file (levels 160x96x80, 80x48x40, 40x24x20) with negative values and structure.
 fn write_volume(dir: &Path) -> String {
-    let [w, h, d] = [160usize, 96, 80];
-    let mut bytes = Vec::with_capacity(w * h * d * 2);
-    for z in 0..d {
-        for y in 0..h {
-            for x in 0..w {
-                let (fx, fy, fz) = (
-                    x as f64 / w as f64 - 0.5,
-                    y as f64 / h as f64 - 0.5,
-                    z as f64 / d as f64 - 0.5,
-                );
-                let r = (fx * fx + fy * fy + fz * fz).sqrt();
-                let v = (3000.0 * (1.0 - 2.5 * r)).round() as i16 - 500 + ((x * 7 + y * 3 + z) % 5) as i16;
-                bytes.extend_from_slice(&v.to_le_bytes());
-            }
-        }
-    }
     let path = dir.join("ball_160x96x80_int16.raw");
-    std::fs::write(&path, bytes).unwrap();
+    common::scratch::write_raw(&path, [160, 96, 80], |[x, y, z], [fx, fy, fz], out| {
+        let r = (fx * fx + fy * fy + fz * fz).sqrt();
+        let v = (3000.0 * (1.0 - 2.5 * r)).round() as i16 - 500 + ((x * 7 + y * 3 + z) % 5) as i16;
+        out.extend_from_slice(&v.to_le_bytes());
+    });
     path.to_string_lossy().into_owned()
 }
 
@@ -89,6 +78,17 @@ fn budgets_that_hold_nothing_and_refusals_name_the_numbers() {
     let o = volcast(&["info", &raw, "--host-budget", "lots"]);
     assert_eq!(o.status.code(), Some(64), "{}", stderr(&o));
     assert!(stderr(&o).contains("'lots' is not a size"), "{}", stderr(&o));
+    // A compressed file is read whole: over the host budget it is refused before it is decompressed.
+    let gz = format!("{}/tests/data/world/nifti_ras.nii.gz", env!("CARGO_MANIFEST_DIR"));
+    let o = volcast(&["info", &gz, "--host-budget", "50K"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("nifti_ras.nii.gz")
+            && err.contains("its 34x40x36 int16 voxels need 96 KiB of memory to decompress"),
+        "{err}"
+    );
+    assert!(err.contains("store it uncompressed"), "{err}");
     // A header claiming 16384^3 float32 (16 TiB) over a few bytes: refused before anything is read.
     let nrrd = dir.join("huge.nrrd");
     let header = "NRRD0004\ntype: float\ndimension: 3\nsizes: 16384 16384 16384\nencoding: raw\n\n";

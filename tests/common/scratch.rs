@@ -49,3 +49,19 @@ pub fn scratch(name: &str) -> Scratch {
     std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     Scratch(dir)
 }
+
+/// Writes a raw volume of `dims` (x fastest) to `path`: `voxel(index, p, out)` appends voxel `index`'s bytes to
+/// `out`, `p` being its position in [-0.5, 0.5) along each axis.
+pub fn write_raw(path: &Path, dims: [usize; 3], voxel: impl Fn([usize; 3], [f64; 3], &mut Vec<u8>)) {
+    let mut bytes = Vec::with_capacity(dims.iter().product::<usize>() * 2);
+    for z in 0..dims[2] {
+        for y in 0..dims[1] {
+            for x in 0..dims[0] {
+                let p = [x, y, z].map(|i| i as f64);
+                let p = [0, 1, 2].map(|i| p[i] / dims[i] as f64 - 0.5);
+                voxel([x, y, z], p, &mut bytes);
+            }
+        }
+    }
+    std::fs::write(path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+}

@@ -13,26 +13,14 @@ use volcast::volume::budget::{Budgets, GpuBudget};
 
 /// A 512x512x256 uint8 raw file: a shell and a rod with some texture, 64 MiB.
 fn write_large(dir: &Path) -> PathBuf {
-    let [w, h, d] = [512usize, 512, 256];
-    let mut bytes = vec![0u8; w * h * d];
-    for z in 0..d {
-        for y in 0..h {
-            for x in 0..w {
-                let (fx, fy, fz) = (
-                    x as f32 / w as f32 - 0.5,
-                    y as f32 / h as f32 - 0.5,
-                    z as f32 / d as f32 - 0.5,
-                );
-                let r = (fx * fx + fy * fy + fz * fz).sqrt();
-                let shell = (1.0 - ((r - 0.35) / 0.05).abs()).max(0.0);
-                let rod = (1.0 - (fx * fx + fy * fy).sqrt() / 0.08).max(0.0);
-                let v = 200.0 * shell.max(rod) + ((x ^ y ^ z) & 7) as f32;
-                bytes[x + w * (y + h * z)] = v.min(255.0) as u8;
-            }
-        }
-    }
     let path = dir.join("large_512x512x256_uint8.raw");
-    std::fs::write(&path, bytes).unwrap();
+    common::scratch::write_raw(&path, [512, 512, 256], |[x, y, z], [fx, fy, fz], out| {
+        let r = (fx * fx + fy * fy + fz * fz).sqrt();
+        let shell = (1.0 - ((r - 0.35) / 0.05).abs()).max(0.0);
+        let rod = (1.0 - (fx * fx + fy * fy).sqrt() / 0.08).max(0.0);
+        let v = 200.0 * shell.max(rod) + ((x ^ y ^ z) & 7) as f64;
+        out.push(v.min(255.0) as u8);
+    });
     path
 }
 

@@ -125,7 +125,7 @@ fn load_in_background(source: VolumeSource, limits: Limits, series: Option<Strin
                 raw: raw.clone(),
                 ..Default::default()
             };
-            if let Ok(Some(v)) = crate::scale::preview_within(path, &opts, limits.budgets) {
+            if let Ok(Some(v)) = crate::scale::preview_within(path, &opts, limits.budgets, limits.cache.as_ref()) {
                 let h = value_histogram(&v);
                 let _ = tx.send(Delivery::Preview(v, h));
             }
