@@ -197,6 +197,9 @@ pub fn measure(
     frames: u32,
 ) -> Result<ScaleRow, Box<dyn std::error::Error>> {
     if cache != "warm" {
+        // SAFETY: sync(2) takes no arguments and touches no memory; dirty pages (a file just written) cannot be
+        // evicted until they are written back.
+        unsafe { libc::sync() };
         evict(path);
     }
     if cache == "cached" {
