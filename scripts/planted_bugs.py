@@ -171,6 +171,11 @@ BUGS = [
     ("preview-not-strided", "the strided preview is placed as if its voxels were the file's, so it fills a corner of the box",
      [("src/scale/preview.rs", "affine: place.geometry.affine * DMat4::from_diagonal(DVec4::new(kf, kf, kf, 1.0)),",
        "affine: place.geometry.affine * DMat4::from_diagonal(DVec4::new(1.0, 1.0, 1.0, 1.0 + 0.0 * kf)),")]),
+    ("cache-stamp-ignored", "the pyramid cache uses an entry made from the file before it changed",
+     [("src/scale/cache.rs", '(Some(f), Some(n)) if f != n => "the file changed since it was made",',
+       '(Some(f), Some(n)) if f.version != n.version => "the file changed since it was made",')]),
+    ("pyramid-whole-block-quarter", "the pyramid's whole-block path divides the 2x2x2 sum by 4",
+     [("src/convert/pyramid.rs", "*slot = T::from_f64(sum / 8.0);", "*slot = T::from_f64(sum / 4.0);")]),
     ("histogram-element-raw", "the parallel histogram bins 8/16-bit elements by their raw value, not their normalised one",
      [("src/transfer/auto.rs", "let v = volume.normalize_element(e as f64);", "let v = e as f64 / 65535.0;")]),
 ]
