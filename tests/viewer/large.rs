@@ -1,5 +1,5 @@
 //! A large file in the viewer (docs/large-volumes.md): launched on a 512x512x256 file (2^26 voxels), the window
-//! first shows a strided preview (1 voxel in 2 per axis) while the file is read, then the volume itself, and the F12
+//! first shows a strided preview (1 voxel in 4 per axis) while the file is read, then the volume itself, and the F12
 //! screenshot then equals the headless render of the whole file. Under `--gpu-budget`, the viewer shows the
 //! pyramid level that fits, says so, and its screenshot equals the headless render of that level.
 
@@ -58,7 +58,7 @@ fn viewer_previews_a_large_file_then_shows_it_and_its_budget_level() {
         &[&file],
         &whole,
         &[
-            "large_512x512x256_uint8.raw: a preview of 1 voxel in 2 per axis (256x256x128 of 512x512x256)",
+            "large_512x512x256_uint8.raw: a preview of 1 voxel in 4 per axis (128x128x64 of 512x512x256)",
             "loaded ",
         ],
     );
