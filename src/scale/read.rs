@@ -30,6 +30,21 @@ fn level_step<T: Sample>(
     let slice = out[0] as usize * out[1] as usize;
     let span = 1u32 << level;
     let slab_bytes = u64::from(full[0]) * u64::from(full[1]) * u64::from(span) * std::mem::size_of::<T>() as u64;
+    // Whole slices are read: 2^L of them per output slice must fit in half the host budget, or 256 MiB where the
+    // budget is smaller (a limit only for very wide slices at high levels: 16384² uint16 at level 4 takes 8 GiB).
+    if slab_bytes > (host_budget / 2).max(256 << 20) {
+        return Err(VolumeError::Header {
+            file: source.name().to_string(),
+            problem: format!(
+                "reading pyramid level {level} takes {span} slices of {}x{} at once ({}), more than half the host \
+                 budget ({}) allows; raise --host-budget",
+                full[0],
+                full[1],
+                crate::volume::budget::show(slab_bytes),
+                crate::volume::budget::show(host_budget)
+            ),
+        });
+    }
     let step = batch(rayon::current_num_threads(), slab_bytes, host_budget);
     let mut dst = vec![T::default(); slice * out[2] as usize];
     for first in (0..out[2] as usize).step_by(step) {
@@ -180,5 +195,24 @@ mod tests {
             }
         }
         std::fs::remove_dir_all(path.parent().unwrap()).ok();
+    }
+
+    #[test]
+    fn slabs_wider_than_the_budget_allows_are_refused_before_reading() {
+        // 16384x16384x4 uint8, sparse (no disk): level 1 takes 2 slices of 256 MiB at once.
+        let dir = std::env::temp_dir().join(format!("volcast-wide-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("wide_16384x16384x4_uint8.raw");
+        std::fs::File::create(&path)
+            .unwrap()
+            .set_len(16384 * 16384 * 4)
+            .unwrap();
+        let place = in_place(&path, &Default::default()).unwrap().unwrap();
+        let source = Source::in_place(place).unwrap();
+        let e = read_level(&source, 1, 1 << 28, Vec::new(), &mut |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("takes 2 slices of 16384x16384 at once (512 MiB)"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
