@@ -61,6 +61,9 @@ pub(super) struct Loader {
     limits: Limits,
     /// The channel of an OME-Zarr image to load (`--channel`; `None`: channel 0).
     pub(super) channel: Option<u32>,
+    /// The load under way showed a preview: the transfer function it opened with (the volume replacing it keeps
+    /// one the user set since). Forgotten when a load starts or fails.
+    pub(super) preview_tf: Option<Option<crate::transfer::function::TransferFunction>>,
 }
 
 /// The viewer's histogram of normalised values, over every step of a series (as its range is): the automatic
@@ -173,7 +176,14 @@ impl Loader {
             dialog_asked: Instant::now(),
             limits,
             channel: None,
+            preview_tf: None,
         }
+    }
+
+    /// A preview was shown for the load that just ended and the user has changed its transfer function since
+    /// (`tf`, the one shown now); forgets the preview.
+    pub(super) fn preview_edited(&mut self, tf: &Option<crate::transfer::function::TransferFunction>) -> bool {
+        self.preview_tf.take().is_some_and(|shown| shown != *tf)
     }
 
     pub(super) fn limits(&self) -> &Limits {
@@ -204,6 +214,7 @@ impl Loader {
         }
         messages.error = None;
         messages.about = Topic::Volume;
+        self.preview_tf = None;
         self.loading = Some(load_in_background(source, self.limits.clone(), series, self.channel));
     }
 
@@ -277,6 +288,7 @@ impl Loader {
             }
             Ok(Delivery::Done(Err(e))) => {
                 self.pending_restore = None;
+                self.preview_tf = None;
                 if self.initial.take().is_some() {
                     // The command line's volume: the window stays open on the empty placeholder, with the error
                     // where a load from the panel shows it, so that another file can be opened.
@@ -292,6 +304,7 @@ impl Loader {
                 messages.loading = Some((loading.label.clone(), p));
             }
             Err(TryRecvError::Disconnected) => {
+                self.preview_tf = None;
                 messages.error = Some(format!("{}: the loader stopped unexpectedly", loading.label));
                 self.loading = None;
                 messages.loading = None;

@@ -138,8 +138,8 @@ impl Running {
         }
         // After a preview, the volume replaces it in the view the user has: the camera and clipping plane, and the
         // transfer function if they changed it (else the volume's own automatic one, from its full histogram).
-        let after_preview = self.shown.preview_tf.is_some();
-        let edited = self.shown.preview_edited(&self.model);
+        let after_preview = self.loader.preview_tf.is_some();
+        let edited = self.loader.preview_edited(&self.model.look.transfer_function);
         let before = after_preview.then(|| Snapshot::of(&self.model));
         let from_file = from_file && !edited;
         let installed = (self.shown).install(&mut self.presenter, &mut self.model, volume, histogram, from_file);
@@ -194,7 +194,7 @@ impl Running {
             eprintln!("could not show a preview of {label}: {e}");
             return Ok(());
         }
-        self.shown.preview_tf = Some(self.model.look.transfer_function.clone());
+        self.loader.preview_tf = Some(self.model.look.transfer_function.clone());
         let note = note.unwrap_or_default();
         eprintln!("previewing {label}: {note}");
         self.model.messages.status = Some(format!("refining {label}: {note}"));

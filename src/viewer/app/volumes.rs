@@ -17,18 +17,9 @@ pub(super) struct Shown {
     kept: Option<Volume>,
     /// Where the shown volume came from (for sessions and screenshots' view states).
     pub(super) source: Option<VolumeSource>,
-    /// A preview is shown: the transfer function it opened with (the volume replacing it keeps one the user set).
-    pub(super) preview_tf: Option<Option<crate::transfer::function::TransferFunction>>,
 }
 
 impl Shown {
-    /// A preview was shown and the user has changed its transfer function since; forgets the preview.
-    pub(super) fn preview_edited(&mut self, model: &crate::viewer::model::Model) -> bool {
-        self.preview_tf
-            .take()
-            .is_some_and(|tf| tf != model.look.transfer_function)
-    }
-
     /// What the slice views resample: the shown step of a series, or the kept volume.
     pub(super) fn for_slices(&self) -> Option<&Volume> {
         self.series.as_ref().or(self.kept.as_ref())
