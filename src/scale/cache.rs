@@ -1,6 +1,6 @@
 //! The pyramid cache: a level that a file read in place was shown at, kept on disk as an OME-Zarr store (written by
 //! `volcast convert`'s writer: zstd, 64³ chunks, with its own coarser levels), so the next open of the same file at
-//! that level reads the store instead of the file. Napari, neuroglancer and Fiji open the store too.
+//! that level reads the store instead of the file. The store is a standard OME-Zarr 0.5 one.
 //!
 //! An entry is `<cache>/pyramids/<key>.ome.zarr` and its stamp `<key>.json`. The key hashes what makes the level (the
 //! data file's canonical path, where its voxels start, their layout, the level); the stamp records what says the
