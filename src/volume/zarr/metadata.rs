@@ -166,8 +166,10 @@ struct Image {
     metadata: Option<serde_json::Map<String, Value>>,
 }
 
-impl Image {
-    fn from_v04(m: ome_zarr_metadata::v0_4::MultiscaleImage) -> Image {
+/// An [`Image`] from either version's multiscale: the crate's two types have the same fields.
+macro_rules! image_from {
+    ($m:expr) => {{
+        let m = $m;
         Image {
             axes: m.axes,
             datasets: m
@@ -178,19 +180,16 @@ impl Image {
             transforms: m.coordinate_transformations.unwrap_or_default(),
             metadata: m.metadata.map(|m| m.0),
         }
+    }};
+}
+
+impl Image {
+    fn from_v04(m: ome_zarr_metadata::v0_4::MultiscaleImage) -> Image {
+        image_from!(m)
     }
 
     fn from_v05(m: ome_zarr_metadata::v0_5::MultiscaleImage) -> Image {
-        Image {
-            axes: m.axes,
-            datasets: m
-                .datasets
-                .into_iter()
-                .map(|d| (d.path, d.coordinate_transformations))
-                .collect(),
-            transforms: m.coordinate_transformations.unwrap_or_default(),
-            metadata: m.metadata.map(|m| m.0),
-        }
+        image_from!(m)
     }
 }
 
