@@ -33,4 +33,8 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 light_color;     // rgb: linear colour x intensity
     vec4 light_grid;      // rule 9: xyz the shadow read's offset towards the light (texture space); w: 1 shadows + 2 occlusion
     vec4 clip_plane;      // rule 10, texture space: p is kept where dot(xyz, p) + w >= 0 (0,0,0,1 keeps everything)
+    vec4 pool_inv;        // xyz: 1 / the brick pool's size in texels (render/pool.rs)
+    vec4 pool_brick;      // xyz: a brick's size in voxels of its level; w: the border in voxels
+    vec4 pool_slot;       // xyz: a slot's size in texels
+    vec4 pool_grid;       // xyz: level-0 bricks per axis (the page table's size)
 } frame;

@@ -105,7 +105,7 @@ vec4 march_projection(WalkRay ray) {
             continue;
         }
         taken += 1u;
-        float v = sample_value(ray.a + ray.dir * t);
+        float v = value_in(w.brick, ray.a + ray.dir * t);
         if (!visible(v)) {
             continue;
         }
@@ -147,7 +147,7 @@ vec4 march_isosurface(WalkRay ray, vec3 light, bool cut_start) {
             continue;
         }
         taken += 1u;
-        float v = sample_value(ray.a + ray.dir * t);
+        float v = value_in(w.brick, ray.a + ray.dir * t);
         v = isnan(v) ? -1e30 : v;
         // The first sample meets every surface at or below its value, highest first (the innermost material where
         // the ray starts: a cut face shows what is there) -- except on the clipping plane, which cuts surfaces open:
@@ -221,11 +221,12 @@ vec4 segment_sample(vec4 mean, float seg_steps, vec3 p, vec3 light, bool density
 }
 
 // The segment from the previous point (t_prev, its value v_prev and integrals i_prev) to the point at `t` on the
-// ray: samples the value there and returns the segment's colour and opacity (segment_sample); the point at `t`
-// becomes the previous one.
-vec4 segment_to(WalkRay ray, float t, vec3 light, bool density_model, inout float t_prev, inout float v_prev,
+// ray: samples the value there (in brick b, which holds it) and returns the segment's colour and opacity
+// (segment_sample; its midpoint's gradient is looked up where the midpoint lies); the point at `t` becomes the
+// previous one.
+vec4 segment_to(WalkRay ray, Brick b, float t, vec3 light, bool density_model, inout float t_prev, inout float v_prev,
                 inout vec4 i_prev) {
-    float v = sample_value(ray.a + ray.dir * t);
+    float v = value_in(b, ray.a + ray.dir * t);
     vec4 slope;
     vec4 iv = integral_at(v, slope);
     vec4 c = segment_sample(segment_mean(v_prev, i_prev, v, iv, slope), frame.alpha.y * (t - t_prev) / ray.h,
@@ -259,7 +260,7 @@ vec4 march_emission(WalkRay ray, vec3 light) {
             continue;
         }
         // A resample only starts the next segment: the segment to it is not composited.
-        vec4 c = segment_to(ray, t, light, density_model, t_prev, v_prev, i_prev);
+        vec4 c = segment_to(ray, w.brick, t, light, density_model, t_prev, v_prev, i_prev);
         if (step == WALK_SAMPLE) {
             taken += 1u;
             composite(color, opacity, c.rgb, c.a);
@@ -271,7 +272,8 @@ vec4 march_emission(WalkRay ray, vec3 light) {
     // The last segment, from the last point to the ray's end, where the march got there through bricks that hold
     // something (not by early termination; past a leap everything left is invisible).
     if (w.reached_end && w.walked && opacity < frame.alpha.z) {
-        vec4 c = segment_to(ray, ray.len, light, density_model, t_prev, v_prev, i_prev);
+        vec3 end = ray.a + ray.dir * ray.len;
+        vec4 c = segment_to(ray, brick_at(end), ray.len, light, density_model, t_prev, v_prev, i_prev);
         composite(color, opacity, c.rgb, c.a);
     }
     return output_pixel(finish(color, opacity), taken);

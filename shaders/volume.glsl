@@ -27,29 +27,59 @@ layout(std140, set = 1, binding = 6) uniform Integrals {
 layout(set = 1, binding = 7) uniform texture3D light_tex;
 #endif
 
-// Where the volume comes from (render::VolumeLayout). A 3D texture, filtered by the sampler; or, on CPU devices
-// (lavapipe), a "corner texture": per voxel the four values of the 2x2 square its cell starts in x and y
-// (neighbours clamped to the edge) in one texel, so a trilinear sample is two texelFetch (at z and z + 1) and
-// seven lerps instead of eight filtered texel reads. lavapipe fetches 32-bit texels with one gather for all
-// lanes. Both return what a UNORM or float texture returns (stored / 255, stored / 65535, or the float).
+// The brick pool's page table (src/render/pool.rs): per level-0 brick, the slot holding the data shown there
+// (x, y, z packed 10:10:10) and that data's level.
+layout(set = 1, binding = 8) uniform utexture3D directory_tex;
+
+// A brick's translation from a point p (texture space, [0,1]^3 over the volume) to its slot's texels: the texel
+// coordinate u = p * scale + offset (texel centres at integers + 0.5). `lo` and `hi` bound the level-0 brick it
+// was looked up for (texture space): the walk's spans end there.
+struct Brick {
+    vec3 scale;
+    vec3 offset;
+    vec3 lo;
+    vec3 hi;
+};
+
+// The one addressing function: the brick under p and where its data lies in the pool. The level-L brick under
+// level-0 brick b is b >> L; its voxel x (level-L units, x = p * dims / 2^L) lies in its slot at
+// x - (b >> L) * brick + border + slot * slot_side.
+Brick brick_at(vec3 p) {
+    vec3 vox = p * frame.dims.xyz;
+    // (Not textureSize: a page table one brick deep is two slices, image_3d's copy.)
+    ivec3 b = clamp(ivec3(floor(vox / frame.pool_brick.xyz)), ivec3(0), ivec3(frame.pool_grid.xyz) - 1);
+    uvec2 e = texelFetch(usampler3D(directory_tex, linear_smp), b, 0).rg;
+    vec3 slot = vec3(uvec3(e.x, e.x >> 10u, e.x >> 20u) & uvec3(1023u));
+    int level = int(e.y);
+    float s = exp2(-float(level));
+    vec3 origin = frame.pool_brick.w + slot * frame.pool_slot.xyz - vec3(b >> level) * frame.pool_brick.xyz;
+    vec3 lo = vec3(b) * frame.pool_brick.xyz * frame.texel.xyz;
+    return Brick(frame.dims.xyz * s, origin, lo, lo + frame.pool_brick.xyz * frame.texel.xyz);
+}
+
+// The pool as the march reads it (render::VolumeLayout). A 3D texture, filtered by the sampler; or, on CPU devices
+// (lavapipe), a "corner texture": per texel the four values of the 2x2 square its cell starts in x and y in one
+// texel, so a trilinear sample is two texelFetch (at z and z + 1) and seven lerps instead of eight filtered texel
+// reads. lavapipe fetches 32-bit texels with one gather for all lanes. Both return what a UNORM or float texture
+// returns (stored / 255, stored / 65535, or the float). A point in brick `b` (or within two voxels of it) reads
+// only b's slot: its border holds the voxels around it.
 #if defined(CORNERS8) || defined(CORNERS16)
-float sample_raw(vec3 p) {
-    // Texel centres at (i + 0.5) / n, clamped to the edge, as CLAMP_TO_EDGE linear filtering does.
-    vec3 q = clamp(p * frame.dims.xyz - 0.5, vec3(0.0), frame.dims.xyz - 1.0);
-    ivec3 i = ivec3(q);
+float sample_in(Brick b, vec3 p) {
+    vec3 q = p * b.scale + b.offset - 0.5;
+    ivec3 i = ivec3(floor(q));
     vec3 f = q - vec3(i);
-    ivec3 i1 = ivec3(i.xy, min(i.z + 1, int(frame.dims.z) - 1));
+    ivec3 i1 = ivec3(i.xy, i.z + 1);
 #if defined(CORNERS8)
     uint a = texelFetch(usampler3D(corner_tex, linear_smp), i, 0).r;
-    uint b = texelFetch(usampler3D(corner_tex, linear_smp), i1, 0).r;
+    uint c = texelFetch(usampler3D(corner_tex, linear_smp), i1, 0).r;
     vec4 lo = vec4(uvec4(a, a >> 8u, a >> 16u, a >> 24u) & uvec4(255u));
-    vec4 hi = vec4(uvec4(b, b >> 8u, b >> 16u, b >> 24u) & uvec4(255u));
+    vec4 hi = vec4(uvec4(c, c >> 8u, c >> 16u, c >> 24u) & uvec4(255u));
     const float unorm = 1.0 / 255.0;
 #else
     uvec2 a = texelFetch(usampler3D(corner_tex, linear_smp), i, 0).rg;
-    uvec2 b = texelFetch(usampler3D(corner_tex, linear_smp), i1, 0).rg;
+    uvec2 c = texelFetch(usampler3D(corner_tex, linear_smp), i1, 0).rg;
     vec4 lo = vec4(uvec4(a.x, a.x >> 16u, a.y, a.y >> 16u) & uvec4(65535u));
-    vec4 hi = vec4(uvec4(b.x, b.x >> 16u, b.y, b.y >> 16u) & uvec4(65535u));
+    vec4 hi = vec4(uvec4(c.x, c.x >> 16u, c.y, c.y >> 16u) & uvec4(65535u));
     const float unorm = 1.0 / 65535.0;
 #endif
     vec4 z = mix(lo, hi, f.z);
@@ -57,16 +87,22 @@ float sample_raw(vec3 p) {
     return mix(y.x, y.y, f.x) * unorm;
 }
 #else
-float sample_raw(vec3 p) {
-    return textureLod(sampler3D(volume_tex, linear_smp), p, 0.0).r;
+float sample_in(Brick b, vec3 p) {
+    return textureLod(sampler3D(volume_tex, linear_smp), (p * b.scale + b.offset) * frame.pool_inv.xyz, 0.0).r;
 }
 #endif
 
+// The normalised value at p in brick b (see sample_value).
+float value_in(Brick b, vec3 p) {
+    float v = sample_in(b, p) * frame.value_map.x + frame.value_map.y;
+    return isnan(v) ? v : clamp(v, 0.0, 1.0);
+}
+
 // The normalised value, in [0, 1] by definition (rule 3): f32 rounding of the scale and bias must not push the
 // data's maximum just above 1 (out of a window ending at 1) nor its minimum below 0. NaN stays NaN.
+// Looked up where p lies: for points the walk did not place in its span (segment ends, bisection, the light grid).
 float sample_value(vec3 p) {
-    float v = sample_raw(p) * frame.value_map.x + frame.value_map.y;
-    return isnan(v) ? v : clamp(v, 0.0, 1.0);
+    return value_in(brick_at(p), p);
 }
 
 bool visible(float v) {
@@ -107,21 +143,25 @@ vec4 segment_mean(float vp, vec4 ip, float v, vec4 iv, vec4 slope) {
 }
 
 // Central differences one voxel apart: value change per voxel along each texture axis, from the gradient texture
-// (binding 4) or six samples.
+// (binding 4) or six samples, all in the brick holding the centre p (its border reaches one voxel past it).
 #if defined(GRADIENT_TEXTURE)
-vec3 gradient(vec3 p) {
-    return 0.5 * textureLod(sampler3D(gradient_tex, linear_smp), p, 0.0).xyz;
+vec3 gradient_in(Brick b, vec3 p) {
+    return 0.5 * textureLod(sampler3D(gradient_tex, linear_smp), (p * b.scale + b.offset) * frame.pool_inv.xyz, 0.0).xyz;
 }
 #else
-vec3 gradient(vec3 p) {
+vec3 gradient_in(Brick b, vec3 p) {
     vec3 d = frame.texel.xyz;
     vec3 g = 0.5 * vec3(
-        sample_value(p + vec3(d.x, 0.0, 0.0)) - sample_value(p - vec3(d.x, 0.0, 0.0)),
-        sample_value(p + vec3(0.0, d.y, 0.0)) - sample_value(p - vec3(0.0, d.y, 0.0)),
-        sample_value(p + vec3(0.0, 0.0, d.z)) - sample_value(p - vec3(0.0, 0.0, d.z)));
+        value_in(b, p + vec3(d.x, 0.0, 0.0)) - value_in(b, p - vec3(d.x, 0.0, 0.0)),
+        value_in(b, p + vec3(0.0, d.y, 0.0)) - value_in(b, p - vec3(0.0, d.y, 0.0)),
+        value_in(b, p + vec3(0.0, 0.0, d.z)) - value_in(b, p - vec3(0.0, 0.0, d.z)));
     if (any(isnan(g))) {
         g = vec3(0.0);
     }
     return g;
 }
 #endif
+
+vec3 gradient(vec3 p) {
+    return gradient_in(brick_at(p), p);
+}

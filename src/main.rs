@@ -118,6 +118,7 @@ fn main() -> ExitCode {
                 validate: false,
                 device: None,
                 texture: "auto".into(),
+                brick_size: None,
             },
             size: (1280, 800),
             quality: Quality::Normal,

@@ -259,6 +259,10 @@ pub(crate) struct GpuArgs {
     /// memory), float (4 bytes per voxel) or corners (4 or 8 bytes per voxel for 8/16-bit data).
     #[arg(long, default_value = "auto", value_parser = ["auto", "native", "float", "corners"])]
     pub(crate) texture: String,
+    /// Cut volumes into bricks of this many voxels per side in the GPU's brick pool (at least 8). By default a
+    /// volume that fits the device's 3D texture limit is one brick, and larger ones are cut into 64^3 bricks.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(8..=1024))]
+    pub(crate) brick_size: Option<u32>,
 }
 
 impl GpuArgs {
@@ -273,6 +277,7 @@ impl GpuArgs {
                 "corners" => volcast::gpu::TexelPolicy::Corners,
                 _ => volcast::gpu::TexelPolicy::Auto,
             },
+            brick_side: self.brick_size,
             ..Default::default()
         }
     }

@@ -21,6 +21,9 @@ pub struct GpuOptions {
     pub swapchain: bool,
     /// How renderers on this GPU store volumes (`--texture`).
     pub texel_policy: super::TexelPolicy,
+    /// The side of the bricks renderers on this GPU cut volumes into (`--brick-size`); None: one brick per volume
+    /// where it fits the device's 3D limit (render/pool.rs).
+    pub brick_side: Option<u32>,
 }
 
 /// One validation-layer message.
@@ -181,6 +184,8 @@ pub struct Gpu {
     pub device_local_bytes: u64,
     /// From [`GpuOptions::texel_policy`]: the policy new renderers start with.
     pub texel_policy: super::TexelPolicy,
+    /// From [`GpuOptions::brick_side`].
+    pub brick_side: Option<u32>,
 }
 
 fn load_entry() -> Result<ash::Entry, GpuError> {
@@ -410,6 +415,7 @@ impl Gpu {
                     command_pool: vk::CommandPool::null(),
                     device_local_bytes,
                     texel_policy: opts.texel_policy,
+                    brick_side: opts.brick_side,
                 };
                 gpu.finish()
             }

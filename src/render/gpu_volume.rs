@@ -3,6 +3,8 @@
 //! shown one, so the next step of a series can be uploaded ahead of display (`Renderer::prepare_volume`).
 
 use super::march_key::Sampling;
+use super::pool::{Pool, PoolRows};
+use super::uniforms::PoolInfo;
 use super::{skip, OccupancyKey, VolumeInfo};
 use crate::gpu::resources::{Image, ImageDesc};
 use crate::gpu::upload::{upload_image, upload_image_with};
@@ -10,13 +12,15 @@ use crate::gpu::TexelPolicy;
 use crate::gpu::{Gpu, GpuError};
 use crate::volume::{Volume, VoxelData};
 use ash::vk;
-use rayon::prelude::*;
 
 pub(super) struct GpuVolume {
     pub(super) layout: VolumeLayout,
     /// The 3D texture (`VolumeLayout::Texture`).
     pub(super) image: Option<Image>,
     pub(super) info: VolumeInfo,
+    /// Where the bricks lie in the pool (the image or the corners) and the page table that finds them.
+    pub(super) pool: Pool,
+    pub(super) directory: Image,
     pub(super) bricks: skip::BrickGrid,
     /// One R8 texel per brick: may a sample there be visible (see skip.rs).
     pub(super) occupancy: Image,
@@ -170,10 +174,11 @@ impl DeviceFacts {
     }
 }
 
-/// Builds `volume`'s corner texture (`layout` Corners8 or Corners16): per voxel the four values of the 2×2 square
-/// of the cell it starts in x and y (neighbours clamped to the edge), packed in one texel; the march fetches it at
-/// z and z + 1. Filled slab by slab straight into the staging buffer, rows on every core.
-fn upload_corners(gpu: &Gpu, volume: &Volume, layout: VolumeLayout) -> Result<Image, GpuError> {
+/// Fills the pool's corner texture (`layout` Corners8 or Corners16): per texel the four values of the 2×2 square
+/// of the cell it starts in x and y (neighbours clamped to the pool's edge; within a slot they are the brick's
+/// own voxels and border), packed in one texel; the march fetches it at z and z + 1. Filled slab by slab straight
+/// into the staging buffer, rows on every core.
+fn upload_corners(gpu: &Gpu, volume: &Volume, pool: &Pool, layout: VolumeLayout) -> Result<Image, GpuError> {
     if matches!(volume.data, VoxelData::F32(_)) {
         return Err(GpuError::Lost("corner texture: float data has no corner layout"));
     }
@@ -181,45 +186,33 @@ fn upload_corners(gpu: &Gpu, volume: &Volume, layout: VolumeLayout) -> Result<Im
         VolumeLayout::Corners8 => vk::Format::R32_UINT,
         _ => vk::Format::R32G32_UINT,
     };
-    let mut image = image_3d_once(gpu, format, volume.dims, "volume corners")?;
+    let mut image = image_3d_once(gpu, format, pool.texels(), "volume corners")?;
     let texel = layout.bytes_per_voxel() as usize;
-    // A depth-1 volume is uploaded twice (image_3d makes two slices).
-    let copies = if volume.dims[2] == 1 { 2 } else { 1 };
-    let [nx, ny, nz] = volume.dims.map(|d| d as usize);
-    let uploaded = upload_image_with(
-        gpu,
-        &mut image,
-        (volume.voxel_count() * texel * copies) as u64,
-        |range, dst| {
-            // The slab is whole rows; its rows are numbered within the volume (wrapping into the second copy).
-            let first = range.start / texel / nx;
-            let rows = dst.par_chunks_mut(nx * texel).enumerate();
-            let row_of = |r: usize| (first + r) % (ny * nz);
-            match &volume.data {
-                VoxelData::U8(v) => rows.for_each(|(r, row)| {
-                    let pack = |c: [u32; 4]| c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24;
-                    corner_row(
-                        bytemuck::cast_slice_mut(row),
-                        row_of(r),
-                        [nx, ny],
-                        |i| u32::from(v[i]),
-                        pack,
-                    )
-                }),
-                VoxelData::U16(v) => rows.for_each(|(r, row)| {
-                    let pack = |c: [u32; 4]| [c[0] | c[1] << 16, c[2] | c[3] << 16];
-                    corner_row(
-                        bytemuck::cast_slice_mut(row),
-                        row_of(r),
-                        [nx, ny],
-                        |i| u32::from(v[i]),
-                        pack,
-                    )
-                }),
-                VoxelData::F32(_) => {}
+    let last = pool.texels()[0] as usize - 1;
+    let uploaded = upload_image_with(gpu, &mut image, pool.texel_count() * texel as u64, |range, dst| {
+        let first = range.start / texel;
+        let square = |rows: &PoolRows, x: usize, at: &dyn Fn(Option<usize>) -> u32| {
+            let x1 = (x + 1).min(last);
+            [at(rows.this[x]), at(rows.this[x1]), at(rows.next[x]), at(rows.next[x1])]
+        };
+        match &volume.data {
+            VoxelData::U8(v) => {
+                let at = |i: Option<usize>| i.map_or(0, |i| u32::from(v[i]));
+                pool.fill(first, bytemuck::cast_slice_mut::<u8, u32>(dst), |rows, x| {
+                    let c = square(rows, x, &at);
+                    c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24
+                })
             }
-        },
-    );
+            VoxelData::U16(v) => {
+                let at = |i: Option<usize>| i.map_or(0, |i| u32::from(v[i]));
+                pool.fill(first, bytemuck::cast_slice_mut::<u8, [u32; 2]>(dst), |rows, x| {
+                    let c = square(rows, x, &at);
+                    [c[0] | c[1] << 16, c[2] | c[3] << 16]
+                })
+            }
+            VoxelData::F32(_) => {}
+        }
+    });
     match uploaded {
         Ok(()) => Ok(image),
         Err(e) => {
@@ -229,21 +222,65 @@ fn upload_corners(gpu: &Gpu, volume: &Volume, layout: VolumeLayout) -> Result<Im
     }
 }
 
-/// Row `row` (y + ny·z) of a corner texture: for each voxel (x fastest) the values x0y0, x1y0, x0y1, x1y1 of its
-/// cell's square at its own z (neighbours past the last voxel clamped to it), packed by `pack`.
-fn corner_row<T>(
-    dst: &mut [T],
-    row: usize,
-    [nx, ny]: [usize; 2],
-    at: impl Fn(usize) -> u32,
-    pack: impl Fn([u32; 4]) -> T,
-) {
-    let (y, z) = (row % ny, row / ny);
-    let y1 = (y + 1).min(ny - 1);
-    let (r0, r1) = (nx * (y + ny * z), nx * (y1 + ny * z));
-    for (x, d) in dst.iter_mut().enumerate() {
-        let x1 = (x + 1).min(nx - 1);
-        *d = pack([at(r0 + x), at(r0 + x1), at(r1 + x), at(r1 + x1)]);
+/// Fills the pool's texture of `format` from `volume`: the values as stored (R8, R16 or R32 float data), or 8-
+/// and 16-bit values widened to float as a UNORM texture would return them (stored / 255 or / 65535), so
+/// `Volume::gpu_scale_bias` holds unchanged. Converted straight into the staging buffer.
+fn upload_texels(
+    gpu: &Gpu,
+    image: &mut Image,
+    volume: &Volume,
+    pool: &Pool,
+    format: vk::Format,
+) -> Result<(), GpuError> {
+    let widen = format == vk::Format::R32_SFLOAT && volume.gpu_texel_size() < 4;
+    let texel = if widen { 4 } else { volume.gpu_texel_size() };
+    upload_image_with(gpu, image, pool.texel_count() * texel as u64, |range, dst| {
+        let first = range.start / texel;
+        match (&volume.data, widen) {
+            (VoxelData::U8(v), false) => pool.fill(first, dst, |r, x| r.this[x].map_or(0, |i| v[i])),
+            (VoxelData::U16(v), false) => pool.fill(first, bytemuck::cast_slice_mut::<u8, u16>(dst), |r, x| {
+                r.this[x].map_or(0, |i| v[i])
+            }),
+            (VoxelData::U8(v), true) => pool.fill(first, bytemuck::cast_slice_mut::<u8, f32>(dst), |r, x| {
+                r.this[x].map_or(0.0, |i| f32::from(v[i]) / 255.0)
+            }),
+            (VoxelData::U16(v), true) => pool.fill(first, bytemuck::cast_slice_mut::<u8, f32>(dst), |r, x| {
+                r.this[x].map_or(0.0, |i| f32::from(v[i]) / 65535.0)
+            }),
+            (VoxelData::F32(v), _) => pool.fill(first, bytemuck::cast_slice_mut::<u8, f32>(dst), |r, x| {
+                r.this[x].map_or(0.0, |i| v[i])
+            }),
+        }
+    })
+}
+
+/// Uploads `volume`'s bricks into a pool in `layout`: the 3D texture or the corner texture.
+fn upload_layout(
+    gpu: &Gpu,
+    layout: VolumeLayout,
+    volume: &Volume,
+    pool: &Pool,
+) -> Result<(Option<Image>, Option<Image>), GpuError> {
+    match layout {
+        VolumeLayout::Texture(format) => {
+            // SAFETY: plain query on a live physical device.
+            let features = unsafe { gpu.instance.get_physical_device_format_properties(gpu.physical, format) };
+            let filter = vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
+            if !features.optimal_tiling_features.contains(filter) {
+                return Err(GpuError::TooLarge(format!(
+                    "this device cannot filter {format:?} 3D textures linearly"
+                )));
+            }
+            let mut image = image_3d_once(gpu, format, pool.texels(), "volume")?;
+            if let Err(e) = upload_texels(gpu, &mut image, volume, pool, format) {
+                image.destroy(gpu);
+                return Err(e);
+            }
+            Ok((Some(image), None))
+        }
+        VolumeLayout::Corners8 | VolumeLayout::Corners16 => {
+            Ok((None, Some(upload_corners(gpu, volume, pool, layout)?)))
+        }
     }
 }
 
@@ -258,81 +295,37 @@ pub(super) fn upload_3d(gpu: &Gpu, image: &mut Image, bytes: &[u8], depth: u32) 
     }
 }
 
-/// Uploads 8- or 16-bit `volume` into an R32_SFLOAT image made by [`image_3d`] as the values a UNORM texture
-/// would return (stored / 255 or / 65535), so `Volume::gpu_scale_bias` holds unchanged. Converted straight into
-/// the staging buffer: no float copy of the volume on the heap.
-fn upload_float(gpu: &Gpu, image: &mut Image, volume: &Volume) -> Result<(), GpuError> {
-    let n = volume.voxel_count();
-    // A depth-1 volume is uploaded twice (image_3d makes two slices).
-    let copies = if volume.dims[2] == 1 { 2 } else { 1 };
-    upload_image_with(gpu, image, (n * 4 * copies) as u64, |range, dst| {
-        let mut rest: &mut [f32] = bytemuck::cast_slice_mut(dst);
-        // The slab is whole slices: split where it passes from one copy of the volume to the next.
-        let mut at = range.start / 4;
-        while !rest.is_empty() {
-            let i = at % n;
-            let take = (n - i).min(rest.len());
-            let (head, tail) = rest.split_at_mut(take);
-            match &volume.data {
-                VoxelData::U8(v) => head
-                    .par_iter_mut()
-                    .zip(&v[i..i + take])
-                    .for_each(|(d, &x)| *d = f32::from(x) / 255.0),
-                VoxelData::U16(v) => head
-                    .par_iter_mut()
-                    .zip(&v[i..i + take])
-                    .for_each(|(d, &x)| *d = f32::from(x) / 65535.0),
-                VoxelData::F32(v) => head.copy_from_slice(&v[i..i + take]),
-            }
-            rest = tail;
-            at += take;
+/// The page table as an RG32_UINT 3D image (`Pool::table`).
+fn upload_directory(gpu: &Gpu, pool: &Pool) -> Result<Image, GpuError> {
+    let mut image = image_3d(gpu, vk::Format::R32G32_UINT, pool.grid, "page table")?;
+    match upload_3d(gpu, &mut image, bytemuck::cast_slice(&pool.table()), pool.grid[2]) {
+        Ok(()) => Ok(image),
+        Err(e) => {
+            image.destroy(gpu);
+            Err(e)
         }
-    })
-}
-
-/// Uploads `volume` in `layout`: the 3D texture or the corner texture.
-fn upload_layout(gpu: &Gpu, layout: VolumeLayout, volume: &Volume) -> Result<(Option<Image>, Option<Image>), GpuError> {
-    match layout {
-        VolumeLayout::Texture(format) => {
-            // SAFETY: plain query on a live physical device.
-            let features = unsafe { gpu.instance.get_physical_device_format_properties(gpu.physical, format) };
-            let filter = vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR;
-            if !features.optimal_tiling_features.contains(filter) {
-                return Err(GpuError::TooLarge(format!(
-                    "this device cannot filter {format:?} 3D textures linearly"
-                )));
-            }
-            let mut image = image_3d_once(gpu, format, volume.dims, "volume")?;
-            // Widened to float from 8 or 16 bits, or uploaded as stored.
-            let uploaded = if volume.gpu_texel_size() < 4 && format == vk::Format::R32_SFLOAT {
-                upload_float(gpu, &mut image, volume)
-            } else {
-                upload_3d(gpu, &mut image, volume.gpu_bytes(), volume.dims[2])
-            };
-            if let Err(e) = uploaded {
-                image.destroy(gpu);
-                return Err(e);
-            }
-            Ok((Some(image), None))
-        }
-        VolumeLayout::Corners8 | VolumeLayout::Corners16 => Ok((None, Some(upload_corners(gpu, volume, layout)?))),
     }
 }
 
 impl GpuVolume {
     /// Uploads `volume` in the layout `policy` gives it on `gpu`. The size is checked against the device's 3D
     /// image limit and memory before anything is allocated.
-    pub(super) fn new(gpu: &Gpu, policy: TexelPolicy, volume: &Volume) -> Result<GpuVolume, GpuError> {
+    pub(super) fn new(
+        gpu: &Gpu,
+        policy: TexelPolicy,
+        volume: &Volume,
+        brick: Option<u32>,
+    ) -> Result<GpuVolume, GpuError> {
         let limit = gpu.properties.limits.max_image_dimension3_d;
-        if volume.dims.iter().any(|&d| d > limit) {
-            return Err(GpuError::TooLarge(format!(
-                "volume {}x{}x{} exceeds this device's 3D texture limit of {limit} per side",
+        let pool = Pool::whole(volume.dims, brick, limit).map_err(|e| {
+            GpuError::TooLarge(format!(
+                "volume {}x{}x{}: {e}",
                 volume.dims[0], volume.dims[1], volume.dims[2]
-            )));
-        }
+            ))
+        })?;
         let voxels = volume.voxel_count() as u64;
         let layout = choose_layout(DeviceFacts::of(gpu), policy, &volume.data, voxels);
-        let needed = volume.voxel_count() as u64 * layout.bytes_per_voxel();
+        let needed = pool.texel_count() * layout.bytes_per_voxel();
         // Half the heap: the upload needs a staging copy of the same size alongside.
         if needed > gpu.device_local_bytes / 2 {
             return Err(GpuError::TooLarge(format!(
@@ -344,8 +337,20 @@ impl GpuVolume {
         }
         // The brick statistics beside the upload, on the cores it leaves idle (its fills are parallel, but it
         // waits on the device and, through a staging buffer, on lavapipe's single-threaded copy).
-        let (uploaded, bricks) = rayon::join(|| upload_layout(gpu, layout, volume), || skip::BrickGrid::new(volume));
+        let (uploaded, bricks) = rayon::join(
+            || upload_layout(gpu, layout, volume, &pool),
+            || skip::BrickGrid::new(volume),
+        );
         let (image, corners) = uploaded?;
+        let directory = match upload_directory(gpu, &pool) {
+            Ok(d) => d,
+            Err(e) => {
+                for i in [image, corners].into_iter().flatten() {
+                    i.destroy(gpu);
+                }
+                return Err(e);
+            }
+        };
         let destroy_volume = |gpu: &Gpu, image: Option<Image>, corners: Option<Image>| {
             if let Some(i) = image {
                 i.destroy(gpu);
@@ -368,6 +373,7 @@ impl GpuVolume {
             Ok(o) => o,
             Err(e) => {
                 destroy_volume(gpu, image, corners);
+                directory.destroy(gpu);
                 return Err(e);
             }
         };
@@ -379,7 +385,13 @@ impl GpuVolume {
                 geometry: volume.geometry,
                 scale_bias: volume.gpu_scale_bias(),
                 range: volume.range,
+                pool: PoolInfo {
+                    brick: pool.brick,
+                    texels: pool.texels(),
+                },
             },
+            pool,
+            directory,
             bricks,
             occupancy,
             occupancy_key: None,
@@ -391,6 +403,7 @@ impl GpuVolume {
 
     pub(super) fn destroy(self, gpu: &Gpu) {
         self.occupancy.destroy(gpu);
+        self.directory.destroy(gpu);
         if let Some(l) = self.light {
             l.image.destroy(gpu);
         }

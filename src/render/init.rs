@@ -112,6 +112,7 @@ impl Renderer {
             lut_table: Vec::new(),
             volume: None,
             texel_policy: gpu.texel_policy,
+            brick_side: gpu.brick_side,
             positions: None,
             timestamp_period_ns: gpu.properties.limits.timestamp_period as f64,
         };
@@ -172,6 +173,8 @@ impl Renderer {
                 (D::SAMPLED_IMAGE, frag),
                 (D::UNIFORM_BUFFER, frag),
                 (D::SAMPLED_IMAGE, frag),
+                // The brick pool's page table (render/pool.rs).
+                (D::SAMPLED_IMAGE, frag),
             ],
         )?;
         self.positions_set_layout = set_layout(
@@ -227,7 +230,7 @@ impl Renderer {
         let size = |ty, descriptor_count| vk::DescriptorPoolSize { ty, descriptor_count };
         let sizes = [
             size(D::UNIFORM_BUFFER, n + 1),
-            size(D::SAMPLED_IMAGE, 8),
+            size(D::SAMPLED_IMAGE, 9),
             size(D::SAMPLER, 2),
             size(D::STORAGE_IMAGE, n + 1),
             size(D::STORAGE_BUFFER, 2),

@@ -11,11 +11,12 @@ mod init;
 pub mod light_volume;
 pub mod march_key;
 pub mod png;
+pub mod pool;
 mod record;
 pub mod skip;
 mod uniforms;
 
-pub use uniforms::{mirrors, FrameUniforms, VolumeInfo};
+pub use uniforms::{mirrors, FrameUniforms, PoolInfo, VolumeInfo};
 
 use crate::gpu::upload::upload_image_with;
 use gpu_volume::{image_3d_once, upload_3d, GpuVolume};
@@ -173,6 +174,8 @@ pub struct Renderer {
     volume: Option<GpuVolume>,
     /// How the next `set_volume` stores voxels (see [`TexelPolicy`]); starts as the GPU's option.
     pub texel_policy: TexelPolicy,
+    /// The brick side volumes are cut into (render/pool.rs; None: one brick where it fits).
+    pub brick_side: Option<u32>,
     positions: Option<PositionTargets>,
     timestamp_period_ns: f64,
 }
@@ -239,6 +242,9 @@ impl Renderer {
         let light_info = [vk::DescriptorImageInfo::default()
             .image_view(vol.light.as_ref().map_or(volume_view, |l| l.image.view))
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
+        let directory_info = [vk::DescriptorImageInfo::default()
+            .image_view(vol.directory.view)
+            .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let writes = [
             vk::WriteDescriptorSet::default()
                 .dst_set(self.volume_set)
@@ -280,6 +286,11 @@ impl Renderer {
                 .dst_binding(7)
                 .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
                 .image_info(&light_info),
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.volume_set)
+                .dst_binding(8)
+                .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
+                .image_info(&directory_info),
         ];
         // SAFETY: callers only update descriptors while no submitted work uses them (headless waits per frame).
         unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
@@ -297,7 +308,7 @@ impl Renderer {
     /// [`install_volume`](Self::install_volume). A series' next step is uploaded this way while its current one
     /// is shown.
     pub fn prepare_volume(&self, gpu: &Gpu, volume: &Volume) -> Result<PreparedVolume, GpuError> {
-        GpuVolume::new(gpu, self.texel_policy, volume).map(PreparedVolume)
+        GpuVolume::new(gpu, self.texel_policy, volume, self.brick_side).map(PreparedVolume)
     }
 
     /// Shows `prepared`, destroying the current volume. No frame in flight may still use the current volume.
@@ -318,14 +329,15 @@ impl Renderer {
         if vol.gradient.is_some() {
             return Ok(());
         }
-        let mut image = image_3d_once(gpu, vk::Format::R16G16B16A16_SNORM, volume.dims, "gradients")?;
-        // A depth-1 volume is uploaded twice (image_3d makes two slices).
-        let copies = if volume.dims[2] == 1 { 2 } else { 1 };
-        let slice_bytes = volume.dims[0] as usize * volume.dims[1] as usize * 8;
-        let len = (volume.voxel_count() * 8 * copies) as u64;
-        let filled = upload_image_with(gpu, &mut image, len, |range, dst| {
-            let filter = gradients::GradientFilter::for_volume(volume);
-            gradients::fill_gradient_slices(volume, filter, range.start / slice_bytes, bytemuck::cast_slice_mut(dst))
+        // The gradients on the voxel grid, then gathered into the pool's slots like the values (borders included).
+        let mut grid = vec![[0i16; 4]; volume.voxel_count()];
+        gradients::fill_gradient_slices(volume, gradients::GradientFilter::for_volume(volume), 0, &mut grid);
+        let pool = &vol.pool;
+        let mut image = image_3d_once(gpu, vk::Format::R16G16B16A16_SNORM, pool.texels(), "gradients")?;
+        let filled = upload_image_with(gpu, &mut image, pool.texel_count() * 8, |range, dst| {
+            pool.fill(range.start / 8, bytemuck::cast_slice_mut(dst), |r, x| {
+                r.this[x].map_or([0; 4], |i| grid[i])
+            })
         });
         if let Err(e) = filled {
             image.destroy(gpu);
@@ -339,6 +351,11 @@ impl Renderer {
     /// Whether the loaded volume's gradient texture is made (`enable_gradient_texture`).
     pub fn has_gradient_texture(&self) -> bool {
         self.volume.as_ref().is_some_and(|v| v.gradient.is_some())
+    }
+
+    /// Where the loaded volume's bricks lie in the pool (None: no volume).
+    pub fn pool(&self) -> Option<&pool::Pool> {
+        self.volume.as_ref().map(|v| &v.pool)
     }
 
     /// How the loaded volume is stored on the GPU (None: no volume).

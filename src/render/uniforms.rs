@@ -48,6 +48,14 @@ pub struct FrameUniforms {
     pub light_grid: [f32; 4],
     /// Rule 10's clipping plane in texture space: p is kept where `xyz·p + w ≥ 0` (`clip::KEEP_ALL` without one).
     pub clip_plane: [f32; 4],
+    /// The brick pool (render/pool.rs): xyz 1 / its size in texels.
+    pub pool_inv: [f32; 4],
+    /// xyz: a brick's size in voxels of its level; w: the border (`pool::BORDER`).
+    pub pool_brick: [f32; 4],
+    /// xyz: a slot's size in texels.
+    pub pool_slot: [f32; 4],
+    /// xyz: level-0 bricks per axis (the page table's size).
+    pub pool_grid: [f32; 4],
 }
 
 /// GPU facts about the loaded volume that the uniforms need.
@@ -59,6 +67,27 @@ pub struct VolumeInfo {
     pub scale_bias: (f32, f32),
     /// The data's value range (for transfer functions in data units).
     pub range: [f64; 2],
+    /// Where the march finds the bricks.
+    pub pool: PoolInfo,
+}
+
+/// The brick pool's shape, as the uniforms carry it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PoolInfo {
+    /// A brick's size in voxels.
+    pub brick: [u32; 3],
+    /// The pool texture's size in texels.
+    pub texels: [u32; 3],
+}
+
+impl PoolInfo {
+    /// One brick holding a whole volume of `dims`.
+    pub fn whole(dims: [u32; 3]) -> PoolInfo {
+        PoolInfo {
+            brick: dims,
+            texels: dims.map(super::pool::slot_side),
+        }
+    }
 }
 
 impl VolumeInfo {
@@ -277,6 +306,26 @@ impl FrameUniforms {
             light_color: light_color(s),
             light_grid: light_grid(s, v),
             clip_plane: v.clip_plane(s),
+            pool_inv: v.pool.texels.map(|t| 1.0 / t as f32).into_v4(),
+            pool_brick: {
+                let [x, y, z] = v.pool.brick.map(|b| b as f32);
+                [x, y, z, super::pool::BORDER as f32]
+            },
+            pool_slot: v.pool.brick.map(|b| super::pool::slot_side(b) as f32).into_v4(),
+            pool_grid: [0, 1, 2]
+                .map(|a| v.dims[a].div_ceil(v.pool.brick[a].max(1)) as f32)
+                .into_v4(),
         }
+    }
+}
+
+/// `[x, y, z]` as a uniform's vec4 with w = 0.
+trait IntoV4 {
+    fn into_v4(self) -> [f32; 4];
+}
+
+impl IntoV4 for [f32; 3] {
+    fn into_v4(self) -> [f32; 4] {
+        [self[0], self[1], self[2], 0.0]
     }
 }

@@ -11,6 +11,7 @@ mod clip;
 mod features;
 mod lighting;
 mod methods_agree;
+mod pool;
 mod quality;
 mod validation_canary;
 mod vs_reference;

@@ -1,7 +1,7 @@
 //! Counting the march's samples on the CPU by replaying its rules, so the march shader is left untouched.
 
 use crate::render::skip::{self, BrickGrid};
-use crate::render::{FrameUniforms, VolumeInfo};
+use crate::render::{FrameUniforms, PoolInfo, VolumeInfo};
 use crate::scene::settings::{self, CompositeMode, RenderSettings};
 use crate::transfer::function as tf;
 use crate::transfer::preintegrate;
@@ -224,6 +224,7 @@ impl SampleCounter {
             geometry: self.geometry,
             scale_bias: (1.0, 0.0),
             range: self.range,
+            pool: PoolInfo::whole(self.dims.map(|d| d as u32)),
         };
         let u = FrameUniforms::new(s, &info);
         let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
