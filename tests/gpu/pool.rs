@@ -76,6 +76,14 @@ fn bricked_volumes_match_the_reference() {
         judge.run_cases(("reference", REFERENCE), &gpu, &mut headless, &v, cases, METHODS);
     }
     headless.renderer.texel_policy = TexelPolicy::Auto;
+    // The helix's empty space in bricks of 8 at long steps: after each leap the segment starts at the last sample
+    // leapt over, up to a step outside the brick of the sample after it.
+    let small = volume::builtin("helix", Some(48)).expect("helix");
+    set_bricked(&gpu, &mut headless, &small, 8);
+    let cases = [3.0, 4.0]
+        .map(|step| with(&small, 72, &format!("step-{step}"), |s| s.step_length = step))
+        .to_vec();
+    judge.run_cases(("reference", REFERENCE), &gpu, &mut headless, &small, cases, METHODS);
     // The compute march the same way.
     let ml = volume::builtin("marschner-lobb", None).expect("marschner-lobb");
     set_bricked(&gpu, &mut headless, &ml, 8);
