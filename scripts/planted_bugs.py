@@ -168,8 +168,6 @@ BUGS = [
      [("shaders/walk.glsl", "    vec3 lo = pb.lo;\n    vec3 hi = pb.hi;", "    vec3 lo = vec3(-1e30);\n    vec3 hi = vec3(1e30);")]),
     ("page-table-slot-axes", "the page table's slot position is decoded with y and z swapped",
      [("shaders/volume.glsl", "uvec3(e.x, e.x >> 10u, e.x >> 20u)", "uvec3(e.x, e.x >> 20u, e.x >> 10u)")]),
-    ("resample-brick-of-span", "the resample after a leap is read with the next span's brick instead of its own",
-     [("shaders/walk.glsl", "        w.brick = w.resample_brick;", "        w.brick = w.span_brick;")]),
     ("level-not-centred", "a pyramid level read within the budgets keeps level 0's voxel positions instead of its blocks' centres",
      [("src/scale/read.rs", "g.downsampled(f.map(|v| v as u32))",
        "Geometry { affine: g.affine * glam::DMat4::from_scale(glam::DVec3::new(f[0] as f64, f[1] as f64, f[2] as f64)), ..g }")]),
