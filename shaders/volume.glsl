@@ -146,7 +146,9 @@ vec4 segment_mean(float vp, vec4 ip, float v, vec4 iv, vec4 slope) {
 // (binding 4) or six samples, all in the brick holding the centre p (its border reaches one voxel past it).
 #if defined(GRADIENT_TEXTURE)
 vec3 gradient_in(Brick b, vec3 p) {
-    return 0.5 * textureLod(sampler3D(gradient_tex, linear_smp), (p * b.scale + b.offset) * frame.pool_inv.xyz, 0.0).xyz;
+    // Per voxel of the brick's level (2^L level-0 voxels): scaled to level 0's (b.scale = dims / 2^L).
+    vec4 g = textureLod(sampler3D(gradient_tex, linear_smp), (p * b.scale + b.offset) * frame.pool_inv.xyz, 0.0);
+    return 0.5 * g.xyz * (b.scale.x / frame.dims.x);
 }
 #else
 vec3 gradient_in(Brick b, vec3 p) {

@@ -2,8 +2,9 @@
 //! and policy), its upload, brick grid and occupancy texture. A [`GpuVolume`] is made whole before it replaces the
 //! shown one, so the next step of a series can be uploaded ahead of display (`Renderer::prepare_volume`).
 
+use super::levels::Cut;
 use super::march_key::Sampling;
-use super::pool::{Pool, PoolRows};
+use super::pool::{Pool, PoolRows, Source};
 use super::uniforms::PoolInfo;
 use super::{skip, OccupancyKey, VolumeInfo};
 use crate::gpu::resources::{Image, ImageDesc};
@@ -21,6 +22,10 @@ pub(super) struct GpuVolume {
     /// Where the bricks lie in the pool (the image or the corners) and the page table that finds them.
     pub(super) pool: Pool,
     pub(super) directory: Image,
+    /// The levels the pool shows, level 0 everywhere until `show_cut`.
+    pub(super) cut: Cut,
+    /// Levels 1.. of the volume, made by the first cut that needs them (levels.rs).
+    pub(super) pyramid: Vec<Volume>,
     pub(super) bricks: skip::BrickGrid,
     /// One R8 texel per brick: may a sample there be visible (see skip.rs).
     pub(super) occupancy: Image,
@@ -174,12 +179,31 @@ impl DeviceFacts {
     }
 }
 
+/// Each level's elements, level 0 (the volume) first, as the pool's sources index them (`pool::Source`).
+pub(super) enum Levels<'a> {
+    U8(Vec<&'a [u8]>),
+    U16(Vec<&'a [u16]>),
+    F32(Vec<&'a [f32]>),
+}
+
+impl<'a> Levels<'a> {
+    /// `volume` and the levels above it (all of one element type).
+    pub(super) fn of(volume: &'a Volume, pyramid: &'a [Volume]) -> Levels<'a> {
+        let all = std::iter::once(volume).chain(pyramid);
+        match &volume.data {
+            VoxelData::U8(_) => Levels::U8(all.filter_map(|v| v.data.as_u8()).collect()),
+            VoxelData::U16(_) => Levels::U16(all.filter_map(|v| v.data.as_u16()).collect()),
+            VoxelData::F32(_) => Levels::F32(all.filter_map(|v| v.data.as_f32()).collect()),
+        }
+    }
+}
+
 /// Fills the pool's corner texture (`layout` Corners8 or Corners16): per texel the four values of the 2×2 square
 /// of the cell it starts in x and y (neighbours clamped to the pool's edge; within a slot they are the brick's
 /// own voxels and border), packed in one texel; the march fetches it at z and z + 1. Filled slab by slab straight
 /// into the staging buffer, rows on every core.
-fn upload_corners(gpu: &Gpu, volume: &Volume, pool: &Pool, layout: VolumeLayout) -> Result<Image, GpuError> {
-    if matches!(volume.data, VoxelData::F32(_)) {
+fn upload_corners(gpu: &Gpu, levels: &Levels, pool: &Pool, layout: VolumeLayout) -> Result<Image, GpuError> {
+    if matches!(levels, Levels::F32(_)) {
         return Err(GpuError::Lost("corner texture: float data has no corner layout"));
     }
     let format = match layout {
@@ -191,26 +215,26 @@ fn upload_corners(gpu: &Gpu, volume: &Volume, pool: &Pool, layout: VolumeLayout)
     let last = pool.texels()[0] as usize - 1;
     let uploaded = upload_image_with(gpu, &mut image, pool.texel_count() * texel as u64, |range, dst| {
         let first = range.start / texel;
-        let square = |rows: &PoolRows, x: usize, at: &dyn Fn(Option<usize>) -> u32| {
+        let square = |rows: &PoolRows, x: usize, at: &dyn Fn(Option<Source>) -> u32| {
             let x1 = (x + 1).min(last);
             [at(rows.this[x]), at(rows.this[x1]), at(rows.next[x]), at(rows.next[x1])]
         };
-        match &volume.data {
-            VoxelData::U8(v) => {
-                let at = |i: Option<usize>| i.map_or(0, |i| u32::from(v[i]));
+        match levels {
+            Levels::U8(v) => {
+                let at = |s: Option<Source>| s.map_or(0, |(l, i)| u32::from(v[l as usize][i]));
                 pool.fill(first, bytemuck::cast_slice_mut::<u8, u32>(dst), |rows, x| {
                     let c = square(rows, x, &at);
                     c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24
                 })
             }
-            VoxelData::U16(v) => {
-                let at = |i: Option<usize>| i.map_or(0, |i| u32::from(v[i]));
+            Levels::U16(v) => {
+                let at = |s: Option<Source>| s.map_or(0, |(l, i)| u32::from(v[l as usize][i]));
                 pool.fill(first, bytemuck::cast_slice_mut::<u8, [u32; 2]>(dst), |rows, x| {
                     let c = square(rows, x, &at);
                     [c[0] | c[1] << 16, c[2] | c[3] << 16]
                 })
             }
-            VoxelData::F32(_) => {}
+            Levels::F32(_) => {}
         }
     });
     match uploaded {
@@ -222,43 +246,49 @@ fn upload_corners(gpu: &Gpu, volume: &Volume, pool: &Pool, layout: VolumeLayout)
     }
 }
 
-/// Fills the pool's texture of `format` from `volume`: the values as stored (R8, R16 or R32 float data), or 8-
+/// Fills the pool's texture of `format` from `levels`: the values as stored (R8, R16 or R32 float data), or 8-
 /// and 16-bit values widened to float as a UNORM texture would return them (stored / 255 or / 65535), so
 /// `Volume::gpu_scale_bias` holds unchanged. Converted straight into the staging buffer.
 fn upload_texels(
     gpu: &Gpu,
     image: &mut Image,
-    volume: &Volume,
+    levels: &Levels,
     pool: &Pool,
     format: vk::Format,
 ) -> Result<(), GpuError> {
-    let widen = format == vk::Format::R32_SFLOAT && volume.gpu_texel_size() < 4;
-    let texel = if widen { 4 } else { volume.gpu_texel_size() };
+    let native = match levels {
+        Levels::U8(_) => 1,
+        Levels::U16(_) => 2,
+        Levels::F32(_) => 4,
+    };
+    let widen = format == vk::Format::R32_SFLOAT && native < 4;
+    let texel = if widen { 4 } else { native };
     upload_image_with(gpu, image, pool.texel_count() * texel as u64, |range, dst| {
         let first = range.start / texel;
-        match (&volume.data, widen) {
-            (VoxelData::U8(v), false) => pool.fill(first, dst, |r, x| r.this[x].map_or(0, |i| v[i])),
-            (VoxelData::U16(v), false) => pool.fill(first, bytemuck::cast_slice_mut::<u8, u16>(dst), |r, x| {
-                r.this[x].map_or(0, |i| v[i])
+        let floats = bytemuck::cast_slice_mut::<u8, f32>;
+        match (levels, widen) {
+            (Levels::U8(v), false) => pool.fill(first, dst, |r, x| r.this[x].map_or(0, |(l, i)| v[l as usize][i])),
+            (Levels::U16(v), false) => pool.fill(first, bytemuck::cast_slice_mut::<u8, u16>(dst), |r, x| {
+                r.this[x].map_or(0, |(l, i)| v[l as usize][i])
             }),
-            (VoxelData::U8(v), true) => pool.fill(first, bytemuck::cast_slice_mut::<u8, f32>(dst), |r, x| {
-                r.this[x].map_or(0.0, |i| f32::from(v[i]) / 255.0)
+            (Levels::U8(v), true) => pool.fill(first, floats(dst), |r, x| {
+                r.this[x].map_or(0.0, |(l, i)| f32::from(v[l as usize][i]) / 255.0)
             }),
-            (VoxelData::U16(v), true) => pool.fill(first, bytemuck::cast_slice_mut::<u8, f32>(dst), |r, x| {
-                r.this[x].map_or(0.0, |i| f32::from(v[i]) / 65535.0)
+            (Levels::U16(v), true) => pool.fill(first, floats(dst), |r, x| {
+                r.this[x].map_or(0.0, |(l, i)| f32::from(v[l as usize][i]) / 65535.0)
             }),
-            (VoxelData::F32(v), _) => pool.fill(first, bytemuck::cast_slice_mut::<u8, f32>(dst), |r, x| {
-                r.this[x].map_or(0.0, |i| v[i])
+            (Levels::F32(v), _) => pool.fill(first, floats(dst), |r, x| {
+                r.this[x].map_or(0.0, |(l, i)| v[l as usize][i])
             }),
         }
     })
 }
 
-/// Uploads `volume`'s bricks into a pool in `layout`: the 3D texture or the corner texture.
-fn upload_layout(
+/// Uploads the bricks `pool` holds into a pool in `layout`: the 3D texture or the corner texture.
+pub(super) fn upload_layout(
     gpu: &Gpu,
     layout: VolumeLayout,
-    volume: &Volume,
+    levels: &Levels,
     pool: &Pool,
 ) -> Result<(Option<Image>, Option<Image>), GpuError> {
     match layout {
@@ -272,14 +302,14 @@ fn upload_layout(
                 )));
             }
             let mut image = image_3d_once(gpu, format, pool.texels(), "volume")?;
-            if let Err(e) = upload_texels(gpu, &mut image, volume, pool, format) {
+            if let Err(e) = upload_texels(gpu, &mut image, levels, pool, format) {
                 image.destroy(gpu);
                 return Err(e);
             }
             Ok((Some(image), None))
         }
         VolumeLayout::Corners8 | VolumeLayout::Corners16 => {
-            Ok((None, Some(upload_corners(gpu, volume, pool, layout)?)))
+            Ok((None, Some(upload_corners(gpu, levels, pool, layout)?)))
         }
     }
 }
@@ -296,7 +326,7 @@ pub(super) fn upload_3d(gpu: &Gpu, image: &mut Image, bytes: &[u8], depth: u32) 
 }
 
 /// The page table as an RG32_UINT 3D image (`Pool::table`).
-fn upload_directory(gpu: &Gpu, pool: &Pool) -> Result<Image, GpuError> {
+pub(super) fn upload_directory(gpu: &Gpu, pool: &Pool) -> Result<Image, GpuError> {
     let mut image = image_3d(gpu, vk::Format::R32G32_UINT, pool.grid, "page table")?;
     match upload_3d(gpu, &mut image, bytemuck::cast_slice(&pool.table()), pool.grid[2]) {
         Ok(()) => Ok(image),
@@ -338,7 +368,7 @@ impl GpuVolume {
         // The brick statistics beside the upload, on the cores it leaves idle (its fills are parallel, but it
         // waits on the device and, through a staging buffer, on lavapipe's single-threaded copy).
         let (uploaded, bricks) = rayon::join(
-            || upload_layout(gpu, layout, volume, &pool),
+            || upload_layout(gpu, layout, &Levels::of(volume, &[]), &pool),
             || skip::BrickGrid::new(volume),
         );
         let (image, corners) = uploaded?;
@@ -390,8 +420,10 @@ impl GpuVolume {
                     texels: pool.texels(),
                 },
             },
+            cut: Cut::uniform(pool.grid, 0),
             pool,
             directory,
+            pyramid: Vec::new(),
             bricks,
             occupancy,
             occupancy_key: None,

@@ -8,11 +8,13 @@ pub mod gradients;
 pub mod headless;
 pub mod info;
 mod init;
+pub mod levels;
 pub mod light_volume;
 pub mod march_key;
 pub mod png;
 pub mod pool;
 mod record;
+mod resident;
 pub mod skip;
 mod uniforms;
 
@@ -329,14 +331,22 @@ impl Renderer {
         if vol.gradient.is_some() {
             return Ok(());
         }
-        // The gradients on the voxel grid, then gathered into the pool's slots like the values (borders included).
-        let mut grid = vec![[0i16; 4]; volume.voxel_count()];
-        gradients::fill_gradient_slices(volume, gradients::GradientFilter::for_volume(volume), 0, &mut grid);
+        // The gradients on each shown level's voxel grid, then gathered into the pool's slots like the values
+        // (borders included).
+        let top = vol.pool.levels.len() - 1;
+        let grids: Vec<Vec<[i16; 4]>> = std::iter::once(volume)
+            .chain(&vol.pyramid[..top])
+            .map(|v| {
+                let mut grid = vec![[0i16; 4]; v.voxel_count()];
+                gradients::fill_gradient_slices(v, gradients::GradientFilter::for_volume(volume), 0, &mut grid);
+                grid
+            })
+            .collect();
         let pool = &vol.pool;
         let mut image = image_3d_once(gpu, vk::Format::R16G16B16A16_SNORM, pool.texels(), "gradients")?;
         let filled = upload_image_with(gpu, &mut image, pool.texel_count() * 8, |range, dst| {
             pool.fill(range.start / 8, bytemuck::cast_slice_mut(dst), |r, x| {
-                r.this[x].map_or([0; 4], |i| grid[i])
+                r.this[x].map_or([0; 4], |(l, i)| grids[l as usize][i])
             })
         });
         if let Err(e) = filled {
@@ -345,6 +355,53 @@ impl Renderer {
         }
         vol.gradient = Some(image);
         self.write_volume_set(gpu);
+        Ok(())
+    }
+
+    /// Shows the levels `choice` gives the view `s` of `volume` (the one last given to `set_volume`): a pool of the
+    /// bricks of that cut and its page table (levels.rs has the rule). A gradient texture is made again for the new
+    /// pool. Call between frames. Returns the cut shown.
+    pub fn show_levels(
+        &mut self,
+        gpu: &Gpu,
+        volume: &Volume,
+        s: &RenderSettings,
+        choice: levels::LevelChoice,
+    ) -> Result<levels::Cut, GpuError> {
+        let Some(vol) = &mut self.volume else {
+            return Err(GpuError::Lost("no volume loaded"));
+        };
+        let brick = vol.pool.brick;
+        let top = levels::top_level(volume.dims, brick);
+        let grid = vol.pool.grid;
+        let cut = match choice {
+            levels::LevelChoice::Finest => levels::Cut::uniform(grid, 0),
+            levels::LevelChoice::Forced(l) => levels::Cut::uniform(grid, l.min(top)),
+            levels::LevelChoice::Screen { factor, bricks } => {
+                let view = levels::View::of(&vol.info, s);
+                levels::screen_cut(volume.dims, brick, top, &view, factor, bricks)
+            }
+        };
+        self.show_cut(gpu, volume, &cut)?;
+        Ok(cut)
+    }
+
+    /// Shows `cut` of `volume` (the one last given to `set_volume`; `cut.grid` must be its pool's grid), as
+    /// [`show_levels`](Self::show_levels) does for the cut it chooses.
+    pub fn show_cut(&mut self, gpu: &Gpu, volume: &Volume, cut: &levels::Cut) -> Result<(), GpuError> {
+        let Some(vol) = &mut self.volume else {
+            return Err(GpuError::Lost("no volume loaded"));
+        };
+        if cut.grid != vol.pool.grid || cut.level.len() != vol.pool.directory.len() {
+            return Err(GpuError::Lost("a cut for another brick grid"));
+        }
+        let had_gradients = vol.gradient.is_some();
+        if vol.show_cut(gpu, volume, cut)? {
+            self.write_volume_set(gpu);
+            if had_gradients {
+                self.enable_gradient_texture(gpu, volume)?;
+            }
+        }
         Ok(())
     }
 

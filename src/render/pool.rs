@@ -16,6 +16,8 @@
 //! Brick size: a volume that fits the device's 3D limit in one slot is kept as one brick (its page table one
 //! entry, its walk's spans those of the skip grid alone); larger ones, or any under `--brick-size`, are tiled.
 
+use super::levels::Cut;
+
 /// Voxels of border on each side of a brick in its slot: a point in the brick, moved one voxel (gradients) and
 /// filtered (one more), reads at most two voxels beyond it.
 pub const BORDER: u32 = 2;
@@ -39,6 +41,8 @@ pub struct Pool {
     pub resident: Vec<Option<Resident>>,
     /// Per level-0 brick (x fastest), the slot whose data is shown there.
     pub directory: Vec<u32>,
+    /// Each level's size in voxels, up to the coarsest one shown.
+    pub levels: Vec<[u32; 3]>,
 }
 
 /// A brick held in a slot.
@@ -65,35 +69,46 @@ impl Pool {
             None => dims.map(|d| TILED_BRICK.min(d)),
         };
         let grid = [0, 1, 2].map(|a| dims[a].div_ceil(brick[a]));
+        // Refused before a page table of that size is made.
         let count = grid.iter().map(|&g| u64::from(g)).product::<u64>();
-        let slots = arrange(count, brick.map(slot_side), max_dim).ok_or_else(|| {
-            format!(
-                "{count} bricks of {}x{}x{} do not fit a pool of 3D textures of at most {max_dim} per side",
-                brick[0], brick[1], brick[2]
-            )
-        })?;
+        if arrange(count, brick.map(slot_side), max_dim).is_none() {
+            return Err(too_many(count, brick, max_dim));
+        }
+        Pool::with_cut(dims, brick, max_dim, &Cut::uniform(grid, 0))
+    }
+
+    /// The bricks `cut` shows, each in a slot (in the order of [`Cut::shown`]), and the page table pointing every
+    /// level-0 brick at the slot of the brick over it.
+    pub fn with_cut(dims: [u32; 3], brick: [u32; 3], max_dim: u32, cut: &Cut) -> Result<Pool, String> {
+        let shown = cut.shown();
+        let count = shown.len() as u64;
+        let slots = arrange(count, brick.map(slot_side), max_dim).ok_or_else(|| too_many(count, brick, max_dim))?;
         let n_slots = slots.iter().map(|&s| s as usize).product::<usize>();
         let mut resident = vec![None; n_slots];
-        let mut directory = Vec::with_capacity(count as usize);
-        for z in 0..grid[2] {
-            for y in 0..grid[1] {
-                for x in 0..grid[0] {
-                    let slot = directory.len();
-                    resident[slot] = Some(Resident {
-                        level: 0,
-                        brick: [x, y, z],
-                    });
-                    directory.push(slot as u32);
-                }
-            }
+        for (slot, &(level, brick)) in shown.iter().enumerate() {
+            resident[slot] = Some(Resident { level, brick });
+        }
+        let directory = (0..cut.level.len())
+            .map(|i| {
+                let l = cut.level[i];
+                let key = (l, cut.brick_of(i).map(|b| b >> l));
+                shown.binary_search(&key).map_or(0, |slot| slot as u32)
+            })
+            .collect();
+        let top = cut.level.iter().copied().max().unwrap_or(0);
+        let mut levels = vec![dims];
+        for _ in 0..top {
+            let d = levels[levels.len() - 1].map(|n| n.div_ceil(2));
+            levels.push(d);
         }
         Ok(Pool {
             dims,
             brick,
-            grid,
+            grid: cut.grid,
             slots,
             resident,
             directory,
+            levels,
         })
     }
 
@@ -126,24 +141,24 @@ impl Pool {
             .collect()
     }
 
-    /// For each texel of pool row (`y`, `z`), the level-0 voxel (x, y, z index into `dims`) it holds, or None in
-    /// an empty slot. Slots hold level-0 bricks only here; the border repeats the edge past the volume.
-    pub fn row_sources(&self, y: u32, z: u32, out: &mut Vec<Option<usize>>) {
+    /// For each texel of pool row (`y`, `z`), the voxel it holds: its level and index in that level (x fastest),
+    /// or None in an empty slot. The border repeats the level's edge voxel past its edge.
+    pub fn row_sources(&self, y: u32, z: u32, out: &mut Vec<Option<Source>>) {
         out.clear();
         let side = self.brick.map(slot_side);
         let [sy, sz] = [y / side[1], z / side[2]];
         let (ly, lz) = (y % side[1], z % side[2]);
-        let clamp = |a: usize, b: u32, l: u32| -> usize {
-            let v = i64::from(b * self.brick[a]) + i64::from(l) - i64::from(BORDER);
-            v.clamp(0, i64::from(self.dims[a]) - 1) as usize
-        };
         for sx in 0..self.slots[0] {
             let index = sx + self.slots[0] * (sy + self.slots[1] * sz);
             match self.resident.get(index as usize).copied().flatten() {
                 Some(r) => {
-                    let row = self.dims[0] as usize
-                        * (clamp(1, r.brick[1], ly) + self.dims[1] as usize * clamp(2, r.brick[2], lz));
-                    out.extend((0..side[0]).map(|lx| Some(row + clamp(0, r.brick[0], lx))));
+                    let dims = self.levels[r.level as usize];
+                    let clamp = |a: usize, l: u32| -> usize {
+                        let v = i64::from(r.brick[a] * self.brick[a]) + i64::from(l) - i64::from(BORDER);
+                        v.clamp(0, i64::from(dims[a]) - 1) as usize
+                    };
+                    let row = dims[0] as usize * (clamp(1, ly) + dims[1] as usize * clamp(2, lz));
+                    out.extend((0..side[0]).map(|lx| Some((r.level, row + clamp(0, lx)))));
                 }
                 None => out.extend((0..side[0]).map(|_| None)),
             }
@@ -172,10 +187,20 @@ impl Pool {
     }
 }
 
+/// Where a pool texel's value comes from: a level and the voxel's index in it.
+pub type Source = (u32, usize);
+
+fn too_many(count: u64, brick: [u32; 3], max_dim: u32) -> String {
+    format!(
+        "{count} bricks of {}x{}x{} do not fit a pool of 3D textures of at most {max_dim} per side",
+        brick[0], brick[1], brick[2]
+    )
+}
+
 /// A pool row's sources and those of the row after it (the corner layout reads both).
 pub struct PoolRows<'a> {
-    pub this: &'a [Option<usize>],
-    pub next: &'a [Option<usize>],
+    pub this: &'a [Option<Source>],
+    pub next: &'a [Option<Source>],
 }
 
 /// Slots per axis for `count` slots of `side` texels within `max_dim` per pool side: close to a cube of slots
@@ -241,7 +266,7 @@ mod tests {
                             (i64::from(r.brick[a] * p.brick[a] + local[a]) - 2).clamp(0, i64::from(dims[a]) - 1)
                                 as usize
                         });
-                        v[0] + 37 * (v[1] + 20 * v[2])
+                        (0, v[0] + 37 * (v[1] + 20 * v[2]))
                     });
                     assert_eq!(row[x as usize], want, "texel {x} {y} {z}");
                 }
@@ -249,10 +274,59 @@ mod tests {
         }
         // The table names each level-0 brick's slot.
         let table = p.table();
-        assert_eq!(table.len(), 3 * 2 * 1);
+        assert_eq!(table.len(), 6);
+        let cut = Cut::uniform(p.grid, 0);
         for (i, e) in table.iter().enumerate() {
-            let [x, y, z] = p.slot_at(i as u32);
+            let slot = p.directory[i];
+            let [x, y, z] = p.slot_at(slot);
             assert_eq!(*e, [x | y << 10 | z << 20, 0]);
+            let brick = cut.brick_of(i);
+            assert_eq!(p.resident[slot as usize], Some(Resident { level: 0, brick }));
+        }
+    }
+
+    /// A cut of mixed levels: one slot per brick shown, each level-0 brick pointed at the brick over it, and the
+    /// slot's texels taken from that brick's level (clamped to the level's edge).
+    #[test]
+    fn a_cut_of_levels_fills_slots_from_its_levels() {
+        let dims = [40, 24, 16];
+        // Bricks of 8: a level-0 grid of 5 x 3 x 2; level 1 is 20 x 12 x 8, level 2 10 x 6 x 4.
+        let mut cut = Cut::uniform([5, 3, 2], 0);
+        let flat = cut.clone();
+        for (i, l) in cut.level.iter_mut().enumerate() {
+            let b = flat.brick_of(i);
+            *l = if b[0] >= 2 { 2 } else { u32::from(b[1] >= 2) };
+        }
+        let p = Pool::with_cut(dims, [8; 3], 2048, &cut).unwrap();
+        assert_eq!(p.levels, vec![[40, 24, 16], [20, 12, 8], [10, 6, 4]]);
+        for (i, &slot) in p.directory.iter().enumerate() {
+            let l = cut.level[i];
+            let r = p.resident[slot as usize].unwrap();
+            assert_eq!(
+                (r.level, r.brick),
+                (l, cut.brick_of(i).map(|b| b >> l)),
+                "level-0 brick {i}"
+            );
+        }
+        // Level 2 bricks: x >= 2 at level 0 is brick 0 of level 2 (it covers level-0 bricks 0..4 per axis).
+        let shown = cut.shown();
+        assert!(shown.contains(&(2, [0, 0, 0])) && shown.contains(&(2, [1, 0, 0])));
+        assert_eq!(p.resident.iter().flatten().count(), shown.len());
+        let mut row = Vec::new();
+        let side = 12;
+        for (slot, r) in p.resident.iter().enumerate() {
+            let Some(r) = r else { continue };
+            let [sx, sy, sz] = p.slot_at(slot as u32);
+            let ld = p.levels[r.level as usize];
+            for (ly, lz) in [(0, 0), (5, 7), (11, 11)] {
+                p.row_sources(sy * side + ly, sz * side + lz, &mut row);
+                for lx in 0..side {
+                    let at =
+                        |a: usize, l: u32| (i64::from(r.brick[a] * 8 + l) - 2).clamp(0, i64::from(ld[a]) - 1) as usize;
+                    let want = at(0, lx) + ld[0] as usize * (at(1, ly) + ld[1] as usize * at(2, lz));
+                    assert_eq!(row[(sx * side + lx) as usize], Some((r.level, want)));
+                }
+            }
         }
     }
 }

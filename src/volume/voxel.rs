@@ -95,6 +95,30 @@ pub enum VoxelData {
 }
 
 impl VoxelData {
+    /// The elements, where they are 8-bit.
+    pub fn as_u8(&self) -> Option<&[u8]> {
+        match self {
+            VoxelData::U8(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The elements, where they are 16-bit.
+    pub fn as_u16(&self) -> Option<&[u16]> {
+        match self {
+            VoxelData::U16(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The elements, where they are float.
+    pub fn as_f32(&self) -> Option<&[f32]> {
+        match self {
+            VoxelData::F32(v) => Some(v),
+            _ => None,
+        }
+    }
+
     pub fn len(&self) -> usize {
         match self {
             VoxelData::U8(v) => v.len(),

@@ -22,6 +22,7 @@
 //! bounds (tests/common/bounds.rs) say by how much.
 
 use super::classify::{encode, linear, Classifier};
+use super::levels::{pyramid, Cut};
 use super::march::Frame;
 pub use super::placement::Placement;
 use super::strides::BrickRanges;
@@ -221,6 +222,8 @@ pub struct Reference {
     grid_gradients: std::sync::OnceLock<Vec<DVec3>>,
     /// Rule 2's brick value ranges, made on first use by a frame with strides.
     pub(crate) brick_ranges: std::sync::OnceLock<BrickRanges>,
+    /// The pyramid's levels 1.. and the level shown per brick (levels.rs); None: level 0 everywhere.
+    levels: Option<(Vec<Reference>, Cut)>,
 }
 
 impl Reference {
@@ -252,7 +255,61 @@ impl Reference {
             quantised: !matches!(volume.source_type, VoxelType::F32 | VoxelType::F64),
             grid_gradients: std::sync::OnceLock::new(),
             brick_ranges: std::sync::OnceLock::new(),
+            levels: None,
         }
+    }
+
+    /// The reference for a GPU pool that shows `cut` of `volume`'s pyramid (levels.rs): each point's value from the
+    /// level shown in the level-0 brick holding it, each gradient's samples from the level at its centre, and
+    /// rule 2's brick ranges widened by every level up to the coarsest shown (as the GPU's skip grid is).
+    pub fn with_levels(volume: &Volume, cut: Cut) -> Reference {
+        let top = cut.level.iter().copied().max().unwrap_or(0);
+        let mut base = Reference::new(volume);
+        let levels: Vec<Reference> = pyramid(volume, top)
+            .into_iter()
+            .skip(1)
+            .map(|level| Reference {
+                dims: level.dims,
+                values: level.values,
+                grid_gradients: std::sync::OnceLock::new(),
+                brick_ranges: std::sync::OnceLock::new(),
+                levels: None,
+                ..base.clone_header()
+            })
+            .collect();
+        let mut ranges = BrickRanges::new(&base.values, base.dims);
+        for (i, level) in levels.iter().enumerate() {
+            ranges.widen(&BrickRanges::new(&level.values, level.dims), i + 1);
+        }
+        let _ = base.brick_ranges.set(ranges);
+        base.levels = Some((levels, cut));
+        base
+    }
+
+    fn clone_header(&self) -> Reference {
+        Reference {
+            dims: self.dims,
+            values: Vec::new(),
+            affine: self.affine,
+            range: self.range,
+            quantised: self.quantised,
+            grid_gradients: std::sync::OnceLock::new(),
+            brick_ranges: std::sync::OnceLock::new(),
+            levels: None,
+        }
+    }
+
+    /// The level shown at `tex` and, for a level L ≥ 1, that level's reference and `tex` in its texture
+    /// coordinates (level L's voxel x = tex · dims0 / 2^L).
+    fn level_at(&self, tex: DVec3) -> Option<(u32, &Reference, DVec3)> {
+        let (refs, cut) = self.levels.as_ref()?;
+        let l = cut.level_at(tex, self.dims);
+        (l > 0).then(|| {
+            let r = &refs[l as usize - 1];
+            let scale =
+                DVec3::from_array([0, 1, 2].map(|a| self.dims[a] as f64 / (f64::from(1u32 << l) * r.dims[a] as f64)));
+            (l, r, scale)
+        })
     }
 
     /// Where the box is for `s`: the rule-1 placement of the texture-space box in the world.
@@ -288,6 +345,13 @@ impl Reference {
     /// Rule 3: trilinear interpolation at texture coordinate `tex`. A NaN among the eight texels gives NaN, as a
     /// filtering `a + w·(b - a)` does even at `w = 0`.
     pub fn sample(&self, tex: DVec3) -> f64 {
+        match self.level_at(tex) {
+            Some((_, level, scale)) => level.sample(tex * scale),
+            None => self.sample_here(tex),
+        }
+    }
+
+    fn sample_here(&self, tex: DVec3) -> f64 {
         let ([[x0, x1], [y0, y1], [z0, z1]], w) = self.corners(tex);
         let lerp = |a: f64, b: f64, t: f64| a + t * (b - a);
         let c00 = lerp(self.at(x0, y0, z0), self.at(x1, y0, z0), w[0]);
@@ -301,11 +365,17 @@ impl Reference {
     /// rule 3's samples one voxel (1/dim_i in texture space) apart, `g_i = (v(p + e_i) − v(p − e_i))/2`. Zero
     /// when any of the six samples is NaN.
     pub fn gradient(&self, tex: DVec3) -> DVec3 {
+        // With levels, all six samples in the level shown at the centre.
+        let at = self.level_at(tex);
+        let sample = |p: DVec3| match at {
+            Some((_, level, scale)) => level.sample(p * scale),
+            None => self.sample_here(p),
+        };
         let mut g = DVec3::ZERO;
         for a in 0..3 {
             let mut e = DVec3::ZERO;
             e[a] = 1.0 / self.dims[a] as f64;
-            g[a] = (self.sample(tex + e) - self.sample(tex - e)) / 2.0;
+            g[a] = (sample(tex + e) - sample(tex - e)) / 2.0;
         }
         if g.is_nan() {
             DVec3::ZERO
@@ -317,6 +387,10 @@ impl Reference {
     /// `gradient_texture`'s gradient at `tex`, in value per voxel: the grid gradients `G/2` (see
     /// [`Reference::grid_gradients`]) interpolated trilinearly like the values (rule 3's filter).
     pub fn grid_gradient(&self, tex: DVec3) -> DVec3 {
+        // With levels: the level's own grid gradients, per voxel of that level (2^L level-0 voxels).
+        if let Some((l, level, scale)) = self.level_at(tex) {
+            return level.grid_gradient(tex * scale) / f64::from(1u32 << l);
+        }
         let grid = self.grid_gradients.get_or_init(|| self.make_grid_gradients());
         let ([[x0, x1], [y0, y1], [z0, z1]], w) = self.corners(tex);
         let at = |x: usize, y: usize, z: usize| grid[x + self.dims[0] * (y + self.dims[1] * z)];

@@ -48,6 +48,24 @@ impl BrickRanges {
     }
 }
 
+impl BrickRanges {
+    /// Widens each brick's range by that of the brick over it in `coarse`, level `l`'s ranges (a level-L brick of
+    /// 8 voxels covers 2^L bricks of level 0 per axis).
+    pub fn widen(&mut self, coarse: &BrickRanges, l: usize) {
+        for (k, range) in self.ranges.iter_mut().enumerate() {
+            let b = [
+                k % self.bricks[0],
+                k / self.bricks[0] % self.bricks[1],
+                k / (self.bricks[0] * self.bricks[1]),
+            ];
+            let c = [0, 1, 2].map(|a| (b[a] >> l).min(coarse.bricks[a] - 1));
+            if let Some((lo, hi)) = coarse.ranges[c[0] + coarse.bricks[0] * (c[1] + coarse.bricks[1] * c[2])] {
+                *range = Some(range.map_or((lo, hi), |(a, b)| (a.min(lo), b.max(hi))));
+            }
+        }
+    }
+}
+
 /// The stride of every brick for one frame.
 pub struct Strides {
     dims: [usize; 3],

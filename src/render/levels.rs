@@ -1,0 +1,218 @@
+//! Which level of the resolution pyramid each brick shows (docs/large-volumes.md, "Bricks, levels and the page
+//! table"). Pure code: the renderer's pool (pool.rs) holds the bricks a [`Cut`] names.
+//!
+//! - The pyramid: level L + 1 halves every axis of level L, rounding up (an axis of 1 stays 1); a voxel is the mean
+//!   of the up-to-2×2×2 voxels it covers (`convert::pyramid::downsample`). Level L's voxel i covers level-0 voxels
+//!   [i·2^L, (i + 1)·2^L), so level-L bricks nest over 2^L level-0 bricks per axis.
+//! - The screen rule: starting from the top level (one brick), a brick of level L ≥ 1 is replaced by its children
+//!   while its voxel (2^L level-0 voxels, smallest side) is larger than `factor` pixels at its distance: the distance
+//!   from the eye to its centre less half its diagonal (world units), a pixel there being 2·d·tan(fov/2)/height
+//!   (orthographic: the view's height / height).
+//! - Within a bound on the bricks (the pool's slots), refinement goes by need (voxel / pixel, largest first; ties to
+//!   the coarser brick, then the lower index), and a brick whose children do not fit stays as it is.
+
+use crate::volume::{Volume, VoxelData};
+use glam::{DMat4, DVec3};
+use std::collections::BinaryHeap;
+
+/// The level shown in each brick of level 0's grid (x fastest).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Cut {
+    pub grid: [u32; 3],
+    pub level: Vec<u32>,
+}
+
+/// How levels are chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LevelChoice {
+    /// Level 0 everywhere.
+    Finest,
+    /// One level everywhere (`--level`).
+    Forced(u32),
+    /// The screen rule with this factor, within this many bricks.
+    Screen { factor: f64, bricks: usize },
+}
+
+/// What the screen rule needs of the view: the texture-to-world placement, the camera and the image height.
+#[derive(Clone, Copy, Debug)]
+pub struct View {
+    pub tex_to_world: DMat4,
+    pub eye: DVec3,
+    pub tan_half_fov: f64,
+    /// Orthographic: the world height of a pixel, everywhere.
+    pub ortho_pixel: Option<f64>,
+    pub height: f64,
+}
+
+impl View {
+    /// The view of `s` over a volume placed as `info` says.
+    pub fn of(info: &super::VolumeInfo, s: &crate::scene::settings::RenderSettings) -> View {
+        let c = &s.camera;
+        let eye = c.eye.as_dvec3();
+        let tan_half_fov = (f64::from(c.fov_y_deg).to_radians() / 2.0).tan();
+        let height = f64::from(s.height);
+        View {
+            tex_to_world: info.tex_to_world(s),
+            eye,
+            tan_half_fov,
+            ortho_pixel: c
+                .ortho
+                .then(|| 2.0 * (c.target.as_dvec3() - eye).length() * tan_half_fov / height),
+            height,
+        }
+    }
+}
+
+/// The top level for bricks of `brick`: the first whose grid is one brick (at most 16).
+pub fn top_level(dims: [u32; 3], brick: [u32; 3]) -> u32 {
+    let mut d = dims;
+    let mut l = 0;
+    while (0..3).any(|a| d[a] > brick[a]) && l < 16 {
+        d = d.map(|n| n.div_ceil(2));
+        l += 1;
+    }
+    l
+}
+
+/// Bricks per axis of level `l`.
+pub fn grid_at(dims: [u32; 3], brick: [u32; 3], l: u32) -> [u32; 3] {
+    let mut d = dims;
+    for _ in 0..l {
+        d = d.map(|n| n.div_ceil(2));
+    }
+    [0, 1, 2].map(|a| d[a].div_ceil(brick[a]))
+}
+
+impl Cut {
+    pub fn uniform(grid: [u32; 3], level: u32) -> Cut {
+        Cut {
+            grid,
+            level: vec![level; grid.iter().map(|&g| g as usize).product()],
+        }
+    }
+
+    /// The bricks shown: (level, brick index in its level's grid), each once.
+    pub fn shown(&self) -> Vec<(u32, [u32; 3])> {
+        let mut out: Vec<(u32, [u32; 3])> = (0..self.level.len())
+            .map(|i| {
+                let l = self.level[i];
+                (l, self.brick_of(i).map(|b| b >> l))
+            })
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// Level-0 brick `i`'s position in the grid.
+    pub fn brick_of(&self, i: usize) -> [u32; 3] {
+        let [gx, gy, _] = self.grid.map(|g| g as usize);
+        [i % gx, i / gx % gy, i / (gx * gy)].map(|v| v as u32)
+    }
+}
+
+/// A brick's need: its voxel over a pixel at its distance (above `factor`: refine).
+fn need(view: &View, dims: [u32; 3], brick: [u32; 3], voxel: f64, l: u32, b: [u32; 3]) -> f64 {
+    let side = [0, 1, 2].map(|a| f64::from(brick[a]) * f64::from(1u32 << l));
+    let lo = DVec3::from_array([0, 1, 2].map(|a| f64::from(b[a]) * side[a] / f64::from(dims[a])));
+    let hi = DVec3::from_array([0, 1, 2].map(|a| (f64::from(b[a] + 1) * side[a] / f64::from(dims[a])).min(1.0)));
+    let (wl, wh) = (
+        view.tex_to_world.transform_point3(lo),
+        view.tex_to_world.transform_point3(hi),
+    );
+    let pixel = view.ortho_pixel.unwrap_or_else(|| {
+        let d = ((wl + wh) / 2.0 - view.eye).length() - (wh - wl).length() / 2.0;
+        2.0 * d.max(0.0) * view.tan_half_fov / view.height
+    });
+    f64::from(1u32 << l) * voxel / pixel
+}
+
+/// The screen rule's cut for a volume of `dims` in bricks of `brick`, levels up to `top`, within `bricks` bricks
+/// (at least the top level's one).
+pub fn screen_cut(dims: [u32; 3], brick: [u32; 3], top: u32, view: &View, factor: f64, bricks: usize) -> Cut {
+    let grid0 = grid_at(dims, brick, 0);
+    // The smallest side of a level-0 voxel in the world.
+    let voxel = (0..3)
+        .map(|a| view.tex_to_world.col(a).truncate().length() / f64::from(dims[a]))
+        .fold(f64::INFINITY, f64::min);
+    #[derive(PartialEq)]
+    struct Item(f64, u32, [u32; 3]);
+    impl Eq for Item {}
+    impl PartialOrd for Item {
+        fn partial_cmp(&self, o: &Item) -> Option<std::cmp::Ordering> {
+            Some(self.cmp(o))
+        }
+    }
+    impl Ord for Item {
+        // Largest need first; ties to the coarser brick, then the lower index (z, y, x).
+        fn cmp(&self, o: &Item) -> std::cmp::Ordering {
+            self.0
+                .total_cmp(&o.0)
+                .then(self.1.cmp(&o.1))
+                .then(o.2[2].cmp(&self.2[2]))
+                .then(o.2[1].cmp(&self.2[1]))
+                .then(o.2[0].cmp(&self.2[0]))
+        }
+    }
+    let mut shown: Vec<(u32, [u32; 3])> = vec![(top, [0, 0, 0])];
+    let mut heap = BinaryHeap::new();
+    let consider = |heap: &mut BinaryHeap<Item>, l: u32, b: [u32; 3]| {
+        let n = need(view, dims, brick, voxel, l, b);
+        if l > 0 && n > factor {
+            heap.push(Item(n, l, b));
+        }
+    };
+    consider(&mut heap, top, [0, 0, 0]);
+    let mut count = 1usize;
+    while let Some(Item(_, l, b)) = heap.pop() {
+        let g = grid_at(dims, brick, l - 1);
+        let children: Vec<[u32; 3]> = (0..8u32)
+            .map(|i| [0, 1, 2].map(|a| 2 * b[a] + (i >> a & 1)))
+            .filter(|c| (0..3).all(|a| c[a] < g[a]))
+            .collect();
+        if count - 1 + children.len() > bricks {
+            continue;
+        }
+        count += children.len() - 1;
+        shown.retain(|&s| s != (l, b));
+        for c in children {
+            shown.push((l - 1, c));
+            consider(&mut heap, l - 1, c);
+        }
+    }
+    let mut cut = Cut::uniform(grid0, top);
+    for (l, b) in shown {
+        // Every level-0 brick under (l, b).
+        let lo = b.map(|v| v << l);
+        for z in lo[2]..((b[2] + 1) << l).min(grid0[2]) {
+            for y in lo[1]..((b[1] + 1) << l).min(grid0[1]) {
+                for x in lo[0]..((b[0] + 1) << l).min(grid0[0]) {
+                    cut.level[(x + grid0[0] * (y + grid0[1] * z)) as usize] = l;
+                }
+            }
+        }
+    }
+    cut
+}
+
+/// Levels 1..=`top` of `volume` (level 0 is the volume), each a [`Volume`] with level 0's value range, so that
+/// its elements normalise the same way.
+pub fn pyramid(volume: &Volume, top: u32) -> Result<Vec<Volume>, crate::volume::VolumeError> {
+    use crate::convert::pyramid::{downsample, Reduce};
+    let mut out: Vec<Volume> = Vec::new();
+    for _ in 0..top {
+        let from = out.last().unwrap_or(volume);
+        let dims = from.dims.map(|d| d as usize);
+        let data = match &from.data {
+            VoxelData::U8(v) => VoxelData::U8(downsample(v, dims, [2, 2, 2], Reduce::Mean)),
+            VoxelData::U16(v) => VoxelData::U16(downsample(v, dims, [2, 2, 2], Reduce::Mean)),
+            VoxelData::F32(v) => VoxelData::F32(downsample(v, dims, [2, 2, 2], Reduce::Mean)),
+        };
+        let dims = from.dims.map(|d| d.div_ceil(2));
+        let mut level =
+            Volume::new(volume.name.clone(), dims, [1.0; 3], volume.source_type, data)?.with_scaling(volume.scaling)?;
+        (level.range, level.stored_range) = (volume.range, volume.stored_range);
+        out.push(level);
+    }
+    Ok(out)
+}
