@@ -216,3 +216,52 @@ pub fn pyramid(volume: &Volume, top: u32) -> Result<Vec<Volume>, crate::volume::
     }
     Ok(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An orthographic view whose pixels are far smaller than a voxel: every brick asks to be refined.
+    fn close_view() -> View {
+        View {
+            tex_to_world: DMat4::IDENTITY,
+            eye: DVec3::new(0.5, 0.5, 5.0),
+            tan_half_fov: 0.3,
+            ortho_pixel: Some(1e-6),
+            height: 100.0,
+        }
+    }
+
+    #[test]
+    fn levels_nest_and_the_top_is_one_brick() {
+        assert_eq!(top_level([32, 32, 32], [16; 3]), 1);
+        assert_eq!(top_level([40, 24, 16], [8; 3]), 3);
+        assert_eq!(grid_at([40, 24, 16], [8; 3], 0), [5, 3, 2]);
+        assert_eq!(grid_at([40, 24, 16], [8; 3], 2), [2, 1, 1]);
+        assert_eq!(grid_at([40, 24, 16], [8; 3], 3), [1, 1, 1]);
+    }
+
+    /// Refining the top brick of a 32³ volume in 16³ bricks replaces one brick by eight: a bound of 8 holds them,
+    /// 7 does not (the top brick stays).
+    #[test]
+    fn the_bound_counts_a_refinement_as_children_minus_one() {
+        let view = close_view();
+        let cut = screen_cut([32; 3], [16; 3], 1, &view, 1.0, 8);
+        assert_eq!(cut.level, vec![0; 8]);
+        assert_eq!(cut.shown().len(), 8);
+        let cut = screen_cut([32; 3], [16; 3], 1, &view, 1.0, 7);
+        assert_eq!(cut.level, vec![1; 8]);
+        assert_eq!(cut.shown(), vec![(1, [0, 0, 0])]);
+    }
+
+    /// Pixels larger than the top level's voxel: nothing is refined, whatever the bound.
+    #[test]
+    fn a_far_view_stays_coarse() {
+        let view = View {
+            ortho_pixel: Some(1.0),
+            ..close_view()
+        };
+        let cut = screen_cut([64; 3], [16; 3], 2, &view, 1.0, usize::MAX);
+        assert!(cut.level.iter().all(|&l| l == 2));
+    }
+}

@@ -8,6 +8,7 @@
 pub mod common;
 
 mod bench;
+mod bricks;
 mod clip;
 mod colorbar;
 mod convert;

@@ -105,6 +105,49 @@ fn forced_levels_and_seams_match_the_reference() {
     finish(gpu, headless, judge);
 }
 
+/// Thin bright planes three voxels before a skip brick's face, all else empty: level 2 averages each plane into a
+/// voxel whose trilinear reach crosses that face, into skip bricks whose level-0 values (apron included) are all
+/// zero. Skipping must take the coarser level's ranges too, or those bricks are leapt over and the glow is lost.
+#[test]
+fn skipping_keeps_what_coarser_levels_show() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut judge = Judge::default();
+    let n = 64usize;
+    let data: Vec<u8> = (0..n * n * n)
+        .map(|i| {
+            let (x, y) = (i % n, i / n % n);
+            if x % 32 == 13 || y % 32 == 21 {
+                255
+            } else {
+                0
+            }
+        })
+        .collect();
+    let planes = Volume::new(
+        "planes",
+        [64; 3],
+        [1.0; 3],
+        VoxelType::U8,
+        volcast::volume::VoxelData::U8(data),
+    )
+    .expect("planes");
+    let flat = bricked(&gpu, &mut headless, &planes, 16);
+    let mut cases = standard_cases(&planes, 64);
+    for case in &mut cases {
+        case.settings.window = [0.02, 1.0];
+    }
+    judge_cut(
+        &mut judge,
+        &gpu,
+        &mut headless,
+        &planes,
+        &Cut::uniform(flat.grid, 2),
+        cases,
+    );
+    finish(gpu, headless, judge);
+}
+
 /// The gradient texture of a pool of mixed levels: each level's own grid gradients, per level-0 voxel.
 #[test]
 fn the_gradient_texture_follows_the_levels() {

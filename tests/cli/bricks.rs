@@ -1,0 +1,70 @@
+//! The brick pool through the binary (docs/large-volumes.md, "Bricks, levels and the page table"): cutting a volume
+//! into bricks changes nothing at level 0, and `--level L` shows level L of its pyramid through the pool, with a
+//! note; a level past the top is the top.
+
+use crate::common;
+
+use common::{stderr, volcast_ok};
+
+/// The mean absolute difference of two images' channels, in 1/255.
+fn mean_difference(a: &std::path::Path, b: &std::path::Path) -> f64 {
+    let (a, b) = (image::open(a).unwrap().to_rgb8(), image::open(b).unwrap().to_rgb8());
+    assert_eq!(a.dimensions(), b.dimensions());
+    let sum: f64 = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(&x, &y)| f64::from(x.abs_diff(y)))
+        .sum();
+    sum / a.as_raw().len() as f64
+}
+
+#[test]
+fn bricks_change_nothing_and_levels_show_the_pyramid() {
+    let dir = common::scratch("cli-bricks");
+    let out = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let base = [
+        "render",
+        "--builtin",
+        "helix",
+        "--builtin-size",
+        "64",
+        "--size",
+        "128x128",
+    ];
+    volcast_ok(&[&base[..], &["-o", &out("whole.png")]].concat());
+    volcast_ok(&[&base[..], &["--brick-size", "16", "-o", &out("bricks.png")]].concat());
+    let d = mean_difference(&dir.join("whole.png"), &dir.join("bricks.png"));
+    assert!(d < 0.02, "bricks of 16 changed the image by {d:.3}/255");
+    let o = volcast_ok(
+        &[
+            &base[..],
+            &["--brick-size", "16", "--level", "1", "-o", &out("level1.png")],
+        ]
+        .concat(),
+    );
+    let err = stderr(&o);
+    assert!(
+        err.contains("note: showing level 1 (32x32x32) of the pyramid everywhere, through bricks of 16x16x16"),
+        "{err}"
+    );
+    let d = mean_difference(&dir.join("whole.png"), &dir.join("level1.png"));
+    assert!(d > 0.05 && d < 6.0, "level 1 differs from level 0 by {d:.3}/255");
+    // Past the top (64 in bricks of 16: level 2 is one brick) the top is shown.
+    let o = volcast_ok(
+        &[
+            &base[..],
+            &["--brick-size", "16", "--level", "7", "-o", &out("top.png")],
+        ]
+        .concat(),
+    );
+    let err = stderr(&o);
+    assert!(
+        err.contains("note: showing level 2 (16x16x16) of the pyramid everywhere"),
+        "{err}"
+    );
+    assert!(
+        err.contains("--level 7 is past the coarsest level of bricks of 16x16x16 (2)"),
+        "{err}"
+    );
+}
