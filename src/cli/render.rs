@@ -5,6 +5,7 @@ use super::args::RenderArgs;
 use super::with_gpu;
 use anyhow::{Context, Result};
 use std::time::Instant;
+use volcast::gpu::Gpu;
 use volcast::render::headless::Headless;
 use volcast::scene::settings::{RaySetup, RenderSettings};
 use volcast::volume::Volume;
@@ -101,6 +102,24 @@ fn movie(args: &RenderArgs) -> Result<()> {
     })
 }
 
+/// `--level`: level `level` (at most the coarsest) everywhere, with a note saying which.
+fn show_level(gpu: &Gpu, headless: &mut Headless, volume: &Volume, s: &RenderSettings, level: u32) -> Result<()> {
+    use volcast::render::levels::{top_level, LevelChoice};
+    headless.renderer.show_levels(gpu, volume, s, LevelChoice::Forced(level))?;
+    let Some(pool) = headless.renderer.pool() else {
+        return Ok(());
+    };
+    let [bx, by, bz] = pool.brick;
+    let top = top_level(volume.dims, pool.brick);
+    if level > top {
+        eprintln!("note: --level {level} is past the coarsest level of bricks of {bx}x{by}x{bz} ({top})");
+    }
+    let shown = level.min(top);
+    let [x, y, z] = pool.levels[shown as usize];
+    eprintln!("note: showing level {shown} ({x}x{y}x{z}) of the pyramid everywhere, through bricks of {bx}x{by}x{bz}");
+    Ok(())
+}
+
 pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     if args.turntable.is_some() || !args.keyframes.is_empty() {
         return movie(args);
@@ -124,6 +143,9 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         let result = (|| -> Result<()> {
             let t_upload = Instant::now();
             headless.set_volume(gpu, &volume)?;
+            if let Some(level) = args.level {
+                show_level(gpu, &mut headless, &volume, &s, level)?;
+            }
             if s.gradient_texture {
                 headless.renderer.enable_gradient_texture(gpu, &volume)?;
             }
