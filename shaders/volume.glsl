@@ -32,19 +32,18 @@ layout(set = 1, binding = 7) uniform texture3D light_tex;
 layout(set = 1, binding = 8) uniform utexture3D directory_tex;
 
 // A brick's translation from a point p (texture space, [0,1]^3 over the volume) to its slot's texels: the texel
-// coordinate u = p * scale + offset (texel centres at integers + 0.5). `lo` and `hi` bound the level-0 brick it
-// was looked up for (texture space): the walk's spans end there.
+// coordinate u = p * scale + offset (texel centres at integers + 0.5).
 struct Brick {
     vec3 scale;
     vec3 offset;
-    vec3 lo;
-    vec3 hi;
 };
 
-// The one addressing function: the brick under p and where its data lies in the pool. The level-L brick under
-// level-0 brick b is b >> L; its voxel x (level-L units, x = p * dims / 2^L) lies in its slot at
+#if defined(POOL_BRICKS)
+// The one addressing function: the brick under p and where its data lies in the pool; `lo` and `hi` bound the
+// level-0 brick it was looked up for (texture space), where the walk's spans end. The level-L brick under level-0
+// brick b is b >> L; its voxel x (level-L units, x = p * dims / 2^L) lies in its slot at
 // x - (b >> L) * brick + border + slot * slot_side.
-Brick brick_at(vec3 p) {
+Brick brick_box_at(vec3 p, out vec3 lo, out vec3 hi) {
     vec3 vox = p * frame.dims.xyz;
     // (Not textureSize: a page table one brick deep is two slices, image_3d's copy.)
     ivec3 b = clamp(ivec3(floor(vox / frame.pool_brick.xyz)), ivec3(0), ivec3(frame.pool_grid.xyz) - 1);
@@ -53,9 +52,23 @@ Brick brick_at(vec3 p) {
     int level = int(e.y);
     float s = exp2(-float(level));
     vec3 origin = frame.pool_brick.w + slot * frame.pool_slot.xyz - vec3(b >> level) * frame.pool_brick.xyz;
-    vec3 lo = vec3(b) * frame.pool_brick.xyz * frame.texel.xyz;
-    return Brick(frame.dims.xyz * s, origin, lo, lo + frame.pool_brick.xyz * frame.texel.xyz);
+    lo = vec3(b) * frame.pool_brick.xyz * frame.texel.xyz;
+    hi = lo + frame.pool_brick.xyz * frame.texel.xyz;
+    return Brick(frame.dims.xyz * s, origin);
 }
+
+Brick brick_at(vec3 p) {
+    vec3 lo;
+    vec3 hi;
+    return brick_box_at(p, lo, hi);
+}
+#else
+// A volume kept as one brick (render/pool.rs): the same translation everywhere, and no page table to read (the
+// march variant without POOL_BRICKS, so that small volumes pay nothing for the pool).
+Brick brick_at(vec3 p) {
+    return Brick(frame.dims.xyz, vec3(frame.pool_brick.w));
+}
+#endif
 
 // The pool as the march reads it (render::VolumeLayout). A 3D texture, filtered by the sampler; or, on CPU devices
 // (lavapipe), a "corner texture": per texel the four values of the 2x2 square its cell starts in x and y in one

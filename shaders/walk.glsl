@@ -43,37 +43,58 @@ WalkRay walk_ray(vec3 a, vec3 dir, float len, float h, float o) {
 }
 
 // A span of the walk: from the sample looked up to the samples before `end`, in bricks of one class (0 empty;
-// 1, 2, 3 strides 4, 2, 1) and in one brick of the pool, whose translation it carries. span_at is the walk's
-// only lookup, once per span, of both the skip grid and the pool's page table.
+// 1, 2, 3 strides 4, 2, 1) and, with POOL_BRICKS, in one brick of the pool, whose translation it carries. span_at
+// is the walk's only lookup, once per span, of the skip grid and the pool's page table.
 struct Span {
     int end;
     int level;
+#if defined(POOL_BRICKS)
     Brick brick;
+#endif
 };
 
 // The span starting at the sample at `t` (= (k + o) * h), from the bricks holding that sample: it ends where the
-// ray leaves the pool's brick or the cube of skip bricks of its class.
+// ray leaves the cube of skip bricks of its class, or the pool's brick.
 Span span_at(WalkRay r, float t) {
     vec3 p = r.a + r.dir * t;
-    Brick pb = brick_at(p);
-    vec3 lo = pb.lo;
-    vec3 hi = pb.hi;
+#if defined(POOL_BRICKS)
+    vec3 lo;
+    vec3 hi;
+    Brick pb = brick_box_at(p, lo, hi);
     int level = 3;
     if (frame.mode_params.z >= 0.5) {
+#else
+    if (frame.mode_params.z < 0.5) {
+        return Span(2147483647, 3);
+    }
+    {
+#endif
         ivec3 b = clamp(ivec3(floor(p * r.inv_brick)), ivec3(0), r.bricks - 1);
         // skip::encode_reach: bits 0-1 the class (0 empty; 1, 2, 3 strides 4, 2, 1), bits 2-7 the reach r: every
         // brick within r bricks has the same class, so the ray is walked to where it leaves that cube of bricks
         // as one span.
         int code = int(texelFetch(sampler3D(occupancy_tex, linear_smp), b, 0).r * 255.0 + 0.5);
+#if defined(POOL_BRICKS)
         level = code & 3;
         int reach = code >> 2;
         lo = max(lo, vec3(b - ivec3(reach)) * frame.brick.xyz);
         hi = min(hi, vec3(b + ivec3(reach + 1)) * frame.brick.xyz);
     }
-    vec3 exits = (mix(lo, hi, r.up) - r.a) * r.inv_dir;
-    // A little short of the exit: rounding must never leap over a sample of the next brick.
-    float t_exit = min(exits.x, min(exits.y, exits.z)) - 1e-4 * r.h;
+#else
+        int level = code & 3;
+        int reach = code >> 2;
+        vec3 lo = vec3(b - ivec3(reach)) * frame.brick.xyz;
+        vec3 hi = vec3(b + ivec3(reach + 1)) * frame.brick.xyz;
+#endif
+        vec3 exits = (mix(lo, hi, r.up) - r.a) * r.inv_dir;
+        // A little short of the exit: rounding must never leap over a sample of the next brick.
+        float t_exit = min(exits.x, min(exits.y, exits.z)) - 1e-4 * r.h;
+#if defined(POOL_BRICKS)
     return Span(int(ceil(t_exit * r.inv_h - r.o)), level, pb);
+#else
+        return Span(int(ceil(t_exit * r.inv_h - r.o)), level);
+    }
+#endif
 }
 
 // Where the walk stands. One sample per step (lavapipe runs a loop until its slowest lane ends, and nested loops
@@ -91,15 +112,22 @@ struct Walk {
     bool walked;
     bool resample;
     int resample_at;
-    // The brick of the sample yielded, of the span and of the resample.
+    // The brick of the sample yielded (a volume kept as one brick: always the same); with POOL_BRICKS, those of
+    // the span and of the resample.
     Brick brick;
+#if defined(POOL_BRICKS)
     Brick span_brick;
     Brick resample_brick;
+#endif
 };
 
 Walk walk_start() {
-    Brick none = Brick(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
-    return Walk(0, 0, 0, 1, false, true, false, 0, none, none, none);
+    Brick whole = brick_at(vec3(0.0));
+#if defined(POOL_BRICKS)
+    return Walk(0, 0, 0, 1, false, true, false, 0, whole, whole, whole);
+#else
+    return Walk(0, 0, 0, 1, false, true, false, 0, whole);
+#endif
 }
 
 // What a step of the walk yields.
@@ -131,11 +159,13 @@ int walk_step(WalkRay r, inout Walk w, out float t) {
         // After a leap, the segment starts at the last sample leapt over (nothing there is visible).
         w.resample = WALK_SEGMENTS && !w.walked && w.k > 0;
         w.resample_at = w.k - 1;
+#if defined(POOL_BRICKS)
         w.span_brick = span.brick;
         if (w.resample) {
             // The last sample leapt over may lie in another of the pool's bricks.
             w.resample_brick = brick_at(r.a + r.dir * ((float(w.resample_at) + r.o) * r.h));
         }
+#endif
         w.walked = !exiting;
         // The span's stride s (rule 2): the samples whose index is a multiple of s.
         w.stride = (exiting || !WALK_SEGMENTS) ? 1 : 1 << (3 - span.level);
@@ -149,10 +179,14 @@ int walk_step(WalkRay r, inout Walk w, out float t) {
     t = (float(j) + r.o) * r.h;
     if (w.resample) {
         w.resample = false;
+#if defined(POOL_BRICKS)
         w.brick = w.resample_brick;
+#endif
         return WALK_RESAMPLE;
     }
+#if defined(POOL_BRICKS)
     w.brick = w.span_brick;
+#endif
     if (t >= r.len) {
         w.reached_end = true;
         return WALK_END;

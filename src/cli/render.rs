@@ -105,7 +105,9 @@ fn movie(args: &RenderArgs) -> Result<()> {
 /// `--level`: level `level` (at most the coarsest) everywhere, with a note saying which.
 fn show_level(gpu: &Gpu, headless: &mut Headless, volume: &Volume, s: &RenderSettings, level: u32) -> Result<()> {
     use volcast::render::levels::{top_level, LevelChoice};
-    headless.renderer.show_levels(gpu, volume, s, LevelChoice::Forced(level))?;
+    headless
+        .renderer
+        .show_levels(gpu, volume, s, LevelChoice::Forced(level))?;
     let Some(pool) = headless.renderer.pool() else {
         return Ok(());
     };

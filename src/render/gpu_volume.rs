@@ -433,6 +433,16 @@ impl GpuVolume {
         })
     }
 
+    /// How the shaders read it: its layout, through the page table unless it is one brick.
+    pub(super) fn sampling(&self) -> Sampling {
+        let s = self.layout.sampling();
+        if self.pool.grid == [1, 1, 1] {
+            s
+        } else {
+            s.bricked()
+        }
+    }
+
     pub(super) fn destroy(self, gpu: &Gpu) {
         self.occupancy.destroy(gpu);
         self.directory.destroy(gpu);

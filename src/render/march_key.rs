@@ -123,19 +123,39 @@ impl Family {
 }
 
 /// How the shaders read the volume (`render::VolumeLayout`): a 3D texture, or the corner texture of 8- or 16-bit
-/// data. Rule 9's light grid pass (light.comp) is compiled once per sampling too.
+/// data; each either as one brick (no page table: `brick_at` is a constant) or as a pool of bricks behind the page
+/// table (`POOL_BRICKS`). Rule 9's light grid pass (light.comp) is compiled once per sampling too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Sampling {
     Texture,
     Corners8,
     Corners16,
+    TextureBricks,
+    Corners8Bricks,
+    Corners16Bricks,
 }
 
 impl Sampling {
-    pub const ALL: [Sampling; 3] = [Sampling::Texture, Sampling::Corners8, Sampling::Corners16];
+    pub const ALL: [Sampling; 6] = [
+        Sampling::Texture,
+        Sampling::Corners8,
+        Sampling::Corners16,
+        Sampling::TextureBricks,
+        Sampling::Corners8Bricks,
+        Sampling::Corners16Bricks,
+    ];
 
     pub fn index(self) -> usize {
         position(&Sampling::ALL, self)
+    }
+
+    /// The same layout read through the page table.
+    pub fn bricked(self) -> Sampling {
+        match self {
+            Sampling::Texture | Sampling::TextureBricks => Sampling::TextureBricks,
+            Sampling::Corners8 | Sampling::Corners8Bricks => Sampling::Corners8Bricks,
+            Sampling::Corners16 | Sampling::Corners16Bricks => Sampling::Corners16Bricks,
+        }
     }
 
     pub fn defines(self) -> &'static [&'static str] {
@@ -143,6 +163,9 @@ impl Sampling {
             Sampling::Texture => &[],
             Sampling::Corners8 => &["CORNERS8"],
             Sampling::Corners16 => &["CORNERS16"],
+            Sampling::TextureBricks => &["POOL_BRICKS"],
+            Sampling::Corners8Bricks => &["CORNERS8", "POOL_BRICKS"],
+            Sampling::Corners16Bricks => &["CORNERS16", "POOL_BRICKS"],
         }
     }
 
@@ -152,6 +175,9 @@ impl Sampling {
             Sampling::Texture => "",
             Sampling::Corners8 => "_c8",
             Sampling::Corners16 => "_c16",
+            Sampling::TextureBricks => "_b",
+            Sampling::Corners8Bricks => "_c8_b",
+            Sampling::Corners16Bricks => "_c16_b",
         }
     }
 }

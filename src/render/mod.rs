@@ -438,7 +438,7 @@ impl Renderer {
 
     /// How the shaders read the loaded volume (as a texture without one).
     fn sampling(&self) -> Sampling {
-        self.volume.as_ref().map_or(Sampling::Texture, |v| v.layout.sampling())
+        self.volume.as_ref().map_or(Sampling::Texture, |v| v.sampling())
     }
 
     /// The march variant frame `s` needs on the loaded volume.
