@@ -285,7 +285,7 @@ fn upload_texels(
 }
 
 /// Uploads the bricks `pool` holds into a pool in `layout`: the 3D texture or the corner texture.
-pub(super) fn upload_layout(
+fn upload_layout(
     gpu: &Gpu,
     layout: VolumeLayout,
     levels: &Levels,
@@ -325,8 +325,30 @@ pub(super) fn upload_3d(gpu: &Gpu, image: &mut Image, bytes: &[u8], depth: u32) 
     }
 }
 
+/// The pool's images in `layout` (the texture or the corner texture) and its page table; nothing is left
+/// allocated on an error.
+pub(super) type PoolImages = (Option<Image>, Option<Image>, Image);
+
+pub(super) fn upload_pool(
+    gpu: &Gpu,
+    layout: VolumeLayout,
+    levels: &Levels,
+    pool: &Pool,
+) -> Result<PoolImages, GpuError> {
+    let (image, corners) = upload_layout(gpu, layout, levels, pool)?;
+    match upload_directory(gpu, pool) {
+        Ok(d) => Ok((image, corners, d)),
+        Err(e) => {
+            for i in [image, corners].into_iter().flatten() {
+                i.destroy(gpu);
+            }
+            Err(e)
+        }
+    }
+}
+
 /// The page table as an RG32_UINT 3D image (`Pool::table`).
-pub(super) fn upload_directory(gpu: &Gpu, pool: &Pool) -> Result<Image, GpuError> {
+fn upload_directory(gpu: &Gpu, pool: &Pool) -> Result<Image, GpuError> {
     let mut image = image_3d(gpu, vk::Format::R32G32_UINT, pool.grid, "page table")?;
     match upload_3d(gpu, &mut image, bytemuck::cast_slice(&pool.table()), pool.grid[2]) {
         Ok(()) => Ok(image),
@@ -368,19 +390,10 @@ impl GpuVolume {
         // The brick statistics beside the upload, on the cores it leaves idle (its fills are parallel, but it
         // waits on the device and, through a staging buffer, on lavapipe's single-threaded copy).
         let (uploaded, bricks) = rayon::join(
-            || upload_layout(gpu, layout, &Levels::of(volume, &[]), &pool),
+            || upload_pool(gpu, layout, &Levels::of(volume, &[]), &pool),
             || skip::BrickGrid::new(volume),
         );
-        let (image, corners) = uploaded?;
-        let directory = match upload_directory(gpu, &pool) {
-            Ok(d) => d,
-            Err(e) => {
-                for i in [image, corners].into_iter().flatten() {
-                    i.destroy(gpu);
-                }
-                return Err(e);
-            }
-        };
+        let (image, corners, directory) = uploaded?;
         let destroy_volume = |gpu: &Gpu, image: Option<Image>, corners: Option<Image>| {
             if let Some(i) = image {
                 i.destroy(gpu);

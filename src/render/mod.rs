@@ -358,53 +358,6 @@ impl Renderer {
         Ok(())
     }
 
-    /// Shows the levels `choice` gives the view `s` of `volume` (the one last given to `set_volume`): a pool of the
-    /// bricks of that cut and its page table (levels.rs has the rule). A gradient texture is made again for the new
-    /// pool. Call between frames. Returns the cut shown.
-    pub fn show_levels(
-        &mut self,
-        gpu: &Gpu,
-        volume: &Volume,
-        s: &RenderSettings,
-        choice: levels::LevelChoice,
-    ) -> Result<levels::Cut, GpuError> {
-        let Some(vol) = &mut self.volume else {
-            return Err(GpuError::Lost("no volume loaded"));
-        };
-        let brick = vol.pool.brick;
-        let top = levels::top_level(volume.dims, brick);
-        let grid = vol.pool.grid;
-        let cut = match choice {
-            levels::LevelChoice::Finest => levels::Cut::uniform(grid, 0),
-            levels::LevelChoice::Forced(l) => levels::Cut::uniform(grid, l.min(top)),
-            levels::LevelChoice::Screen { factor, bricks } => {
-                let view = levels::View::of(&vol.info, s);
-                levels::screen_cut(volume.dims, brick, top, &view, factor, bricks)
-            }
-        };
-        self.show_cut(gpu, volume, &cut)?;
-        Ok(cut)
-    }
-
-    /// Shows `cut` of `volume` (the one last given to `set_volume`; `cut.grid` must be its pool's grid), as
-    /// [`show_levels`](Self::show_levels) does for the cut it chooses.
-    pub fn show_cut(&mut self, gpu: &Gpu, volume: &Volume, cut: &levels::Cut) -> Result<(), GpuError> {
-        let Some(vol) = &mut self.volume else {
-            return Err(GpuError::Lost("no volume loaded"));
-        };
-        if cut.grid != vol.pool.grid || cut.level.len() != vol.pool.directory.len() {
-            return Err(GpuError::Lost("a cut for another brick grid"));
-        }
-        let had_gradients = vol.gradient.is_some();
-        if vol.show_cut(gpu, volume, cut)? {
-            self.write_volume_set(gpu);
-            if had_gradients {
-                self.enable_gradient_texture(gpu, volume)?;
-            }
-        }
-        Ok(())
-    }
-
     /// Whether the loaded volume's gradient texture is made (`enable_gradient_texture`).
     pub fn has_gradient_texture(&self) -> bool {
         self.volume.as_ref().is_some_and(|v| v.gradient.is_some())

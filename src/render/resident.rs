@@ -1,12 +1,14 @@
 //! Changing which bricks the pool holds: a [`Cut`] (levels.rs) becomes a new pool of its bricks, its page table,
-//! and skip ranges that hold for every level shown.
+//! and skip ranges that hold for every level shown; `Renderer::show_levels` and `show_cut`.
 
-use super::gpu_volume::{upload_directory, upload_layout, GpuVolume, Levels};
+use super::gpu_volume::{upload_pool, GpuVolume, Levels};
 use super::levels::{self, Cut};
 use super::pool::Pool;
 use super::skip;
 use super::uniforms::PoolInfo;
+use super::Renderer;
 use crate::gpu::{Gpu, GpuError};
+use crate::scene::settings::RenderSettings;
 use crate::volume::Volume;
 
 impl GpuVolume {
@@ -35,16 +37,7 @@ impl GpuVolume {
                 gpu.device_local_bytes >> 20
             )));
         }
-        let (image, corners) = upload_layout(gpu, self.layout, &Levels::of(volume, &self.pyramid), &pool)?;
-        let directory = match upload_directory(gpu, &pool) {
-            Ok(d) => d,
-            Err(e) => {
-                for i in [image, corners].into_iter().flatten() {
-                    i.destroy(gpu);
-                }
-                return Err(e);
-            }
-        };
+        let (image, corners, directory) = upload_pool(gpu, self.layout, &Levels::of(volume, &self.pyramid), &pool)?;
         for old in [
             std::mem::replace(&mut self.image, image),
             std::mem::replace(&mut self.corners, corners),
@@ -66,5 +59,54 @@ impl GpuVolume {
         self.bricks = skip::BrickGrid::new(volume).with_levels(&self.pyramid[..top]);
         self.occupancy_key = None;
         Ok(true)
+    }
+}
+
+impl Renderer {
+    /// Shows the levels `choice` gives the view `s` of `volume` (the one last given to `set_volume`): a pool of the
+    /// bricks of that cut and its page table (levels.rs has the rule). A gradient texture is made again for the new
+    /// pool. Call between frames. Returns the cut shown.
+    pub fn show_levels(
+        &mut self,
+        gpu: &Gpu,
+        volume: &Volume,
+        s: &RenderSettings,
+        choice: levels::LevelChoice,
+    ) -> Result<levels::Cut, GpuError> {
+        let Some(vol) = &mut self.volume else {
+            return Err(GpuError::Lost("no volume loaded"));
+        };
+        let brick = vol.pool.brick;
+        let top = levels::top_level(volume.dims, brick);
+        let grid = vol.pool.grid;
+        let cut = match choice {
+            levels::LevelChoice::Finest => levels::Cut::uniform(grid, 0),
+            levels::LevelChoice::Forced(l) => levels::Cut::uniform(grid, l.min(top)),
+            levels::LevelChoice::Screen { factor, bricks } => {
+                let view = levels::View::of(&vol.info, s);
+                levels::screen_cut(volume.dims, brick, top, &view, factor, bricks)
+            }
+        };
+        self.show_cut(gpu, volume, &cut)?;
+        Ok(cut)
+    }
+
+    /// Shows `cut` of `volume` (the one last given to `set_volume`; `cut.grid` must be its pool's grid), as
+    /// [`show_levels`](Self::show_levels) does for the cut it chooses.
+    pub fn show_cut(&mut self, gpu: &Gpu, volume: &Volume, cut: &levels::Cut) -> Result<(), GpuError> {
+        let Some(vol) = &mut self.volume else {
+            return Err(GpuError::Lost("no volume loaded"));
+        };
+        if cut.grid != vol.pool.grid || cut.level.len() != vol.pool.directory.len() {
+            return Err(GpuError::Lost("a cut for another brick grid"));
+        }
+        let had_gradients = vol.gradient.is_some();
+        if vol.show_cut(gpu, volume, cut)? {
+            self.write_volume_set(gpu);
+            if had_gradients {
+                self.enable_gradient_texture(gpu, volume)?;
+            }
+        }
+        Ok(())
     }
 }
