@@ -53,47 +53,49 @@ struct Span {
 #endif
 };
 
+// The cube of skip bricks around the one holding p that share its class (bounds in texture space): returns the
+// class. skip::encode_reach: bits 0-1 the class (0 empty; 1, 2, 3 strides 4, 2, 1), bits 2-7 the reach r: every
+// brick within r bricks has the same class, so the ray is walked to where it leaves that cube as one span.
+int skip_cube(WalkRay r, vec3 p, out vec3 lo, out vec3 hi) {
+    ivec3 b = clamp(ivec3(floor(p * r.inv_brick)), ivec3(0), r.bricks - 1);
+    int code = int(texelFetch(sampler3D(occupancy_tex, linear_smp), b, 0).r * 255.0 + 0.5);
+    int reach = code >> 2;
+    lo = vec3(b - ivec3(reach)) * frame.brick.xyz;
+    hi = vec3(b + ivec3(reach + 1)) * frame.brick.xyz;
+    return code & 3;
+}
+
+// The index of the first sample past where the ray leaves the box [lo, hi].
+int span_end(WalkRay r, vec3 lo, vec3 hi) {
+    vec3 exits = (mix(lo, hi, r.up) - r.a) * r.inv_dir;
+    // A little short of the exit: rounding must never leap over a sample of the next brick.
+    float t_exit = min(exits.x, min(exits.y, exits.z)) - 1e-4 * r.h;
+    return int(ceil(t_exit * r.inv_h - r.o));
+}
+
 // The span starting at the sample at `t` (= (k + o) * h), from the bricks holding that sample: it ends where the
 // ray leaves the cube of skip bricks of its class, or the pool's brick.
 Span span_at(WalkRay r, float t) {
     vec3 p = r.a + r.dir * t;
-#if defined(POOL_BRICKS)
     vec3 lo;
     vec3 hi;
+#if defined(POOL_BRICKS)
     Brick pb = brick_box_at(p, lo, hi);
     int level = 3;
     if (frame.mode_params.z >= 0.5) {
+        vec3 cube_lo;
+        vec3 cube_hi;
+        level = skip_cube(r, p, cube_lo, cube_hi);
+        lo = max(lo, cube_lo);
+        hi = min(hi, cube_hi);
+    }
+    return Span(span_end(r, lo, hi), level, pb);
 #else
     if (frame.mode_params.z < 0.5) {
         return Span(2147483647, 3);
     }
-    {
-#endif
-        ivec3 b = clamp(ivec3(floor(p * r.inv_brick)), ivec3(0), r.bricks - 1);
-        // skip::encode_reach: bits 0-1 the class (0 empty; 1, 2, 3 strides 4, 2, 1), bits 2-7 the reach r: every
-        // brick within r bricks has the same class, so the ray is walked to where it leaves that cube of bricks
-        // as one span.
-        int code = int(texelFetch(sampler3D(occupancy_tex, linear_smp), b, 0).r * 255.0 + 0.5);
-#if defined(POOL_BRICKS)
-        level = code & 3;
-        int reach = code >> 2;
-        lo = max(lo, vec3(b - ivec3(reach)) * frame.brick.xyz);
-        hi = min(hi, vec3(b + ivec3(reach + 1)) * frame.brick.xyz);
-    }
-#else
-        int level = code & 3;
-        int reach = code >> 2;
-        vec3 lo = vec3(b - ivec3(reach)) * frame.brick.xyz;
-        vec3 hi = vec3(b + ivec3(reach + 1)) * frame.brick.xyz;
-#endif
-        vec3 exits = (mix(lo, hi, r.up) - r.a) * r.inv_dir;
-        // A little short of the exit: rounding must never leap over a sample of the next brick.
-        float t_exit = min(exits.x, min(exits.y, exits.z)) - 1e-4 * r.h;
-#if defined(POOL_BRICKS)
-    return Span(int(ceil(t_exit * r.inv_h - r.o)), level, pb);
-#else
-        return Span(int(ceil(t_exit * r.inv_h - r.o)), level);
-    }
+    int level = skip_cube(r, p, lo, hi);
+    return Span(span_end(r, lo, hi), level);
 #endif
 }
 

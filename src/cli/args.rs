@@ -317,12 +317,12 @@ pub(crate) struct RenderArgs {
     /// file.
     #[arg(long, value_name = "FILE.json")]
     pub(crate) state: Option<PathBuf>,
-    /// A turntable movie of N frames (1 to 3600) once around the vertical axis (+z through the point looked at),
-    /// starting at the view given: `-o NAME.png` writes NAME-0000.png … and a looping NAME.gif (docs/cli.md, Movies).
     /// Show level L of the volume's resolution pyramid everywhere, through the GPU's brick pool (level 0's box and
-    /// placement; docs/large-volumes.md). A level past the coarsest (one brick) shows the coarsest
+    /// placement; docs/large-volumes.md). A level past the coarsest (one brick) shows the coarsest.
     #[arg(long, value_name = "L", conflicts_with = "movie")]
     pub(crate) level: Option<u32>,
+    /// A turntable movie of N frames (1 to 3600) once around the vertical axis (+z through the point looked at),
+    /// starting at the view given: `-o NAME.png` writes NAME-0000.png … and a looping NAME.gif (docs/cli.md, Movies).
     #[arg(long, value_name = "N", value_parser = parse_turntable, group = "movie", conflicts_with = "timings")]
     pub(crate) turntable: Option<u32>,
     /// A movie along a camera path through view states (F12's JSON), --frames N in all: the first frame is the

@@ -5,7 +5,6 @@
 use super::levels::Cut;
 use super::march_key::Sampling;
 use super::pool::{Pool, PoolRows, Source};
-use super::uniforms::PoolInfo;
 use super::{skip, OccupancyKey, VolumeInfo};
 use crate::gpu::resources::{Image, ImageDesc};
 use crate::gpu::upload::{upload_image, upload_image_with};
@@ -428,10 +427,7 @@ impl GpuVolume {
                 geometry: volume.geometry,
                 scale_bias: volume.gpu_scale_bias(),
                 range: volume.range,
-                pool: PoolInfo {
-                    brick: pool.brick,
-                    texels: pool.texels(),
-                },
+                pool: pool.info(),
             },
             cut: Cut::uniform(pool.grid, 0),
             pool,

@@ -11,6 +11,7 @@
 //! - Within a bound on the bricks (the pool's slots), refinement goes by need (voxel / pixel, largest first; ties to
 //!   the coarser brick, then the lower index), and a brick whose children do not fit stays as it is.
 
+use crate::volume::budget::level_dims;
 use crate::volume::{Volume, VoxelData};
 use glam::{DMat4, DVec3};
 use std::collections::BinaryHeap;
@@ -65,21 +66,12 @@ impl View {
 
 /// The top level for bricks of `brick`: the first whose grid is one brick (at most 16).
 pub fn top_level(dims: [u32; 3], brick: [u32; 3]) -> u32 {
-    let mut d = dims;
-    let mut l = 0;
-    while (0..3).any(|a| d[a] > brick[a]) && l < 16 {
-        d = d.map(|n| n.div_ceil(2));
-        l += 1;
-    }
-    l
+    (0..16).find(|&l| grid_at(dims, brick, l) == [1, 1, 1]).unwrap_or(16)
 }
 
 /// Bricks per axis of level `l`.
 pub fn grid_at(dims: [u32; 3], brick: [u32; 3], l: u32) -> [u32; 3] {
-    let mut d = dims;
-    for _ in 0..l {
-        d = d.map(|n| n.div_ceil(2));
-    }
+    let d = level_dims(dims, l);
     [0, 1, 2].map(|a| d[a].div_ceil(brick[a]))
 }
 
@@ -154,7 +146,7 @@ pub fn screen_cut(dims: [u32; 3], brick: [u32; 3], top: u32, view: &View, factor
                 .then(o.2[0].cmp(&self.2[0]))
         }
     }
-    let mut shown: Vec<(u32, [u32; 3])> = vec![(top, [0, 0, 0])];
+    let mut shown: std::collections::HashSet<(u32, [u32; 3])> = [(top, [0, 0, 0])].into();
     let mut heap = BinaryHeap::new();
     let consider = |heap: &mut BinaryHeap<Item>, l: u32, b: [u32; 3]| {
         let n = need(view, dims, brick, voxel, l, b);
@@ -174,9 +166,9 @@ pub fn screen_cut(dims: [u32; 3], brick: [u32; 3], top: u32, view: &View, factor
             continue;
         }
         count += children.len() - 1;
-        shown.retain(|&s| s != (l, b));
+        shown.remove(&(l, b));
         for c in children {
-            shown.push((l - 1, c));
+            shown.insert((l - 1, c));
             consider(&mut heap, l - 1, c);
         }
     }
@@ -195,13 +187,12 @@ pub fn screen_cut(dims: [u32; 3], brick: [u32; 3], top: u32, view: &View, factor
     cut
 }
 
-/// Levels 1..=`top` of `volume` (level 0 is the volume), each a [`Volume`] with level 0's value range, so that
-/// its elements normalise the same way.
-pub fn pyramid(volume: &Volume, top: u32) -> Result<Vec<Volume>, crate::volume::VolumeError> {
+/// Grows `pyramid`, levels 1.. of `volume` (level 0 is the volume), up to level `top`, each level made from the one
+/// before it: a [`Volume`] with level 0's value range, so that its elements normalise the same way.
+pub fn extend_pyramid(volume: &Volume, pyramid: &mut Vec<Volume>, top: u32) -> Result<(), crate::volume::VolumeError> {
     use crate::convert::pyramid::{downsample, Reduce};
-    let mut out: Vec<Volume> = Vec::new();
-    for _ in 0..top {
-        let from = out.last().unwrap_or(volume);
+    while pyramid.len() < top as usize {
+        let from = pyramid.last().unwrap_or(volume);
         let dims = from.dims.map(|d| d as usize);
         let data = match &from.data {
             VoxelData::U8(v) => VoxelData::U8(downsample(v, dims, [2, 2, 2], Reduce::Mean)),
@@ -212,9 +203,9 @@ pub fn pyramid(volume: &Volume, top: u32) -> Result<Vec<Volume>, crate::volume::
         let mut level =
             Volume::new(volume.name.clone(), dims, [1.0; 3], volume.source_type, data)?.with_scaling(volume.scaling)?;
         (level.range, level.stored_range) = (volume.range, volume.stored_range);
-        out.push(level);
+        pyramid.push(level);
     }
-    Ok(out)
+    Ok(())
 }
 
 #[cfg(test)]

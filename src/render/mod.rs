@@ -331,22 +331,34 @@ impl Renderer {
         if vol.gradient.is_some() {
             return Ok(());
         }
-        // The gradients on each shown level's voxel grid, then gathered into the pool's slots like the values
-        // (borders included).
+        // Slab by slab: the gradients of the slices of each level the slab's slots hold, on that level's voxel
+        // grid, then gathered into the slots like the values (borders included). A volume kept as one brick
+        // computes each slice once or twice (the border), and no whole copy of the gradients is held.
         let top = vol.pool.levels.len() - 1;
-        let grids: Vec<Vec<[i16; 4]>> = std::iter::once(volume)
-            .chain(&vol.pyramid[..top])
-            .map(|v| {
-                let mut grid = vec![[0i16; 4]; v.voxel_count()];
-                gradients::fill_gradient_slices(v, gradients::GradientFilter::for_volume(volume), 0, &mut grid);
-                grid
-            })
-            .collect();
+        let levels: Vec<&Volume> = std::iter::once(volume).chain(&vol.pyramid[..top]).collect();
+        let filter = gradients::GradientFilter::for_volume(volume);
         let pool = &vol.pool;
         let mut image = image_3d_once(gpu, vk::Format::R16G16B16A16_SNORM, pool.texels(), "gradients")?;
         let filled = upload_image_with(gpu, &mut image, pool.texel_count() * 8, |range, dst| {
-            pool.fill(range.start / 8, bytemuck::cast_slice_mut(dst), |r, x| {
-                r.this[x].map_or([0; 4], |(l, i)| grids[l as usize][i])
+            let (first, count) = (range.start / 8, dst.len() / 8);
+            // Per level: the index of its first slice computed, and those slices' gradients.
+            let slabs: Vec<(usize, Vec<[i16; 4]>)> = pool
+                .source_slices(first, count)
+                .into_iter()
+                .zip(&levels)
+                .map(|(span, v)| {
+                    let Some((z0, z1)) = span else { return (0, Vec::new()) };
+                    let plane = v.dims[0] as usize * v.dims[1] as usize;
+                    let mut grid = vec![[0i16; 4]; (z1 - z0 + 1) * plane];
+                    gradients::fill_gradient_slices(v, filter, z0, &mut grid);
+                    (z0 * plane, grid)
+                })
+                .collect();
+            pool.fill(first, bytemuck::cast_slice_mut(dst), |r, x| {
+                r.this[x].map_or([0; 4], |(l, i)| {
+                    let (start, grid) = &slabs[l as usize];
+                    grid[i - start]
+                })
             })
         });
         if let Err(e) = filled {

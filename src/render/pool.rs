@@ -17,6 +17,7 @@
 //! entry, its walk's spans those of the skip grid alone); larger ones, or any under `--brick-size`, are tiled.
 
 use super::levels::Cut;
+use crate::volume::budget::level_dims;
 
 /// Voxels of border on each side of a brick in its slot: a point in the brick, moved one voxel (gradients) and
 /// filtered (one more), reads at most two voxels beyond it.
@@ -96,11 +97,7 @@ impl Pool {
             })
             .collect();
         let top = cut.level.iter().copied().max().unwrap_or(0);
-        let mut levels = vec![dims];
-        for _ in 0..top {
-            let d = levels[levels.len() - 1].map(|n| n.div_ceil(2));
-            levels.push(d);
-        }
+        let levels = (0..=top).map(|l| level_dims(dims, l)).collect();
         Ok(Pool {
             dims,
             brick,
@@ -110,6 +107,14 @@ impl Pool {
             directory,
             levels,
         })
+    }
+
+    /// Its shape as the uniforms carry it.
+    pub fn info(&self) -> super::PoolInfo {
+        super::PoolInfo {
+            brick: self.brick,
+            texels: self.texels(),
+        }
     }
 
     /// The pool texture's size in texels.
@@ -163,6 +168,25 @@ impl Pool {
                 None => out.extend((0..side[0]).map(|_| None)),
             }
         }
+    }
+
+    /// Per level, the first and last slice (z) of that level the pool's texels `first..first + count` (whole rows,
+    /// wrapping as in [`fill`](Self::fill)) hold voxels of; None where they hold none.
+    pub fn source_slices(&self, first: usize, count: usize) -> Vec<Option<(usize, usize)>> {
+        let [tx, ty, tz] = self.texels().map(|t| t as usize);
+        let mut spans: Vec<Option<(usize, usize)>> = vec![None; self.levels.len()];
+        let mut row = Vec::new();
+        for r in first / tx..(first + count).div_ceil(tx) {
+            let at = r % (ty * tz);
+            self.row_sources((at % ty) as u32, (at / ty) as u32, &mut row);
+            for &(l, i) in row.iter().flatten() {
+                let [dx, dy, _] = self.levels[l as usize];
+                let z = i / (dx as usize * dy as usize);
+                let span = &mut spans[l as usize];
+                *span = Some(span.map_or((z, z), |(a, b)| (a.min(z), b.max(z))));
+            }
+        }
+        spans
     }
 
     /// Fills `dst`, the pool's texels from texel `first` on (whole rows; past the last slice they wrap to the

@@ -5,7 +5,6 @@ use super::gpu_volume::{upload_pool, GpuVolume, Levels};
 use super::levels::{self, Cut};
 use super::pool::Pool;
 use super::skip;
-use super::uniforms::PoolInfo;
 use super::Renderer;
 use crate::gpu::{Gpu, GpuError};
 use crate::scene::settings::RenderSettings;
@@ -21,10 +20,8 @@ impl GpuVolume {
             return Ok(false);
         }
         let top = cut.level.iter().copied().max().unwrap_or(0) as usize;
-        if self.pyramid.len() < top {
-            self.pyramid = levels::pyramid(volume, top as u32)
-                .map_err(|e| GpuError::TooLarge(format!("pyramid of {}: {e}", volume.name)))?;
-        }
+        levels::extend_pyramid(volume, &mut self.pyramid, top as u32)
+            .map_err(|e| GpuError::TooLarge(format!("pyramid of {}: {e}", volume.name)))?;
         let limit = gpu.properties.limits.max_image_dimension3_d;
         let pool = Pool::with_cut(volume.dims, self.pool.brick, limit, cut).map_err(GpuError::TooLarge)?;
         let needed = pool.texel_count() * self.layout.bytes_per_voxel();
@@ -49,10 +46,7 @@ impl GpuVolume {
             old.destroy(gpu);
         }
         std::mem::replace(&mut self.directory, directory).destroy(gpu);
-        self.info.pool = PoolInfo {
-            brick: pool.brick,
-            texels: pool.texels(),
-        };
+        self.info.pool = pool.info();
         self.pool = pool;
         self.cut = cut.clone();
         // A sample of level L reads voxels of level L: the skip ranges take every level up to the coarsest shown.

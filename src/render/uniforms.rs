@@ -306,26 +306,19 @@ impl FrameUniforms {
             light_color: light_color(s),
             light_grid: light_grid(s, v),
             clip_plane: v.clip_plane(s),
-            pool_inv: v.pool.texels.map(|t| 1.0 / t as f32).into_v4(),
+            pool_inv: v4(DVec3::from_array(v.pool.texels.map(|t| 1.0 / f64::from(t))), 0.0),
             pool_brick: {
                 let [x, y, z] = v.pool.brick.map(|b| b as f32);
                 [x, y, z, super::pool::BORDER as f32]
             },
-            pool_slot: v.pool.brick.map(|b| super::pool::slot_side(b) as f32).into_v4(),
-            pool_grid: [0, 1, 2]
-                .map(|a| v.dims[a].div_ceil(v.pool.brick[a].max(1)) as f32)
-                .into_v4(),
+            pool_slot: v4(
+                DVec3::from_array(v.pool.brick.map(|b| f64::from(super::pool::slot_side(b)))),
+                0.0,
+            ),
+            pool_grid: v4(
+                DVec3::from_array([0, 1, 2].map(|a| f64::from(v.dims[a].div_ceil(v.pool.brick[a].max(1))))),
+                0.0,
+            ),
         }
-    }
-}
-
-/// `[x, y, z]` as a uniform's vec4 with w = 0.
-trait IntoV4 {
-    fn into_v4(self) -> [f32; 4];
-}
-
-impl IntoV4 for [f32; 3] {
-    fn into_v4(self) -> [f32; 4] {
-        [self[0], self[1], self[2], 0.0]
     }
 }
