@@ -36,6 +36,8 @@ pub(super) struct GpuVolume {
     pub(super) corners: Option<Image>,
     /// Rule 9's light grid, made by the first frame with shadows or occlusion.
     pub(super) light: Option<super::light_volume::LightImage>,
+    /// Which bricks a streamed pool holds (`Renderer::start_stream`); None while the pool is a cut's.
+    pub(super) stream: Option<super::stream::Stream>,
 }
 
 /// A 3D image of `dims` (a depth of 1 gets a duplicated second slice: a depth-1 image would be 2D), filled by
@@ -197,90 +199,120 @@ impl<'a> Levels<'a> {
     }
 }
 
-/// Fills the pool's corner texture (`layout` Corners8 or Corners16): per texel the four values of the 2×2 square
-/// of the cell it starts in x and y (neighbours clamped to the pool's edge; within a slot they are the brick's
-/// own voxels and border), packed in one texel; the march fetches it at z and z + 1. Filled slab by slab straight
-/// into the staging buffer, rows on every core.
-fn upload_corners(gpu: &Gpu, levels: &Levels, pool: &Pool, layout: VolumeLayout) -> Result<Image, GpuError> {
-    if matches!(levels, Levels::F32(_)) {
-        return Err(GpuError::Lost("corner texture: float data has no corner layout"));
-    }
-    let format = match layout {
-        VolumeLayout::Corners8 => vk::Format::R32_UINT,
-        _ => vk::Format::R32G32_UINT,
-    };
-    let mut image = image_3d_once(gpu, format, pool.texels(), "volume corners")?;
-    let texel = layout.bytes_per_voxel() as usize;
-    let last = pool.texels()[0] as usize - 1;
-    let uploaded = upload_image_with(gpu, &mut image, pool.texel_count() * texel as u64, |range, dst| {
-        let first = range.start / texel;
-        let square = |rows: &PoolRows, x: usize, at: &dyn Fn(Option<Source>) -> u32| {
-            let x1 = (x + 1).min(last);
-            [at(rows.this[x]), at(rows.this[x1]), at(rows.next[x]), at(rows.next[x1])]
-        };
-        match levels {
-            Levels::U8(v) => {
-                let at = |s: Option<Source>| s.map_or(0, |(l, i)| u32::from(v[l as usize][i]));
-                pool.fill(first, bytemuck::cast_slice_mut::<u8, u32>(dst), |rows, x| {
-                    let c = square(rows, x, &at);
-                    c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24
-                })
-            }
-            Levels::U16(v) => {
-                let at = |s: Option<Source>| s.map_or(0, |(l, i)| u32::from(v[l as usize][i]));
-                pool.fill(first, bytemuck::cast_slice_mut::<u8, [u32; 2]>(dst), |rows, x| {
-                    let c = square(rows, x, &at);
-                    [c[0] | c[1] << 16, c[2] | c[3] << 16]
-                })
-            }
-            Levels::F32(_) => {}
+/// What a pool texel holds: the voxel as stored (R8, R16 or R32 float data), 8- and 16-bit voxels widened to
+/// float as a UNORM texture would return them (stored / 255 or / 65535, so `Volume::gpu_scale_bias` holds
+/// unchanged), or a corner texel: the four values of the 2×2 square of the cell it starts in x and y (neighbours
+/// clamped to the rows' end; within a slot they are the brick's own voxels and border), which the march fetches
+/// at z and z + 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum TexelKind {
+    Native,
+    Widened,
+    Corners8,
+    Corners16,
+}
+
+impl TexelKind {
+    /// How `layout` stores `levels`' elements.
+    pub(super) fn of(layout: VolumeLayout, levels: &Levels) -> TexelKind {
+        match (layout, levels) {
+            (VolumeLayout::Corners8, _) => TexelKind::Corners8,
+            (VolumeLayout::Corners16, _) => TexelKind::Corners16,
+            (VolumeLayout::Texture(vk::Format::R32_SFLOAT), Levels::U8(_) | Levels::U16(_)) => TexelKind::Widened,
+            _ => TexelKind::Native,
         }
-    });
-    match uploaded {
-        Ok(()) => Ok(image),
-        Err(e) => {
-            image.destroy(gpu);
-            Err(e)
+    }
+
+    pub(super) fn bytes(self, levels: &Levels) -> usize {
+        match (self, levels) {
+            (TexelKind::Native, Levels::U8(_)) => 1,
+            (TexelKind::Native, Levels::U16(_)) => 2,
+            (TexelKind::Corners16, _) => 8,
+            _ => 4,
         }
     }
 }
 
-/// Fills the pool's texture of `format` from `levels`: the values as stored (R8, R16 or R32 float data), or 8-
-/// and 16-bit values widened to float as a UNORM texture would return them (stored / 255 or / 65535), so
-/// `Volume::gpu_scale_bias` holds unchanged. Converted straight into the staging buffer.
-fn upload_texels(
-    gpu: &Gpu,
-    image: &mut Image,
-    levels: &Levels,
-    pool: &Pool,
-    format: vk::Format,
-) -> Result<(), GpuError> {
-    let native = match levels {
-        Levels::U8(_) => 1,
-        Levels::U16(_) => 2,
-        Levels::F32(_) => 4,
+/// Rows of pool texels to write: the whole pool from a texel on (`PoolFrom`), or one slot (brick_upload.rs).
+pub(super) trait TexelRows: Sync {
+    /// Fills `dst` row by row with `texel(row sources, x)`.
+    fn fill<T: Send>(&self, dst: &mut [T], texel: impl Fn(&PoolRows, usize) -> T + Sync);
+    /// The last x of a row.
+    fn last_x(&self) -> usize;
+}
+
+/// The whole pool's texels from texel `first` on (`Pool::fill`).
+pub(super) struct PoolFrom<'a> {
+    pub pool: &'a Pool,
+    pub first: usize,
+}
+
+impl TexelRows for PoolFrom<'_> {
+    fn fill<T: Send>(&self, dst: &mut [T], texel: impl Fn(&PoolRows, usize) -> T + Sync) {
+        self.pool.fill(self.first, dst, texel);
+    }
+
+    fn last_x(&self) -> usize {
+        self.pool.texels()[0] as usize - 1
+    }
+}
+
+/// Writes `rows`' texels of `kind` from `levels` into `dst`, rows on every core.
+pub(super) fn write_texels(rows: &impl TexelRows, levels: &Levels, kind: TexelKind, dst: &mut [u8]) {
+    let last = rows.last_x();
+    let square = |r: &PoolRows, x: usize, at: &dyn Fn(Option<Source>) -> u32| {
+        let x1 = (x + 1).min(last);
+        [at(r.this[x]), at(r.this[x1]), at(r.next[x]), at(r.next[x1])]
     };
-    let widen = format == vk::Format::R32_SFLOAT && native < 4;
-    let texel = if widen { 4 } else { native };
-    upload_image_with(gpu, image, pool.texel_count() * texel as u64, |range, dst| {
-        let first = range.start / texel;
-        let floats = bytemuck::cast_slice_mut::<u8, f32>;
-        match (levels, widen) {
-            (Levels::U8(v), false) => pool.fill(first, dst, |r, x| r.this[x].map_or(0, |(l, i)| v[l as usize][i])),
-            (Levels::U16(v), false) => pool.fill(first, bytemuck::cast_slice_mut::<u8, u16>(dst), |r, x| {
-                r.this[x].map_or(0, |(l, i)| v[l as usize][i])
-            }),
-            (Levels::U8(v), true) => pool.fill(first, floats(dst), |r, x| {
-                r.this[x].map_or(0.0, |(l, i)| f32::from(v[l as usize][i]) / 255.0)
-            }),
-            (Levels::U16(v), true) => pool.fill(first, floats(dst), |r, x| {
-                r.this[x].map_or(0.0, |(l, i)| f32::from(v[l as usize][i]) / 65535.0)
-            }),
-            (Levels::F32(v), _) => pool.fill(first, floats(dst), |r, x| {
-                r.this[x].map_or(0.0, |(l, i)| v[l as usize][i])
-            }),
+    let floats = bytemuck::cast_slice_mut::<u8, f32>;
+    match (levels, kind) {
+        (Levels::U8(v), TexelKind::Native) => rows.fill(dst, |r, x| r.this[x].map_or(0, |(l, i)| v[l as usize][i])),
+        (Levels::U16(v), TexelKind::Native) => rows.fill(bytemuck::cast_slice_mut::<u8, u16>(dst), |r, x| {
+            r.this[x].map_or(0, |(l, i)| v[l as usize][i])
+        }),
+        (Levels::U8(v), TexelKind::Widened) => rows.fill(floats(dst), |r, x| {
+            r.this[x].map_or(0.0, |(l, i)| f32::from(v[l as usize][i]) / 255.0)
+        }),
+        (Levels::U16(v), TexelKind::Widened) => rows.fill(floats(dst), |r, x| {
+            r.this[x].map_or(0.0, |(l, i)| f32::from(v[l as usize][i]) / 65535.0)
+        }),
+        (Levels::F32(v), _) => rows.fill(floats(dst), |r, x| r.this[x].map_or(0.0, |(l, i)| v[l as usize][i])),
+        (Levels::U8(v), _) => {
+            let at = |s: Option<Source>| s.map_or(0, |(l, i)| u32::from(v[l as usize][i]));
+            rows.fill(bytemuck::cast_slice_mut::<u8, u32>(dst), |r, x| {
+                let c = square(r, x, &at);
+                c[0] | c[1] << 8 | c[2] << 16 | c[3] << 24
+            })
         }
+        (Levels::U16(v), _) => {
+            let at = |s: Option<Source>| s.map_or(0, |(l, i)| u32::from(v[l as usize][i]));
+            rows.fill(bytemuck::cast_slice_mut::<u8, [u32; 2]>(dst), |r, x| {
+                let c = square(r, x, &at);
+                [c[0] | c[1] << 16, c[2] | c[3] << 16]
+            })
+        }
+    }
+}
+
+/// Fills the pool's image in `layout` (a texture, or a corner texture for 8- and 16-bit data) from `levels`,
+/// slab by slab straight into the staging buffer.
+fn upload_texels(gpu: &Gpu, image: &mut Image, levels: &Levels, pool: &Pool, layout: VolumeLayout) -> Result<(), GpuError> {
+    let kind = TexelKind::of(layout, levels);
+    if matches!(levels, Levels::F32(_)) && matches!(kind, TexelKind::Corners8 | TexelKind::Corners16) {
+        return Err(GpuError::Lost("corner texture: float data has no corner layout"));
+    }
+    let texel = kind.bytes(levels);
+    upload_image_with(gpu, image, pool.texel_count() * texel as u64, |range, dst| {
+        write_texels(&PoolFrom { pool, first: range.start / texel }, levels, kind, dst)
     })
+}
+
+/// The corner texture's format for `layout`.
+pub(super) fn corners_format(layout: VolumeLayout) -> vk::Format {
+    match layout {
+        VolumeLayout::Corners8 => vk::Format::R32_UINT,
+        _ => vk::Format::R32G32_UINT,
+    }
 }
 
 /// Uploads the bricks `pool` holds into a pool in `layout`: the 3D texture or the corner texture.
@@ -301,14 +333,19 @@ fn upload_layout(
                 )));
             }
             let mut image = image_3d_once(gpu, format, pool.texels(), "volume")?;
-            if let Err(e) = upload_texels(gpu, &mut image, levels, pool, format) {
+            if let Err(e) = upload_texels(gpu, &mut image, levels, pool, layout) {
                 image.destroy(gpu);
                 return Err(e);
             }
             Ok((Some(image), None))
         }
         VolumeLayout::Corners8 | VolumeLayout::Corners16 => {
-            Ok((None, Some(upload_corners(gpu, levels, pool, layout)?)))
+            let mut image = image_3d_once(gpu, corners_format(layout), pool.texels(), "volume corners")?;
+            if let Err(e) = upload_texels(gpu, &mut image, levels, pool, layout) {
+                image.destroy(gpu);
+                return Err(e);
+            }
+            Ok((None, Some(image)))
         }
     }
 }
@@ -439,6 +476,7 @@ impl GpuVolume {
             gradient: None,
             corners,
             light: None,
+            stream: None,
         })
     }
 

@@ -2,6 +2,7 @@
 //! faces → entry positions), pass 2 (back faces → exit positions) and pass 3 (march); for the analytic method
 //! the march alone. The same code serves headless rendering and (later) the window.
 
+mod brick_upload;
 pub mod figure;
 mod gpu_volume;
 pub mod gradients;
@@ -13,6 +14,7 @@ pub mod light_volume;
 pub mod march_key;
 pub mod png;
 pub mod pool;
+pub mod stream;
 mod record;
 mod resident;
 pub mod skip;

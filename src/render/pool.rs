@@ -109,6 +109,28 @@ impl Pool {
         })
     }
 
+    /// An empty pool of at least `capacity` slots (as many as its arrangement holds) for streaming levels
+    /// 0..=`top`: nothing resident, every page-table entry at slot 0 until a stream writes it (stream.rs).
+    pub fn with_capacity(dims: [u32; 3], brick: [u32; 3], max_dim: u32, capacity: usize, top: u32) -> Result<Pool, String> {
+        let count = capacity.max(1) as u64;
+        let slots = arrange(count, brick.map(slot_side), max_dim).ok_or_else(|| too_many(count, brick, max_dim))?;
+        let grid = [0, 1, 2].map(|a| dims[a].div_ceil(brick[a]));
+        Ok(Pool {
+            dims,
+            brick,
+            grid,
+            slots,
+            resident: vec![None; slots.iter().map(|&s| s as usize).product()],
+            directory: vec![0; grid.iter().map(|&g| g as usize).product()],
+            levels: (0..=top).map(|l| level_dims(dims, l)).collect(),
+        })
+    }
+
+    /// Slots in the pool.
+    pub fn capacity(&self) -> usize {
+        self.resident.len()
+    }
+
     /// Its shape as the uniforms carry it.
     pub fn info(&self) -> super::PoolInfo {
         super::PoolInfo {
@@ -152,22 +174,24 @@ impl Pool {
         out.clear();
         let side = self.brick.map(slot_side);
         let [sy, sz] = [y / side[1], z / side[2]];
-        let (ly, lz) = (y % side[1], z % side[2]);
         for sx in 0..self.slots[0] {
             let index = sx + self.slots[0] * (sy + self.slots[1] * sz);
             match self.resident.get(index as usize).copied().flatten() {
-                Some(r) => {
-                    let dims = self.levels[r.level as usize];
-                    let clamp = |a: usize, l: u32| -> usize {
-                        let v = i64::from(r.brick[a] * self.brick[a]) + i64::from(l) - i64::from(BORDER);
-                        v.clamp(0, i64::from(dims[a]) - 1) as usize
-                    };
-                    let row = dims[0] as usize * (clamp(1, ly) + dims[1] as usize * clamp(2, lz));
-                    out.extend((0..side[0]).map(|lx| Some((r.level, row + clamp(0, lx)))));
-                }
+                Some(r) => self.slot_row(r, y % side[1], z % side[2], out),
                 None => out.extend((0..side[0]).map(|_| None)),
             }
         }
+    }
+
+    /// Appends the sources of row (`ly`, `lz`) of a slot holding `r` (slot-local texels).
+    pub fn slot_row(&self, r: Resident, ly: u32, lz: u32, out: &mut Vec<Option<Source>>) {
+        let dims = self.levels[r.level as usize];
+        let clamp = |a: usize, l: u32| -> usize {
+            let v = i64::from(r.brick[a] * self.brick[a]) + i64::from(l) - i64::from(BORDER);
+            v.clamp(0, i64::from(dims[a]) - 1) as usize
+        };
+        let row = dims[0] as usize * (clamp(1, ly) + dims[1] as usize * clamp(2, lz));
+        out.extend((0..slot_side(self.brick[0])).map(|lx| Some((r.level, row + clamp(0, lx)))));
     }
 
     /// Per level, the first and last slice (z) of that level the pool's texels `first..first + count` (whole rows,

@@ -1,9 +1,12 @@
 //! Changing which bricks the pool holds: a [`Cut`] (levels.rs) becomes a new pool of its bricks, its page table,
-//! and skip ranges that hold for every level shown; `Renderer::show_levels` and `show_cut`.
+//! and skip ranges that hold for every level shown (`Renderer::show_levels` and `show_cut`); or the pool is
+//! streamed: a fixed number of slots filled brick by brick as the view needs them (stream.rs,
+//! `Renderer::start_stream` and `stream_step`).
 
-use super::gpu_volume::{upload_pool, GpuVolume, Levels};
+use super::gpu_volume::{corners_format, image_3d, upload_pool, GpuVolume, Levels, VolumeLayout};
 use super::levels::{self, Cut};
-use super::pool::Pool;
+use super::pool::{Pool, TILED_BRICK};
+use super::stream::{Step, Stream};
 use super::skip;
 use super::Renderer;
 use crate::gpu::{Gpu, GpuError};
@@ -46,9 +49,11 @@ impl GpuVolume {
             old.destroy(gpu);
         }
         std::mem::replace(&mut self.directory, directory).destroy(gpu);
+        self.drop_light(gpu);
         self.info.pool = pool.info();
         self.pool = pool;
         self.cut = cut.clone();
+        self.stream = None;
         // A sample of level L reads voxels of level L: the skip ranges take every level up to the coarsest shown.
         self.bricks = skip::BrickGrid::new(volume).with_levels(&self.pyramid[..top]);
         self.occupancy_key = None;
@@ -56,7 +61,142 @@ impl GpuVolume {
     }
 }
 
+impl GpuVolume {
+    /// Drops the light grid (it was filled from bricks no longer shown); the next frame that needs it fills it.
+    fn drop_light(&mut self, gpu: &Gpu) {
+        if let Some(l) = self.light.take() {
+            l.image.destroy(gpu);
+        }
+    }
+
+    /// Replaces the pool with an empty one of `capacity` slots of `brick`-voxel bricks for streaming `volume`,
+    /// whose pyramid is made up to its top level (one brick). Nothing is shown until the first step.
+    fn start_stream(&mut self, gpu: &Gpu, volume: &Volume, brick: u32, capacity: usize) -> Result<(), GpuError> {
+        let brick = volume.dims.map(|d| brick.clamp(1, d));
+        let top = levels::top_level(volume.dims, brick);
+        levels::extend_pyramid(volume, &mut self.pyramid, top)
+            .map_err(|e| GpuError::TooLarge(format!("pyramid of {}: {e}", volume.name)))?;
+        let limit = gpu.properties.limits.max_image_dimension3_d;
+        let pool = Pool::with_capacity(volume.dims, brick, limit, capacity, top).map_err(GpuError::TooLarge)?;
+        let format = match self.layout {
+            VolumeLayout::Texture(f) => f,
+            corners => corners_format(corners),
+        };
+        let image = image_3d(gpu, format, pool.texels(), "streamed pool")?;
+        let directory = match image_3d(gpu, ash::vk::Format::R32G32_UINT, pool.grid, "page table") {
+            Ok(d) => d,
+            Err(e) => {
+                image.destroy(gpu);
+                return Err(e);
+            }
+        };
+        let (image, corners) = match self.layout {
+            VolumeLayout::Texture(_) => (Some(image), None),
+            _ => (None, Some(image)),
+        };
+        for old in [
+            std::mem::replace(&mut self.image, image),
+            std::mem::replace(&mut self.corners, corners),
+            self.gradient.take(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            old.destroy(gpu);
+        }
+        std::mem::replace(&mut self.directory, directory).destroy(gpu);
+        self.drop_light(gpu);
+        self.info.pool = pool.info();
+        self.stream = Some(Stream::new(pool.capacity(), top));
+        self.cut = levels::Cut::uniform(pool.grid, top);
+        self.pool = pool;
+        self.bricks = skip::BrickGrid::new(volume).with_levels(&self.pyramid[..top as usize]);
+        self.occupancy_key = None;
+        Ok(())
+    }
+
+    /// One step of the stream towards `wanted`: its uploads into their slots and the page table of what is shown.
+    fn stream_step(&mut self, gpu: &Gpu, volume: &Volume, wanted: &Cut, max_uploads: usize) -> Result<Step, GpuError> {
+        let stream = self.stream.as_mut().ok_or(GpuError::Lost("the pool is not streamed"))?;
+        let step = stream.step(wanted, max_uploads);
+        let fresh = stream.uploaded == step.uploads.len() as u64;
+        stream.write(&mut self.pool, &step.shown);
+        if !step.uploads.is_empty() {
+            let slots: Vec<u32> = step.uploads.iter().map(|&(slot, _)| slot).collect();
+            let image = self
+                .image
+                .as_ref()
+                .or(self.corners.as_ref())
+                .ok_or(GpuError::Lost("the pool has no image"))?;
+            let levels = Levels::of(volume, &self.pyramid);
+            super::brick_upload::upload_bricks(gpu, image, self.layout, &levels, &self.pool, &slots, fresh)?;
+            if let Some(g) = self.gradient.take() {
+                g.destroy(gpu);
+            }
+            self.drop_light(gpu);
+        }
+        let table = self.pool.table();
+        super::gpu_volume::upload_3d(gpu, &mut self.directory, bytemuck::cast_slice(&table), self.pool.grid[2])?;
+        self.cut = step.shown.clone();
+        Ok(step)
+    }
+}
+
 impl Renderer {
+    /// Streams `volume` (the one last given to `set_volume`) through a pool of `capacity` slots of bricks of
+    /// `--brick-size` (default [`TILED_BRICK`]) voxels: the pool starts empty, and [`stream_step`](Self::stream_step)
+    /// fills it. Call between frames.
+    pub fn start_stream(&mut self, gpu: &Gpu, volume: &Volume, capacity: usize) -> Result<(), GpuError> {
+        let brick = self.brick_side.unwrap_or(TILED_BRICK);
+        let Some(vol) = &mut self.volume else {
+            return Err(GpuError::Lost("no volume loaded"));
+        };
+        vol.start_stream(gpu, volume, brick, capacity)?;
+        self.write_volume_set(gpu);
+        Ok(())
+    }
+
+    /// One step of the stream: the screen rule's cut for the view `s` (with `factor`, within the pool less the
+    /// top's slot), at most `max_uploads` bricks uploaded (coarsest first), the rest shown from the finest resident
+    /// coarser brick. Call between frames; the step says how many wanted bricks are still missing.
+    pub fn stream_step(
+        &mut self,
+        gpu: &Gpu,
+        volume: &Volume,
+        s: &RenderSettings,
+        factor: f64,
+        max_uploads: usize,
+    ) -> Result<Step, GpuError> {
+        let Some(vol) = &mut self.volume else {
+            return Err(GpuError::Lost("no volume loaded"));
+        };
+        let Some(stream) = &vol.stream else {
+            return Err(GpuError::Lost("the pool is not streamed (start_stream first)"));
+        };
+        let view = levels::View::of(&vol.info, s);
+        let wanted = levels::screen_cut(volume.dims, vol.pool.brick, stream.top, &view, factor, stream.cut_bound());
+        self.stream_to(gpu, volume, &wanted, max_uploads)
+    }
+
+    /// One step of the stream towards `wanted` (a cut of the streamed pool's grid within its bound).
+    pub fn stream_to(&mut self, gpu: &Gpu, volume: &Volume, wanted: &Cut, max_uploads: usize) -> Result<Step, GpuError> {
+        let Some(vol) = &mut self.volume else {
+            return Err(GpuError::Lost("no volume loaded"));
+        };
+        if wanted.grid != vol.pool.grid {
+            return Err(GpuError::Lost("a cut for another brick grid"));
+        }
+        let step = vol.stream_step(gpu, volume, wanted, max_uploads)?;
+        if !step.uploads.is_empty() {
+            self.write_volume_set(gpu);
+        }
+        Ok(step)
+    }
+
+    /// The stream's state (None: not streaming).
+    pub fn stream(&self) -> Option<&Stream> {
+        self.volume.as_ref().and_then(|v| v.stream.as_ref())
+    }
     /// Shows the levels `choice` gives the view `s` of `volume` (the one last given to `set_volume`): a pool of the
     /// bricks of that cut and its page table (levels.rs has the rule). A gradient texture is made again for the new
     /// pool. Call between frames. Returns the cut shown.

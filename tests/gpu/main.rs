@@ -14,5 +14,6 @@ mod lighting;
 mod methods_agree;
 mod pool;
 mod quality;
+mod stream;
 mod validation_canary;
 mod vs_reference;
