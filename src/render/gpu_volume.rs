@@ -296,14 +296,28 @@ pub(super) fn write_texels(rows: &impl TexelRows, levels: &Levels, kind: TexelKi
 
 /// Fills the pool's image in `layout` (a texture, or a corner texture for 8- and 16-bit data) from `levels`,
 /// slab by slab straight into the staging buffer.
-fn upload_texels(gpu: &Gpu, image: &mut Image, levels: &Levels, pool: &Pool, layout: VolumeLayout) -> Result<(), GpuError> {
+fn upload_texels(
+    gpu: &Gpu,
+    image: &mut Image,
+    levels: &Levels,
+    pool: &Pool,
+    layout: VolumeLayout,
+) -> Result<(), GpuError> {
     let kind = TexelKind::of(layout, levels);
     if matches!(levels, Levels::F32(_)) && matches!(kind, TexelKind::Corners8 | TexelKind::Corners16) {
         return Err(GpuError::Lost("corner texture: float data has no corner layout"));
     }
     let texel = kind.bytes(levels);
     upload_image_with(gpu, image, pool.texel_count() * texel as u64, |range, dst| {
-        write_texels(&PoolFrom { pool, first: range.start / texel }, levels, kind, dst)
+        write_texels(
+            &PoolFrom {
+                pool,
+                first: range.start / texel,
+            },
+            levels,
+            kind,
+            dst,
+        )
     })
 }
 

@@ -14,10 +14,10 @@ pub mod light_volume;
 pub mod march_key;
 pub mod png;
 pub mod pool;
-pub mod stream;
 mod record;
 mod resident;
 pub mod skip;
+pub mod stream;
 mod uniforms;
 
 pub use uniforms::{mirrors, FrameUniforms, PoolInfo, VolumeInfo};

@@ -111,7 +111,13 @@ impl Pool {
 
     /// An empty pool of at least `capacity` slots (as many as its arrangement holds) for streaming levels
     /// 0..=`top`: nothing resident, every page-table entry at slot 0 until a stream writes it (stream.rs).
-    pub fn with_capacity(dims: [u32; 3], brick: [u32; 3], max_dim: u32, capacity: usize, top: u32) -> Result<Pool, String> {
+    pub fn with_capacity(
+        dims: [u32; 3],
+        brick: [u32; 3],
+        max_dim: u32,
+        capacity: usize,
+        top: u32,
+    ) -> Result<Pool, String> {
         let count = capacity.max(1) as u64;
         let slots = arrange(count, brick.map(slot_side), max_dim).ok_or_else(|| too_many(count, brick, max_dim))?;
         let grid = [0, 1, 2].map(|a| dims[a].div_ceil(brick[a]));

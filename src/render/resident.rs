@@ -6,8 +6,8 @@
 use super::gpu_volume::{corners_format, image_3d, upload_pool, GpuVolume, Levels, VolumeLayout};
 use super::levels::{self, Cut};
 use super::pool::{Pool, TILED_BRICK};
-use super::stream::{Step, Stream};
 use super::skip;
+use super::stream::{Step, Stream};
 use super::Renderer;
 use crate::gpu::{Gpu, GpuError};
 use crate::scene::settings::RenderSettings;
@@ -136,7 +136,12 @@ impl GpuVolume {
             self.drop_light(gpu);
         }
         let table = self.pool.table();
-        super::gpu_volume::upload_3d(gpu, &mut self.directory, bytemuck::cast_slice(&table), self.pool.grid[2])?;
+        super::gpu_volume::upload_3d(
+            gpu,
+            &mut self.directory,
+            bytemuck::cast_slice(&table),
+            self.pool.grid[2],
+        )?;
         self.cut = step.shown.clone();
         Ok(step)
     }
@@ -174,12 +179,25 @@ impl Renderer {
             return Err(GpuError::Lost("the pool is not streamed (start_stream first)"));
         };
         let view = levels::View::of(&vol.info, s);
-        let wanted = levels::screen_cut(volume.dims, vol.pool.brick, stream.top, &view, factor, stream.cut_bound());
+        let wanted = levels::screen_cut(
+            volume.dims,
+            vol.pool.brick,
+            stream.top,
+            &view,
+            factor,
+            stream.cut_bound(),
+        );
         self.stream_to(gpu, volume, &wanted, max_uploads)
     }
 
     /// One step of the stream towards `wanted` (a cut of the streamed pool's grid within its bound).
-    pub fn stream_to(&mut self, gpu: &Gpu, volume: &Volume, wanted: &Cut, max_uploads: usize) -> Result<Step, GpuError> {
+    pub fn stream_to(
+        &mut self,
+        gpu: &Gpu,
+        volume: &Volume,
+        wanted: &Cut,
+        max_uploads: usize,
+    ) -> Result<Step, GpuError> {
         let Some(vol) = &mut self.volume else {
             return Err(GpuError::Lost("no volume loaded"));
         };

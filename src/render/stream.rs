@@ -189,7 +189,13 @@ mod tests {
         let mut s = Stream::new(80, 2);
         let first = s.step(&wanted(1), 4);
         // The top first, then three level-1 bricks; everything else shows the top.
-        assert_eq!(first.uploads[0].1, Resident { level: 2, brick: [0, 0, 0] });
+        assert_eq!(
+            first.uploads[0].1,
+            Resident {
+                level: 2,
+                brick: [0, 0, 0]
+            }
+        );
         assert_eq!(first.uploads.len(), 4);
         assert_eq!((first.wanted.shown().len(), first.missing), (8, 5));
         assert_eq!(first.shown.level.iter().filter(|&&l| l == 1).count(), 3 * 8);
@@ -238,7 +244,16 @@ mod tests {
         while s.step(&wanted(1), 100).missing > 0 {}
         // Level 0 wanted everywhere, one upload: brick 0 at level 0, the rest shows level 1 (never the top).
         let step = s.step(&wanted(0), 1);
-        assert_eq!(step.uploads, vec![(9, Resident { level: 0, brick: [0, 0, 0] })]);
+        assert_eq!(
+            step.uploads,
+            vec![(
+                9,
+                Resident {
+                    level: 0,
+                    brick: [0, 0, 0]
+                }
+            )]
+        );
         assert_eq!(step.shown.level[0], 0);
         assert!(step.shown.level[1..].iter().all(|&l| l == 1));
     }
@@ -259,6 +274,12 @@ mod tests {
         assert_eq!(fine.shown().len(), 8 + 7);
         // Over the bound: the wanted bricks themselves are never evicted for each other, so some stay missing
         // and show a coarser level, never a hole.
+        // The unwanted level-1 brick makes room for one; then no slot may go (all others are wanted or the top).
+        let step = s.step(&fine, 2);
+        assert_eq!(step.uploads.len(), 1);
+        for (l, b) in fine.shown().into_iter().filter(|&(l, _)| l == 1) {
+            assert!(s.is_resident((l, b)), "wanted brick {b:?} was evicted for another");
+        }
         for _ in 0..5 {
             let step = s.step(&fine, 2);
             assert!(step.missing > 0);

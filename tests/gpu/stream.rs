@@ -46,14 +46,25 @@ fn check_shown(headless: &Headless, step: &volcast::render::stream::Step) -> boo
         let finest = (wanted..=top).find(|&l| resident.contains(&(l, b.map(|v| v >> l))));
         assert_eq!(Some(shown), finest, "level-0 brick {b:?} (wanted level {wanted})");
         let r = pool.resident[pool.directory[i] as usize].expect("the page table names a filled slot");
-        assert_eq!((r.level, r.brick), (shown, b.map(|v| v >> shown)), "page table of {b:?}");
+        assert_eq!(
+            (r.level, r.brick),
+            (shown, b.map(|v| v >> shown)),
+            "page table of {b:?}"
+        );
         fell_back |= shown > wanted;
     }
     fell_back
 }
 
 /// Steps the stream for the view `s` until the wanted cut is shown, judging every step's image.
-fn stream_view(judge: &mut Judge, gpu: &Gpu, headless: &mut Headless, v: &Volume, s: &RenderSettings, label: &str) -> bool {
+fn stream_view(
+    judge: &mut Judge,
+    gpu: &Gpu,
+    headless: &mut Headless,
+    v: &Volume,
+    s: &RenderSettings,
+    label: &str,
+) -> bool {
     let mut fell_back = false;
     for n in 0..40 {
         let step = headless.renderer.stream_step(gpu, v, s, 1.0, 6).expect("stream step");
@@ -61,7 +72,14 @@ fn stream_view(judge: &mut Judge, gpu: &Gpu, headless: &mut Headless, v: &Volume
         fell_back |= check_shown(headless, &step);
         let actual = headless.render(gpu, s).expect("render").image;
         let expected = Reference::with_levels(v, reference_cut(&step.shown)).render_full(s);
-        judge.against("reference", format!("{label}-step-{n}"), &actual, &expected, s, REFERENCE);
+        judge.against(
+            "reference",
+            format!("{label}-step-{n}"),
+            &actual,
+            &expected,
+            s,
+            REFERENCE,
+        );
         if step.missing == 0 {
             assert_eq!(step.shown, step.wanted, "{label}: everything wanted is shown");
             return fell_back;
@@ -85,7 +103,14 @@ fn a_small_pool_streams_without_holes() {
         headless.renderer.start_stream(&gpu, &helix, 40).expect("stream");
         assert_eq!(headless.renderer.pool().unwrap().grid, [8, 8, 8]);
         let label = format!("helix-128-pool-40-{policy:?}").to_lowercase();
-        let first = stream_view(&mut judge, &gpu, &mut headless, &helix, &view(&helix, 30.0, 0.6), &label);
+        let first = stream_view(
+            &mut judge,
+            &gpu,
+            &mut headless,
+            &helix,
+            &view(&helix, 30.0, 0.6),
+            &label,
+        );
         assert!(first, "some bricks showed a coarser fallback while they streamed in");
         let stream = headless.renderer.stream().unwrap();
         assert_eq!(stream.evicted, 0, "the first view fits the pool");
@@ -118,7 +143,10 @@ fn streaming_refines_to_full_resolution() {
     headless.renderer.start_stream(&gpu, &helix, 600).expect("stream");
     let mut steps = 0;
     loop {
-        let step = headless.renderer.stream_step(&gpu, &helix, &s, 1e-6, 128).expect("step");
+        let step = headless
+            .renderer
+            .stream_step(&gpu, &helix, &s, 1e-6, 128)
+            .expect("step");
         steps += 1;
         if step.missing == 0 {
             assert!(step.shown.level.iter().all(|&l| l == 0));
