@@ -122,6 +122,97 @@ fn show_level(gpu: &Gpu, headless: &mut Headless, volume: &Volume, s: &RenderSet
     Ok(())
 }
 
+/// Whether `volume` (one step) is over the GPU budget whole and is streamed instead.
+fn streams(volume: &Volume, budgets: &volcast::volume::budget::Budgets) -> bool {
+    let shape = volcast::volume::budget::Shape {
+        dims: volume.dims,
+        voxel_type: volume.source_type,
+        steps: 1,
+    };
+    volcast::volume::budget::misfit(&shape, 0, budgets).is_some()
+}
+
+/// Starts streaming `volume` through a pool of half the GPU budget (the rest for targets and the other textures);
+/// false where that pool holds no brick.
+fn start_stream(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    volume: &Volume,
+    budgets: &volcast::volume::budget::Budgets,
+) -> Result<bool> {
+    let budget = budgets.gpu.map_or(gpu.device_local_bytes, |g| g.bytes);
+    match headless.renderer.set_volume_streamed(gpu, volume, budget / 2) {
+        Ok(()) => Ok(true),
+        Err(volcast::gpu::GpuError::NoRoom(_)) => Ok(false),
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// Bytes of bricks uploaded per stream step (Voreen's bound per frame).
+const UPLOAD_PER_STEP: u64 = 32 << 20;
+
+/// Streams `volume` (after [`start_stream`]) until the screen rule's cut for `s` (or `level` everywhere) is
+/// resident, with a note saying what was shown.
+fn stream_in(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    volume: &Volume,
+    s: &RenderSettings,
+    level: Option<u32>,
+    budgets: &volcast::volume::budget::Budgets,
+) -> Result<()> {
+    use volcast::render::levels::Cut;
+    let budget = budgets.gpu.map_or(gpu.device_local_bytes, |g| g.bytes);
+    let r = &mut headless.renderer;
+    let per_step = r.stream_uploads_within(UPLOAD_PER_STEP);
+    let (capacity, top, grid) = match (r.stream(), r.pool()) {
+        (Some(st), Some(p)) => (st.capacity(), st.top, p.grid),
+        _ => anyhow::bail!("{}: the stream did not start", volume.name),
+    };
+    let forced = level.map(|l| Cut::uniform(grid, l.min(top)));
+    if let Some(cut) = &forced {
+        let n = cut.shown().len();
+        anyhow::ensure!(
+            n < capacity,
+            "{}: --level {} needs {n} bricks and the GPU budget holds {capacity} (--gpu-budget, or a coarser --level)",
+            volume.name,
+            cut.level[0]
+        );
+    }
+    let mut steps = 0;
+    let last = loop {
+        let step = match &forced {
+            Some(cut) => r.stream_to(gpu, volume, cut, per_step)?,
+            None => r.stream_step(gpu, volume, s, 1.0, per_step)?,
+        };
+        steps += 1;
+        if step.missing == 0 || step.uploads.is_empty() {
+            break step;
+        }
+    };
+    let pool = r.pool().expect("streamed pool");
+    let [bx, by, bz] = pool.brick;
+    let mut per_level = vec![0usize; pool.levels.len()];
+    for &l in &last.shown.level {
+        per_level[l as usize] += 1;
+    }
+    let levels: Vec<String> = per_level
+        .iter()
+        .enumerate()
+        .filter(|(_, &n)| n > 0)
+        .map(|(l, n)| format!("level {l} in {n}"))
+        .collect();
+    eprintln!(
+        "note: {} is over the GPU budget whole ({}); streamed through a pool of {capacity} bricks of {bx}x{by}x{bz} \
+         in {steps} step(s) of at most {per_step} uploads: {} of its {} level-0 bricks shown",
+        volume.name,
+        volcast::volume::budget::show(budget),
+        levels.join(", "),
+        last.shown.level.len()
+    );
+    Ok(())
+}
+
 pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     if args.turntable.is_some() || !args.keyframes.is_empty() {
         return movie(args);
@@ -131,11 +222,12 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
         let device_ms = t_device.elapsed().as_secs_f64() * 1e3;
-        // Read once the device is known, at the level its budget takes.
+        // Read at the finest level the host budget holds; the GPU budget decides below whether it is uploaded
+        // whole or streamed brick by brick.
         let t_load = Instant::now();
-        let loaded = render_view(args, Some(gpu));
+        let loaded = render_view(args, None);
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
-        let (volume, s) = match loaded {
+        let (mut volume, s) = match loaded {
             Ok(v) => v,
             Err(e) => {
                 headless.destroy(gpu);
@@ -144,9 +236,17 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         };
         let result = (|| -> Result<()> {
             let t_upload = Instant::now();
-            headless.set_volume(gpu, &volume)?;
-            if let Some(level) = args.level {
-                show_level(gpu, &mut headless, &volume, &s, level)?;
+            let budgets = args.volume.budgets_on(gpu);
+            let streamed = streams(&volume, &budgets) && start_stream(gpu, &mut headless, &volume, &budgets)?;
+            if streamed {
+                stream_in(gpu, &mut headless, &volume, &s, args.level, &budgets)?;
+            } else {
+                // Within the budget whole, or a budget without room for one brick: the finest whole level.
+                volume = args.volume.fit_device(gpu, volume)?;
+                headless.set_volume(gpu, &volume)?;
+                if let Some(level) = args.level {
+                    show_level(gpu, &mut headless, &volume, &s, level)?;
+                }
             }
             if s.gradient_texture {
                 headless.renderer.enable_gradient_texture(gpu, &volume)?;

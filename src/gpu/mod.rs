@@ -43,6 +43,9 @@ pub enum GpuError {
     Alloc(#[from] gpu_allocator::AllocationError),
     #[error("{0}")]
     TooLarge(String),
+    /// A streamed pool's budget holds not even one brick.
+    #[error("{0}")]
+    NoRoom(String),
     #[error("invalid render settings: {0}")]
     InvalidSettings(String),
     #[error("internal GPU state lost: {0}")]

@@ -409,6 +409,25 @@ fn upload_directory(gpu: &Gpu, pool: &Pool) -> Result<Image, GpuError> {
     }
 }
 
+/// The occupancy texture of `bricks`: everything occupied until `prepare` computes the real occupancy for the
+/// settings.
+pub(super) fn occupancy_image(gpu: &Gpu, bricks: &skip::BrickGrid) -> Result<Image, GpuError> {
+    let mut o = image_3d(gpu, vk::Format::R8_UNORM, bricks.bricks, "brick occupancy")?;
+    let all = vec![255u8; bricks.min.len()];
+    match upload_3d(gpu, &mut o, &all, bricks.bricks[2]) {
+        Ok(()) => Ok(o),
+        Err(e) => {
+            o.destroy(gpu);
+            Err(e)
+        }
+    }
+}
+
+/// What [`choose_layout`] gives `volume` on `gpu` under `policy`, for `voxels` texels.
+pub(super) fn layout_for(gpu: &Gpu, policy: TexelPolicy, volume: &Volume, voxels: u64) -> VolumeLayout {
+    choose_layout(DeviceFacts::of(gpu), policy, &volume.data, voxels)
+}
+
 impl GpuVolume {
     /// Uploads `volume` in the layout `policy` gives it on `gpu`. The size is checked against the device's 3D
     /// image limit and memory before anything is allocated.
@@ -452,17 +471,7 @@ impl GpuVolume {
                 c.destroy(gpu);
             }
         };
-        // Everything occupied until prepare() computes the real occupancy for the settings.
-        let occupancy = match image_3d(gpu, vk::Format::R8_UNORM, bricks.bricks, "brick occupancy").and_then(|mut o| {
-            let all = vec![255u8; bricks.min.len()];
-            match upload_3d(gpu, &mut o, &all, bricks.bricks[2]) {
-                Ok(()) => Ok(o),
-                Err(e) => {
-                    o.destroy(gpu);
-                    Err(e)
-                }
-            }
-        }) {
+        let occupancy = match occupancy_image(gpu, &bricks) {
             Ok(o) => o,
             Err(e) => {
                 destroy_volume(gpu, image, corners);

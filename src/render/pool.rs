@@ -257,6 +257,17 @@ pub struct PoolRows<'a> {
     pub next: &'a [Option<Source>],
 }
 
+/// The most slots a pool of bricks of `brick` holds within `max_slots` slots and `max_dim` per side (its
+/// arrangement rounds a count up to whole rows and layers, so it is searched from `max_slots` down).
+pub fn slots_within(max_slots: u64, brick: [u32; 3], max_dim: u32) -> u64 {
+    let side = brick.map(slot_side);
+    let held = |c: u64| arrange(c, side, max_dim).map(|s| s.iter().map(|&v| u64::from(v)).product::<u64>());
+    (1..=max_slots)
+        .rev()
+        .find_map(|c| held(c).filter(|&n| n <= max_slots))
+        .unwrap_or(0)
+}
+
 /// Slots per axis for `count` slots of `side` texels within `max_dim` per pool side: close to a cube of slots
 /// (neighbouring bricks stay near in the pool), else as few rows and layers as fit. None when they cannot fit.
 fn arrange(count: u64, side: [u32; 3], max_dim: u32) -> Option<[u32; 3]> {
@@ -297,6 +308,18 @@ mod tests {
         let p = Pool::whole([400, 16, 16], Some(16), 100).unwrap();
         assert_eq!(p.slots, [3, 3, 3]);
         assert!(Pool::whole([256, 256, 256], Some(16), 200).is_err());
+    }
+
+    #[test]
+    fn slots_within_a_budget_count_the_whole_arrangement() {
+        for max in [1, 2, 13, 18, 40, 1000] {
+            let n = slots_within(max, [64; 3], 2048);
+            let p = Pool::with_capacity([4096; 3], [64; 3], 2048, n as usize, 0).unwrap();
+            assert!(p.capacity() as u64 <= max && p.capacity() as u64 == n, "{max}: {n}");
+        }
+        assert!(slots_within(13, [64; 3], 2048) >= 12);
+        // 5 slots of 20 texels per side at most.
+        assert_eq!(slots_within(1000, [16; 3], 100), 125);
     }
 
     /// Every texel of every slot holds the voxel at its place around the brick, clamped to the volume.

@@ -3,13 +3,15 @@
 //! streamed: a fixed number of slots filled brick by brick as the view needs them (stream.rs,
 //! `Renderer::start_stream` and `stream_step`).
 
-use super::gpu_volume::{corners_format, image_3d, upload_pool, GpuVolume, Levels, VolumeLayout};
+use super::gpu_volume::{
+    corners_format, image_3d, layout_for, occupancy_image, upload_pool, GpuVolume, Levels, VolumeLayout,
+};
 use super::levels::{self, Cut};
-use super::pool::{Pool, TILED_BRICK};
+use super::pool::{slot_side, Pool, TILED_BRICK};
 use super::skip;
 use super::stream::{Step, Stream};
 use super::Renderer;
-use crate::gpu::{Gpu, GpuError};
+use crate::gpu::{Gpu, GpuError, TexelPolicy};
 use crate::scene::settings::RenderSettings;
 use crate::volume::Volume;
 
@@ -67,6 +69,85 @@ impl GpuVolume {
         if let Some(l) = self.light.take() {
             l.image.destroy(gpu);
         }
+    }
+
+    /// `volume` streamed through a pool of at most `pool_bytes` on the device, in bricks of `brick` voxels: as many
+    /// slots as fit (no more than the pyramid has bricks), in the native texel format unless `policy` names another
+    /// (a wider layout would hold fewer bricks). Nothing is shown until the first step.
+    pub(super) fn streamed(
+        gpu: &Gpu,
+        policy: TexelPolicy,
+        volume: &Volume,
+        brick: u32,
+        pool_bytes: u64,
+    ) -> Result<GpuVolume, GpuError> {
+        let brick3 = volume.dims.map(|d| brick.clamp(1, d));
+        let policy = match policy {
+            TexelPolicy::Auto => TexelPolicy::Native,
+            p => p,
+        };
+        let slot_texels = brick3.iter().map(|&b| u64::from(slot_side(b))).product::<u64>();
+        let layout = layout_for(gpu, policy, volume, slot_texels);
+        let top = levels::top_level(volume.dims, brick3);
+        let bricks_in_pyramid = (0..=top)
+            .map(|l| {
+                levels::grid_at(volume.dims, brick3, l)
+                    .iter()
+                    .map(|&g| g as u64)
+                    .product::<u64>()
+            })
+            .sum::<u64>();
+        let limit = gpu.properties.limits.max_image_dimension3_d;
+        let fit = (pool_bytes / (slot_texels * layout.bytes_per_voxel())).min(bricks_in_pyramid);
+        let capacity = super::pool::slots_within(fit, brick3, limit);
+        if capacity == 0 {
+            return Err(GpuError::NoRoom(format!(
+                "a brick of {}x{}x{} needs {} KiB on the GPU as {} and the pool may take {} KiB",
+                brick3[0],
+                brick3[1],
+                brick3[2],
+                (slot_texels * layout.bytes_per_voxel()) >> 10,
+                layout.name(),
+                pool_bytes >> 10
+            )));
+        }
+        let bricks = skip::BrickGrid::new(volume);
+        let occupancy = occupancy_image(gpu, &bricks)?;
+        let directory = match image_3d(gpu, ash::vk::Format::R32G32_UINT, [1, 1, 1], "page table") {
+            Ok(d) => d,
+            Err(e) => {
+                occupancy.destroy(gpu);
+                return Err(e);
+            }
+        };
+        let pool = Pool::with_capacity(volume.dims, brick3, limit, 1, 0).map_err(GpuError::TooLarge)?;
+        let mut v = GpuVolume {
+            layout,
+            image: None,
+            info: super::VolumeInfo {
+                dims: volume.dims,
+                geometry: volume.geometry,
+                scale_bias: volume.gpu_scale_bias(),
+                range: volume.range,
+                pool: pool.info(),
+            },
+            cut: Cut::uniform(pool.grid, 0),
+            pool,
+            directory,
+            pyramid: Vec::new(),
+            bricks,
+            occupancy,
+            occupancy_key: None,
+            gradient: None,
+            corners: None,
+            light: None,
+            stream: None,
+        };
+        if let Err(e) = v.start_stream(gpu, volume, brick, capacity as usize) {
+            v.destroy(gpu);
+            return Err(e);
+        }
+        Ok(v)
     }
 
     /// Replaces the pool with an empty one of `capacity` slots of `brick`-voxel bricks for streaming `volume`,
@@ -209,6 +290,26 @@ impl Renderer {
             self.write_volume_set(gpu);
         }
         Ok(step)
+    }
+
+    /// Replaces the current volume with `volume` streamed through a pool of at most `pool_bytes` of device memory
+    /// in bricks of `--brick-size` (default [`TILED_BRICK`]); [`stream_step`](Self::stream_step) fills it.
+    pub fn set_volume_streamed(&mut self, gpu: &Gpu, volume: &Volume, pool_bytes: u64) -> Result<(), GpuError> {
+        let brick = self.brick_side.unwrap_or(TILED_BRICK);
+        let v = GpuVolume::streamed(gpu, self.texel_policy, volume, brick, pool_bytes)?;
+        if let Some(old) = self.volume.replace(v) {
+            old.destroy(gpu);
+        }
+        self.write_volume_set(gpu);
+        Ok(())
+    }
+
+    /// How many of the streamed pool's bricks `bytes` of uploads hold (at least one).
+    pub fn stream_uploads_within(&self, bytes: u64) -> usize {
+        self.volume.as_ref().map_or(1, |v| {
+            let texels = v.pool.brick.iter().map(|&b| u64::from(slot_side(b))).product::<u64>();
+            (bytes / (texels * v.layout.bytes_per_voxel())).max(1) as usize
+        })
     }
 
     /// The stream's state (None: not streaming).

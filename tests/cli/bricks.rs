@@ -68,3 +68,50 @@ fn bricks_change_nothing_and_levels_show_the_pyramid() {
         "{err}"
     );
 }
+
+/// A volume over the GPU budget whole is streamed through a pool that budget holds (half of it), at the levels the
+/// screen rule gives within it, with a note; a budget for one brick shows the top level; `--level` that does not
+/// fit the pool is refused with the numbers.
+#[test]
+fn a_volume_over_the_gpu_budget_is_streamed() {
+    let dir = common::scratch("cli-stream");
+    let out = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let base = [
+        "render",
+        "--builtin",
+        "helix",
+        "--builtin-size",
+        "256",
+        "--size",
+        "192x192",
+    ];
+    volcast_ok(&[&base[..], &["-o", &out("whole.png")]].concat());
+    let o = volcast_ok(&[&base[..], &["--gpu-budget", "24M", "-o", &out("stream.png")]].concat());
+    let err = stderr(&o);
+    assert!(
+        err.contains(
+            "note: helix is over the GPU budget whole (24 MiB); streamed through a pool of 36 bricks of 64x64x64"
+        ),
+        "{err}"
+    );
+    assert!(err.contains("level 0 in") && err.contains("level 1 in"), "{err}");
+    let d = mean_difference(&dir.join("whole.png"), &dir.join("stream.png"));
+    assert!(
+        d > 0.0 && d < 0.5,
+        "the streamed image differs from the whole one by {d:.3}/255"
+    );
+    let o = volcast_ok(&[&base[..], &["--gpu-budget", "1M", "-o", &out("top.png")]].concat());
+    let err = stderr(&o);
+    assert!(
+        err.contains("a pool of 1 bricks") && err.contains("level 2 in 64 of its 64"),
+        "{err}"
+    );
+    let o =
+        common::volcast_validated(&[&base[..], &["--gpu-budget", "8M", "--level", "0", "-o", &out("l0.png")]].concat());
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("--level 0 needs 64 bricks and the GPU budget holds 12 (--gpu-budget, or a coarser --level)"),
+        "{err}"
+    );
+}

@@ -24,15 +24,32 @@ fn write_volume(dir: &Path) -> String {
 fn over_the_gpu_budget_a_file_shows_the_level_convert_writes() {
     let dir = common::scratch("cli-scale-level");
     let raw = write_volume(&dir);
-    // Level 1 takes 80x48x40x2 = 300 KiB, twice that with the upload; level 0 takes 2.3 MiB.
+    // Level 1 takes 80x48x40x2 = 300 KiB, twice that with the upload; level 0 takes 2.3 MiB. The host budget
+    // reads level 1 from the file.
     let a = dir.join("budget.png");
-    let o = volcast_ok(&["render", &raw, "--gpu-budget", "700K", "-o", &a.to_string_lossy()]);
+    let o = volcast_ok(&["render", &raw, "--host-budget", "700K", "-o", &a.to_string_lossy()]);
     let err = stderr(&o);
     assert!(
         err.contains(
             "note: pyramid level 1 (80x48x40, 1/2 of 160x96x80 per axis, the mean of each block): at full \
-             resolution its texture needs 3 MiB"
+             resolution it needs 3 MiB of memory and the host budget is 700 KiB"
         ),
+        "{err}"
+    );
+    assert!(stdout(&o).contains("(80x48x40 int16"), "{}", stdout(&o));
+    // A GPU budget without room for one brick of the pool (350 KiB for bricks of 64x64x64 R16, 614 KiB each):
+    // the finest whole level within it.
+    let o = volcast_ok(&[
+        "render",
+        &raw,
+        "--gpu-budget",
+        "700K",
+        "-o",
+        &dir.join("gpu.png").to_string_lossy(),
+    ]);
+    let err = stderr(&o);
+    assert!(
+        err.contains("note: pyramid level 1 (80x48x40, 1/2 of 160x96x80 per axis, the mean of each block): at full resolution its texture needs 3 MiB"),
         "{err}"
     );
     assert!(stdout(&o).contains("(80x48x40 int16"), "{}", stdout(&o));
@@ -133,7 +150,7 @@ fn the_pyramid_cache_is_used_rebuilt_when_stale_or_corrupt_and_never_fatal() {
         let o = volcast_ok(&[
             "render",
             &raw,
-            "--gpu-budget",
+            "--host-budget",
             "700K",
             "--cache-dir",
             &cache,
