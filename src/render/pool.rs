@@ -63,7 +63,9 @@ impl Pool {
     /// (clamped to the volume); without it, one brick when its slot fits `max_dim`, else [`TILED_BRICK`]. The
     /// slots are arranged so that the pool's sides fit `max_dim`.
     pub fn whole(dims: [u32; 3], brick_side: Option<u32>, max_dim: u32) -> Result<Pool, String> {
-        let one = dims.iter().all(|&d| slot_side(d) <= max_dim);
+        // One texture of at most 2^31 texels: beyond that, 32-bit sizes and offsets in drivers are a risk.
+        let texels = dims.iter().map(|&d| u64::from(slot_side(d))).product::<u64>();
+        let one = dims.iter().all(|&d| slot_side(d) <= max_dim) && texels <= 1 << 31;
         let brick = match brick_side {
             Some(b) => dims.map(|d| b.max(1).min(d)),
             None if one => dims,

@@ -23,7 +23,7 @@ pub enum VolumeError {
     ZeroDimension { dims: [u32; 3] },
     #[error("dimensions {} exceed the limit of {MAX_DIM} per axis", Dims(*dims))]
     DimensionTooLarge { dims: [u32; 3] },
-    #[error("dimensions {} make {count} voxels, more than the limit of {MAX_VOXELS} (2^31)", Dims(*dims))]
+    #[error("dimensions {} make {count} voxels, more than the limit of {MAX_VOXELS} (2^36)", Dims(*dims))]
     TooManyVoxels { dims: [u32; 3], count: u64 },
     #[error(
         "voxel spacing {} {} {} is invalid: each must be positive and finite (and dims × spacing finite)",

@@ -63,9 +63,10 @@ pub use geometry::Geometry;
 /// Largest dimension accepted at load; the device's own limit is checked later at upload.
 pub const MAX_DIM: u32 = 16384;
 
-/// Most voxels accepted at load (2^31): beyond this, byte offsets of 4-byte voxels stop fitting the 32-bit
-/// sizes that drivers and `image` handling commonly assume, and the volume no longer fits typical GPU memory.
-pub const MAX_VOXELS: u64 = 1 << 31;
+/// Most voxels accepted at load (2^36, 64 Gi): a bound on what a header may claim. What is actually held is set
+/// by the budgets (`budget.rs`): the host holds the finest level within its budget, and the GPU streams bricks of
+/// it through a pool within its own (render/stream.rs).
+pub const MAX_VOXELS: u64 = 1 << 36;
 
 /// A volume ready for upload.
 #[derive(Clone, Debug)]

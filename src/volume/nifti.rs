@@ -353,7 +353,7 @@ pub(crate) mod tests {
         assert!(e(&b).contains("zero or negative size"), "{}", e(&b));
         let big = nifti_bytes(&[3, 30000, 30000, 30000], 2, [1.0; 3], (1.0, 0.0), false, &[1; 8]);
         assert!(e(&big).contains("exceed the limit"), "{}", e(&big));
-        let huge = nifti_bytes(&[3, 16000, 16000, 9], 2, [1.0; 3], (1.0, 0.0), false, &[1; 8]);
+        let huge = nifti_bytes(&[3, 16000, 16000, 300], 2, [1.0; 3], (1.0, 0.0), false, &[1; 8]);
         assert!(e(&huge).contains("more than the limit"), "{}", e(&huge));
         let many = nifti_bytes(&[3, 1000, 1000, 1000], 2, [1.0; 3], (1.0, 0.0), false, &[1; 8]);
         assert!(

@@ -486,10 +486,10 @@ mod tests {
             "dimensions 20000x1x1 exceed the limit of 16384 per axis"
         );
 
-        let err = load(&dir, "huge_16384x16384x16_uint8.raw", &[0; 4]).unwrap_err();
+        let err = load(&dir, "huge_16384x16384x257_uint8.raw", &[0; 4]).unwrap_err();
         assert_eq!(
             err.to_string(),
-            "dimensions 16384x16384x16 make 4294967296 voxels, more than the limit of 2147483648 (2^31)"
+            "dimensions 16384x16384x257 make 68987912192 voxels, more than the limit of 68719476736 (2^36)"
         );
 
         let path = dir.write("s_1x1x1_uint8.raw", &[5]);

@@ -61,10 +61,10 @@ fn new_validates() {
         "dimensions 16385x1x1 exceed the limit of 16384 per axis"
     );
 
-    let err = Volume::new("t", [16384, 16384, 9], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![])).unwrap_err();
+    let err = Volume::new("t", [16384, 16384, 257], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![])).unwrap_err();
     assert_eq!(
         err.to_string(),
-        "dimensions 16384x16384x9 make 2415919104 voxels, more than the limit of 2147483648 (2^31)"
+        "dimensions 16384x16384x257 make 68987912192 voxels, more than the limit of 68719476736 (2^36)"
     );
 
     for spacing in [

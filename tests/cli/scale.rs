@@ -116,8 +116,10 @@ fn budgets_that_hold_nothing_and_refusals_name_the_numbers() {
     assert!(err.contains("huge.nrrd") && err.contains("17592186044416"), "{err}");
 }
 
+/// Past 2^31 voxels (the old cap): within the host budget a file opens at full resolution, and `render` streams it
+/// through a pool of half the GPU budget; under a smaller host budget, at the level that holds.
 #[test]
-fn past_two_to_the_31_voxels_a_file_opens_at_a_coarser_level() {
+fn past_two_to_the_31_voxels_a_file_opens_whole_and_streams() {
     let dir = common::scratch("cli-scale-sparse");
     // 2048x1024x1025 uint8 (2^31 + 2^21 voxels), sparse: it takes no disk and reads as zeros but one marked voxel
     // block near the far corner.
@@ -128,16 +130,43 @@ fn past_two_to_the_31_voxels_a_file_opens_at_a_coarser_level() {
     let last = 2048u64 * 1024 * 1024;
     file.write_all_at(&[200, 200], last + 2046).unwrap();
     drop(file);
-    let o = volcast(&["info", &path.to_string_lossy(), "--json"]);
+    let file = path.to_string_lossy();
+    let o = volcast(&["info", &file, "--host-budget", "8G", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(json["dims"], serde_json::json!([2048, 1024, 1025]), "{json}");
+    assert_eq!(json["value_range"], serde_json::json!([0.0, 200.0]), "{json}");
+    let o = volcast(&["info", &file, "--host-budget", "1G", "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let json: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
     assert_eq!(json["dims"], serde_json::json!([1024, 512, 513]), "{json}");
     let notes = json["notes"].to_string();
     assert!(notes.contains("pyramid level 1 (1024x512x513"), "{notes}");
-    assert!(notes.contains("2147483648 volcast holds as one volume"), "{notes}");
+    assert!(notes.contains("the host budget is 1024 MiB"), "{notes}");
     // Voxel (1023, 0, 512) of level 1 is the mean of the block holding the two 200s: 400 / 4 (the last slice
     // has one fine slice under it, so 4 voxels), exactly 100.
     assert_eq!(json["value_range"], serde_json::json!([0.0, 100.0]), "{json}");
+    let png = dir.join("sparse.png");
+    let o = volcast_ok(&[
+        "render",
+        &file,
+        "--host-budget",
+        "8G",
+        "--gpu-budget",
+        "1G",
+        "--size",
+        "64x64",
+        "-o",
+        &png.to_string_lossy(),
+    ]);
+    let err = stderr(&o);
+    assert!(
+        err.contains(
+            "note: sparse is over the GPU budget whole (1024 MiB); streamed through a pool of 1584 bricks of 64x64x64"
+        ),
+        "{err}"
+    );
+    assert!(stdout(&o).contains("(2048x1024x1025 uint8"), "{}", stdout(&o));
 }
 
 #[test]
