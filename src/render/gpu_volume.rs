@@ -26,6 +26,8 @@ pub(super) struct GpuVolume {
     /// Levels 1.. of the volume, made by the first cut that needs them (levels.rs).
     pub(super) pyramid: Vec<Volume>,
     pub(super) bricks: skip::BrickGrid,
+    /// Each level's skip grid (level 0 first), made as cuts need them; `bricks` is their `levels::cut_ranges`.
+    pub(super) skip_levels: Vec<skip::BrickGrid>,
     /// One R8 texel per brick: may a sample there be visible (see skip.rs).
     pub(super) occupancy: Image,
     /// What the occupancy was computed for.
@@ -494,6 +496,7 @@ impl GpuVolume {
             directory,
             pyramid: Vec::new(),
             bricks,
+            skip_levels: Vec::new(),
             occupancy,
             occupancy_key: None,
             gradient: None,

@@ -208,6 +208,46 @@ pub fn extend_pyramid(volume: &Volume, pyramid: &mut Vec<Volume>, top: u32) -> R
     Ok(())
 }
 
+/// The skip grid's ranges for `cut` shown in pool bricks of `brick` voxels: each 8³ skip brick takes the ranges of
+/// the levels its samples are taken at, those of the pool bricks it overlaps (`grids[L]` is level L's skip grid,
+/// whose brick k >> L holds every voxel a level-L sample inside level-0 skip brick k reads). A brick shown at level
+/// 2 is thus classified by level 2 alone: level 0's empty bricks under a coarser glow are not leapt over, and a
+/// coarse level's glow does not keep level-0 bricks shown elsewhere from being skipped.
+pub fn cut_ranges(grids: &[super::skip::BrickGrid], cut: &Cut, brick: [u32; 3]) -> super::skip::BrickGrid {
+    use rayon::prelude::*;
+    let base = &grids[0];
+    let s = super::skip::BRICK;
+    let [gx, gy, _] = base.bricks.map(|b| b as usize);
+    let ranges: Vec<(f32, f32)> = (0..base.min.len())
+        .into_par_iter()
+        .map(|k| {
+            let at = [k % gx, k / gx % gy, k / (gx * gy)].map(|v| v as u32);
+            // The level-0 pool bricks this skip brick overlaps.
+            let lo = [0, 1, 2].map(|a| at[a] * s / brick[a]);
+            let hi = [0, 1, 2].map(|a| ((at[a] * s + s - 1) / brick[a]).min(cut.grid[a] - 1));
+            let mut range = (f32::INFINITY, f32::NEG_INFINITY);
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
+                        let l = cut.level[(x + cut.grid[0] * (y + cut.grid[1] * z)) as usize] as usize;
+                        let g = &grids[l.min(grids.len() - 1)];
+                        let [cx, cy, cz] = g.bricks.map(|b| b as usize);
+                        let [x, y, z] = at.map(|v| (v >> l) as usize);
+                        let c = x.min(cx - 1) + cx * (y.min(cy - 1) + cy * z.min(cz - 1));
+                        range = (range.0.min(g.min[c]), range.1.max(g.max[c]));
+                    }
+                }
+            }
+            range
+        })
+        .collect();
+    super::skip::BrickGrid {
+        bricks: base.bricks,
+        min: ranges.iter().map(|r| r.0).collect(),
+        max: ranges.iter().map(|r| r.1).collect(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -254,5 +294,44 @@ mod tests {
         };
         let cut = screen_cut([64; 3], [16; 3], 2, &view, 1.0, usize::MAX);
         assert!(cut.level.iter().all(|&l| l == 2));
+    }
+
+    /// Each skip brick takes the ranges of the levels of the pool bricks it overlaps, and only those.
+    #[test]
+    fn skip_ranges_follow_the_cut() {
+        use super::super::skip::BrickGrid;
+        let n = 32u32;
+        let data: Vec<u8> = (0..n * n * n).map(|i| if i % n == 5 { 255 } else { 0 }).collect();
+        let v = Volume::new("t", [n; 3], [1.0; 3], crate::volume::VoxelType::U8, VoxelData::U8(data)).unwrap();
+        let mut pyramid = Vec::new();
+        extend_pyramid(&v, &mut pyramid, 2).unwrap();
+        let grids: Vec<BrickGrid> = std::iter::once(&v).chain(&pyramid).map(BrickGrid::new).collect();
+        // Pool bricks of 16: level 0 in the lower x half, level 2 in the upper (bricks of 12 straddle skip bricks).
+        for side in [16, 12] {
+            let g = [0, 1, 2].map(|_| n.div_ceil(side));
+            let flat = Cut::uniform(g, 0);
+            let mut cut = flat.clone();
+            for (i, l) in cut.level.iter_mut().enumerate() {
+                *l = if flat.brick_of(i)[0] == 0 { 0 } else { 2 };
+            }
+            let r = cut_ranges(&grids, &cut, [side; 3]);
+            for k in 0..r.min.len() {
+                let x = k % 4;
+                let (x0, x1) = (x as u32 * 8 / side, (x as u32 * 8 + 7) / side);
+                let mut want = (f32::INFINITY, f32::NEG_INFINITY);
+                for px in [x0, x1] {
+                    let l = if px == 0 { 0 } else { 2 };
+                    let g = &grids[l];
+                    let c = (x >> l).min(g.bricks[0] as usize - 1)
+                        + g.bricks[0] as usize
+                            * ((k / 4 % 4 >> l).min(g.bricks[1] as usize - 1)
+                                + g.bricks[1] as usize * (k / 16 >> l).min(g.bricks[2] as usize - 1));
+                    want = (want.0.min(g.min[c]), want.1.max(g.max[c]));
+                }
+                assert_eq!((r.min[k], r.max[k]), want, "pool side {side}, skip brick {k}");
+            }
+        }
+        // Level 0 sees the plane only in its first skip brick along x; level 2's glow reaches further.
+        assert!(grids[0].max[1] == 0.0 && grids[2].max[0] > 0.0);
     }
 }

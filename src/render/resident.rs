@@ -56,14 +56,27 @@ impl GpuVolume {
         self.pool = pool;
         self.cut = cut.clone();
         self.stream = None;
-        // A sample of level L reads voxels of level L: the skip ranges take every level up to the coarsest shown.
-        self.bricks = skip::BrickGrid::new(volume).with_levels(&self.pyramid[..top]);
-        self.occupancy_key = None;
+        self.refresh_skip();
         Ok(true)
     }
 }
 
 impl GpuVolume {
+    /// The skip grid for the cut shown: a sample of level L reads voxels of level L, so each skip brick takes the
+    /// ranges of the levels shown where it lies (`levels::cut_ranges`). The occupancy is computed again.
+    fn refresh_skip(&mut self) {
+        if self.skip_levels.is_empty() {
+            // Until the first cut, `bricks` is level 0's own grid.
+            self.skip_levels.push(self.bricks.clone());
+        }
+        while self.skip_levels.len() <= self.pyramid.len() {
+            let level = &self.pyramid[self.skip_levels.len() - 1];
+            self.skip_levels.push(skip::BrickGrid::new(level));
+        }
+        self.bricks = levels::cut_ranges(&self.skip_levels, &self.cut, self.pool.brick);
+        self.occupancy_key = None;
+    }
+
     /// Drops the light grid (it was filled from bricks no longer shown); the next frame that needs it fills it.
     fn drop_light(&mut self, gpu: &Gpu) {
         if let Some(l) = self.light.take() {
@@ -136,6 +149,7 @@ impl GpuVolume {
             directory,
             pyramid: Vec::new(),
             bricks,
+            skip_levels: Vec::new(),
             occupancy,
             occupancy_key: None,
             gradient: None,
@@ -191,8 +205,7 @@ impl GpuVolume {
         self.stream = Some(Stream::new(pool.capacity(), top));
         self.cut = levels::Cut::uniform(pool.grid, top);
         self.pool = pool;
-        self.bricks = skip::BrickGrid::new(volume).with_levels(&self.pyramid[..top as usize]);
-        self.occupancy_key = None;
+        self.refresh_skip();
         Ok(())
     }
 
@@ -223,7 +236,10 @@ impl GpuVolume {
             bytemuck::cast_slice(&table),
             self.pool.grid[2],
         )?;
-        self.cut = step.shown.clone();
+        if self.cut != step.shown {
+            self.cut = step.shown.clone();
+            self.refresh_skip();
+        }
         Ok(step)
     }
 }

@@ -48,25 +48,6 @@ impl BrickGrid {
         BrickGrid { bricks, min, max }
     }
 
-    /// The ranges widened by levels 1.. of the pyramid (`pyramid[L - 1]` is level L): level-0 brick k takes the
-    /// range of the level-L brick k >> L too, which holds every voxel a level-L sample inside k reads (its apron of
-    /// one level-L voxel included), so a brick shown at any of these levels is classified by what it can show.
-    pub fn with_levels(mut self, pyramid: &[Volume]) -> BrickGrid {
-        for (i, level) in pyramid.iter().enumerate() {
-            let l = i + 1;
-            let coarse = BrickGrid::new(level);
-            let [gx, gy, _] = self.bricks.map(|b| b as usize);
-            let [cx, cy, cz] = coarse.bricks.map(|b| b as usize);
-            for k in 0..self.min.len() {
-                let (x, y, z) = (k % gx, k / gx % gy, k / (gx * gy));
-                let c = (x >> l).min(cx - 1) + cx * ((y >> l).min(cy - 1) + cy * (z >> l).min(cz - 1));
-                self.min[k] = self.min[k].min(coarse.min[c]);
-                self.max[k] = self.max[k].max(coarse.max[c]);
-            }
-        }
-        self
-    }
-
     /// One byte per brick (x fastest): 0 where no sample inside can be visible for frame `s` (whose baked table
     /// is `lut`), else the brick's stride (rule 2 of `RenderSettings`: 1, 2 or 4; 1 wherever strides do not
     /// apply). With `s.skip_empty` off no brick is empty.
