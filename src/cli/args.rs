@@ -48,8 +48,9 @@ pub(crate) struct VolumeArgs {
     /// disk.
     #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
     pub(crate) host_budget: Option<u64>,
-    /// Device memory the volume may take, upload included, like 1G (default: the device's largest heap). A larger
-    /// volume is shown at the finest pyramid level that fits.
+    /// Device memory the volume may take, upload included, like 1G (default: the device's largest heap). Over it,
+    /// `render` streams the volume brick by brick through a pool of half of it, each brick at the level its size on
+    /// screen asks; the viewer and movies show the finest pyramid level that fits.
     #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
     pub(crate) gpu_budget: Option<u64>,
     /// Where levels read from large files are kept for the next open, as OME-Zarr stores (default:

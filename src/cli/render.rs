@@ -306,7 +306,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             );
             println!(
                 "load {load_ms:.0} ms; device {device_ms:.0} ms; upload {upload_ms:.0} ms; first frame {first_ms:.0} \
-                 ms (includes shader compilation on lavapipe)"
+                 ms (includes compiling its pipelines)"
             );
             println!("classification: {}", classification_text(&s));
             if !timing_line.is_empty() {
