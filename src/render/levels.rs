@@ -324,8 +324,8 @@ mod tests {
                     let g = &grids[l];
                     let c = (x >> l).min(g.bricks[0] as usize - 1)
                         + g.bricks[0] as usize
-                            * ((k / 4 % 4 >> l).min(g.bricks[1] as usize - 1)
-                                + g.bricks[1] as usize * (k / 16 >> l).min(g.bricks[2] as usize - 1));
+                            * (((k / 4 % 4) >> l).min(g.bricks[1] as usize - 1)
+                                + g.bricks[1] as usize * ((k / 16) >> l).min(g.bricks[2] as usize - 1));
                     want = (want.0.min(g.min[c]), want.1.max(g.max[c]));
                 }
                 assert_eq!((r.min[k], r.max[k]), want, "pool side {side}, skip brick {k}");
