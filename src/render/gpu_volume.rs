@@ -481,7 +481,27 @@ impl GpuVolume {
                 return Err(e);
             }
         };
-        Ok(GpuVolume {
+        Ok(GpuVolume::assemble(
+            volume,
+            layout,
+            (image, corners, directory),
+            pool,
+            bricks,
+            occupancy,
+        ))
+    }
+
+    /// A volume on the device from its parts: its pool's images (texture or corners, and page table), where its
+    /// bricks lie, its skip grid and occupancy; level 0 everywhere, nothing derived made yet.
+    pub(super) fn assemble(
+        volume: &Volume,
+        layout: VolumeLayout,
+        (image, corners, directory): PoolImages,
+        pool: Pool,
+        bricks: skip::BrickGrid,
+        occupancy: Image,
+    ) -> GpuVolume {
+        GpuVolume {
             layout,
             image,
             info: VolumeInfo {
@@ -503,7 +523,7 @@ impl GpuVolume {
             corners,
             light: None,
             stream: None,
-        })
+        }
     }
 
     /// How the shaders read it: its layout, through the page table unless it is one brick.

@@ -4,7 +4,7 @@
 //! `Renderer::start_stream` and `stream_step`).
 
 use super::gpu_volume::{
-    corners_format, image_3d, layout_for, occupancy_image, upload_pool, GpuVolume, Levels, VolumeLayout,
+    corners_format, image_3d, layout_for, occupancy_image, upload_pool, GpuVolume, Levels, PoolImages, VolumeLayout,
 };
 use super::levels::{self, Cut};
 use super::pool::{slot_side, Pool, TILED_BRICK};
@@ -39,21 +39,8 @@ impl GpuVolume {
                 gpu.device_local_bytes >> 20
             )));
         }
-        let (image, corners, directory) = upload_pool(gpu, self.layout, &Levels::of(volume, &self.pyramid), &pool)?;
-        for old in [
-            std::mem::replace(&mut self.image, image),
-            std::mem::replace(&mut self.corners, corners),
-            self.gradient.take(),
-        ]
-        .into_iter()
-        .flatten()
-        {
-            old.destroy(gpu);
-        }
-        std::mem::replace(&mut self.directory, directory).destroy(gpu);
-        self.drop_light(gpu);
-        self.info.pool = pool.info();
-        self.pool = pool;
+        let images = upload_pool(gpu, self.layout, &Levels::of(volume, &self.pyramid), &pool)?;
+        self.replace_pool(gpu, images, pool);
         self.cut = cut.clone();
         self.stream = None;
         self.refresh_skip();
@@ -75,6 +62,26 @@ impl GpuVolume {
         }
         self.bricks = levels::cut_ranges(&self.skip_levels, &self.cut, self.pool.brick);
         self.occupancy_key = None;
+    }
+
+    /// Puts `images` (the pool's texture or corners, and page table) and `pool` in place of the current ones,
+    /// destroying those and what was filled from them (the gradient texture, the light grid). No frame may still use
+    /// them.
+    fn replace_pool(&mut self, gpu: &Gpu, (image, corners, directory): PoolImages, pool: Pool) {
+        for old in [
+            std::mem::replace(&mut self.image, image),
+            std::mem::replace(&mut self.corners, corners),
+            self.gradient.take(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            old.destroy(gpu);
+        }
+        std::mem::replace(&mut self.directory, directory).destroy(gpu);
+        self.drop_light(gpu);
+        self.info.pool = pool.info();
+        self.pool = pool;
     }
 
     /// Drops the light grid (it was filled from bricks no longer shown); the next frame that needs it fills it.
@@ -134,29 +141,7 @@ impl GpuVolume {
             }
         };
         let pool = Pool::with_capacity(volume.dims, brick3, limit, 1, 0).map_err(GpuError::TooLarge)?;
-        let mut v = GpuVolume {
-            layout,
-            image: None,
-            info: super::VolumeInfo {
-                dims: volume.dims,
-                geometry: volume.geometry,
-                scale_bias: volume.gpu_scale_bias(),
-                range: volume.range,
-                pool: pool.info(),
-            },
-            cut: Cut::uniform(pool.grid, 0),
-            pool,
-            directory,
-            pyramid: Vec::new(),
-            bricks,
-            skip_levels: Vec::new(),
-            occupancy,
-            occupancy_key: None,
-            gradient: None,
-            corners: None,
-            light: None,
-            stream: None,
-        };
+        let mut v = GpuVolume::assemble(volume, layout, (None, None, directory), pool, bricks, occupancy);
         if let Err(e) = v.start_stream(gpu, volume, brick, capacity as usize) {
             v.destroy(gpu);
             return Err(e);
@@ -189,22 +174,9 @@ impl GpuVolume {
             VolumeLayout::Texture(_) => (Some(image), None),
             _ => (None, Some(image)),
         };
-        for old in [
-            std::mem::replace(&mut self.image, image),
-            std::mem::replace(&mut self.corners, corners),
-            self.gradient.take(),
-        ]
-        .into_iter()
-        .flatten()
-        {
-            old.destroy(gpu);
-        }
-        std::mem::replace(&mut self.directory, directory).destroy(gpu);
-        self.drop_light(gpu);
-        self.info.pool = pool.info();
         self.stream = Some(Stream::new(pool.capacity(), top));
         self.cut = levels::Cut::uniform(pool.grid, top);
-        self.pool = pool;
+        self.replace_pool(gpu, (image, corners, directory), pool);
         self.refresh_skip();
         Ok(())
     }
