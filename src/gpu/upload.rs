@@ -71,49 +71,57 @@ pub fn upload_image_with(
         };
         let (first, last) = (z == 0, z + n == depth);
         result = result.and_then(|_| {
-            gpu.submit_and_wait(|cb| {
-                let from = if first {
-                    Access::Undefined
-                } else {
-                    Access::TransferWrite
-                };
-                image_barrier(&gpu.device, cb, image.raw, from, Access::TransferWrite);
-                let region = vk::BufferImageCopy::default()
-                    .image_subresource(COLOR_LAYERS)
-                    .image_offset(vk::Offset3D {
-                        x: 0,
-                        y: 0,
-                        z: z as i32,
-                    })
-                    .image_extent(vk::Extent3D {
-                        depth: n as u32,
-                        ..extent
-                    });
-                // SAFETY: the buffer holds exactly these slices' texels; the image is in TRANSFER_DST layout.
-                unsafe {
-                    gpu.device.cmd_copy_buffer_to_image(
-                        cb,
-                        staging.raw,
-                        image.raw,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        &[region],
-                    )
-                };
-                if last {
-                    image_barrier(
-                        &gpu.device,
-                        cb,
-                        image.raw,
-                        Access::TransferWrite,
-                        Access::FragmentSampled,
-                    );
-                }
-            })
+            let from = if first {
+                Access::Undefined
+            } else {
+                Access::TransferWrite
+            };
+            let to = if last {
+                Access::FragmentSampled
+            } else {
+                Access::TransferWrite
+            };
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(COLOR_LAYERS)
+                .image_offset(vk::Offset3D {
+                    x: 0,
+                    y: 0,
+                    z: z as i32,
+                })
+                .image_extent(vk::Extent3D {
+                    depth: n as u32,
+                    ..extent
+                });
+            copy_to_image(gpu, &staging, image.raw, &[region], from, to)
         });
         z += n;
     }
     staging.destroy(gpu);
     result
+}
+
+/// Copies `regions` of `buffer` into `image` in one submission, waited for: the image goes from `from` to transfer
+/// (its contents kept unless `from` is `Undefined`), then to `to` (no second barrier when `to` is a transfer write:
+/// the next copy's own barrier orders it).
+pub fn copy_to_image(
+    gpu: &Gpu,
+    buffer: &Buffer,
+    image: vk::Image,
+    regions: &[vk::BufferImageCopy],
+    from: Access,
+    to: Access,
+) -> Result<(), GpuError> {
+    gpu.submit_and_wait(|cb| {
+        image_barrier(&gpu.device, cb, image, from, Access::TransferWrite);
+        // SAFETY: the caller's regions lie within the buffer and the image, which is in TRANSFER_DST layout.
+        unsafe {
+            gpu.device
+                .cmd_copy_buffer_to_image(cb, buffer.raw, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, regions)
+        };
+        if to != Access::TransferWrite {
+            image_barrier(&gpu.device, cb, image, Access::TransferWrite, to);
+        }
+    })
 }
 
 /// [`upload_image_with`] for a host-written image at `layout` in its memory, whose tightly packed texels have

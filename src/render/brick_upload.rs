@@ -5,8 +5,8 @@
 use super::gpu_volume::{write_texels, Levels, TexelKind, TexelRows, VolumeLayout};
 use super::pool::{slot_side, Pool, PoolRows, Resident};
 use crate::gpu::resources::{Buffer, Image};
-use crate::gpu::sync::{image_barrier, Access, COLOR_LAYERS};
-use crate::gpu::upload::STAGING_CHUNK;
+use crate::gpu::sync::{Access, COLOR_LAYERS};
+use crate::gpu::upload::{copy_to_image, STAGING_CHUNK};
 use crate::gpu::{Gpu, GpuError};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -132,30 +132,10 @@ fn copy_batch(
                 })
         })
         .collect();
-    gpu.submit_and_wait(|cb| {
-        let from = if fresh {
-            Access::Undefined
-        } else {
-            Access::FragmentSampled
-        };
-        image_barrier(&gpu.device, cb, image.raw, from, Access::TransferWrite);
-        // SAFETY: each region is one slot's texels at its offset in the buffer, inside the image (slot_at is within
-        // the pool's slot grid), which is in TRANSFER_DST layout.
-        unsafe {
-            gpu.device.cmd_copy_buffer_to_image(
-                cb,
-                staging.raw,
-                image.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &regions,
-            )
-        };
-        image_barrier(
-            &gpu.device,
-            cb,
-            image.raw,
-            Access::TransferWrite,
-            Access::FragmentSampled,
-        );
-    })
+    let from = if fresh {
+        Access::Undefined
+    } else {
+        Access::FragmentSampled
+    };
+    copy_to_image(gpu, staging, image.raw, &regions, from, Access::FragmentSampled)
 }
