@@ -19,19 +19,16 @@ fn mean_difference(a: &std::path::Path, b: &std::path::Path) -> f64 {
     sum / a.as_raw().len() as f64
 }
 
+/// `render` of the built-in helix at `edge`³ into a `size` image.
+fn helix<'a>(edge: &'a str, size: &'a str) -> [&'a str; 7] {
+    ["render", "--builtin", "helix", "--builtin-size", edge, "--size", size]
+}
+
 #[test]
 fn bricks_change_nothing_and_levels_show_the_pyramid() {
     let dir = common::scratch("cli-bricks");
     let out = |name: &str| dir.join(name).to_string_lossy().into_owned();
-    let base = [
-        "render",
-        "--builtin",
-        "helix",
-        "--builtin-size",
-        "64",
-        "--size",
-        "128x128",
-    ];
+    let base = helix("64", "128x128");
     volcast_ok(&[&base[..], &["-o", &out("whole.png")]].concat());
     volcast_ok(&[&base[..], &["--brick-size", "16", "-o", &out("bricks.png")]].concat());
     let d = mean_difference(&dir.join("whole.png"), &dir.join("bricks.png"));
@@ -76,15 +73,7 @@ fn bricks_change_nothing_and_levels_show_the_pyramid() {
 fn a_volume_over_the_gpu_budget_is_streamed() {
     let dir = common::scratch("cli-stream");
     let out = |name: &str| dir.join(name).to_string_lossy().into_owned();
-    let base = [
-        "render",
-        "--builtin",
-        "helix",
-        "--builtin-size",
-        "256",
-        "--size",
-        "192x192",
-    ];
+    let base = helix("256", "192x192");
     volcast_ok(&[&base[..], &["-o", &out("whole.png")]].concat());
     let o = volcast_ok(&[&base[..], &["--gpu-budget", "24M", "-o", &out("stream.png")]].concat());
     let err = stderr(&o);
