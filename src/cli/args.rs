@@ -128,12 +128,6 @@ impl VolumeArgs {
         self.load_within(self.budgets())
     }
 
-    /// [`VolumeArgs::load`] within `gpu`'s budgets too: a volume larger than the device takes is read at the
-    /// level it takes, never at full resolution first.
-    pub(crate) fn load_on(&self, gpu: &volcast::gpu::Gpu) -> Result<Volume> {
-        self.load_within(self.budgets_on(gpu))
-    }
-
     fn load_within(&self, budgets: volume::budget::Budgets) -> Result<Volume> {
         let v = self.load_without_notes_within(budgets)?;
         for note in &v.notes {

@@ -15,9 +15,9 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-/// The volume and settings `render` shows: a saved view's, or the options'.
-/// With `gpu`, the volume is read within the device's budgets too.
-fn render_view(args: &RenderArgs, gpu: Option<&volcast::gpu::Gpu>) -> Result<(Volume, RenderSettings)> {
+/// The volume and settings `render` shows: a saved view's, or the options'. The volume is read within the host
+/// budget; the device decides later whether it is uploaded whole, streamed or reduced further.
+fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
     let state = match &args.state {
         Some(path) => {
             let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
@@ -32,10 +32,7 @@ fn render_view(args: &RenderArgs, gpu: Option<&volcast::gpu::Gpu>) -> Result<(Vo
         Some(st) => args.volume.or_from(&st.volume),
         None => args.volume.clone(),
     };
-    let volume = match gpu {
-        Some(gpu) => volume_args.load_on(gpu)?,
-        None => volume_args.load()?,
-    };
+    let volume = volume_args.load()?;
     let mut s = match state {
         // The saved view (its method included), with the options given here over it.
         Some(st) => {
@@ -63,7 +60,7 @@ fn movie(args: &RenderArgs) -> Result<()> {
     let (volume, plan) = if args.keyframes.is_empty() {
         let frames = args.turntable.unwrap_or(1);
         MovieFiles::new(&args.output, frames)?;
-        let (volume, base) = render_view(args, None)?;
+        let (volume, base) = render_view(args)?;
         (
             volume,
             Plan::Turntable {
@@ -134,13 +131,7 @@ fn streams(volume: &Volume, budgets: &volcast::volume::budget::Budgets) -> bool 
 
 /// Starts streaming `volume` through a pool of half the GPU budget (the rest for targets and the other textures);
 /// false where that pool holds no brick.
-fn start_stream(
-    gpu: &Gpu,
-    headless: &mut Headless,
-    volume: &Volume,
-    budgets: &volcast::volume::budget::Budgets,
-) -> Result<bool> {
-    let budget = budgets.gpu.map_or(gpu.device_local_bytes, |g| g.bytes);
+fn start_stream(gpu: &Gpu, headless: &mut Headless, volume: &Volume, budget: u64) -> Result<bool> {
     match headless.renderer.set_volume_streamed(gpu, volume, budget / 2) {
         Ok(()) => Ok(true),
         Err(volcast::gpu::GpuError::NoRoom(_)) => Ok(false),
@@ -159,10 +150,9 @@ fn stream_in(
     volume: &Volume,
     s: &RenderSettings,
     level: Option<u32>,
-    budgets: &volcast::volume::budget::Budgets,
+    budget: u64,
 ) -> Result<()> {
     use volcast::render::levels::Cut;
-    let budget = budgets.gpu.map_or(gpu.device_local_bytes, |g| g.bytes);
     let r = &mut headless.renderer;
     let per_step = r.stream_uploads_within(UPLOAD_PER_STEP);
     let (capacity, top, grid) = match (r.stream(), r.pool()) {
@@ -225,7 +215,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         // Read at the finest level the host budget holds; the GPU budget decides below whether it is uploaded
         // whole or streamed brick by brick.
         let t_load = Instant::now();
-        let loaded = render_view(args, None);
+        let loaded = render_view(args);
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
         let (mut volume, s) = match loaded {
             Ok(v) => v,
@@ -237,9 +227,10 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         let result = (|| -> Result<()> {
             let t_upload = Instant::now();
             let budgets = args.volume.budgets_on(gpu);
-            let streamed = streams(&volume, &budgets) && start_stream(gpu, &mut headless, &volume, &budgets)?;
+            let gpu_budget = budgets.gpu.map_or(gpu.device_local_bytes, |g| g.bytes);
+            let streamed = streams(&volume, &budgets) && start_stream(gpu, &mut headless, &volume, gpu_budget)?;
             if streamed {
-                stream_in(gpu, &mut headless, &volume, &s, args.level, &budgets)?;
+                stream_in(gpu, &mut headless, &volume, &s, args.level, gpu_budget)?;
             } else {
                 // Within the budget whole, or a budget without room for one brick: the finest whole level.
                 volume = args.volume.fit_device(gpu, volume)?;

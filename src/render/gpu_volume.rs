@@ -25,9 +25,12 @@ pub(super) struct GpuVolume {
     pub(super) cut: Cut,
     /// Levels 1.. of the volume, made by the first cut that needs them (levels.rs).
     pub(super) pyramid: Vec<Volume>,
+    /// The skip grid of the cut shown (read it through `skip_grid`, which makes it again after a cut changed).
     pub(super) bricks: skip::BrickGrid,
     /// Each level's skip grid (level 0 first), made as cuts need them; `bricks` is their `levels::cut_ranges`.
     pub(super) skip_levels: Vec<skip::BrickGrid>,
+    /// The cut changed since `bricks` was made (`skip_grid` makes it again).
+    pub(super) skip_stale: bool,
     /// One R8 texel per brick: may a sample there be visible (see skip.rs).
     pub(super) occupancy: Image,
     /// What the occupancy was computed for.
@@ -517,6 +520,7 @@ impl GpuVolume {
             pyramid: Vec::new(),
             bricks,
             skip_levels: Vec::new(),
+            skip_stale: false,
             occupancy,
             occupancy_key: None,
             gradient: None,

@@ -492,9 +492,12 @@ impl Renderer {
         if !self.occupancy_is_current(s) {
             // The table is current now (above), so the occupancy follows from it.
             if let Some(vol) = &mut self.volume {
-                let levels = vol.bricks.classify(&self.lut_table, s);
-                let occupancy = skip::encode_reach(&levels, vol.bricks.bricks);
-                upload_3d(gpu, &mut vol.occupancy, &occupancy, vol.bricks.bricks[2])?;
+                let grid = vol.skip_grid();
+                let (occupancy, depth) = (
+                    skip::encode_reach(&grid.classify(&self.lut_table, s), grid.bricks),
+                    grid.bricks[2],
+                );
+                upload_3d(gpu, &mut vol.occupancy, &occupancy, depth)?;
                 vol.occupancy_key = Some(OccupancyKey::of(s));
             }
         }

@@ -43,25 +43,35 @@ impl GpuVolume {
         self.replace_pool(gpu, images, pool);
         self.cut = cut.clone();
         self.stream = None;
-        self.refresh_skip();
+        self.skip_follows_cut();
         Ok(true)
     }
 }
 
 impl GpuVolume {
-    /// The skip grid for the cut shown: a sample of level L reads voxels of level L, so each skip brick takes the
-    /// ranges of the levels shown where it lies (`levels::cut_ranges`). The occupancy is computed again.
-    fn refresh_skip(&mut self) {
-        if self.skip_levels.is_empty() {
-            // Until the first cut, `bricks` is level 0's own grid.
-            self.skip_levels.push(self.bricks.clone());
-        }
-        while self.skip_levels.len() <= self.pyramid.len() {
-            let level = &self.pyramid[self.skip_levels.len() - 1];
-            self.skip_levels.push(skip::BrickGrid::new(level));
-        }
-        self.bricks = levels::cut_ranges(&self.skip_levels, &self.cut, self.pool.brick);
+    /// The cut shown changed: the skip grid follows it when a frame next needs it ([`skip_grid`](Self::skip_grid)),
+    /// not on every step of a stream, and the occupancy is computed again.
+    fn skip_follows_cut(&mut self) {
+        self.skip_stale = true;
         self.occupancy_key = None;
+    }
+
+    /// The skip grid for the cut shown: a sample of level L reads voxels of level L, so each skip brick takes the
+    /// ranges of the levels shown where it lies (`levels::cut_ranges`, over each level's grid, made once).
+    pub(super) fn skip_grid(&mut self) -> &skip::BrickGrid {
+        if self.skip_stale {
+            if self.skip_levels.is_empty() {
+                // Until the first cut, `bricks` is level 0's own grid.
+                self.skip_levels.push(self.bricks.clone());
+            }
+            while self.skip_levels.len() <= self.pyramid.len() {
+                let level = &self.pyramid[self.skip_levels.len() - 1];
+                self.skip_levels.push(skip::BrickGrid::new(level));
+            }
+            self.bricks = levels::cut_ranges(&self.skip_levels, &self.cut, self.pool.brick);
+            self.skip_stale = false;
+        }
+        &self.bricks
     }
 
     /// Puts `images` (the pool's texture or corners, and page table) and `pool` in place of the current ones,
@@ -177,7 +187,7 @@ impl GpuVolume {
         self.stream = Some(Stream::new(pool.capacity(), top));
         self.cut = levels::Cut::uniform(pool.grid, top);
         self.replace_pool(gpu, (image, corners, directory), pool);
-        self.refresh_skip();
+        self.skip_follows_cut();
         Ok(())
     }
 
@@ -210,7 +220,7 @@ impl GpuVolume {
         )?;
         if self.cut != step.shown {
             self.cut = step.shown.clone();
-            self.refresh_skip();
+            self.skip_follows_cut();
         }
         Ok(step)
     }
