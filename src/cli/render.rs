@@ -54,6 +54,21 @@ fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
     Ok((volume, s))
 }
 
+/// Places `volume` on the GPU within the budgets: whole, or streamed where it is over the GPU budget whole; a
+/// budget without room for one brick takes the finest whole level that fits it. Returns the volume placed.
+fn place(gpu: &Gpu, headless: &mut Headless, args: &RenderArgs, volume: Volume) -> Result<Volume> {
+    let budgets = args.volume.budgets_on(gpu);
+    match headless.renderer.place_volume(gpu, &volume, &budgets) {
+        Ok(_) => Ok(volume),
+        Err(volcast::gpu::GpuError::NoRoom(_)) => {
+            let volume = args.volume.fit_device(gpu, volume)?;
+            headless.set_volume(gpu, &volume)?;
+            Ok(volume)
+        }
+        Err(e) => Err(e.into()),
+    }
+}
+
 /// `render --turntable` and `render --keyframes`: the frames of `volcast::movie`, as PNGs and a GIF.
 fn movie(args: &RenderArgs) -> Result<()> {
     use volcast::movie::{MovieError, MovieFiles, Plan};
@@ -86,8 +101,23 @@ fn movie(args: &RenderArgs) -> Result<()> {
         "keyframes"
     };
     with_gpu(&args.gpu, |gpu| {
-        let volume = args.volume.fit_device(gpu, volume)?;
         let mut headless = Headless::new(gpu)?;
+        let volume = match place(gpu, &mut headless, args, volume) {
+            Ok(v) => {
+                if let Some(st) = headless.renderer.stream() {
+                    eprintln!(
+                        "note: {} is over the GPU budget whole; each frame is streamed through a pool of {} bricks",
+                        v.name,
+                        st.capacity()
+                    );
+                }
+                v
+            }
+            Err(e) => {
+                headless.destroy(gpu);
+                return Err(e);
+            }
+        };
         let mut progress = volcast::movie::Progress::stderr(label, plan.frame_count());
         let done = volcast::movie::record(gpu, &mut headless, &volume, &plan, &files, args.fps, &mut |k| {
             progress.update(k)
@@ -119,31 +149,8 @@ fn show_level(gpu: &Gpu, headless: &mut Headless, volume: &Volume, s: &RenderSet
     Ok(())
 }
 
-/// Whether `volume` (one step) is over the GPU budget whole and is streamed instead.
-fn streams(volume: &Volume, budgets: &volcast::volume::budget::Budgets) -> bool {
-    let shape = volcast::volume::budget::Shape {
-        dims: volume.dims,
-        voxel_type: volume.source_type,
-        steps: 1,
-    };
-    volcast::volume::budget::misfit(&shape, 0, budgets).is_some()
-}
-
-/// Starts streaming `volume` through a pool of half the GPU budget (the rest for targets and the other textures);
-/// false where that pool holds no brick.
-fn start_stream(gpu: &Gpu, headless: &mut Headless, volume: &Volume, budget: u64) -> Result<bool> {
-    match headless.renderer.set_volume_streamed(gpu, volume, budget / 2) {
-        Ok(()) => Ok(true),
-        Err(volcast::gpu::GpuError::NoRoom(_)) => Ok(false),
-        Err(e) => Err(e.into()),
-    }
-}
-
-/// Bytes of bricks uploaded per stream step (Voreen's bound per frame).
-const UPLOAD_PER_STEP: u64 = 32 << 20;
-
-/// Streams `volume` (after [`start_stream`]) until the screen rule's cut for `s` (or `level` everywhere) is
-/// resident, with a note saying what was shown.
+/// Streams `volume` (placed streamed) until the screen rule's cut for `s` (or `level` everywhere) is resident,
+/// with a note saying what was shown.
 fn stream_in(
     gpu: &Gpu,
     headless: &mut Headless,
@@ -154,51 +161,39 @@ fn stream_in(
 ) -> Result<()> {
     use volcast::render::levels::Cut;
     let r = &mut headless.renderer;
-    let per_step = r.stream_uploads_within(UPLOAD_PER_STEP);
+    let per_step = r.stream_uploads_within(volcast::render::placement::UPLOAD_PER_STEP);
     let (capacity, top, grid) = match (r.stream(), r.pool()) {
         (Some(st), Some(p)) => (st.capacity(), st.top, p.grid),
         _ => anyhow::bail!("{}: the stream did not start", volume.name),
     };
-    let forced = level.map(|l| Cut::uniform(grid, l.min(top)));
-    if let Some(cut) = &forced {
-        let n = cut.shown().len();
-        anyhow::ensure!(
-            n < capacity,
-            "{}: --level {} needs {n} bricks and the GPU budget holds {capacity} (--gpu-budget, or a coarser --level)",
-            volume.name,
-            cut.level[0]
-        );
-    }
-    let mut steps = 0;
-    let last = loop {
-        let step = match &forced {
-            Some(cut) => r.stream_to(gpu, volume, cut, per_step)?,
-            None => r.stream_step(gpu, volume, s, 1.0, per_step)?,
-        };
-        steps += 1;
-        if step.missing == 0 || step.uploads.is_empty() {
-            break step;
+    let last = match level.map(|l| Cut::uniform(grid, l.min(top))) {
+        Some(cut) => {
+            let n = cut.shown().len();
+            anyhow::ensure!(
+                n < capacity,
+                "{}: --level {} needs {n} bricks and the GPU budget holds {capacity} (--gpu-budget, or a coarser \
+                 --level)",
+                volume.name,
+                cut.level[0]
+            );
+            loop {
+                let progress = r.refine_towards(gpu, volume, &cut)?;
+                if progress.done {
+                    break progress;
+                }
+            }
         }
+        None => r.refine(gpu, volume, s)?.context("the stream did not start")?,
     };
-    let pool = r.pool().expect("streamed pool");
-    let [bx, by, bz] = pool.brick;
-    let mut per_level = vec![0usize; pool.levels.len()];
-    for &l in &last.shown.level {
-        per_level[l as usize] += 1;
-    }
-    let levels: Vec<String> = per_level
-        .iter()
-        .enumerate()
-        .filter(|(_, &n)| n > 0)
-        .map(|(l, n)| format!("level {l} in {n}"))
-        .collect();
+    let [bx, by, bz] = r.pool().map_or([0; 3], |p| p.brick);
     eprintln!(
         "note: {} is over the GPU budget whole ({}); streamed through a pool of {capacity} bricks of {bx}x{by}x{bz} \
-         in {steps} step(s) of at most {per_step} uploads: {} of its {} level-0 bricks shown",
+         in {} step(s) of at most {per_step} uploads: {} of its {} level-0 bricks shown",
         volume.name,
         volcast::volume::budget::show(budget),
-        levels.join(", "),
-        last.shown.level.len()
+        last.steps,
+        last.levels_shown(),
+        last.per_level.iter().sum::<usize>()
     );
     Ok(())
 }
@@ -228,16 +223,11 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             let t_upload = Instant::now();
             let budgets = args.volume.budgets_on(gpu);
             let gpu_budget = budgets.gpu.map_or(gpu.device_local_bytes, |g| g.bytes);
-            let streamed = streams(&volume, &budgets) && start_stream(gpu, &mut headless, &volume, gpu_budget)?;
-            if streamed {
+            volume = place(gpu, &mut headless, args, volume)?;
+            if headless.renderer.stream().is_some() {
                 stream_in(gpu, &mut headless, &volume, &s, args.level, gpu_budget)?;
-            } else {
-                // Within the budget whole, or a budget without room for one brick: the finest whole level.
-                volume = args.volume.fit_device(gpu, volume)?;
-                headless.set_volume(gpu, &volume)?;
-                if let Some(level) = args.level {
-                    show_level(gpu, &mut headless, &volume, &s, level)?;
-                }
+            } else if let Some(level) = args.level {
+                show_level(gpu, &mut headless, &volume, &s, level)?;
             }
             if s.gradient_texture {
                 headless.renderer.enable_gradient_texture(gpu, &volume)?;

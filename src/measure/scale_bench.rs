@@ -123,6 +123,8 @@ pub struct ScaleRow {
     pub read_from_disk: Option<u64>,
     /// Seconds to write the level into the pyramid cache, after it was shown (none when read from it).
     pub cache_write_s: Option<f64>,
+    /// Over the GPU budget whole: streamed through a pool of this many bricks, and the levels shown at rest.
+    pub streamed: Option<(usize, String)>,
 }
 
 /// (rchar, read_bytes) of this process.
@@ -217,17 +219,20 @@ pub fn measure(
     let mut headless = Headless::new(gpu)?;
     let result = (|| -> Result<ScaleRow, Box<dyn std::error::Error>> {
         let start = Instant::now();
-        let preview = crate::scale::preview_within(path, &opts, budgets, Some(pyramids))?;
+        // Read within the host budget; over the GPU budget whole, streamed as the viewer does.
+        let read = Budgets { gpu: None, ..budgets };
+        let preview = crate::scale::preview_within(path, &opts, read, Some(pyramids))?;
         let had_preview = preview.is_some();
         if let Some(p) = preview {
             headless.set_volume(gpu, &p)?;
             headless.render(gpu, &settings(&p, size).0)?;
         }
         let first = start.elapsed().as_secs_f64();
-        let opened = crate::scale::open_deferred(path, &opts, budgets, Some(pyramids), &mut |_| {})?;
+        let opened = crate::scale::open_deferred(path, &opts, read, Some(pyramids), &mut |_| {})?;
         let v = opened.volume;
-        headless.set_volume(gpu, &v)?;
+        headless.renderer.place_volume(gpu, &v, &budgets)?;
         let (rest, drag) = settings(&v, size);
+        let at_rest = headless.renderer.refine(gpu, &v, &rest)?;
         headless.render(gpu, &rest)?;
         let refined = start.elapsed().as_secs_f64();
         let io1 = io_counters();
@@ -235,10 +240,13 @@ pub fn measure(
             .notes
             .iter()
             .find_map(|n| n.strip_prefix("pyramid level ")?.split(' ').next()?.parse().ok());
-        let (rest_ms, drag_ms) = (
-            timed_frames(gpu, &mut headless, &rest, frames)?,
-            timed_frames(gpu, &mut headless, &drag, frames)?,
-        );
+        let rest_ms = timed_frames(gpu, &mut headless, &rest, frames)?;
+        // Dragging, the viewer wants one level coarser (factor 2) of the still view's cut.
+        if let Some(wanted) = headless.renderer.stream_wanted(&v, &rest, 2.0) {
+            while !headless.renderer.refine_towards(gpu, &v, &wanted)?.done {}
+        }
+        let drag_ms = timed_frames(gpu, &mut headless, &drag, frames)?;
+        let streamed = at_rest.map(|p| (headless.renderer.stream().map_or(0, |s| s.capacity()), p.levels_shown()));
         let peak = if peak_known { peak_rss_bytes() } else { None };
         let write = Instant::now();
         let cache_write_s = opened.keep.map(|k| {
@@ -263,6 +271,7 @@ pub fn measure(
             read_from_files: io0.zip(io1).map(|(a, b)| b.0 - a.0),
             read_from_disk: io0.zip(io1).map(|(a, b)| b.1 - a.1),
             cache_write_s,
+            streamed,
         })
     })();
     headless.destroy(gpu);
@@ -303,11 +312,14 @@ pub fn table(rows: &[ScaleRow], device: &str, size: u32) -> String {
     );
     for r in rows {
         let [x, y, z] = r.shown;
+        let level = match &r.streamed {
+            Some((slots, levels)) => format!("streamed, {slots} slots: {levels}"),
+            None => r.level.to_string(),
+        };
         out += &format!(
-            "| {} | {} | {x}x{y}x{z} ({}) | {:.2}{} | {:.2} | {:.0} | {:.0} | {} | {} | {} ({}) | {} |\n",
+            "| {} | {} | {x}x{y}x{z} ({level}) | {:.2}{} | {:.2} | {:.0} | {:.0} | {} | {} | {} ({}) | {} |\n",
             r.scene,
             r.cache,
-            r.level,
             r.first_image_s,
             if r.preview { " (preview)" } else { "" },
             r.refined_s,

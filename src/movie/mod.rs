@@ -133,7 +133,8 @@ impl MovieFiles {
     }
 }
 
-/// Renders every frame of `plan` with `volume`, writing `files` (the GIF at `fps`); `progress` hears the frames
+/// Renders every frame of `plan` with `volume` (placed on `headless` already: whole, or streamed and refined for
+/// each frame's view before it is drawn), writing `files` (the GIF at `fps`); `progress` hears the frames
 /// done. On an error nothing of the movie is left: the frames written so far are removed and the GIF never
 /// appears.
 pub fn record(
@@ -154,11 +155,11 @@ pub fn record(
     }
     let (width, height) = plan.size();
     let mut gif = GifWriter::create(&files.gif, width, height, fps)?;
-    headless.set_volume(gpu, volume)?;
     let mut written = 0;
     let result = (|| -> Result<(), MovieError> {
         for (k, png) in (0..n).zip(&files.frames) {
             let s = plan.frame(k);
+            headless.renderer.refine(gpu, volume, &s)?;
             if s.gradient_texture && !headless.renderer.has_gradient_texture() {
                 headless.renderer.enable_gradient_texture(gpu, volume)?;
             }

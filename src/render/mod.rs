@@ -12,6 +12,7 @@ mod init;
 pub mod levels;
 pub mod light_volume;
 pub mod march_key;
+pub mod placement;
 pub mod png;
 pub mod pool;
 mod record;

@@ -251,21 +251,9 @@ impl Renderer {
         factor: f64,
         max_uploads: usize,
     ) -> Result<Step, GpuError> {
-        let Some(vol) = &mut self.volume else {
-            return Err(GpuError::Lost("no volume loaded"));
-        };
-        let Some(stream) = &vol.stream else {
-            return Err(GpuError::Lost("the pool is not streamed (start_stream first)"));
-        };
-        let view = levels::View::of(&vol.info, s);
-        let wanted = levels::screen_cut(
-            volume.dims,
-            vol.pool.brick,
-            stream.top,
-            &view,
-            factor,
-            stream.cut_bound(),
-        );
+        let wanted = self
+            .stream_wanted(volume, s, factor)
+            .ok_or(GpuError::Lost("the pool is not streamed (start_stream first)"))?;
         self.stream_to(gpu, volume, &wanted, max_uploads)
     }
 

@@ -67,6 +67,11 @@ impl Stream {
         (self.capacity() - 1).max(1)
     }
 
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.step
+    }
+
     pub fn is_resident(&self, key: Key) -> bool {
         self.index.contains_key(&key)
     }

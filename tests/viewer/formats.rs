@@ -124,13 +124,33 @@ pub(crate) fn drop_for_real(display: &str, dir: &Path, path: &Path, suffix: &str
 
 /// `volume` rendered headless under `settings`, with validation, which must report nothing.
 pub(crate) fn headless_render(volume: &volcast::volume::Volume, settings: &RenderSettings) -> image::RgbaImage {
+    headless_render_within(volume, settings, None)
+}
+
+/// [`headless_render`] with the volume placed within a GPU budget of `gpu_budget` bytes (`None`: whole), as the
+/// viewer places it: over it whole, streamed through a pool and refined for `settings`' view.
+pub(crate) fn headless_render_within(
+    volume: &volcast::volume::Volume,
+    settings: &RenderSettings,
+    gpu_budget: Option<u64>,
+) -> image::RgbaImage {
     let gpu = Gpu::new(&GpuOptions {
         validation: true,
         ..Default::default()
     })
     .expect("Vulkan");
     let mut headless = Headless::new(&gpu).expect("renderer");
-    headless.set_volume(&gpu, volume).expect("upload");
+    match gpu_budget {
+        None => headless.set_volume(&gpu, volume).expect("upload"),
+        Some(bytes) => {
+            let budgets = volcast::volume::budget::Budgets::host(None).with_gpu(volcast::volume::budget::GpuBudget {
+                bytes,
+                max_dim: gpu.properties.limits.max_image_dimension3_d,
+            });
+            headless.renderer.place_volume(&gpu, volume, &budgets).expect("placed");
+            headless.renderer.refine(&gpu, volume, settings).expect("refined");
+        }
+    }
     let expected = headless.render(&gpu, settings).expect("render").image;
     headless.destroy(&gpu);
     let log = gpu.log.clone();

@@ -1,15 +1,15 @@
 //! A large file in the viewer (docs/large-volumes.md): launched on a 512x512x256 file (2^26 voxels), the window
 //! first shows a strided preview (1 voxel in 4 per axis) while the file is read, then the volume itself, and the F12
-//! screenshot then equals the headless render of the whole file. Under `--gpu-budget`, the viewer shows the
-//! pyramid level that fits, says so, and its screenshot equals the headless render of that level.
+//! screenshot then equals the headless render of the whole file. Under a `--gpu-budget` it is over whole, the viewer
+//! streams it through a pool of bricks, says so, refines (again after a real drag), and its screenshots equal the
+//! headless render streamed within the same budget.
 
 use crate::common;
 
 use common::compare::diff;
-use common::x11::{have, read_screenshot, type_keys, xvfb, Viewer, HOLD};
+use common::x11::{drag, have, read_screenshot, type_keys, xvfb, Viewer, HOLD};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-use volcast::volume::budget::{Budgets, GpuBudget};
 
 /// A 512x512x256 uint8 raw file: a shell and a rod with some texture, 64 MiB.
 fn write_large(dir: &Path) -> PathBuf {
@@ -41,7 +41,7 @@ fn shot_matches(display: &str, dir: &Path, args: &[&str], expected: &volcast::vo
 }
 
 #[test]
-fn viewer_previews_a_large_file_then_shows_it_and_its_budget_level() {
+fn viewer_previews_a_large_file_then_shows_it() {
     let Some(x) = xvfb() else { return };
     if !have("xdotool", "version") {
         common::skip("xdotool not found; apt-get install xdotool");
@@ -62,18 +62,61 @@ fn viewer_previews_a_large_file_then_shows_it_and_its_budget_level() {
             "loaded ",
         ],
     );
-    // 40 MiB of GPU budget takes level 1 (8 MiB, twice that to upload), not level 0 (64 MiB).
-    let budgets = Budgets::host(None).with_gpu(GpuBudget {
-        bytes: 40 << 20,
-        max_dim: 16384,
-    });
-    let level = volcast::scale::open(&path, &Default::default(), budgets, None, &mut |_| {}).expect("level 1");
-    assert_eq!(level.dims, [256, 256, 128]);
-    shot_matches(
-        &x.display,
+}
+
+#[test]
+fn viewer_streams_a_file_over_the_gpu_budget_and_refines_again_after_a_drag() {
+    let Some(x) = xvfb() else { return };
+    if !have("xdotool", "version") {
+        common::skip("xdotool not found; apt-get install xdotool");
+        return;
+    }
+    let d = &x.display;
+    let dir = common::scratch("viewer-streamed");
+    let path = write_large(&dir);
+    let file = path.to_string_lossy().into_owned();
+    let whole = volcast::volume::open(&path, &Default::default()).expect("volume");
+    // 40 MiB of GPU budget: the 64 MiB file is over it whole, so it is read at full resolution and streamed
+    // through a pool of 20 MiB (64 bricks of 64^3), refined to the screen rule's cut for the still view.
+    let mut viewer = Viewer::start(
+        d,
         &dir,
         &[&file, "--gpu-budget", "40M"],
-        &level,
-        &["showing pyramid level 1 (256x256x128, 1/2 of 512x512x256 per axis"],
+        &format!("frames:3;{HOLD};exit"),
     );
+    let wait = Duration::from_secs(180);
+    viewer.wait_for(
+        "large is over the GPU budget whole (40 MiB); streamed through a pool of",
+        wait,
+    );
+    viewer.wait_for("refined: every brick at its level", wait);
+    viewer.wait_for("script: Hold", wait);
+    let window = viewer.window(d);
+    let shot = |viewer: &mut Viewer| {
+        type_keys(d, &window, &["F12"]);
+        read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(120)))
+    };
+    let (first, before) = shot(&mut viewer);
+    let expected = super::formats::headless_render_within(&whole, &before, Some(40 << 20));
+    let d0 = diff(&first, &expected);
+    assert!(
+        d0.max <= 1.0,
+        "the refined view differs from the headless render streamed within 40 MiB: {d0}"
+    );
+    // A real drag turns the camera (one level coarser while it lasts); once still, the view refines again to the
+    // new view's cut.
+    drag(d, &window, "1", egui::pos2(560.0, 300.0), egui::vec2(20.0, 0.0), 6);
+    viewer.wait_for("refined: every brick at its level", wait);
+    let (second, after) = shot(&mut viewer);
+    assert_ne!(before.camera.eye, after.camera.eye, "the drag turned the camera");
+    let d1 = diff(
+        &second,
+        &super::formats::headless_render_within(&whole, &after, Some(40 << 20)),
+    );
+    assert!(
+        d1.max <= 1.0,
+        "after the drag the view differs from the headless render streamed within 40 MiB: {d1}"
+    );
+    viewer.finish_clean();
+    let _ = std::fs::remove_dir_all(&dir);
 }

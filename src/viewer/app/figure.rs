@@ -34,7 +34,10 @@ impl Running {
             ));
         }
         let s = self.model.render_settings(width - bar, height);
-        let image = self.presenter.render_offscreen(volume, &s).map_err(|e| e.to_string())?;
+        let image = self
+            .presenter
+            .render_offscreen(volume, &s, &self.loader.limits().budgets)
+            .map_err(|e| e.to_string())?;
         let image = if bar > 0 {
             with_colorbar(&image, &s, volume)
         } else {

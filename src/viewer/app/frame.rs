@@ -115,6 +115,7 @@ impl Running {
             let still = self.model.render_settings(view_size.width, view_size.height);
             capture::save_session(&path, &self.view_state(&still), &mut self.model.messages);
         }
+        self.refine(view_size, moving)?;
         self.presenter.prepare(&settings, self.shown.kept())?;
         let reduced = settings.width < view_size.width;
         if let Some(slot) = self.presenter.begin_frame(reduced)? {
@@ -131,6 +132,29 @@ impl Running {
             view_offset,
             view_size,
         })
+    }
+
+    /// A streamed volume takes a step towards the levels the still view wants (one coarser while `moving`), at
+    /// most one bounded upload a frame; reaching them while still is said on stderr.
+    fn refine(&mut self, view_size: vk::Extent2D, moving: bool) -> Result<(), ViewerError> {
+        if self.model.streaming.is_none() {
+            return Ok(());
+        }
+        let still = self.model.render_settings(view_size.width, view_size.height);
+        let Some((progress, reached_now)) = self.presenter.refine(&still, moving, self.shown.kept())? else {
+            return Ok(());
+        };
+        if reached_now && !moving {
+            eprintln!(
+                "refined: every brick at its level after {} step(s): {} of the level-0 bricks",
+                progress.steps,
+                progress.levels_shown()
+            );
+        }
+        if let Some(streaming) = &mut self.model.streaming {
+            streaming.progress = Some(progress);
+        }
+        Ok(())
     }
 
     /// Records the march, blits it into the window with egui over it, and presents (reading the view back when a

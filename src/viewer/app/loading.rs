@@ -82,9 +82,22 @@ pub(super) struct Limits {
     pub(super) cache: Option<crate::scale::cache::PyramidCache>,
 }
 
-/// Loads any format `volume::open` reads (raw with the given options) within `limits`: a volume larger than they
-/// allow is shown at a coarser pyramid level, with a note, rather than refused. A level read from its file comes
-/// with its pyramid-cache write, left to the caller.
+impl Limits {
+    /// What a volume is read within: the host budget alone (the GPU budget decides whether it is uploaded whole
+    /// or streamed).
+    pub(super) fn read_budgets(&self) -> volume::budget::Budgets {
+        volume::budget::Budgets {
+            gpu: None,
+            ..self.budgets
+        }
+    }
+}
+
+/// Loads any format `volume::open` reads (raw with the given options) within `limits`: read at the finest level
+/// the host budget holds (one step over the GPU budget whole is streamed through a pool of bricks); a time series,
+/// shown whole step by step, at the finest level that fits the GPU budget too. A volume larger than they allow is
+/// shown at a coarser pyramid level, with a note, rather than refused. A level read from its file comes with its
+/// pyramid-cache write, left to the caller.
 pub(super) fn open_source(
     source: &VolumeSource,
     limits: &Limits,
@@ -92,11 +105,12 @@ pub(super) fn open_source(
     channel: Option<u32>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<crate::scale::Opened, String> {
-    match source {
+    let host_only = limits.read_budgets();
+    let mut opened = match source {
         VolumeSource::Builtin(name, size) => volume::builtin(name, *size)
-            .and_then(|v| crate::scale::fit(v, &limits.budgets, false))
+            .and_then(|v| crate::scale::fit(v, &host_only, false))
             .map(|volume| crate::scale::Opened { volume, keep: None })
-            .map_err(|e| e.to_string()),
+            .map_err(|e| e.to_string())?,
         VolumeSource::File(path, raw) => {
             let opts = volume::OpenOptions {
                 raw: raw.clone(),
@@ -105,10 +119,20 @@ pub(super) fn open_source(
                 channel,
                 ..Default::default()
             };
-            crate::scale::open_deferred(path, &opts, limits.budgets, limits.cache.as_ref(), progress)
-                .map_err(|e| e.to_string())
+            // A series read in place is read at its GPU level at once.
+            let steps = volume::in_place::in_place(path, &opts)
+                .ok()
+                .flatten()
+                .map_or(1, |p| p.timesteps);
+            let budgets = if steps > 1 { limits.budgets } else { host_only };
+            crate::scale::open_deferred(path, &opts, budgets, limits.cache.as_ref(), progress)
+                .map_err(|e| e.to_string())?
         }
+    };
+    if opened.volume.timesteps() > 1 && opened.keep.is_none() {
+        opened.volume = crate::scale::fit(opened.volume, &limits.budgets, false).map_err(|e| e.to_string())?;
     }
+    Ok(opened)
 }
 
 fn load_in_background(source: VolumeSource, limits: Limits, series: Option<String>, channel: Option<u32>) -> Loading {
@@ -128,7 +152,8 @@ fn load_in_background(source: VolumeSource, limits: Limits, series: Option<Strin
                 raw: raw.clone(),
                 ..Default::default()
             };
-            if let Ok(Some(v)) = crate::scale::preview_within(path, &opts, limits.budgets, limits.cache.as_ref()) {
+            let budgets = limits.read_budgets();
+            if let Ok(Some(v)) = crate::scale::preview_within(path, &opts, budgets, limits.cache.as_ref()) {
                 let h = value_histogram(&v);
                 let _ = tx.send(Delivery::Preview(v, h));
             }

@@ -83,7 +83,14 @@ impl Running {
             self.model.files.path_edited();
             let placeholder = Volume::new("loading", [2; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![0; 8]))
                 .map_err(|e| ViewerError::Other(e.to_string()))?;
-            (self.shown).install(&mut self.presenter, &mut self.model, placeholder, Vec::new(), false)?;
+            let budgets = self.loader.limits().budgets;
+            (self.shown).install(
+                &mut self.presenter,
+                &mut self.model,
+                (placeholder, Vec::new()),
+                false,
+                &budgets,
+            )?;
             self.model.volume.label = "loading…".into();
             self.loader.channel = opts.channel;
             (self.loader).start_series(opts.source.clone(), opts.series.clone(), &mut self.model.messages);
@@ -100,7 +107,14 @@ impl Running {
             None => opened.volume,
         };
         let histogram = value_histogram(&first);
-        (self.shown).install(&mut self.presenter, &mut self.model, first, histogram, false)?;
+        let budgets = self.loader.limits().budgets;
+        (self.shown).install(
+            &mut self.presenter,
+            &mut self.model,
+            (first, histogram),
+            false,
+            &budgets,
+        )?;
         self.shown.source = Some(opts.source.clone());
         self.window.set_title(&title::window_title(self.shown.source.as_ref()));
         self.start_at(opts.time)?;
@@ -142,7 +156,14 @@ impl Running {
         let edited = self.loader.preview_edited(&self.model.look.transfer_function);
         let before = after_preview.then(|| Snapshot::of(&self.model));
         let from_file = from_file && !edited;
-        let installed = (self.shown).install(&mut self.presenter, &mut self.model, volume, histogram, from_file);
+        let budgets = self.loader.limits().budgets;
+        let installed = (self.shown).install(
+            &mut self.presenter,
+            &mut self.model,
+            (volume, histogram),
+            from_file,
+            &budgets,
+        );
         // Logged too: a load from the panel or a drop has no other trace outside the window.
         if let Err(e) = installed {
             eprintln!("could not show {label}: {e}");
@@ -188,7 +209,14 @@ impl Running {
         label: &str,
         note: Option<String>,
     ) -> Result<(), ViewerError> {
-        let installed = (self.shown).install(&mut self.presenter, &mut self.model, volume, histogram, true);
+        let budgets = self.loader.limits().budgets;
+        let installed = (self.shown).install(
+            &mut self.presenter,
+            &mut self.model,
+            (volume, histogram),
+            true,
+            &budgets,
+        );
         if let Err(e) = installed {
             // The volume itself may still fit where its preview did not: say so and wait for it.
             eprintln!("could not show a preview of {label}: {e}");
@@ -217,7 +245,7 @@ impl Running {
             camera_moving: self.model.camera_moving(),
             playing: self.model.time.playing,
             script: self.script.as_ref().is_some_and(|s| s.waiting_until().is_none()),
-            refining: self.pacing.refine_pending,
+            refining: self.pacing.refine_pending || self.model.streaming.as_ref().is_some_and(|s| s.refining()),
             held_input: self.gui.holds_input(),
         }
     }

@@ -2,9 +2,11 @@
 //! showing the step of a series the time controls ask for, and uploading the next one ahead while it plays.
 
 use crate::gpu::GpuError;
-use crate::viewer::model::Model;
+use crate::render::placement::Placed;
+use crate::viewer::model::{Model, Streaming};
 use crate::viewer::present::Presenter;
 use crate::viewer::VolumeSource;
+use crate::volume::budget::Budgets;
 use crate::volume::Volume;
 
 /// The shown volume on the CPU, and where it came from.
@@ -35,18 +37,46 @@ impl Shown {
         self.series.as_ref().map(Volume::shown_step)
     }
 
-    /// Shows `v` in place of the volume shown: on the GPU, in the model (resetting what depends on the volume),
-    /// and kept here.
+    /// Shows `v` in place of the volume shown: on the GPU (whole, or streamed where one step is over `budgets`'
+    /// GPU budget whole; a GPU budget without room for one brick shows the finest whole level that fits it), in the
+    /// model (resetting what depends on the volume), and kept here.
     pub(super) fn install(
         &mut self,
         presenter: &mut Presenter,
         model: &mut Model,
-        v: Volume,
-        histogram: Vec<u64>,
+        (mut v, histogram): (Volume, Vec<u64>),
         from_file: bool,
+        budgets: &Budgets,
     ) -> Result<(), GpuError> {
-        presenter.set_volume(&v)?;
+        let placed = match presenter.set_volume(&v, budgets) {
+            Err(GpuError::NoRoom(why)) => {
+                eprintln!(
+                    "note: {}: no brick fits the GPU budget's pool ({why}); shown whole",
+                    v.name
+                );
+                v = crate::scale::fit(v, budgets, false).map_err(|e| GpuError::TooLarge(e.to_string()))?;
+                presenter.set_volume(&v, budgets)?
+            }
+            placed => placed?,
+        };
         model.show_volume(&v, histogram.into(), from_file);
+        model.streaming = match placed {
+            Placed::Whole => None,
+            Placed::Streamed { capacity } => {
+                eprintln!(
+                    "note: {} is over the GPU budget whole ({}); streamed through a pool of {capacity} bricks",
+                    v.name,
+                    crate::volume::budget::show(budgets.gpu.map_or(0, |g| g.bytes))
+                );
+                // Central differences: a gradient texture of the pool (8 bytes a texel) would be made again
+                // after every step that uploads.
+                model.sampling.gradient_texture = false;
+                Some(Streaming {
+                    capacity,
+                    progress: None,
+                })
+            }
+        };
         (self.series, self.kept) = if v.timesteps() > 1 {
             (Some(v), None)
         } else {

@@ -62,6 +62,8 @@ pub struct Model {
     pub recent: recent::RecentFiles,
     pub messages: Messages,
     pub stats: FrameStats,
+    /// The shown volume is streamed through a pool of bricks (it is over the GPU budget whole).
+    pub streaming: Option<Streaming>,
     pub interaction: Interaction,
     /// The "Export figure" section's fields.
     pub export: export::FigureExport,
@@ -149,6 +151,21 @@ pub enum Topic {
     Capture,
 }
 
+/// A volume streamed through a pool: its slots, and how far the view has refined towards the level each brick
+/// wants.
+#[derive(Clone, Debug, Default)]
+pub struct Streaming {
+    pub capacity: usize,
+    pub progress: Option<crate::render::placement::Progress>,
+}
+
+impl Streaming {
+    /// Still refining: some brick the view wants is not resident yet.
+    pub fn refining(&self) -> bool {
+        self.progress.as_ref().is_none_or(|p| !p.done)
+    }
+}
+
 /// What the last frames measured.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct FrameStats {
@@ -220,6 +237,7 @@ impl Model {
             recent: recent::RecentFiles::default(),
             messages: Messages::default(),
             stats: FrameStats::default(),
+            streaming: None,
             interaction: Interaction::default(),
             export: Default::default(),
             history: History::default(),

@@ -144,9 +144,28 @@ impl Presenter {
         self.screen.stale = true;
     }
 
-    /// Shows `volume` (a new one, or a series).
-    pub fn set_volume(&mut self, volume: &Volume) -> Result<(), GpuError> {
-        self.pass.set_volume(&self.gpu, volume)
+    /// Shows `volume` (a new one, or a series): whole, or streamed where one step is over `budgets`' GPU budget
+    /// whole ([`refine`](Self::refine) fills the pool).
+    pub fn set_volume(
+        &mut self,
+        volume: &Volume,
+        budgets: &crate::volume::budget::Budgets,
+    ) -> Result<crate::render::placement::Placed, GpuError> {
+        self.pass.set_volume(&self.gpu, volume, budgets)
+    }
+
+    /// One step of a streamed volume (`kept`, the one shown) towards the cut the still view `s` wants, one level
+    /// coarser while `moving`: its progress, and whether it reached that cut just now. `None`: shown whole.
+    pub fn refine(
+        &mut self,
+        s: &RenderSettings,
+        moving: bool,
+        kept: Option<&Volume>,
+    ) -> Result<Option<(crate::render::placement::Progress, bool)>, GpuError> {
+        match kept {
+            Some(volume) => self.pass.refine(&self.gpu, s, moving, volume),
+            None => Ok(None),
+        }
     }
 
     /// Shows step `step` of `series`, whose voxels are that step's now.

@@ -5,8 +5,11 @@
 use crate::gpu::resources::{Image, ImageDesc};
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::render::headless::OUTPUT_FORMAT;
+use crate::render::levels::Cut;
+use crate::render::placement::{Placed, Progress};
 use crate::render::{PassTimings, PreparedVolume, Renderer};
 use crate::scene::settings::RenderSettings;
+use crate::volume::budget::Budgets;
 use crate::volume::Volume;
 use ash::vk;
 
@@ -17,6 +20,15 @@ pub(super) struct VolumePass {
     view: Option<Image>,
     /// The step after the shown one while a series plays, uploaded ahead of display.
     ahead: Option<(u32, PreparedVolume)>,
+    /// A volume streamed through a pool: the cut its view last reached (nothing to do until the view wants
+    /// another), and how far it came.
+    stream: Option<Reached>,
+}
+
+#[derive(Default)]
+struct Reached {
+    cut: Option<Cut>,
+    progress: Option<Progress>,
 }
 
 fn wait_idle(gpu: &Gpu) -> Result<(), GpuError> {
@@ -30,6 +42,7 @@ impl VolumePass {
             renderer: Some(Renderer::new(gpu, OUTPUT_FORMAT, frames_in_flight)?),
             view: None,
             ahead: None,
+            stream: None,
         })
     }
 
@@ -41,13 +54,56 @@ impl VolumePass {
         self.view.as_ref().ok_or(GpuError::Lost("view image"))
     }
 
-    /// Shows `volume` (waiting for in-flight frames: their descriptors are rewritten).
-    pub(super) fn set_volume(&mut self, gpu: &Gpu, volume: &Volume) -> Result<(), GpuError> {
+    /// Shows `volume` (waiting for in-flight frames: their descriptors are rewritten): a series whole (the loader
+    /// read it within the GPU budget), one step whole if it fits `budgets` so, else streamed through a pool
+    /// ([`refine`](Self::refine) fills it).
+    pub(super) fn set_volume(&mut self, gpu: &Gpu, volume: &Volume, budgets: &Budgets) -> Result<Placed, GpuError> {
         wait_idle(gpu)?;
         if let Some((_, old)) = self.ahead.take() {
             old.destroy(gpu);
         }
-        self.renderer()?.set_volume(gpu, volume)
+        self.stream = None;
+        let renderer = self.renderer()?;
+        let placed = if volume.timesteps() > 1 {
+            renderer.set_volume(gpu, volume)?;
+            Placed::Whole
+        } else {
+            renderer.place_volume(gpu, volume, budgets)?
+        };
+        if let Placed::Streamed { .. } = placed {
+            self.stream = Some(Reached::default());
+        }
+        Ok(placed)
+    }
+
+    /// One step of a streamed volume towards the cut the still view `s` wants (one level coarser while `moving`),
+    /// unless that cut is resident already: how far it has come, and whether it reached the cut just now. `None`
+    /// for a volume shown whole. `volume` is the one given to `set_volume`.
+    pub(super) fn refine(
+        &mut self,
+        gpu: &Gpu,
+        s: &RenderSettings,
+        moving: bool,
+        volume: &Volume,
+    ) -> Result<Option<(Progress, bool)>, GpuError> {
+        let (Some(reached), Some(renderer)) = (self.stream.as_mut(), self.renderer.as_mut()) else {
+            return Ok(None);
+        };
+        let factor = if moving { 2.0 } else { 1.0 };
+        let Some(wanted) = renderer.stream_wanted(volume, s, factor) else {
+            return Ok(None);
+        };
+        if reached.cut.as_ref() == Some(&wanted) {
+            return Ok(reached.progress.clone().map(|p| (p, false)));
+        }
+        // The page table, and the pool's slots uploaded, are read by the frames in flight.
+        wait_idle(gpu)?;
+        let progress = renderer.refine_towards(gpu, volume, &wanted)?;
+        if progress.done {
+            reached.cut = Some(wanted);
+        }
+        reached.progress = Some(progress.clone());
+        Ok(Some((progress.clone(), progress.done)))
     }
 
     /// Shows step `step` of `series` (whose voxels are that step's now): a descriptor update when it was uploaded

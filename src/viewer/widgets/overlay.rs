@@ -30,6 +30,7 @@ pub fn view_overlay(ui: &mut egui::Ui, model: &mut Model) {
         paint_colorbar(&painter, model, rect);
     }
     orientation::paint(&painter, model, rect);
+    paint_refining(&painter, model, rect);
     if model.anatomical() {
         // Which side of the patient each edge of the view faces.
         marks::side_labels(
@@ -40,6 +41,24 @@ pub fn view_overlay(ui: &mut egui::Ui, model: &mut Model) {
             egui::vec2(8.0, 8.0),
         );
     }
+}
+
+/// While a streamed volume refines, how far it has come, at the view's bottom left.
+fn paint_refining(painter: &egui::Painter, model: &Model, rect: egui::Rect) {
+    let Some(streaming) = model.streaming.as_ref().filter(|s| s.refining()) else {
+        return;
+    };
+    let text = match &streaming.progress {
+        Some(p) => format!("refining: {} of {} bricks at their level", p.resident, p.wanted),
+        None => "refining".to_string(),
+    };
+    painter.text(
+        rect.left_bottom() + egui::vec2(8.0, -8.0),
+        egui::Align2::LEFT_BOTTOM,
+        text,
+        egui::FontId::proportional(13.0),
+        Color32::from_rgb(230, 230, 140),
+    );
 }
 
 /// Left drag turns (arcball) unless a gizmo took it, right or middle drag pans, the wheel zooms, a click on the

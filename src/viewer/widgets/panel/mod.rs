@@ -93,6 +93,17 @@ fn performance_section(ui: &mut egui::Ui, model: &Model) {
                     }
                 }
             }
+            if let Some(streaming) = &model.streaming {
+                ui.label(format!("streamed through a pool of {} bricks", streaming.capacity));
+                if let Some(p) = &streaming.progress {
+                    let state = if p.done { "refined" } else { "refining" };
+                    ui.label(format!(
+                        "{state}: {} of {} wanted bricks resident",
+                        p.resident, p.wanted
+                    ))
+                    .on_hover_text(format!("level-0 bricks showing each level: {}", p.levels_shown()));
+                }
+            }
         });
 }
 
