@@ -83,14 +83,7 @@ impl Running {
             self.model.files.path_edited();
             let placeholder = Volume::new("loading", [2; 3], [1.0; 3], VoxelType::U8, VoxelData::U8(vec![0; 8]))
                 .map_err(|e| ViewerError::Other(e.to_string()))?;
-            let budgets = self.loader.limits().budgets;
-            (self.shown).install(
-                &mut self.presenter,
-                &mut self.model,
-                (placeholder, Vec::new()),
-                false,
-                &budgets,
-            )?;
+            self.install((placeholder, Vec::new()), false)?;
             self.model.volume.label = "loading…".into();
             self.loader.channel = opts.channel;
             (self.loader).start_series(opts.source.clone(), opts.series.clone(), &mut self.model.messages);
@@ -107,14 +100,7 @@ impl Running {
             None => opened.volume,
         };
         let histogram = value_histogram(&first);
-        let budgets = self.loader.limits().budgets;
-        (self.shown).install(
-            &mut self.presenter,
-            &mut self.model,
-            (first, histogram),
-            false,
-            &budgets,
-        )?;
+        self.install((first, histogram), false)?;
         self.shown.source = Some(opts.source.clone());
         self.window.set_title(&title::window_title(self.shown.source.as_ref()));
         self.start_at(opts.time)?;
@@ -156,14 +142,7 @@ impl Running {
         let edited = self.loader.preview_edited(&self.model.look.transfer_function);
         let before = after_preview.then(|| Snapshot::of(&self.model));
         let from_file = from_file && !edited;
-        let budgets = self.loader.limits().budgets;
-        let installed = (self.shown).install(
-            &mut self.presenter,
-            &mut self.model,
-            (volume, histogram),
-            from_file,
-            &budgets,
-        );
+        let installed = self.install((volume, histogram), from_file);
         // Logged too: a load from the panel or a drop has no other trace outside the window.
         if let Err(e) = installed {
             eprintln!("could not show {label}: {e}");
@@ -201,6 +180,12 @@ impl Running {
         Ok(())
     }
 
+    /// Shows `volume` within the loader's budgets (`Shown::install`: whole, or streamed over the GPU budget).
+    fn install(&mut self, volume: (Volume, Vec<u64>), from_file: bool) -> Result<(), crate::gpu::GpuError> {
+        let budgets = self.loader.limits().budgets;
+        (self.shown).install(&mut self.presenter, &mut self.model, volume, from_file, &budgets)
+    }
+
     /// Shows a strided preview while its volume is read; the load goes on, and a script waiting for it waits on.
     fn install_preview(
         &mut self,
@@ -209,14 +194,7 @@ impl Running {
         label: &str,
         note: Option<String>,
     ) -> Result<(), ViewerError> {
-        let budgets = self.loader.limits().budgets;
-        let installed = (self.shown).install(
-            &mut self.presenter,
-            &mut self.model,
-            (volume, histogram),
-            true,
-            &budgets,
-        );
+        let installed = self.install((volume, histogram), true);
         if let Err(e) = installed {
             // The volume itself may still fit where its preview did not: say so and wait for it.
             eprintln!("could not show a preview of {label}: {e}");
