@@ -9,7 +9,7 @@ use image::RgbaImage;
 use std::time::Duration;
 
 /// Clicks field `name`, replaces its text with `text`.
-fn type_into(viewer: &mut Viewer, display: &str, window: &str, name: &str, text: &str) {
+pub(crate) fn type_into(viewer: &mut Viewer, display: &str, window: &str, name: &str, text: &str) {
     pointer(display, window, viewer.ui_rect(name).center());
     button(display, "click", "1");
     let mut keys = vec!["ctrl+a"];
@@ -19,7 +19,7 @@ fn type_into(viewer: &mut Viewer, display: &str, window: &str, name: &str, text:
 }
 
 /// Clicks the colour bar's checkbox and waits for the viewer to say it is `state` ("on" or "off").
-fn toggle_colorbar(viewer: &mut Viewer, display: &str, window: &str, state: &str) {
+pub(crate) fn toggle_colorbar(viewer: &mut Viewer, display: &str, window: &str, state: &str) {
     pointer(display, window, viewer.ui_rect("export-colorbar").center());
     button(display, "click", "1");
     let said = viewer.wait_for("export figure: colour bar ", Duration::from_secs(30));
@@ -27,7 +27,7 @@ fn toggle_colorbar(viewer: &mut Viewer, display: &str, window: &str, state: &str
 }
 
 /// Clicks Export and reads the figure the viewer says it wrote.
-fn export(viewer: &mut Viewer, display: &str, window: &str, dir: &std::path::Path) -> RgbaImage {
+pub(crate) fn export(viewer: &mut Viewer, display: &str, window: &str, dir: &std::path::Path) -> RgbaImage {
     pointer(display, window, viewer.ui_rect("export-button").center());
     button(display, "click", "1");
     let line = viewer.wait_for("exported figure ", Duration::from_secs(120));
@@ -46,21 +46,12 @@ fn export(viewer: &mut Viewer, display: &str, window: &str, dir: &std::path::Pat
         .to_rgba8()
 }
 
-#[test]
-fn export_figure_renders_the_view_at_the_typed_size_with_the_colour_bar() {
-    let Some((x, dir)) = x_session("viewer-export") else {
-        return;
-    };
-    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "helix", "--builtin-size", "64"]);
-    let window = &window;
-    type_keys(&x.display, window, &["F12"]);
-    let (shot, _) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
-    let (w, h) = shot.dimensions();
-
+/// Scrolls the panel until the "Export figure" section is in view and still.
+pub(crate) fn scroll_to_export(viewer: &mut Viewer, display: &str, window: &str) {
     // Bring the section into view: the panel scrolls.
-    pointer(&x.display, window, egui::pos2(100.0, 300.0));
+    pointer(display, window, egui::pos2(100.0, 300.0));
     for _ in 0..25 {
-        button(&x.display, "click", "5");
+        button(display, "click", "5");
     }
     // The scroll glides: wait until the section stays put.
     let mut at = viewer.ui_rect("export-button");
@@ -73,6 +64,20 @@ fn export_figure_renders_the_view_at_the_typed_size_with_the_colour_bar() {
         at = now;
     }
     assert!(at.bottom() < 600.0, "the section scrolled into view: {at:?}");
+}
+
+#[test]
+fn export_figure_renders_the_view_at_the_typed_size_with_the_colour_bar() {
+    let Some((x, dir)) = x_session("viewer-export") else {
+        return;
+    };
+    let (mut viewer, window) = Viewer::held(&x.display, &dir, &["--builtin", "helix", "--builtin-size", "64"]);
+    let window = &window;
+    type_keys(&x.display, window, &["F12"]);
+    let (shot, _) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
+    let (w, h) = shot.dimensions();
+
+    scroll_to_export(&mut viewer, &x.display, window);
 
     // At the view's size and without the bar, the figure is the view: F12's screenshot within 1/255.
     type_into(&mut viewer, &x.display, window, "export-width", &w.to_string());

@@ -2,7 +2,7 @@
 //! first shows a strided preview (1 voxel in 4 per axis) while the file is read, then the volume itself, and the F12
 //! screenshot then equals the headless render of the whole file. Under a `--gpu-budget` it is over whole, the viewer
 //! streams it through a pool of bricks, says so, refines (again after a real drag), and its screenshots equal the
-//! headless render streamed within the same budget.
+//! headless render streamed within the same budget, as does its exported figure.
 
 use crate::common;
 
@@ -116,6 +116,20 @@ fn viewer_streams_a_file_over_the_gpu_budget_and_refines_again_after_a_drag() {
     assert!(
         d1.max <= 1.0,
         "after the drag the view differs from the headless render streamed within 40 MiB: {d1}"
+    );
+    // "Export figure" at the view's size without the colour bar streams its own copy within the same budget,
+    // refined for that view: it is the view.
+    use super::export::{export, scroll_to_export, toggle_colorbar, type_into};
+    let (w, h) = second.dimensions();
+    scroll_to_export(&mut viewer, d, &window);
+    type_into(&mut viewer, d, &window, "export-width", &w.to_string());
+    type_into(&mut viewer, d, &window, "export-height", &h.to_string());
+    toggle_colorbar(&mut viewer, d, &window, "off");
+    let figure = export(&mut viewer, d, &window, &dir);
+    let d2 = diff(&figure, &second);
+    assert!(
+        d2.max <= 1.0,
+        "the exported figure of the streamed volume differs from the view: {d2}"
     );
     viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
