@@ -201,6 +201,8 @@ BUGS = [
      [("src/render/placement.rs", "misfit(&shape, 0, &gpu_only).is_none()", "misfit(&shape, 0, &gpu_only).is_none() || gpu_only.host > 0")]),
     ("figure-uploads-whole", "Export figure uploads a streamed volume whole, so the figure shows finer levels than the view",
      [("src/viewer/present/figure.rs", "headless.renderer.place_volume(gpu, volume, budgets)?;", "headless.set_volume(gpu, volume)?;")]),
+    ("stream-skip-ignored", "a .nii.gz decoded as a stream reads its header and extensions as voxels",
+     [("src/convert/source.rs", "s.skip_to(v, inflate.skip)?;", "s.skip_to(v, 0)?;")]),
     ("cut-bound-off-by-one", "the bounded screen rule counts a refined brick's replacement as one more brick than it is",
      [("src/render/levels.rs", "if count - 1 + children.len() > bricks {", "if count + children.len() > bricks {")]),
     ("level-not-centred", "a pyramid level read within the budgets keeps level 0's voxel positions instead of its blocks' centres",

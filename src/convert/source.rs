@@ -2,11 +2,13 @@
 //! lie in place on disk, read with positioned reads so it is never held whole.
 
 use super::sample::Sample;
-use crate::volume::in_place::InPlace;
+use crate::volume::in_place::{InPlace, Inflate};
 use crate::volume::{Endian, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
 use rayon::prelude::*;
 use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::os::unix::fs::FileExt;
+use std::sync::Mutex;
 
 /// The voxels to convert.
 pub enum Source {
@@ -14,11 +16,100 @@ pub enum Source {
     Loaded(Box<Volume>),
     /// Read slab by slab from the file.
     InPlace(Box<InPlace>, File),
+    /// Decoded front to back from a compressed stream (`InPlace::inflate`): read in order, it is decoded once.
+    Stream(Box<InPlace>, Mutex<Inflating>),
+}
+
+/// A compressed stream being decoded, and how many of its voxel bytes were read.
+pub struct Inflating {
+    reader: Box<dyn Read + Send>,
+    at: u64,
+}
+
+impl Inflating {
+    /// Opens `v`'s stream and skips to its first voxel.
+    fn open(v: &InPlace) -> Result<Inflating, VolumeError> {
+        let io = |source| VolumeError::Io {
+            path: v.data_file.clone(),
+            source,
+        };
+        let mut file = File::open(&v.data_file).map_err(io)?;
+        file.seek(SeekFrom::Start(v.offset)).map_err(io)?;
+        let file = BufReader::new(file);
+        let inflate = v.inflate.unwrap_or(Inflate { zlib: false, skip: 0 });
+        let reader: Box<dyn Read + Send> = if inflate.zlib {
+            Box::new(flate2::read::ZlibDecoder::new(file))
+        } else {
+            Box::new(flate2::read::MultiGzDecoder::new(file))
+        };
+        let mut s = Inflating { reader, at: 0 };
+        s.skip_to(v, inflate.skip)?;
+        s.at = 0;
+        Ok(s)
+    }
+
+    /// Discards inflated bytes up to `to` (bytes of voxels read so far).
+    fn skip_to(&mut self, v: &InPlace, to: u64) -> Result<(), VolumeError> {
+        let want = to - self.at;
+        let skipped =
+            std::io::copy(&mut (&mut self.reader).take(want), &mut std::io::sink()).map_err(|e| corrupt(v, e))?;
+        self.at += skipped;
+        if skipped < want {
+            return Err(truncated(v, self.at));
+        }
+        Ok(())
+    }
+
+    /// `len` bytes of voxels from `at`: read forward (from the stream's start again if `at` was passed).
+    fn read_at(&mut self, v: &InPlace, at: u64, out: &mut [u8]) -> Result<(), VolumeError> {
+        if at < self.at {
+            *self = Inflating::open(v)?;
+        }
+        self.skip_to(v, at)?;
+        let mut got = 0;
+        while got < out.len() {
+            match self.reader.read(&mut out[got..]) {
+                Ok(0) => return Err(truncated(v, self.at + got as u64)),
+                Ok(n) => got += n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(corrupt(v, e)),
+            }
+        }
+        self.at += got as u64;
+        Ok(())
+    }
+}
+
+fn corrupt(v: &InPlace, source: std::io::Error) -> VolumeError {
+    VolumeError::Corrupt {
+        file: v.data_file.display().to_string(),
+        what: if v.inflate.is_some_and(|i| i.zlib) {
+            "zlib"
+        } else {
+            "gzip"
+        },
+        source,
+    }
+}
+
+/// The stream ended after `actual` bytes of voxels.
+fn truncated(v: &InPlace, actual: u64) -> VolumeError {
+    VolumeError::Truncated {
+        file: v.data_file.display().to_string(),
+        actual,
+        expected: v.step_bytes() * u64::from(v.timesteps),
+        dims: v.dims,
+        voxel_type: v.voxel_type,
+    }
 }
 
 impl Source {
-    /// Opens `in_place`'s data file for positioned reads.
+    /// Opens `in_place`'s data file for positioned reads, or its compressed stream to decode.
     pub fn in_place(v: InPlace) -> Result<Source, VolumeError> {
+        if v.inflate.is_some() {
+            let stream = Inflating::open(&v)?;
+            return Ok(Source::Stream(Box::new(v), Mutex::new(stream)));
+        }
         let file = File::open(&v.data_file).map_err(|source| VolumeError::Io {
             path: v.data_file.clone(),
             source,
@@ -29,7 +120,7 @@ impl Source {
     pub fn name(&self) -> &str {
         match self {
             Source::Loaded(v) => &v.name,
-            Source::InPlace(v, _) => &v.name,
+            Source::InPlace(v, _) | Source::Stream(v, _) => &v.name,
         }
     }
 
@@ -37,28 +128,28 @@ impl Source {
     pub fn dims(&self) -> [u32; 3] {
         match self {
             Source::Loaded(v) => v.dims,
-            Source::InPlace(v, _) => v.dims,
+            Source::InPlace(v, _) | Source::Stream(v, _) => v.dims,
         }
     }
 
     pub fn timesteps(&self) -> u32 {
         match self {
             Source::Loaded(v) => v.timesteps(),
-            Source::InPlace(v, _) => v.timesteps,
+            Source::InPlace(v, _) | Source::Stream(v, _) => v.timesteps,
         }
     }
 
     pub fn geometry(&self) -> Geometry {
         match self {
             Source::Loaded(v) => v.geometry,
-            Source::InPlace(v, _) => v.geometry,
+            Source::InPlace(v, _) | Source::Stream(v, _) => v.geometry,
         }
     }
 
     pub fn scaling(&self) -> Scaling {
         match self {
             Source::Loaded(v) => v.scaling,
-            Source::InPlace(v, _) => v.scaling,
+            Source::InPlace(v, _) | Source::Stream(v, _) => v.scaling,
         }
     }
 
@@ -66,7 +157,7 @@ impl Source {
     pub fn source_type(&self) -> VoxelType {
         match self {
             Source::Loaded(v) => v.source_type,
-            Source::InPlace(v, _) => v.voxel_type,
+            Source::InPlace(v, _) | Source::Stream(v, _) => v.voxel_type,
         }
     }
 
@@ -77,7 +168,7 @@ impl Source {
                 (VoxelData::F32(_), VoxelType::U32 | VoxelType::I32 | VoxelType::F64) => VoxelType::F32,
                 (_, t) => t,
             },
-            Source::InPlace(v, _) => v.voxel_type,
+            Source::InPlace(v, _) | Source::Stream(v, _) => v.voxel_type,
         }
     }
 
@@ -154,22 +245,18 @@ impl Source {
                 }
                 Ok(out)
             }
-            Source::InPlace(v, file) => {
+            Source::InPlace(v, _) | Source::Stream(v, _) => {
                 let size = v.voxel_type.size();
-                let at = v.offset + (u64::from(t) * v.step_bytes()) + (start * size) as u64;
-                let io = |source| VolumeError::Io {
-                    path: v.data_file.clone(),
-                    source,
-                };
+                let at = u64::from(t) * v.step_bytes() + (start * size) as u64;
                 let (vt, big) = (v.voxel_type, v.endian == Endian::Big);
                 // The file's bytes are the values as written: read straight into the slab.
                 if T::TYPE == vt && big == cfg!(target_endian = "big") && scaling.is_identity() {
                     let mut out = vec![T::default(); len];
-                    file.read_exact_at(bytemuck::cast_slice_mut(&mut out), at).map_err(io)?;
+                    self.read_bytes(at, bytemuck::cast_slice_mut(&mut out))?;
                     return Ok(out);
                 }
                 let mut bytes = vec![0u8; len * size];
-                file.read_exact_at(&mut bytes, at).map_err(io)?;
+                self.read_bytes(at, &mut bytes)?;
                 let mut out = vec![T::default(); len];
                 out.par_chunks_mut(1 << 16)
                     .zip(bytes.par_chunks(size << 16))
@@ -180,6 +267,35 @@ impl Source {
                     });
                 Ok(out)
             }
+        }
+    }
+
+    /// Whether slabs are best read in order (a compressed stream: reading back starts it again).
+    pub fn is_stream(&self) -> bool {
+        matches!(self, Source::Stream(..))
+    }
+
+    /// The voxel bytes `at..at + out.len()` (from the first voxel of the first step) of a file read in place or
+    /// decoded.
+    fn read_bytes(&self, at: u64, out: &mut [u8]) -> Result<(), VolumeError> {
+        match self {
+            Source::InPlace(v, file) => file
+                .read_exact_at(out, v.offset + at)
+                .map_err(|source| VolumeError::Io {
+                    path: v.data_file.clone(),
+                    source,
+                }),
+            Source::Stream(v, stream) => stream
+                .lock()
+                .map_err(|_| VolumeError::Header {
+                    file: v.data_file.display().to_string(),
+                    problem: "a reader of its stream panicked".into(),
+                })?
+                .read_at(v, at, out),
+            Source::Loaded(v) => Err(VolumeError::Header {
+                file: v.name.clone(),
+                problem: "a loaded volume has no file bytes".into(),
+            }),
         }
     }
 }

@@ -73,7 +73,14 @@ pub fn open_deferred(
         file: path.display().to_string(),
         problem,
     };
-    if let Some(place) = in_place(path, &opts)? {
+    // A file in place is read level by level with positioned reads; a compressed one is decoded once, front to
+    // back, into the level (never held whole). Either only where the level is not full resolution: level 0 is read
+    // by the format's own loader.
+    let place = match in_place(path, &opts)? {
+        Some(p) => Some(p),
+        None => crate::volume::in_place::compressed(path, &opts)?,
+    };
+    if let Some(place) = place {
         let shape = Shape {
             dims: place.dims,
             voxel_type: place.voxel_type,
@@ -82,33 +89,7 @@ pub fn open_deferred(
         let level = budget::choose(&shape, &budgets).map_err(named)?;
         if level.level > 0 {
             refuse_if_asked(&opts, shape.dims, &level).map_err(named)?;
-            let mut notes = place.notes.clone();
-            notes.push(budget::level_note(shape.dims, &level));
-            let miss_note = match cache.map(|c| c.lookup(&place, level.level)) {
-                Some(Lookup::Hit(mut v)) => {
-                    notes.append(&mut v.notes);
-                    v.notes = notes;
-                    return Ok(Opened {
-                        volume: after_level(*v, &opts),
-                        keep: None,
-                    });
-                }
-                Some(Lookup::Miss { note }) => note,
-                None => None,
-            };
-            notes.extend(miss_note);
-            let source = Source::in_place(place.clone())?;
-            let mut v = read::read_level(&source, level.level, budgets.host, notes, progress)?;
-            v.format = place.format.to_string();
-            let keep = cache.map(|c| Keep {
-                cache: c.clone(),
-                place,
-                level: level.level,
-            });
-            return Ok(Opened {
-                volume: after_level(v, &opts),
-                keep,
-            });
+            return read_place(place, &level, &opts, cache, progress);
         }
     }
     refuse_whole_over_budget(path, &budgets).map_err(named)?;
@@ -118,6 +99,53 @@ pub fn open_deferred(
         e => e,
     })?;
     Ok(Opened { volume, keep: None })
+}
+
+/// Level `level` of the file `place` describes: from the pyramid cache where `cache` holds it, else read from the
+/// file (with the cache write left to the caller).
+fn read_place(
+    place: InPlace,
+    level: &budget::Level,
+    opts: &OpenOptions,
+    cache: Option<&PyramidCache>,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Opened, VolumeError> {
+    let mut notes = place.notes.clone();
+    notes.push(budget::level_note(place.dims, level));
+    let miss_note = match cache.map(|c| c.lookup(&place, level.level)) {
+        Some(Lookup::Hit(mut v)) => {
+            notes.append(&mut v.notes);
+            v.notes = notes;
+            return Ok(Opened {
+                volume: after_level(*v, opts),
+                keep: None,
+            });
+        }
+        Some(Lookup::Miss { note }) => note,
+        None => None,
+    };
+    notes.extend(miss_note);
+    if place.inflate.is_some() {
+        notes.push("its compressed voxels were decoded once, as a stream, into that level".into());
+    }
+    let source = Source::in_place(place.clone())?;
+    let mut v = read::read_level(
+        &source,
+        level.level,
+        opts.budgets.map_or(u64::MAX, |b| b.host),
+        notes,
+        progress,
+    )?;
+    v.format = place.format.to_string();
+    let keep = cache.map(|c| Keep {
+        cache: c.clone(),
+        place,
+        level: level.level,
+    });
+    Ok(Opened {
+        volume: after_level(v, opts),
+        keep,
+    })
 }
 
 /// A preview of `path` when it is a file read in place that is large at the level `budgets` give it: from the

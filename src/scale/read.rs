@@ -47,25 +47,35 @@ fn level_step<T: Sample>(
     }
     let step = batch(rayon::current_num_threads(), slab_bytes, host_budget);
     let mut dst = vec![T::default(); slice * out[2] as usize];
+    let read = |oz: usize| -> Result<(Vec<T>, u32), VolumeError> {
+        let z0 = oz as u32 * span;
+        let n = span.min(full[2] - z0);
+        Ok((source.read_slab(t, z0, n, crate::volume::Scaling::IDENTITY)?, n))
+    };
+    let reduce = |(mut slab, n): (Vec<T>, u32), into: &mut [T]| {
+        let mut dims = [full[0] as usize, full[1] as usize, n as usize];
+        for l in 0..level {
+            // The factors of the whole level, not of the slab: an axis of length 1 is not halved.
+            let f = factors(level_dims(full, l).map(u64::from));
+            slab = downsample(&slab, dims, f, Reduce::Mean);
+            dims = [0, 1, 2].map(|i| dims[i].div_ceil(f[i]));
+        }
+        into.copy_from_slice(&slab);
+    };
     for first in (0..out[2] as usize).step_by(step) {
         let last = (first + step).min(out[2] as usize);
-        dst[first * slice..last * slice]
-            .par_chunks_mut(slice)
-            .zip(first..last)
-            .try_for_each(|(into, oz)| {
-                let z0 = oz as u32 * span;
-                let n = span.min(full[2] - z0);
-                let mut slab: Vec<T> = source.read_slab(t, z0, n, crate::volume::Scaling::IDENTITY)?;
-                let mut dims = [full[0] as usize, full[1] as usize, n as usize];
-                for l in 0..level {
-                    // The factors of the whole level, not of the slab: an axis of length 1 is not halved.
-                    let f = factors(level_dims(full, l).map(u64::from));
-                    slab = downsample(&slab, dims, f, Reduce::Mean);
-                    dims = [0, 1, 2].map(|i| dims[i].div_ceil(f[i]));
-                }
-                into.copy_from_slice(&slab);
+        let into = dst[first * slice..last * slice].par_chunks_mut(slice);
+        if source.is_stream() {
+            // A compressed stream is decoded front to back: the batch's slabs are read in order, then reduced on
+            // every core.
+            let slabs = (first..last).map(read).collect::<Result<Vec<_>, _>>()?;
+            into.zip(slabs).for_each(|(into, slab)| reduce(slab, into));
+        } else {
+            into.zip(first..last).try_for_each(|(into, oz)| {
+                reduce(read(oz)?, into);
                 Ok::<(), VolumeError>(())
             })?;
+        }
         progress(last as f32 / out[2] as f32);
     }
     Ok(dst)

@@ -23,6 +23,16 @@ pub struct InPlace {
     pub scaling: Scaling,
     pub timesteps: u32,
     pub notes: Vec<String>,
+    /// The bytes from `offset` are a compressed stream (gzip NIfTI or NRRD, zlib MetaImage), decoded front to back;
+    /// `None`: they lie in place.
+    pub inflate: Option<Inflate>,
+}
+
+/// A compressed stream's kind, and the inflated bytes before the voxels (a `.nii.gz`'s header and extensions).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Inflate {
+    pub zlib: bool,
+    pub skip: u64,
 }
 
 impl InPlace {
@@ -96,6 +106,86 @@ pub fn claimed_shape(path: &Path) -> Option<([u32; 3], VoxelType, u32)> {
     Some((header.dims, header.voxel_type, header.timesteps.max(1)))
 }
 
+/// `path` as a compressed stream to decode front to back (gzip NIfTI, gzip NRRD, zlib MetaImage), so that a level of
+/// it can be made without holding the whole volume (`scale::open`); `None` for every other file. A claim larger than
+/// the compressed bytes can inflate to is refused before anything is decoded.
+pub fn compressed(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, VolumeError> {
+    let file = format::file_label(path);
+    let header = match detect_format(path) {
+        Ok(Format::Nrrd) => nrrd::parse(&format::read_prefix(path, format::HEADER_LIMIT)?, &file)?,
+        Ok(Format::MetaImage) => metaimage::parse(&format::read_prefix(path, format::HEADER_LIMIT)?, &file)?,
+        Ok(Format::Nifti) => {
+            if !nifti::is_gzip(&format::read_prefix(path, 4)?) {
+                return Ok(None);
+            }
+            let mut h = nifti::parse_file(&gzip_prefix(path, 544)?, &file)?;
+            let DataLocation::Inline(Some(vox_offset)) = h.location else {
+                return Ok(None);
+            };
+            // The stream starts at the file's first byte; the voxels `vox_offset` inflated bytes into it.
+            h.location = DataLocation::Inline(Some(0));
+            h.encoding = Encoding::Gzip;
+            return stream_of(path, h, vox_offset, opts).map(Some);
+        }
+        _ => return Ok(None),
+    };
+    if !matches!(header.encoding, Encoding::Gzip | Encoding::Zlib) {
+        return Ok(None);
+    }
+    stream_of(path, header, 0, opts).map(Some)
+}
+
+/// The first `n` inflated bytes of a gzip file (fewer if it is shorter).
+fn gzip_prefix(path: &Path, n: u64) -> Result<Vec<u8>, VolumeError> {
+    use std::io::Read;
+    let io = |source| VolumeError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut head = Vec::with_capacity(n as usize);
+    let gz = flate2::read::MultiGzDecoder::new(std::fs::File::open(path).map_err(io)?);
+    gz.take(n)
+        .read_to_end(&mut head)
+        .map_err(|source| VolumeError::Corrupt {
+            file: format::file_label(path),
+            what: "gzip",
+            source,
+        })?;
+    Ok(head)
+}
+
+/// A compressed stream from where `header` puts it, its voxels `skip` inflated bytes in.
+fn stream_of(path: &Path, header: Header, skip: u64, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
+    let file = format::file_label(path);
+    let step = check_extent(header.dims)?;
+    let needed = step * header.voxel_type.size() as u64 * u64::from(header.timesteps.max(1));
+    let (data_file, offset) = match &header.location {
+        DataLocation::Inline(Some(o)) => (path.to_path_buf(), *o),
+        DataLocation::Detached { name, skip: Some(s) } => (format::resolve_data_file(path, name)?, *s),
+        _ => {
+            return Err(VolumeError::Header {
+                file,
+                problem: "a data offset of -1 (data at the end of the file) only works with raw encoding".into(),
+            })
+        }
+    };
+    let len = std::fs::metadata(&data_file)
+        .map_err(|source| VolumeError::Io {
+            path: data_file.clone(),
+            source,
+        })?
+        .len();
+    let available = len.saturating_sub(offset);
+    format::check_compressed(&header, &file, available, needed.saturating_add(skip))?;
+    let inflate = Inflate {
+        zlib: header.encoding == Encoding::Zlib,
+        skip,
+    };
+    let mut place = header_in_place_unchecked(path, header, data_file, offset, opts);
+    place.inflate = Some(inflate);
+    Ok(place)
+}
+
 fn header_in_place(path: &Path, header: Header, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
     let step = check_extent(header.dims)?;
     let needed = step * header.voxel_type.size() as u64 * u64::from(header.timesteps.max(1));
@@ -123,11 +213,22 @@ fn header_in_place(path: &Path, header: Header, opts: &OpenOptions) -> Result<In
     if len < offset.saturating_add(needed) {
         return Err(truncated(len.saturating_sub(offset)));
     }
+    Ok(header_in_place_unchecked(path, header, data_file, offset, opts))
+}
+
+/// The [`InPlace`] `header` describes at `offset` of `data_file`, sizes already checked.
+fn header_in_place_unchecked(
+    path: &Path,
+    header: Header,
+    data_file: PathBuf,
+    offset: u64,
+    opts: &OpenOptions,
+) -> InPlace {
     let mut geometry = header.placement();
     if let Some(s) = opts.raw.spacing {
         geometry = geometry.with_spacing(s.map(f64::from));
     }
-    Ok(InPlace {
+    InPlace {
         name: format::volume_name(path),
         format: header.format,
         data_file,
@@ -139,7 +240,8 @@ fn header_in_place(path: &Path, header: Header, opts: &OpenOptions) -> Result<In
         scaling: header.scaling,
         timesteps: header.timesteps.max(1),
         notes: header.notes,
-    })
+        inflate: None,
+    }
 }
 
 fn raw_in_place(path: &Path, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
@@ -167,5 +269,6 @@ fn raw_in_place(path: &Path, opts: &OpenOptions) -> Result<InPlace, VolumeError>
         scaling: Scaling::IDENTITY,
         timesteps: 1,
         notes: Vec::new(),
+        inflate: None,
     })
 }

@@ -9,6 +9,7 @@ pub mod common;
 mod dicom;
 mod headers;
 mod open;
+mod streamed;
 mod tiff;
 mod time;
 mod vtk;
