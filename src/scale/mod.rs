@@ -175,8 +175,9 @@ pub fn preview_within(
     preview::preview(path, opts, level.level)
 }
 
-/// A compressed file is read whole before it can be reduced: one whose header claims more than the host budget is
-/// refused before anything else is read, saying what to do.
+/// A file neither in place nor a compressed stream (`in_place::compressed`), such as ASCII NRRD, is read whole before
+/// it can be reduced: one whose header claims more than the host budget is refused before anything else is read,
+/// saying what to do.
 fn refuse_whole_over_budget(path: &Path, budgets: &Budgets) -> Result<(), String> {
     let Some((dims, voxel_type, steps)) = crate::volume::in_place::claimed_shape(path) else {
         return Ok(());
@@ -192,9 +193,10 @@ fn refuse_whole_over_budget(path: &Path, budgets: &Budgets) -> Result<(), String
     }
     let [x, y, z] = dims;
     Err(format!(
-        "its {x}x{y}x{z} {voxel_type} voxels{} need {} of memory to decompress, and the host budget is {} \
-         (--host-budget); a compressed file is read whole: raise --host-budget, or store it uncompressed (volcast \
-         reads uncompressed NIfTI, NRRD and MetaImage in place, level by level, at any size)",
+        "its {x}x{y}x{z} {voxel_type} voxels{} need {} of memory to decode, and the host budget is {} \
+         (--host-budget); this encoding is read whole: raise --host-budget, or store it as raw or gzip (volcast \
+         reads uncompressed NIfTI, NRRD and MetaImage in place, and gzip ones as a stream, level by level, at any \
+         size)",
         if steps > 1 {
             format!(" x {steps} steps")
         } else {

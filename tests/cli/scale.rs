@@ -95,17 +95,27 @@ fn budgets_that_hold_nothing_and_refusals_name_the_numbers() {
     let o = volcast(&["info", &raw, "--host-budget", "lots"]);
     assert_eq!(o.status.code(), Some(64), "{}", stderr(&o));
     assert!(stderr(&o).contains("'lots' is not a size"), "{}", stderr(&o));
-    // A compressed file is read whole: over the host budget it is refused before it is decompressed.
+    // A gzip file over the host budget is decoded as a stream into the level that fits (formats::streamed proves the
+    // voxels).
     let gz = format!("{}/tests/data/world/nifti_ras.nii.gz", env!("CARGO_MANIFEST_DIR"));
-    let o = volcast(&["info", &gz, "--host-budget", "50K"]);
+    let o = volcast(&["info", &gz, "--host-budget", "50K", "--no-cache"]);
+    let out = String::from_utf8_lossy(&o.stdout).into_owned() + &stderr(&o);
+    assert!(o.status.success(), "{out}");
+    assert!(out.contains("17 x 20 x 18"), "{out}");
+    assert!(out.contains("decoded once, as a stream"), "{out}");
+    // An ASCII NRRD is read whole: over the host budget it is refused before it is decoded.
+    let ascii = dir.join("ascii.nrrd");
+    let mut text = String::from("NRRD0004\ntype: uint8\ndimension: 3\nsizes: 40 40 40\nencoding: ascii\n\n");
+    text += &"7 ".repeat(40 * 40 * 40);
+    std::fs::write(&ascii, text).expect("write");
+    let o = volcast(&["info", ascii.to_str().unwrap(), "--host-budget", "50K"]);
     assert!(!o.status.success());
     let err = stderr(&o);
     assert!(
-        err.contains("nifti_ras.nii.gz")
-            && err.contains("its 34x40x36 int16 voxels need 96 KiB of memory to decompress"),
+        err.contains("ascii.nrrd") && err.contains("its 40x40x40 uint8 voxels need 63 KiB of memory to decode"),
         "{err}"
     );
-    assert!(err.contains("store it uncompressed"), "{err}");
+    assert!(err.contains("store it as raw or gzip"), "{err}");
     // A header claiming 16384^3 float32 (16 TiB) over a few bytes: refused before anything is read.
     let nrrd = dir.join("huge.nrrd");
     let header = "NRRD0004\ntype: float\ndimension: 3\nsizes: 16384 16384 16384\nencoding: raw\n\n";
