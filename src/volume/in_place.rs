@@ -157,8 +157,7 @@ fn gzip_prefix(path: &Path, n: u64) -> Result<Vec<u8>, VolumeError> {
 /// A compressed stream from where `header` puts it, its voxels `skip` inflated bytes in.
 fn stream_of(path: &Path, header: Header, skip: u64, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
     let file = format::file_label(path);
-    let step = check_extent(header.dims)?;
-    let needed = step * header.voxel_type.size() as u64 * u64::from(header.timesteps.max(1));
+    let needed = claimed_bytes(&header)?;
     let (data_file, offset) = match &header.location {
         DataLocation::Inline(Some(o)) => (path.to_path_buf(), *o),
         DataLocation::Detached { name, skip: Some(s) } => (format::resolve_data_file(path, name)?, *s),
@@ -169,12 +168,7 @@ fn stream_of(path: &Path, header: Header, skip: u64, opts: &OpenOptions) -> Resu
             })
         }
     };
-    let len = std::fs::metadata(&data_file)
-        .map_err(|source| VolumeError::Io {
-            path: data_file.clone(),
-            source,
-        })?
-        .len();
+    let len = file_len(&data_file)?;
     let available = len.saturating_sub(offset);
     format::check_compressed(&header, &file, available, needed.saturating_add(skip))?;
     let inflate = Inflate {
@@ -187,18 +181,12 @@ fn stream_of(path: &Path, header: Header, skip: u64, opts: &OpenOptions) -> Resu
 }
 
 fn header_in_place(path: &Path, header: Header, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
-    let step = check_extent(header.dims)?;
-    let needed = step * header.voxel_type.size() as u64 * u64::from(header.timesteps.max(1));
+    let needed = claimed_bytes(&header)?;
     let (data_file, offset) = match &header.location {
         DataLocation::Inline(offset) => (path.to_path_buf(), *offset),
         DataLocation::Detached { name, skip } => (format::resolve_data_file(path, name)?, *skip),
     };
-    let len = std::fs::metadata(&data_file)
-        .map_err(|source| VolumeError::Io {
-            path: data_file.clone(),
-            source,
-        })?
-        .len();
+    let len = file_len(&data_file)?;
     let truncated = |actual| VolumeError::Truncated {
         file: format::file_label(&data_file),
         actual,
@@ -214,6 +202,20 @@ fn header_in_place(path: &Path, header: Header, opts: &OpenOptions) -> Result<In
         return Err(truncated(len.saturating_sub(offset)));
     }
     Ok(header_in_place_unchecked(path, header, data_file, offset, opts))
+}
+
+/// Bytes of voxels `header` claims, every step.
+fn claimed_bytes(header: &Header) -> Result<u64, VolumeError> {
+    Ok(check_extent(header.dims)? * header.voxel_type.size() as u64 * u64::from(header.timesteps.max(1)))
+}
+
+fn file_len(data_file: &Path) -> Result<u64, VolumeError> {
+    std::fs::metadata(data_file)
+        .map(|m| m.len())
+        .map_err(|source| VolumeError::Io {
+            path: data_file.to_path_buf(),
+            source,
+        })
 }
 
 /// The [`InPlace`] `header` describes at `offset` of `data_file`, sizes already checked.
