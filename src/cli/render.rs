@@ -8,6 +8,7 @@ use std::time::Instant;
 use volcast::gpu::Gpu;
 use volcast::render::headless::Headless;
 use volcast::scene::settings::{RaySetup, RenderSettings};
+use volcast::volume::budget::Budgets;
 use volcast::volume::Volume;
 
 fn median(v: &mut [f64]) -> f64 {
@@ -56,9 +57,8 @@ fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
 
 /// Places `volume` on the GPU within the budgets: whole, or streamed where it is over the GPU budget whole; a
 /// budget without room for one brick takes the finest whole level that fits it. Returns the volume placed.
-fn place(gpu: &Gpu, headless: &mut Headless, args: &RenderArgs, volume: Volume) -> Result<Volume> {
-    let budgets = args.volume.budgets_on(gpu);
-    match headless.renderer.place_volume(gpu, &volume, &budgets) {
+fn place(gpu: &Gpu, headless: &mut Headless, args: &RenderArgs, budgets: &Budgets, volume: Volume) -> Result<Volume> {
+    match headless.renderer.place_volume(gpu, &volume, budgets) {
         Ok(_) => Ok(volume),
         Err(volcast::gpu::GpuError::NoRoom(_)) => {
             let volume = args.volume.fit_device(gpu, volume)?;
@@ -102,7 +102,7 @@ fn movie(args: &RenderArgs) -> Result<()> {
     };
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
-        let volume = match place(gpu, &mut headless, args, volume) {
+        let volume = match place(gpu, &mut headless, args, &args.volume.budgets_on(gpu), volume) {
             Ok(v) => {
                 if let Some(st) = headless.renderer.stream() {
                     eprintln!(
@@ -176,12 +176,7 @@ fn stream_in(
                 volume.name,
                 cut.level[0]
             );
-            loop {
-                let progress = r.refine_towards(gpu, volume, &cut)?;
-                if progress.done {
-                    break progress;
-                }
-            }
+            r.refine_to(gpu, volume, &cut)?
         }
         None => r.refine(gpu, volume, s)?.context("the stream did not start")?,
     };
@@ -223,7 +218,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             let t_upload = Instant::now();
             let budgets = args.volume.budgets_on(gpu);
             let gpu_budget = budgets.gpu.map_or(gpu.device_local_bytes, |g| g.bytes);
-            volume = place(gpu, &mut headless, args, volume)?;
+            volume = place(gpu, &mut headless, args, &budgets, volume)?;
             if headless.renderer.stream().is_some() {
                 stream_in(gpu, &mut headless, &volume, &s, args.level, gpu_budget)?;
             } else if let Some(level) = args.level {

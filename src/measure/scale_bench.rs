@@ -243,7 +243,7 @@ pub fn measure(
         let rest_ms = timed_frames(gpu, &mut headless, &rest, frames)?;
         // Dragging, the viewer wants one level coarser (factor 2) of the still view's cut.
         if let Some(wanted) = headless.renderer.stream_wanted(&v, &rest, 2.0) {
-            while !headless.renderer.refine_towards(gpu, &v, &wanted)?.done {}
+            headless.renderer.refine_to(gpu, &v, &wanted)?;
         }
         let drag_ms = timed_frames(gpu, &mut headless, &drag, frames)?;
         let streamed = at_rest.map(|p| (headless.renderer.stream().map_or(0, |s| s.capacity()), p.levels_shown()));

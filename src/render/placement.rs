@@ -121,17 +121,22 @@ impl Renderer {
         Ok(Progress::of(&step, steps))
     }
 
+    /// Steps the stream until `wanted` is resident (or nothing more can be uploaded).
+    pub fn refine_to(&mut self, gpu: &Gpu, volume: &Volume, wanted: &Cut) -> Result<Progress, GpuError> {
+        loop {
+            let progress = self.refine_towards(gpu, volume, wanted)?;
+            if progress.done {
+                return Ok(progress);
+            }
+        }
+    }
+
     /// Steps the stream until the screen rule's cut for `s` is resident (headless: a movie frame, a figure, a
     /// render). `None` when the volume is not streamed.
     pub fn refine(&mut self, gpu: &Gpu, volume: &Volume, s: &RenderSettings) -> Result<Option<Progress>, GpuError> {
-        let Some(wanted) = self.stream_wanted(volume, s, 1.0) else {
-            return Ok(None);
-        };
-        loop {
-            let progress = self.refine_towards(gpu, volume, &wanted)?;
-            if progress.done {
-                return Ok(Some(progress));
-            }
+        match self.stream_wanted(volume, s, 1.0) {
+            Some(wanted) => self.refine_to(gpu, volume, &wanted).map(Some),
+            None => Ok(None),
         }
     }
 }

@@ -89,7 +89,7 @@ pub fn open_deferred(
         let level = budget::choose(&shape, &budgets).map_err(named)?;
         if level.level > 0 {
             refuse_if_asked(&opts, shape.dims, &level).map_err(named)?;
-            return read_place(place, &level, &opts, cache, progress);
+            return read_place(place, &level, &opts, budgets.host, cache, progress);
         }
     }
     refuse_whole_over_budget(path, &budgets).map_err(named)?;
@@ -102,11 +102,12 @@ pub fn open_deferred(
 }
 
 /// Level `level` of the file `place` describes: from the pyramid cache where `cache` holds it, else read from the
-/// file (with the cache write left to the caller).
+/// file within `host_budget` (with the cache write left to the caller).
 fn read_place(
     place: InPlace,
     level: &budget::Level,
     opts: &OpenOptions,
+    host_budget: u64,
     cache: Option<&PyramidCache>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Opened, VolumeError> {
@@ -129,13 +130,7 @@ fn read_place(
         notes.push("its compressed voxels were decoded once, as a stream, into that level".into());
     }
     let source = Source::in_place(place.clone())?;
-    let mut v = read::read_level(
-        &source,
-        level.level,
-        opts.budgets.map_or(u64::MAX, |b| b.host),
-        notes,
-        progress,
-    )?;
+    let mut v = read::read_level(&source, level.level, host_budget, notes, progress)?;
     v.format = place.format.to_string();
     let keep = cache.map(|c| Keep {
         cache: c.clone(),
