@@ -119,11 +119,9 @@ pub(super) fn open_source(
                 channel,
                 ..Default::default()
             };
-            // A series read in place is read at its GPU level at once.
-            let steps = volume::in_place::in_place(path, &opts)
-                .ok()
-                .flatten()
-                .map_or(1, |p| p.timesteps);
+            // A series whose header says so (in place or compressed) is read at its GPU level at once; one read
+            // whole by its format's reader is reduced to it below.
+            let steps = volume::in_place::claimed_shape(path).map_or(1, |(_, _, steps)| steps);
             let budgets = if steps > 1 { limits.budgets } else { host_only };
             crate::scale::open_deferred(path, &opts, budgets, limits.cache.as_ref(), progress)
                 .map_err(|e| e.to_string())?
@@ -343,6 +341,32 @@ impl Loader {
 mod tests {
     use super::*;
     use crate::viewer::model::tf::TfEditorState;
+
+    #[test]
+    fn a_compressed_series_over_the_budgets_is_read_at_its_gpu_level() {
+        // A series is shown whole, step by step: read at the level the GPU budget takes whole, even where its file
+        // is decoded as a stream (and that level kept in the pyramid cache).
+        let dir = std::env::temp_dir().join(format!("volcast-loading-series-{}", std::process::id()));
+        let budgets = volume::budget::Budgets::host(Some(10 << 10)).with_gpu(volume::budget::GpuBudget {
+            bytes: 2 << 10,
+            max_dim: 16384,
+        });
+        let limits = Limits {
+            budgets,
+            max_dim: None,
+            cache: Some(crate::scale::cache::PyramidCache::new(Some(dir.clone()))),
+        };
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/nibabel/example_nifti2.nii.gz");
+        let source = VolumeSource::File(path, Default::default());
+        let opened = open_source(&source, &limits, None, None, &mut |_| {}).expect("opened");
+        assert_eq!(opened.volume.timesteps(), 2);
+        assert!(
+            crate::render::placement::fits_gpu_whole(&opened.volume, &budgets),
+            "{:?} is over the GPU budget",
+            opened.volume.dims
+        );
+        let _ = std::fs::remove_dir_all(dir);
+    }
 
     #[test]
     fn the_viewer_opens_with_the_automatic_function_render_gives() {
