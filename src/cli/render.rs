@@ -105,9 +105,15 @@ fn movie(args: &RenderArgs) -> Result<()> {
         let volume = match place(gpu, &mut headless, args, &args.volume.budgets_on(gpu), volume) {
             Ok(v) => {
                 if let Some(st) = headless.renderer.stream() {
+                    let gpu_budget = args
+                        .volume
+                        .budgets_on(gpu)
+                        .gpu
+                        .map_or(gpu.device_local_bytes, |g| g.bytes);
                     eprintln!(
-                        "note: {} is over the GPU budget whole; each frame is streamed through a pool of {} bricks",
+                        "note: {} {}; each frame is streamed through a pool of {} bricks",
                         v.name,
+                        volcast::render::placement::streamed_because(&v, gpu_budget),
                         st.capacity()
                     );
                 }
@@ -182,10 +188,10 @@ fn stream_in(
     };
     let [bx, by, bz] = r.pool().map_or([0; 3], |p| p.brick);
     eprintln!(
-        "note: {} is over the GPU budget whole ({}); streamed through a pool of {capacity} bricks of {bx}x{by}x{bz} \
-         in {} step(s) of at most {per_step} uploads: {} of its {} level-0 bricks shown",
+        "note: {} {}; streamed through a pool of {capacity} bricks of {bx}x{by}x{bz} in {} step(s) of at most \
+         {per_step} uploads: {} of its {} level-0 bricks shown",
         volume.name,
-        volcast::volume::budget::show(budget),
+        volcast::render::placement::streamed_because(volume, budget),
         last.steps,
         last.levels_shown(),
         last.per_level.iter().sum::<usize>()

@@ -270,6 +270,39 @@ impl Source {
         }
     }
 
+    /// The box of voxels `lo..lo + size` of step `t` of a file read in place (x fastest), as [`read_slab`] converts
+    /// them (identity scaling): one positioned read per row, rows of each slice on every core.
+    ///
+    /// [`read_slab`]: Self::read_slab
+    pub fn read_box<T: Sample>(&self, t: u32, lo: [u32; 3], size: [u32; 3]) -> Result<Vec<T>, VolumeError> {
+        let Source::InPlace(v, _) = self else {
+            return Err(VolumeError::Header {
+                file: self.name().to_string(),
+                problem: "only a file read in place gives boxes of voxels".into(),
+            });
+        };
+        let [w, h, _] = v.dims.map(|d| d as usize);
+        let (vsize, vt, big) = (v.voxel_type.size(), v.voxel_type, v.endian == Endian::Big);
+        let row = size[0] as usize;
+        let mut out = vec![T::default(); row * size[1] as usize * size[2] as usize];
+        out.par_chunks_mut(row).enumerate().try_for_each_init(
+            || vec![0u8; row * vsize],
+            |bytes, (r, dst)| {
+                let (y, z) = (
+                    lo[1] as usize + r % size[1] as usize,
+                    lo[2] as usize + r / size[1] as usize,
+                );
+                let first = lo[0] as usize + w * (y + h * z);
+                self.read_bytes(u64::from(t) * v.step_bytes() + (first * vsize) as u64, bytes)?;
+                for (o, b) in dst.iter_mut().zip(bytes.chunks_exact(vsize)) {
+                    *o = T::from_f64(decode(vt, big, b));
+                }
+                Ok(())
+            },
+        )?;
+        Ok(out)
+    }
+
     /// Whether slabs are best read in order (a compressed stream: reading back starts it again).
     pub fn is_stream(&self) -> bool {
         matches!(self, Source::Stream(..))

@@ -46,6 +46,9 @@ pub enum GpuError {
     /// A streamed pool's budget holds not even one brick.
     #[error("{0}")]
     NoRoom(String),
+    /// Reading a brick from the volume's file failed (it changed or went away since it was opened).
+    #[error("{0}")]
+    Source(String),
     #[error("invalid render settings: {0}")]
     InvalidSettings(String),
     #[error("internal GPU state lost: {0}")]

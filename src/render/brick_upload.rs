@@ -1,21 +1,59 @@
 //! Filling single slots of a streamed pool (stream.rs): each brick's texels and border gathered from its level on
-//! every core into one staging buffer, then copied into its slot, one copy region per brick. Uploads are bounded
-//! per step by the caller, and batched here within [`STAGING_CHUNK`] bytes of staging.
+//! every core into one staging buffer, then copied into its slot, one copy region per brick. A brick of a level
+//! finer than the one the host holds is read from the volume's file first, as one box (`scale::finer`), the
+//! batch's boxes on every core. Uploads are bounded per step by the caller, and batched here within
+//! [`STAGING_CHUNK`] bytes of staging.
 
 use super::gpu_volume::{write_texels, Levels, TexelKind, TexelRows, VolumeLayout};
-use super::pool::{slot_side, Pool, PoolRows, Resident};
+use super::pool::{slot_side, Pool, PoolRows, Resident, BORDER};
 use crate::gpu::resources::{Buffer, Image};
 use crate::gpu::sync::{Access, COLOR_LAYERS};
 use crate::gpu::upload::{copy_to_image, STAGING_CHUNK};
 use crate::gpu::{Gpu, GpuError};
+use crate::scale::finer::Finer;
+use crate::volume::VoxelData;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use rayon::prelude::*;
 
-/// One slot's texels, rows of its slot-local (y, z), x fastest.
+/// One slot's texels, rows of its slot-local (y, z), x fastest: from the pool's levels, or from `within`, a box
+/// of the brick's level read for it.
 struct SlotRows<'a> {
     pool: &'a Pool,
     brick: Resident,
+    within: Option<&'a Boxed>,
+}
+
+/// The voxels a slot of a brick below the held level reads: its level's voxels `lo..lo + size`.
+struct Boxed {
+    data: VoxelData,
+    lo: [u32; 3],
+    size: [u32; 3],
+}
+
+impl SlotRows<'_> {
+    /// Row (`ly`, `lz`) of the slot: from the levels, or (level 0 of the box's own [`Levels`]) from the box.
+    fn row(&self, ly: u32, lz: u32, out: &mut Vec<Option<super::pool::Source>>) {
+        let Some(b) = self.within else {
+            return self.pool.slot_row(self.brick, ly, lz, out);
+        };
+        // As `Pool::slot_row` clamps, less the box's corner.
+        let dims = self.pool.levels[self.brick.level as usize];
+        let at = |a: usize, l: u32| -> usize {
+            let v = i64::from(self.brick.brick[a] * self.pool.brick[a]) + i64::from(l) - i64::from(BORDER);
+            (v.clamp(0, i64::from(dims[a]) - 1) as u32 - b.lo[a]) as usize
+        };
+        let row = b.size[0] as usize * (at(1, ly) + b.size[1] as usize * at(2, lz));
+        out.extend((0..slot_side(self.pool.brick[0])).map(|lx| Some((0, row + at(0, lx)))));
+    }
+}
+
+/// The box of its level a slot of `r` reads (the brick and its border, clamped into the level).
+fn slot_box(pool: &Pool, r: Resident) -> ([u32; 3], [u32; 3]) {
+    let dims = pool.levels[r.level as usize];
+    let lo = [0, 1, 2].map(|a| (r.brick[a] * pool.brick[a]).saturating_sub(BORDER));
+    let hi = [0, 1, 2].map(|a| (r.brick[a] * pool.brick[a] + pool.brick[a] + BORDER).min(dims[a]));
+    (lo, [0, 1, 2].map(|a| hi[a] - lo[a]))
 }
 
 impl TexelRows for SlotRows<'_> {
@@ -27,8 +65,8 @@ impl TexelRows for SlotRows<'_> {
                 let (ly, lz) = (r as u32 % side[1], r as u32 / side[1]);
                 this.clear();
                 next.clear();
-                self.pool.slot_row(self.brick, ly, lz, this);
-                self.pool.slot_row(self.brick, (ly + 1).min(side[1] - 1), lz, next);
+                self.row(ly, lz, this);
+                self.row((ly + 1).min(side[1] - 1), lz, next);
                 let rows = PoolRows { this, next };
                 for (x, d) in row.iter_mut().enumerate() {
                     *d = texel(&rows, x);
@@ -42,8 +80,13 @@ impl TexelRows for SlotRows<'_> {
     }
 }
 
+/// What the skip grid needs of a brick read from the file: the extremes of the elements its slot holds (`None`:
+/// none is finite).
+pub(super) type BoxRange = (Resident, Option<[f64; 2]>);
+
 /// Uploads the bricks `pool.resident` names in `slots` into `image` (the pool's texture or corner texture in
 /// `layout`). `fresh`: the image has never been written (its old contents are discarded on the first copy).
+/// Returns the element ranges of the bricks read from `finer`'s file.
 pub(super) fn upload_bricks(
     gpu: &Gpu,
     image: &Image,
@@ -52,7 +95,8 @@ pub(super) fn upload_bricks(
     pool: &Pool,
     slots: &[u32],
     fresh: bool,
-) -> Result<(), GpuError> {
+    finer: Option<&Finer>,
+) -> Result<Vec<BoxRange>, GpuError> {
     let kind = TexelKind::of(layout, levels);
     let side = pool.brick.map(slot_side);
     let slot_bytes = side.iter().map(|&s| s as usize).product::<usize>() * kind.bytes(levels);
@@ -64,41 +108,84 @@ pub(super) fn upload_bricks(
         MemoryLocation::CpuToGpu,
         "staging bricks",
     )?;
-    let mut result = Ok(());
+    let mut result = Ok(Vec::new());
     for (n, batch) in slots.chunks(per_batch).enumerate() {
-        result = fill_batch(&mut staging, pool, levels, kind, batch, slot_bytes)
-            .and_then(|()| copy_batch(gpu, &staging, image, pool, batch, slot_bytes, fresh && n == 0));
-        if result.is_err() {
-            break;
+        let filled = fill_batch(&mut staging, (pool, levels, finer), kind, batch, slot_bytes);
+        let copied = filled.and_then(|r| {
+            copy_batch(gpu, &staging, image, pool, batch, slot_bytes, fresh && n == 0)?;
+            Ok(r)
+        });
+        match (copied, &mut result) {
+            (Ok(mut r), Ok(all)) => all.append(&mut r),
+            (Err(e), _) => {
+                result = Err(e);
+                break;
+            }
+            _ => {}
         }
     }
     staging.destroy(gpu);
     result
 }
 
-/// Writes each slot's texels into its part of the staging buffer.
+/// The extremes of the finite elements of `data`.
+fn element_range(data: &VoxelData) -> Option<[f64; 2]> {
+    fn extremes(values: impl Iterator<Item = f64>) -> Option<[f64; 2]> {
+        values.fold(None, |r, v| {
+            Some(r.map_or([v, v], |[a, b]: [f64; 2]| [a.min(v), b.max(v)]))
+        })
+    }
+    match data {
+        VoxelData::U8(v) => extremes(v.iter().map(|&x| f64::from(x))),
+        VoxelData::U16(v) => extremes(v.iter().map(|&x| f64::from(x))),
+        VoxelData::F32(v) => extremes(v.iter().filter(|x| x.is_finite()).map(|&x| f64::from(x))),
+    }
+}
+
+/// Writes each slot's texels into its part of the staging buffer: the boxes of bricks below the held level read
+/// from the file first, on every core.
 fn fill_batch(
     staging: &mut Buffer,
-    pool: &Pool,
-    levels: &Levels,
+    (pool, levels, finer): (&Pool, &Levels, Option<&Finer>),
     kind: TexelKind,
     batch: &[u32],
     slot_bytes: usize,
-) -> Result<(), GpuError> {
+) -> Result<Vec<BoxRange>, GpuError> {
+    let bricks = batch
+        .iter()
+        .map(|&slot| pool.resident.get(slot as usize).copied().flatten())
+        .collect::<Option<Vec<Resident>>>()
+        .ok_or(GpuError::Lost("an upload into a slot that holds no brick"))?;
+    let boxes = bricks
+        .par_iter()
+        .map(|&r| match finer {
+            Some(f) if r.level < f.held() => {
+                let (lo, size) = slot_box(pool, r);
+                let data = f.read(r.level, lo, size).map_err(|e| GpuError::Source(e.to_string()))?;
+                Ok(Some(Boxed { data, lo, size }))
+            }
+            _ => Ok(None),
+        })
+        .collect::<Result<Vec<Option<Boxed>>, GpuError>>()?;
     let dst = staging
         .mapped_mut()
         .ok_or(GpuError::Lost("staging buffer is not host-visible"))?;
-    for (i, &slot) in batch.iter().enumerate() {
-        let brick = pool
-            .resident
-            .get(slot as usize)
-            .copied()
-            .flatten()
-            .ok_or(GpuError::Lost("an upload into a slot that holds no brick"))?;
+    for (i, (&brick, boxed)) in bricks.iter().zip(&boxes).enumerate() {
         let part = &mut dst[i * slot_bytes..(i + 1) * slot_bytes];
-        write_texels(&SlotRows { pool, brick }, levels, kind, part);
+        let rows = SlotRows {
+            pool,
+            brick,
+            within: boxed.as_ref(),
+        };
+        match boxed {
+            Some(b) => write_texels(&rows, &Levels::single(&b.data), kind, part),
+            None => write_texels(&rows, levels, kind, part),
+        }
     }
-    Ok(())
+    let ranges = bricks.iter().zip(&boxes);
+    Ok(ranges
+        .filter_map(|(&r, b)| b.as_ref().map(|b| (r, element_range(&b.data))))
+        .collect())
 }
 
 /// Copies the batch's staged bricks into their slots: from sampled (or, `fresh`, discarded) to transfer and back.

@@ -43,6 +43,9 @@ pub(super) struct GpuVolume {
     pub(super) light: Option<super::light_volume::LightImage>,
     /// Which bricks a streamed pool holds (`Renderer::start_stream`); None while the pool is a cut's.
     pub(super) stream: Option<super::stream::Stream>,
+    /// The normalised value range of each brick read from the file below the held level (`VolumeInfo::held`), for
+    /// the skip grid.
+    pub(super) finer_ranges: std::collections::HashMap<super::stream::Key, (f32, f32)>,
 }
 
 /// A 3D image of `dims` (a depth of 1 gets a duplicated second slice: a depth-1 image would be 2D), filled by
@@ -195,11 +198,41 @@ pub(super) enum Levels<'a> {
 impl<'a> Levels<'a> {
     /// `volume` and the levels above it (all of one element type).
     pub(super) fn of(volume: &'a Volume, pyramid: &'a [Volume]) -> Levels<'a> {
+        Levels::held(volume, pyramid, 0)
+    }
+
+    /// `volume` as level `held` and the levels above it; levels below it are empty (read from the file by brick).
+    pub(super) fn held(volume: &'a Volume, pyramid: &'a [Volume], held: u32) -> Levels<'a> {
         let all = std::iter::once(volume).chain(pyramid);
+        let below = held as usize;
         match &volume.data {
-            VoxelData::U8(_) => Levels::U8(all.filter_map(|v| v.data.as_u8()).collect()),
-            VoxelData::U16(_) => Levels::U16(all.filter_map(|v| v.data.as_u16()).collect()),
-            VoxelData::F32(_) => Levels::F32(all.filter_map(|v| v.data.as_f32()).collect()),
+            VoxelData::U8(_) => Levels::U8(
+                vec![&[][..]; below]
+                    .into_iter()
+                    .chain(all.filter_map(|v| v.data.as_u8()))
+                    .collect(),
+            ),
+            VoxelData::U16(_) => Levels::U16(
+                vec![&[][..]; below]
+                    .into_iter()
+                    .chain(all.filter_map(|v| v.data.as_u16()))
+                    .collect(),
+            ),
+            VoxelData::F32(_) => Levels::F32(
+                vec![&[][..]; below]
+                    .into_iter()
+                    .chain(all.filter_map(|v| v.data.as_f32()))
+                    .collect(),
+            ),
+        }
+    }
+
+    /// One box of voxels read from a file as the only level.
+    pub(super) fn single(data: &'a VoxelData) -> Levels<'a> {
+        match data {
+            VoxelData::U8(v) => Levels::U8(vec![v]),
+            VoxelData::U16(v) => Levels::U16(vec![v]),
+            VoxelData::F32(v) => Levels::F32(vec![v]),
         }
     }
 }
@@ -513,6 +546,8 @@ impl GpuVolume {
                 scale_bias: volume.gpu_scale_bias(),
                 range: volume.range,
                 pool: pool.info(),
+                held: 0,
+                step_level: 0,
             },
             cut: Cut::uniform(pool.grid, 0),
             pool,
@@ -527,6 +562,7 @@ impl GpuVolume {
             corners,
             light: None,
             stream: None,
+            finer_ranges: Default::default(),
         }
     }
 

@@ -212,11 +212,18 @@ pub fn extend_pyramid(volume: &Volume, pyramid: &mut Vec<Volume>, top: u32) -> R
 /// the levels its samples are taken at, those of the pool bricks it overlaps (`grids[L]` is level L's skip grid,
 /// whose brick k >> L holds every voxel a level-L sample inside level-0 skip brick k reads). A brick shown at level
 /// 2 is thus classified by level 2 alone: level 0's empty bricks under a coarser glow are not leapt over, and a
-/// coarse level's glow does not keep level-0 bricks shown elsewhere from being skipped.
-pub fn cut_ranges(grids: &[super::skip::BrickGrid], cut: &Cut, brick: [u32; 3]) -> super::skip::BrickGrid {
+/// coarse level's glow does not keep level-0 bricks shown elsewhere from being skipped. With `held` > 0 (a file's
+/// finer levels read by brick, `VolumeInfo::held`), `grids[0]` is level `held`'s grid, skip bricks are 8 of its
+/// voxels, and a brick shown below it takes the range of its own voxels as read (`finer`).
+pub fn cut_ranges(
+    grids: &[super::skip::BrickGrid],
+    cut: &Cut,
+    brick: [u32; 3],
+    (held, finer): (u32, &std::collections::HashMap<super::stream::Key, (f32, f32)>),
+) -> super::skip::BrickGrid {
     use rayon::prelude::*;
     let base = &grids[0];
-    let s = super::skip::BRICK;
+    let s = super::skip::BRICK << held;
     let [gx, gy, _] = base.bricks.map(|b| b as usize);
     let ranges: Vec<(f32, f32)> = (0..base.min.len())
         .into_par_iter()
@@ -229,7 +236,17 @@ pub fn cut_ranges(grids: &[super::skip::BrickGrid], cut: &Cut, brick: [u32; 3]) 
             for z in lo[2]..=hi[2] {
                 for y in lo[1]..=hi[1] {
                     for x in lo[0]..=hi[0] {
-                        let l = cut.level[(x + cut.grid[0] * (y + cut.grid[1] * z)) as usize] as usize;
+                        let l = cut.level[(x + cut.grid[0] * (y + cut.grid[1] * z)) as usize];
+                        let Some(l) = l.checked_sub(held).map(|l| l as usize) else {
+                            // A level finer than the one held, read from the file: its brick's own range (any
+                            // value if it was never read).
+                            let r = finer
+                                .get(&(l, [x, y, z].map(|v| v >> l)))
+                                .copied()
+                                .unwrap_or((0.0, 1.0));
+                            range = (range.0.min(r.0), range.1.max(r.1));
+                            continue;
+                        };
                         let g = &grids[l.min(grids.len() - 1)];
                         let [cx, cy, cz] = g.bricks.map(|b| b as usize);
                         let [x, y, z] = at.map(|v| (v >> l) as usize);
@@ -314,7 +331,7 @@ mod tests {
             for (i, l) in cut.level.iter_mut().enumerate() {
                 *l = if flat.brick_of(i)[0] == 0 { 0 } else { 2 };
             }
-            let r = cut_ranges(&grids, &cut, [side; 3]);
+            let r = cut_ranges(&grids, &cut, [side; 3], (0, &Default::default()));
             for k in 0..r.min.len() {
                 let x = k % 4;
                 let (x0, x1) = (x as u32 * 8 / side, (x as u32 * 8 + 7) / side);

@@ -326,12 +326,14 @@ impl Renderer {
 
     /// Precomputes `volume`'s gradients (its [`gradients::GradientFilter`] on the voxel grid, RGBA16 SNORM, 8 bytes
     /// per voxel) for frames with `gradient_texture`: the alternative to six extra samples per gradient, and the
-    /// smoothed gradient rule 5 prefers. `volume` must be the one last given to `set_volume`.
+    /// smoothed gradient rule 5 prefers. `volume` must be the one last given to `set_volume`. A volume whose finer
+    /// levels are read from its file has no texture (its finest voxels are not held): its frames take gradients by
+    /// central differences whatever `gradient_texture` says.
     pub fn enable_gradient_texture(&mut self, gpu: &Gpu, volume: &Volume) -> Result<(), GpuError> {
         let Some(vol) = &mut self.volume else {
             return Err(GpuError::Lost("no volume loaded"));
         };
-        if vol.gradient.is_some() {
+        if vol.gradient.is_some() || vol.info.held > 0 {
             return Ok(());
         }
         // Slab by slab: the gradients of the slices of each level the slab's slots hold, on that level's voxel
@@ -417,7 +419,8 @@ impl Renderer {
             RaySetup::Analytic if s.compute => Setup::Compute,
             RaySetup::Analytic => Setup::Analytic,
         };
-        let lighting = Lighting::new(s.gradient_texture, s.uses_light_volume());
+        let from_file = self.volume.as_ref().is_some_and(|v| v.info.held > 0);
+        let lighting = Lighting::new(s.gradient_texture && !from_file, s.uses_light_volume());
         let family = match s.mode {
             M::Emission | M::Density if s.shading.is_some() || s.gradient_opacity.is_some() => {
                 Family::EmissionShaded(lighting)

@@ -18,6 +18,10 @@ pub const UPLOAD_PER_STEP: u64 = 32 << 20;
 /// One step of `volume` (its shown step) fits `budgets`' GPU budget whole; a volume already held is not measured
 /// against the host budget again.
 pub fn fits_gpu_whole(volume: &Volume, budgets: &Budgets) -> bool {
+    if volume.finer.is_some() {
+        // Its finer levels are in the file: only a pool can show them.
+        return false;
+    }
     let shape = Shape {
         dims: volume.dims,
         voxel_type: volume.source_type,
@@ -28,6 +32,25 @@ pub fn fits_gpu_whole(volume: &Volume, budgets: &Budgets) -> bool {
         ..*budgets
     };
     misfit(&shape, 0, &gpu_only).is_none()
+}
+
+/// Why `volume` is streamed, as the notes say it after its name: over the GPU budget whole (`gpu_budget` bytes),
+/// or holding a coarser level of its file whose finer levels' bricks are read from the file.
+pub fn streamed_because(volume: &Volume, gpu_budget: u64) -> String {
+    match &volume.finer {
+        Some(f) => {
+            let [x, y, z] = f.dims();
+            format!(
+                "holds level {} of its {x}x{y}x{z} voxels; the finer levels' bricks are read from the file as the \
+                 view needs them",
+                f.held()
+            )
+        }
+        None => format!(
+            "is over the GPU budget whole ({})",
+            crate::volume::budget::show(gpu_budget)
+        ),
+    }
 }
 
 /// How a volume was placed.
@@ -98,12 +121,12 @@ impl Renderer {
 
     /// The cut the screen rule wants for the view `s` (one level coarser per doubling of `factor`) within the
     /// streamed pool; `None` when the volume is not streamed.
-    pub fn stream_wanted(&self, volume: &Volume, s: &RenderSettings, factor: f64) -> Option<Cut> {
+    pub fn stream_wanted(&self, _volume: &Volume, s: &RenderSettings, factor: f64) -> Option<Cut> {
         let vol = self.volume.as_ref()?;
         let stream = vol.stream.as_ref()?;
         let view = super::levels::View::of(&vol.info, s);
         Some(super::levels::screen_cut(
-            volume.dims,
+            vol.pool.dims,
             vol.pool.brick,
             stream.top,
             &view,

@@ -68,7 +68,8 @@ impl GpuVolume {
                 let level = &self.pyramid[self.skip_levels.len() - 1];
                 self.skip_levels.push(skip::BrickGrid::new(level));
             }
-            self.bricks = levels::cut_ranges(&self.skip_levels, &self.cut, self.pool.brick);
+            let held = (self.info.held, &self.finer_ranges);
+            self.bricks = levels::cut_ranges(&self.skip_levels, &self.cut, self.pool.brick, held);
             self.skip_stale = false;
         }
         &self.bricks
@@ -111,17 +112,18 @@ impl GpuVolume {
         brick: u32,
         pool_bytes: u64,
     ) -> Result<GpuVolume, GpuError> {
-        let brick3 = volume.dims.map(|d| brick.clamp(1, d));
+        let (dims, _) = level0(volume);
+        let brick3 = dims.map(|d| brick.clamp(1, d));
         let policy = match policy {
             TexelPolicy::Auto => TexelPolicy::Native,
             p => p,
         };
         let slot_texels = brick3.iter().map(|&b| u64::from(slot_side(b))).product::<u64>();
         let layout = layout_for(gpu, policy, volume, slot_texels);
-        let top = levels::top_level(volume.dims, brick3);
+        let top = levels::top_level(dims, brick3);
         let bricks_in_pyramid = (0..=top)
             .map(|l| {
-                levels::grid_at(volume.dims, brick3, l)
+                levels::grid_at(dims, brick3, l)
                     .iter()
                     .map(|&g| g as u64)
                     .product::<u64>()
@@ -150,7 +152,7 @@ impl GpuVolume {
                 return Err(e);
             }
         };
-        let pool = Pool::with_capacity(volume.dims, brick3, limit, 1, 0).map_err(GpuError::TooLarge)?;
+        let pool = Pool::with_capacity(dims, brick3, limit, 1, 0).map_err(GpuError::TooLarge)?;
         let mut v = GpuVolume::assemble(volume, layout, (None, None, directory), pool, bricks, occupancy);
         if let Err(e) = v.start_stream(gpu, volume, brick, capacity as usize) {
             v.destroy(gpu);
@@ -162,12 +164,13 @@ impl GpuVolume {
     /// Replaces the pool with an empty one of `capacity` slots of `brick`-voxel bricks for streaming `volume`,
     /// whose pyramid is made up to its top level (one brick). Nothing is shown until the first step.
     fn start_stream(&mut self, gpu: &Gpu, volume: &Volume, brick: u32, capacity: usize) -> Result<(), GpuError> {
-        let brick = volume.dims.map(|d| brick.clamp(1, d));
-        let top = levels::top_level(volume.dims, brick);
-        levels::extend_pyramid(volume, &mut self.pyramid, top)
+        let (dims, held) = level0(volume);
+        let brick = dims.map(|d| brick.clamp(1, d));
+        let top = levels::top_level(dims, brick);
+        levels::extend_pyramid(volume, &mut self.pyramid, top.saturating_sub(held))
             .map_err(|e| GpuError::TooLarge(format!("pyramid of {}: {e}", volume.name)))?;
         let limit = gpu.properties.limits.max_image_dimension3_d;
-        let pool = Pool::with_capacity(volume.dims, brick, limit, capacity, top).map_err(GpuError::TooLarge)?;
+        let pool = Pool::with_capacity(dims, brick, limit, capacity, top).map_err(GpuError::TooLarge)?;
         let format = match self.layout {
             VolumeLayout::Texture(f) => f,
             corners => corners_format(corners),
@@ -187,6 +190,12 @@ impl GpuVolume {
         self.stream = Some(Stream::new(pool.capacity(), top));
         self.cut = levels::Cut::uniform(pool.grid, top);
         self.replace_pool(gpu, (image, corners, directory), pool);
+        if let Some(f) = &volume.finer {
+            // The pool's level 0 is the file's; the volume is its level `held`.
+            (self.info.dims, self.info.geometry) = (f.dims(), f.geometry());
+        }
+        self.info.held = held;
+        self.info.step_level = held;
         self.skip_follows_cut();
         Ok(())
     }
@@ -204,8 +213,17 @@ impl GpuVolume {
                 .as_ref()
                 .or(self.corners.as_ref())
                 .ok_or(GpuError::Lost("the pool has no image"))?;
-            let levels = Levels::of(volume, &self.pyramid);
-            super::brick_upload::upload_bricks(gpu, image, self.layout, &levels, &self.pool, &slots, fresh)?;
+            let levels = Levels::held(volume, &self.pyramid, self.info.held);
+            let finer = volume.finer.as_deref();
+            let read =
+                super::brick_upload::upload_bricks(gpu, image, self.layout, &levels, &self.pool, &slots, fresh, finer)?;
+            for (r, range) in read {
+                let normal = range.map_or((f32::INFINITY, f32::NEG_INFINITY), |[a, b]| {
+                    let (a, b) = (volume.normalize_element(a) as f32, volume.normalize_element(b) as f32);
+                    (a.min(b), a.max(b))
+                });
+                self.finer_ranges.insert((r.level, r.brick), normal);
+            }
             if let Some(g) = self.gradient.take() {
                 g.destroy(gpu);
             }
@@ -221,9 +239,22 @@ impl GpuVolume {
         if self.cut != step.shown {
             self.cut = step.shown.clone();
             self.skip_follows_cut();
+            self.info.step_level = step_level(&self.cut, self.info.held);
         }
         Ok(step)
     }
+}
+
+/// Level 0's size of `volume` (its file's, where it holds a coarser level with finer ones in the file) and the
+/// level it holds.
+fn level0(volume: &Volume) -> ([u32; 3], u32) {
+    volume.finer.as_ref().map_or((volume.dims, 0), |f| (f.dims(), f.held()))
+}
+
+/// The march's step level for `cut` on a volume holding level `held`: the finest level shown, down to `held`
+/// (`VolumeInfo::step_level`).
+pub fn step_level(cut: &Cut, held: u32) -> u32 {
+    cut.level.iter().copied().min().unwrap_or(held).min(held)
 }
 
 impl Renderer {

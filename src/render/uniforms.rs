@@ -69,6 +69,12 @@ pub struct VolumeInfo {
     pub range: [f64; 2],
     /// Where the march finds the bricks.
     pub pool: PoolInfo,
+    /// The level the host holds: 0, or the level of a file whose finer levels' bricks are read from it
+    /// (`scale::finer`). The skip grid is that level's, in bricks of `skip::BRICK` of its voxels.
+    pub held: u32,
+    /// The march's step is `step_length` voxels of this level: the finest level the pool shows, down to `held`
+    /// (a file's finer levels are sampled at their own voxel once they are shown, not before).
+    pub step_level: u32,
 }
 
 /// The brick pool's shape, as the uniforms carry it.
@@ -246,7 +252,9 @@ impl FrameUniforms {
         let eye_tex = model.inverse().transform_point3(cam.eye.as_dvec3());
         let dims = DVec3::from_array(v.dims.map(f64::from));
         let index_to_world = v.index_to_world(s);
-        let h = s.step_length * v.smallest_voxel(s) as f32;
+        // The step in voxels of level 0 (the opacity of a segment follows its length in them).
+        let step_length = s.step_length * (1u32 << v.step_level) as f32;
+        let h = step_length * v.smallest_voxel(s) as f32;
         let shading = s.shading.unwrap_or_default();
         let surfaces = s.isosurfaces();
         let (iso_values, iso_colors) = iso_tables(&surfaces);
@@ -267,7 +275,7 @@ impl FrameUniforms {
             value_map: [v.scale_bias.0, v.scale_bias.1, s.window[0], s.window[1]],
             alpha: [
                 s.step_alpha,
-                s.step_length,
+                step_length,
                 s.early_termination,
                 if s.multiplied_alpha { 1.0 } else { 0.0 },
             ],
@@ -292,7 +300,7 @@ impl FrameUniforms {
                 s.looks_up_bricks() as u32 as f32,
                 surfaces.len().min(4) as f32,
             ],
-            brick: v4(DVec3::splat(f64::from(skip::BRICK)) / dims, 0.0),
+            brick: v4(DVec3::splat(f64::from(skip::BRICK << v.held)) / dims, 0.0),
             dims: [v.dims[0] as f32, v.dims[1] as f32, v.dims[2] as f32, 0.0],
             flags: [
                 s.mode.index(),

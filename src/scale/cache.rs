@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::time::UNIX_EPOCH;
 
 /// Changes whenever what a cached level holds would change (the pyramid's rule, the store's layout).
-pub const CACHE_VERSION: u32 = 1;
+pub const CACHE_VERSION: u32 = 2;
 
 /// Where the cache lives: `--cache-dir`, else `$XDG_CACHE_HOME/volcast`, else `~/.cache/volcast`.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -28,7 +28,7 @@ pub struct PyramidCache {
 }
 
 /// What a stamp says of the file its entry was made from.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 struct Stamp {
     version: u32,
     file: String,
@@ -36,6 +36,9 @@ struct Stamp {
     modified_ns: u128,
     level: u32,
     dims: [u32; 3],
+    /// Level 0's stored value range (the level normalises by it); not part of the file's identity.
+    #[serde(default)]
+    stored_range: Option<[f64; 2]>,
 }
 
 /// What looking a level up found.
@@ -95,21 +98,25 @@ impl PyramidCache {
             modified_ns,
             level,
             dims: crate::volume::budget::level_dims(place.dims, level),
+            stored_range: None,
         })
     }
 
     /// The store of level `level` of `place` and the level's size, if its entry's stamp says it was made from the file
     /// as it is now; else why not (`None`: there is no entry).
-    fn valid(&self, place: &InPlace, level: u32) -> Result<(PathBuf, [u32; 3]), Option<String>> {
+    fn valid(&self, place: &InPlace, level: u32) -> Result<(PathBuf, Stamp), Option<String>> {
         let (store, stamp_path) = self.entry(place, level);
         let text = std::fs::read_to_string(&stamp_path).map_err(|_| None)?;
         let found: Option<Stamp> = serde_json::from_str(&text).ok();
-        let now = PyramidCache::stamp(place, level);
+        let now = PyramidCache::stamp(place, level).map(|n| Stamp {
+            stored_range: found.as_ref().and_then(|f| f.stored_range),
+            ..n
+        });
         let why = match (&found, &now) {
             (None, _) => "its stamp is unreadable",
             (Some(f), _) if f.version != CACHE_VERSION => "it was written by another version of volcast",
             (Some(f), Some(n)) if f != n => "the file changed since it was made",
-            (Some(f), Some(_)) => return Ok((store, f.dims)),
+            (Some(f), Some(_)) => return Ok((store, f.clone())),
             (_, None) => "the file's size and time cannot be read",
         };
         Err(Some(format!(
@@ -120,13 +127,17 @@ impl PyramidCache {
 
     /// Level `level` of `place` from the cache, if an entry for the file as it is now is there and reads back.
     pub fn lookup(&self, place: &InPlace, level: u32) -> Lookup {
-        let (store, dims) = match self.valid(place, level) {
+        let (store, stamp) = match self.valid(place, level) {
             Ok(found) => found,
             Err(note) => return Lookup::Miss { note },
         };
         let store_label = store.display();
         match volume::open(&store, &OpenOptions::default()) {
-            Ok(mut v) if v.dims == dims => {
+            Ok(v) if v.dims == stamp.dims => {
+                let mut v = match stamp.stored_range {
+                    Some(r) => v.with_stored_range(r),
+                    None => v,
+                };
                 v.name = place.name.clone();
                 v.format = place.format.to_string();
                 v.notes = vec![format!("read from the pyramid cache ({store_label})")];
@@ -171,7 +182,7 @@ impl PyramidCache {
             return (v, Err("a rescaled file's levels are not cached".into()));
         }
         let (store, stamp_path) = self.entry(place, level);
-        let Some(stamp) = PyramidCache::stamp(place, level) else {
+        let Some(mut stamp) = PyramidCache::stamp(place, level) else {
             return (v, Err("the file's size and time cannot be read".into()));
         };
         let fail = |what: &str, e: &dyn std::fmt::Display| format!("{what} {}: {e}", store.display());
@@ -195,6 +206,7 @@ impl PyramidCache {
             reduce: Reduce::Mean,
             step: None,
         };
+        stamp.stored_range = Some(v.stored_range);
         let source = Source::Loaded(Box::new(v));
         let written = convert(&source, &store, &opts, &mut |_| {}).map_err(|e| fail("cannot write", &e));
         let Source::Loaded(v) = source else {

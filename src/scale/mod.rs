@@ -5,6 +5,7 @@
 //! docs/large-volumes.md states the rules and what is still to come (bricks behind a page table).
 
 pub mod cache;
+pub mod finer;
 pub mod preview;
 pub mod read;
 
@@ -118,7 +119,7 @@ fn read_place(
             notes.append(&mut v.notes);
             v.notes = notes;
             return Ok(Opened {
-                volume: after_level(*v, opts),
+                volume: with_finer(after_level(*v, opts), &place, level.level)?,
                 keep: None,
             });
         }
@@ -130,6 +131,7 @@ fn read_place(
         notes.push("its compressed voxels were decoded once, as a stream, into that level".into());
     }
     let source = Source::in_place(place.clone())?;
+    let keep_place = place.clone();
     let mut v = read::read_level(&source, level.level, host_budget, notes, progress)?;
     v.format = place.format.to_string();
     let keep = cache.map(|c| Keep {
@@ -138,9 +140,18 @@ fn read_place(
         level: level.level,
     });
     Ok(Opened {
-        volume: after_level(v, opts),
+        volume: with_finer(after_level(v, opts), &keep_place, level.level)?,
         keep,
     })
+}
+
+/// `v`, level `level` of `place`, with its finer levels in the file ([`finer::Finer`]) where they can be read by
+/// box and `v` is that level as read (not reduced further by `--max-dim`).
+fn with_finer(mut v: Volume, place: &InPlace, level: u32) -> Result<Volume, VolumeError> {
+    if v.dims == budget::level_dims(place.dims, level) {
+        v.finer = finer::Finer::of(place, level)?.map(std::sync::Arc::new);
+    }
+    Ok(v)
 }
 
 /// A preview of `path` when it is a file read in place that is large at the level `budgets` give it: from the

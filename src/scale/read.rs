@@ -24,7 +24,7 @@ fn level_step<T: Sample>(
     level: u32,
     host_budget: u64,
     progress: &mut dyn FnMut(f32),
-) -> Result<Vec<T>, VolumeError> {
+) -> Result<(Vec<T>, Option<[f64; 2]>), VolumeError> {
     let full = source.dims();
     let out = level_dims(full, level);
     let slice = out[0] as usize * out[1] as usize;
@@ -52,7 +52,19 @@ fn level_step<T: Sample>(
         let n = span.min(full[2] - z0);
         Ok((source.read_slab(t, z0, n, crate::volume::Scaling::IDENTITY)?, n))
     };
+    // Level 0's value range, from the voxels read: the level stands in for level 0 and normalises as it does.
+    let range = std::sync::Mutex::new(None::<[f64; 2]>);
     let reduce = |(mut slab, n): (Vec<T>, u32), into: &mut [T]| {
+        let found = slab
+            .iter()
+            .map(|v| v.to_f64())
+            .filter(|v| v.is_finite())
+            .fold(None, |r: Option<[f64; 2]>, v| {
+                Some(r.map_or([v, v], |[a, b]| [a.min(v), b.max(v)]))
+            });
+        if let (Some([a, b]), Ok(mut r)) = (found, range.lock()) {
+            *r = Some(r.map_or([a, b], |[lo, hi]| [lo.min(a), hi.max(b)]));
+        }
         let mut dims = [full[0] as usize, full[1] as usize, n as usize];
         for l in 0..level {
             // The factors of the whole level, not of the slab: an axis of length 1 is not halved.
@@ -78,33 +90,47 @@ fn level_step<T: Sample>(
         }
         progress(last as f32 / out[2] as f32);
     }
-    Ok(dst)
+    let range = range.into_inner().ok().flatten();
+    Ok((dst, range))
 }
 
-/// One step of level `level` as [`VoxelData`] in the representation `voxel_type` is held in.
+/// One step of level `level` as [`VoxelData`] in the representation `voxel_type` is held in, and the stored value
+/// range of the level-0 voxels it was made from.
 fn level_data(
     source: &Source,
     t: u32,
     level: u32,
     host_budget: u64,
     progress: &mut dyn FnMut(f32),
-) -> Result<VoxelData, VolumeError> {
+) -> Result<(VoxelData, Option<[f64; 2]>), VolumeError> {
+    fn biased<T: Send, U: Send>((v, r): (Vec<T>, Option<[f64; 2]>), f: fn(T) -> U) -> (Vec<U>, Option<[f64; 2]>) {
+        (v.into_par_iter().map(f).collect(), r)
+    }
     Ok(match source.held_type() {
-        VoxelType::U8 => VoxelData::U8(level_step::<u8>(source, t, level, host_budget, progress)?),
-        VoxelType::I8 => VoxelData::U8(
-            level_step::<i8>(source, t, level, host_budget, progress)?
-                .into_par_iter()
-                .map(|v| (i16::from(v) + 128) as u8)
-                .collect(),
-        ),
-        VoxelType::U16 => VoxelData::U16(level_step::<u16>(source, t, level, host_budget, progress)?),
-        VoxelType::I16 => VoxelData::U16(
-            level_step::<i16>(source, t, level, host_budget, progress)?
-                .into_par_iter()
-                .map(|v| (i32::from(v) + 32768) as u16)
-                .collect(),
-        ),
-        _ => VoxelData::F32(level_step::<f32>(source, t, level, host_budget, progress)?),
+        VoxelType::U8 => {
+            let (v, r) = level_step::<u8>(source, t, level, host_budget, progress)?;
+            (VoxelData::U8(v), r)
+        }
+        VoxelType::I8 => {
+            let (v, r) = biased(level_step::<i8>(source, t, level, host_budget, progress)?, |v| {
+                (i16::from(v) + 128) as u8
+            });
+            (VoxelData::U8(v), r)
+        }
+        VoxelType::U16 => {
+            let (v, r) = level_step::<u16>(source, t, level, host_budget, progress)?;
+            (VoxelData::U16(v), r)
+        }
+        VoxelType::I16 => {
+            let (v, r) = biased(level_step::<i16>(source, t, level, host_budget, progress)?, |v| {
+                (i32::from(v) + 32768) as u16
+            });
+            (VoxelData::U16(v), r)
+        }
+        _ => {
+            let (v, r) = level_step::<f32>(source, t, level, host_budget, progress)?;
+            (VoxelData::F32(v), r)
+        }
     })
 }
 
@@ -128,17 +154,22 @@ pub fn read_level(
 ) -> Result<Volume, VolumeError> {
     let steps = source.timesteps().max(1);
     let mut data = Vec::with_capacity(steps as usize);
+    let mut stored: Option<[f64; 2]> = None;
     for t in 0..steps {
         let (t0, n) = (t as f32, steps as f32);
-        data.push(level_data(source, t, level, host_budget, &mut |f| {
-            progress((t0 + f) / n)
-        })?);
+        let (d, r) = level_data(source, t, level, host_budget, &mut |f| progress((t0 + f) / n))?;
+        data.push(d);
+        if let Some([a, b]) = r {
+            stored = Some(stored.map_or([a, b], |[lo, hi]| [lo.min(a), hi.max(b)]));
+        }
     }
     let dims = level_dims(source.dims(), level);
     let first = data.remove(0);
     let mut v = Volume::new(source.name(), dims, [1.0; 3], source.source_type(), first)?
         .with_geometry(level_geometry(source.geometry(), source.dims(), level))?
         .with_time_steps(data)?;
+    // The level stands in for level 0: it normalises by level 0's range, as the levels above a held volume do.
+    v = v.with_stored_range(stored.unwrap_or([0.0, 0.0]));
     let scaling = source.scaling();
     if !scaling.is_identity() {
         v = v.with_scaling(scaling)?;

@@ -102,6 +102,9 @@ pub struct Volume {
     /// The channels of an OME-Zarr image (names, omero windows and colours), the loaded one marked; empty
     /// otherwise. The loaded channel's window and colour seed the default transfer function.
     pub channels: Vec<ChannelInfo>,
+    /// Where this is a coarser level of a file read in place, the finer levels' bricks in that file (streamed
+    /// pools read them as the view needs them); `None` otherwise.
+    pub finer: Option<std::sync::Arc<crate::scale::finer::Finer>>,
 }
 
 /// One data array of a multi-array file, as `volcast info` lists it.
@@ -158,6 +161,7 @@ impl Volume {
             series: Vec::new(),
             time: TimeSteps::default(),
             channels: Vec::new(),
+            finer: None,
         })
     }
 
@@ -200,6 +204,14 @@ impl Volume {
         let [a, b] = self.stored_range.map(|v| scaling.apply(v));
         self.range = [a.min(b), a.max(b)];
         Ok(self)
+    }
+
+    /// Sets the stored value range (a level of a pyramid takes level 0's) and the scaled range from it.
+    pub fn with_stored_range(mut self, stored: [f64; 2]) -> Volume {
+        self.stored_range = stored;
+        let [a, b] = stored.map(|v| self.scaling.apply(v));
+        self.range = [a.min(b), a.max(b)];
+        self
     }
 
     /// Bytes the voxels take on the GPU.

@@ -9,6 +9,7 @@ pub mod common;
 
 mod clip;
 mod features;
+mod finer;
 mod levels;
 mod lighting;
 mod methods_agree;

@@ -225,6 +225,8 @@ impl SampleCounter {
             scale_bias: (1.0, 0.0),
             range: self.range,
             pool: PoolInfo::whole(self.dims.map(|d| d as u32)),
+            held: 0,
+            step_level: 0,
         };
         let u = FrameUniforms::new(s, &info);
         let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);

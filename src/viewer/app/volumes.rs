@@ -64,9 +64,9 @@ impl Shown {
             Placed::Whole => None,
             Placed::Streamed { capacity } => {
                 eprintln!(
-                    "note: {} is over the GPU budget whole ({}); streamed through a pool of {capacity} bricks",
+                    "note: {} {}; streamed through a pool of {capacity} bricks",
                     v.name,
-                    crate::volume::budget::show(budgets.gpu.map_or(0, |g| g.bytes))
+                    crate::render::placement::streamed_because(&v, budgets.gpu.map_or(0, |g| g.bytes))
                 );
                 // Central differences: a gradient texture of the pool (8 bytes a texel) would be made again
                 // after every step that uploads.

@@ -1,0 +1,170 @@
+//! The levels finer than the one a volume holds. A file whose voxels lie in place on disk is held at the finest
+//! level of the pyramid that the host budget takes; its finer levels stay in the file, and a streamed pool reads
+//! their bricks as the view needs them: one box of level-0 voxels per brick (a positioned read per row), reduced
+//! to the brick's level by the pyramid's rule (`convert::pyramid`, recursively, each box aligned to 2^L so that the
+//! cascade inside it is exactly the pyramid's). docs/large-volumes.md, "Full resolution from the file".
+
+use crate::convert::pyramid::{downsample, factors, Reduce};
+use crate::convert::sample::Sample;
+use crate::convert::source::Source;
+use crate::volume::budget::level_dims;
+use crate::volume::in_place::InPlace;
+use crate::volume::{Geometry, VolumeError, VoxelData, VoxelType};
+use rayon::prelude::*;
+
+/// Where the levels below a held level come from.
+pub struct Finer {
+    source: Source,
+    /// Level 0's size and placement.
+    dims: [u32; 3],
+    geometry: Geometry,
+    /// The level the volume holds: levels 0..held come from the file.
+    held: u32,
+}
+
+impl std::fmt::Debug for Finer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Finer({}, {:?} below level {})",
+            self.source.name(),
+            self.dims,
+            self.held
+        )
+    }
+}
+
+impl Finer {
+    /// The finer levels of `place`, held at level `held`: only for one step of voxels that lie uncompressed in the
+    /// file (a compressed stream cannot be read by box) and a held level above 0.
+    pub fn of(place: &InPlace, held: u32) -> Result<Option<Finer>, VolumeError> {
+        if held == 0 || place.inflate.is_some() || place.timesteps > 1 || !place.scaling.is_identity() {
+            return Ok(None);
+        }
+        Ok(Some(Finer {
+            source: Source::in_place(place.clone())?,
+            dims: place.dims,
+            geometry: place.geometry,
+            held,
+        }))
+    }
+
+    /// Level 0's size in voxels.
+    pub fn dims(&self) -> [u32; 3] {
+        self.dims
+    }
+
+    /// Level 0's placement.
+    pub fn geometry(&self) -> Geometry {
+        self.geometry
+    }
+
+    /// The level the volume holds.
+    pub fn held(&self) -> u32 {
+        self.held
+    }
+
+    /// Voxels `lo..lo + size` of level `level` (below the held one; the box within the level), x fastest, in the
+    /// representation the held level has (biased 8/16-bit integers, float32 for wider types).
+    pub fn read(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<VoxelData, VolumeError> {
+        let within = level_dims(self.dims, level);
+        if level >= self.held || (0..3).any(|a| size[a] == 0 || lo[a] + size[a] > within[a]) {
+            return Err(VolumeError::Header {
+                file: self.source.name().to_string(),
+                problem: format!("no box {lo:?}+{size:?} in level {level} below level {}", self.held),
+            });
+        }
+        Ok(match self.source.held_type() {
+            VoxelType::U8 => VoxelData::U8(self.box_at::<u8>(level, lo, size)?),
+            VoxelType::I8 => VoxelData::U8(
+                (self.box_at::<i8>(level, lo, size)?.into_par_iter())
+                    .map(|v| (i16::from(v) + 128) as u8)
+                    .collect(),
+            ),
+            VoxelType::U16 => VoxelData::U16(self.box_at::<u16>(level, lo, size)?),
+            VoxelType::I16 => VoxelData::U16(
+                (self.box_at::<i16>(level, lo, size)?.into_par_iter())
+                    .map(|v| (i32::from(v) + 32768) as u16)
+                    .collect(),
+            ),
+            _ => VoxelData::F32(self.box_at::<f32>(level, lo, size)?),
+        })
+    }
+
+    /// The box of level `level` from the level-0 box under it, halved `level` times.
+    fn box_at<T: Sample>(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<Vec<T>, VolumeError> {
+        let lo0 = lo.map(|v| v << level);
+        let hi0 = [0, 1, 2].map(|a| ((lo[a] + size[a]) << level).min(self.dims[a]));
+        let mut dims = [0, 1, 2].map(|a| (hi0[a] - lo0[a]) as usize);
+        let mut data = self.source.read_box::<T>(0, lo0, dims.map(|d| d as u32))?;
+        for l in 0..level {
+            // The factors of the whole level, not of the box: an axis of length 1 is not halved.
+            let f = factors(level_dims(self.dims, l).map(u64::from));
+            data = downsample(&data, dims, f, Reduce::Mean);
+            dims = [0, 1, 2].map(|a| dims[a].div_ceil(f[a]));
+        }
+        debug_assert_eq!(dims, size.map(|s| s as usize));
+        Ok(data)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scale::read::read_level;
+    use crate::volume::in_place::in_place;
+
+    /// Every box of every finer level equals that level of the pyramid read whole, at odd sizes and offsets.
+    #[test]
+    fn boxes_of_finer_levels_equal_the_pyramid() {
+        let dims = [13u32, 9, 11];
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        let src: Vec<i16> = (0..n).map(|i| ((i * 7919) % 601) as i16 - 300).collect();
+        let (path, opts) = crate::scale::test_file::int16_raw("finer", dims, &src, None);
+        let place = in_place(&path, &opts).unwrap().unwrap();
+        let finer = Finer::of(&place, 3).unwrap().expect("raw has finer levels");
+        let whole = Source::in_place(place).unwrap();
+        for level in 0..3 {
+            let full = if level == 0 {
+                crate::volume::open(&path, &opts).unwrap()
+            } else {
+                read_level(&whole, level, 1 << 30, Vec::new(), &mut |_| {}).unwrap()
+            };
+            let ld = full.dims;
+            let half = ld.map(|d| d / 2);
+            let rest = [0, 1, 2].map(|a| ld[a] - half[a]);
+            for (lo, size) in [
+                ([0, 0, 0], ld),
+                (half, rest),
+                ([ld[0] - 1, 0, ld[2] - 1], [1, ld[1], 1]),
+            ] {
+                let VoxelData::U16(got) = finer.read(level, lo, size).unwrap() else {
+                    panic!("int16 is held as biased uint16")
+                };
+                let VoxelData::U16(all) = &full.data else { panic!() };
+                for z in 0..size[2] {
+                    for y in 0..size[1] {
+                        for x in 0..size[0] {
+                            let at = |p: [u32; 3], d: [u32; 3]| (p[0] + d[0] * (p[1] + d[1] * p[2])) as usize;
+                            let want = all[at([lo[0] + x, lo[1] + y, lo[2] + z], ld)];
+                            assert_eq!(
+                                got[at([x, y, z], size)],
+                                want,
+                                "level {level} box {lo:?} at {x},{y},{z}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(
+            finer.read(3, [0; 3], [1; 3]).is_err(),
+            "the held level is not read from the file"
+        );
+        assert!(
+            finer.read(0, [12, 0, 0], [2, 1, 1]).is_err(),
+            "a box past the level's edge"
+        );
+        std::fs::remove_dir_all(path.parent().unwrap()).ok();
+    }
+}

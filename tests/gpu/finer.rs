@@ -1,0 +1,124 @@
+//! Full resolution from the file (src/scale/finer.rs, render/brick_upload.rs): a 128³ helix written as a raw file
+//! and opened within a host budget that holds only level 1. The pool's level 0 is the file's: its bricks are read
+//! from the file as the view wants them. Every step's image matches the reference made from the whole level-0
+//! volume for the cut shown, with the step of the finest level shown (down to the held one); with room for every
+//! brick the stream reaches the image of the whole volume uploaded at full resolution, bit for bit.
+
+use crate::common;
+
+use common::bounds::REFERENCE;
+use common::gpu::{finish, validated_gpu, Judge};
+use common::levels::Cut as RefCut;
+use common::reference::{Reference, Rendered};
+use volcast::render::headless::Headless;
+use volcast::render::levels::Cut;
+use volcast::scene::camera::Camera;
+use volcast::scene::settings::{RenderSettings, Shading};
+use volcast::volume::budget::Budgets;
+use volcast::volume::{self, OpenOptions, Volume};
+
+/// The helix and the same voxels opened from a raw file within a host budget one byte short of level 0.
+fn helix_held_at_level_1(folder: &str) -> (Volume, Volume) {
+    let helix = volume::builtin("helix", Some(128)).expect("helix");
+    let dir = common::scratch::scratch(folder);
+    let path = dir.write("helix_128x128x128_uint8.raw", helix.gpu_bytes());
+    let budgets = Budgets {
+        host: 128 * 128 * 128 - 1,
+        gpu: None,
+    };
+    let held = volcast::scale::open(&path, &OpenOptions::default(), budgets, None, &mut |_| {}).expect("open");
+    assert_eq!(held.dims, [64; 3], "level 1 is held");
+    assert!(held.finer.is_some(), "level 0 stays in the file");
+    assert_eq!(held.range, helix.range, "the held level normalises by level 0's range");
+    (helix, held)
+}
+
+/// A close shaded view from `azimuth`.
+fn view(v: &Volume, azimuth: f32) -> RenderSettings {
+    let mut s = RenderSettings::for_volume(96, 96, v);
+    s.camera = Camera::orbit(azimuth, 20.0, 1.2, glam::Vec3::ZERO);
+    s.shading = Some(Shading::default());
+    s
+}
+
+/// The reference's frame for `cut`: the march steps by the finest level shown, down to level 1 (the held one).
+fn reference_for(helix: &Volume, cut: &Cut, s: &RenderSettings) -> Rendered {
+    let finest = cut.level.iter().copied().min().unwrap().min(1);
+    let mut s = s.clone();
+    s.step_length *= (1u32 << finest) as f32;
+    let rc = RefCut {
+        brick: [16; 3],
+        grid: cut.grid.map(|g| g as usize),
+        level: cut.level.clone(),
+    };
+    Reference::with_levels(helix, rc).render_full(&s)
+}
+
+/// A pool of 120 slots streams the held level's top and level-0 bricks from the file: each step's image matches the
+/// reference for its cut, and the close view reaches level 0 where it wants it.
+#[test]
+fn finer_levels_stream_from_the_file() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut judge = Judge::default();
+    let (helix, held) = helix_held_at_level_1("gpu-finer-stream");
+    headless.renderer.brick_side = Some(16);
+    headless.set_volume(&gpu, &held).expect("upload");
+    headless.renderer.start_stream(&gpu, &held, 120).expect("stream");
+    assert_eq!(
+        headless.renderer.pool().unwrap().grid,
+        [8, 8, 8],
+        "the file's level-0 grid"
+    );
+    let s = view(&helix, 30.0);
+    let mut level0 = false;
+    for n in 0..40 {
+        let step = headless.renderer.stream_step(&gpu, &held, &s, 1.0, 6).expect("step");
+        level0 |= step.shown.level.contains(&0);
+        let actual = headless.render(&gpu, &s).expect("render").image;
+        let expected = reference_for(&helix, &step.shown, &s);
+        judge.against(
+            "reference",
+            format!("finer-step-{n}"),
+            &actual,
+            &expected,
+            &s,
+            REFERENCE,
+        );
+        if step.missing == 0 {
+            assert!(level0, "the close view shows level-0 bricks read from the file");
+            return finish(gpu, headless, judge);
+        }
+    }
+    panic!("the stream did not reach its cut in 40 steps");
+}
+
+/// With room for every brick and a tiny factor, the stream reaches level 0 everywhere: the image equals the one of
+/// the whole volume streamed from memory to level 0, bit for bit (skipping and strides off: the skip grids differ,
+/// a brick read from the file taking one range where the volume in memory has one per 8³).
+#[test]
+fn finer_levels_refine_to_the_whole_image() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let (helix, held) = helix_held_at_level_1("gpu-finer-whole");
+    headless.renderer.brick_side = Some(16);
+    let mut s = view(&helix, 30.0);
+    s.skip_empty = false;
+    s.max_stride = 1;
+    let mut level0 = |v: &Volume| {
+        headless.set_volume(&gpu, v).expect("upload");
+        headless.renderer.start_stream(&gpu, v, 600).expect("stream");
+        for _ in 0..10 {
+            let step = headless.renderer.stream_step(&gpu, v, &s, 1e-6, 128).expect("step");
+            if step.missing == 0 {
+                assert!(step.shown.level.iter().all(|&l| l == 0));
+                return headless.render(&gpu, &s).unwrap().image;
+            }
+        }
+        panic!("512 bricks and the top in uploads of 128");
+    };
+    let from_memory = level0(&helix);
+    let from_file = level0(&held);
+    assert!(from_file == from_memory, "refined to level 0 from the file");
+    finish(gpu, headless, Judge::default());
+}
