@@ -125,6 +125,25 @@ pub struct ScaleRow {
     pub cache_write_s: Option<f64>,
     /// Over the GPU budget whole: streamed through a pool of this many bricks, and the levels shown at rest.
     pub streamed: Option<(usize, String)>,
+    /// Streamed: the view four times closer, refined from the rest view's pool.
+    pub close: Option<Close>,
+}
+
+/// A close view of a streamed volume: where the screen rule wants the file's finest levels.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Close {
+    /// The levels shown once refined, and how long refining took from the rest view's pool.
+    pub levels: String,
+    pub refined_s: f64,
+    pub rest_ms: Stats,
+}
+
+/// `rest` four times closer to its target.
+fn closer(rest: &RenderSettings) -> RenderSettings {
+    let mut s = rest.clone();
+    let c = &mut s.camera;
+    c.eye = c.target + (c.eye - c.target) / 4.0;
+    s
 }
 
 /// (rchar, read_bytes) of this process.
@@ -247,6 +266,26 @@ pub fn measure(
         }
         let drag_ms = timed_frames(gpu, &mut headless, &drag, frames)?;
         let streamed = at_rest.map(|p| (headless.renderer.stream().map_or(0, |s| s.capacity()), p.levels_shown()));
+        let close = match streamed {
+            Some(_) => {
+                let s = closer(&rest);
+                let t = Instant::now();
+                let levels = headless
+                    .renderer
+                    .refine(gpu, &v, &s)?
+                    .map(|p| p.levels_shown())
+                    .unwrap_or_default();
+                headless.render(gpu, &s)?;
+                let refined_s = t.elapsed().as_secs_f64();
+                let rest_ms = timed_frames(gpu, &mut headless, &s, frames)?;
+                Some(Close {
+                    levels,
+                    refined_s,
+                    rest_ms,
+                })
+            }
+            None => None,
+        };
         let peak = if peak_known { peak_rss_bytes() } else { None };
         let write = Instant::now();
         let cache_write_s = opened.keep.map(|k| {
@@ -259,7 +298,8 @@ pub fn measure(
                 .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
             file_bytes: std::fs::metadata(path)?.len(),
             cache,
-            shown: v.dims,
+            // The file's size where its finer levels stream from it.
+            shown: v.finer.as_ref().map_or(v.dims, |f| f.dims()),
             level: level.unwrap_or(0),
             first_image_s: if had_preview { first } else { refined },
             preview: had_preview,
@@ -272,6 +312,7 @@ pub fn measure(
             read_from_disk: io0.zip(io1).map(|(a, b)| b.1 - a.1),
             cache_write_s,
             streamed,
+            close,
         })
     })();
     headless.destroy(gpu);
@@ -331,6 +372,18 @@ pub fn table(rows: &[ScaleRow], device: &str, size: u32) -> String {
             opt(r.read_from_disk),
             r.cache_write_s.map_or("-".to_string(), |s| format!("{s:.1}")),
         );
+    }
+    let close: Vec<&ScaleRow> = rows.iter().filter(|r| r.close.is_some()).collect();
+    if !close.is_empty() {
+        out += "\nstreamed scenes four times closer (refined from the rest view's pool)\n\
+                | scene | cache | shown (levels of the file's level-0 bricks) | refined s | rest ms |\n|---|---|---|---|---|\n";
+        for r in close {
+            let c = r.close.as_ref().expect("filtered");
+            out += &format!(
+                "| {} | {} | {} | {:.2} | {:.0} |\n",
+                r.scene, r.cache, c.levels, c.refined_s, c.rest_ms.median
+            );
+        }
     }
     out
 }

@@ -496,9 +496,14 @@ impl Renderer {
         if !self.occupancy_is_current(s) {
             // The table is current now (above), so the occupancy follows from it.
             if let Some(vol) = &mut self.volume {
+                // Strides follow the step the march takes (the finest level shown).
+                let stepped = RenderSettings {
+                    step_length: vol.info.step_length(s),
+                    ..s.clone()
+                };
                 let grid = vol.skip_grid();
                 let (occupancy, depth) = (
-                    skip::encode_reach(&grid.classify(&self.lut_table, s), grid.bricks),
+                    skip::encode_reach(&grid.classify(&self.lut_table, &stepped), grid.bricks),
                     grid.bricks[2],
                 );
                 upload_3d(gpu, &mut vol.occupancy, &occupancy, depth)?;

@@ -42,6 +42,7 @@ impl GpuVolume {
         let images = upload_pool(gpu, self.layout, &Levels::of(volume, &self.pyramid), &pool)?;
         self.replace_pool(gpu, images, pool);
         self.cut = cut.clone();
+        self.info.step_level = step_level(cut);
         self.stream = None;
         self.skip_follows_cut();
         Ok(true)
@@ -195,7 +196,7 @@ impl GpuVolume {
             (self.info.dims, self.info.geometry) = (f.dims(), f.geometry());
         }
         self.info.held = held;
-        self.info.step_level = held;
+        self.info.step_level = step_level(&self.cut);
         self.skip_follows_cut();
         Ok(())
     }
@@ -239,7 +240,7 @@ impl GpuVolume {
         if self.cut != step.shown {
             self.cut = step.shown.clone();
             self.skip_follows_cut();
-            self.info.step_level = step_level(&self.cut, self.info.held);
+            self.info.step_level = step_level(&self.cut);
         }
         Ok(step)
     }
@@ -251,10 +252,10 @@ fn level0(volume: &Volume) -> ([u32; 3], u32) {
     volume.finer.as_ref().map_or((volume.dims, 0), |f| (f.dims(), f.held()))
 }
 
-/// The march's step level for `cut` on a volume holding level `held`: the finest level shown, down to `held`
-/// (`VolumeInfo::step_level`).
-pub fn step_level(cut: &Cut, held: u32) -> u32 {
-    cut.level.iter().copied().min().unwrap_or(held).min(held)
+/// The march's step level for `cut`: the finest level shown (`VolumeInfo::step_level`). A sample of level L
+/// resolves no more than one of its voxels, so a cut of coarser levels takes longer steps.
+pub fn step_level(cut: &Cut) -> u32 {
+    cut.level.iter().copied().min().unwrap_or(0)
 }
 
 impl Renderer {

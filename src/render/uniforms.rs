@@ -72,8 +72,8 @@ pub struct VolumeInfo {
     /// The level the host holds: 0, or the level of a file whose finer levels' bricks are read from it
     /// (`scale::finer`). The skip grid is that level's, in bricks of `skip::BRICK` of its voxels.
     pub held: u32,
-    /// The march's step is `step_length` voxels of this level: the finest level the pool shows, down to `held`
-    /// (a file's finer levels are sampled at their own voxel once they are shown, not before).
+    /// The march's step is `step_length` voxels of this level: the finest level the pool shows (a cut of coarser
+    /// levels takes longer steps; a file's finer levels their own voxel once they are shown).
     pub step_level: u32,
 }
 
@@ -113,6 +113,11 @@ impl VolumeInfo {
     pub fn index_to_world(&self, s: &RenderSettings) -> DMat3 {
         let dims = DVec3::from_array(self.dims.map(f64::from));
         DMat3::from_mat4(self.tex_to_world(s)) * DMat3::from_diagonal(1.0 / dims)
+    }
+
+    /// The march's step in voxels of level 0: `s.step_length` voxels of the finest level shown.
+    pub fn step_length(&self, s: &RenderSettings) -> f32 {
+        s.step_length * (1u32 << self.step_level) as f32
     }
 
     /// The smallest voxel side in world units (rule 2's and rule 9's voxel).
@@ -253,7 +258,7 @@ impl FrameUniforms {
         let dims = DVec3::from_array(v.dims.map(f64::from));
         let index_to_world = v.index_to_world(s);
         // The step in voxels of level 0 (the opacity of a segment follows its length in them).
-        let step_length = s.step_length * (1u32 << v.step_level) as f32;
+        let step_length = v.step_length(s);
         let h = step_length * v.smallest_voxel(s) as f32;
         let shading = s.shading.unwrap_or_default();
         let surfaces = s.isosurfaces();

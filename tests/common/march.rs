@@ -56,6 +56,8 @@ struct Composite {
 
 impl<'a> Frame<'a> {
     pub(crate) fn new(volume: &'a Reference, s: &RenderSettings) -> Frame<'a> {
+        let stepped = volume.stepped(s);
+        let s = &stepped;
         let placement = volume.placement(s);
         let world_per_mm = placement.world_per_mm();
         let shading = match s.mode {

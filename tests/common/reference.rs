@@ -317,6 +317,17 @@ impl Reference {
         Placement::new(self.affine, self.dims, s.voxel_axes)
     }
 
+    /// The settings the march takes: a cut of the pyramid is marched at `step_length` voxels of the finest level it
+    /// shows (render/resident.rs `step_level`, `VolumeInfo::step_level`).
+    pub(crate) fn stepped(&self, s: &RenderSettings) -> RenderSettings {
+        let mut s = s.clone();
+        if let Some((_, cut)) = &self.levels {
+            let finest = cut.level.iter().copied().min().unwrap_or(0);
+            s.step_length *= (1u32 << finest) as f32;
+        }
+        s
+    }
+
     /// Rule 2's step `h` in world units: `step_length` × the smallest voxel side.
     pub fn step_world(&self, s: &RenderSettings) -> f64 {
         f64::from(s.step_length) * self.placement(s).voxel_sides().min_element()

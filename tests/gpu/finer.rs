@@ -41,17 +41,14 @@ fn view(v: &Volume, azimuth: f32) -> RenderSettings {
     s
 }
 
-/// The reference's frame for `cut`: the march steps by the finest level shown, down to level 1 (the held one).
+/// The reference's frame for `cut` (it steps by the finest level shown, as the GPU does).
 fn reference_for(helix: &Volume, cut: &Cut, s: &RenderSettings) -> Rendered {
-    let finest = cut.level.iter().copied().min().unwrap().min(1);
-    let mut s = s.clone();
-    s.step_length *= (1u32 << finest) as f32;
     let rc = RefCut {
         brick: [16; 3],
         grid: cut.grid.map(|g| g as usize),
         level: cut.level.clone(),
     };
-    Reference::with_levels(helix, rc).render_full(&s)
+    Reference::with_levels(helix, rc).render_full(s)
 }
 
 /// A pool of 120 slots streams the held level's top and level-0 bricks from the file: each step's image matches the

@@ -2,7 +2,8 @@
 //! first shows a strided preview (1 voxel in 4 per axis) while the file is read, then the volume itself, and the F12
 //! screenshot then equals the headless render of the whole file. Under a `--gpu-budget` it is over whole, the viewer
 //! streams it through a pool of bricks, says so, refines (again after a real drag), and its screenshots equal the
-//! headless render streamed within the same budget, as does its exported figure.
+//! headless render streamed within the same budget, as does its exported figure. Under a `--host-budget` that holds
+//! only level 1, level 0's bricks are read from the file where the still view wants them.
 
 use crate::common;
 
@@ -62,6 +63,59 @@ fn viewer_previews_a_large_file_then_shows_it() {
             "loaded ",
         ],
     );
+}
+
+/// Within a host budget that holds only level 1 of the file, the viewer streams level 0's bricks from the file
+/// where the still view wants them: the refined screenshot shows level 0 and equals the headless render of the
+/// same held level streamed within the same budgets.
+#[test]
+fn viewer_shows_full_resolution_from_the_file_within_the_host_budget() {
+    let Some(x) = xvfb() else { return };
+    if !have("xdotool", "version") {
+        common::skip("xdotool not found; apt-get install xdotool");
+        return;
+    }
+    let d = &x.display;
+    let dir = common::scratch("viewer-finer");
+    let path = write_large(&dir);
+    let file = path.to_string_lossy().into_owned();
+    let budgets = volcast::volume::budget::Budgets::host(Some(20 << 20));
+    let held = volcast::scale::open(&path, &Default::default(), budgets, None, &mut |_| {}).expect("held");
+    assert_eq!(held.dims, [256, 256, 128]);
+    let args = [
+        file.as_str(),
+        "--host-budget",
+        "20M",
+        "--gpu-budget",
+        "256M",
+        "--cache-dir",
+    ];
+    let cache = dir.join("cache").to_string_lossy().into_owned();
+    let mut viewer = Viewer::start(
+        d,
+        &dir,
+        &[&args[..], &[&cache]].concat(),
+        &format!("frames:3;{HOLD};exit"),
+    );
+    let wait = Duration::from_secs(180);
+    viewer.wait_for("large holds level 1 of its 512x512x256 voxels", wait);
+    let refined = viewer.wait_for("refined: every brick at its level", wait);
+    assert!(
+        refined.contains("level 0 in"),
+        "the still view shows level-0 bricks: {refined}"
+    );
+    viewer.wait_for("script: Hold", wait);
+    let window = viewer.window(d);
+    type_keys(d, &window, &["F12"]);
+    let (shot, settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(120)));
+    let expected = super::formats::headless_render_within(&held, &settings, Some(256 << 20));
+    let diff = diff(&shot, &expected);
+    assert!(
+        diff.max <= 1.0,
+        "the view differs from the headless render of the file's levels: {diff}"
+    );
+    viewer.finish_clean();
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
