@@ -119,3 +119,56 @@ fn finer_levels_refine_to_the_whole_image() {
     assert!(from_file == from_memory, "refined to level 0 from the file");
     finish(gpu, headless, Judge::default());
 }
+
+/// A sheet one voxel thick that the held level averages to half its value: where level-0 bricks read from the file
+/// show it, the skip grid takes those bricks' own ranges (not the held level's, which never reaches the window), so
+/// the sheet is drawn as the reference draws it.
+#[test]
+fn bricks_read_from_the_file_are_skipped_by_their_own_range() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut judge = Judge::default();
+    let dir = common::scratch::scratch("gpu-finer-sheet");
+    let path = dir.join("sheet_64x64x64_uint8.raw");
+    common::scratch::write_raw(&path, [64, 64, 64], |[x, _, _], _, out| {
+        out.push(if x == 21 { 250 } else { 10 })
+    });
+    let full = volume::open(&path, &OpenOptions::default()).expect("whole");
+    let budgets = Budgets {
+        host: 64 * 64 * 64 - 1,
+        gpu: None,
+    };
+    let held = volcast::scale::open(&path, &OpenOptions::default(), budgets, None, &mut |_| {}).expect("open");
+    assert!(held.finer.is_some());
+    headless.renderer.brick_side = Some(16);
+    headless.set_volume(&gpu, &held).expect("upload");
+    headless.renderer.start_stream(&gpu, &held, 80).expect("stream");
+    let mut s = view(&full, 60.0);
+    // Visible only above 180: the held level's sheet (130) is not.
+    s.window = [0.7, 1.0];
+    for n in 0..20 {
+        let step = headless.renderer.stream_step(&gpu, &held, &s, 1.0, 16).expect("step");
+        if step.missing > 0 {
+            continue;
+        }
+        assert!(step.shown.level.contains(&0), "the close view shows level-0 bricks");
+        let actual = headless.render(&gpu, &s).expect("render").image;
+        let rc = RefCut {
+            brick: [16; 3],
+            grid: step.shown.grid.map(|g| g as usize),
+            level: step.shown.level.clone(),
+        };
+        let expected = Reference::with_levels(&full, rc).render_full(&s);
+        assert!(expected.object.iter().any(|&o| o), "the reference shows the sheet");
+        judge.against(
+            "reference",
+            format!("finer-sheet-{n}"),
+            &actual,
+            &expected,
+            &s,
+            REFERENCE,
+        );
+        return finish(gpu, headless, judge);
+    }
+    panic!("the stream did not reach its cut in 20 steps");
+}
