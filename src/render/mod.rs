@@ -496,11 +496,9 @@ impl Renderer {
         if !self.occupancy_is_current(s) {
             // The table is current now (above), so the occupancy follows from it.
             if let Some(vol) = &mut self.volume {
-                // Strides follow the step the march takes (the finest level shown).
-                let stepped = RenderSettings {
-                    step_length: vol.info.step_length(s),
-                    ..s.clone()
-                };
+                // Strides follow the step the march takes (the finest level shown), and none is taken where a
+                // skip brick holds fewer than 8 of its samples.
+                let stepped = vol.info.stepped(s);
                 let grid = vol.skip_grid();
                 let (occupancy, depth) = (
                     skip::encode_reach(&grid.classify(&self.lut_table, &stepped), grid.bricks),

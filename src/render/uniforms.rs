@@ -120,6 +120,17 @@ impl VolumeInfo {
         s.step_length * (1u32 << self.step_level) as f32
     }
 
+    /// `s` as the march takes it on this volume: its step ([`step_length`](Self::step_length)), and no strides where
+    /// the step is coarser than the held level's voxel (a skip brick, 8 of those voxels, then holds at most 4
+    /// samples: a strided span would be shorter than the lookups it costs).
+    pub fn stepped(&self, s: &RenderSettings) -> RenderSettings {
+        RenderSettings {
+            step_length: self.step_length(s),
+            max_stride: if self.step_level > self.held { 1 } else { s.max_stride },
+            ..s.clone()
+        }
+    }
+
     /// The smallest voxel side in world units (rule 2's and rule 9's voxel).
     pub fn smallest_voxel(&self, s: &RenderSettings) -> f64 {
         let m = self.index_to_world(s);

@@ -104,6 +104,8 @@ pub struct Cut {
     pub brick: [usize; 3],
     pub grid: [usize; 3],
     pub level: Vec<u32>,
+    /// The level the host holds (a file's finer levels are read by brick below it; 0 otherwise).
+    pub held: u32,
 }
 
 impl Cut {
@@ -113,6 +115,7 @@ impl Cut {
             brick,
             grid,
             level: vec![level; grid.iter().product()],
+            held: 0,
         }
     }
 

@@ -318,12 +318,16 @@ impl Reference {
     }
 
     /// The settings the march takes: a cut of the pyramid is marched at `step_length` voxels of the finest level it
-    /// shows (render/resident.rs `step_level`, `VolumeInfo::step_level`).
+    /// shows (render/resident.rs `step_level`, `VolumeInfo::stepped`), without strides where that level is coarser
+    /// than the one held.
     pub(crate) fn stepped(&self, s: &RenderSettings) -> RenderSettings {
         let mut s = s.clone();
         if let Some((_, cut)) = &self.levels {
             let finest = cut.level.iter().copied().min().unwrap_or(0);
             s.step_length *= (1u32 << finest) as f32;
+            if finest > cut.held {
+                s.max_stride = 1;
+            }
         }
         s
     }

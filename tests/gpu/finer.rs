@@ -1,7 +1,7 @@
 //! Full resolution from the file (src/scale/finer.rs, render/brick_upload.rs): a 128³ helix written as a raw file
 //! and opened within a host budget that holds only level 1. The pool's level 0 is the file's: its bricks are read
 //! from the file as the view wants them. Every step's image matches the reference made from the whole level-0
-//! volume for the cut shown, with the step of the finest level shown (down to the held one); with room for every
+//! volume for the cut shown (marched at the step of the finest level shown, as the GPU does); with room for every
 //! brick the stream reaches the image of the whole volume uploaded at full resolution, bit for bit.
 
 use crate::common;
@@ -47,6 +47,7 @@ fn reference_for(helix: &Volume, cut: &Cut, s: &RenderSettings) -> Rendered {
         brick: [16; 3],
         grid: cut.grid.map(|g| g as usize),
         level: cut.level.clone(),
+        held: 1,
     };
     Reference::with_levels(helix, rc).render_full(s)
 }
@@ -157,6 +158,7 @@ fn bricks_read_from_the_file_are_skipped_by_their_own_range() {
             brick: [16; 3],
             grid: step.shown.grid.map(|g| g as usize),
             level: step.shown.level.clone(),
+            held: 1,
         };
         let expected = Reference::with_levels(&full, rc).render_full(&s);
         assert!(expected.object.iter().any(|&o| o), "the reference shows the sheet");

@@ -22,6 +22,7 @@ fn reference_cut(cut: &Cut, brick: [u32; 3]) -> RefCut {
         brick: brick.map(|b| b as usize),
         grid: cut.grid.map(|g| g as usize),
         level: cut.level.clone(),
+        held: 0,
     }
 }
 

@@ -23,6 +23,7 @@ fn reference_cut(cut: &Cut) -> RefCut {
         brick: [16; 3],
         grid: cut.grid.map(|g| g as usize),
         level: cut.level.clone(),
+        held: 0,
     }
 }
 
