@@ -174,3 +174,38 @@ fn bricks_read_from_the_file_are_skipped_by_their_own_range() {
     }
     panic!("the stream did not reach its cut in 20 steps");
 }
+
+/// A cut whose finest level is coarser than the held one is marched at that level's step without strides (a skip
+/// brick holds at most 4 of its samples): faint strided settings take every sample there, as the reference does,
+/// while at level 0 the same settings take fewer (Marschner–Lobb, whose faint bricks stride).
+#[test]
+fn coarse_cuts_take_no_strides() {
+    use common::gpu::gpu_sample_counts;
+    use volcast::render::levels::LevelChoice;
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let ml = volume::builtin("marschner-lobb", None).expect("marschner-lobb");
+    headless.renderer.brick_side = Some(8);
+    headless.set_volume(&gpu, &ml).expect("upload");
+    let mut s = RenderSettings::for_volume(96, 96, &ml);
+    (s.step_length, s.max_stride, s.step_alpha) = (0.4, 4, 0.03);
+    let total = |c: Vec<u32>| c.iter().map(|&n| u64::from(n)).sum::<u64>();
+    let mut samples = Vec::new();
+    for level in [0, 1] {
+        let r = &mut headless.renderer;
+        r.show_levels(&gpu, &ml, &s, LevelChoice::Forced(level)).expect("cut");
+        let strided = total(gpu_sample_counts(&gpu, &mut headless, &s));
+        let every = total(gpu_sample_counts(
+            &gpu,
+            &mut headless,
+            &RenderSettings {
+                max_stride: 1,
+                ..s.clone()
+            },
+        ));
+        samples.push((strided, every));
+    }
+    assert!(samples[0].0 < samples[0].1, "level 0 takes strides: {samples:?}");
+    assert_eq!(samples[1].0, samples[1].1, "level 1 everywhere takes none: {samples:?}");
+    finish(gpu, headless, Judge::default());
+}
