@@ -10,8 +10,7 @@ use crate::gpu::resources::{Buffer, Image};
 use crate::gpu::sync::{Access, COLOR_LAYERS};
 use crate::gpu::upload::{copy_to_image, STAGING_CHUNK};
 use crate::gpu::{Gpu, GpuError};
-use crate::scale::finer::Finer;
-use crate::volume::VoxelData;
+use crate::volume::{FinerLevels as Finer, VoxelData};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use rayon::prelude::*;
@@ -91,11 +90,10 @@ pub(super) fn upload_bricks(
     gpu: &Gpu,
     image: &Image,
     layout: VolumeLayout,
-    levels: &Levels,
+    (levels, finer): (&Levels, Option<&dyn Finer>),
     pool: &Pool,
     slots: &[u32],
     fresh: bool,
-    finer: Option<&Finer>,
 ) -> Result<Vec<BoxRange>, GpuError> {
     let kind = TexelKind::of(layout, levels);
     let side = pool.brick.map(slot_side);
@@ -146,7 +144,7 @@ fn element_range(data: &VoxelData) -> Option<[f64; 2]> {
 /// from the file first, on every core.
 fn fill_batch(
     staging: &mut Buffer,
-    (pool, levels, finer): (&Pool, &Levels, Option<&Finer>),
+    (pool, levels, finer): (&Pool, &Levels, Option<&dyn Finer>),
     kind: TexelKind,
     batch: &[u32],
     slot_bytes: usize,

@@ -45,7 +45,7 @@ pub(super) struct GpuVolume {
     pub(super) stream: Option<super::stream::Stream>,
     /// The normalised value range of each brick read from the file below the held level (`VolumeInfo::held`), for
     /// the skip grid.
-    pub(super) finer_ranges: std::collections::HashMap<super::stream::Key, (f32, f32)>,
+    pub(super) finer_ranges: super::levels::FinerRanges,
 }
 
 /// A 3D image of `dims` (a depth of 1 gets a duplicated second slice: a depth-1 image would be 2D), filled by

@@ -208,6 +208,9 @@ pub fn extend_pyramid(volume: &Volume, pyramid: &mut Vec<Volume>, top: u32) -> R
     Ok(())
 }
 
+/// The normalised value range of each brick read from the file below the held level, by (level, brick).
+pub type FinerRanges = std::collections::HashMap<(u32, [u32; 3]), (f32, f32)>;
+
 /// The skip grid's ranges for `cut` shown in pool bricks of `brick` voxels: each 8³ skip brick takes the ranges of
 /// the levels its samples are taken at, those of the pool bricks it overlaps (`grids[L]` is level L's skip grid,
 /// whose brick k >> L holds every voxel a level-L sample inside level-0 skip brick k reads). A brick shown at level
@@ -219,7 +222,7 @@ pub fn cut_ranges(
     grids: &[super::skip::BrickGrid],
     cut: &Cut,
     brick: [u32; 3],
-    (held, finer): (u32, &std::collections::HashMap<super::stream::Key, (f32, f32)>),
+    (held, finer): (u32, &FinerRanges),
 ) -> super::skip::BrickGrid {
     use rayon::prelude::*;
     let base = &grids[0];

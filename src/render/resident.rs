@@ -216,8 +216,15 @@ impl GpuVolume {
                 .ok_or(GpuError::Lost("the pool has no image"))?;
             let levels = Levels::held(volume, &self.pyramid, self.info.held);
             let finer = volume.finer.as_deref();
-            let read =
-                super::brick_upload::upload_bricks(gpu, image, self.layout, &levels, &self.pool, &slots, fresh, finer)?;
+            let read = super::brick_upload::upload_bricks(
+                gpu,
+                image,
+                self.layout,
+                (&levels, finer),
+                &self.pool,
+                &slots,
+                fresh,
+            )?;
             for (r, range) in read {
                 let normal = range.map_or((f32::INFINITY, f32::NEG_INFINITY), |[a, b]| {
                     let (a, b) = (volume.normalize_element(a) as f32, volume.normalize_element(b) as f32);

@@ -9,7 +9,7 @@ use crate::convert::sample::Sample;
 use crate::convert::source::Source;
 use crate::volume::budget::level_dims;
 use crate::volume::in_place::InPlace;
-use crate::volume::{Geometry, VolumeError, VoxelData, VoxelType};
+use crate::volume::{FinerLevels, Geometry, VolumeError, VoxelData, VoxelType};
 use rayon::prelude::*;
 
 /// Where the levels below a held level come from.
@@ -49,24 +49,39 @@ impl Finer {
         }))
     }
 
-    /// Level 0's size in voxels.
-    pub fn dims(&self) -> [u32; 3] {
+    /// The box of level `level` from the level-0 box under it, halved `level` times.
+    fn box_at<T: Sample>(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<Vec<T>, VolumeError> {
+        let lo0 = lo.map(|v| v << level);
+        let hi0 = [0, 1, 2].map(|a| ((lo[a] + size[a]) << level).min(self.dims[a]));
+        let mut dims = [0, 1, 2].map(|a| (hi0[a] - lo0[a]) as usize);
+        let mut data = self.source.read_box::<T>(0, lo0, dims.map(|d| d as u32))?;
+        for l in 0..level {
+            // The factors of the whole level, not of the box: an axis of length 1 is not halved.
+            let f = factors(level_dims(self.dims, l).map(u64::from));
+            data = downsample(&data, dims, f, Reduce::Mean);
+            dims = [0, 1, 2].map(|a| dims[a].div_ceil(f[a]));
+        }
+        debug_assert_eq!(dims, size.map(|s| s as usize));
+        Ok(data)
+    }
+}
+
+impl FinerLevels for Finer {
+    fn dims(&self) -> [u32; 3] {
         self.dims
     }
 
-    /// Level 0's placement.
-    pub fn geometry(&self) -> Geometry {
+    fn geometry(&self) -> Geometry {
         self.geometry
     }
 
-    /// The level the volume holds.
-    pub fn held(&self) -> u32 {
+    fn held(&self) -> u32 {
         self.held
     }
 
-    /// Voxels `lo..lo + size` of level `level` (below the held one; the box within the level), x fastest, in the
-    /// representation the held level has (biased 8/16-bit integers, float32 for wider types).
-    pub fn read(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<VoxelData, VolumeError> {
+    /// The box must lie within the level; the representation is the held level's (biased 8/16-bit integers,
+    /// float32 for wider types).
+    fn read(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<VoxelData, VolumeError> {
         let within = level_dims(self.dims, level);
         if level >= self.held || (0..3).any(|a| size[a] == 0 || lo[a] + size[a] > within[a]) {
             return Err(VolumeError::Header {
@@ -89,22 +104,6 @@ impl Finer {
             ),
             _ => VoxelData::F32(self.box_at::<f32>(level, lo, size)?),
         })
-    }
-
-    /// The box of level `level` from the level-0 box under it, halved `level` times.
-    fn box_at<T: Sample>(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<Vec<T>, VolumeError> {
-        let lo0 = lo.map(|v| v << level);
-        let hi0 = [0, 1, 2].map(|a| ((lo[a] + size[a]) << level).min(self.dims[a]));
-        let mut dims = [0, 1, 2].map(|a| (hi0[a] - lo0[a]) as usize);
-        let mut data = self.source.read_box::<T>(0, lo0, dims.map(|d| d as u32))?;
-        for l in 0..level {
-            // The factors of the whole level, not of the box: an axis of length 1 is not halved.
-            let f = factors(level_dims(self.dims, l).map(u64::from));
-            data = downsample(&data, dims, f, Reduce::Mean);
-            dims = [0, 1, 2].map(|a| dims[a].div_ceil(f[a]));
-        }
-        debug_assert_eq!(dims, size.map(|s| s as usize));
-        Ok(data)
     }
 }
 

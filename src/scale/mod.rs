@@ -149,7 +149,8 @@ fn read_place(
 /// box and `v` is that level as read (not reduced further by `--max-dim`).
 fn with_finer(mut v: Volume, place: &InPlace, level: u32) -> Result<Volume, VolumeError> {
     if v.dims == budget::level_dims(place.dims, level) {
-        v.finer = finer::Finer::of(place, level)?.map(std::sync::Arc::new);
+        v.finer =
+            finer::Finer::of(place, level)?.map(|f| std::sync::Arc::new(f) as std::sync::Arc<dyn volume::FinerLevels>);
     }
     Ok(v)
 }

@@ -104,7 +104,20 @@ pub struct Volume {
     pub channels: Vec<ChannelInfo>,
     /// Where this is a coarser level of a file read in place, the finer levels' bricks in that file (streamed
     /// pools read them as the view needs them); `None` otherwise.
-    pub finer: Option<std::sync::Arc<crate::scale::finer::Finer>>,
+    pub finer: Option<std::sync::Arc<dyn FinerLevels>>,
+}
+
+/// The levels below the one a volume holds, where they stay in its file (`scale::finer::Finer`): the pool reads
+/// their bricks as the view needs them.
+pub trait FinerLevels: std::fmt::Debug + Send + Sync {
+    /// Level 0's size in voxels and its placement.
+    fn dims(&self) -> [u32; 3];
+    fn geometry(&self) -> Geometry;
+    /// The level the volume holds (levels 0..held are read from the file).
+    fn held(&self) -> u32;
+    /// Voxels `lo..lo + size` of level `level` (below the held one), x fastest, in the representation the volume
+    /// holds its level in.
+    fn read(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<VoxelData, VolumeError>;
 }
 
 /// One data array of a multi-array file, as `volcast info` lists it.
