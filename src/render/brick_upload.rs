@@ -10,7 +10,7 @@ use crate::gpu::resources::{Buffer, Image};
 use crate::gpu::sync::{Access, COLOR_LAYERS};
 use crate::gpu::upload::{copy_to_image, STAGING_CHUNK};
 use crate::gpu::{Gpu, GpuError};
-use crate::volume::{FinerLevels as Finer, VoxelData};
+use crate::volume::{element_range, FinerLevels as Finer, VoxelData};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use rayon::prelude::*;
@@ -106,38 +106,19 @@ pub(super) fn upload_bricks(
         MemoryLocation::CpuToGpu,
         "staging bricks",
     )?;
-    let mut result = Ok(Vec::new());
+    let (mut ranges, mut result) = (Vec::new(), Ok(()));
     for (n, batch) in slots.chunks(per_batch).enumerate() {
-        let filled = fill_batch(&mut staging, (pool, levels, finer), kind, batch, slot_bytes);
-        let copied = filled.and_then(|r| {
+        result = fill_batch(&mut staging, (pool, levels, finer), kind, batch, slot_bytes).and_then(|mut r| {
             copy_batch(gpu, &staging, image, pool, batch, slot_bytes, fresh && n == 0)?;
-            Ok(r)
+            ranges.append(&mut r);
+            Ok(())
         });
-        match (copied, &mut result) {
-            (Ok(mut r), Ok(all)) => all.append(&mut r),
-            (Err(e), _) => {
-                result = Err(e);
-                break;
-            }
-            _ => {}
+        if result.is_err() {
+            break;
         }
     }
     staging.destroy(gpu);
-    result
-}
-
-/// The extremes of the finite elements of `data`.
-fn element_range(data: &VoxelData) -> Option<[f64; 2]> {
-    fn extremes(values: impl Iterator<Item = f64>) -> Option<[f64; 2]> {
-        values.fold(None, |r, v| {
-            Some(r.map_or([v, v], |[a, b]: [f64; 2]| [a.min(v), b.max(v)]))
-        })
-    }
-    match data {
-        VoxelData::U8(v) => extremes(v.iter().map(|&x| f64::from(x))),
-        VoxelData::U16(v) => extremes(v.iter().map(|&x| f64::from(x))),
-        VoxelData::F32(v) => extremes(v.iter().filter(|x| x.is_finite()).map(|&x| f64::from(x))),
-    }
+    result.map(|()| ranges)
 }
 
 /// Writes each slot's texels into its part of the staging buffer: the boxes of bricks below the held level read

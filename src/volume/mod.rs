@@ -42,7 +42,7 @@ pub use open::{detect_format, format_by_name, open, open_with_progress, Format, 
 pub use raw::{load_raw, parse_scivis_name, RawOptions};
 pub use time::TimeSteps;
 use voxel::{compute_range, compute_range_of, stored_offset, stored_value};
-pub use voxel::{Scaling, VoxelData, VoxelType};
+pub use voxel::{element_range, Scaling, VoxelData, VoxelType};
 pub use zarr::ChannelInfo;
 
 /// Parsers that read from memory and never touch the file system: the fuzz targets drive these.

@@ -212,6 +212,16 @@ pub(super) fn compute_range(source_type: VoxelType, data: &VoxelData) -> [f64; 2
     compute_range_of(source_type, data).unwrap_or([0.0, 0.0])
 }
 
+/// The extremes of `data`'s finite elements as held (biased integers stay biased); `None` if none is finite.
+pub fn element_range(data: &VoxelData) -> Option<[f64; 2]> {
+    let held = match data {
+        VoxelData::U8(_) => VoxelType::U8,
+        VoxelData::U16(_) => VoxelType::U16,
+        VoxelData::F32(_) => VoxelType::F32,
+    };
+    compute_range_of(held, data)
+}
+
 /// The data's min/max as source values (NaN/Inf ignored); `None` if no voxel is finite.
 pub(super) fn compute_range_of(source_type: VoxelType, data: &VoxelData) -> Option<[f64; 2]> {
     // In blocks on every core (a 1 GiB volume is read once more here), each block a vectorisable fold.
