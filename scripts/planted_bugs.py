@@ -230,6 +230,8 @@ BUGS = [
     ("strides-at-coarse-steps", "strides are taken where the step is coarser than the held level's voxel (the reference takes none)",
      [("src/render/uniforms.rs", "max_stride: if self.step_level > self.held { 1 } else { s.max_stride },",
        "max_stride: if self.step_level > self.held + 9 { 1 } else { s.max_stride },")]),
+    ("level-stride-ignored", "coarser bricks of a mixed cut are sampled at the finest level's pace (rule 2's level stride dropped)",
+     [("shaders/walk.glsl", "(1 << (3 - span.level)) * span.coarser;", "(1 << (3 - span.level));")]),
     ("finer-bricks-take-the-held-range", "a brick read from the file takes the held level's skip range, narrower than its own voxels'",
      [("src/render/levels.rs", "let Some(l) = l.checked_sub(held).map(|l| l as usize) else {",
        "let Some(l) = Some(l.saturating_sub(held) as usize) else {")]),

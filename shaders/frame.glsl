@@ -36,5 +36,5 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 pool_inv;        // xyz: 1 / the brick pool's size in texels (render/pool.rs)
     vec4 pool_brick;      // xyz: a brick's size in voxels of its level; w: the border in voxels
     vec4 pool_slot;       // xyz: a slot's size in texels
-    vec4 pool_grid;       // xyz: level-0 bricks per axis (the page table's size)
+    vec4 pool_grid;       // xyz: level-0 bricks per axis (the page table's size); w: the step's level (rule 2)
 } frame;

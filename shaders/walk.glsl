@@ -48,6 +48,9 @@ WalkRay walk_ray(vec3 a, vec3 dir, float len, float h, float o) {
 struct Span {
     int end;
     int level;
+    // Rule 2's level stride: 2^(L - S) for a pool brick of level L under a step of level S's voxel (1 without
+    // POOL_BRICKS). A coarser brick's samples are taken at its own voxel's pace.
+    int coarser;
 #if defined(POOL_BRICKS)
     Brick brick;
 #endif
@@ -89,13 +92,15 @@ Span span_at(WalkRay r, float t) {
         lo = max(lo, cube_lo);
         hi = min(hi, cube_hi);
     }
-    return Span(span_end(r, lo, hi), level, pb);
+    // pb.scale = dims / 2^L exactly, so the quotient is the power of two; pool_grid.w is the step's level S.
+    int coarser = max(int(frame.dims.x / pb.scale.x + 0.5) >> int(frame.pool_grid.w), 1);
+    return Span(span_end(r, lo, hi), level, coarser, pb);
 #else
     if (frame.mode_params.z < 0.5) {
-        return Span(2147483647, 3);
+        return Span(2147483647, 3, 1);
     }
     int level = skip_cube(r, p, lo, hi);
-    return Span(span_end(r, lo, hi), level);
+    return Span(span_end(r, lo, hi), level, 1);
 #endif
 }
 
@@ -169,8 +174,9 @@ int walk_step(WalkRay r, inout Walk w, out float t) {
         }
 #endif
         w.walked = !exiting;
-        // The span's stride s (rule 2): the samples whose index is a multiple of s.
-        w.stride = (exiting || !WALK_SEGMENTS) ? 1 : 1 << (3 - span.level);
+        // The span's stride s (rule 2): the samples whose index is a multiple of s, its class's stride times its
+        // brick's level stride.
+        w.stride = (exiting || !WALK_SEGMENTS) ? 1 : (1 << (3 - span.level)) * span.coarser;
         w.stop = exiting ? w.k + 1 : w.span_end;
         w.k = (w.k + w.stride - 1) & ~(w.stride - 1);
         if (WALK_SEGMENTS && w.k >= w.stop && !w.resample) {

@@ -341,7 +341,7 @@ impl FrameUniforms {
             ),
             pool_grid: v4(
                 DVec3::from_array([0, 1, 2].map(|a| f64::from(v.dims[a].div_ceil(v.pool.brick[a].max(1))))),
-                0.0,
+                v.step_level as f32,
             ),
         }
     }

@@ -159,6 +159,10 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    least 1); `D` = `STRIDE_DEPTH`, or `STRIDE_DEPTH_LIT` with `shading` or `gradient_opacity`. Sample k is
 ///    taken only where k is a multiple of the stride of the brick holding it (in empty bricks every sample is
 ///    taken; none adds anything).
+///    **Level strides** (emission/density, a pool of mixed levels: docs/large-volumes.md): the step is
+///    `step_length` voxels of the finest level S the cut shows; a sample in a level-0 brick shown at level L
+///    is also taken only where k is a multiple of 2^(L − S), so every brick is sampled at `step_length` of its
+///    own voxels, on the one lattice (the two strides multiply).
 /// 3. **Value.** Trilinear interpolation (texel centres at (i + 0.5)/dim, clamped to the edge) of the values
 ///    normalised by the data range: `v = (raw − min)/(max − min)`. NaN samples are skipped. Samples outside the
 ///    `window` are skipped (every mode but isosurface).

@@ -43,6 +43,8 @@ pub(crate) struct Frame<'a> {
     jitter: Option<u32>,
     /// Rule 2's brick strides (None: every sample).
     strides: Option<Strides>,
+    /// The finest level a cut shows (rule 2's level strides).
+    finest: u32,
     early_termination: f64,
     /// Linear light.
     background: DVec3,
@@ -116,6 +118,7 @@ impl<'a> Frame<'a> {
             grid_gradients: s.gradient_texture,
             jitter: s.jitter,
             strides,
+            finest: volume.finest_level(),
             early_termination: f64::from(s.early_termination),
             background: linear(s.background.as_dvec3()),
         };
@@ -240,14 +243,15 @@ impl<'a> Frame<'a> {
         let (mut color, mut alpha) = (DVec3::ZERO, 0.0f64);
         let light = -segment.dir;
         let (mut t_prev, mut v_prev) = (0.0, self.volume.sample(self.tex_at(segment, 0.0)));
-        // Rule 2's strides: sample k only where k is a multiple of its brick's stride.
+        // Rule 2's strides: sample k only where k is a multiple of its brick's stride times its level stride.
         let samples: Vec<f64> = self
             .sample_offsets(segment, trace.offset)
             .enumerate()
             .filter(|&(k, t)| {
-                self.strides
-                    .as_ref()
-                    .is_none_or(|b| (k as u64).is_multiple_of(b.at(self.tex_at(segment, t))))
+                let tex = self.tex_at(segment, t);
+                let stride =
+                    self.strides.as_ref().map_or(1, |b| b.at(tex)) * self.volume.level_stride(tex, self.finest);
+                (k as u64).is_multiple_of(stride)
             })
             .map(|(_, t)| t)
             .collect();

@@ -312,6 +312,22 @@ impl Reference {
         })
     }
 
+    /// The finest level the cut shows (0 without one): the level of the step's voxel.
+    pub(crate) fn finest_level(&self) -> u32 {
+        self.levels
+            .as_ref()
+            .map_or(0, |(_, cut)| cut.level.iter().copied().min().unwrap_or(0))
+    }
+
+    /// Rule 2's level stride at `tex`: 2^(L − S) for the level L shown there and the finest level S =
+    /// [`finest_level`](Self::finest_level) (1 without a cut): every brick is sampled at the step's length in
+    /// voxels of its own level.
+    pub(crate) fn level_stride(&self, tex: DVec3, finest: u32) -> u64 {
+        self.levels
+            .as_ref()
+            .map_or(1, |(_, cut)| 1 << (cut.level_at(tex, self.dims) - finest))
+    }
+
     /// Where the box is for `s`: the rule-1 placement of the texture-space box in the world.
     pub fn placement(&self, s: &RenderSettings) -> Placement {
         Placement::new(self.affine, self.dims, s.voxel_axes)
@@ -323,7 +339,7 @@ impl Reference {
     pub(crate) fn stepped(&self, s: &RenderSettings) -> RenderSettings {
         let mut s = s.clone();
         if let Some((_, cut)) = &self.levels {
-            let finest = cut.level.iter().copied().min().unwrap_or(0);
+            let finest = self.finest_level();
             s.step_length *= (1u32 << finest) as f32;
             if finest > cut.held {
                 s.max_stride = 1;

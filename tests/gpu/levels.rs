@@ -277,3 +277,57 @@ fn the_screen_rule_within_a_small_pool() {
     assert_eq!(headless.render(&gpu, &s).unwrap().image, finest, "refined to level 0");
     finish(gpu, headless, judge);
 }
+
+/// Rule 2's level strides: in a cut of levels 0, 1 and 2 side by side, each brick is sampled at the step's length
+/// in voxels of its own level. The GPU visits, pixel by pixel, the samples the reference names (faint strided
+/// settings and strong ones alike), and the coarse half takes fewer samples than the same view at level 0.
+#[test]
+fn level_strides_sample_each_brick_at_its_own_voxel() {
+    use common::gpu::gpu_sample_counts;
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let helix = volume::builtin("helix", Some(64)).expect("helix");
+    let flat = bricked(&gpu, &mut headless, &helix, 16);
+    let mut mixed = flat.clone();
+    for (i, l) in mixed.level.iter_mut().enumerate() {
+        let b = flat.brick_of(i);
+        *l = if b[0] < 2 { 0 } else { 1 + u32::from(b[1] >= 2) };
+    }
+    let reference = Reference::with_levels(&helix, reference_cut(&mixed, [16; 3]));
+    let total = |c: &[u32]| c.iter().map(|&n| u64::from(n)).sum::<u64>();
+    let mut failures = Vec::new();
+    for (name, stride, alpha) in [("faint", 4, 0.02), ("strong", 1, 0.4)] {
+        let mut s = RenderSettings::for_volume(64, 64, &helix);
+        (s.step_length, s.max_stride, s.step_alpha) = (0.5, stride, alpha);
+        // Every sample counted, as the reference counts them (skipping would leave out the empty bricks').
+        s.skip_empty = false;
+        headless.renderer.show_cut(&gpu, &helix, &flat).expect("level 0");
+        let level0 = gpu_sample_counts(&gpu, &mut headless, &s);
+        headless.renderer.show_cut(&gpu, &helix, &mixed).expect("mixed cut");
+        let counts = gpu_sample_counts(&gpu, &mut headless, &s);
+        let expected = reference.render_full(&s).samples;
+        let off: Vec<(usize, u32, u32)> = counts
+            .iter()
+            .zip(&expected)
+            .enumerate()
+            .filter(|(_, (g, r))| g.abs_diff(**r) > 1)
+            .map(|(i, (g, r))| (i, *g, *r))
+            .collect();
+        if off.len() > 12 {
+            failures.push(format!(
+                "{name}: {} pixels visit other samples than rule 2's (pixel, GPU, reference): {:?}",
+                off.len(),
+                &off[..8]
+            ));
+        }
+        let (mixed_total, level0_total) = (total(&counts), total(&level0));
+        eprintln!("{name}: {mixed_total} samples in the mixed cut, {level0_total} at level 0");
+        if mixed_total * 10 > level0_total * 8 {
+            failures.push(format!(
+                "{name}: the coarse bricks took their samples at level 0's pace"
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+    finish(gpu, headless, Judge::default());
+}
