@@ -413,9 +413,10 @@ pub(crate) struct BenchArgs {
     /// Where --scale keeps its generated files (default: $XDG_CACHE_HOME/volcast/bench, else ~/.cache/volcast/bench).
     #[arg(long, requires = "scale")]
     pub(crate) cache: Option<PathBuf>,
-    /// Sampling quality of every scene, as `render --quality`: draft, fast, normal or converged.
-    #[arg(long, default_value = "normal", value_parser = parse_quality)]
-    pub(crate) quality: Quality,
+    /// Sampling quality of every scene, as `render --quality`: draft, fast, normal or converged. Repeat it to
+    /// time each level against the same converged image (default: normal).
+    #[arg(long = "quality", value_parser = parse_quality)]
+    pub(crate) qualities: Vec<Quality>,
     /// Where shaded scenes take gradients, as `render --gradients`: auto, texture or samples.
     #[arg(long, default_value = "auto", value_parser = parse_gradients)]
     pub(crate) gradients: Gradients,

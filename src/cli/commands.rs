@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use volcast::gpu::GpuError;
 use volcast::measure::compare;
 use volcast::render::headless::Headless;
+use volcast::scene::quality::Quality;
 use volcast::transfer::function::TransferFunction;
 use volcast::viewer::{self, ViewerOptions, VolumeSource};
 
@@ -137,7 +138,11 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
         shadings: args.shadings.clone(),
         methods: args.methods.clone(),
         sample_only: args.sample_only,
-        quality: args.quality,
+        qualities: if args.qualities.is_empty() {
+            vec![Quality::Normal]
+        } else {
+            args.qualities.clone()
+        },
         gradients: args.gradients,
         step_length: args.step_length,
     };

@@ -229,3 +229,47 @@ fn bench_errors_are_against_the_converged_image_at_the_forced_step() {
         );
     }
 }
+
+/// `--quality` repeated times every level against the same converged image: a row per level, each naming it, the
+/// coarser levels taking longer steps and erring more (never less) than the finer ones, converged itself exactly.
+#[test]
+fn bench_times_each_quality_level_against_one_converged_image() {
+    let out = bench(&[
+        "--quick",
+        "--method",
+        "faces",
+        "--shading",
+        "off",
+        "--quality",
+        "draft",
+        "--quality",
+        "normal",
+        "--quality",
+        "converged",
+        "--json",
+    ]);
+    let (stdout, stderr) = (stdout(&out), stderr(&out));
+    assert!(out.status.success(), "exit {:?}\nstderr:\n{stderr}", out.status);
+    assert_eq!(
+        stderr.matches("converged image").count(),
+        1,
+        "one converged image for the three levels:\n{stderr}"
+    );
+    let json: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+    let rows: Vec<(String, f64, f64)> = json["results"]
+        .as_array()
+        .expect("results")
+        .iter()
+        .map(|r| {
+            (
+                r["quality"].as_str().expect("quality").to_string(),
+                r["step_length"].as_f64().expect("step"),
+                r["error"]["mean"].as_f64().expect("error"),
+            )
+        })
+        .collect();
+    let names: Vec<&str> = rows.iter().map(|r| r.0.as_str()).collect();
+    assert_eq!(names, ["draft", "normal", "converged"], "{rows:?}");
+    assert!(rows[0].1 > rows[1].1 && rows[1].1 > rows[2].1, "steps shrink: {rows:?}");
+    assert!(rows[0].2 >= rows[1].2 && rows[2].2 == 0.0, "errors: {rows:?}");
+}

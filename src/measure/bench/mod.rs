@@ -24,7 +24,7 @@ use crate::gpu::{Gpu, GpuError};
 use crate::measure::fidelity::{converged, Fidelity};
 use crate::render::headless::Headless;
 use crate::render::VolumeLayout;
-use crate::scene::quality::CONVERGED_STEP;
+use crate::scene::quality::{Quality, CONVERGED_STEP};
 use crate::scene::settings::RenderSettings;
 use crate::volume::{self, RawOptions, Volume, VolumeError};
 use ash::vk;
@@ -180,11 +180,10 @@ struct LoadedScene<'a> {
     counter: SampleCounter,
 }
 
-/// What a scene × size × shading's frames under each method are measured against.
+/// What a scene × size × shading's frames under each quality and method are measured against.
 struct Reference {
     size: u32,
     shading: Shading,
-    count: SampleCount,
     converged_image: RgbaImage,
     /// How long rule 9's light grid took to fill, for scenes with shadows or occlusion.
     light_grid_ms: Option<f64>,
@@ -226,11 +225,6 @@ impl Bench<'_> {
         for size in sizes {
             let mut base = RenderSettings::new(size, size, loaded.volume.extent());
             (scene.configure)(&mut base, &loaded.volume);
-            opts.quality.apply(&mut base, loaded.volume.range);
-            if let Some(step) = opts.step_length {
-                base.step_length = step;
-                base.max_stride = 1;
-            }
             let shadings = scene
                 .shadings
                 .iter()
@@ -285,8 +279,6 @@ impl Bench<'_> {
         if s.gradient_texture {
             self.headless.renderer.enable_gradient_texture(gpu, &loaded.volume)?;
         }
-        // Counted before timing, so the count's CPU work never overlaps a timed frame.
-        let count = loaded.counter.count(&s);
         (self.log)(&format!(
             "{name} {size}x{size} shading {}: converged image (step {CONVERGED_STEP})",
             shading.name()
@@ -304,25 +296,58 @@ impl Bench<'_> {
         let reference = Reference {
             size,
             shading,
-            count,
             converged_image,
             light_grid_ms,
         };
-        let opts = self.opts;
+        for (quality, s) in self.variants(&s, loaded.volume.range) {
+            self.methods(loaded, &reference, &quality, s)?;
+        }
+        Ok(())
+    }
+
+    /// The frames timed against one converged image: `s` at each `--quality`, or at the `--step-length` forced.
+    fn variants(&self, s: &RenderSettings, range: [f64; 2]) -> Vec<(String, RenderSettings)> {
+        if let Some(step) = self.opts.step_length {
+            let forced = RenderSettings {
+                step_length: step,
+                max_stride: 1,
+                ..s.clone()
+            };
+            return vec![(format!("step {step}"), forced)];
+        }
+        let apply = |q: Quality| {
+            let mut s = s.clone();
+            q.apply(&mut s, range);
+            (q.name().to_string(), s)
+        };
+        self.opts.qualities.iter().map(|&q| apply(q)).collect()
+    }
+
+    /// Each method's timed frames of `s` at one quality.
+    fn methods(
+        &mut self,
+        loaded: &LoadedScene,
+        reference: &Reference,
+        quality: &str,
+        mut s: RenderSettings,
+    ) -> Result<(), BenchError> {
+        let (opts, name, size) = (self.opts, loaded.scene.name, reference.size);
+        // Counted before timing, so the count's CPU work never overlaps a timed frame.
+        let count = loaded.counter.count(&s);
         let methods = Method::ALL
             .into_iter()
             .filter(|m| opts.methods.is_empty() || opts.methods.iter().any(|n| n == m.name()));
         for method in methods {
             method.apply(&mut s);
             (self.log)(&format!(
-                "{name} {size}x{size} {} shading {}: {} warm-up + {} frames",
+                "{name} {size}x{size} {} shading {} {quality}: {} warm-up + {} frames",
                 method.name(),
-                shading.name(),
+                reference.shading.name(),
                 opts.warmup,
                 opts.frames
             ));
             let frames = self.time_frames(&s)?;
-            let result = self.result(loaded, &reference, method, &s, frames)?;
+            let result = self.result(loaded, reference, (method, quality, count), &s, frames)?;
             self.report.results.push(result);
         }
         Ok(())
@@ -363,12 +388,11 @@ impl Bench<'_> {
         &self,
         loaded: &LoadedScene,
         reference: &Reference,
-        method: Method,
+        (method, quality, count): (Method, &str, SampleCount),
         s: &RenderSettings,
         frames: TimedFrames,
     ) -> Result<SceneResult, BenchError> {
         let size = reference.size;
-        let count = reference.count;
         let wall_ms = Stats::of(&frames.wall).ok_or(GpuError::Lost("no frames timed"))?;
         let gpu_ms = Stats::of(&frames.total);
         let frame_ms = gpu_ms.map_or(wall_ms.median, |g| g.median).max(1e-6);
@@ -383,6 +407,7 @@ impl Bench<'_> {
             height: size,
             method,
             shading: reference.shading,
+            quality: quality.to_string(),
             frames: frames.wall.len() as u32,
             wall_ms,
             gpu_ms,

@@ -28,8 +28,9 @@ pub struct BenchOptions {
     pub methods: Vec<String>,
     /// Only the sample-only micro-benchmark.
     pub sample_only: bool,
-    /// The sampling quality of every scene (`--quality`), as `render` applies it.
-    pub quality: crate::scene::quality::Quality,
+    /// The sampling qualities every scene is timed at (`--quality`, repeatable), as `render` applies them, each
+    /// against the same converged image.
+    pub qualities: Vec<crate::scene::quality::Quality>,
     /// Where shaded scenes take gradients (`--gradients`), as `render` applies it.
     pub gradients: crate::scene::quality::Gradients,
     /// A step length (voxels) forced on every scene, overriding the quality's.
@@ -82,6 +83,8 @@ pub struct SceneResult {
     pub height: u32,
     pub method: Method,
     pub shading: Shading,
+    /// The quality level (`--quality`), or "step L" where `--step-length` forced the step.
+    pub quality: String,
     pub frames: u32,
     pub wall_ms: Stats,
     /// Whole frame on the GPU (all passes), from timestamps.
@@ -133,11 +136,12 @@ pub struct BenchReport {
 }
 
 /// The columns of [`BenchReport::text`]'s table, in order (tests parse the table by these).
-pub const TABLE_COLUMNS: [&str; 22] = [
+pub const TABLE_COLUMNS: [&str; 23] = [
     "scene",
     "size",
     "method",
     "shading",
+    "quality",
     "wall_med",
     "wall_min",
     "wall_max",
@@ -159,13 +163,13 @@ pub const TABLE_COLUMNS: [&str; 22] = [
 ];
 
 /// Each column's width in [`BenchReport::text`]'s table (a cell that is wider pushes the rest of its row along).
-const TABLE_WIDTHS: [usize; 22] = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7, 6, 6, 8, 7, 7];
+const TABLE_WIDTHS: [usize; 23] = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7, 6, 6, 8, 7, 7];
 
 /// What the table's columns mean, printed above it.
 const TABLE_LEGEND: &str = "\nms per frame (wall: render + readback; gpu: timestamps, entry + exit + march); \
     seg_spp: samples on the ray segments per pixel, before early termination; spp: 3D-texture \
     samples taken per pixel, gradients included (CPU replay of the march rules); Gsamples/s: spp x pixels / gpu_med; of_raw: that / \
-    sample-only rate of the volume's format; step: in voxels; stride: the longest brick stride; err_mean/p99/max: the last frame \
+    sample-only rate of the volume's format; quality: --quality's level (or the --step-length forced); step: in voxels; stride: the longest brick stride; err_mean/p99/max: the last frame \
     against the same scene converged (1/8-voxel steps, approximations off), in 1/255 over object \
     pixels\n";
 
@@ -275,6 +279,7 @@ impl SceneResult {
             format!("{}", self.width),
             self.method.name().into(),
             self.shading.name().into(),
+            self.quality.clone(),
             format!("{:.2}", self.wall_ms.median),
             format!("{:.2}", self.wall_ms.min),
             format!("{:.2}", self.wall_ms.max),
