@@ -205,6 +205,7 @@ fn settings(v: &Volume, size: u32) -> (RenderSettings, RenderSettings) {
     drag.height = size / 2;
     drag.step_length = drag.step_length.max(Quality::Draft.step_length(&drag, v.range));
     drag.max_stride = drag.max_stride.max(Quality::Draft.max_stride());
+    drag.stride_tolerance = drag.stride_tolerance.max(Quality::Draft.stride_tolerance());
     (rest, drag)
 }
 

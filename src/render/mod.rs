@@ -66,9 +66,9 @@ struct OccupancyKey {
     mode: crate::scene::settings::CompositeMode,
     iso: f32,
     skip_empty: bool,
-    /// Rule 2's strides: the longest stride (1 where strides do not apply), the step, the density factor and the
-    /// depth bound (which shading changes).
-    strides: (u32, u32, u32, u64),
+    /// Rule 2's strides: the longest stride (1 where strides do not apply), the step, the density factor, the
+    /// depth bound (which shading changes) and the spread bound (both scaled by the tolerance).
+    strides: (u32, u32, u32, u64, u64),
 }
 
 impl OccupancyKey {
@@ -85,9 +85,10 @@ impl OccupancyKey {
                     s.step_length.to_bits(),
                     s.density.to_bits(),
                     s.stride_depth().to_bits(),
+                    s.stride_spread().to_bits(),
                 )
             } else {
-                (1, 0, 0, 0)
+                (1, 0, 0, 0, 0)
             },
         }
     }

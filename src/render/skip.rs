@@ -3,7 +3,7 @@
 //! leaps over empty bricks without moving its sample grid, so skipping changes which samples are *taken*, never
 //! what they would have contributed; strides take every second or fourth sample of that grid. Pure code.
 
-use crate::scene::settings::{CompositeMode, RenderSettings, STRIDES, STRIDE_SPREAD};
+use crate::scene::settings::{CompositeMode, RenderSettings, STRIDES};
 use crate::transfer::preintegrate::extinction;
 use crate::volume::{Volume, VoxelData};
 use rayon::prelude::*;
@@ -64,14 +64,14 @@ impl BrickGrid {
         let sigma_max = RangeMax::new(sigma.clone());
         let sigma_min = RangeMax::new(sigma.iter().map(|v| -v).collect());
         // The longest stride whose segments stay within the frame's depth at extinction `sigma_b` and within
-        // STRIDE_SPREAD of depth between the brick's faintest and strongest values (`spread_b`).
-        let depth = s.stride_depth();
+        // the spread bound of depth between the brick's faintest and strongest values (`spread_b`).
+        let (depth, spread) = (s.stride_depth(), s.stride_spread());
         let stride = |sigma_b: f64, spread_b: f64| {
             STRIDES
                 .into_iter()
                 .filter(|&k| {
                     let length = f64::from(k) * f64::from(s.step_length);
-                    k <= s.max_stride && sigma_b * length <= depth && spread_b * length <= STRIDE_SPREAD
+                    k <= s.max_stride && sigma_b * length <= depth && spread_b * length <= spread
                 })
                 .max()
                 .unwrap_or(1) as u8

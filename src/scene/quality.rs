@@ -1,8 +1,10 @@
 //! Quality levels (`--quality`): how finely rays are sampled, as a step length chosen per frame from the transfer
-//! function. A level is a base step; emission and density frames shorten it where the classification is strong,
-//! so that no pre-integrated segment carries more than [`SEGMENT_DEPTH`] of optical depth (about 22% opacity) —
-//! unless that would take the step below a quarter of the base. A segment that opaque hides where inside it a
-//! surface lies, and the image moves with the sample grid; fainter segments average that out.
+//! function. Each level is an error target against the converged image ([`Quality::target`], measured by `bench`
+//! on its scenes: docs/performance.md, Quality levels), met by a base step and a segment depth: emission and density
+//! frames shorten the base step where the classification is strong, so that no pre-integrated segment carries more
+//! than the level's [`Quality::segment_depth`] of optical depth (0.25 for `normal`: about 22% opacity) — unless
+//! that would take the step below a quarter of the base. A segment that opaque hides where inside it a surface
+//! lies, and the image moves with the sample grid; fainter segments average that out.
 //!
 //! Within that step, faint bricks take longer strides (rule 2 of `RenderSettings`: segments of at most
 //! `STRIDE_DEPTH`). The level resolves to an ordinary `RenderSettings::step_length` and `max_stride` before a
@@ -16,7 +18,8 @@ use crate::transfer::preintegrate::extinction;
 /// The converged image's step, in voxels: `converged` quality, and what fidelity measures against.
 pub const CONVERGED_STEP: f32 = 0.125;
 
-/// Optical depth one segment may carry at most (where the step may still shrink): e^−0.25 ≈ 78% transmitted.
+/// Optical depth one segment of `normal` may carry at most (where the step may still shrink): e^−0.25 ≈ 78%
+/// transmitted.
 pub const SEGMENT_DEPTH: f64 = 0.25;
 
 /// How far below its base step a level may go for a strong transfer function.
@@ -25,9 +28,11 @@ pub const MIN_SCALE: f64 = 0.25;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Quality {
-    /// Base step 2 voxels: for interaction.
+    /// Base step 3 voxels, segments up to depth 1: for interaction, about the error of VTK's fixed-point caster at
+    /// its default 1-voxel step (mean 3.5/255 on `vtk-helix`).
     Draft,
-    /// Base step 1 voxel (volcast's default before quality levels; VTK's default sample distance).
+    /// Base step 1 voxel (volcast's default before quality levels; VTK's default sample distance), segments up to
+    /// depth 0.5.
     Fast,
     /// Base step 0.4 voxel, the default: "visually converged", within mean 0.5/255 and p99 4/255 of the
     /// converged image on the test and bench scenes docs/performance.md lists (errors fall with the square of the step:
@@ -56,10 +61,33 @@ impl Quality {
             .find(|q| q.name() == s.trim().to_ascii_lowercase())
     }
 
+    /// The error the level is made to stay within against the converged image, mean and p99 in 1/255 over object
+    /// pixels, on the bench scenes (docs/performance.md lists each scene's; `normal`'s is held by
+    /// tests/gpu/quality.rs on the test scenes): `normal` visually converged, `draft` about VTK's fixed-point
+    /// caster's at its 1-voxel default on `vtk-helix` (3.47 / 9), `fast` between them.
+    pub fn target(self) -> (f64, f64) {
+        match self {
+            Quality::Draft => (3.5, 20.0),
+            Quality::Fast => (1.5, 8.0),
+            Quality::Normal => (0.5, 4.0),
+            Quality::Converged => (0.0, 0.0),
+        }
+    }
+
+    /// The most optical depth one pre-integrated segment of this level may carry before the step shrinks: the error
+    /// of a segment grows with its depth (docs/performance.md, Quality levels).
+    pub fn segment_depth(self) -> f64 {
+        match self {
+            Quality::Draft => 3.0 * SEGMENT_DEPTH,
+            Quality::Fast => 2.0 * SEGMENT_DEPTH,
+            Quality::Normal | Quality::Converged => SEGMENT_DEPTH,
+        }
+    }
+
     /// The level's step in voxels before the transfer function is looked at.
     pub fn base_step(self) -> f32 {
         match self {
-            Quality::Draft => 2.0,
+            Quality::Draft => 3.0,
             Quality::Fast => 1.0,
             Quality::Normal => 0.4,
             Quality::Converged => CONVERGED_STEP,
@@ -67,7 +95,7 @@ impl Quality {
     }
 
     /// The step length (voxels) for frame `s` on data of value range `range`: the base step, shortened for
-    /// emission and density frames to `SEGMENT_DEPTH / σ_max` (σ_max: the largest extinction per voxel the
+    /// emission and density frames to [`segment_depth`](Self::segment_depth)` / σ_max` (σ_max: the largest extinction per voxel the
     /// classification gives inside the window, `preintegrate::extinction`), but not below `MIN_SCALE` of the base.
     /// `Converged` is always 1/8 voxel.
     pub fn step_length(self, s: &RenderSettings, range: [f64; 2]) -> f32 {
@@ -87,11 +115,11 @@ impl Quality {
             .filter(|(i, _)| (s.window[0]..=s.window[1]).contains(&(*i as f32 / last)))
             .map(|(_, e)| extinction(f64::from(e[3]), density))
             .fold(0.0f64, f64::max);
-        let depth = sigma_max * f64::from(base);
-        if depth <= SEGMENT_DEPTH {
+        let (depth, bound) = (sigma_max * f64::from(base), self.segment_depth());
+        if depth <= bound {
             return base;
         }
-        (f64::from(base) * (SEGMENT_DEPTH / depth).max(MIN_SCALE)) as f32
+        (f64::from(base) * (bound / depth).max(MIN_SCALE)) as f32
     }
 
     /// The longest brick stride (rule 2 of `RenderSettings`) the level allows: faint bricks take every second
@@ -104,10 +132,21 @@ impl Quality {
         }
     }
 
+    /// How far rule 2's stride bounds are loosened for this level (`RenderSettings::stride_tolerance`): faint bricks
+    /// of `draft` and `fast` stride over segments four and two times deeper than `normal`'s.
+    pub fn stride_tolerance(self) -> f32 {
+        match self {
+            Quality::Draft => 4.0,
+            Quality::Fast => 2.0,
+            Quality::Normal | Quality::Converged => 1.0,
+        }
+    }
+
     /// Applies the level to `s` (data of value range `range`): its step length and brick strides.
     pub fn apply(self, s: &mut RenderSettings, range: [f64; 2]) {
         s.step_length = self.step_length(s, range);
         s.max_stride = self.max_stride();
+        s.stride_tolerance = self.stride_tolerance();
     }
 }
 
@@ -180,13 +219,16 @@ mod tests {
         let mut s = RenderSettings::new(8, 8, Vec3::ONE);
         s.step_alpha = 0.1;
         assert_eq!(Quality::Normal.step_length(&s, [0.0, 1.0]), 0.4);
-        assert_eq!(Quality::Draft.step_length(&s, [0.0, 1.0]), 2.0);
-        // Opacity 0.6 per voxel: extinction 0.916, so 0.25 / 0.916 of a voxel.
+        assert_eq!(Quality::Draft.step_length(&s, [0.0, 1.0]), 3.0);
+        // Opacity 0.6 per voxel: extinction 0.916, so 0.5 / 0.916 of a voxel for fast, 0.25 / 0.916 for normal.
         s.step_alpha = 0.6;
+        let sigma = -(0.4f64).ln();
         let step = Quality::Fast.step_length(&s, [0.0, 1.0]);
-        assert!((step - (0.25 / -(0.4f64).ln()) as f32).abs() < 1e-5, "{step}");
-        // The same limit below normal's base: no segment carries more than SEGMENT_DEPTH.
-        assert!((Quality::Normal.step_length(&s, [0.0, 1.0]) - step).abs() < 1e-6);
+        assert!((step - (0.5 / sigma) as f32).abs() < 1e-5, "{step}");
+        let normal = Quality::Normal.step_length(&s, [0.0, 1.0]);
+        assert!((normal - (SEGMENT_DEPTH / sigma) as f32).abs() < 1e-5, "{normal}");
+        let draft = Quality::Draft.step_length(&s, [0.0, 1.0]);
+        assert!((draft - (0.75 / sigma) as f32).abs() < 1e-5, "{draft}");
         // Opacity 1: not below a quarter of the base.
         s.step_alpha = 1.0;
         assert_eq!(Quality::Fast.step_length(&s, [0.0, 1.0]), 0.25);

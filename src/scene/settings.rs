@@ -155,8 +155,9 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    ceil(hi·4095); `σ_b` and `σ_min` are the largest and smallest extinction (rule 6) of the classification at
 ///    e/4095 (clamped to the window) over them, `σ_min = 0` where [lo, hi] reaches beyond the window. A brick
 ///    none of whose entries is visible is empty. Any other brick's stride is the largest s in {1, 2, 4},
-///    s ≤ `max_stride`, with `σ_b·s·step_length ≤ D` and `(σ_b − σ_min)·s·step_length ≤ STRIDE_SPREAD` (at
-///    least 1); `D` = `STRIDE_DEPTH`, or `STRIDE_DEPTH_LIT` with `shading` or `gradient_opacity`. Sample k is
+///    s ≤ `max_stride`, with `σ_b·s·step_length ≤ D` and `(σ_b − σ_min)·s·step_length ≤ STRIDE_SPREAD·t` (at
+///    least 1); `D` = `STRIDE_DEPTH·t`, or `STRIDE_DEPTH_LIT·t` with `shading` or `gradient_opacity`, where
+///    `t` = `stride_tolerance`. Sample k is
 ///    taken only where k is a multiple of the stride of the brick holding it (in empty bricks every sample is
 ///    taken; none adds anything).
 ///    **Level strides** (emission/density, a pool of mixed levels: docs/large-volumes.md): the step is
@@ -293,6 +294,9 @@ pub struct RenderSettings {
     /// Rule 2's brick strides: the longest stride (1, 2 or 4 steps) a brick of faint opacity may take. 1 takes
     /// every sample; the quality levels set it (`Quality::apply`).
     pub max_stride: u32,
+    /// Rule 2's tolerance: the stride bounds `D` and `STRIDE_SPREAD` are multiplied by it (1: as rule 2 states
+    /// them). The quality levels set it from their error target (`Quality::apply`).
+    pub stride_tolerance: f32,
     /// Shade from a precomputed gradient texture (one sample instead of six; 8 bytes per voxel): rule 5's filtered
     /// grid gradients, smoothed for integer data. `Gradients::Auto` takes it for every frame that reads gradients
     /// while it stays within 1 GiB.
@@ -375,6 +379,7 @@ impl RenderSettings {
             position_format: PositionFormat::Rgba32f,
             skip_empty: true,
             max_stride: 1,
+            stride_tolerance: 1.0,
             gradient_texture: false,
             compute: false,
             voxel_axes: false,
@@ -461,13 +466,19 @@ impl RenderSettings {
         (self.skip_empty || self.max_stride > 1) && !self.layered_isosurfaces()
     }
 
-    /// Rule 2's depth bound `D` for strided segments.
+    /// Rule 2's depth bound `D` for strided segments, times `stride_tolerance`.
     pub fn stride_depth(&self) -> f64 {
-        if self.shading.is_some() || self.gradient_opacity.is_some() {
+        let d = if self.shading.is_some() || self.gradient_opacity.is_some() {
             STRIDE_DEPTH_LIT
         } else {
             STRIDE_DEPTH
-        }
+        };
+        d * f64::from(self.stride_tolerance)
+    }
+
+    /// Rule 2's spread bound for strided segments: `STRIDE_SPREAD` times `stride_tolerance`.
+    pub fn stride_spread(&self) -> f64 {
+        STRIDE_SPREAD * f64::from(self.stride_tolerance)
     }
 
     pub fn validate(&self) -> Result<(), String> {
@@ -486,6 +497,9 @@ impl RenderSettings {
         }
         if !(0.05..=64.0).contains(&self.step_length) {
             return Err(format!("step length {} voxels must be in [0.05, 64]", self.step_length));
+        }
+        if !(self.stride_tolerance.is_finite() && self.stride_tolerance > 0.0) {
+            return Err(format!("stride tolerance {} must be above 0", self.stride_tolerance));
         }
         if !STRIDES.contains(&self.max_stride) {
             return Err(format!("max stride {} must be 1, 2 or 4", self.max_stride));

@@ -5,7 +5,7 @@
 
 use super::segments::Segments;
 use glam::DVec3;
-use volcast::scene::settings::{CompositeMode, RenderSettings, STRIDES, STRIDE_SPREAD};
+use volcast::scene::settings::{CompositeMode, RenderSettings, STRIDES};
 
 /// Brick edge in voxels (rule 2).
 const BRICK: usize = 8;
@@ -86,7 +86,7 @@ impl Strides {
         let sigma: Vec<f64> = (0..ENTRIES)
             .map(|e| segments.point((e as f64 / last).clamp(window[0], window[1])).1)
             .collect();
-        let (step, depth) = (f64::from(s.step_length), s.stride_depth());
+        let (step, depth, spread) = (f64::from(s.step_length), s.stride_depth(), s.stride_spread());
         let stride = ranges
             .ranges
             .iter()
@@ -102,6 +102,10 @@ impl Strides {
                 let i = (lo.clamp(0.0, 1.0) * last).floor() as usize;
                 let j = ((hi.clamp(0.0, 1.0) * last).ceil() as usize).min(ENTRIES - 1);
                 let sigma_b = sigma[i..=j].iter().copied().fold(0.0, f64::max);
+                if sigma_b <= 0.0 {
+                    // Empty: every sample is taken (none adds anything).
+                    return 1;
+                }
                 let sigma_min = if beyond {
                     0.0
                 } else {
@@ -111,9 +115,7 @@ impl Strides {
                     .into_iter()
                     .filter(|&k| {
                         let length = f64::from(k) * step;
-                        k <= s.max_stride
-                            && sigma_b * length <= depth
-                            && (sigma_b - sigma_min) * length <= STRIDE_SPREAD
+                        k <= s.max_stride && sigma_b * length <= depth && (sigma_b - sigma_min) * length <= spread
                     })
                     .max()
                     .map_or(1, u64::from)

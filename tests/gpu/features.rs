@@ -159,6 +159,12 @@ fn brick_strides_follow_the_reference_rule() {
                 s.mode = CompositeMode::Density;
                 s.step_alpha = 0.02;
             }),
+            // Draft's tolerance (Quality::stride_tolerance): bounds four times looser, more bricks stride.
+            with(v, 112, "faint-tolerant", |s| {
+                strided(s);
+                s.step_alpha = 0.03;
+                s.stride_tolerance = 4.0;
+            }),
         ];
         let (mut full_samples, mut strided_samples) = (0, 0);
         for case in cases {
@@ -168,17 +174,41 @@ fn brick_strides_follow_the_reference_rule() {
             let label = format!("{}-{}-strides", v.name, case.name).to_lowercase();
             let strided = reference.render_full(&s);
             judge.against("reference", label.clone(), &image, &strided, &s, REFERENCE);
+            // Rule 2 pixel by pixel: every sample counted (skipping would leave out the empty bricks').
+            let counts = gpu_sample_counts(
+                &gpu,
+                &mut headless,
+                &RenderSettings {
+                    skip_empty: false,
+                    ..s.clone()
+                },
+            );
+            let off = counts
+                .iter()
+                .zip(&strided.samples)
+                .filter(|(g, r)| g.abs_diff(**r) > 1)
+                .count();
+            // (A brick whose bound the f32 table and the f64 reference put on either side takes another stride.)
+            if off > counts.len() / 100 {
+                failures.push(format!(
+                    "{label}: {off} pixels take other samples than rule 2's strides"
+                ));
+            }
             s.max_stride = 1;
             let every = total(&gpu_sample_counts(&gpu, &mut headless, &s));
             (strided_samples, full_samples) = (strided_samples + taken, full_samples + every);
-            judge.against(
-                "strides",
-                label,
-                &strided.image,
-                &reference.render_full(&s),
-                &s,
-                STRIDES,
-            );
+            // What rule 2 gives up is bounded at its own tolerance; a looser one is draft's, whose error the bench
+            // measures against its target (docs/performance.md, Quality levels).
+            if s.stride_tolerance == 1.0 {
+                judge.against(
+                    "strides",
+                    label,
+                    &strided.image,
+                    &reference.render_full(&s),
+                    &s,
+                    STRIDES,
+                );
+            }
             eprintln!("{}: {taken} of {every} samples", case.name);
         }
         // The same classification unlit, then lit: lighting halves the depth bound, so the renderer must classify

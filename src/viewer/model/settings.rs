@@ -50,6 +50,7 @@ impl Model {
                 None => (s.step_length * 2.0).min(64.0),
             };
             s.max_stride = s.max_stride.max(Quality::Draft.max_stride());
+            s.stride_tolerance = s.stride_tolerance.max(Quality::Draft.stride_tolerance());
         }
         s
     }
@@ -122,13 +123,13 @@ mod tests {
                 "{q:?}"
             );
             let moving = model.frame_settings(401, 300, true).step_length;
-            assert_eq!(moving, cli.step_length.max(2.0), "{q:?} while moving: draft's 2 voxels");
+            assert_eq!(moving, cli.step_length.max(3.0), "{q:?} while moving: draft's 3 voxels");
         }
         // Strong opacity shortens every level's step, the draft's while moving too (to a quarter at most).
         model.look.step_alpha = 1.0;
         model.sampling.quality = Some(Quality::Normal);
         let moving = model.frame_settings(401, 300, true).step_length;
-        assert!((0.5..2.0).contains(&moving), "{moving}");
+        assert!((0.75..3.0).contains(&moving), "{moving}");
         assert!(model.frame_settings(401, 300, false).step_length < 0.4);
         // Q walks down the levels and wraps; a custom step keeps the slider's.
         assert_eq!(next_lower(Some(Quality::Normal)), Quality::Fast);
