@@ -235,6 +235,8 @@ BUGS = [
     ("stride-tolerance-ignored", "the GPU's strides ignore the quality's tolerance on the spread bound (draft strides as normal does)",
      [("src/render/skip.rs", "let (depth, spread) = (s.stride_depth(), s.stride_spread());",
        "let (depth, spread) = (s.stride_depth(), crate::scene::settings::STRIDE_SPREAD);")]),
+    ("shading-fade-ignored", "the GPU lights flat regions fully although --shading-fade asks for flat light there",
+     [("shaders/shade.glsl", "float width = frame.voxel_world.x;", "float width = 0.0;")]),
     ("finer-bricks-take-the-held-range", "a brick read from the file takes the held level's skip range, narrower than its own voxels'",
      [("src/render/levels.rs", "let Some(l) = l.checked_sub(held).map(|l| l as usize) else {",
        "let Some(l) = Some(l.saturating_sub(held) as usize) else {")]),

@@ -180,7 +180,7 @@ vec4 march_isosurface(WalkRay ray, vec3 light, bool cut_start) {
             vec4 material = frame.iso_colors[i];
             vec3 rgb = material.r < 0.0 ? classify(clamp(iso, frame.value_map.z, frame.value_map.w)).rgb : material.rgb;
             vec3 p_hit = ray.a + ray.dir * t_hit;
-            composite(color, opacity, shade(rgb, gradient(p_hit), light, p_hit), material.a);
+            composite(color, opacity, shade(rgb, gradient(p_hit), light, p_hit, 1.0), material.a);
             if (opacity >= frame.alpha.z) {
                 break;
             }
@@ -211,7 +211,7 @@ vec4 segment_sample(vec4 mean, float seg_steps, vec3 p, vec3 light, bool density
         sigma *= min(1.0, length(g) / grad_ref);
     }
     if (frame.flags.w != 0u) {
-        rgb = shade(rgb, g, light, p);
+        rgb = shade(rgb, g, light, p, gradient_fade(g));
     }
 #else
     vec3 rgb = sigma > 0.0 ? clamp(mean.rgb / sigma, 0.0, 1.0) : vec3(0.0);

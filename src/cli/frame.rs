@@ -121,6 +121,10 @@ pub(crate) struct FrameArgs {
     /// Scale opacity by gradient magnitude, full at this value change per voxel (e.g. 0.05).
     #[arg(long)]
     pub(crate) gradient_opacity: Option<f32>,
+    /// Fade lighting to flat light where the gradient is below this fraction of the window per voxel (e.g. 0.05):
+    /// flat, noisy regions then show no speckled highlights (rule 5).
+    #[arg(long)]
+    pub(crate) shading_fade: Option<f32>,
     /// Sample at step midpoints instead of a per-pixel jittered start.
     #[arg(long)]
     pub(crate) no_jitter: bool,

@@ -271,6 +271,9 @@ impl FrameArgs {
         if wants("gradient_opacity") {
             s.gradient_opacity = self.gradient_opacity;
         }
+        if wants("shading_fade") {
+            s.shading_fade = self.shading_fade.unwrap_or(0.0);
+        }
         if wants("no_jitter") || wants("jitter_seed") {
             s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
         }

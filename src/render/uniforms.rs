@@ -308,7 +308,12 @@ impl FrameUniforms {
                 s.count_samples as u32 as f32,
             ],
             texel: v4(1.0 / dims, 0.0),
-            voxel_world: [0.0, 0.0, 0.0, s.gradient_opacity.unwrap_or(0.0)],
+            voxel_world: [
+                s.shading_fade * (s.window[1] - s.window[0]),
+                0.0,
+                0.0,
+                s.gradient_opacity.unwrap_or(0.0),
+            ],
             shading: [shading.ambient, shading.diffuse, shading.specular, shading.shininess],
             mode_params: [
                 s.iso_value,

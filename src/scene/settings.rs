@@ -183,7 +183,11 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///    × intensity; `rgb ← rgb·(ambient + diffuse·c·max(n·L, 0)) + specular·c·max(n·H, 0)^shininess` (specular
 ///    0 where n·L ≤ 0). `|g| = 0`: rgb kept. (A white headlight of intensity 1 gives
 ///    `rgb·(ambient + diffuse·|n·V|) + specular·|n·V|^shininess`.)
-///    In emission/density modes a segment (rule 6) is lit by the gradient at its midpoint.
+///    In emission/density modes a segment (rule 6) is lit by the gradient at its midpoint; with `shading_fade`
+///    F > 0, lighting fades with the gradient: with `x = clamp(|g| / (F·(window[1] − window[0])), 0, 1)` and
+///    `w = x²(3 − 2x)`, `rgb ← (1 − w)·rgb·(ambient + diffuse·c) + w·(the lit colour above)` (|g| = 0: the first
+///    term alone). Where the data is flat its gradient is noise whose direction turns with every shift of the
+///    samples, and a highlight follows it.
 ///    With `gradient_opacity = Some(r)`: the segment's extinction `σ̄ ← σ̄·min(1, |g|/r)`. With `gradient_texture`
 ///    (every mode that reads gradients), `g` is instead the grid's filtered gradient, interpolated trilinearly like
 ///    the values: per voxel the derivative along axis i by weights `d_k` over the neighbours k = −R..=R along i,
@@ -279,6 +283,9 @@ pub struct RenderSettings {
     pub shading: Option<Shading>,
     /// Gradient-magnitude-modulated opacity: full opacity from this gradient (value per voxel) up.
     pub gradient_opacity: Option<f32>,
+    /// Rule 5's shading fade (`--shading-fade`): volume lighting reaches full strength where the gradient is this
+    /// fraction of the window's width per voxel, and fades to flat light below (0: off).
+    pub shading_fade: f32,
     /// Jittered ray start with this seed (stable per seed); None: samples at the step midpoints.
     pub jitter: Option<u32>,
     pub early_termination: f32,
@@ -370,6 +377,7 @@ impl RenderSettings {
             density: 1.0,
             shading: None,
             gradient_opacity: None,
+            shading_fade: 0.0,
             jitter: Some(0),
             early_termination: DEFAULT_EARLY_TERMINATION,
             background: Vec3::ZERO,
@@ -497,6 +505,9 @@ impl RenderSettings {
         }
         if !(0.05..=64.0).contains(&self.step_length) {
             return Err(format!("step length {} voxels must be in [0.05, 64]", self.step_length));
+        }
+        if !(self.shading_fade.is_finite() && self.shading_fade >= 0.0) {
+            return Err(format!("shading fade {} must be 0 or more", self.shading_fade));
         }
         if !(self.stride_tolerance.is_finite() && self.stride_tolerance > 0.0) {
             return Err(format!("stride tolerance {} must be above 0", self.stride_tolerance));

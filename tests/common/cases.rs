@@ -159,6 +159,11 @@ pub fn quality_cases(v: &Volume, size: u32) -> Vec<Case> {
             s.gradient_opacity = Some(0.05);
             s.step_alpha = 0.4;
         }),
+        with(v, size, "shaded-fade", |s| {
+            s.shading = Some(Shading::default());
+            s.shading_fade = 0.05;
+            s.window = [0.1, 0.9];
+        }),
         with(v, size, "shaded-double-step", |s| {
             s.shading = Some(Shading::default());
             s.step_length = 2.0;

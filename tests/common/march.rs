@@ -38,6 +38,8 @@ pub(crate) struct Frame<'a> {
     /// isosurface mode.
     shading: Option<Shading>,
     gradient_opacity: Option<f64>,
+    /// Rule 5's shading fade (0: off).
+    shading_fade: f64,
     /// `gradient_texture`: shade from the grid gradients instead of central differences of the interpolant.
     grid_gradients: bool,
     jitter: Option<u32>,
@@ -115,6 +117,7 @@ impl<'a> Frame<'a> {
             light_grid: None,
             shading,
             gradient_opacity: s.gradient_opacity.map(f64::from),
+            shading_fade: f64::from(s.shading_fade),
             grid_gradients: s.gradient_texture,
             jitter: s.jitter,
             strides,
@@ -281,7 +284,8 @@ impl<'a> Frame<'a> {
                 }
                 if let Some(shading) = &self.shading {
                     let p = self.tex_at(segment, 0.5 * (t + t_mid_prev));
-                    rgb = shade(rgb, self.placement.normal(grad), light, shading, &self.lamp_at(p));
+                    let fade = super::reference::gradient_fade(grad, self.shading_fade, self.window);
+                    rgb = shade(rgb, self.placement.normal(grad), light, shading, &self.lamp_at(p), fade);
                 }
             }
             let a_step = match self.mode {
@@ -386,6 +390,7 @@ impl<'a> Frame<'a> {
                     -segment.dir,
                     &shading,
                     &self.lamp_at(p),
+                    1.0,
                 );
                 color += (1.0 - alpha) * opacity * lit;
                 alpha += (1.0 - alpha) * opacity;

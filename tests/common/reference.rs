@@ -163,10 +163,11 @@ impl Lamp {
 /// vector towards the eye), `l` the lamp's direction or `view`, `h = normalize(l + view)`;
 /// `rgb·(ambient + diffuse·c·max(n·l, 0)) + specular·c·max(n·h, 0)^shininess` (no specular where n·l ≤ 0);
 /// `rgb` unchanged where the world gradient vanishes.
-pub fn shade(rgb: DVec3, world_gradient: DVec3, view: DVec3, shading: &Shading, lamp: &Lamp) -> DVec3 {
+pub fn shade(rgb: DVec3, world_gradient: DVec3, view: DVec3, shading: &Shading, lamp: &Lamp, fade: f64) -> DVec3 {
+    let flat = rgb * (f64::from(shading.ambient) * lamp.occlusion + f64::from(shading.diffuse) * lamp.color);
     let len = world_gradient.length();
     if len < 1e-8 {
-        return rgb;
+        return if fade < 1.0 { flat } else { rgb };
     }
     let mut n = world_gradient / len;
     if n.dot(view) < 0.0 {
@@ -183,7 +184,18 @@ pub fn shade(rgb: DVec3, world_gradient: DVec3, view: DVec3, shading: &Shading, 
     let [ambient, diffuse, specular, shininess] =
         [shading.ambient, shading.diffuse, shading.specular, shading.shininess].map(f64::from);
     let spec = if ndl > 0.0 { ndh.powf(shininess) } else { 0.0 };
-    rgb * (DVec3::splat(ambient * lamp.occlusion) + diffuse * ndl * lamp.color) + specular * spec * lamp.color
+    let lit = rgb * (DVec3::splat(ambient * lamp.occlusion) + diffuse * ndl * lamp.color) + specular * spec * lamp.color;
+    flat + (lit - flat) * fade
+}
+
+/// Rule 5's shading fade for volume shading: smoothstep of |g| (value per voxel) over `shading_fade` of the
+/// window's width (1 where the fade is off).
+pub fn gradient_fade(g: DVec3, fade: f64, window: [f64; 2]) -> f64 {
+    if fade <= 0.0 {
+        return 1.0;
+    }
+    let x = (g.length() / (fade * (window[1] - window[0]))).clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
 }
 
 /// Renders `volume` with `s` by the CPU reference. Prefer [`Reference`] to render one volume several times.
