@@ -68,7 +68,7 @@ impl Quality {
     pub fn target(self) -> (f64, f64) {
         match self {
             Quality::Draft => (3.5, 20.0),
-            Quality::Fast => (1.5, 8.0),
+            Quality::Fast => (1.5, 10.0),
             Quality::Normal => (0.5, 4.0),
             Quality::Converged => (0.0, 0.0),
         }

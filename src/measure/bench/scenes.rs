@@ -107,7 +107,7 @@ pub fn scenes() -> Vec<Scene> {
         Scene {
             name: "ct-head",
             about: "CT head 256×256×108 int16 at 0.96×0.96×1.5 mm, window 0.33–0.9, plasma, step alpha 0.6 (the \
-                    CT picture of docs/cli.md)",
+                    CT picture of docs/cli.md); lit with --shading-fade 0.05 (soft tissue's gradients are noise)",
             source: Source::DataFile {
                 file: "cranium_ct_256x256x108_int16.raw",
                 spacing: [0.957031, 0.957031, 1.5],
@@ -116,6 +116,7 @@ pub fn scenes() -> Vec<Scene> {
                 s.window = [0.33, 0.9];
                 s.colormap = Colormap::Plasma;
                 s.step_alpha = 0.6;
+                s.shading_fade = 0.05;
                 let d = Camera::fit_distance(v.extent().length() * 0.5, s.camera.fov_y_deg);
                 s.camera = Camera::orbit(25.0, 10.0, d, Vec3::ZERO);
             },
