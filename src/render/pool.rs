@@ -21,7 +21,7 @@ use crate::volume::budget::level_dims;
 
 /// Voxels of border on each side of a brick in its slot: a point in the brick, moved one voxel (gradients) and
 /// filtered (one more), reads at most two voxels beyond it.
-pub const BORDER: u32 = 2;
+pub const BORDER: u32 = crate::volume::budget::BRICK_BORDER;
 
 /// The brick side used when a volume does not fit the device's 3D limit in one slot (docs/large-volumes.md has
 /// the measurements).

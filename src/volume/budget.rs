@@ -104,6 +104,10 @@ pub fn held_bytes(t: VoxelType) -> u64 {
     }
 }
 
+/// The border of voxels the GPU's brick pool keeps around every brick, on every side (`render::pool::BORDER`): a
+/// volume uploaded whole is one brick, so its texture is 2·BRICK_BORDER voxels longer along each axis.
+pub const BRICK_BORDER: u32 = 2;
+
 /// What a volume is: its shape, type and time steps.
 #[derive(Clone, Copy, Debug)]
 pub struct Shape {
@@ -117,11 +121,14 @@ impl Shape {
         dims.iter().map(|&d| u64::from(d)).product()
     }
 
-    /// Bytes level `level` takes on the host (every step) and in its cheapest texture (one step).
+    /// Bytes level `level` takes on the host (every step) and in its cheapest texture (one step, as one brick of
+    /// the pool with its border: what the upload allocates).
     pub fn level_bytes(&self, level: u32) -> (u64, u64) {
-        let v = Shape::voxels(level_dims(self.dims, level));
-        let one = v.saturating_mul(held_bytes(self.voxel_type));
-        (one.saturating_mul(u64::from(self.steps.max(1))), one)
+        let dims = level_dims(self.dims, level);
+        let bytes = held_bytes(self.voxel_type);
+        let one = Shape::voxels(dims).saturating_mul(bytes);
+        let bordered = Shape::voxels(dims.map(|d| d.saturating_add(2 * BRICK_BORDER))).saturating_mul(bytes);
+        (one.saturating_mul(u64::from(self.steps.max(1))), bordered)
     }
 }
 
@@ -255,6 +262,23 @@ mod tests {
             max_dim: 2048,
         });
         assert_eq!(choose(&small, &limit).unwrap().dims, [2048, 128, 128]);
+    }
+
+    #[test]
+    fn the_texture_counts_its_border() {
+        // 1024^3 uint8 is exactly half a 2 GiB budget, but uploaded with its 2-voxel border it is 1028^3: over.
+        let shape = Shape {
+            dims: [1024; 3],
+            voxel_type: VoxelType::U8,
+            steps: 1,
+        };
+        let gpu = Budgets::host(Some(6 << 30)).with_gpu(GpuBudget {
+            bytes: 2 << 30,
+            max_dim: 16384,
+        });
+        assert_eq!(shape.level_bytes(0), (1 << 30, 1028u64.pow(3)));
+        assert!(misfit(&shape, 0, &gpu).is_some_and(|why| why.contains("as much again to upload")));
+        assert_eq!(choose(&shape, &gpu).unwrap().level, 1);
     }
 
     #[test]

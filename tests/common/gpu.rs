@@ -45,6 +45,16 @@ pub fn gpu_sample_counts(gpu: &Gpu, headless: &mut Headless, s: &RenderSettings)
     sample_counts(&headless.render(gpu, &s).expect("render").image)
 }
 
+/// The pixels whose GPU sample count differs from the reference's by more than one: (pixel, GPU, reference).
+pub fn counts_off(gpu: &[u32], reference: &[u32]) -> Vec<(usize, u32, u32)> {
+    gpu.iter()
+        .zip(reference)
+        .enumerate()
+        .filter(|(_, (g, r))| g.abs_diff(**r) > 1)
+        .map(|(i, (g, r))| (i, *g, *r))
+        .collect()
+}
+
 pub struct Outcome {
     pub family: &'static str,
     pub label: String,

@@ -184,7 +184,8 @@ pub fn shade(rgb: DVec3, world_gradient: DVec3, view: DVec3, shading: &Shading, 
     let [ambient, diffuse, specular, shininess] =
         [shading.ambient, shading.diffuse, shading.specular, shading.shininess].map(f64::from);
     let spec = if ndl > 0.0 { ndh.powf(shininess) } else { 0.0 };
-    let lit = rgb * (DVec3::splat(ambient * lamp.occlusion) + diffuse * ndl * lamp.color) + specular * spec * lamp.color;
+    let lit =
+        rgb * (DVec3::splat(ambient * lamp.occlusion) + diffuse * ndl * lamp.color) + specular * spec * lamp.color;
     flat + (lit - flat) * fade
 }
 

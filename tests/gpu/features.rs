@@ -63,13 +63,7 @@ fn empty_space_skipping_takes_fewer_samples_and_keeps_the_image() {
                     failures.push(format!("{label}: skipping changed the image: {d}"));
                 }
                 // Rule 2 against the reference, pixel by pixel.
-                let off: Vec<(usize, u32, u32)> = counts_full
-                    .iter()
-                    .zip(&expected.samples)
-                    .enumerate()
-                    .filter(|(_, (g, r))| g.abs_diff(**r) > 1)
-                    .map(|(i, (g, r))| (i, *g, *r))
-                    .collect();
+                let off = common::gpu::counts_off(&counts_full, &expected.samples);
                 if off.len() > 12 {
                     failures.push(format!(
                         "{label}: {} pixels visit other samples than rule 2's (pixel, GPU, reference): {:?}",
@@ -183,11 +177,7 @@ fn brick_strides_follow_the_reference_rule() {
                     ..s.clone()
                 },
             );
-            let off = counts
-                .iter()
-                .zip(&strided.samples)
-                .filter(|(g, r)| g.abs_diff(**r) > 1)
-                .count();
+            let off = common::gpu::counts_off(&counts, &strided.samples).len();
             // (A brick whose bound the f32 table and the f64 reference put on either side takes another stride.)
             if off > counts.len() / 100 {
                 failures.push(format!(

@@ -306,13 +306,7 @@ fn level_strides_sample_each_brick_at_its_own_voxel() {
         headless.renderer.show_cut(&gpu, &helix, &mixed).expect("mixed cut");
         let counts = gpu_sample_counts(&gpu, &mut headless, &s);
         let expected = reference.render_full(&s).samples;
-        let off: Vec<(usize, u32, u32)> = counts
-            .iter()
-            .zip(&expected)
-            .enumerate()
-            .filter(|(_, (g, r))| g.abs_diff(**r) > 1)
-            .map(|(i, (g, r))| (i, *g, *r))
-            .collect();
+        let off = common::gpu::counts_off(&counts, &expected);
         if off.len() > 12 {
             failures.push(format!(
                 "{name}: {} pixels visit other samples than rule 2's (pixel, GPU, reference): {:?}",
