@@ -86,7 +86,7 @@ BUGS = [
      [("shaders/march.glsl", "taken += 1u;\n            composite(color, opacity, c.rgb, c.a);",
        "composite(color, opacity, c.rgb, c.a);\n            taken += c.a > 0.0 ? 1u : 0u;")]),
     ("stride-spread-dropped", "brick strides ignore how much the brick's extinction varies (leap over edges)",
-     [("src/render/skip.rs", " && spread_b * length <= STRIDE_SPREAD", "")]),
+     [("src/render/skip.rs", " && spread_b * length <= spread", "")]),
     ("reach-one-too-far", "a brick's reach is the distance to another class, not one less: spans run into the next class",
      [("src/render/skip.rs", "*r = d - 1;", "*r = d;")]),
     ("parallel-read-no-bias", "the parallel reader forgets signed 16-bit data's bias",

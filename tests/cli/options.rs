@@ -193,8 +193,9 @@ fn classification_options_take_effect() {
             s.max_stride = 1;
         }),
         rule(&["--quality", "draft"], |s, _| {
-            s.step_length = 2.0;
+            s.step_length = 3.0;
             s.max_stride = 2;
+            s.stride_tolerance = 4.0;
         }),
         // A faint opacity (extinction 0.0202 per voxel) lets every occupied brick stride 4 steps; --max-stride
         // caps it.
