@@ -7,9 +7,10 @@
 //! lies, and the image moves with the sample grid; fainter segments average that out.
 //!
 //! Within that step, faint bricks take longer strides (rule 2 of `RenderSettings`: segments of at most
-//! `STRIDE_DEPTH`). The level resolves to an ordinary `RenderSettings::step_length` and `max_stride` before a
-//! frame is rendered, so the GPU and the CPU reference render the same rule. Measured errors against the converged image per level and scene are in the
-//! docs/performance.md (Quality levels).
+//! `STRIDE_DEPTH` times the level's tolerance). The level resolves to an ordinary `RenderSettings::step_length`,
+//! `max_stride` and `stride_tolerance` before a frame is rendered, so the GPU and the CPU reference render the same
+//! rule. Measured errors against the converged image per level and scene are in docs/performance.md (Quality
+//! levels).
 
 use crate::scene::settings::{CompositeMode, RenderSettings};
 use crate::transfer::function::{bake, LUT_SIZE};
@@ -28,7 +29,7 @@ pub const MIN_SCALE: f64 = 0.25;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Quality {
-    /// Base step 3 voxels, segments up to depth 1: for interaction, about the error of VTK's fixed-point caster at
+    /// Base step 3 voxels, segments up to depth 0.75, strides at 4× rule 2's tolerance: for interaction, about the error of VTK's fixed-point caster at
     /// its default 1-voxel step (mean 3.5/255 on `vtk-helix`).
     Draft,
     /// Base step 1 voxel (volcast's default before quality levels; VTK's default sample distance), segments up to
@@ -95,8 +96,9 @@ impl Quality {
     }
 
     /// The step length (voxels) for frame `s` on data of value range `range`: the base step, shortened for
-    /// emission and density frames to [`segment_depth`](Self::segment_depth)` / σ_max` (σ_max: the largest extinction per voxel the
-    /// classification gives inside the window, `preintegrate::extinction`), but not below `MIN_SCALE` of the base.
+    /// emission and density frames to [`segment_depth`](Self::segment_depth)` / σ_max` (σ_max: the largest
+    /// extinction per voxel the classification gives inside the window, `preintegrate::extinction`), but not below
+    /// `MIN_SCALE` of the base.
     /// `Converged` is always 1/8 voxel.
     pub fn step_length(self, s: &RenderSettings, range: [f64; 2]) -> f32 {
         let base = self.base_step();
