@@ -66,7 +66,7 @@ impl Quality {
     /// pixels, on the bench scenes (docs/performance.md lists each scene's; `normal`'s is held by
     /// tests/gpu/quality.rs on the test scenes): `normal` visually converged, `draft` about VTK's fixed-point
     /// caster's at its 1-voxel default on `vtk-helix` (3.47 / 9), `fast` between them.
-    pub fn target(self) -> (f64, f64) {
+    pub const fn target(self) -> (f64, f64) {
         match self {
             Quality::Draft => (3.5, 20.0),
             Quality::Fast => (1.5, 10.0),

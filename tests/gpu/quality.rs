@@ -23,8 +23,10 @@ use volcast::scene::settings::{CompositeMode, RenderSettings, Shading};
 use volcast::transfer::Colormap;
 use volcast::volume::{self, Volume};
 
-const MEAN: f64 = 0.5;
-const P99: f64 = 4.0;
+/// `normal`'s error target (mean, p99 in 1/255): the fidelity issue's bound.
+const TARGET: (f64, f64) = Quality::Normal.target();
+const MEAN: f64 = TARGET.0;
+const P99: f64 = TARGET.1;
 const SIZE: u32 = 96;
 
 struct Case {
