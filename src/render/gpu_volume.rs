@@ -46,6 +46,10 @@ pub(super) struct GpuVolume {
     /// The normalised value range of each brick read from the file below the held level (`VolumeInfo::held`), for
     /// the skip grid.
     pub(super) finer_ranges: super::levels::FinerRanges,
+    /// Which bricks may be refined (refinable.rs): the ranges, made by the first screen cut that needs them, and
+    /// the classes of the frame they were last taken for.
+    pub(super) refinable: Option<super::refinable::Refinable>,
+    pub(super) refine_classes: Option<(OccupancyKey, super::refinable::Classes)>,
 }
 
 /// A 3D image of `dims` (a depth of 1 gets a duplicated second slice: a depth-1 image would be 2D), filled by
@@ -563,6 +567,8 @@ impl GpuVolume {
             light: None,
             stream: None,
             finer_ranges: Default::default(),
+            refinable: None,
+            refine_classes: None,
         }
     }
 

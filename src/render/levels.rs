@@ -120,8 +120,16 @@ fn need(view: &View, dims: [u32; 3], brick: [u32; 3], voxel: f64, l: u32, b: [u3
 }
 
 /// The screen rule's cut for a volume of `dims` in bricks of `brick`, levels up to `top`, within `bricks` bricks
-/// (at least the top level's one).
-pub fn screen_cut(dims: [u32; 3], brick: [u32; 3], top: u32, view: &View, factor: f64, bricks: usize) -> Cut {
+/// (at least the top level's one), refining only bricks that `may_refine` (refinable.rs: those whose children can
+/// show anything).
+pub fn screen_cut(
+    dims: [u32; 3],
+    brick: [u32; 3],
+    top: u32,
+    (view, factor): (&View, f64),
+    bricks: usize,
+    may_refine: &dyn Fn(u32, [u32; 3]) -> bool,
+) -> Cut {
     let grid0 = grid_at(dims, brick, 0);
     // The smallest side of a level-0 voxel in the world.
     let voxel = (0..3)
@@ -150,7 +158,7 @@ pub fn screen_cut(dims: [u32; 3], brick: [u32; 3], top: u32, view: &View, factor
     let mut heap = BinaryHeap::new();
     let consider = |heap: &mut BinaryHeap<Item>, l: u32, b: [u32; 3]| {
         let n = need(view, dims, brick, voxel, l, b);
-        if l > 0 && n > factor {
+        if l > 0 && n > factor && may_refine(l, b) {
             heap.push(Item(n, l, b));
         }
     };
@@ -297,10 +305,10 @@ mod tests {
     #[test]
     fn the_bound_counts_a_refinement_as_children_minus_one() {
         let view = close_view();
-        let cut = screen_cut([32; 3], [16; 3], 1, &view, 1.0, 8);
+        let cut = screen_cut([32; 3], [16; 3], 1, (&view, 1.0), 8, &|_, _| true);
         assert_eq!(cut.level, vec![0; 8]);
         assert_eq!(cut.shown().len(), 8);
-        let cut = screen_cut([32; 3], [16; 3], 1, &view, 1.0, 7);
+        let cut = screen_cut([32; 3], [16; 3], 1, (&view, 1.0), 7, &|_, _| true);
         assert_eq!(cut.level, vec![1; 8]);
         assert_eq!(cut.shown(), vec![(1, [0, 0, 0])]);
     }
@@ -312,7 +320,7 @@ mod tests {
             ortho_pixel: Some(1.0),
             ..close_view()
         };
-        let cut = screen_cut([64; 3], [16; 3], 2, &view, 1.0, usize::MAX);
+        let cut = screen_cut([64; 3], [16; 3], 2, (&view, 1.0), usize::MAX, &|_, _| true);
         assert!(cut.level.iter().all(|&l| l == 2));
     }
 

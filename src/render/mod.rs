@@ -16,6 +16,7 @@ pub mod placement;
 pub mod png;
 pub mod pool;
 mod record;
+pub mod refinable;
 mod resident;
 pub mod skip;
 pub mod stream;

@@ -121,17 +121,20 @@ impl Renderer {
 
     /// The cut the screen rule wants for the view `s` (one level coarser per doubling of `factor`) within the
     /// streamed pool; `None` when the volume is not streamed.
-    pub fn stream_wanted(&self, _volume: &Volume, s: &RenderSettings, factor: f64) -> Option<Cut> {
-        let vol = self.volume.as_ref()?;
-        let stream = vol.stream.as_ref()?;
+    pub fn stream_wanted(&mut self, volume: &Volume, s: &RenderSettings, factor: f64) -> Option<Cut> {
+        let vol = self.volume.as_mut()?;
+        let (top, bound) = vol.stream.as_ref().map(|st| (st.top, st.cut_bound()))?;
         let view = super::levels::View::of(&vol.info, s);
+        let (dims, brick) = (vol.pool.dims, vol.pool.brick);
+        let classes = vol.refine_classes(volume, s, top);
+        let may_refine = |l, b| classes.is_none_or(|c| c.may_refine(l, b));
         Some(super::levels::screen_cut(
-            vol.pool.dims,
-            vol.pool.brick,
-            stream.top,
-            &view,
-            factor,
-            stream.cut_bound(),
+            dims,
+            brick,
+            top,
+            (&view, factor),
+            bound,
+            &may_refine,
         ))
     }
 

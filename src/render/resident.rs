@@ -13,6 +13,7 @@ use super::stream::{Step, Stream};
 use super::Renderer;
 use crate::gpu::{Gpu, GpuError, TexelPolicy};
 use crate::scene::settings::RenderSettings;
+use crate::volume::cells::CellRanges;
 use crate::volume::Volume;
 
 impl GpuVolume {
@@ -197,8 +198,38 @@ impl GpuVolume {
         }
         self.info.held = held;
         self.info.step_level = step_level(&self.cut);
+        (self.refinable, self.refine_classes) = (None, None);
         self.skip_follows_cut();
         Ok(())
+    }
+
+    /// Which bricks of levels 1..=`top` of the pool's pyramid frame `s` may refine (refinable.rs), or None where
+    /// that is not known: a series, or a file's finer levels without level 0's ranges.
+    pub(super) fn refine_classes(
+        &mut self,
+        volume: &Volume,
+        s: &RenderSettings,
+        top: u32,
+    ) -> Option<&super::refinable::Classes> {
+        let key = super::OccupancyKey::of(s);
+        if self.refine_classes.as_ref().is_none_or(|(k, _)| *k != key) {
+            if self.refinable.is_none() {
+                let made;
+                let cells = match &volume.finer {
+                    Some(f) => volume.cells.as_deref().filter(|c| c.dims == f.dims())?,
+                    None if volume.timesteps() == 1 => {
+                        made = CellRanges::of(volume);
+                        &made
+                    }
+                    None => return None,
+                };
+                self.refinable = Some(super::refinable::Refinable::new(cells, volume, self.pool.brick, top));
+            }
+            let lut = crate::transfer::function::bake(&s.classification(), s.window, self.info.range);
+            let classes = self.refinable.as_ref()?.classes(&lut, s);
+            self.refine_classes = Some((key, classes));
+        }
+        self.refine_classes.as_ref().map(|(_, c)| c)
     }
 
     /// One step of the stream towards `wanted`: its uploads into their slots and the page table of what is shown.
@@ -362,7 +393,9 @@ impl Renderer {
             levels::LevelChoice::Forced(l) => levels::Cut::uniform(grid, l.min(top)),
             levels::LevelChoice::Screen { factor, bricks } => {
                 let view = levels::View::of(&vol.info, s);
-                levels::screen_cut(volume.dims, brick, top, &view, factor, bricks)
+                let classes = vol.refine_classes(volume, s, top);
+                let may_refine = |l, b| classes.is_none_or(|c| c.may_refine(l, b));
+                levels::screen_cut(volume.dims, brick, top, (&view, factor), bricks, &may_refine)
             }
         };
         self.show_cut(gpu, volume, &cut)?;

@@ -5,7 +5,7 @@
 
 use crate::scene::settings::{CompositeMode, RenderSettings, STRIDES};
 use crate::transfer::preintegrate::extinction;
-use crate::volume::{Volume, VoxelData};
+use crate::volume::Volume;
 use rayon::prelude::*;
 
 /// Brick edge in voxels.
@@ -27,11 +27,7 @@ impl BrickGrid {
         // The extremes of the elements as stored, by rows (a series uploads a step per frame: this is on the
         // playback path), then normalised: normalisation is affine in the element, so the extremes map to
         // extremes (f32 rounding is monotonic too, so the result equals a per-voxel min/max of normalised f32).
-        let extremes: Vec<Option<(f64, f64)>> = match &volume.data {
-            VoxelData::U8(v) => brick_extremes(v, dims, bricks),
-            VoxelData::U16(v) => brick_extremes(v, dims, bricks),
-            VoxelData::F32(v) => brick_extremes(v, dims, bricks),
-        };
+        let extremes = crate::volume::cells::extremes(&volume.data, dims, BRICK, 1);
         let mut min = Vec::with_capacity(extremes.len());
         let mut max = Vec::with_capacity(extremes.len());
         for e in extremes {
@@ -233,89 +229,6 @@ fn chebyshev_pass(dist: &[u8], line: usize, stride: usize, far: u8) -> Vec<u8> {
             out[first + k * stride] = v;
         }
     }
-    out
-}
-
-/// An element type as volumes store it, with the values that start a running minimum and maximum.
-trait Element: Copy + PartialOrd + Into<f64> + Send + Sync {
-    /// Not below any value (a running minimum starts here).
-    const HIGHEST: Self;
-    /// Not above any value.
-    const LOWEST: Self;
-}
-
-impl Element for u8 {
-    const HIGHEST: u8 = u8::MAX;
-    const LOWEST: u8 = 0;
-}
-
-impl Element for u16 {
-    const HIGHEST: u16 = u16::MAX;
-    const LOWEST: u16 = 0;
-}
-
-impl Element for f32 {
-    const HIGHEST: f32 = f32::INFINITY;
-    const LOWEST: f32 = f32::NEG_INFINITY;
-}
-
-/// `lo` takes the element-wise minimum with `values`. NaN compares false, so it never replaces anything.
-/// Written as plain selects so that it vectorises.
-fn merge_min<T: Element>(lo: &mut [T], values: &[T]) {
-    for (l, &v) in lo.iter_mut().zip(values) {
-        *l = if v < *l { v } else { *l };
-    }
-}
-
-/// `hi` takes the element-wise maximum with `values`, as [`merge_min`].
-fn merge_max<T: Element>(hi: &mut [T], values: &[T]) {
-    for (h, &v) in hi.iter_mut().zip(values) {
-        *h = if v > *h { v } else { *h };
-    }
-}
-
-/// Per brick, the smallest and largest element over its voxels and a one-voxel apron (NaN ignored; `None` for
-/// a brick of only NaN). Per layer of bricks: the planes of the layer's z-span reduced element-wise to one plane
-/// of minima and one of maxima, then their rows of each brick row's y-span to one row, then each brick's x-span:
-/// every step a vectorisable sweep over contiguous elements (a per-voxel walk brick by brick took a fifth of
-/// loading a 1 GiB volume).
-fn brick_extremes<T: Element>(data: &[T], dims: [u32; 3], bricks: [u32; 3]) -> Vec<Option<(f64, f64)>> {
-    let [w, h, d] = dims.map(|v| v as usize);
-    let [bx, by, bz] = bricks.map(|v| v as usize);
-    let b = BRICK as usize;
-    let span = |k: usize, n: usize| ((k * b).saturating_sub(1), ((k + 1) * b).min(n - 1));
-    let plane = w * h;
-    let mut out: Vec<Option<(f64, f64)>> = vec![None; bx * by * bz];
-    // Each layer of bricks (k) on its own core: the layers only read the data they share at their seams.
-    out.par_chunks_mut(bx * by).enumerate().for_each(|(k, layer)| {
-        let (z0, z1) = span(k, d);
-        let (mut lo, mut hi) = (vec![T::HIGHEST; plane], vec![T::LOWEST; plane]);
-        for z in z0..=z1 {
-            let slice = &data[z * plane..][..plane];
-            merge_min(&mut lo, slice);
-            merge_max(&mut hi, slice);
-        }
-        let (mut row_lo, mut row_hi) = (vec![T::HIGHEST; w], vec![T::LOWEST; w]);
-        for j in 0..by {
-            let (y0, y1) = span(j, h);
-            row_lo.fill(T::HIGHEST);
-            row_hi.fill(T::LOWEST);
-            for y in y0..=y1 {
-                merge_min(&mut row_lo, &lo[y * w..][..w]);
-                merge_max(&mut row_hi, &hi[y * w..][..w]);
-            }
-            for i in 0..bx {
-                let (x0, x1) = span(i, w);
-                let (mut a, mut c) = (T::HIGHEST, T::LOWEST);
-                for x in x0..=x1 {
-                    a = if row_lo[x] < a { row_lo[x] } else { a };
-                    c = if row_hi[x] > c { row_hi[x] } else { c };
-                }
-                // Only NaN leaves the minimum above the maximum (a value equal to a start value sets both).
-                layer[i + bx * j] = (a <= c).then(|| (a.into(), c.into()));
-            }
-        }
-    });
     out
 }
 

@@ -2,7 +2,9 @@
 //! `volcast convert`'s writer: zstd, 64³ chunks, with its own coarser levels), so the next open of the same file at
 //! that level reads the store instead of the file. The store is a standard OME-Zarr 0.5 one.
 //!
-//! An entry is `<cache>/pyramids/<key>.ome.zarr` and its stamp `<key>.json`. The key hashes what makes the level (the
+//! An entry is `<cache>/pyramids/<key>.ome.zarr`, its stamp `<key>.json` and, for a level whose finer levels stay in
+//! the file, level 0's value range per cell `<key>.cells` (`volume::cells`, made by the pass that read the level:
+//! which finer bricks can show anything is known before they are read). The key hashes what makes the level (the
 //! data file's canonical path, where its voxels start, their layout, the level); the stamp records what says the
 //! file is unchanged (its length and modification time) and the cache's version, and is written last, so an
 //! entry without one is unfinished. A stale, corrupt or other-version entry is rebuilt with a note; a cache folder
@@ -12,14 +14,16 @@ use crate::convert::layout::OmeVersion;
 use crate::convert::pyramid::Reduce;
 use crate::convert::source::Source;
 use crate::convert::{convert, Compression, ConvertOptions};
+use crate::volume::cells::CellRanges;
 use crate::volume::in_place::InPlace;
 use crate::volume::{self, OpenOptions, Volume};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::UNIX_EPOCH;
 
-/// Changes whenever what a cached level holds would change (the pyramid's rule, the store's layout).
-pub const CACHE_VERSION: u32 = 2;
+/// Changes whenever what a cached level holds would change (the pyramid's rule, the store's layout, what is kept
+/// beside it: level 0's ranges per cell since version 3).
+pub const CACHE_VERSION: u32 = 3;
 
 /// Where the cache lives: `--cache-dir`, else `$XDG_CACHE_HOME/volcast`, else `~/.cache/volcast`.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -87,6 +91,23 @@ impl PyramidCache {
         (dir.join(format!("{key}.ome.zarr")), dir.join(format!("{key}.json")))
     }
 
+    /// Where level 0's ranges per cell are kept beside an entry's stamp.
+    fn cells_path(stamp: &Path) -> PathBuf {
+        stamp.with_extension("cells")
+    }
+
+    /// Level 0's ranges per cell kept beside the entry whose stamp is `stamp`, as `read::read_level` made them for
+    /// level `level` of `place` (cells of 8 voxels of that level); `None` if absent or not what they must be.
+    fn cells(stamp: &Path, place: &InPlace, level: u32) -> Option<CellRanges> {
+        let path = PyramidCache::cells_path(stamp);
+        let cell = CellRanges::SIDE << level;
+        // The length is known before anything is read: a foreign or truncated file allocates nothing.
+        if std::fs::metadata(&path).ok()?.len() != CellRanges::byte_len(place.dims, cell) {
+            return None;
+        }
+        CellRanges::from_bytes(&std::fs::read(&path).ok()?, place.dims).filter(|c| c.cell == cell)
+    }
+
     /// What the stamp of level `level` of `place` must say now.
     fn stamp(place: &InPlace, level: u32) -> Option<Stamp> {
         let meta = std::fs::metadata(&place.data_file).ok()?;
@@ -132,6 +153,17 @@ impl PyramidCache {
             Err(note) => return Lookup::Miss { note },
         };
         let store_label = store.display();
+        // A level whose finer levels stay in the file needs level 0's ranges (which of their bricks can show
+        // anything); an entry without them is read again, once.
+        let cells = PyramidCache::cells(&self.entry(place, level).1, place, level).map(std::sync::Arc::new);
+        let finer = place.inflate.is_none() && place.timesteps == 1 && level > 0 && place.scaling.is_identity();
+        if finer && cells.is_none() {
+            return Lookup::Miss {
+                note: Some(format!(
+                    "the pyramid cache's entry {store_label} has no readable level-0 ranges beside it: rebuilt"
+                )),
+            };
+        }
         match volume::open(&store, &OpenOptions::default()) {
             Ok(v) if v.dims == stamp.dims => {
                 let mut v = match stamp.stored_range {
@@ -141,6 +173,7 @@ impl PyramidCache {
                 v.name = place.name.clone();
                 v.format = place.format.to_string();
                 v.notes = vec![format!("read from the pyramid cache ({store_label})")];
+                v.cells = cells;
                 Lookup::Hit(Box::new(v))
             }
             Ok(v) => Lookup::Miss {
@@ -207,6 +240,15 @@ impl PyramidCache {
             step: None,
         };
         stamp.stored_range = Some(v.stored_range);
+        let cells_path = PyramidCache::cells_path(&stamp_path);
+        let _ = std::fs::remove_file(&cells_path);
+        let kept_cells = match &v.cells {
+            Some(c) => std::fs::write(&cells_path, c.to_bytes()).map_err(|e| fail("cannot write the ranges of", &e)),
+            None => Ok(()),
+        };
+        if let Err(e) = kept_cells {
+            return (v, Err(e));
+        }
         let source = Source::Loaded(Box::new(v));
         let written = convert(&source, &store, &opts, &mut |_| {}).map_err(|e| fail("cannot write", &e));
         let Source::Loaded(v) = source else {
@@ -225,6 +267,7 @@ impl PyramidCache {
         });
         if stamped.is_err() {
             let _ = std::fs::remove_dir_all(&store);
+            let _ = std::fs::remove_file(&cells_path);
         }
         (*v, stamped)
     }
@@ -297,6 +340,8 @@ mod tests {
         };
         assert_eq!(back.dims, level.dims);
         assert_eq!(back.geometry, level.geometry);
+        assert!(level.cells.is_some(), "the read pass made level 0's ranges");
+        assert_eq!(back.cells, level.cells, "level 0's ranges are kept beside the entry");
         let [w, h, d] = level.dims;
         for (x, y, z) in [(0, 0, 0), (w - 1, h - 1, d - 1), (7, 3, 5)] {
             assert_eq!(back.value(x, y, z), level.value(x, y, z), "({x}, {y}, {z})");
@@ -305,6 +350,14 @@ mod tests {
         let preview = cache.preview(&place, 1, 8).expect("a preview");
         assert!(preview.dims.iter().all(|&s| s <= 8), "{:?}", preview.dims);
         assert!(preview.notes[0].starts_with("a preview from the pyramid cache"));
+        // Ranges cut short (a full disk, another program): the entry is read again, with a note, never trusted.
+        let cells = PyramidCache::cells_path(&cache.entry(&place, 1).1);
+        let bytes = std::fs::read(&cells).unwrap();
+        std::fs::write(&cells, &bytes[..bytes.len() - 16]).unwrap();
+        let Lookup::Miss { note: Some(note) } = cache.lookup(&place, 1) else {
+            panic!("a hit without level 0's ranges")
+        };
+        assert!(note.contains("no readable level-0 ranges"), "{note}");
         std::fs::remove_dir_all(&folder).ok();
     }
 }

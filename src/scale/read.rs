@@ -7,6 +7,7 @@ use super::budget::level_dims;
 use crate::convert::pyramid::{downsample, factors, Reduce};
 use crate::convert::sample::Sample;
 use crate::convert::source::Source;
+use crate::volume::cells::{CellRanges, Element};
 use crate::volume::{Geometry, Volume, VolumeError, VoxelData, VoxelType};
 use rayon::prelude::*;
 
@@ -18,13 +19,13 @@ fn batch(threads: usize, slab_bytes: u64, host_budget: u64) -> usize {
 
 /// Level `level` of time step `t` of `source`, held as volcast holds the type (biased 8/16-bit integers, float32
 /// for wider types). `progress` gets the fraction of output slices made.
-fn level_step<T: Sample>(
+fn level_step<T: Sample + Element>(
     source: &Source,
     t: u32,
     level: u32,
     host_budget: u64,
     progress: &mut dyn FnMut(f32),
-) -> Result<(Vec<T>, Option<[f64; 2]>), VolumeError> {
+) -> Result<Read<Vec<T>>, VolumeError> {
     let full = source.dims();
     let out = level_dims(full, level);
     let slice = out[0] as usize * out[1] as usize;
@@ -54,7 +55,16 @@ fn level_step<T: Sample>(
     };
     // Level 0's value range, from the voxels read: the level stands in for level 0 and normalises as it does.
     let range = std::sync::Mutex::new(None::<[f64; 2]>);
-    let reduce = |(mut slab, n): (Vec<T>, u32), into: &mut [T]| {
+    // Level 0's range per cell of 8 voxels of this level (2^L slices: part of one layer of cells), as held.
+    let cell = CellRanges::SIDE << level;
+    let offset = crate::volume::stored_offset(T::TYPE);
+    let layer = |slab: &[T], n: u32| -> Vec<Option<(f64, f64)>> {
+        let held = |(a, b): (f64, f64)| (a + offset, b + offset);
+        let ranges = crate::volume::cells::extremes_of(slab, [full[0], full[1], n], cell, 0);
+        ranges.into_iter().map(|r| r.map(held)).collect()
+    };
+    let reduce = |(mut slab, n): (Vec<T>, u32), into: &mut [T]| -> Vec<Option<(f64, f64)>> {
+        let cells = layer(&slab, n);
         let found = slab
             .iter()
             .map(|v| v.to_f64())
@@ -73,7 +83,10 @@ fn level_step<T: Sample>(
             dims = [0, 1, 2].map(|i| dims[i].div_ceil(f[i]));
         }
         into.copy_from_slice(&slab);
+        cells
     };
+    let mut cells = CellRanges::unseen(full, cell);
+    let cells_per_layer = (cell >> level) as usize;
     for first in (0..out[2] as usize).step_by(step) {
         let last = (first + step).min(out[2] as usize);
         let into = dst[first * slice..last * slice].par_chunks_mut(slice);
@@ -81,18 +94,28 @@ fn level_step<T: Sample>(
             // A compressed stream is decoded front to back: the batch's slabs are read in order, then reduced on
             // every core.
             let slabs = (first..last).map(read).collect::<Result<Vec<_>, _>>()?;
-            into.zip(slabs).for_each(|(into, slab)| reduce(slab, into));
+            let layers: Vec<_> = into.zip(slabs).map(|(into, slab)| reduce(slab, into)).collect();
+            for (oz, layer) in (first..last).zip(layers) {
+                cells.merge_layer((oz / cells_per_layer) as u32, &layer);
+            }
         } else {
-            into.zip(first..last).try_for_each(|(into, oz)| {
-                reduce(read(oz)?, into);
-                Ok::<(), VolumeError>(())
-            })?;
+            let layers = into
+                .zip(first..last)
+                .map(|(into, oz)| Ok::<_, VolumeError>((oz, reduce(read(oz)?, into))))
+                .collect::<Result<Vec<_>, _>>()?;
+            for (oz, layer) in layers {
+                cells.merge_layer((oz / cells_per_layer) as u32, &layer);
+            }
         }
         progress(last as f32 / out[2] as f32);
     }
     let range = range.into_inner().ok().flatten();
-    Ok((dst, range))
+    Ok((dst, range, cells))
 }
+
+/// A level of one step as read: its voxels, level 0's stored value range (finite values) and level 0's range per
+/// cell.
+type Read<V> = (V, Option<[f64; 2]>, CellRanges);
 
 /// One step of level `level` as [`VoxelData`] in the representation `voxel_type` is held in, and the stored value
 /// range of the level-0 voxels it was made from.
@@ -102,35 +125,29 @@ fn level_data(
     level: u32,
     host_budget: u64,
     progress: &mut dyn FnMut(f32),
-) -> Result<(VoxelData, Option<[f64; 2]>), VolumeError> {
-    fn biased<T: Send, U: Send>((v, r): (Vec<T>, Option<[f64; 2]>), f: fn(T) -> U) -> (Vec<U>, Option<[f64; 2]>) {
-        (v.into_par_iter().map(f).collect(), r)
+) -> Result<Read<VoxelData>, VolumeError> {
+    fn held<T>((v, r, c): Read<Vec<T>>, f: fn(Vec<T>) -> VoxelData) -> Read<VoxelData> {
+        (f(v), r, c)
+    }
+    fn biased<T: Send, U: Send>((v, r, c): Read<Vec<T>>, f: fn(T) -> U) -> Read<Vec<U>> {
+        (v.into_par_iter().map(f).collect(), r, c)
     }
     Ok(match source.held_type() {
-        VoxelType::U8 => {
-            let (v, r) = level_step::<u8>(source, t, level, host_budget, progress)?;
-            (VoxelData::U8(v), r)
-        }
+        VoxelType::U8 => held::<u8>(level_step(source, t, level, host_budget, progress)?, VoxelData::U8),
         VoxelType::I8 => {
-            let (v, r) = biased(level_step::<i8>(source, t, level, host_budget, progress)?, |v| {
+            let r = biased(level_step::<i8>(source, t, level, host_budget, progress)?, |v| {
                 (i16::from(v) + 128) as u8
             });
-            (VoxelData::U8(v), r)
+            held::<u8>(r, VoxelData::U8)
         }
-        VoxelType::U16 => {
-            let (v, r) = level_step::<u16>(source, t, level, host_budget, progress)?;
-            (VoxelData::U16(v), r)
-        }
+        VoxelType::U16 => held::<u16>(level_step(source, t, level, host_budget, progress)?, VoxelData::U16),
         VoxelType::I16 => {
-            let (v, r) = biased(level_step::<i16>(source, t, level, host_budget, progress)?, |v| {
+            let r = biased(level_step::<i16>(source, t, level, host_budget, progress)?, |v| {
                 (i32::from(v) + 32768) as u16
             });
-            (VoxelData::U16(v), r)
+            held::<u16>(r, VoxelData::U16)
         }
-        _ => {
-            let (v, r) = level_step::<f32>(source, t, level, host_budget, progress)?;
-            (VoxelData::F32(v), r)
-        }
+        _ => held::<f32>(level_step(source, t, level, host_budget, progress)?, VoxelData::F32),
     })
 }
 
@@ -155,10 +172,13 @@ pub fn read_level(
     let steps = source.timesteps().max(1);
     let mut data = Vec::with_capacity(steps as usize);
     let mut stored: Option<[f64; 2]> = None;
+    let mut cells = None;
     for t in 0..steps {
         let (t0, n) = (t as f32, steps as f32);
-        let (d, r) = level_data(source, t, level, host_budget, &mut |f| progress((t0 + f) / n))?;
+        let (d, r, c) = level_data(source, t, level, host_budget, &mut |f| progress((t0 + f) / n))?;
         data.push(d);
+        // One step's cells: a series streams no finer levels.
+        cells = (steps == 1 && level > 0).then_some(c);
         if let Some([a, b]) = r {
             stored = Some(stored.map_or([a, b], |[lo, hi]| [lo.min(a), hi.max(b)]));
         }
@@ -175,6 +195,7 @@ pub fn read_level(
         v = v.with_scaling(scaling)?;
     }
     v.notes = notes;
+    v.cells = cells.map(std::sync::Arc::new);
     Ok(v)
 }
 
@@ -208,7 +229,7 @@ mod tests {
 
     #[test]
     fn levels_read_in_place_and_from_memory_match_the_definition() {
-        let dims = [7u32, 5, 6];
+        let dims = [37u32, 21, 40];
         let n = (dims[0] * dims[1] * dims[2]) as usize;
         let src: Vec<i16> = (0..n).map(|i| ((i * 7919) % 601) as i16 - 300).collect();
         let (path, opts) = crate::scale::test_file::int16_raw("level", dims, &src, None);
@@ -228,6 +249,27 @@ mod tests {
                         assert_eq!(b.value(x, y, z), want, "loaded, level {level} at ({x}, {y}, {z})");
                     }
                 }
+            }
+            // Level 0's range per cell of 8 voxels of the level read, as held (int16 biased by 32768).
+            let cells = a.cells.as_deref().expect("the pass made level 0's ranges");
+            let side = 8 << level;
+            assert_eq!((cells.cell, cells.dims), (side, dims));
+            for (k, &range) in cells.ranges.iter().enumerate() {
+                let c = [
+                    k as u32 % cells.grid[0],
+                    k as u32 / cells.grid[0] % cells.grid[1],
+                    k as u32 / (cells.grid[0] * cells.grid[1]),
+                ];
+                let mut want: Option<(f64, f64)> = None;
+                for z in c[2] * side..((c[2] + 1) * side).min(dims[2]) {
+                    for y in c[1] * side..((c[1] + 1) * side).min(dims[1]) {
+                        for x in c[0] * side..((c[0] + 1) * side).min(dims[0]) {
+                            let v = f64::from(src[(x + dims[0] * (y + dims[1] * z)) as usize]) + 32768.0;
+                            want = Some(want.map_or((v, v), |(lo, hi)| (lo.min(v), hi.max(v))));
+                        }
+                    }
+                }
+                assert_eq!(range, want, "level {level}, cell {c:?}");
             }
             // Level 1's first voxel is centred between voxels 0 and 1 of level 0 on every halved axis.
             if level == 1 {

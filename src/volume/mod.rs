@@ -13,6 +13,7 @@
 
 pub mod budget;
 mod builtin;
+pub mod cells;
 mod decode;
 mod dicom;
 mod downsample;
@@ -41,7 +42,8 @@ pub use error::VolumeError;
 pub use open::{detect_format, format_by_name, open, open_with_progress, Format, OpenOptions};
 pub use raw::{load_raw, parse_scivis_name, RawOptions};
 pub use time::TimeSteps;
-use voxel::{compute_range, compute_range_of, stored_offset, stored_value};
+pub(crate) use voxel::stored_offset;
+use voxel::{compute_range, compute_range_of, stored_value};
 pub use voxel::{element_range, Scaling, VoxelData, VoxelType};
 pub use zarr::ChannelInfo;
 
@@ -105,6 +107,10 @@ pub struct Volume {
     /// Where this is a coarser level of a file read in place, the finer levels' bricks in that file (streamed
     /// pools read them as the view needs them); `None` otherwise.
     pub finer: Option<std::sync::Arc<dyn FinerLevels>>,
+    /// Level 0's value range per cell, where this is a coarser level of a file read whole in one pass (made by that
+    /// pass, or kept beside the level in the pyramid cache): which bricks finer than this level can show anything
+    /// is known before they are read. `None` otherwise (a volume that is its own level 0 has them in its voxels).
+    pub cells: Option<std::sync::Arc<cells::CellRanges>>,
 }
 
 /// The levels below the one a volume holds, where they stay in its file (`scale::finer::Finer`): the pool reads
@@ -175,6 +181,7 @@ impl Volume {
             time: TimeSteps::default(),
             channels: Vec::new(),
             finer: None,
+            cells: None,
         })
     }
 

@@ -166,7 +166,7 @@ const INT16_BIAS: f64 = 32768.0;
 const INT8_BIAS: f64 = 128.0;
 
 /// Offset between a stored (biased) integer and the source value.
-pub(super) fn stored_offset(source_type: VoxelType) -> f64 {
+pub(crate) fn stored_offset(source_type: VoxelType) -> f64 {
     match source_type {
         VoxelType::I16 => INT16_BIAS,
         VoxelType::I8 => INT8_BIAS,

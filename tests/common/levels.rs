@@ -10,6 +10,9 @@
 //!   grid (clamped to its edge) at the point, and a gradient's six samples are taken in the level of their centre.
 //! - The screen rule: a brick of level L ≥ 1 is replaced by its children while its voxel is larger than `factor`
 //!   pixels at its distance; without a bound on the bricks that gives one cut, which [`screen_cut`] computes.
+//! - Only what can be seen is refined: a brick of level L ≥ 1 is replaced by its children only if the range of
+//!   level 0's values within 2^L voxels of its box, rounded out to cells of `cell` voxels, can be visible
+//!   ([`may_refine`]).
 
 use super::placement::Placement;
 use glam::DVec3;
@@ -140,6 +143,17 @@ pub fn screen_cut(
     s: &RenderSettings,
     factor: f64,
 ) -> Cut {
+    screen_cut_where(dims, brick, top, (placement, s, factor), &|_, _| true)
+}
+
+/// [`screen_cut`] where only bricks (level, index in its level's grid) that `refine` allows are refined.
+pub fn screen_cut_where(
+    dims: [usize; 3],
+    brick: [usize; 3],
+    top: u32,
+    (placement, s, factor): (&Placement, &RenderSettings, f64),
+    refine: &dyn Fn(u32, [usize; 3]) -> bool,
+) -> Cut {
     let mut cut = Cut::uniform(dims, brick, top);
     let voxel = placement.voxel_sides().min_element();
     let c = &s.camera;
@@ -167,7 +181,7 @@ pub fn screen_cut(
             } else {
                 2.0 * ((centre - eye).length() - radius).max(0.0) * tan / f64::from(s.height)
             };
-            if f64::from(1u32 << l) * voxel <= factor * pixel {
+            if f64::from(1u32 << l) * voxel <= factor * pixel || !refine(l, b.map(|v| v >> l)) {
                 break;
             }
             l -= 1;
@@ -175,4 +189,33 @@ pub fn screen_cut(
         *level = l;
     }
     cut
+}
+
+/// The rule that only what can be seen is refined, for brick `b` of level `l` in bricks of `brick` voxels over
+/// `level0` (its normalised values): the smallest and largest value (NaN ignored) over level 0's voxels within
+/// 2^l voxels of the brick's box, that box rounded out to whole cells of `cell` voxels (cells from the volume's
+/// corner), can be visible by `visible`. A region of only NaN cannot.
+pub fn may_refine(
+    level0: &Level,
+    (brick, cell): ([usize; 3], usize),
+    l: u32,
+    b: [usize; 3],
+    visible: &dyn Fn(f64, f64) -> bool,
+) -> bool {
+    let dims = level0.dims;
+    let reach = 1usize << l;
+    let lo = [0, 1, 2].map(|a| (((b[a] * brick[a]) << l).saturating_sub(reach) / cell) * cell);
+    let hi = [0, 1, 2].map(|a| ((((b[a] + 1) * brick[a]) << l) + reach).div_ceil(cell) * cell);
+    let mut range: Option<(f64, f64)> = None;
+    for z in lo[2]..hi[2].min(dims[2]) {
+        for y in lo[1]..hi[1].min(dims[1]) {
+            for x in lo[0]..hi[0].min(dims[0]) {
+                let v = level0.at(x, y, z);
+                if !v.is_nan() {
+                    range = Some(range.map_or((v, v), |(a, c)| (a.min(v), c.max(v))));
+                }
+            }
+        }
+    }
+    range.is_some_and(|(a, c)| visible(a, c))
 }

@@ -66,6 +66,31 @@ impl BrickRanges {
     }
 }
 
+/// Extinction of the classification at each table entry's value, clamped into the window (the table's entries
+/// beyond it repeat its edges).
+fn extinctions(s: &RenderSettings, segments: &Segments) -> Vec<f64> {
+    let (window, last) = (s.window.map(f64::from), (ENTRIES - 1) as f64);
+    (0..ENTRIES)
+        .map(|e| segments.point((e as f64 / last).clamp(window[0], window[1])).1)
+        .collect()
+}
+
+/// Rule 2's test of emptiness for emission, as a function of a value range: some table entry that the part of the
+/// range inside the window reaches has extinction above 0.
+pub fn visible_emission(s: &RenderSettings, segments: &Segments) -> impl Fn(f64, f64) -> bool {
+    let (sigma, window) = (extinctions(s, segments), s.window.map(f64::from));
+    let last = (ENTRIES - 1) as f64;
+    move |lo, hi| {
+        let (lo, hi) = (lo.max(window[0]), hi.min(window[1]));
+        if lo > hi {
+            return false;
+        }
+        let i = (lo.clamp(0.0, 1.0) * last).floor() as usize;
+        let j = ((hi.clamp(0.0, 1.0) * last).ceil() as usize).min(ENTRIES - 1);
+        sigma[i..=j].iter().any(|&v| v > 0.0)
+    }
+}
+
 /// The stride of every brick for one frame.
 pub struct Strides {
     dims: [usize; 3],
@@ -81,11 +106,7 @@ impl Strides {
         }
         let window = s.window.map(f64::from);
         let last = (ENTRIES - 1) as f64;
-        // Extinction of the classification at each entry's value, clamped into the window (the table's entries
-        // beyond it repeat its edges).
-        let sigma: Vec<f64> = (0..ENTRIES)
-            .map(|e| segments.point((e as f64 / last).clamp(window[0], window[1])).1)
-            .collect();
+        let sigma = extinctions(s, segments);
         let (step, depth, spread) = (f64::from(s.step_length), s.stride_depth(), s.stride_spread());
         let stride = ranges
             .ranges

@@ -18,7 +18,7 @@ use volcast::volume::budget::Budgets;
 use volcast::volume::{self, OpenOptions, Volume};
 
 /// The helix and the same voxels opened from a raw file within a host budget one byte short of level 0.
-fn helix_held_at_level_1(folder: &str) -> (Volume, Volume) {
+pub(crate) fn helix_held_at_level_1(folder: &str) -> (Volume, Volume) {
     let helix = volume::builtin("helix", Some(128)).expect("helix");
     let dir = common::scratch::scratch(folder);
     let path = dir.write("helix_128x128x128_uint8.raw", helix.gpu_bytes());
@@ -34,7 +34,7 @@ fn helix_held_at_level_1(folder: &str) -> (Volume, Volume) {
 }
 
 /// A close shaded view from `azimuth`.
-fn view(v: &Volume, azimuth: f32) -> RenderSettings {
+pub(crate) fn view(v: &Volume, azimuth: f32) -> RenderSettings {
     let mut s = RenderSettings::for_volume(96, 96, v);
     s.camera = Camera::orbit(azimuth, 20.0, 1.2, glam::Vec3::ZERO);
     s.shading = Some(Shading::default());
@@ -42,7 +42,7 @@ fn view(v: &Volume, azimuth: f32) -> RenderSettings {
 }
 
 /// The reference's frame for `cut` (it steps by the finest level shown, as the GPU does).
-fn reference_for(helix: &Volume, cut: &Cut, s: &RenderSettings) -> Rendered {
+pub(crate) fn reference_for(helix: &Volume, cut: &Cut, s: &RenderSettings) -> Rendered {
     let rc = RefCut {
         brick: [16; 3],
         grid: cut.grid.map(|g| g as usize),

@@ -15,6 +15,7 @@ mod lighting;
 mod methods_agree;
 mod pool;
 mod quality;
+mod refinable;
 mod stream;
 mod validation_canary;
 mod vs_reference;
