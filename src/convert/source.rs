@@ -312,12 +312,15 @@ impl Source {
     /// decoded.
     fn read_bytes(&self, at: u64, out: &mut [u8]) -> Result<(), VolumeError> {
         match self {
-            Source::InPlace(v, file) => file
-                .read_exact_at(out, v.offset + at)
-                .map_err(|source| VolumeError::Io {
-                    path: v.data_file.clone(),
-                    source,
-                }),
+            Source::InPlace(v, file) => match &v.blocks {
+                Some(blocks) => blocks.read_at((file, &v.data_file), at, out),
+                None => file
+                    .read_exact_at(out, v.offset + at)
+                    .map_err(|source| VolumeError::Io {
+                        path: v.data_file.clone(),
+                        source,
+                    }),
+            },
             Source::Stream(v, stream) => stream
                 .lock()
                 .map_err(|_| VolumeError::Header {

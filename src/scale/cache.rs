@@ -156,8 +156,7 @@ impl PyramidCache {
         // A level whose finer levels stay in the file needs level 0's ranges (which of their bricks can show
         // anything); an entry without them is read again, once.
         let cells = PyramidCache::cells(&self.entry(place, level).1, place, level).map(std::sync::Arc::new);
-        let finer = place.inflate.is_none() && place.timesteps == 1 && level > 0 && place.scaling.is_identity();
-        if finer && cells.is_none() {
+        if place.by_box() && level > 0 && cells.is_none() {
             return Lookup::Miss {
                 note: Some(format!(
                     "the pyramid cache's entry {store_label} has no readable level-0 ranges beside it: rebuilt"

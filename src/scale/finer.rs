@@ -36,9 +36,10 @@ impl std::fmt::Debug for Finer {
 
 impl Finer {
     /// The finer levels of `place`, held at level `held`: only for one step of voxels that lie uncompressed in the
-    /// file (a compressed stream cannot be read by box) and a held level above 0.
+    /// file (`InPlace::by_box`: a compressed stream cannot be read by box, and compressed blocks would be decoded once
+    /// per row) and a held level above 0.
     pub fn of(place: &InPlace, held: u32) -> Result<Option<Finer>, VolumeError> {
-        if held == 0 || place.inflate.is_some() || place.timesteps > 1 || !place.scaling.is_identity() {
+        if held == 0 || !place.by_box() {
             return Ok(None);
         }
         Ok(Some(Finer {

@@ -92,6 +92,11 @@ pub fn open_deferred(
             refuse_if_asked(&opts, shape.dims, &level).map_err(named)?;
             return read_place(place, &level, &opts, budgets.host, cache, progress);
         }
+        if place.blocks.is_some() {
+            // Appended `.vti` data are decoded by range at full resolution too: the file is never held beside its
+            // voxels (the format's reader holds both). Level 0 is not cached: it is the file.
+            return read_place(place, &level, &opts, budgets.host, None, progress);
+        }
     }
     refuse_whole_over_budget(path, &budgets).map_err(named)?;
     let v = volume::open_with_progress(path, &opts, progress)?;
@@ -113,11 +118,14 @@ fn read_place(
     progress: &mut dyn FnMut(f32),
 ) -> Result<Opened, VolumeError> {
     let mut notes = place.notes.clone();
-    notes.push(budget::level_note(place.dims, level));
+    if level.level > 0 {
+        notes.push(budget::level_note(place.dims, level));
+    }
     let miss_note = match cache.map(|c| c.lookup(&place, level.level)) {
         Some(Lookup::Hit(mut v)) => {
             notes.append(&mut v.notes);
             v.notes = notes;
+            v.arrays = place.arrays.clone();
             return Ok(Opened {
                 volume: with_finer(after_level(*v, opts), &place, level.level)?,
                 keep: None,
@@ -130,10 +138,17 @@ fn read_place(
     if place.inflate.is_some() {
         notes.push("its compressed voxels were decoded once, as a stream, into that level".into());
     }
+    if place.blocks.is_some() {
+        notes.push(match level.level {
+            0 => "its encoded voxels were decoded once, on every core, without holding the file".into(),
+            _ => "its encoded voxels were decoded once, on every core, into that level".into(),
+        });
+    }
     let source = Source::in_place(place.clone())?;
     let keep_place = place.clone();
     let mut v = read::read_level(&source, level.level, host_budget, notes, progress)?;
     v.format = place.format.to_string();
+    v.arrays = place.arrays.clone();
     let keep = cache.map(|c| Keep {
         cache: c.clone(),
         place,

@@ -5,6 +5,8 @@
 use super::decode::Endian;
 use super::format::{self, DataLocation, Encoding, Header};
 use super::open::{detect_format, Format};
+use super::vtk::vti;
+use super::vtk::vti_blocks::{BlockIndex, Text};
 use super::{check_extent, metaimage, nifti, nrrd, raw, Geometry, OpenOptions, Scaling, VolumeError, VoxelType};
 use std::path::{Path, PathBuf};
 
@@ -26,6 +28,11 @@ pub struct InPlace {
     /// The bytes from `offset` are a compressed stream (gzip NIfTI or NRRD, zlib MetaImage), decoded front to back;
     /// `None`: they lie in place.
     pub inflate: Option<Inflate>,
+    /// The values are in independently compressed blocks (an appended `.vti` array): any range is read by decoding
+    /// the blocks under it (`vtk::vti_blocks`); `None`: they lie in place or `inflate` says how to decode them.
+    pub blocks: Option<std::sync::Arc<BlockIndex>>,
+    /// The file's data arrays, as `volcast info` lists them (a multi-array `.vti`); empty for one-array formats.
+    pub arrays: Vec<super::ArrayInfo>,
 }
 
 /// A compressed stream's kind, and the inflated bytes before the voxels (a `.nii.gz`'s header and extensions).
@@ -36,6 +43,12 @@ pub struct Inflate {
 }
 
 impl InPlace {
+    /// Whether any box of voxels can be read with positioned reads (uncompressed, one step, not rescaled): the
+    /// finer levels of a level held from such a file stay in it (`scale::finer`).
+    pub fn by_box(&self) -> bool {
+        self.inflate.is_none() && self.blocks.is_none() && self.timesteps == 1 && self.scaling.is_identity()
+    }
+
     /// Bytes of one time step.
     pub fn step_bytes(&self) -> u64 {
         self.dims.iter().map(|&d| u64::from(d)).product::<u64>() * self.voxel_type.size() as u64
@@ -55,6 +68,7 @@ pub fn in_place(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, Volu
         Format::Raw => return raw_in_place(path, opts).map(Some),
         Format::Nrrd => nrrd::parse(&format::read_prefix(path, format::HEADER_LIMIT)?, &file)?,
         Format::MetaImage => metaimage::parse(&format::read_prefix(path, format::HEADER_LIMIT)?, &file)?,
+        Format::Vti => return vti_uncompressed(path, opts),
         Format::Nifti => {
             // 544 bytes: NIfTI-2's 540-byte header and its extension flag; NIfTI-1 and Analyze need 348.
             let prefix = format::read_prefix(path, 544)?;
@@ -127,6 +141,7 @@ pub fn compressed(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, Vo
             h.encoding = Encoding::Gzip;
             return stream_of(path, h, vox_offset, opts).map(Some);
         }
+        Ok(Format::Vti) => return vti_compressed(path, opts),
         _ => return Ok(None),
     };
     if !matches!(header.encoding, Encoding::Gzip | Encoding::Zlib) {
@@ -178,6 +193,58 @@ fn stream_of(path: &Path, header: Header, skip: u64, opts: &OpenOptions) -> Resu
     let mut place = header_in_place_unchecked(path, header, data_file, offset, opts);
     place.inflate = Some(inflate);
     Ok(place)
+}
+
+/// A `.vti` whose array is appended raw and uncompressed: its values lie in place after the one header word that
+/// counts their bytes (which must agree with the extent and type). `None` for any other layout.
+fn vti_uncompressed(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, VolumeError> {
+    let Some((mut header, stored)) = vti::appended(path, opts.array.as_deref())? else {
+        return Ok(None);
+    };
+    if stored.compressor.is_some() || stored.text != Text::Raw {
+        return Ok(None);
+    }
+    let needed = claimed_bytes(&header)?;
+    let mut word = [0u8; 8];
+    let n = stored.word;
+    let read = std::fs::File::open(path).and_then(|f| {
+        use std::os::unix::fs::FileExt;
+        f.read_exact_at(&mut word[..n], stored.at)
+    });
+    let count = match stored.endian {
+        Endian::Little => u64::from_le_bytes(word),
+        Endian::Big => u64::from_be_bytes(word) >> (8 * (8 - n)),
+    };
+    if read.is_err() || count != needed {
+        // Not what the extent needs, or past the file's end: the whole-file reader says which.
+        return Ok(None);
+    }
+    header.location = DataLocation::Inline(Some(stored.at + n as u64));
+    header.encoding = Encoding::Raw;
+    header_in_place(path, header, opts).map(Some)
+}
+
+/// The largest compressed block read by range: VTK writes 32 KiB blocks; a file of larger ones is read whole.
+const MAX_BLOCK: u64 = 64 << 20;
+
+/// A `.vti` whose array is appended in compressed blocks or as base64: read by range, decoding the characters and
+/// blocks each range needs. `None` for any other layout (a raw uncompressed array lies in place).
+fn vti_compressed(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, VolumeError> {
+    let Some((header, stored)) = vti::appended(path, opts.array.as_deref())? else {
+        return Ok(None);
+    };
+    if stored.compressor.is_none() && stored.text == Text::Raw {
+        return Ok(None);
+    }
+    let needed = claimed_bytes(&header)?;
+    let at = (stored.at, stored.text);
+    let index = BlockIndex::read(path, at, (stored.word, stored.endian), stored.compressor, needed)?;
+    if index.block > MAX_BLOCK {
+        return Ok(None);
+    }
+    let mut place = header_in_place_unchecked(path, header, path.to_path_buf(), 0, opts);
+    place.blocks = Some(std::sync::Arc::new(index));
+    Ok(Some(place))
 }
 
 fn header_in_place(path: &Path, header: Header, opts: &OpenOptions) -> Result<InPlace, VolumeError> {
@@ -243,6 +310,8 @@ fn header_in_place_unchecked(
         timesteps: header.timesteps.max(1),
         notes: header.notes,
         inflate: None,
+        blocks: None,
+        arrays: header.arrays,
     }
 }
 
@@ -272,5 +341,7 @@ fn raw_in_place(path: &Path, opts: &OpenOptions) -> Result<InPlace, VolumeError>
         timesteps: 1,
         notes: Vec::new(),
         inflate: None,
+        blocks: None,
+        arrays: Vec::new(),
     })
 }

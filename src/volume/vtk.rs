@@ -6,7 +6,8 @@
 
 mod scan;
 pub(crate) mod vti;
-mod vti_data;
+pub(crate) mod vti_blocks;
+pub(crate) mod vti_data;
 mod walk;
 
 use super::decode::{Endian, Progress};

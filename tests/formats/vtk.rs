@@ -319,8 +319,14 @@ fn hostile_vti_files_are_refused() {
         ("not-xml.vti", b"<VTKFile type=\"ImageData\" <<<".to_vec(), "malformed"),
     ];
     for (name, bytes, expected) in cases {
-        let e = open(&s.write(name, &bytes), None).expect_err(name).to_string();
+        let path = s.write(name, &bytes);
+        let e = open(&path, None).expect_err(name).to_string();
         assert!(e.contains(name), "{name}: the message should name the file: {e}");
         assert!(e.contains(expected), "{name}: {e} should contain '{expected}'");
+        // Within a host budget smaller than the claim, an appended array is read where it lies (by range): refused
+        // as clearly, before any block is decoded past what the file holds.
+        let budgets = volcast::volume::budget::Budgets::host(Some(100));
+        let e = volcast::scale::open(&path, &Default::default(), budgets, None, &mut |_| {}).expect_err(name);
+        assert!(e.to_string().contains(name), "{name}: within the budget: {e}");
     }
 }

@@ -250,21 +250,19 @@ fn select<'a>(p: &'a Parsed, wanted: Option<&str>, file: &str) -> Result<&'a Xml
     Ok(chosen)
 }
 
-/// Parses and loads a `.vti` held in memory; `file` names it in messages.
-fn read(
-    bytes: &[u8],
+/// The header of the parsed `p` for the array `wanted` (or the default one), that array, and how binary data are
+/// stored (byte order, header word size, compressor).
+fn header_of<'p>(
+    p: &'p Parsed,
     file: &str,
-    name: String,
     wanted: Option<&str>,
-    progress: &mut Progress,
-) -> Result<Volume, VolumeError> {
-    let p = parse_xml(bytes, file)?;
-    check_single_image(&p, file)?;
-    let (endian, word, compressor) = encoding(&p, file)?;
-    let (extent, dims) = extent(&p, file)?;
-    let count = crate::volume::check_dims(dims).map_err(|e| named(file, e))?;
-    let (spacing, geometry) = placement(&p, file, &extent)?;
-    let chosen = select(&p, wanted, file)?;
+) -> Result<(Header, &'p XmlArray, Stored), VolumeError> {
+    check_single_image(p, file)?;
+    let stored = encoding(p, file)?;
+    let (extent, dims) = extent(p, file)?;
+    crate::volume::check_dims(dims).map_err(|e| named(file, e))?;
+    let (spacing, geometry) = placement(p, file, &extent)?;
+    let chosen = select(p, wanted, file)?;
     let voxel_type = voxel_type(&chosen.type_name).ok_or_else(|| VolumeError::UnsupportedType {
         file: file.to_string(),
         format: FORMAT,
@@ -273,7 +271,7 @@ fn read(
     let mut h = Header::new(FORMAT);
     h.dims = dims;
     h.voxel_type = voxel_type;
-    h.endian = endian;
+    h.endian = stored.0;
     h.spacing = spacing.map(f64::abs);
     h.geometry = Some(geometry);
     if p.piece_extent.is_some() && p.whole_extent.is_some() && p.piece_extent != p.whole_extent {
@@ -290,18 +288,88 @@ fn read(
             loaded: std::ptr::eq(a, chosen),
         })
         .collect();
+    Ok((h, chosen, stored))
+}
+
+/// Parses and loads a `.vti` held in memory; `file` names it in messages.
+fn read(
+    bytes: &[u8],
+    file: &str,
+    name: String,
+    wanted: Option<&str>,
+    progress: &mut Progress,
+) -> Result<Volume, VolumeError> {
+    let p = parse_xml(bytes, file)?;
+    let (h, chosen, (endian, word, compressor)) = header_of(&p, file, wanted)?;
     let location = location(bytes, &p, chosen, file)?;
     let layout = Layout {
         file,
         word,
         endian,
         compressor,
-        voxel_type,
-        dims,
-        count,
+        voxel_type: h.voxel_type,
+        dims: h.dims,
+        count: crate::volume::check_dims(h.dims).map_err(|e| named(file, e))?,
     };
     let data = vti_data::decode(&layout, location, progress)?;
     h.into_volume(name, data).map_err(|e| named(file, e))
+}
+
+/// Where an appended array lies in its file: the byte its block header (compressed) or byte count starts at, how it
+/// is written (raw or base64), the header's word size and byte order, and the compressor.
+pub(crate) struct Appended {
+    pub at: u64,
+    pub text: super::vti_blocks::Text,
+    pub word: usize,
+    pub endian: Endian,
+    pub compressor: Option<Compressor>,
+}
+
+/// The header of `path`'s array `wanted` and where its values lie, when it is appended (raw, as ParaView writes,
+/// or base64, VTK's default) and the XML before it fits [`format::HEADER_LIMIT`]: such a file is read where it lies
+/// (`in_place`). `None` for every other layout (ascii and inline arrays): those are read whole.
+pub(crate) fn appended(path: &Path, wanted: Option<&str>) -> Result<Option<(Header, Appended)>, VolumeError> {
+    let file = format::file_label(path);
+    let prefix = format::read_prefix(path, format::HEADER_LIMIT)?;
+    // A head cut by the prefix does not parse: the whole-file reader says what is wrong, if anything.
+    let Ok(p) = parse_xml(&prefix, &file) else {
+        return Ok(None);
+    };
+    let Some((encoding, after_tag)) = p.appended.clone() else {
+        return Ok(None);
+    };
+    let (h, chosen, (endian, word, compressor)) = header_of(&p, &file, wanted)?;
+    let text = match encoding.as_str() {
+        "raw" => super::vti_blocks::Text::Raw,
+        "base64" => super::vti_blocks::Text::Base64,
+        _ => return Ok(None),
+    };
+    if chosen.format != ArrayFormat::Appended {
+        return Ok(None);
+    }
+    // The array's offset counts from the byte after the underscore that opens the appended bytes (which may lie
+    // past the prefix: the caller checks the file's length).
+    let err = |problem: String| header_error(&file, problem);
+    let rest = &prefix[after_tag..];
+    let underscore = rest
+        .iter()
+        .position(|&b| !b.is_ascii_whitespace())
+        .filter(|&i| rest[i] == b'_')
+        .ok_or_else(|| err("<AppendedData> must start with '_'".into()))?;
+    let offset_text = chosen
+        .offset
+        .as_deref()
+        .ok_or_else(|| err(format!("appended array '{}' has no offset", clip(&chosen.name))))?;
+    let offset: u64 = format::number(&file, "DataArray offset", offset_text)?;
+    let at = (after_tag + underscore + 1) as u64 + offset;
+    let stored = Appended {
+        at,
+        text,
+        word,
+        endian,
+        compressor,
+    };
+    Ok(Some((h, stored)))
 }
 
 /// Refuses VTK XML files other than ImageData, and ImageData of no or several pieces.
@@ -326,8 +394,11 @@ fn check_single_image(p: &Parsed, file: &str) -> Result<(), VolumeError> {
     }
 }
 
-/// How the binary data are stored: byte order, the block headers' word size in bytes, and the compressor.
-fn encoding(p: &Parsed, file: &str) -> Result<(Endian, usize, Option<Compressor>), VolumeError> {
+/// How binary data are stored: byte order, the block headers' word size in bytes, and the compressor.
+type Stored = (Endian, usize, Option<Compressor>);
+
+/// How the binary data are stored ([`Stored`]).
+fn encoding(p: &Parsed, file: &str) -> Result<Stored, VolumeError> {
     let err = |problem: String| header_error(file, problem);
     let endian = match p.byte_order.as_deref() {
         None | Some("LittleEndian") => Endian::Little,

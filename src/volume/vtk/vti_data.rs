@@ -15,14 +15,14 @@ use base64::Engine;
 use std::io::{Read, Write};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Compressor {
+pub enum Compressor {
     Zlib,
     Lz4,
     Lzma,
 }
 
 impl Compressor {
-    fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Compressor::Zlib => "zlib",
             Compressor::Lz4 => "lz4",
@@ -33,7 +33,7 @@ impl Compressor {
     /// Most output a block of `compressed` bytes can honestly produce: deflate ~1032:1, LZ4 ~255:1 (a 255-byte
     /// length extension per byte); xz reaches several thousand to one on constant data, so its bound is loose and
     /// only stops absurd claims.
-    fn max_output(self, compressed: u64) -> u64 {
+    pub(crate) fn max_output(self, compressed: u64) -> u64 {
         let ratio = match self {
             Compressor::Zlib => 1032,
             Compressor::Lz4 => 256,
@@ -306,31 +306,11 @@ fn inflate(
         }
         let start = out.len();
         let corrupt = |e: String| layout.err(format!("{} block {i} is corrupt: {e}", compressor.name()));
-        match compressor {
-            Compressor::Zlib => {
-                // One byte past the size shows a stream that holds more than its header says.
-                flate2::read::ZlibDecoder::new(input)
-                    .take(size as u64 + 1)
-                    .read_to_end(&mut out)
-                    .map_err(|e| corrupt(e.to_string()))?;
-            }
-            Compressor::Lz4 => {
-                out.try_reserve_exact(size).map_err(|_| VolumeError::OutOfMemory {
-                    dims: layout.dims,
-                    bytes: layout.expected(),
-                })?;
-                out.resize(start + size, 0);
-                let n =
-                    lz4_flex::block::decompress_into(input, &mut out[start..]).map_err(|e| corrupt(e.to_string()))?;
-                out.truncate(start + n);
-            }
-            Compressor::Lzma => {
-                let mut reader = input;
-                let limit = start + size;
-                lzma_rs::xz_decompress(&mut reader, &mut Capped { out: &mut out, limit })
-                    .map_err(|e| corrupt(e.to_string()))?;
-            }
-        }
+        out.try_reserve_exact(size).map_err(|_| VolumeError::OutOfMemory {
+            dims: layout.dims,
+            bytes: layout.expected(),
+        })?;
+        decode_block(compressor, size, input, &mut out).map_err(corrupt)?;
         let got = out.len() - start;
         if got > size {
             return Err(layout.err(format!(
@@ -346,6 +326,54 @@ fn inflate(
         }
     }
     Ok(out)
+}
+
+/// Decodes one block of `input` that the header says holds `size` bytes, appending to `out`; stops one byte past
+/// `size` (the caller checks the count).
+fn decode_block(compressor: Compressor, size: usize, input: &[u8], out: &mut Vec<u8>) -> Result<(), String> {
+    let start = out.len();
+    match compressor {
+        Compressor::Zlib => {
+            // One byte past the size shows a stream that holds more than its header says.
+            flate2::read::ZlibDecoder::new(input)
+                .take(size as u64 + 1)
+                .read_to_end(out)
+                .map_err(|e| e.to_string())?;
+        }
+        Compressor::Lz4 => {
+            out.resize(start + size, 0);
+            let n = lz4_flex::block::decompress_into(input, &mut out[start..]).map_err(|e| e.to_string())?;
+            out.truncate(start + n);
+        }
+        Compressor::Lzma => {
+            let mut reader = input;
+            let limit = start + size;
+            lzma_rs::xz_decompress(&mut reader, &mut Capped { out, limit }).map_err(|e| e.to_string())?;
+        }
+    }
+    Ok(())
+}
+
+/// One block of `size` bytes decoded from `input` into `out` (cleared first): exactly `size` bytes, or why not.
+pub(crate) fn inflate_block(
+    compressor: Compressor,
+    size: usize,
+    input: &[u8],
+    out: &mut Vec<u8>,
+) -> Result<(), String> {
+    out.clear();
+    if size as u64 > compressor.max_output(input.len() as u64) {
+        return Err(format!(
+            "it claims {size} bytes, more than {} bytes can produce",
+            input.len()
+        ));
+    }
+    decode_block(compressor, size, input, out)?;
+    match out.len() {
+        n if n == size => Ok(()),
+        n if n > size => Err(format!("it inflates to more than the {size} bytes its header says")),
+        n => Err(format!("it inflates to {n} bytes, not the {size} its header says")),
+    }
 }
 
 /// The array's voxels.
