@@ -39,12 +39,20 @@ pub fn factors(fine: [u64; 3]) -> [usize; 3] {
 /// Reduces `src` (`dims` = width, height, slices; x fastest) by `factor` per axis with `how`; the result has
 /// `ceil(dims / factor)` voxels per axis. Rows are reduced on every core.
 pub fn downsample<T: Sample>(src: &[T], dims: [usize; 3], factor: [usize; 3], how: Reduce) -> Vec<T> {
+    let out = [0, 1, 2].map(|i| dims[i].div_ceil(factor[i]));
+    let mut dst = vec![T::default(); out[0] * out[1] * out[2]];
+    downsample_into(src, dims, factor, how, &mut dst);
+    dst
+}
+
+/// [`downsample`] into `dst`, which must hold the result's `ceil(dims / factor)` voxels.
+pub fn downsample_into<T: Sample>(src: &[T], dims: [usize; 3], factor: [usize; 3], how: Reduce, dst: &mut [T]) {
     let [w, h, d] = dims;
     assert_eq!(src.len(), w * h * d, "slab size");
     let out = [0, 1, 2].map(|i| dims[i].div_ceil(factor[i]));
-    let mut dst = vec![T::default(); out[0] * out[1] * out[2]];
+    assert_eq!(dst.len(), out[0] * out[1] * out[2], "result size");
     if dst.is_empty() {
-        return dst;
+        return;
     }
     dst.par_chunks_mut(out[0]).enumerate().for_each(|(row, line)| {
         let (oy, oz) = (row % out[1], row / out[1]);
@@ -62,11 +70,7 @@ pub fn downsample<T: Sample>(src: &[T], dims: [usize; 3], factor: [usize; 3], ho
                 at(ys.start + 1, zs.start + 1),
             ];
             first = w / 2;
-            for (ox, slot) in line[..first].iter_mut().enumerate() {
-                let x = 2 * ox;
-                let sum: f64 = rows.iter().map(|r| r[x].to_f64() + r[x + 1].to_f64()).sum();
-                *slot = T::from_f64(sum / 8.0);
-            }
+            T::mean_rows(rows, &mut line[..first]);
         }
         let mut block = [T::default(); 8];
         for (ox, slot) in line.iter_mut().enumerate().skip(first) {
@@ -83,7 +87,6 @@ pub fn downsample<T: Sample>(src: &[T], dims: [usize; 3], factor: [usize; 3], ho
             *slot = reduce(&mut block[..n], how);
         }
     });
-    dst
 }
 
 /// One coarse voxel from the fine voxels of its block (at least one).

@@ -203,6 +203,21 @@ impl Source {
     /// Slices `z0..z0 + n` of step `t` (x fastest), each value `scaling` applied to the true source value
     /// (signed integers un-biased, big-endian bytes swapped), converted to `T`.
     pub fn read_slab<T: Sample>(&self, t: u32, z0: u32, n: u32, scaling: Scaling) -> Result<Vec<T>, VolumeError> {
+        let mut out = Vec::new();
+        self.read_slab_into(t, z0, n, scaling, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`read_slab`](Self::read_slab) into `out`, reusing its memory (a reader of many slabs allocates once: fresh
+    /// pages for every slab cost a fifth of reading a level).
+    pub fn read_slab_into<T: Sample>(
+        &self,
+        t: u32,
+        z0: u32,
+        n: u32,
+        scaling: Scaling,
+        out: &mut Vec<T>,
+    ) -> Result<(), VolumeError> {
         let [w, h, _] = self.dims();
         let slice = w as usize * h as usize;
         let (start, len) = (z0 as usize * slice, n as usize * slice);
@@ -228,9 +243,12 @@ impl Source {
                         VoxelData::U16(d) => bytemuck::cast_slice(&d[start..start + len]),
                         VoxelData::F32(d) => bytemuck::cast_slice(&d[start..start + len]),
                     };
-                    return Ok(bytemuck::cast_slice(held).to_vec());
+                    out.clear();
+                    out.extend_from_slice(bytemuck::cast_slice(held));
+                    return Ok(());
                 }
-                let mut out = vec![T::default(); len];
+                out.clear();
+                out.resize(len, T::default());
                 let convert = |out: &mut [T], get: &(dyn Fn(usize) -> f64 + Sync)| {
                     out.par_chunks_mut(1 << 16).enumerate().for_each(|(c, block)| {
                         for (i, o) in block.iter_mut().enumerate() {
@@ -239,25 +257,27 @@ impl Source {
                     })
                 };
                 match data {
-                    VoxelData::U8(d) => convert(&mut out, &|i| f64::from(d[i])),
-                    VoxelData::U16(d) => convert(&mut out, &|i| f64::from(d[i])),
-                    VoxelData::F32(d) => convert(&mut out, &|i| f64::from(d[i])),
+                    VoxelData::U8(d) => convert(out, &|i| f64::from(d[i])),
+                    VoxelData::U16(d) => convert(out, &|i| f64::from(d[i])),
+                    VoxelData::F32(d) => convert(out, &|i| f64::from(d[i])),
                 }
-                Ok(out)
+                Ok(())
             }
             Source::InPlace(v, _) | Source::Stream(v, _) => {
                 let size = v.voxel_type.size();
                 let at = u64::from(t) * v.step_bytes() + (start * size) as u64;
                 let (vt, big) = (v.voxel_type, v.endian == Endian::Big);
                 // The file's bytes are the values as written: read straight into the slab.
+                // Every element is written below: a reused buffer of the right size is not cleared first.
+                if out.len() != len {
+                    out.clear();
+                    out.resize(len, T::default());
+                }
                 if T::TYPE == vt && big == cfg!(target_endian = "big") && scaling.is_identity() {
-                    let mut out = vec![T::default(); len];
-                    self.read_bytes(at, bytemuck::cast_slice_mut(&mut out))?;
-                    return Ok(out);
+                    return self.read_bytes(at, bytemuck::cast_slice_mut(out));
                 }
                 let mut bytes = vec![0u8; len * size];
                 self.read_bytes(at, &mut bytes)?;
-                let mut out = vec![T::default(); len];
                 out.par_chunks_mut(1 << 16)
                     .zip(bytes.par_chunks(size << 16))
                     .for_each(|(block, raw)| {
@@ -265,7 +285,7 @@ impl Source {
                             *o = T::from_f64(apply(decode(vt, big, b)));
                         }
                     });
-                Ok(out)
+                Ok(())
             }
         }
     }

@@ -4,7 +4,7 @@
 //! cascade inside it is exactly the pyramid's: the result equals level L of `volcast convert`'s store.
 
 use super::budget::level_dims;
-use crate::convert::pyramid::{downsample, factors, Reduce};
+use crate::convert::pyramid::{downsample, downsample_into, factors, Reduce};
 use crate::convert::sample::Sample;
 use crate::convert::source::Source;
 use crate::volume::cells::{CellRanges, Element};
@@ -48,10 +48,12 @@ fn level_step<T: Sample + Element>(
     }
     let step = batch(rayon::current_num_threads(), slab_bytes, host_budget);
     let mut dst = vec![T::default(); slice * out[2] as usize];
-    let read = |oz: usize| -> Result<(Vec<T>, u32), VolumeError> {
+    // Slab `oz` into `buf` (its memory reused), and its slices.
+    let read = |oz: usize, buf: &mut Vec<T>| -> Result<u32, VolumeError> {
         let z0 = oz as u32 * span;
         let n = span.min(full[2] - z0);
-        Ok((source.read_slab(t, z0, n, crate::volume::Scaling::IDENTITY)?, n))
+        source.read_slab_into(t, z0, n, crate::volume::Scaling::IDENTITY, buf)?;
+        Ok(n)
     };
     // Level 0's value range, from the voxels read: the level stands in for level 0 and normalises as it does.
     let range = std::sync::Mutex::new(None::<[f64; 2]>);
@@ -63,26 +65,27 @@ fn level_step<T: Sample + Element>(
         let ranges = crate::volume::cells::extremes_of(slab, [full[0], full[1], n], cell, 0);
         ranges.into_iter().map(|r| r.map(held)).collect()
     };
-    let reduce = |(mut slab, n): (Vec<T>, u32), into: &mut [T]| -> Vec<Option<(f64, f64)>> {
-        let cells = layer(&slab, n);
-        let found = slab
-            .iter()
-            .map(|v| v.to_f64())
-            .filter(|v| v.is_finite())
-            .fold(None, |r: Option<[f64; 2]>, v| {
-                Some(r.map_or([v, v], |[a, b]| [a.min(v), b.max(v)]))
+    let integer = !matches!(T::TYPE, VoxelType::F32 | VoxelType::F64);
+    let reduce = |slab: &[T], n: u32, into: &mut [T]| -> Vec<Option<(f64, f64)>> {
+        let cells = layer(slab, n);
+        // Integers are all finite: the range is the cells'. Floats' infinities are left out of it.
+        let found = if integer {
+            let held = cells.iter().flatten().fold(None, |r: Option<[f64; 2]>, &(a, b)| {
+                Some(r.map_or([a, b], |[lo, hi]| [lo.min(a), hi.max(b)]))
             });
+            held.map(|r| r.map(|v| v - offset))
+        } else {
+            slab.iter()
+                .map(|v| v.to_f64())
+                .filter(|v| v.is_finite())
+                .fold(None, |r: Option<[f64; 2]>, v| {
+                    Some(r.map_or([v, v], |[a, b]| [a.min(v), b.max(v)]))
+                })
+        };
         if let (Some([a, b]), Ok(mut r)) = (found, range.lock()) {
             *r = Some(r.map_or([a, b], |[lo, hi]| [lo.min(a), hi.max(b)]));
         }
-        let mut dims = [full[0] as usize, full[1] as usize, n as usize];
-        for l in 0..level {
-            // The factors of the whole level, not of the slab: an axis of length 1 is not halved.
-            let f = factors(level_dims(full, l).map(u64::from));
-            slab = downsample(&slab, dims, f, Reduce::Mean);
-            dims = [0, 1, 2].map(|i| dims[i].div_ceil(f[i]));
-        }
-        into.copy_from_slice(&slab);
+        cascade(slab, (full, n), level, into);
         cells
     };
     let mut cells = CellRanges::unseen(full, cell);
@@ -93,15 +96,26 @@ fn level_step<T: Sample + Element>(
         if source.is_stream() {
             // A compressed stream is decoded front to back: the batch's slabs are read in order, then reduced on
             // every core.
-            let slabs = (first..last).map(read).collect::<Result<Vec<_>, _>>()?;
-            let layers: Vec<_> = into.zip(slabs).map(|(into, slab)| reduce(slab, into)).collect();
+            let slabs = (first..last)
+                .map(|oz| {
+                    let mut buf = Vec::new();
+                    read(oz, &mut buf).map(|n| (buf, n))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let layers: Vec<_> = into
+                .zip(slabs)
+                .map(|(into, (slab, n))| reduce(&slab, n, into))
+                .collect();
             for (oz, layer) in (first..last).zip(layers) {
                 cells.merge_layer((oz / cells_per_layer) as u32, &layer);
             }
         } else {
             let layers = into
                 .zip(first..last)
-                .map(|(into, oz)| Ok::<_, VolumeError>((oz, reduce(read(oz)?, into))))
+                .map_init(Vec::new, |buf, (into, oz)| {
+                    let n = read(oz, buf)?;
+                    Ok::<_, VolumeError>((oz, reduce(buf, n, into)))
+                })
                 .collect::<Result<Vec<_>, _>>()?;
             for (oz, layer) in layers {
                 cells.merge_layer((oz / cells_per_layer) as u32, &layer);
@@ -111,6 +125,24 @@ fn level_step<T: Sample + Element>(
     }
     let range = range.into_inner().ok().flatten();
     Ok((dst, range, cells))
+}
+
+/// Reduces `slab` (whole slices of level 0 of a volume of `full`, `n` of them: 2^`level` but at the end) by the
+/// pyramid's rule to its slice of level `level`, into `into`.
+fn cascade<T: Sample>(slab: &[T], (full, n): ([u32; 3], u32), level: u32, into: &mut [T]) {
+    let mut dims = [full[0] as usize, full[1] as usize, n as usize];
+    let mut made: Option<Vec<T>> = None;
+    for l in 0..level {
+        // The factors of the whole level, not of the slab: an axis of length 1 is not halved.
+        let f = factors(level_dims(full, l).map(u64::from));
+        let src = made.as_deref().unwrap_or(slab);
+        if l + 1 == level {
+            return downsample_into(src, dims, f, Reduce::Mean, into);
+        }
+        made = Some(downsample(src, dims, f, Reduce::Mean));
+        dims = [0, 1, 2].map(|i| dims[i].div_ceil(f[i]));
+    }
+    into.copy_from_slice(slab);
 }
 
 /// A level of one step as read: its voxels, level 0's stored value range (finite values) and level 0's range per

@@ -185,10 +185,10 @@ fn merge_max<T: Element>(hi: &mut [T], values: &[T]) {
 }
 
 /// Per cell of `side` voxels, the smallest and largest element over its voxels and `apron` voxels either side
-/// (NaN ignored; `None` for a cell of only NaN). Per layer of cells: the planes of the layer's z-span reduced
-/// element-wise to one plane of minima and one of maxima, then their rows of each cell row's y-span to one row,
-/// then each cell's x-span: every step a vectorisable sweep over contiguous elements (a per-voxel walk cell by cell
-/// took a fifth of loading a 1 GiB volume).
+/// (NaN ignored; `None` for a cell of only NaN). Per row of cells: the rows of its y- and z-span reduced element-wise
+/// to one row of minima and one of maxima, then each cell's x-span: every step a vectorisable sweep over contiguous
+/// elements, each voxel read once (twice in an apron) and nothing allocated but two rows (a per-voxel walk cell by
+/// cell took a fifth of loading a 1 GiB volume; reducing whole planes first cost the read pass 70%).
 pub fn extremes_of<T: Element>(data: &[T], dims: [u32; 3], side: u32, apron: u32) -> Vec<Option<(f64, f64)>> {
     let [w, h, d] = dims.map(|v| v as usize);
     let [bx, by, bz] = dims.map(|d| d.div_ceil(side) as usize);
@@ -196,23 +196,20 @@ pub fn extremes_of<T: Element>(data: &[T], dims: [u32; 3], side: u32, apron: u32
     let span = |k: usize, n: usize| ((k * b).saturating_sub(apron), ((k + 1) * b - 1 + apron).min(n - 1));
     let plane = w * h;
     let mut out: Vec<Option<(f64, f64)>> = vec![None; bx * by * bz];
-    // Each layer of bricks (k) on its own core: the layers only read the data they share at their seams.
+    // Each layer of cells (k) on its own core: the layers only read the data they share at their seams.
     out.par_chunks_mut(bx * by).enumerate().for_each(|(k, layer)| {
         let (z0, z1) = span(k, d);
-        let (mut lo, mut hi) = (vec![T::HIGHEST; plane], vec![T::LOWEST; plane]);
-        for z in z0..=z1 {
-            let slice = &data[z * plane..][..plane];
-            merge_min(&mut lo, slice);
-            merge_max(&mut hi, slice);
-        }
         let (mut row_lo, mut row_hi) = (vec![T::HIGHEST; w], vec![T::LOWEST; w]);
         for j in 0..by {
             let (y0, y1) = span(j, h);
             row_lo.fill(T::HIGHEST);
             row_hi.fill(T::LOWEST);
-            for y in y0..=y1 {
-                merge_min(&mut row_lo, &lo[y * w..][..w]);
-                merge_max(&mut row_hi, &hi[y * w..][..w]);
+            for z in z0..=z1 {
+                for y in y0..=y1 {
+                    let row = &data[z * plane + y * w..][..w];
+                    merge_min(&mut row_lo, row);
+                    merge_max(&mut row_hi, row);
+                }
             }
             for i in 0..bx {
                 let (x0, x1) = span(i, w);
