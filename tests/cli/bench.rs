@@ -272,4 +272,17 @@ fn bench_times_each_quality_level_against_one_converged_image() {
     assert_eq!(names, ["draft", "normal", "converged"], "{rows:?}");
     assert!(rows[0].1 > rows[1].1 && rows[1].1 > rows[2].1, "steps shrink: {rows:?}");
     assert!(rows[0].2 >= rows[1].2 && rows[2].2 == 0.0, "errors: {rows:?}");
+    // Each level's row carries its error target (the table's `target` column says met or over); none for converged.
+    use volcast::scene::quality::Quality;
+    let targets: Vec<serde_json::Value> = json["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["target"].clone())
+        .collect();
+    let want = |q: Quality| serde_json::json!([q.target().0, q.target().1]);
+    assert_eq!(
+        targets,
+        [want(Quality::Draft), want(Quality::Normal), serde_json::Value::Null]
+    );
 }

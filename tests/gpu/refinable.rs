@@ -21,6 +21,12 @@ use volcast::volume::{OpenOptions, Volume};
 
 const BRICK: [usize; 3] = [16; 3];
 
+/// Samples the march takes over the whole frame `s` (the GPU's own count).
+fn samples(gpu: &volcast::gpu::Gpu, headless: &mut Headless, s: &RenderSettings) -> u64 {
+    let counts = common::gpu::gpu_sample_counts(gpu, headless, s);
+    counts.iter().map(|&n| u64::from(n)).sum()
+}
+
 fn reference_cut(cut: &Cut, held: u32) -> RefCut {
     RefCut {
         brick: BRICK,
@@ -75,8 +81,9 @@ fn balls(folder: &str) -> (Volume, Volume) {
     (whole, held)
 }
 
-/// In memory: the cut refines only bricks near the tube, as the reference's rule does; it shows fewer bricks than
-/// the rule without it (skipping off), never a finer level, the same finest level, and the same image.
+/// In memory: the cut refines only bricks near the balls, as the reference's rule does; it shows fewer bricks than
+/// the rule without it (skipping off), never a finer level, the same finest level, the same samples and the same
+/// image.
 #[test]
 fn bricks_that_show_nothing_are_not_refined() {
     let gpu = validated_gpu();
@@ -103,7 +110,10 @@ fn bricks_that_show_nothing_are_not_refined() {
         "without skipping every brick may be refined"
     );
     let whole = headless.render(&gpu, &s).expect("render").image;
+    let all_samples = samples(&gpu, &mut headless, &s);
     let seen = headless.renderer.show_levels(&gpu, &v, &s, free).expect("cut");
+    // Skipping leaps the bricks left coarse as it leapt their children: not one sample more or less.
+    assert_eq!(samples(&gpu, &mut headless, &s), all_samples, "samples taken");
     assert_eq!(reference_cut(&seen, 0), reference_rule(&v, &s, 8), "the rule");
     let (n_seen, n_all) = (seen.shown().len(), all.shown().len());
     eprintln!("bricks shown: {n_seen} (only what can be seen refined) of {n_all}");
@@ -120,7 +130,8 @@ fn bricks_that_show_nothing_are_not_refined() {
 }
 
 /// From a file held at level 1: the stream wants the reference rule's cut over level 0's values in cells of 16
-/// voxels, and reads no brick outside it (room for every brick: the uploads are the wanted bricks and the top).
+/// voxels, reads no brick outside it (room for every brick: the uploads are the wanted bricks and the top), and takes
+/// the same samples as the cut without the rule.
 #[test]
 fn a_files_bricks_that_show_nothing_are_never_read() {
     let gpu = validated_gpu();
@@ -154,7 +165,11 @@ fn a_files_bricks_that_show_nothing_are_never_read() {
     let (n_wanted, n_all) = (wanted.shown().len(), all.shown().len());
     assert!(n_wanted < n_all, "{n_wanted} of {n_all} bricks");
     assert!(wanted.level.contains(&0), "the close view reads level-0 bricks");
+    headless.renderer.refine_to(&gpu, &held, &all).expect("refine");
+    let all_samples = samples(&gpu, &mut headless, &s);
+    headless.renderer.start_stream(&gpu, &held, 600).expect("stream");
     let progress = headless.renderer.refine_to(&gpu, &held, &wanted).expect("refine");
+    assert_eq!(samples(&gpu, &mut headless, &s), all_samples, "samples taken");
     assert!(progress.done);
     let uploaded = headless.renderer.stream().expect("streamed").uploaded as usize;
     let top = usize::from(!wanted.level.contains(&3));

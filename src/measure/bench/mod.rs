@@ -428,6 +428,9 @@ impl Bench<'_> {
                 &reference.converged_image,
                 s,
             ),
+            target: Quality::parse(quality)
+                .filter(|&q| q != Quality::Converged)
+                .map(|q| q.target().into()),
         })
     }
 }

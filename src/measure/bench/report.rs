@@ -112,6 +112,16 @@ pub struct SceneResult {
     pub light_grid_ms: Option<f64>,
     /// The last timed frame against the scene's converged image (`fidelity`), in 1/255.
     pub error: Fidelity,
+    /// The quality level's error target (mean, p99 in 1/255: `Quality::target`); None for a forced step.
+    pub target: Option<[f64; 2]>,
+}
+
+impl SceneResult {
+    /// Whether the error is within the quality level's target (None for a forced step).
+    pub fn target_met(&self) -> Option<bool> {
+        self.target
+            .map(|[mean, p99]| self.error.mean <= mean && self.error.p99 <= p99)
+    }
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -136,7 +146,7 @@ pub struct BenchReport {
 }
 
 /// The columns of [`BenchReport::text`]'s table, in order (tests parse the table by these).
-pub const TABLE_COLUMNS: [&str; 23] = [
+pub const TABLE_COLUMNS: [&str; 24] = [
     "scene",
     "size",
     "method",
@@ -160,10 +170,11 @@ pub const TABLE_COLUMNS: [&str; 23] = [
     "err_mean",
     "err_p99",
     "err_max",
+    "target",
 ];
 
 /// Each column's width in [`BenchReport::text`]'s table (a cell that is wider pushes the rest of its row along).
-const TABLE_WIDTHS: [usize; 23] = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7, 6, 6, 8, 7, 7];
+const TABLE_WIDTHS: [usize; 24] = [12, 5, 9, 7, 9, 9, 9, 9, 9, 9, 9, 7, 7, 9, 8, 8, 10, 7, 6, 6, 8, 7, 7, 6];
 
 /// What the table's columns mean, printed above it.
 const TABLE_LEGEND: &str = "\nms per frame (wall: render + readback; gpu: timestamps, entry + exit + march); \
@@ -171,7 +182,8 @@ const TABLE_LEGEND: &str = "\nms per frame (wall: render + readback; gpu: timest
     samples taken per pixel, gradients included (CPU replay of the march rules); Gsamples/s: spp x pixels / gpu_med; of_raw: that / \
     sample-only rate of the volume's format; quality: --quality's level (or the --step-length forced); step: in voxels; stride: the longest brick stride; err_mean/p99/max: the last frame \
     against the same scene converged (1/8-voxel steps, approximations off), in 1/255 over object \
-    pixels\n";
+    pixels; target: whether err_mean and err_p99 are within the quality level's error target (docs/rendering.md, \
+    Quality levels): met or over\n";
 
 impl BenchReport {
     /// A human-readable report: the sample-only rates, then one table row per configuration.
@@ -298,6 +310,11 @@ impl SceneResult {
             format!("{:.3}", self.error.mean),
             format!("{:.0}", self.error.p99),
             format!("{:.0}", self.error.max),
+            match self.target_met() {
+                Some(true) => "met".into(),
+                Some(false) => "over".into(),
+                None => "-".into(),
+            },
         ]
     }
 }
