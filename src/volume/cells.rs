@@ -144,25 +144,17 @@ pub trait Element: Copy + PartialOrd + Into<f64> + Send + Sync {
     const LOWEST: Self;
 }
 
-impl Element for u8 {
-    const HIGHEST: u8 = u8::MAX;
-    const LOWEST: u8 = 0;
+/// Integers run from their type's minimum to its maximum.
+macro_rules! integer_element {
+    ($($t:ty),*) => {$(
+        impl Element for $t {
+            const HIGHEST: $t = <$t>::MAX;
+            const LOWEST: $t = <$t>::MIN;
+        }
+    )*};
 }
 
-impl Element for i8 {
-    const HIGHEST: i8 = i8::MAX;
-    const LOWEST: i8 = i8::MIN;
-}
-
-impl Element for i16 {
-    const HIGHEST: i16 = i16::MAX;
-    const LOWEST: i16 = i16::MIN;
-}
-
-impl Element for u16 {
-    const HIGHEST: u16 = u16::MAX;
-    const LOWEST: u16 = 0;
-}
+integer_element!(u8, i8, u16, i16);
 
 impl Element for f32 {
     const HIGHEST: f32 = f32::INFINITY;
