@@ -31,21 +31,7 @@ fn level_step<T: Sample + Element>(
     let slice = out[0] as usize * out[1] as usize;
     let span = 1u32 << level;
     let slab_bytes = u64::from(full[0]) * u64::from(full[1]) * u64::from(span) * std::mem::size_of::<T>() as u64;
-    // Whole slices are read: 2^L of them per output slice must fit in half the host budget, or 256 MiB where the
-    // budget is smaller (a limit only for very wide slices at high levels: 16384² uint16 at level 4 takes 8 GiB).
-    if slab_bytes > (host_budget / 2).max(256 << 20) {
-        return Err(VolumeError::Header {
-            file: source.name().to_string(),
-            problem: format!(
-                "reading pyramid level {level} takes {span} slices of {}x{} at once ({}), more than half the host \
-                 budget ({}) allows; raise --host-budget",
-                full[0],
-                full[1],
-                crate::volume::budget::show(slab_bytes),
-                crate::volume::budget::show(host_budget)
-            ),
-        });
-    }
+    check_slab(source, level, slab_bytes, host_budget)?;
     let step = batch(rayon::current_num_threads(), slab_bytes, host_budget);
     let mut dst = vec![T::default(); slice * out[2] as usize];
     // Slab `oz` into `buf` (its memory reused), and its slices.
@@ -57,31 +43,9 @@ fn level_step<T: Sample + Element>(
     };
     // Level 0's value range, from the voxels read: the level stands in for level 0 and normalises as it does.
     let range = std::sync::Mutex::new(None::<[f64; 2]>);
-    // Level 0's range per cell of 8 voxels of this level (2^L slices: part of one layer of cells), as held.
     let cell = CellRanges::SIDE << level;
-    let offset = crate::volume::stored_offset(T::TYPE);
-    let layer = |slab: &[T], n: u32| -> Vec<Option<(f64, f64)>> {
-        let held = |(a, b): (f64, f64)| (a + offset, b + offset);
-        let ranges = crate::volume::cells::extremes_of(slab, [full[0], full[1], n], cell, 0);
-        ranges.into_iter().map(|r| r.map(held)).collect()
-    };
-    let integer = !matches!(T::TYPE, VoxelType::F32 | VoxelType::F64);
     let reduce = |slab: &[T], n: u32, into: &mut [T]| -> Vec<Option<(f64, f64)>> {
-        let cells = layer(slab, n);
-        // Integers are all finite: the range is the cells'. Floats' infinities are left out of it.
-        let found = if integer {
-            let held = cells.iter().flatten().fold(None, |r: Option<[f64; 2]>, &(a, b)| {
-                Some(r.map_or([a, b], |[lo, hi]| [lo.min(a), hi.max(b)]))
-            });
-            held.map(|r| r.map(|v| v - offset))
-        } else {
-            slab.iter()
-                .map(|v| v.to_f64())
-                .filter(|v| v.is_finite())
-                .fold(None, |r: Option<[f64; 2]>, v| {
-                    Some(r.map_or([v, v], |[a, b]| [a.min(v), b.max(v)]))
-                })
-        };
+        let (cells, found) = slab_ranges(slab, [full[0], full[1], n], cell);
         if let (Some([a, b]), Ok(mut r)) = (found, range.lock()) {
             *r = Some(r.map_or([a, b], |[lo, hi]| [lo.min(a), hi.max(b)]));
         }
@@ -125,6 +89,58 @@ fn level_step<T: Sample + Element>(
     }
     let range = range.into_inner().ok().flatten();
     Ok((dst, range, cells))
+}
+
+/// Refuses a level whose slabs (2^`level` whole slices, `slab_bytes`) would take more than half the host budget, or
+/// 256 MiB where the budget is smaller: a limit only for very wide slices at high levels (16384² uint16 at level 4
+/// takes 8 GiB).
+fn check_slab(source: &Source, level: u32, slab_bytes: u64, host_budget: u64) -> Result<(), VolumeError> {
+    if slab_bytes <= (host_budget / 2).max(256 << 20) {
+        return Ok(());
+    }
+    let full = source.dims();
+    Err(VolumeError::Header {
+        file: source.name().to_string(),
+        problem: format!(
+            "reading pyramid level {level} takes {} slices of {}x{} at once ({}), more than half the host budget ({}) \
+             allows; raise --host-budget",
+            1u32 << level,
+            full[0],
+            full[1],
+            crate::volume::budget::show(slab_bytes),
+            crate::volume::budget::show(host_budget)
+        ),
+    })
+}
+
+/// A stored value range (None: no finite value).
+type Range = Option<[f64; 2]>;
+
+/// Level 0's range per cell of `cell` voxels over a slab of `dims` (part of one layer of cells), as held (biased
+/// 8/16-bit integers), and the slab's stored value range (finite values; integers are all finite, so it is the
+/// cells', and floats' infinities are left out).
+fn slab_ranges<T: Sample + Element>(slab: &[T], dims: [u32; 3], cell: u32) -> (Vec<Option<(f64, f64)>>, Range) {
+    let offset = crate::volume::stored_offset(T::TYPE);
+    let extremes = crate::volume::cells::extremes_of(slab, dims, cell, 0);
+    let cells: Vec<Option<(f64, f64)>> = extremes
+        .into_iter()
+        .map(|r| r.map(|(a, b)| (a + offset, b + offset)))
+        .collect();
+    let union =
+        |r: Option<[f64; 2]>, (a, b): (f64, f64)| Some(r.map_or([a, b], |[lo, hi]: [f64; 2]| [lo.min(a), hi.max(b)]));
+    let found = if matches!(T::TYPE, VoxelType::F32 | VoxelType::F64) {
+        slab.iter()
+            .map(|v| v.to_f64())
+            .filter(|v| v.is_finite())
+            .fold(None, |r, v| union(r, (v, v)))
+    } else {
+        cells
+            .iter()
+            .flatten()
+            .fold(None, |r, &c| union(r, c))
+            .map(|r| r.map(|v| v - offset))
+    };
+    (cells, found)
 }
 
 /// Reduces `slab` (whole slices of level 0 of a volume of `full`, `n` of them: 2^`level` but at the end) by the
