@@ -271,6 +271,14 @@ BUGS = [
        "for (oz, layer) in layers {\n                cells.merge_layer((oz / cells_per_layer).saturating_sub(1) as u32, &layer);")]),
     ("cells-not-kept", "the pyramid cache keeps a level without level 0's ranges beside it",
      [("src/scale/cache.rs", "Some(c) => std::fs::write(&cells_path, c.to_bytes())", "Some(c) => std::fs::write(&cells_path, &c.to_bytes()[..8])")]),
+    ("dicom-slices-biased", "a signed DICOM series read slice by slice keeps volcast's bias in the values it gives the level",
+     [("src/volume/dicom/slices.rs", "let flip = if self.voxel_type == VoxelType::I16 { 0x8000 } else { 0 };",
+       "let flip = 0;")]),
+    ("dicom-slices-resample-window", "an unevenly spaced series read slice by slice decodes one sorted slice too few past a run",
+     [("src/volume/dicom/slices.rs", "let hi = (at[z0 + n - 1].floor() as usize + 1).min(last);",
+       "let hi = (at[z0 + n - 1].floor() as usize).min(last);")]),
+    ("dicom-slices-stamp-first-file", "the pyramid cache stamps a DICOM series' level by its first file alone",
+     [("src/volume/dicom/slices.rs", "self.files.iter().try_fold(", "self.files.iter().take(1).try_fold(")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -18,6 +18,8 @@ pub enum Source {
     InPlace(Box<InPlace>, File),
     /// Decoded front to back from a compressed stream (`InPlace::inflate`): read in order, it is decoded once.
     Stream(Box<InPlace>, Mutex<Inflating>),
+    /// A DICOM series, its slices decoded from their own files (`InPlace::slices`): any slab, on any core.
+    Slices(Box<InPlace>),
 }
 
 /// A compressed stream being decoded, and how many of its voxel bytes were read.
@@ -106,6 +108,9 @@ fn truncated(v: &InPlace, actual: u64) -> VolumeError {
 impl Source {
     /// Opens `in_place`'s data file for positioned reads, or its compressed stream to decode.
     pub fn in_place(v: InPlace) -> Result<Source, VolumeError> {
+        if v.slices.is_some() {
+            return Ok(Source::Slices(Box::new(v)));
+        }
         if v.inflate.is_some() {
             let stream = Inflating::open(&v)?;
             return Ok(Source::Stream(Box::new(v), Mutex::new(stream)));
@@ -120,7 +125,7 @@ impl Source {
     pub fn name(&self) -> &str {
         match self {
             Source::Loaded(v) => &v.name,
-            Source::InPlace(v, _) | Source::Stream(v, _) => &v.name,
+            Source::InPlace(v, _) | Source::Stream(v, _) | Source::Slices(v) => &v.name,
         }
     }
 
@@ -128,28 +133,28 @@ impl Source {
     pub fn dims(&self) -> [u32; 3] {
         match self {
             Source::Loaded(v) => v.dims,
-            Source::InPlace(v, _) | Source::Stream(v, _) => v.dims,
+            Source::InPlace(v, _) | Source::Stream(v, _) | Source::Slices(v) => v.dims,
         }
     }
 
     pub fn timesteps(&self) -> u32 {
         match self {
             Source::Loaded(v) => v.timesteps(),
-            Source::InPlace(v, _) | Source::Stream(v, _) => v.timesteps,
+            Source::InPlace(v, _) | Source::Stream(v, _) | Source::Slices(v) => v.timesteps,
         }
     }
 
     pub fn geometry(&self) -> Geometry {
         match self {
             Source::Loaded(v) => v.geometry,
-            Source::InPlace(v, _) | Source::Stream(v, _) => v.geometry,
+            Source::InPlace(v, _) | Source::Stream(v, _) | Source::Slices(v) => v.geometry,
         }
     }
 
     pub fn scaling(&self) -> Scaling {
         match self {
             Source::Loaded(v) => v.scaling,
-            Source::InPlace(v, _) | Source::Stream(v, _) => v.scaling,
+            Source::InPlace(v, _) | Source::Stream(v, _) | Source::Slices(v) => v.scaling,
         }
     }
 
@@ -157,7 +162,7 @@ impl Source {
     pub fn source_type(&self) -> VoxelType {
         match self {
             Source::Loaded(v) => v.source_type,
-            Source::InPlace(v, _) | Source::Stream(v, _) => v.voxel_type,
+            Source::InPlace(v, _) | Source::Stream(v, _) | Source::Slices(v) => v.voxel_type,
         }
     }
 
@@ -168,7 +173,7 @@ impl Source {
                 (VoxelData::F32(_), VoxelType::U32 | VoxelType::I32 | VoxelType::F64) => VoxelType::F32,
                 (_, t) => t,
             },
-            Source::InPlace(v, _) | Source::Stream(v, _) => v.voxel_type,
+            Source::InPlace(v, _) | Source::Stream(v, _) | Source::Slices(v) => v.voxel_type,
         }
     }
 
@@ -263,7 +268,7 @@ impl Source {
                 }
                 Ok(())
             }
-            Source::InPlace(v, _) | Source::Stream(v, _) => {
+            Source::InPlace(v, _) | Source::Stream(v, _) | Source::Slices(v) => {
                 let size = v.voxel_type.size();
                 let at = u64::from(t) * v.step_bytes() + (start * size) as u64;
                 let (vt, big) = (v.voxel_type, v.endian == Endian::Big);
@@ -348,6 +353,13 @@ impl Source {
                     problem: "a reader of its stream panicked".into(),
                 })?
                 .read_at(v, at, out),
+            Source::Slices(v) => match &v.slices {
+                Some(series) => series.read_at(at, out),
+                None => Err(VolumeError::Header {
+                    file: v.data_file.display().to_string(),
+                    problem: "a series without its slices".into(),
+                }),
+            },
             Source::Loaded(v) => Err(VolumeError::Header {
                 file: v.name.clone(),
                 problem: "a loaded volume has no file bytes".into(),

@@ -77,8 +77,10 @@ impl PyramidCache {
     /// The entry's store and stamp for level `level` of `place`.
     fn entry(&self, place: &InPlace, level: u32) -> (PathBuf, PathBuf) {
         let path = std::fs::canonicalize(&place.data_file).unwrap_or_else(|_| place.data_file.clone());
+        // A folder of several DICOM series keeps an entry per series.
+        let series = place.slices.as_ref().map_or("", |s| s.uid());
         let what = format!(
-            "{}|{}|{:?}|{:?}|{:?}|{}|{level}|{CACHE_VERSION}",
+            "{}{series}|{}|{:?}|{:?}|{:?}|{}|{level}|{CACHE_VERSION}",
             path.display(),
             place.offset,
             place.dims,
@@ -110,12 +112,21 @@ impl PyramidCache {
 
     /// What the stamp of level `level` of `place` must say now.
     fn stamp(place: &InPlace, level: u32) -> Option<Stamp> {
-        let meta = std::fs::metadata(&place.data_file).ok()?;
-        let modified_ns = meta.modified().ok()?.duration_since(UNIX_EPOCH).ok()?.as_nanos();
+        let (len, modified_ns) = match &place.slices {
+            // A DICOM series: its files together.
+            Some(series) => series.identity()?,
+            None => {
+                let meta = std::fs::metadata(&place.data_file).ok()?;
+                (
+                    meta.len(),
+                    meta.modified().ok()?.duration_since(UNIX_EPOCH).ok()?.as_nanos(),
+                )
+            }
+        };
         Some(Stamp {
             version: CACHE_VERSION,
             file: place.data_file.display().to_string(),
-            len: meta.len(),
+            len,
             modified_ns,
             level,
             dims: crate::volume::budget::level_dims(place.dims, level),

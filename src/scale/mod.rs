@@ -79,7 +79,10 @@ pub fn open_deferred(
     // by the format's own loader.
     let place = match in_place(path, &opts)? {
         Some(p) => Some(p),
-        None => crate::volume::in_place::compressed(path, &opts)?,
+        None => match crate::volume::in_place::compressed(path, &opts)? {
+            Some(p) => Some(p),
+            None => dicom_by_slices(path, &opts, &budgets)?,
+        },
     };
     if let Some(place) = place {
         let shape = Shape {
@@ -107,6 +110,36 @@ pub fn open_deferred(
     Ok(Opened { volume, keep: None })
 }
 
+/// A folder of DICOM slices that may not fit `budgets` at full resolution (its first image times its files, an
+/// upper bound read from one header): the series read slice by slice (`dicom::slices`), so that its level is made
+/// without holding it. `None` for any other file, and for a series that surely fits: the loader reads it whole.
+fn dicom_by_slices(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result<Option<InPlace>, VolumeError> {
+    use crate::volume::dicom::slices;
+    let Some((dims, voxel_type)) = slices::claimed_bound(path) else {
+        return Ok(None);
+    };
+    let shape = Shape {
+        dims,
+        voxel_type,
+        steps: 1,
+    };
+    if budget::choose(&shape, budgets).is_ok_and(|l| l.level == 0) {
+        return Ok(None);
+    }
+    slices::series_in_place(path, opts.series.as_deref())
+}
+
+/// `v` as read from `place`: its arrays, and a DICOM series' modality and the folder's series, as its loader says.
+fn described(mut v: Volume, place: &InPlace) -> Volume {
+    v.format = place.format.to_string();
+    v.arrays = place.arrays.clone();
+    if let Some(s) = &place.slices {
+        v.modality = s.modality.clone();
+        v.series = s.series.clone();
+    }
+    v
+}
+
 /// Level `level` of the file `place` describes: from the pyramid cache where `cache` holds it, else read from the
 /// file within `host_budget` (with the cache write left to the caller).
 fn read_place(
@@ -125,9 +158,8 @@ fn read_place(
         Some(Lookup::Hit(mut v)) => {
             notes.append(&mut v.notes);
             v.notes = notes;
-            v.arrays = place.arrays.clone();
             return Ok(Opened {
-                volume: with_finer(after_level(*v, opts), &place, level.level)?,
+                volume: with_finer(after_level(described(*v, &place), opts), &place, level.level)?,
                 keep: None,
             });
         }
@@ -144,11 +176,15 @@ fn read_place(
             _ => "its encoded voxels were decoded once, on every core, into that level".into(),
         });
     }
+    if place.slices.is_some() {
+        notes.push("its slices were decoded one file at a time, on every core, into that level".into());
+    }
     let source = Source::in_place(place.clone())?;
     let keep_place = place.clone();
-    let mut v = read::read_level(&source, level.level, host_budget, notes, progress)?;
-    v.format = place.format.to_string();
-    v.arrays = place.arrays.clone();
+    let v = described(
+        read::read_level(&source, level.level, host_budget, notes, progress)?,
+        &place,
+    );
     let keep = cache.map(|c| Keep {
         cache: c.clone(),
         place,

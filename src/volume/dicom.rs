@@ -17,6 +17,7 @@ mod lengths;
 mod pixels;
 pub(crate) mod series;
 mod slice;
+pub(crate) mod slices;
 mod temporal;
 
 use super::decode::Progress;
@@ -96,12 +97,7 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
         let sorted = arrangement.order.iter().filter_map(|&i| slots[i].take()).collect();
         (sorted, (0..first.frames as usize).collect())
     };
-    let voxel_type = match (first.bits_allocated, first.signed) {
-        (8, false) => VoxelType::U8,
-        (8, true) => VoxelType::I8,
-        (_, false) => VoxelType::U16,
-        (_, true) => VoxelType::I16,
-    };
+    let voxel_type = voxel_type(first.bits_allocated, first.signed);
     Ok(Plan {
         slices,
         dims,
@@ -113,6 +109,16 @@ fn plan(slices: Vec<Slice>, label: &str) -> Result<Plan, VolumeError> {
         modality: first.modality.clone(),
         notes,
     })
+}
+
+/// The type of a slice's pixels: 8-bit stays 8-bit, wider is held in 16 bits.
+fn voxel_type(bits_allocated: u16, signed: bool) -> VoxelType {
+    match (bits_allocated, signed) {
+        (8, false) => VoxelType::U8,
+        (8, true) => VoxelType::I8,
+        (_, false) => VoxelType::U16,
+        (_, true) => VoxelType::I16,
+    }
 }
 
 /// Every slice must share the first one's size, bit depth, signedness and rescale.
@@ -223,9 +229,17 @@ fn open_dicom(path: &Path, header_only: bool) -> Result<DefaultDicomObject, Volu
     parse_bytes(&bytes, &format::file_label(path), header_only)
 }
 
-/// Loads a folder of slices (or one file). Pass 1 reads every header (stopping before the pixels) to sort the
-/// slices; pass 2 reads the pixels slice by slice into the final buffer, so the peak is one volume plus one slice.
-pub(crate) fn load(path: &Path, series: Option<&str>, progress: &mut Progress) -> Result<Volume, VolumeError> {
+/// What pass 1 found: the files, the chosen series' slices (unsorted), notes so far and the folder's series.
+struct Headers {
+    files: Vec<PathBuf>,
+    slices: Vec<Slice>,
+    notes: Vec<String>,
+    listed: Vec<series::SeriesInfo>,
+    label: String,
+}
+
+/// Pass 1: every header of the folder (or the one file), stopping before the pixels, and the series chosen.
+fn headers(path: &Path, series: Option<&str>) -> Result<Headers, VolumeError> {
     let label = format::file_label(path);
     let files: Vec<PathBuf> = if path.is_dir() {
         list_folder(path, &label)?
@@ -255,21 +269,44 @@ pub(crate) fn load(path: &Path, series: Option<&str>, progress: &mut Progress) -
             "{skipped} file(s) in the folder are not DICOM images and were skipped"
         ));
     }
-    let (kept, listed) = series::choose(slices, series, &label)?;
-    slices = kept;
+    let (slices, listed) = series::choose(slices, series, &label)?;
     notes.extend(series::note(&listed));
-    // Several temporal positions (TemporalPositionIdentifier): one volume per position, as time steps.
+    Ok(Headers {
+        files,
+        slices,
+        notes,
+        listed,
+        label,
+    })
+}
+
+/// The distinct temporal positions of `slices`, if they are one series at several times.
+fn temporal_positions(slices: &[Slice]) -> Option<Vec<i64>> {
     let mut times: Vec<i64> = slices.iter().filter_map(|s| s.temporal).collect();
     times.sort_unstable();
     times.dedup();
-    if times.len() < 2 || slices.iter().any(|s| s.temporal.is_none()) {
+    (times.len() >= 2 && slices.iter().all(|s| s.temporal.is_some())).then_some(times)
+}
+
+/// Loads a folder of slices (or one file). Pass 1 reads every header (stopping before the pixels) to sort the
+/// slices; pass 2 reads the pixels slice by slice into the final buffer, so the peak is one volume plus one slice.
+pub(crate) fn load(path: &Path, series: Option<&str>, progress: &mut Progress) -> Result<Volume, VolumeError> {
+    let Headers {
+        files,
+        slices,
+        mut notes,
+        listed,
+        label,
+    } = headers(path, series)?;
+    // Several temporal positions (TemporalPositionIdentifier): one volume per position, as time steps.
+    let Some(times) = temporal_positions(&slices) else {
         let mut plan = plan(slices, &label)?;
         notes.append(&mut plan.notes);
         plan.notes = notes;
         let mut v = load_planned(plan, &files, format::volume_name(path), &label, progress)?;
         v.series = listed;
         return Ok(v);
-    }
+    };
     let mut v = temporal::load_steps(
         slices,
         &times,

@@ -31,6 +31,9 @@ pub struct InPlace {
     /// The values are in independently compressed blocks (an appended `.vti` array): any range is read by decoding
     /// the blocks under it (`vtk::vti_blocks`); `None`: they lie in place or `inflate` says how to decode them.
     pub blocks: Option<std::sync::Arc<BlockIndex>>,
+    /// The voxels are a DICOM series' slices, each decoded from its own file (`dicom::slices`); `data_file` is the
+    /// folder.
+    pub slices: Option<std::sync::Arc<super::dicom::slices::SeriesReader>>,
     /// The file's data arrays, as `volcast info` lists them (a multi-array `.vti`); empty for one-array formats.
     pub arrays: Vec<super::ArrayInfo>,
 }
@@ -46,7 +49,8 @@ impl InPlace {
     /// Whether any box of voxels can be read with positioned reads (uncompressed, one step, not rescaled): the
     /// finer levels of a level held from such a file stay in it (`scale::finer`).
     pub fn by_box(&self) -> bool {
-        self.inflate.is_none() && self.blocks.is_none() && self.timesteps == 1 && self.scaling.is_identity()
+        let decoded = self.inflate.is_some() || self.blocks.is_some() || self.slices.is_some();
+        !decoded && self.timesteps == 1 && self.scaling.is_identity()
     }
 
     /// Bytes of one time step.
@@ -311,6 +315,7 @@ fn header_in_place_unchecked(
         notes: header.notes,
         inflate: None,
         blocks: None,
+        slices: None,
         arrays: header.arrays,
     }
 }
@@ -342,6 +347,7 @@ fn raw_in_place(path: &Path, opts: &OpenOptions) -> Result<InPlace, VolumeError>
         notes: Vec::new(),
         inflate: None,
         blocks: None,
+        slices: None,
         arrays: Vec::new(),
     })
 }

@@ -15,7 +15,7 @@ pub mod budget;
 mod builtin;
 pub mod cells;
 mod decode;
-mod dicom;
+pub(crate) mod dicom;
 mod downsample;
 mod error;
 mod format;

@@ -7,6 +7,7 @@
 pub mod common;
 
 mod dicom;
+mod dicom_slices;
 mod headers;
 mod open;
 mod streamed;

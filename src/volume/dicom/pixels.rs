@@ -12,7 +12,7 @@ use crate::volume::{check_dims, Volume};
 use crate::volume::{VolumeError, VoxelData, VoxelType};
 use dicom_core::value::PrimitiveValue as P;
 use dicom_object::DefaultDicomObject;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Pixel data as found: little-endian bytes (OB, decoded, or read from the file) or 16-bit words (OW).
 #[derive(Clone, Copy)]
@@ -246,35 +246,43 @@ pub(super) fn load_planned(
     let (dims, voxel_type) = (plan.dims, plan.voxel_type);
     let count = check_dims(dims)? as usize;
     let bytes_needed = count as u64 * voxel_type.size() as u64;
-    // The files must at least hold the pixels they claim before the volume is allocated.
+    check_files_back(&plan, files, bytes_needed, label)?;
+    let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
+    for (i, s) in plan.slices.iter().enumerate() {
+        append_slice(s, &files[s.source], &plan.frame_order, &mut data)?;
+        progress.report((i + 1) as f64 / plan.slices.len() as f64);
+    }
+    finish(name, plan, data)
+}
+
+/// The files must at least hold the pixels they claim (`needed` bytes) before anything is allocated for them.
+pub(super) fn check_files_back(plan: &Plan, files: &[PathBuf], needed: u64, label: &str) -> Result<(), VolumeError> {
     let file_bytes: Vec<(Kind, u64)> = plan
         .slices
         .iter()
         .map(|s| (s.kind, std::fs::metadata(&files[s.source]).map_or(0, |m| m.len())))
         .collect();
-    check_backed(label, bytes_needed, &file_bytes)?;
-    let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
-    for (i, s) in plan.slices.iter().enumerate() {
-        let f = &files[s.source];
-        let f_label = format::file_label(f);
-        match open_dicom(f, false) {
-            Ok(obj) => append_file(&obj, s, &plan.frame_order, &mut data, &f_label)?,
-            Err(e) => {
-                // Pass 1 read this header, so the file is DICOM; dicom-object stops on bytes after the pixels.
-                if !s.native_little_endian {
-                    return Err(e);
-                }
-                let bytes = std::fs::read(f).map_err(|source| VolumeError::Io {
-                    path: f.clone(),
-                    source,
-                })?;
-                let frame_bytes =
-                    s.rows as usize * s.columns as usize * s.frames as usize * usize::from(s.bits_allocated / 8);
-                let pixels = find_pixel_bytes(&bytes, frame_bytes).ok_or(e)?;
-                append_native(Pixels::Bytes(pixels), s, &plan.frame_order, &mut data, &f_label)?;
+    check_backed(label, needed, &file_bytes)
+}
+
+/// Appends slice `s`'s frames in `order`, read from `file` and decoded, to `data`.
+pub(super) fn append_slice(s: &Slice, file: &Path, order: &[usize], data: &mut VoxelData) -> Result<(), VolumeError> {
+    let f_label = format::file_label(file);
+    match open_dicom(file, false) {
+        Ok(obj) => append_file(&obj, s, order, data, &f_label),
+        Err(e) => {
+            // Pass 1 read this header, so the file is DICOM; dicom-object stops on bytes after the pixels.
+            if !s.native_little_endian {
+                return Err(e);
             }
+            let bytes = std::fs::read(file).map_err(|source| VolumeError::Io {
+                path: file.to_path_buf(),
+                source,
+            })?;
+            let frame_bytes =
+                s.rows as usize * s.columns as usize * s.frames as usize * usize::from(s.bits_allocated / 8);
+            let pixels = find_pixel_bytes(&bytes, frame_bytes).ok_or(e)?;
+            append_native(Pixels::Bytes(pixels), s, order, data, &f_label)
         }
-        progress.report((i + 1) as f64 / plan.slices.len() as f64);
     }
-    finish(name, plan, data)
 }
