@@ -24,7 +24,8 @@ pub struct Refinable {
 /// Which bricks may be refined for one frame.
 #[derive(Clone, Debug)]
 pub struct Classes {
-    levels: Vec<(BrickGrid, Vec<u8>)>,
+    /// Per level from 1: its grid's size in bricks, and each brick's class.
+    levels: Vec<([u32; 3], Vec<u8>)>,
 }
 
 impl Refinable {
@@ -43,13 +44,7 @@ impl Refinable {
                         let b = [k % gx, k / gx % gy, k / (gx * gy)].map(|v| v as u32);
                         let lo = [0, 1, 2].map(|a| (b[a] * side[a]).saturating_sub(1 << l));
                         let hi = [0, 1, 2].map(|a| (b[a] + 1) * side[a] + (1 << l));
-                        match cells.over(lo, hi) {
-                            Some((a, c)) => {
-                                let (a, c) = (volume.normalize_element(a) as f32, volume.normalize_element(c) as f32);
-                                (a.min(c), a.max(c))
-                            }
-                            None => (f32::INFINITY, f32::NEG_INFINITY),
-                        }
+                        volume.normalize_range(cells.over(lo, hi))
                     })
                     .collect();
                 let (min, max) = ranges.into_iter().unzip();
@@ -62,7 +57,7 @@ impl Refinable {
     /// Which bricks frame `s` (whose baked table is `lut`) may refine.
     pub fn classes(&self, lut: &[[f32; 4]], s: &RenderSettings) -> Classes {
         Classes {
-            levels: self.levels.iter().map(|g| (g.clone(), g.classify(lut, s))).collect(),
+            levels: self.levels.iter().map(|g| (g.bricks, g.classify(lut, s))).collect(),
         }
     }
 }
@@ -70,10 +65,9 @@ impl Refinable {
 impl Classes {
     /// Whether brick `b` of level `l` may be refined (level 0 never is; a level beyond the ranges always may).
     pub fn may_refine(&self, l: u32, b: [u32; 3]) -> bool {
-        let Some((grid, class)) = l.checked_sub(1).and_then(|i| self.levels.get(i as usize)) else {
+        let Some(([gx, gy, _], class)) = l.checked_sub(1).and_then(|i| self.levels.get(i as usize)) else {
             return l > 0;
         };
-        let [gx, gy, _] = grid.bricks;
         class
             .get((b[0] + gx * (b[1] + gy * b[2])) as usize)
             .is_none_or(|&c| c > 0)

@@ -257,10 +257,7 @@ impl GpuVolume {
                 fresh,
             )?;
             for (r, range) in read {
-                let normal = range.map_or((f32::INFINITY, f32::NEG_INFINITY), |[a, b]| {
-                    let (a, b) = (volume.normalize_element(a) as f32, volume.normalize_element(b) as f32);
-                    (a.min(b), a.max(b))
-                });
+                let normal = volume.normalize_range(range.map(|[a, b]| (a, b)));
                 self.finer_ranges.insert((r.level, r.brick), normal);
             }
             if let Some(g) = self.gradient.take() {

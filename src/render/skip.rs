@@ -31,13 +31,7 @@ impl BrickGrid {
         let mut min = Vec::with_capacity(extremes.len());
         let mut max = Vec::with_capacity(extremes.len());
         for e in extremes {
-            let (lo, hi) = match e {
-                Some((a, b)) => {
-                    let (a, b) = (volume.normalize_element(a) as f32, volume.normalize_element(b) as f32);
-                    (a.min(b), a.max(b))
-                }
-                None => (f32::INFINITY, f32::NEG_INFINITY),
-            };
+            let (lo, hi) = volume.normalize_range(e);
             min.push(lo);
             max.push(hi);
         }

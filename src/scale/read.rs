@@ -54,21 +54,21 @@ fn level_step<T: Sample + Element>(
     };
     let mut cells = CellRanges::unseen(full, cell);
     let cells_per_layer = (cell >> level) as usize;
+    // A stream's batch of slabs, their memory reused from batch to batch.
+    let mut slabs: Vec<(Vec<T>, u32)> = Vec::new();
     for first in (0..out[2] as usize).step_by(step) {
         let last = (first + step).min(out[2] as usize);
         let into = dst[first * slice..last * slice].par_chunks_mut(slice);
         if source.is_stream() {
             // A compressed stream is decoded front to back: the batch's slabs are read in order, then reduced on
             // every core.
-            let slabs = (first..last)
-                .map(|oz| {
-                    let mut buf = Vec::new();
-                    read(oz, &mut buf).map(|n| (buf, n))
-                })
-                .collect::<Result<Vec<_>, _>>()?;
+            slabs.resize_with(last - first, || (Vec::new(), 0));
+            for (oz, (buf, n)) in (first..last).zip(slabs.iter_mut()) {
+                *n = read(oz, buf)?;
+            }
             let layers: Vec<_> = into
-                .zip(slabs)
-                .map(|(into, (slab, n))| reduce(&slab, n, into))
+                .zip(&slabs[..last - first])
+                .map(|(into, (slab, n))| reduce(slab, *n, into))
                 .collect();
             for (oz, layer) in (first..last).zip(layers) {
                 cells.merge_layer((oz / cells_per_layer) as u32, &layer);

@@ -285,6 +285,18 @@ impl Volume {
         self.normalize_value(self.scaling.apply(element - stored_offset(self.source_type)))
     }
 
+    /// The normalised range (f32, ordered) of a block whose elements span `range` as `data` holds them (None: no
+    /// finite element, the empty range (+inf, -inf)): the skip grid's, the refinement rule's and a read brick's.
+    pub fn normalize_range(&self, range: Option<(f64, f64)>) -> (f32, f32) {
+        match range {
+            Some((a, b)) => {
+                let (a, b) = (self.normalize_element(a) as f32, self.normalize_element(b) as f32);
+                (a.min(b), a.max(b))
+            }
+            None => (f32::INFINITY, f32::NEG_INFINITY),
+        }
+    }
+
     /// Physical box, dims × spacing, scaled so the largest side is 1.
     pub fn extent(&self) -> glam::Vec3 {
         let spacing = self.geometry.spacing();
