@@ -167,7 +167,7 @@ BUGS = [
      [("src/render/pool.rs", "v.clamp(0, i64::from(dims[a]) - 1) as usize",
        "v.clamp(i64::from(r.brick[a] * self.brick[a]), (i64::from((r.brick[a] + 1) * self.brick[a]) - 1).min(i64::from(dims[a]) - 1)) as usize")]),
     ("span-crosses-bricks", "the walk's spans do not end at the pool's brick faces, so samples past a face read another slot",
-     [("shaders/walk.glsl", "    Brick pb = brick_box_at(p, lo, hi);", "    Brick pb = brick_box_at(p, lo, hi);\n    lo = vec3(-1e30);\n    hi = vec3(1e30);")]),
+     [("shaders/walk.glsl", "    Brick pb = brick_box_at(p, lo, hi, shown);", "    Brick pb = brick_box_at(p, lo, hi, shown);\n    lo = vec3(-1e30);\n    hi = vec3(1e30);")]),
     ("page-table-slot-axes", "the page table's slot position is decoded with y and z swapped",
      [("shaders/volume.glsl", "uvec3(e.x, e.x >> 10u, e.x >> 20u)", "uvec3(e.x, e.x >> 20u, e.x >> 10u)")]),
     ("level-brick-not-shifted", "the page table's level-L brick is taken as the level-0 brick's own index instead of b >> L",

@@ -40,16 +40,17 @@ struct Brick {
 
 #if defined(POOL_BRICKS)
 // The one addressing function: the brick under p and where its data lies in the pool; `lo` and `hi` bound the
-// level-0 brick it was looked up for (texture space), where the walk's spans end. The level-L brick under level-0
+// level-0 brick it was looked up for (texture space), where the walk's spans end, and `level` is the level of the
+// data shown there (the page table's). The level-L brick under level-0
 // brick b is b >> L; its voxel x (level-L units, x = p * dims / 2^L) lies in its slot at
 // x - (b >> L) * brick + border + slot * slot_side.
-Brick brick_box_at(vec3 p, out vec3 lo, out vec3 hi) {
+Brick brick_box_at(vec3 p, out vec3 lo, out vec3 hi, out int level) {
     vec3 vox = p * frame.dims.xyz;
     // (Not textureSize: a page table one brick deep is two slices, image_3d's copy.)
     ivec3 b = clamp(ivec3(floor(vox / frame.pool_brick.xyz)), ivec3(0), ivec3(frame.pool_grid.xyz) - 1);
     uvec2 e = texelFetch(usampler3D(directory_tex, linear_smp), b, 0).rg;
     vec3 slot = vec3(uvec3(e.x, e.x >> 10u, e.x >> 20u) & uvec3(1023u));
-    int level = int(e.y);
+    level = int(e.y);
     float s = exp2(-float(level));
     vec3 origin = frame.pool_brick.w + slot * frame.pool_slot.xyz - vec3(b >> level) * frame.pool_brick.xyz;
     lo = vec3(b) * frame.pool_brick.xyz * frame.texel.xyz;
@@ -60,7 +61,8 @@ Brick brick_box_at(vec3 p, out vec3 lo, out vec3 hi) {
 Brick brick_at(vec3 p) {
     vec3 lo;
     vec3 hi;
-    return brick_box_at(p, lo, hi);
+    int level;
+    return brick_box_at(p, lo, hi, level);
 }
 #else
 // A volume kept as one brick (render/pool.rs): the same translation everywhere, and no page table to read (the

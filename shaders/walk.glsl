@@ -83,7 +83,8 @@ Span span_at(WalkRay r, float t) {
     vec3 lo;
     vec3 hi;
 #if defined(POOL_BRICKS)
-    Brick pb = brick_box_at(p, lo, hi);
+    int shown;
+    Brick pb = brick_box_at(p, lo, hi, shown);
     int level = 3;
     if (frame.mode_params.z >= 0.5) {
         vec3 cube_lo;
@@ -92,8 +93,9 @@ Span span_at(WalkRay r, float t) {
         lo = max(lo, cube_lo);
         hi = min(hi, cube_hi);
     }
-    // pb.scale = dims / 2^L exactly, so the quotient is the power of two; pool_grid.w is the step's level S.
-    int coarser = max(int(frame.dims.x / pb.scale.x + 0.5) >> int(frame.pool_grid.w), 1);
+    // 2^(L - S): how many of the step's voxels one voxel of the level shown spans (pool_grid.w is the step's
+    // level S).
+    int coarser = max((1 << shown) >> int(frame.pool_grid.w), 1);
     return Span(span_end(r, lo, hi), level, coarser, pb);
 #else
     if (frame.mode_params.z < 0.5) {
