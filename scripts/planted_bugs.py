@@ -279,6 +279,10 @@ BUGS = [
        "let hi = (at[z0 + n - 1].floor() as usize).min(last);")]),
     ("dicom-slices-stamp-first-file", "the pyramid cache stamps a DICOM series' level by its first file alone",
      [("src/volume/dicom/slices.rs", "self.files.iter().try_fold(", "self.files.iter().take(1).try_fold(")]),
+    ("zarr-boxes-axes-reversed", "an OME-Zarr store's level-0 boxes are read with x and z swapped",
+     [("src/volume/zarr/boxes.rs", "space: [space[2], space[1], space[0]],", "space: [space[0], space[1], space[2]],")]),
+    ("zarr-finer-placement-unchecked", "a store's level 0 streams behind a held level placed otherwise",
+     [("src/volume/zarr/boxes.rs", "if !placed.affine.abs_diff_eq(v.geometry.affine, tolerance) {", "if false {")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -9,12 +9,45 @@ use crate::convert::sample::Sample;
 use crate::convert::source::Source;
 use crate::volume::budget::level_dims;
 use crate::volume::in_place::InPlace;
+use crate::volume::zarr::boxes::ZarrBoxes;
 use crate::volume::{FinerLevels, Geometry, VolumeError, VoxelData, VoxelType};
 use rayon::prelude::*;
 
+/// Where the level-0 boxes come from.
+enum Boxes {
+    /// A file in place.
+    File(Source),
+    /// An OME-Zarr store's level 0.
+    Zarr(Box<ZarrBoxes>),
+}
+
+impl Boxes {
+    fn name(&self) -> &str {
+        match self {
+            Boxes::File(s) => s.name(),
+            Boxes::Zarr(z) => z.name(),
+        }
+    }
+
+    /// The type the box is read in (wider types are held as float32, see [`FinerLevels::read`]).
+    fn voxel_type(&self) -> VoxelType {
+        match self {
+            Boxes::File(s) => s.held_type(),
+            Boxes::Zarr(z) => z.voxel_type,
+        }
+    }
+
+    fn read_box<T: Sample>(&self, lo: [u32; 3], size: [u32; 3]) -> Result<Vec<T>, VolumeError> {
+        match self {
+            Boxes::File(s) => s.read_box::<T>(0, lo, size),
+            Boxes::Zarr(z) => z.read_box::<T>(lo, size),
+        }
+    }
+}
+
 /// Where the levels below a held level come from.
 pub struct Finer {
-    source: Source,
+    source: Boxes,
     /// Level 0's size and placement.
     dims: [u32; 3],
     geometry: Geometry,
@@ -43,11 +76,21 @@ impl Finer {
             return Ok(None);
         }
         Ok(Some(Finer {
-            source: Source::in_place(place.clone())?,
+            source: Boxes::File(Source::in_place(place.clone())?),
             dims: place.dims,
             geometry: place.geometry,
             held,
         }))
+    }
+
+    /// The finer levels of an OME-Zarr store's level 0, `boxes`, held at level `held` (`zarr::boxes::finer_of`).
+    pub fn of_zarr(boxes: ZarrBoxes, held: u32) -> Finer {
+        Finer {
+            dims: boxes.dims,
+            geometry: boxes.geometry,
+            source: Boxes::Zarr(Box::new(boxes)),
+            held,
+        }
     }
 
     /// The box of level `level` from the level-0 box under it, halved `level` times.
@@ -55,7 +98,7 @@ impl Finer {
         let lo0 = lo.map(|v| v << level);
         let hi0 = [0, 1, 2].map(|a| ((lo[a] + size[a]) << level).min(self.dims[a]));
         let mut dims = [0, 1, 2].map(|a| (hi0[a] - lo0[a]) as usize);
-        let mut data = self.source.read_box::<T>(0, lo0, dims.map(|d| d as u32))?;
+        let mut data = self.source.read_box::<T>(lo0, dims.map(|d| d as u32))?;
         for l in 0..level {
             // The factors of the whole level, not of the box: an axis of length 1 is not halved.
             let f = factors(level_dims(self.dims, l).map(u64::from));
@@ -90,7 +133,7 @@ impl FinerLevels for Finer {
                 problem: format!("no box {lo:?}+{size:?} in level {level} below level {}", self.held),
             });
         }
-        Ok(match self.source.held_type() {
+        Ok(match self.source.voxel_type() {
             VoxelType::U8 => VoxelData::U8(self.box_at::<u8>(level, lo, size)?),
             VoxelType::I8 => VoxelData::U8(
                 (self.box_at::<i8>(level, lo, size)?.into_par_iter())

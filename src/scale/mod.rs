@@ -107,7 +107,10 @@ pub fn open_deferred(
         VolumeError::Header { problem, .. } => named(problem),
         e => e,
     })?;
-    Ok(Opened { volume, keep: None })
+    Ok(Opened {
+        volume: with_store_finer(volume, path, &opts),
+        keep: None,
+    })
 }
 
 /// A folder of DICOM slices that may not fit `budgets` at full resolution (its first image times its files, an
@@ -204,6 +207,24 @@ fn with_finer(mut v: Volume, place: &InPlace, level: u32) -> Result<Volume, Volu
             finer::Finer::of(place, level)?.map(|f| std::sync::Arc::new(f) as std::sync::Arc<dyn volume::FinerLevels>);
     }
     Ok(v)
+}
+
+/// `v`, a coarser level of the OME-Zarr store at `path`, with the store's level 0 behind it ([`finer::Finer`]) where
+/// the pyramid rule makes `v` from it, so that a streamed pool reads finer bricks from the store; a note where the
+/// store could not be read again.
+fn with_store_finer(mut v: Volume, path: &Path, opts: &OpenOptions) -> Volume {
+    // `--max-dim` asks for no more than the level chosen.
+    if v.format != "OME-Zarr" || v.finer.is_some() || opts.max_dim.is_some() {
+        return v;
+    }
+    match crate::volume::zarr::boxes::finer_of(path, &v, opts.channel) {
+        Ok(Some((boxes, held))) => {
+            v.finer = Some(std::sync::Arc::new(finer::Finer::of_zarr(boxes, held)));
+        }
+        Ok(None) => {}
+        Err(e) => v.notes.push(format!("its finer levels will not be shown: {e}")),
+    }
+    v
 }
 
 /// A preview of `path` when it is a file read in place that is large at the level `budgets` give it: from the

@@ -32,7 +32,7 @@ mod time;
 mod unsupported;
 mod voxel;
 mod vtk;
-mod zarr;
+pub(crate) mod zarr;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use decode::Endian;

@@ -76,6 +76,28 @@ fn over_the_gpu_budget_a_file_shows_the_level_convert_writes() {
         worst <= Some(1),
         "within the host budget, full resolution from the file: differs by {worst:?}"
     );
+    // The store within the same budget: its level 1 held, level 0's bricks read from the store where the view
+    // wants them; the same image.
+    let z = dir.join("store.png");
+    let o = volcast_ok(&[
+        "render",
+        &store.to_string_lossy(),
+        "--host-budget",
+        "700K",
+        "-o",
+        &z.to_string_lossy(),
+    ]);
+    let err = stderr(&o);
+    assert!(
+        err.contains("holds level 1 of its 160x96x80 voxels") && err.contains("level 0 in"),
+        "{err}"
+    );
+    let z = image::open(&z).unwrap().to_rgba8();
+    let worst = z.as_raw().iter().zip(full.as_raw()).map(|(p, q)| p.abs_diff(*q)).max();
+    assert!(
+        worst <= Some(1),
+        "within the host budget, full resolution from the store: differs by {worst:?}"
+    );
     // The host budget alone (info has no device): level 2.
     let o = volcast(&["info", &raw, "--host-budget", "100K"]);
     assert!(o.status.success(), "{}", stderr(&o));

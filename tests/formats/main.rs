@@ -16,3 +16,4 @@ mod time;
 mod vtk;
 mod world;
 mod zarr;
+mod zarr_finer;

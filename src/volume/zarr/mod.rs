@@ -2,6 +2,7 @@
 //! shards, blosc/zstd/gzip, missing chunks as the fill value), ome_zarr_metadata parses the OME attributes, and this
 //! module turns them into a [`Volume`]: one level (the finest that fits), one channel, every time step.
 
+pub(crate) mod boxes;
 mod guard;
 pub(crate) mod levels;
 pub(crate) mod metadata;
