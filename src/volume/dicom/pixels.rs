@@ -12,6 +12,7 @@ use crate::volume::{check_dims, Volume};
 use crate::volume::{VolumeError, VoxelData, VoxelType};
 use dicom_core::value::PrimitiveValue as P;
 use dicom_object::DefaultDicomObject;
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// Pixel data as found: little-endian bytes (OB, decoded, or read from the file) or 16-bit words (OW).
@@ -248,9 +249,29 @@ pub(super) fn load_planned(
     let bytes_needed = count as u64 * voxel_type.size() as u64;
     check_files_back(&plan, files, bytes_needed, label)?;
     let mut data = empty_data(voxel_type, count, dims, bytes_needed)?;
-    for (i, s) in plan.slices.iter().enumerate() {
-        append_slice(s, &files[s.source], &plan.frame_order, &mut data)?;
-        progress.report((i + 1) as f64 / plan.slices.len() as f64);
+    // Batches of slices decoded on every core (parsing and decompressing a slice is CPU work), then appended in
+    // order: the peak is the volume and one batch of slices.
+    let plane = dims[0] as usize * dims[1] as usize * plan.frame_order.len();
+    let mut done = 0;
+    for batch in plan.slices.chunks(rayon::current_num_threads() * 2) {
+        let decoded = batch
+            .par_iter()
+            .map(|s| {
+                let bytes = plane as u64 * voxel_type.size() as u64;
+                let mut one = empty_data(voxel_type, plane, dims, bytes)?;
+                append_slice(s, &files[s.source], &plan.frame_order, &mut one)?;
+                Ok(one)
+            })
+            .collect::<Result<Vec<VoxelData>, VolumeError>>()?;
+        for one in decoded {
+            match (&mut data, one) {
+                (VoxelData::U8(all), VoxelData::U8(v)) => all.extend_from_slice(&v),
+                (VoxelData::U16(all), VoxelData::U16(v)) => all.extend_from_slice(&v),
+                _ => unreachable_layout(label)?,
+            }
+        }
+        done += batch.len();
+        progress.report(done as f64 / plan.slices.len() as f64);
     }
     finish(name, plan, data)
 }
