@@ -283,6 +283,8 @@ BUGS = [
      [("src/volume/zarr/boxes.rs", "space: [space[2], space[1], space[0]],", "space: [space[0], space[1], space[2]],")]),
     ("zarr-finer-placement-unchecked", "a store's level 0 streams behind a held level placed otherwise",
      [("src/volume/zarr/boxes.rs", "if !placed.affine.abs_diff_eq(v.geometry.affine, tolerance) {", "if false {")]),
+    ("box-span-rows-packed", "a box read as one span per slice takes its rows as if they lay next to each other in the file",
+     [("src/convert/source.rs", "convert(&bytes[r * row_bytes..][..sx * vsize], d);", "convert(&bytes[r * sx * vsize..][..sx * vsize], d);")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent
