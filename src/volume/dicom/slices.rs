@@ -36,17 +36,12 @@ pub(crate) fn series_in_place(path: &Path, series: Option<&str>) -> Result<Optio
     if !path.is_dir() {
         return Ok(None);
     }
-    let Headers {
-        files,
-        slices,
-        mut notes,
-        listed,
-        label,
-    } = headers(path, series)?;
-    if temporal_positions(&slices).is_some() || slices.iter().any(|s| s.frames > 1) {
+    let found: Headers = headers(path, series)?;
+    let (files, label, mut notes) = (found.files, found.label, found.notes);
+    if temporal_positions(&found.slices).is_some() || found.slices.iter().any(|s| s.frames > 1) {
         return Ok(None);
     }
-    let mut plan = plan(slices, &label)?;
+    let mut plan = plan(found.slices, &label)?;
     let needed = check_dims(plan.dims)? * plan.voxel_type.size() as u64;
     check_files_back(&plan, &files, needed, &label)?;
     notes.append(&mut plan.notes);
@@ -57,7 +52,7 @@ pub(crate) fn series_in_place(path: &Path, series: Option<&str>) -> Result<Optio
         voxel_type: plan.voxel_type,
         label,
         modality: Some(plan.modality).filter(|m| !m.is_empty()),
-        series: listed,
+        series: found.listed,
         slices: plan.slices,
     };
     Ok(Some(InPlace {
