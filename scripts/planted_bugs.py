@@ -285,6 +285,11 @@ BUGS = [
      [("src/volume/zarr/boxes.rs", "if !placed.affine.abs_diff_eq(v.geometry.affine, tolerance) {", "if false {")]),
     ("box-span-rows-packed", "a box read as one span per slice takes its rows as if they lay next to each other in the file",
      [("src/convert/source.rs", "convert(&bytes[r * row_bytes..][..sx * vsize], d);", "convert(&bytes[r * sx * vsize..][..sx * vsize], d);")]),
+    ("finer-cells-apron-dropped", "a skip cell over a brick read from the file takes its own voxels without the one around it that a sample reads",
+     [("src/render/finer_cells.rs", "let from = (c[a] * side).max(ilo[a]).saturating_sub(1).max(lo[a]);",
+       "let from = (c[a] * side).max(ilo[a]).max(lo[a]);")]),
+    ("finer-cells-first-for-all", "every skip cell over a brick read from the file takes the range of the brick's first cell",
+     [("src/render/levels.rs", ".and_then(|cells| cells.at(at))", ".and_then(|cells| cells.ranges.first().copied())")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -10,7 +10,7 @@ use crate::gpu::resources::{Buffer, Image};
 use crate::gpu::sync::{Access, COLOR_LAYERS};
 use crate::gpu::upload::{copy_to_image, STAGING_CHUNK};
 use crate::gpu::{Gpu, GpuError};
-use crate::volume::{element_range, FinerLevels as Finer, VoxelData};
+use crate::volume::{FinerLevels as Finer, VoxelData};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use rayon::prelude::*;
@@ -79,9 +79,9 @@ impl TexelRows for SlotRows<'_> {
     }
 }
 
-/// What the skip grid needs of a brick read from the file: the extremes of the elements its slot holds (`None`:
-/// none is finite).
-pub(super) type BoxRange = (Resident, Option<[f64; 2]>);
+/// What the skip grid needs of a brick read from the file: the element range of each skip cell it covers
+/// (finer_cells.rs).
+pub(super) type BoxRange = (Resident, super::finer_cells::BoxCells<Option<(f64, f64)>>);
 
 /// Uploads the bricks `pool.resident` names in `slots` into `image` (the pool's texture or corner texture in
 /// `layout`). `fresh`: the image has never been written (its old contents are discarded on the first copy).
@@ -161,9 +161,21 @@ fn fill_batch(
             None => write_texels(&rows, levels, kind, part),
         }
     }
-    let ranges = bricks.iter().zip(&boxes);
-    Ok(ranges
-        .filter_map(|(&r, b)| b.as_ref().map(|b| (r, element_range(&b.data))))
+    let Some(held) = finer.map(|f| f.held()) else {
+        return Ok(Vec::new());
+    };
+    let cell = super::skip::BRICK << held;
+    Ok(bricks
+        .par_iter()
+        .zip(&boxes)
+        .filter_map(|(&r, b)| {
+            let b = b.as_ref()?;
+            let dims = pool.levels[r.level as usize];
+            let ilo = [0, 1, 2].map(|a| r.brick[a] * pool.brick[a]);
+            let ihi = [0, 1, 2].map(|a| (ilo[a] + pool.brick[a]).min(dims[a]));
+            let cells = super::finer_cells::box_cells(&b.data, (b.lo, b.size), (ilo, ihi), r.level, cell);
+            Some((r, cells))
+        })
         .collect())
 }
 

@@ -216,8 +216,9 @@ pub fn extend_pyramid(volume: &Volume, pyramid: &mut Vec<Volume>, top: u32) -> R
     Ok(())
 }
 
-/// The normalised value range of each brick read from the file below the held level, by (level, brick).
-pub type FinerRanges = std::collections::HashMap<(u32, [u32; 3]), (f32, f32)>;
+/// The normalised value range of each skip cell a brick read from the file below the held level covers, by (level,
+/// brick) (finer_cells.rs).
+pub type FinerRanges = std::collections::HashMap<(u32, [u32; 3]), super::finer_cells::BoxCells<(f32, f32)>>;
 
 /// The skip grid's ranges for `cut` shown in pool bricks of `brick` voxels: each 8³ skip brick takes the ranges of
 /// the levels its samples are taken at, those of the pool bricks it overlaps (`grids[L]` is level L's skip grid,
@@ -225,7 +226,8 @@ pub type FinerRanges = std::collections::HashMap<(u32, [u32; 3]), (f32, f32)>;
 /// 2 is thus classified by level 2 alone: level 0's empty bricks under a coarser glow are not leapt over, and a
 /// coarse level's glow does not keep level-0 bricks shown elsewhere from being skipped. With `held` > 0 (a file's
 /// finer levels read by brick, `VolumeInfo::held`), `grids[0]` is level `held`'s grid, skip bricks are 8 of its
-/// voxels, and a brick shown below it takes the range of its own voxels as read (`finer`).
+/// voxels, and a brick shown below it takes the range of its own voxels within one voxel of the skip brick, as read
+/// (`finer`).
 pub fn cut_ranges(
     grids: &[super::skip::BrickGrid],
     cut: &Cut,
@@ -249,11 +251,11 @@ pub fn cut_ranges(
                     for x in lo[0]..=hi[0] {
                         let l = cut.level[(x + cut.grid[0] * (y + cut.grid[1] * z)) as usize];
                         let Some(l) = l.checked_sub(held).map(|l| l as usize) else {
-                            // A level finer than the one held, read from the file: its brick's own range (any
-                            // value if it was never read).
+                            // A level finer than the one held, read from the file: its brick's own voxels in
+                            // and around this skip brick (any value if it was never read).
                             let r = finer
                                 .get(&(l, [x, y, z].map(|v| v >> l)))
-                                .copied()
+                                .and_then(|cells| cells.at(at))
                                 .unwrap_or((0.0, 1.0));
                             range = (range.0.min(r.0), range.1.max(r.1));
                             continue;

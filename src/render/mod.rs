@@ -4,6 +4,7 @@
 
 mod brick_upload;
 pub mod figure;
+mod finer_cells;
 mod gpu_volume;
 pub mod gradients;
 pub mod headless;

@@ -256,8 +256,8 @@ impl GpuVolume {
                 &slots,
                 fresh,
             )?;
-            for (r, range) in read {
-                let normal = volume.normalize_range(range.map(|[a, b]| (a, b)));
+            for (r, cells) in read {
+                let normal = cells.map(|range| volume.normalize_range(range));
                 self.finer_ranges.insert((r.level, r.brick), normal);
             }
             if let Some(g) = self.gradient.take() {
