@@ -34,7 +34,7 @@ impl std::fmt::Debug for ZarrBoxes {
 
 /// Level 0 of the store at `path` and the pyramid level `v` (one level of it, channel `channel`) is of it; `None`
 /// where `v` is level 0, a series, a 2-D image, or a level the pyramid rule does not make from level 0 (another
-/// size, or another placement).
+/// size, placement or type).
 pub(crate) fn finer_of(path: &Path, v: &Volume, channel: Option<u32>) -> Result<Option<(ZarrBoxes, u32)>, VolumeError> {
     let file = format::file_label(path);
     let bad = |problem: String| format::header_error(&file, problem);
@@ -70,6 +70,10 @@ pub(crate) fn finer_of(path: &Path, v: &Volume, channel: Option<u32>) -> Result<
         return Ok(None);
     }
     let voxel_type = read::voxel_type(&array).map_err(bad)?;
+    // Level 0's bricks land in the held level's texture: a store whose levels differ in type keeps its level.
+    if voxel_type != v.source_type {
+        return Ok(None);
+    }
     Ok(Some((
         ZarrBoxes {
             file,
