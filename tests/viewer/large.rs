@@ -70,18 +70,36 @@ fn viewer_previews_a_large_file_then_shows_it() {
 /// same held level streamed within the same budgets.
 #[test]
 fn viewer_shows_full_resolution_from_the_file_within_the_host_budget() {
+    let dir = common::scratch("viewer-finer");
+    let path = write_large(&dir);
+    full_resolution_within_the_host_budget(&path, &dir);
+}
+
+/// The same for the file's OME-Zarr store (`volcast convert`'s): level 1 from the store, level 0's bricks from
+/// the store's level 0.
+#[test]
+fn viewer_shows_full_resolution_from_an_ome_zarr_store_within_the_host_budget() {
+    let dir = common::scratch("viewer-finer-zarr");
+    let raw = write_large(&dir);
+    let store = dir.join("large.ome.zarr");
+    let o = common::volcast(&["convert", &raw.to_string_lossy(), &store.to_string_lossy()]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    std::fs::remove_file(&raw).expect("the raw file is not needed");
+    full_resolution_within_the_host_budget(&store, &dir);
+}
+
+fn full_resolution_within_the_host_budget(path: &Path, dir: &Path) {
     let Some(x) = xvfb() else { return };
     if !have("xdotool", "version") {
         common::skip("xdotool not found; apt-get install xdotool");
         return;
     }
     let d = &x.display;
-    let dir = common::scratch("viewer-finer");
-    let path = write_large(&dir);
     let file = path.to_string_lossy().into_owned();
     let budgets = volcast::volume::budget::Budgets::host(Some(20 << 20));
-    let held = volcast::scale::open(&path, &Default::default(), budgets, None, &mut |_| {}).expect("held");
+    let held = volcast::scale::open(path, &Default::default(), budgets, None, &mut |_| {}).expect("held");
     assert_eq!(held.dims, [256, 256, 128]);
+    assert!(held.finer.is_some(), "level 0 stays behind the held level");
     let args = [
         file.as_str(),
         "--host-budget",
@@ -93,7 +111,7 @@ fn viewer_shows_full_resolution_from_the_file_within_the_host_budget() {
     let cache = dir.join("cache").to_string_lossy().into_owned();
     let mut viewer = Viewer::start(
         d,
-        &dir,
+        dir,
         &[&args[..], &[&cache]].concat(),
         &format!("frames:3;{HOLD};exit"),
     );
@@ -107,7 +125,7 @@ fn viewer_shows_full_resolution_from_the_file_within_the_host_budget() {
     viewer.wait_for("script: Hold", wait);
     let window = viewer.window(d);
     type_keys(d, &window, &["F12"]);
-    let (shot, settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(120)));
+    let (shot, settings) = read_screenshot(dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(120)));
     let expected = super::formats::headless_render_within(&held, &settings, Some(256 << 20));
     let diff = diff(&shot, &expected);
     assert!(
@@ -115,7 +133,7 @@ fn viewer_shows_full_resolution_from_the_file_within_the_host_budget() {
         "the view differs from the headless render of the file's levels: {diff}"
     );
     viewer.finish_clean();
-    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]
