@@ -189,23 +189,53 @@ pub fn encode_reach(levels: &[u8], bricks: [u32; 3]) -> Vec<u8> {
 
 /// One pass of [`encode_reach`]'s distance transform along an axis whose lines are `line` bricks long, `stride`
 /// apart in `dist`: each brick gets min over the bricks b' of its line of max(|b − b'|, dist[b']) (bricks past
-/// the grid's edge ignored). Line by line on every core; within a line, one vectorisable sweep per distance d
-/// over all its bricks, until d reaches the largest distance left (at most 64).
+/// the grid's edge ignored), by one sweep per distance d until d reaches the largest distance left (at most 64).
+/// Along y and z the lines are swept together, a row (or plane) of `stride` bricks at a time (contiguous: it
+/// vectorises), rows on every core; along x, line by line.
 fn chebyshev_pass(dist: &[u8], line: usize, stride: usize, far: u8) -> Vec<u8> {
     let pad = usize::from(far);
-    // Brick a + stride·(k + line·c) is element k of line (a, c).
-    let starts: Vec<usize> = (0..dist.len() / (stride * line))
-        .flat_map(|c| (0..stride).map(move |a| a + stride * line * c))
-        .collect();
-    let lines: Vec<Vec<u8>> = starts
-        .par_iter()
-        .map(|&first| {
-            // The line with `pad` ignored bricks (u8::MAX, never the minimum) on either side.
-            let mut padded = vec![u8::MAX; line + 2 * pad];
-            for (k, p) in padded[pad..pad + line].iter_mut().enumerate() {
-                *p = dist[first + k * stride];
+    if stride == 1 {
+        return along_x(dist, line, pad);
+    }
+    let mut out = dist.to_vec();
+    out.par_chunks_mut(stride).enumerate().for_each(|(r, row)| {
+        // Row k of block c: the rows of that block at k ± d are its line neighbours at distance d.
+        let (block, k) = (r / line * line, r % line);
+        let at = |j: usize| &dist[(block + j) * stride..][..stride];
+        for d in 1..pad {
+            if row.iter().all(|&b| usize::from(b) <= d) {
+                break;
             }
-            let mut best = padded[pad..pad + line].to_vec();
+            let (before, after) = (k.checked_sub(d).map(at), (k + d < line).then(|| at(k + d)));
+            let d8 = d as u8;
+            match (before, after) {
+                (Some(a), Some(b)) => {
+                    for ((o, &x), &y) in row.iter_mut().zip(a).zip(b) {
+                        *o = (*o).min(x.min(y).max(d8));
+                    }
+                }
+                (Some(a), None) | (None, Some(a)) => {
+                    for (o, &x) in row.iter_mut().zip(a) {
+                        *o = (*o).min(x.max(d8));
+                    }
+                }
+                (None, None) => break,
+            }
+        }
+    });
+    out
+}
+
+/// [`chebyshev_pass`] along x: each line (contiguous) on its own, on every core.
+fn along_x(dist: &[u8], line: usize, pad: usize) -> Vec<u8> {
+    let mut out = dist.to_vec();
+    out.par_chunks_mut(line)
+        .zip(dist.par_chunks(line))
+        .for_each_init(Vec::new, |padded, (best, src)| {
+            // The line with `pad` ignored bricks (u8::MAX, never the minimum) on either side.
+            padded.clear();
+            padded.resize(line + 2 * pad, u8::MAX);
+            padded[pad..pad + line].copy_from_slice(src);
             let mut d = 1;
             while d < pad && best.iter().any(|&b| usize::from(b) > d) {
                 let (before, after) = (&padded[pad - d..pad - d + line], &padded[pad + d..pad + d + line]);
@@ -214,15 +244,7 @@ fn chebyshev_pass(dist: &[u8], line: usize, stride: usize, far: u8) -> Vec<u8> {
                 }
                 d += 1;
             }
-            best
-        })
-        .collect();
-    let mut out = vec![0u8; dist.len()];
-    for (first, values) in starts.iter().zip(lines) {
-        for (k, v) in values.into_iter().enumerate() {
-            out[first + k * stride] = v;
-        }
-    }
+        });
     out
 }
 
