@@ -290,6 +290,10 @@ BUGS = [
        "let from = (c[a] * side).max(ilo[a]).max(lo[a]);")]),
     ("finer-cells-first-for-all", "every skip cell over a brick read from the file takes the range of the brick's first cell",
      [("src/render/levels.rs", ".and_then(|cells| cells.at(at))", ".and_then(|cells| cells.ranges.first().copied())")]),
+    ("slot-row-run-shifted", "a streamed brick's rows copied as runs of its level start one voxel to the right",
+     [("src/render/brick_upload.rs", "return run(level, first + x0, row);", "return run(level, first + x0 + 1, row);")]),
+    ("reach-one-sided", "the skip grid's reach along y and z looks only at the bricks before, not after",
+     [("src/render/skip.rs", "*o = (*o).min(x.min(y).max(d8));", "*o = (*o).min(x.max(d8));")]),
 ]
 
 ROOT = Path(__file__).resolve().parent.parent

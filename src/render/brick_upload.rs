@@ -4,8 +4,9 @@
 //! batch's boxes on every core. Uploads are bounded per step by the caller, and batched here within
 //! [`STAGING_CHUNK`] bytes of staging.
 
-use super::gpu_volume::{write_texels, Levels, TexelKind, TexelRows, VolumeLayout};
+use super::gpu_volume::VolumeLayout;
 use super::pool::{slot_side, Pool, PoolRows, Resident, BORDER};
+use super::texels::{write_texels, Levels, Run, TexelKind, TexelRows};
 use crate::gpu::resources::{Buffer, Image};
 use crate::gpu::sync::{Access, COLOR_LAYERS};
 use crate::gpu::upload::{copy_to_image, STAGING_CHUNK};
@@ -31,6 +32,35 @@ struct Boxed {
 }
 
 impl SlotRows<'_> {
+    /// Where the slot's rows start in x within the data they are read from (the level, or the box), where every
+    /// row is contiguous there: the slot's x span (brick and border) lies inside the level. `None` at its x edges
+    /// (the border clamps).
+    fn first_x(&self) -> Option<usize> {
+        let dims = self.pool.levels[self.brick.level as usize];
+        let side = slot_side(self.pool.brick[0]);
+        let x0 = (self.brick.brick[0] * self.pool.brick[0]).checked_sub(BORDER)?;
+        let lo = self.within.map_or(0, |b| b.lo[0]);
+        (x0 + side <= dims[0]).then_some((x0 - lo) as usize)
+    }
+
+    /// The level (as `Levels` index it) and element of x = 0 of row (`ly`, `lz`)'s data: the row [`row`](Self::row)
+    /// reads, less its x offset.
+    fn row_start(&self, ly: u32, lz: u32) -> (u32, usize) {
+        let dims = self.pool.levels[self.brick.level as usize];
+        let lo = self.within.map_or([0; 3], |b| b.lo);
+        let at = |a: usize, l: u32| -> usize {
+            let v = i64::from(self.brick.brick[a] * self.pool.brick[a]) + i64::from(l) - i64::from(BORDER);
+            (v.clamp(0, i64::from(dims[a]) - 1) as u32 - lo[a]) as usize
+        };
+        match self.within {
+            Some(b) => (0, b.size[0] as usize * (at(1, ly) + b.size[1] as usize * at(2, lz))),
+            None => (
+                self.brick.level,
+                dims[0] as usize * (at(1, ly) + dims[1] as usize * at(2, lz)),
+            ),
+        }
+    }
+
     /// Row (`ly`, `lz`) of the slot: from the levels, or (level 0 of the box's own [`Levels`]) from the box.
     fn row(&self, ly: u32, lz: u32, out: &mut Vec<Option<super::pool::Source>>) {
         let Some(b) = self.within else {
@@ -56,16 +86,23 @@ fn slot_box(pool: &Pool, r: Resident) -> ([u32; 3], [u32; 3]) {
 }
 
 impl TexelRows for SlotRows<'_> {
-    fn fill<T: Send>(&self, dst: &mut [T], texel: impl Fn(&PoolRows, usize) -> T + Sync) {
+    fn fill<T: Send>(&self, dst: &mut [T], pairs: bool, texel: impl Fn(&PoolRows, usize) -> T + Sync, run: Run<T>) {
         let side = self.pool.brick.map(slot_side);
+        let first_x = self.first_x();
         dst.par_chunks_mut(side[0] as usize).enumerate().for_each_init(
             || (Vec::new(), Vec::new()),
             |(this, next), (r, row)| {
                 let (ly, lz) = (r as u32 % side[1], r as u32 / side[1]);
+                if let (Some(run), Some(x0), false) = (run, first_x, pairs) {
+                    let (level, first) = self.row_start(ly, lz);
+                    return run(level, first + x0, row);
+                }
                 this.clear();
                 next.clear();
                 self.row(ly, lz, this);
-                self.row((ly + 1).min(side[1] - 1), lz, next);
+                if pairs {
+                    self.row((ly + 1).min(side[1] - 1), lz, next);
+                }
                 let rows = PoolRows { this, next };
                 for (x, d) in row.iter_mut().enumerate() {
                     *d = texel(&rows, x);

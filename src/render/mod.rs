@@ -21,6 +21,7 @@ pub mod refinable;
 mod resident;
 pub mod skip;
 pub mod stream;
+mod texels;
 mod uniforms;
 
 pub use uniforms::{mirrors, FrameUniforms, PoolInfo, VolumeInfo};
@@ -362,7 +363,7 @@ impl Renderer {
                     (z0 * plane, grid)
                 })
                 .collect();
-            pool.fill(first, bytemuck::cast_slice_mut(dst), |r, x| {
+            pool.fill(first, bytemuck::cast_slice_mut(dst), false, |r, x| {
                 r.this[x].map_or([0; 4], |(l, i)| {
                     let (start, grid) = &slabs[l as usize];
                     grid[i - start]

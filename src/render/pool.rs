@@ -223,7 +223,13 @@ impl Pool {
 
     /// Fills `dst`, the pool's texels from texel `first` on (whole rows; past the last slice they wrap to the
     /// first, as a depth-1 pool's second copy does), with `texel(row sources, x)`, rows on every core.
-    pub fn fill<T: Send>(&self, first: usize, dst: &mut [T], texel: impl Fn(&PoolRows, usize) -> T + Sync) {
+    pub fn fill<T: Send>(
+        &self,
+        first: usize,
+        dst: &mut [T],
+        pairs: bool,
+        texel: impl Fn(&PoolRows, usize) -> T + Sync,
+    ) {
         use rayon::prelude::*;
         let [tx, ty, tz] = self.texels().map(|t| t as usize);
         let first_row = first / tx;
@@ -233,7 +239,9 @@ impl Pool {
                 let at = (first_row + r) % (ty * tz);
                 let (y, z) = ((at % ty) as u32, (at / ty) as u32);
                 self.row_sources(y, z, this);
-                self.row_sources((y + 1).min(ty as u32 - 1), z, next);
+                if pairs {
+                    self.row_sources((y + 1).min(ty as u32 - 1), z, next);
+                }
                 let rows = PoolRows { this, next };
                 for (x, d) in row.iter_mut().enumerate() {
                     *d = texel(&rows, x);

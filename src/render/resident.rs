@@ -4,12 +4,13 @@
 //! `Renderer::start_stream` and `stream_step`).
 
 use super::gpu_volume::{
-    corners_format, image_3d, layout_for, occupancy_image, upload_pool, GpuVolume, Levels, PoolImages, VolumeLayout,
+    corners_format, image_3d, layout_for, occupancy_image, upload_pool, GpuVolume, PoolImages, VolumeLayout,
 };
 use super::levels::{self, Cut};
 use super::pool::{slot_side, Pool, TILED_BRICK};
 use super::skip;
 use super::stream::{Step, Stream};
+use super::texels::Levels;
 use super::Renderer;
 use crate::gpu::{Gpu, GpuError, TexelPolicy};
 use crate::scene::settings::RenderSettings;
