@@ -238,7 +238,7 @@ pub fn cut_ranges(
     let base = &grids[0];
     let s = super::skip::BRICK << held;
     let [gx, gy, _] = base.bricks.map(|b| b as usize);
-    let ranges: Vec<(f32, f32)> = (0..base.min.len())
+    let (min, max): (Vec<f32>, Vec<f32>) = (0..base.min.len())
         .into_par_iter()
         .map(|k| {
             let at = [k % gx, k / gx % gy, k / (gx * gy)].map(|v| v as u32);
@@ -270,11 +270,11 @@ pub fn cut_ranges(
             }
             range
         })
-        .collect();
+        .unzip();
     super::skip::BrickGrid {
         bricks: base.bricks,
-        min: ranges.iter().map(|r| r.0).collect(),
-        max: ranges.iter().map(|r| r.1).collect(),
+        min,
+        max,
     }
 }
 

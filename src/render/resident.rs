@@ -64,8 +64,8 @@ impl GpuVolume {
     pub(super) fn skip_grid(&mut self) -> &skip::BrickGrid {
         if self.skip_stale {
             if self.skip_levels.is_empty() {
-                // Until the first cut, `bricks` is level 0's own grid.
-                self.skip_levels.push(self.bricks.clone());
+                // Until the first cut, `bricks` is level 0's own grid (replaced below).
+                self.skip_levels.push(std::mem::take(&mut self.bricks));
             }
             while self.skip_levels.len() <= self.pyramid.len() {
                 let level = &self.pyramid[self.skip_levels.len() - 1];

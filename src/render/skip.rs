@@ -13,7 +13,7 @@ pub const BRICK: u32 = 8;
 
 /// Per-brick value range (normalised), over every voxel a trilinear sample inside the brick reads: the brick's
 /// own voxels plus a one-voxel apron. NaN is ignored; a brick of only NaN has min > max (never visible).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct BrickGrid {
     pub bricks: [u32; 3],
     pub min: Vec<f32>,
