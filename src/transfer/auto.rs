@@ -103,24 +103,21 @@ pub fn value_histogram(volume: &Volume, bins: usize) -> Vec<u64> {
     let add = |a: Vec<u64>, b: Vec<u64>| a.into_iter().zip(b).map(|(x, y)| x + y).collect::<Vec<u64>>();
     // 8- and 16-bit elements are counted by element on every core, then each element value is normalised once:
     // the same counts as normalising every voxel, at memory speed.
-    fn counts<T: Copy + Into<usize> + Sync>(data: &[T], size: usize) -> Vec<u64> {
-        data.par_chunks(1 << 20)
-            .map(|c| match size {
-                256 => counts_interleaved(c, size),
-                _ => {
-                    let mut n = vec![0u64; size];
-                    c.iter().for_each(|&e| n[e.into()] += 1);
-                    n
-                }
-            })
-            .reduce(
-                || vec![0u64; size],
-                |a, b| a.into_iter().zip(b).map(|(x, y)| x + y).collect(),
-            )
+    // `chunk` counts one chunk's elements into a table of `size`.
+    fn counts<T: Copy + Into<usize> + Sync>(data: &[T], size: usize, chunk: fn(&[T], usize) -> Vec<u64>) -> Vec<u64> {
+        data.par_chunks(1 << 20).map(|c| chunk(c, size)).reduce(
+            || vec![0u64; size],
+            |a, b| a.into_iter().zip(b).map(|(x, y)| x + y).collect(),
+        )
     }
     // Four tables taking every fourth element: a run of one value (a background) does not wait on its own last
     // increment. Twice as fast for 8-bit data (1 GiB: 0.15 s against 0.30 s on 2 cores); no faster for 16-bit
     // data, whose four tables of 65536 leave the L1 cache.
+    fn counts_plain<T: Copy + Into<usize>>(c: &[T], size: usize) -> Vec<u64> {
+        let mut n = vec![0u64; size];
+        c.iter().for_each(|&e| n[e.into()] += 1);
+        n
+    }
     fn counts_interleaved<T: Copy + Into<usize>>(c: &[T], size: usize) -> Vec<u64> {
         let mut n = vec![0u32; 4 * size];
         let (a, rest) = n.split_at_mut(size);
@@ -144,8 +141,8 @@ pub fn value_histogram(volume: &Volume, bins: usize) -> Vec<u64> {
     for t in 0..volume.timesteps() {
         let Some(data) = volume.step_data(t) else { continue };
         let by_element = match data {
-            VoxelData::U8(d) => counts(d, 256),
-            VoxelData::U16(d) => counts(d, 65536),
+            VoxelData::U8(d) => counts(d, 256, counts_interleaved),
+            VoxelData::U16(d) => counts(d, 65536, counts_plain),
             VoxelData::F32(d) => {
                 let part = d
                     .par_chunks(1 << 16)
