@@ -74,7 +74,7 @@ BUGS = [
      [("src/transfer/function.rs", "TfUnits::Data => (range[0] + v as f64 * (range[1] - range[0])) as f32,",
        "TfUnits::Data => (v as f64 * (range[1] - range[0])) as f32,")]),
     ("corner-next-row-missed", "the corner texture's y + 1 values are taken from the texel's own row",
-     [("src/render/gpu_volume.rs", "[at(r.this[x]), at(r.this[x1]), at(r.next[x]), at(r.next[x1])]",
+     [("src/render/texels.rs", "[at(r.this[x]), at(r.this[x1]), at(r.next[x]), at(r.next[x1])]",
        "[at(r.this[x]), at(r.this[x1]), at(r.this[x]), at(r.this[x1])]")]),
     ("mip-minimum", "maximum intensity projection keeps the minimum",
      [("shaders/march.glsl", "m = mode == MODE_MIP ? max(m, v) : min(m, v);", "m = mode == MODE_MIP ? min(m, v) : min(m, v);")]),
@@ -292,6 +292,8 @@ BUGS = [
      [("src/render/levels.rs", ".and_then(|cells| cells.at(at))", ".and_then(|cells| cells.ranges.first().copied())")]),
     ("slot-row-run-shifted", "a streamed brick's rows copied as runs of its level start one voxel to the right",
      [("src/render/brick_upload.rs", "return run(level, first + x0, row);", "return run(level, first + x0 + 1, row);")]),
+    ("slot-run-u16-widened-as-8-bit", "a streamed brick's 16-bit rows copied as runs into a float pool are divided by 255",
+     [("src/render/texels.rs", "widen(&v[l as usize][i..i + out.len()], 65535.0, out)", "widen(&v[l as usize][i..i + out.len()], 255.0, out)")]),
     ("reach-one-sided", "the skip grid's reach along y and z looks only at the bricks before, not after",
      [("src/render/skip.rs", "*o = (*o).min(x.min(y).max(d8));", "*o = (*o).min(x.max(d8));")]),
 ]

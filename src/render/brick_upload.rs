@@ -254,3 +254,72 @@ fn copy_batch(
     };
     copy_to_image(gpu, staging, image.raw, &regions, from, Access::FragmentSampled)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every slot's texels, written as the stream writes them (rows inside the level copied as runs, the level's x
+    /// edges gathered), equal the pool's definition: texel (lx, ly, lz) of brick b is the level's voxel at
+    /// b · side + l − BORDER, clamped into the level; for each element type, stored and widened to float.
+    #[test]
+    fn slot_texels_follow_the_clamped_definition_in_every_kind() {
+        let dims = [40u32, 37, 35];
+        let pool = Pool::whole(dims, Some(16), 2048).unwrap();
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        let u8s: Vec<u8> = (0..n).map(|i| (i * 7919 % 251) as u8).collect();
+        let u16s: Vec<u16> = (0..n).map(|i| (i * 7919 % 65521) as u16).collect();
+        let f32s: Vec<f32> = (0..n).map(|i| (i * 7919 % 1009) as f32 * 0.5).collect();
+        let side = pool.brick.map(slot_side);
+        let texels = side.iter().map(|&s| s as usize).product::<usize>();
+        let voxel = |r: Resident, l: [u32; 3]| -> usize {
+            let at = |a: usize| {
+                let v = i64::from(r.brick[a] * pool.brick[a]) + i64::from(l[a]) - i64::from(BORDER);
+                v.clamp(0, i64::from(dims[a]) - 1) as usize
+            };
+            at(0) + dims[0] as usize * (at(1) + dims[1] as usize * at(2))
+        };
+        let cases: [(VoxelData, TexelKind); 5] = [
+            (VoxelData::U8(u8s.clone()), TexelKind::Native),
+            (VoxelData::U8(u8s), TexelKind::Widened),
+            (VoxelData::U16(u16s.clone()), TexelKind::Native),
+            (VoxelData::U16(u16s), TexelKind::Widened),
+            (VoxelData::F32(f32s), TexelKind::Native),
+        ];
+        for (data, kind) in &cases {
+            let levels = Levels::single(data);
+            for r in pool.resident.iter().flatten() {
+                let rows = SlotRows {
+                    pool: &pool,
+                    brick: *r,
+                    within: None,
+                };
+                let mut dst = vec![0u8; texels * kind.bytes(&levels)];
+                write_texels(&rows, &levels, *kind, &mut dst);
+                let slot =
+                    (0..side[2]).flat_map(|z| (0..side[1]).flat_map(move |y| (0..side[0]).map(move |x| (x, y, z))));
+                for (lx, ly, lz) in slot {
+                    let i = (lx + side[0] * (ly + side[1] * lz)) as usize;
+                    let v = voxel(*r, [lx, ly, lz]);
+                    let (got, want) = match (data, kind) {
+                        (VoxelData::U8(d), TexelKind::Native) => (f64::from(dst[i]), f64::from(d[v])),
+                        (VoxelData::U16(d), TexelKind::Native) => {
+                            let got = u16::from_ne_bytes([dst[2 * i], dst[2 * i + 1]]);
+                            (f64::from(got), f64::from(d[v]))
+                        }
+                        (d, _) => {
+                            let got = f32::from_ne_bytes(dst[4 * i..4 * i + 4].try_into().unwrap());
+                            let want = match d {
+                                VoxelData::U8(d) => f32::from(d[v]) / 255.0,
+                                VoxelData::U16(d) => f32::from(d[v]) / 65535.0,
+                                VoxelData::F32(d) => d[v],
+                            };
+                            (f64::from(got), f64::from(want))
+                        }
+                    };
+                    assert_eq!(got, want, "{kind:?} brick {:?} texel ({lx}, {ly}, {lz})", r.brick);
+                }
+            }
+        }
+    }
+}
