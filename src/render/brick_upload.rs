@@ -132,7 +132,7 @@ pub(super) fn upload_bricks(
     slots: &[u32],
     fresh: bool,
 ) -> Result<Vec<BoxRange>, GpuError> {
-    let kind = TexelKind::of(layout, levels);
+    let kind = layout.texel_kind(levels);
     let side = pool.brick.map(slot_side);
     let slot_bytes = side.iter().map(|&s| s as usize).product::<usize>() * kind.bytes(levels);
     let per_batch = (STAGING_CHUNK as usize / slot_bytes).clamp(1, slots.len().max(1));

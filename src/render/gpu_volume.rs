@@ -110,6 +110,16 @@ pub enum VolumeLayout {
 }
 
 impl VolumeLayout {
+    /// How this layout stores `levels`' elements in a pool texel.
+    pub(super) fn texel_kind(self, levels: &Levels) -> TexelKind {
+        match (self, levels) {
+            (VolumeLayout::Corners8, _) => TexelKind::Corners8,
+            (VolumeLayout::Corners16, _) => TexelKind::Corners16,
+            (VolumeLayout::Texture(vk::Format::R32_SFLOAT), Levels::U8(_) | Levels::U16(_)) => TexelKind::Widened,
+            _ => TexelKind::Native,
+        }
+    }
+
     /// How the shaders read a volume of this layout (their compiled variant).
     pub fn sampling(self) -> Sampling {
         match self {
@@ -202,7 +212,7 @@ fn upload_texels(
     pool: &Pool,
     layout: VolumeLayout,
 ) -> Result<(), GpuError> {
-    let kind = TexelKind::of(layout, levels);
+    let kind = layout.texel_kind(levels);
     if matches!(levels, Levels::F32(_)) && matches!(kind, TexelKind::Corners8 | TexelKind::Corners16) {
         return Err(GpuError::Lost("corner texture: float data has no corner layout"));
     }

@@ -1,10 +1,8 @@
 //! What a pool texel holds and how rows of texels are written from the levels the host holds: the whole pool at
 //! once (gpu_volume.rs) or one slot at a time (brick_upload.rs), rows on every core.
 
-use super::gpu_volume::VolumeLayout;
 use super::pool::{Pool, PoolRows, Source};
 use crate::volume::{Volume, VoxelData};
-use ash::vk;
 
 /// Each level's elements, level 0 (the volume) first, as the pool's sources index them (`pool::Source`).
 pub(super) enum Levels<'a> {
@@ -69,16 +67,6 @@ pub(super) enum TexelKind {
 }
 
 impl TexelKind {
-    /// How `layout` stores `levels`' elements.
-    pub(super) fn of(layout: VolumeLayout, levels: &Levels) -> TexelKind {
-        match (layout, levels) {
-            (VolumeLayout::Corners8, _) => TexelKind::Corners8,
-            (VolumeLayout::Corners16, _) => TexelKind::Corners16,
-            (VolumeLayout::Texture(vk::Format::R32_SFLOAT), Levels::U8(_) | Levels::U16(_)) => TexelKind::Widened,
-            _ => TexelKind::Native,
-        }
-    }
-
     pub(super) fn bytes(self, levels: &Levels) -> usize {
         match (self, levels) {
             (TexelKind::Native, Levels::U8(_)) => 1,
