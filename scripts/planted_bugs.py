@@ -294,6 +294,8 @@ BUGS = [
      [("src/render/brick_upload.rs", "return run(level, first + x0, row);", "return run(level, first + x0 + 1, row);")]),
     ("slot-run-u16-widened-as-8-bit", "a streamed brick's 16-bit rows copied as runs into a float pool are divided by 255",
      [("src/render/texels.rs", "widen(&v[l as usize][i..i + out.len()], 65535.0, out)", "widen(&v[l as usize][i..i + out.len()], 255.0, out)")]),
+    ("slot-box-corner-ignored", "a brick read from the file as a box is indexed as if the box started at the level's corner",
+     [("src/render/brick_upload.rs", "let lo = self.within.map_or(0, |b| b.lo[a]);", "let lo = self.within.map_or(0, |_| 0);")]),
     ("reach-one-sided", "the skip grid's reach along y and z looks only at the bricks before, not after",
      [("src/render/skip.rs", "*o = (*o).min(x.min(y).max(d8));", "*o = (*o).min(x.max(d8));")]),
 ]

@@ -43,37 +43,32 @@ impl SlotRows<'_> {
         (x0 + side <= dims[0]).then_some((x0 - lo) as usize)
     }
 
+    /// Slot-local texel `l` along axis `a` as a coordinate of the data the slot reads: clamped into its level (the
+    /// border past the level's edge repeats it), less the box's corner where the slot reads a box.
+    fn at(&self, a: usize, l: u32) -> usize {
+        let dims = self.pool.levels[self.brick.level as usize];
+        let lo = self.within.map_or(0, |b| b.lo[a]);
+        let v = i64::from(self.brick.brick[a] * self.pool.brick[a]) + i64::from(l) - i64::from(BORDER);
+        (v.clamp(0, i64::from(dims[a]) - 1) as u32 - lo) as usize
+    }
+
     /// The level (as `Levels` index it) and element of x = 0 of row (`ly`, `lz`)'s data: the row [`row`](Self::row)
     /// reads, less its x offset.
     fn row_start(&self, ly: u32, lz: u32) -> (u32, usize) {
-        let dims = self.pool.levels[self.brick.level as usize];
-        let lo = self.within.map_or([0; 3], |b| b.lo);
-        let at = |a: usize, l: u32| -> usize {
-            let v = i64::from(self.brick.brick[a] * self.pool.brick[a]) + i64::from(l) - i64::from(BORDER);
-            (v.clamp(0, i64::from(dims[a]) - 1) as u32 - lo[a]) as usize
+        let (level, [w, h, _]) = match self.within {
+            Some(b) => (0, b.size),
+            None => (self.brick.level, self.pool.levels[self.brick.level as usize]),
         };
-        match self.within {
-            Some(b) => (0, b.size[0] as usize * (at(1, ly) + b.size[1] as usize * at(2, lz))),
-            None => (
-                self.brick.level,
-                dims[0] as usize * (at(1, ly) + dims[1] as usize * at(2, lz)),
-            ),
-        }
+        (level, w as usize * (self.at(1, ly) + h as usize * self.at(2, lz)))
     }
 
     /// Row (`ly`, `lz`) of the slot: from the levels, or (level 0 of the box's own [`Levels`]) from the box.
     fn row(&self, ly: u32, lz: u32, out: &mut Vec<Option<super::pool::Source>>) {
-        let Some(b) = self.within else {
+        if self.within.is_none() {
             return self.pool.slot_row(self.brick, ly, lz, out);
-        };
-        // As `Pool::slot_row` clamps, less the box's corner.
-        let dims = self.pool.levels[self.brick.level as usize];
-        let at = |a: usize, l: u32| -> usize {
-            let v = i64::from(self.brick.brick[a] * self.pool.brick[a]) + i64::from(l) - i64::from(BORDER);
-            (v.clamp(0, i64::from(dims[a]) - 1) as u32 - b.lo[a]) as usize
-        };
-        let row = b.size[0] as usize * (at(1, ly) + b.size[1] as usize * at(2, lz));
-        out.extend((0..slot_side(self.pool.brick[0])).map(|lx| Some((0, row + at(0, lx)))));
+        }
+        let (_, first) = self.row_start(ly, lz);
+        out.extend((0..slot_side(self.pool.brick[0])).map(|lx| Some((0, first + self.at(0, lx)))));
     }
 }
 
@@ -259,6 +254,22 @@ fn copy_batch(
 mod tests {
     use super::*;
 
+    /// The box `lo..lo + size` of `data` (a volume of `dims`).
+    fn crop(data: &VoxelData, dims: [u32; 3], lo: [u32; 3], size: [u32; 3]) -> VoxelData {
+        fn cut<T: Copy>(v: &[T], dims: [u32; 3], lo: [u32; 3], size: [u32; 3]) -> Vec<T> {
+            let at = |x: u32, y: u32, z: u32| (x + dims[0] * (y + dims[1] * z)) as usize;
+            (lo[2]..lo[2] + size[2])
+                .flat_map(|z| (lo[1]..lo[1] + size[1]).map(move |y| (y, z)))
+                .flat_map(|(y, z)| v[at(lo[0], y, z)..at(lo[0] + size[0], y, z)].to_vec())
+                .collect()
+        }
+        match data {
+            VoxelData::U8(v) => VoxelData::U8(cut(v, dims, lo, size)),
+            VoxelData::U16(v) => VoxelData::U16(cut(v, dims, lo, size)),
+            VoxelData::F32(v) => VoxelData::F32(cut(v, dims, lo, size)),
+        }
+    }
+
     /// Every slot's texels, written as the stream writes them (rows inside the level copied as runs, the level's x
     /// edges gathered), equal the pool's definition: texel (lx, ly, lz) of brick b is the level's voxel at
     /// b · side + l − BORDER, clamped into the level; for each element type, stored and widened to float.
@@ -296,6 +307,21 @@ mod tests {
                 };
                 let mut dst = vec![0u8; texels * kind.bytes(&levels)];
                 write_texels(&rows, &levels, *kind, &mut dst);
+                // The same slot from its box (as a brick read from the file is): the same texels.
+                let (lo, size) = slot_box(&pool, *r);
+                let boxed = Boxed {
+                    data: crop(data, dims, lo, size),
+                    lo,
+                    size,
+                };
+                let from_box = SlotRows {
+                    pool: &pool,
+                    brick: *r,
+                    within: Some(&boxed),
+                };
+                let mut again = vec![0u8; dst.len()];
+                write_texels(&from_box, &Levels::single(&boxed.data), *kind, &mut again);
+                assert!(again == dst, "{kind:?} brick {:?} from its box", r.brick);
                 let slot =
                     (0..side[2]).flat_map(|z| (0..side[1]).flat_map(move |y| (0..side[0]).map(move |x| (x, y, z))));
                 for (lx, ly, lz) in slot {
