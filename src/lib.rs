@@ -4,8 +4,11 @@
 //! Pure rooms (no Vulkan): `volume` (files to a `Volume`), `convert` (volumes to OME-Zarr stores), `scale` (volumes
 //! within memory budgets: pyramid levels, the preview, the pyramid cache), `transfer` (values to colour and opacity),
 //! `scene` (what a frame shows, as plain data). Rooms that drive the GPU: `gpu` (the Vulkan layer), `render` (the passes
-//! and the headless path), `measure` (compare, fidelity, bench, playback), `movie` and `viewer`.
+//! and the headless path), `measure` (compare, fidelity, bench, playback), `movie` and `viewer`. `cli` holds the
+//! command line's options and subcommand bodies, here so that the Python module (`python/`) parses the same options
+//! and renders through the same steps as `volcast render`.
 
+pub mod cli;
 pub mod convert;
 pub mod gpu;
 pub mod measure;

@@ -1,7 +1,7 @@
 //! The `volcast` command line: parses it, picks a subcommand (its arguments and body are in `cli/`), reports errors
 //! with their exit status.
 
-mod cli;
+use volcast::cli;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use cli::args::{BenchArgs, CacheArgs, CompareArgs, ConvertArgs, GpuArgs, InfoArgs, RenderArgs, ViewArgs, VolumeArgs};
@@ -47,21 +47,6 @@ enum Command {
 
 /// The exit status of a malformed command line.
 const USAGE_EXIT: u8 = 64;
-
-/// `e` and its causes, each cause added only where the text so far does not already say it (errors that embed
-/// their source in their own message would otherwise print it twice: "…(os error 2): …(os error 2)").
-fn error_text(e: &anyhow::Error) -> String {
-    let mut text = String::new();
-    for cause in e.chain() {
-        let part = cause.to_string();
-        if text.is_empty() {
-            text = part;
-        } else if !text.contains(&part) {
-            text = format!("{text}: {part}");
-        }
-    }
-    text
-}
 
 /// The options subcommand `name`'s command line gave.
 fn given(matches: &clap::ArgMatches, name: &str, volume: &VolumeArgs) -> cli::frame::Given {
@@ -140,7 +125,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", error_text(&e));
+            eprintln!("error: {}", cli::error_text(&e));
             let unavailable = e.downcast_ref::<GpuError>().is_some_and(|g| g.is_unavailable())
                 || e.downcast_ref::<ViewerError>().is_some_and(|v| match v {
                     ViewerError::NoDisplay(_) => true,

@@ -5,84 +5,84 @@ use super::frame::FrameArgs;
 use super::parse::{
     parse_builtin, parse_bytes, parse_fps, parse_gradients, parse_preset, parse_quality, parse_size, parse_turntable,
 };
+use crate::gpu::GpuOptions;
+use crate::scene::quality::{Gradients, Quality};
+use crate::volume::{self, RawOptions, Volume, VoxelType};
 use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
-use volcast::gpu::GpuOptions;
-use volcast::scene::quality::{Gradients, Quality};
-use volcast::volume::{self, RawOptions, Volume, VoxelType};
 
 #[derive(Args, Clone)]
-pub(crate) struct VolumeArgs {
+pub struct VolumeArgs {
     /// A volume file: raw, VTK (.vtk, .vti), NRRD (.nrrd/.nhdr), NIfTI-1 and NIfTI-2 (.nii/.nii.gz/.hdr), Analyze 7.5
     /// (.hdr/.img), MetaImage (.mha/.mhd), DICOM (a folder of slices or one file), TIFF stack (.tif/.tiff, one
     /// multi-page file or a folder). Raw files take dims and type from --dims/--type or a NAME_WxHxD_TYPE name.
-    pub(crate) file: Option<PathBuf>,
+    pub file: Option<PathBuf>,
     /// A built-in volume: helix, box, colormap or marschner-lobb.
     #[arg(long, conflicts_with = "file", value_parser = parse_builtin)]
-    pub(crate) builtin: Option<String>,
+    pub builtin: Option<String>,
     /// Edge length of the built-in volume (default 256; 41 for marschner-lobb).
     #[arg(long, requires = "builtin")]
-    pub(crate) builtin_size: Option<u32>,
+    pub builtin_size: Option<u32>,
     /// Dimensions of a raw file: W H D.
     #[arg(long, num_args = 3, value_names = ["W", "H", "D"])]
-    pub(crate) dims: Option<Vec<u32>>,
+    pub dims: Option<Vec<u32>>,
     /// Voxel type of a raw file: uint8, uint16, int16, float32, float64.
     #[arg(long = "type")]
-    pub(crate) voxel_type: Option<String>,
+    pub voxel_type: Option<String>,
     /// Voxel spacing: SX SY SZ (default: from the file's header; 1 1 1 for raw files). Overrides the header.
     #[arg(long, num_args = 3, value_names = ["SX", "SY", "SZ"])]
-    pub(crate) spacing: Option<Vec<f32>>,
+    pub spacing: Option<Vec<f32>>,
     /// Byte order of a raw file's voxels.
     #[arg(long, value_parser = ["little", "big"])]
-    pub(crate) endian: Option<String>,
+    pub endian: Option<String>,
     /// Bytes to skip at the start of a raw file (a header volcast does not read).
     #[arg(long, value_name = "N")]
-    pub(crate) header_bytes: Option<u64>,
+    pub header_bytes: Option<u64>,
     /// Largest dimension: a larger volume is downsampled 2x per axis until it fits (with a warning). Default: no
     /// limit but the budgets' and the device's.
     #[arg(long, value_name = "N")]
-    pub(crate) max_dim: Option<u32>,
+    pub max_dim: Option<u32>,
     /// Host memory the voxels may take, like 6G or 512M (default: a quarter of the machine's memory). A larger
     /// volume is shown at the finest pyramid level that fits, read level by level from files whose voxels lie on
     /// disk.
     #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
-    pub(crate) host_budget: Option<u64>,
+    pub host_budget: Option<u64>,
     /// Device memory the volume may take, upload included, like 1G (default: the device's largest heap). Over it,
     /// `render` streams the volume brick by brick through a pool of half of it, each brick at the level its size on
     /// screen asks; the viewer and movies show the finest pyramid level that fits.
     #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
-    pub(crate) gpu_budget: Option<u64>,
+    pub gpu_budget: Option<u64>,
     /// Where levels read from large files are kept for the next open, as OME-Zarr stores (default:
     /// $XDG_CACHE_HOME/volcast, else ~/.cache/volcast); `volcast cache` shows and empties it.
     #[arg(long, value_name = "DIR")]
-    pub(crate) cache_dir: Option<PathBuf>,
+    pub cache_dir: Option<PathBuf>,
     /// Neither read nor write the pyramid cache.
     #[arg(long)]
-    pub(crate) no_cache: bool,
+    pub no_cache: bool,
     /// Refuse a volume larger than --max-dim or the budgets instead of downsampling it.
     #[arg(long)]
-    pub(crate) no_downsample: bool,
+    pub no_downsample: bool,
     /// The point array to load from a VTK file holding several (default: its active scalars, else the first
     /// one-component array); `volcast info` lists them.
     #[arg(long, value_name = "NAME")]
-    pub(crate) array: Option<String>,
+    pub array: Option<String>,
     /// The series to load from a DICOM folder holding several: its SeriesNumber or SeriesInstanceUID (default: the
     /// one with the most slices); `volcast info FOLDER` lists them.
     #[arg(long, value_name = "N|UID")]
-    pub(crate) series: Option<String>,
+    pub series: Option<String>,
     /// The channel to load from an OME-Zarr image with a `c` axis, from 0 (default 0); `volcast info STORE`
     /// lists them.
     #[arg(long, value_name = "N")]
-    pub(crate) channel: Option<u32>,
+    pub channel: Option<u32>,
     /// The time step of a 4-D series to show, from 0 (default 0); the value range stays the whole series'.
     #[arg(long, value_name = "N")]
-    pub(crate) time: Option<u32>,
+    pub time: Option<u32>,
 }
 
 impl VolumeArgs {
     /// These arguments with the volume of a view state where none is given here.
-    pub(crate) fn or_from(&self, r: &volcast::scene::view_state::VolumeRef) -> VolumeArgs {
+    pub fn or_from(&self, r: &crate::scene::view_state::VolumeRef) -> VolumeArgs {
         let mut a = self.clone();
         if a.file.is_some() || a.builtin.is_some() {
             return a;
@@ -99,13 +99,13 @@ impl VolumeArgs {
     }
 
     /// The host budget (no device known yet).
-    pub(crate) fn budgets(&self) -> volume::budget::Budgets {
+    pub fn budgets(&self) -> volume::budget::Budgets {
         volume::budget::Budgets::host(self.host_budget)
     }
 
     /// The budgets on `gpu`: the host's, and `--gpu-budget` (default the device's largest heap) with the device's
     /// 3-D texture limit.
-    pub(crate) fn budgets_on(&self, gpu: &volcast::gpu::Gpu) -> volume::budget::Budgets {
+    pub fn budgets_on(&self, gpu: &crate::gpu::Gpu) -> volume::budget::Budgets {
         self.budgets().with_gpu(volume::budget::GpuBudget {
             bytes: self.gpu_budget.unwrap_or(gpu.device_local_bytes),
             max_dim: gpu.properties.limits.max_image_dimension3_d,
@@ -114,9 +114,9 @@ impl VolumeArgs {
 
     /// `v` at the finest pyramid level that `gpu` and the budgets take, its note said on stderr when that is not
     /// full resolution.
-    pub(crate) fn fit_device(&self, gpu: &volcast::gpu::Gpu, v: Volume) -> Result<Volume> {
+    pub fn fit_device(&self, gpu: &crate::gpu::Gpu, v: Volume) -> Result<Volume> {
         let before = v.notes.len();
-        let v = volcast::scale::fit(v, &self.budgets_on(gpu), self.no_downsample)?;
+        let v = crate::scale::fit(v, &self.budgets_on(gpu), self.no_downsample)?;
         for note in &v.notes[before.min(v.notes.len())..] {
             eprintln!("note: {note}");
         }
@@ -124,7 +124,7 @@ impl VolumeArgs {
     }
 
     /// The volume, its notes (uneven spacing, skipped files, ...) said on stderr.
-    pub(crate) fn load(&self) -> Result<Volume> {
+    pub fn load(&self) -> Result<Volume> {
         self.load_within(self.budgets())
     }
 
@@ -138,7 +138,7 @@ impl VolumeArgs {
 
     /// The volume, its notes left to the caller: `info` prints them with the rest, so saying them on stderr too
     /// showed each twice.
-    pub(crate) fn load_without_notes(&self) -> Result<Volume> {
+    pub fn load_without_notes(&self) -> Result<Volume> {
         self.load_without_notes_within(self.budgets())
     }
 
@@ -149,7 +149,7 @@ impl VolumeArgs {
             if let Some(s) = &self.spacing {
                 v = v.with_spacing([s[0], s[1], s[2]])?;
             }
-            v = volcast::scale::fit(v, &budgets, self.no_downsample)?;
+            v = crate::scale::fit(v, &budgets, self.no_downsample)?;
             if let Some(t) = self.time {
                 v.show_step(t)?;
             }
@@ -173,8 +173,8 @@ impl VolumeArgs {
             bar.set_style(style.progress_chars("=> "));
         }
         bar.set_message(format!("loading {}", path.display()));
-        let cache = (!self.no_cache).then(|| volcast::scale::cache::PyramidCache::new(self.cache_dir.clone()));
-        let loaded = volcast::scale::open(path, &opts, budgets, cache.as_ref(), &mut |f| {
+        let cache = (!self.no_cache).then(|| crate::scale::cache::PyramidCache::new(self.cache_dir.clone()));
+        let loaded = crate::scale::open(path, &opts, budgets, cache.as_ref(), &mut |f| {
             bar.set_position((f * 1000.0) as u64)
         });
         bar.finish_and_clear();
@@ -190,7 +190,7 @@ impl VolumeArgs {
     }
 
     /// How to open the file these arguments name.
-    pub(crate) fn open_options(&self) -> Result<volume::OpenOptions> {
+    pub fn open_options(&self) -> Result<volume::OpenOptions> {
         Ok(volume::OpenOptions {
             raw: self.raw_options()?,
             endian: match self.endian.as_deref() {
@@ -207,7 +207,7 @@ impl VolumeArgs {
         })
     }
 
-    pub(crate) fn raw_options(&self) -> Result<RawOptions> {
+    pub fn raw_options(&self) -> Result<RawOptions> {
         let voxel_type = match &self.voxel_type {
             Some(t) => Some(t.parse::<VoxelType>()?),
             None => None,
@@ -221,56 +221,56 @@ impl VolumeArgs {
 }
 
 #[derive(Args, Clone)]
-pub(crate) struct CacheArgs {
+pub struct CacheArgs {
     /// The cache folder (default: $XDG_CACHE_HOME/volcast, else ~/.cache/volcast).
     #[arg(long, value_name = "DIR")]
-    pub(crate) cache_dir: Option<PathBuf>,
+    pub cache_dir: Option<PathBuf>,
     /// Empty it.
     #[arg(long)]
-    pub(crate) clear: bool,
+    pub clear: bool,
 }
 
 #[derive(Args, Clone)]
-pub(crate) struct InfoArgs {
+pub struct InfoArgs {
     #[command(flatten)]
-    pub(crate) volume: VolumeArgs,
+    pub volume: VolumeArgs,
     /// Print one JSON object (format, dims, type, spacing, value_range, timesteps, affine_ras, axes,
     /// handedness, ...) instead of text.
     #[arg(long)]
-    pub(crate) json: bool,
+    pub json: bool,
 }
 
 #[derive(Args, Clone)]
-pub(crate) struct GpuArgs {
+pub struct GpuArgs {
     /// Run under the Khronos validation layer with synchronization validation (also VOLCAST_VALIDATION=1);
     /// exits non-zero if it reports an error.
     #[arg(long)]
-    pub(crate) validate: bool,
+    pub validate: bool,
     /// Device index or part of its name (see `volcast devices`).
     #[arg(long)]
-    pub(crate) device: Option<String>,
+    pub device: Option<String>,
     /// How volumes are stored on the GPU: auto (on CPU devices such as lavapipe the fastest layout within 1 GiB:
     /// corner textures for 8/16-bit data, else a float texture; the data's own format on GPUs), native (least
     /// memory), float (4 bytes per voxel) or corners (4 or 8 bytes per voxel for 8/16-bit data).
     #[arg(long, default_value = "auto", value_parser = ["auto", "native", "float", "corners"])]
-    pub(crate) texture: String,
+    pub texture: String,
     /// Cut volumes into bricks of this many voxels per side in the GPU's brick pool (at least 8). By default a
     /// volume that fits the device's 3D texture limit is one brick, and larger ones are cut into 64^3 bricks.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(8..=1024))]
-    pub(crate) brick_size: Option<u32>,
+    pub brick_size: Option<u32>,
 }
 
 impl GpuArgs {
-    pub(crate) fn options(&self) -> GpuOptions {
+    pub fn options(&self) -> GpuOptions {
         let env = std::env::var("VOLCAST_VALIDATION").is_ok_and(|v| !v.is_empty() && v != "0");
         GpuOptions {
             validation: self.validate || env,
             device: self.device.clone(),
             texel_policy: match self.texture.as_str() {
-                "native" => volcast::gpu::TexelPolicy::Native,
-                "float" => volcast::gpu::TexelPolicy::Float,
-                "corners" => volcast::gpu::TexelPolicy::Corners,
-                _ => volcast::gpu::TexelPolicy::Auto,
+                "native" => crate::gpu::TexelPolicy::Native,
+                "float" => crate::gpu::TexelPolicy::Float,
+                "corners" => crate::gpu::TexelPolicy::Corners,
+                _ => crate::gpu::TexelPolicy::Auto,
             },
             brick_side: self.brick_size,
             ..Default::default()
@@ -279,211 +279,211 @@ impl GpuArgs {
 }
 
 #[derive(Args, Clone)]
-pub(crate) struct RenderArgs {
+pub struct RenderArgs {
     #[command(flatten)]
-    pub(crate) volume: VolumeArgs,
+    pub volume: VolumeArgs,
     #[command(flatten)]
-    pub(crate) gpu: GpuArgs,
+    pub gpu: GpuArgs,
     #[command(flatten)]
-    pub(crate) frame: FrameArgs,
+    pub frame: FrameArgs,
     /// Output PNG.
     #[arg(short, long, default_value = "volcast.png")]
-    pub(crate) output: PathBuf,
+    pub output: PathBuf,
     /// Ray setup: faces (entry/exit textures), analytic (ray/box intersection) or compute (analytic, marched in a
     /// compute pass instead of a fragment pass).
     #[arg(long, default_value = "faces", value_parser = ["faces", "analytic", "compute"])]
-    pub(crate) method: String,
+    pub method: String,
     /// Print GPU time per pass (after a warm-up frame; lavapipe compiles shaders on first use).
     #[arg(long)]
-    pub(crate) timings: bool,
+    pub timings: bool,
     /// Print peak resident memory and the GPU memory allocated (volume, targets, buffers).
     #[arg(long)]
-    pub(crate) memory: bool,
+    pub memory: bool,
     /// Append a colour bar (the transfer function's colours and opacity over the window, ticks in data units) as
     /// a strip at the right: the image grows by its width.
     #[arg(long)]
-    pub(crate) colorbar: bool,
+    pub colorbar: bool,
     /// Frames to time with --timings (the median is reported; default 5); with --keyframes, the movie's frame
     /// count (2 to 3600).
     #[arg(long)]
-    pub(crate) frames: Option<u32>,
+    pub frames: Option<u32>,
     /// Render a view the viewer saved (F12's JSON beside its screenshot): its settings, and its volume unless a
     /// FILE or --builtin is given. The view options (camera, transfer function, mode, size, method) come from the
     /// file.
     #[arg(long, value_name = "FILE.json")]
-    pub(crate) state: Option<PathBuf>,
+    pub state: Option<PathBuf>,
     /// Show level L of the volume's resolution pyramid everywhere, through the GPU's brick pool (level 0's box and
     /// placement; docs/large-volumes.md). A level past the coarsest (one brick) shows the coarsest.
     #[arg(long, value_name = "L", conflicts_with = "movie")]
-    pub(crate) level: Option<u32>,
+    pub level: Option<u32>,
     /// A turntable movie of N frames (1 to 3600) once around the vertical axis (+z through the point looked at),
     /// starting at the view given: `-o NAME.png` writes NAME-0000.png … and a looping NAME.gif (docs/cli.md, Movies).
     #[arg(long, value_name = "N", value_parser = parse_turntable, group = "movie", conflicts_with = "timings")]
-    pub(crate) turntable: Option<u32>,
+    pub turntable: Option<u32>,
     /// A movie along a camera path through view states (F12's JSON), --frames N in all: the first frame is the
     /// first state, the last the last; the volume is the first state's. Written like --turntable.
     #[arg(long, num_args = 2.., value_name = "STATE.json", group = "movie", conflicts_with_all = ["state", "timings"])]
-    pub(crate) keyframes: Vec<PathBuf>,
+    pub keyframes: Vec<PathBuf>,
     /// Frames per second of a movie's GIF (0.1 to 50).
-    #[arg(long, value_name = "F", default_value_t = volcast::movie::gif::DEFAULT_FPS, value_parser = parse_fps, requires = "movie")]
-    pub(crate) fps: f32,
+    #[arg(long, value_name = "F", default_value_t = crate::movie::gif::DEFAULT_FPS, value_parser = parse_fps, requires = "movie")]
+    pub fps: f32,
 }
 
 #[derive(Args, Clone)]
-pub(crate) struct ViewArgs {
+pub struct ViewArgs {
     #[command(flatten)]
-    pub(crate) volume: VolumeArgs,
+    pub volume: VolumeArgs,
     #[command(flatten)]
-    pub(crate) gpu: GpuArgs,
+    pub gpu: GpuArgs,
     /// Initial window size WxH.
     #[arg(long, default_value = "1280x800", value_parser = parse_size)]
-    pub(crate) size: (u32, u32),
+    pub size: (u32, u32),
     /// Sampling quality of still frames, as `render --quality`: draft, fast, normal or converged (moving frames
     /// use draft's step; the panel and the Q key change it).
     #[arg(long, default_value = "normal", value_parser = parse_quality)]
-    pub(crate) quality: Quality,
+    pub quality: Quality,
     /// Drive the window with a script (for tests), e.g. "frames:3;resize:320x240;screenshot:a.png;exit".
     #[arg(long, hide = true)]
-    pub(crate) script: Option<String>,
+    pub script: Option<String>,
     /// Start with the three slice views beside the 3D view (four-up; L toggles it).
     #[arg(long)]
-    pub(crate) slices: bool,
+    pub slices: bool,
     /// Restore a session (Ctrl+S's or F12's JSON): its volume, unless a FILE or --builtin is given here, and its
     /// view (transfer function, camera, slabs, clip plane, mode, lighting, time step, slice views).
     #[arg(long, value_name = "FILE.json")]
-    pub(crate) state: Option<PathBuf>,
+    pub state: Option<PathBuf>,
     /// Open with this transfer-function preset (ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example) and
     /// lock it, instead of the one chosen by modality (auto, the default).
     #[arg(long, conflicts_with = "tf", value_parser = parse_preset)]
-    pub(crate) preset: Option<String>,
+    pub preset: Option<String>,
     /// Open with the transfer function in this JSON file (docs/rendering.md, The JSON format), locked.
     #[arg(long, value_name = "FILE.json")]
-    pub(crate) tf: Option<PathBuf>,
+    pub tf: Option<PathBuf>,
 }
 
 #[derive(Args, Clone)]
-pub(crate) struct BenchArgs {
+pub struct BenchArgs {
     #[command(flatten)]
-    pub(crate) gpu: GpuArgs,
+    pub gpu: GpuArgs,
     /// Timed frames per configuration (median, min and max are reported).
     #[arg(long, default_value_t = 10)]
-    pub(crate) frames: u32,
+    pub frames: u32,
     /// Untimed frames first (lavapipe compiles shaders on first use).
     #[arg(long, default_value_t = 2)]
-    pub(crate) warmup: u32,
+    pub warmup: u32,
     /// Folder with the CT head and MRI brain raw files (scenes whose file is missing are skipped).
     #[arg(long, default_value = "../shared/data/raw")]
-    pub(crate) data: PathBuf,
+    pub data: PathBuf,
     /// make_volume.py's helix_256x256x256_uint8.raw for the vtk-helix scene (default: the same field generated).
     #[arg(long)]
-    pub(crate) vtk_raw: Option<PathBuf>,
+    pub vtk_raw: Option<PathBuf>,
     /// Only these scenes (repeatable): helix, dense, ct-head, mri-brain, vtk-helix, quick-helix.
     #[arg(long = "scene")]
-    pub(crate) scenes: Vec<String>,
+    pub scenes: Vec<String>,
     /// Only these image sizes (repeatable), e.g. --size 512.
     #[arg(long = "size")]
-    pub(crate) sizes: Vec<u32>,
+    pub sizes: Vec<u32>,
     /// Only these shading variants (repeatable): off, on, shadows (shading with shadows and ambient occlusion;
     /// the helix and CT head scenes).
     #[arg(long = "shading")]
-    pub(crate) shadings: Vec<String>,
+    pub shadings: Vec<String>,
     /// Only these methods (repeatable): faces, analytic, compute (the analytic ray setup in a compute pass).
     #[arg(long = "method", value_parser = ["faces", "analytic", "compute"])]
-    pub(crate) methods: Vec<String>,
+    pub methods: Vec<String>,
     /// CI smoke mode: a 64³ helix at 64x64, all three methods, shading off and on, tiny sample-only run.
     #[arg(long)]
-    pub(crate) quick: bool,
+    pub quick: bool,
     /// Only the sample-only micro-benchmark (all three texel formats).
     #[arg(long)]
-    pub(crate) sample_only: bool,
+    pub sample_only: bool,
     /// Only time-series playback as the viewer plays it: 64 steps of 128³ float32 at 512² (with --quick 6 steps
     /// of 24³ at 64²); each step is uploaded and rendered, the two timed apart.
     #[arg(long, conflicts_with_all = ["sample_only", "scenes"])]
-    pub(crate) playback: bool,
+    pub playback: bool,
     /// Only the scale scenes (docs/large-volumes.md): a procedural field at 256³, 1024³ and 2048³ uint8 and 2048³
     /// uint16, generated once into --cache, opened cold and warm within the default budgets at 512² (or --size).
     #[arg(long, conflicts_with_all = ["sample_only", "scenes", "playback"])]
-    pub(crate) scale: bool,
+    pub scale: bool,
     /// With --scale: only these edges (repeatable), e.g. --scale-edge 1024, of --scale-type voxels.
     #[arg(long = "scale-edge", requires = "scale")]
-    pub(crate) scale_edges: Vec<u32>,
+    pub scale_edges: Vec<u32>,
     /// With --scale-edge: the voxel type, uint8 or uint16.
     #[arg(long, requires = "scale_edges", value_parser = ["uint8", "uint16"], default_value = "uint8")]
-    pub(crate) scale_type: String,
+    pub scale_type: String,
     /// Where --scale keeps its generated files (default: $XDG_CACHE_HOME/volcast/bench, else ~/.cache/volcast/bench).
     #[arg(long, requires = "scale")]
-    pub(crate) cache: Option<PathBuf>,
+    pub cache: Option<PathBuf>,
     /// Sampling quality of every scene, as `render --quality`: draft, fast, normal or converged. Repeat it to
     /// time each level against the same converged image (default: normal).
     #[arg(long = "quality", value_parser = parse_quality)]
-    pub(crate) qualities: Vec<Quality>,
+    pub qualities: Vec<Quality>,
     /// Where shaded scenes take gradients, as `render --gradients`: auto, texture or samples.
     #[arg(long, default_value = "auto", value_parser = parse_gradients)]
-    pub(crate) gradients: Gradients,
+    pub gradients: Gradients,
     /// Force this step length (in voxels) on every scene instead of its quality's; each frame's error is still
     /// taken against the scene's converged image (1/8-voxel steps).
     #[arg(long)]
-    pub(crate) step_length: Option<f32>,
+    pub step_length: Option<f32>,
     /// Print the results as JSON on stdout (progress still goes to stderr).
     #[arg(long)]
-    pub(crate) json: bool,
+    pub json: bool,
 }
 
 #[derive(Args, Clone)]
-pub(crate) struct CompareArgs {
+pub struct CompareArgs {
     #[command(flatten)]
-    pub(crate) volume: VolumeArgs,
+    pub volume: VolumeArgs,
     #[command(flatten)]
-    pub(crate) gpu: GpuArgs,
+    pub gpu: GpuArgs,
     #[command(flatten)]
-    pub(crate) frame: FrameArgs,
+    pub frame: FrameArgs,
     /// Folder for the images and the tables (created if missing).
     #[arg(long, default_value = "cmp")]
-    pub(crate) out: PathBuf,
+    pub out: PathBuf,
     /// Timed frames per method and view after a warm-up frame (medians are reported).
     #[arg(long, default_value_t = 3)]
-    pub(crate) frames: u32,
+    pub frames: u32,
 }
 
 #[derive(Args, Clone)]
-pub(crate) struct ConvertArgs {
+pub struct ConvertArgs {
     #[command(flatten)]
-    pub(crate) volume: VolumeArgs,
+    pub volume: VolumeArgs,
     /// The OME-Zarr store to write (a folder, conventionally NAME.ome.zarr); refused if it exists.
     #[arg(
         value_name = "OUT.ome.zarr",
         required_unless_present = "output_option",
         conflicts_with = "output_option"
     )]
-    pub(crate) output: Option<PathBuf>,
+    pub output: Option<PathBuf>,
     /// The store to write, as an option: needed with --builtin, which takes no FILE (so one path would be FILE).
     #[arg(short = 'o', long = "output", value_name = "OUT.ome.zarr")]
-    pub(crate) output_option: Option<PathBuf>,
+    pub output_option: Option<PathBuf>,
     /// OME-Zarr version: 0.5 (Zarr v3) or 0.4 (Zarr v2).
     #[arg(long, default_value = "0.5", value_parser = ["0.5", "0.4"])]
-    pub(crate) ome_zarr_version: String,
+    pub ome_zarr_version: String,
     /// Chunk edge in voxels (chunks of N³).
     #[arg(long, value_name = "N", default_value_t = 64)]
-    pub(crate) chunk: u64,
+    pub chunk: u64,
     /// Shard edge in voxels (shards of N³ holding --chunk chunks; a multiple of --chunk; OME-Zarr 0.5 only).
     #[arg(long, value_name = "N")]
-    pub(crate) shard: Option<u64>,
+    pub shard: Option<u64>,
     /// Chunk compression: zstd (level 1), blosc (blosc with lz4 inside, level 5, byte shuffle for multi-byte
     /// types) or none.
     #[arg(long, default_value = "zstd", value_parser = ["zstd", "blosc", "none"])]
-    pub(crate) compression: String,
+    pub compression: String,
     /// Label data: coarser levels take each 2x2x2 block's most common value (ties: the smallest), or with
     /// `--labels nearest` the block's first voxel, instead of the mean.
     #[arg(long, value_name = "RULE", num_args = 0..=1, default_missing_value = "mode", value_parser = ["mode", "nearest"])]
-    pub(crate) labels: Option<String>,
+    pub labels: Option<String>,
     /// Replace OUT if it is a Zarr store (nothing else is ever removed).
     #[arg(long)]
-    pub(crate) overwrite: bool,
+    pub overwrite: bool,
 }
 
 impl ConvertArgs {
     /// The store to write, given either way.
-    pub(crate) fn out(&self) -> &std::path::Path {
+    pub fn out(&self) -> &std::path::Path {
         self.output
             .as_deref()
             .or(self.output_option.as_deref())

@@ -2,22 +2,28 @@
 
 use super::args::{BenchArgs, CacheArgs, CompareArgs, InfoArgs, ViewArgs};
 use super::with_gpu;
+use crate::gpu::GpuError;
+use crate::measure::compare;
+use crate::render::headless::Headless;
+use crate::scene::quality::Quality;
+use crate::transfer::function::TransferFunction;
+use crate::viewer::{self, ViewerOptions, VolumeSource};
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
-use volcast::gpu::GpuError;
-use volcast::measure::compare;
-use volcast::render::headless::Headless;
-use volcast::scene::quality::Quality;
-use volcast::transfer::function::TransferFunction;
-use volcast::viewer::{self, ViewerOptions, VolumeSource};
 
-pub(crate) fn view(args: &ViewArgs) -> Result<()> {
+pub fn view(args: &ViewArgs) -> Result<()> {
+    view_source(args, None)
+}
+
+/// The viewer on `source` where one is given (the Python module's volumes), else on what `args` name.
+pub fn view_source(args: &ViewArgs, source: Option<VolumeSource>) -> Result<()> {
     let restore = match &args.state {
         Some(path) => Some(viewer::session::read(path).map_err(anyhow::Error::msg)?),
         None => None,
     };
     let from_session = restore.as_ref().and_then(|s| viewer::session::source_of(&s.volume));
     let source = match (&args.volume.builtin, &args.volume.file, from_session) {
+        _ if source.is_some() => source.expect("matched"),
         (Some(name), _, _) => VolumeSource::Builtin(name.clone(), args.volume.builtin_size),
         (None, Some(path), _) => VolumeSource::File(path.clone(), args.volume.raw_options()?),
         (None, None, Some(source)) => source,
@@ -62,7 +68,7 @@ pub(crate) fn view(args: &ViewArgs) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn compare(args: &CompareArgs) -> Result<()> {
+pub fn compare(args: &CompareArgs) -> Result<()> {
     let volume = args.volume.load()?;
     let base = args.frame.settings(&volume)?;
     let mut views = compare::builtin_views(&base, volume.extent());
@@ -81,17 +87,17 @@ pub(crate) fn compare(args: &CompareArgs) -> Result<()> {
             let mut rows = Vec::new();
             for view in &views {
                 let c = compare::compare_view(gpu, &mut headless, view, args.frames)?;
-                let diff = volcast::measure::image_diff::amplified_diff(&c.faces.image, &c.analytic.image, 10);
+                let diff = crate::measure::image_diff::amplified_diff(&c.faces.image, &c.analytic.image, 10);
                 let save = |suffix: &str, img: &image::RgbaImage| -> Result<()> {
                     let path = args.out.join(format!("{}-{suffix}.png", view.name));
-                    volcast::render::png::save(img, &path).map_err(anyhow::Error::msg)
+                    crate::render::png::save(img, &path).map_err(anyhow::Error::msg)
                 };
                 save("faces", &c.faces.image)?;
                 save("analytic", &c.analytic.image)?;
                 save("diff", &diff)?;
                 save(
                     "side-by-side",
-                    &volcast::measure::image_diff::side_by_side(&[&c.faces.image, &c.analytic.image, &diff]),
+                    &crate::measure::image_diff::side_by_side(&[&c.faces.image, &c.analytic.image, &diff]),
                 )?;
                 println!("{:>15}: {}", view.name, c.verdict());
                 rows.push(compare::Row::from(&c));
@@ -126,8 +132,8 @@ pub(crate) fn compare(args: &CompareArgs) -> Result<()> {
     })
 }
 
-pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
-    let opts = volcast::measure::bench::BenchOptions {
+pub fn bench(args: &BenchArgs) -> Result<()> {
+    let opts = crate::measure::bench::BenchOptions {
         frames: if args.quick { args.frames.min(2) } else { args.frames },
         warmup: if args.quick { args.warmup.min(1) } else { args.warmup },
         data_dir: args.data.clone(),
@@ -151,12 +157,12 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
     }
     if args.playback {
         let play = if args.quick {
-            volcast::measure::playback::PlaybackOptions::QUICK
+            crate::measure::playback::PlaybackOptions::QUICK
         } else {
-            volcast::measure::playback::PlaybackOptions::FULL
+            crate::measure::playback::PlaybackOptions::FULL
         };
         return with_gpu(&args.gpu, |gpu| {
-            let report = volcast::measure::playback::run(gpu, &play, &mut |line| eprintln!("{line}"))?;
+            let report = crate::measure::playback::run(gpu, &play, &mut |line| eprintln!("{line}"))?;
             if args.json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -166,7 +172,7 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
         });
     }
     with_gpu(&args.gpu, |gpu| {
-        let report = volcast::measure::bench::run(gpu, &opts, &mut |line| eprintln!("{line}"))?;
+        let report = crate::measure::bench::run(gpu, &opts, &mut |line| eprintln!("{line}"))?;
         if args.json {
             println!("{}", serde_json::to_string_pretty(&report)?);
         } else {
@@ -178,14 +184,14 @@ pub(crate) fn bench(args: &BenchArgs) -> Result<()> {
 
 /// `bench --scale`.
 fn scale_bench(args: &BenchArgs) -> Result<()> {
-    use volcast::measure::scale_bench::{self, ScaleScene};
+    use crate::measure::scale_bench::{self, ScaleScene};
     let scenes: Vec<ScaleScene> = if args.scale_edges.is_empty() {
         ScaleScene::DEFAULT.to_vec()
     } else {
         let t = if args.scale_type == "uint16" {
-            volcast::volume::VoxelType::U16
+            crate::volume::VoxelType::U16
         } else {
-            volcast::volume::VoxelType::U8
+            crate::volume::VoxelType::U8
         };
         args.scale_edges
             .iter()
@@ -215,8 +221,8 @@ fn scale_bench(args: &BenchArgs) -> Result<()> {
 }
 
 /// `volcast cache`: where the pyramid cache is, what it holds, and `--clear`.
-pub(crate) fn cache(args: &CacheArgs) -> Result<()> {
-    let cache = volcast::scale::cache::PyramidCache::new(args.cache_dir.clone());
+pub fn cache(args: &CacheArgs) -> Result<()> {
+    let cache = crate::scale::cache::PyramidCache::new(args.cache_dir.clone());
     let (entries, bytes) = cache.usage();
     println!(
         "pyramid cache: {} ({entries} entr{}, {} MiB)",
@@ -233,9 +239,9 @@ pub(crate) fn cache(args: &CacheArgs) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn info(args: &InfoArgs) -> Result<()> {
+pub fn info(args: &InfoArgs) -> Result<()> {
     let v = args.volume.load_without_notes()?;
-    let info = volcast::render::info::Info::of(&v);
+    let info = crate::render::info::Info::of(&v);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&info)?);
     } else {
@@ -244,12 +250,12 @@ pub(crate) fn info(args: &InfoArgs) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn devices() -> Result<()> {
-    let list = volcast::gpu::list_devices()?;
+pub fn devices() -> Result<()> {
+    let list = crate::gpu::list_devices()?;
     if list.is_empty() {
         return Err(GpuError::NoDevice("the Vulkan loader found no physical device".into()).into());
     }
-    let chosen = volcast::gpu::default_device(&list);
+    let chosen = crate::gpu::default_device(&list);
     for d in &list {
         let mark = if chosen == Some(d.index) {
             "  <- volcast's choice (--device picks another)"

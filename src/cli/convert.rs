@@ -2,15 +2,15 @@
 //! slab in place; everything else is loaded once and streamed from memory.
 
 use super::args::ConvertArgs;
+use crate::convert::layout::OmeVersion;
+use crate::convert::pyramid::Reduce;
+use crate::convert::source::Source;
+use crate::convert::{self, Compression, ConvertError, ConvertOptions};
+use crate::volume;
 use anyhow::{Context, Result};
 use std::time::Instant;
-use volcast::convert::layout::OmeVersion;
-use volcast::convert::pyramid::Reduce;
-use volcast::convert::source::Source;
-use volcast::convert::{self, Compression, ConvertError, ConvertOptions};
-use volcast::volume;
 
-pub(crate) fn convert(args: &ConvertArgs) -> Result<()> {
+pub fn convert(args: &ConvertArgs) -> Result<()> {
     let started = Instant::now();
     let out = args.out();
     let opts = ConvertOptions {

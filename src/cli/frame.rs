@@ -7,194 +7,198 @@ use super::parse::{
     parse_preset, parse_quality, parse_shading, parse_size, parse_slice, parse_surface, parse_vec3, parse_view,
     IsoColor, LightDirection,
 };
+use crate::scene::camera::ViewPreset;
+use crate::scene::quality::{Gradients, Quality};
+use crate::scene::settings::CompositeMode;
+use crate::transfer::Colormap;
 use clap::parser::ValueSource;
 use clap::{ArgMatches, Args};
 use glam::Vec3;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
-use volcast::scene::camera::ViewPreset;
-use volcast::scene::quality::{Gradients, Quality};
-use volcast::scene::settings::CompositeMode;
-use volcast::transfer::Colormap;
 
 /// What a frame shows: camera, transfer function, slicing. Shared by `render` and `compare`.
 #[derive(Args, Clone)]
-pub(crate) struct FrameArgs {
+pub struct FrameArgs {
     /// Image size WxH.
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
-    pub(crate) size: (u32, u32),
+    pub size: (u32, u32),
     /// Camera azimuth in degrees (about +z, from +y) [default: 35, or 0 for an anatomical volume].
     #[arg(long, allow_negative_numbers = true, conflicts_with = "view")]
-    pub(crate) azimuth: Option<f32>,
+    pub azimuth: Option<f32>,
     /// Camera elevation in degrees [default: 25, or 0 for an anatomical volume].
     #[arg(long, allow_negative_numbers = true, conflicts_with = "view")]
-    pub(crate) elevation: Option<f32>,
+    pub elevation: Option<f32>,
     /// Camera distance from the volume centre (the box's longest side is 1); default fits the volume.
     #[arg(long)]
-    pub(crate) distance: Option<f32>,
+    pub distance: Option<f32>,
     /// Camera position X,Y,Z (world units: RAS for anatomical volumes, centred, the box's longest side 1),
     /// looking at --look-at (default the centre).
     #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "distance", "view", "view_dir"], allow_hyphen_values = true)]
-    pub(crate) eye: Option<Vec3>,
+    pub eye: Option<Vec3>,
     /// The point the camera looks at, X,Y,Z in world units (default the volume's centre, 0,0,0); the orbit, --view
     /// and --view-dir cameras turn about it.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub(crate) look_at: Option<Vec3>,
+    pub look_at: Option<Vec3>,
     /// Look along direction X,Y,Z (world units) at --look-at from --distance (default: fitting the volume).
     #[arg(long, value_parser = parse_vec3, conflicts_with_all = ["azimuth", "elevation", "view"], allow_hyphen_values = true)]
-    pub(crate) view_dir: Option<Vec3>,
+    pub view_dir: Option<Vec3>,
     /// View from a side of the patient: anterior, posterior, left, right, superior or inferior (head up; from
     /// above and below anterior up). An anatomical volume is seen from anterior unless told otherwise.
     #[arg(long, value_parser = parse_view)]
-    pub(crate) view: Option<ViewPreset>,
+    pub view: Option<ViewPreset>,
     /// Render in voxel index space (the box along the world's axes, the file's orientation ignored).
     #[arg(long)]
-    pub(crate) voxel_axes: bool,
+    pub voxel_axes: bool,
     /// Vertical field of view in degrees.
-    #[arg(long, default_value_t = volcast::scene::camera::DEFAULT_FOV_Y_DEG)]
-    pub(crate) fov: f32,
+    #[arg(long, default_value_t = crate::scene::camera::DEFAULT_FOV_Y_DEG)]
+    pub fov: f32,
     /// Colormap: cool-warm, plasma, viridis, rainbow, gnuplot, grayscale.
     #[arg(long, default_value = "cool-warm", value_parser = parse_colormap)]
-    pub(crate) colormap: Colormap,
+    pub colormap: Colormap,
     /// Visible value range TMIN,TMAX in [0,1] of the data's range; values outside are transparent
     /// (default 0.1,1; with a transfer function 0,1).
     #[arg(long, value_parser = parse_pair)]
-    pub(crate) window: Option<(f32, f32)>,
+    pub window: Option<(f32, f32)>,
     /// A transfer-function preset: ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example, or auto (by
     /// modality: CT gets ct-bone, anything else a grey ramp over its histogram's percentiles). A file is shown with
     /// auto unless --preset, --tf, --colormap, --step-alpha or --multiplied-alpha says otherwise; a built-in volume
     /// with the colormap.
     #[arg(long, conflicts_with = "tf", value_parser = parse_preset)]
-    pub(crate) preset: Option<String>,
+    pub preset: Option<String>,
     /// A transfer function from a JSON file (docs/rendering.md, The JSON format).
     #[arg(long)]
-    pub(crate) tf: Option<PathBuf>,
+    pub tf: Option<PathBuf>,
     /// Write the transfer function in use (preset or file) as JSON, to start your own from.
     #[arg(long)]
-    pub(crate) save_tf: Option<PathBuf>,
+    pub save_tf: Option<PathBuf>,
     /// Compositing: emission, mip, minip, average, iso, density.
     #[arg(long, default_value = "emission", value_parser = parse_mode)]
-    pub(crate) mode: CompositeMode,
+    pub mode: CompositeMode,
     /// Iso value for --mode iso, in [0,1] of the data range.
     #[arg(long, default_value_t = 0.5)]
-    pub(crate) iso: f32,
+    pub iso: f32,
     /// The iso-surface's colour R,G,B in [0,1] (sRGB), or "colormap" for the colour the colormap or transfer
     /// function gives its value (default: a light neutral).
     #[arg(long, value_parser = parse_iso_color)]
-    pub(crate) iso_color: Option<IsoColor>,
+    pub iso_color: Option<IsoColor>,
     /// The iso-surface's opacity in (0,1]: below 1 the surfaces behind show through.
     #[arg(long, default_value_t = 1.0)]
-    pub(crate) iso_opacity: f32,
+    pub iso_opacity: f32,
     /// A further iso-surface VALUE[,R,G,B][,OPACITY] or VALUE,colormap[,OPACITY] (repeatable, 4 surfaces in all);
     /// surfaces are composited in the order a ray meets them. E.g. translucent skin over bone:
     /// --mode iso --iso 0.45 --surface 0.2,0.9,0.6,0.5,0.3.
     #[arg(long = "surface", value_parser = parse_surface)]
-    pub(crate) surfaces: Vec<volcast::scene::lighting::IsoSurface>,
+    pub surfaces: Vec<crate::scene::lighting::IsoSurface>,
     /// The light: "head" (a headlight, the default) or the direction X,Y,Z towards a light fixed to the volume, in
     /// world coordinates (RAS for anatomical volumes). Turns shading on.
     #[arg(long, value_parser = parse_light, allow_hyphen_values = true)]
-    pub(crate) light: Option<LightDirection>,
+    pub light: Option<LightDirection>,
     /// The light's colour R,G,B in [0,1] (sRGB). Turns shading on.
     #[arg(long, value_parser = parse_vec3)]
-    pub(crate) light_color: Option<Vec3>,
+    pub light_color: Option<Vec3>,
     /// The light's intensity (scales its diffuse and specular terms). Turns shading on.
     #[arg(long)]
-    pub(crate) light_intensity: Option<f32>,
+    pub light_intensity: Option<f32>,
     /// Shadows: light attenuated through the volume on its way to each point (a light grid computed on the GPU;
     /// with a headlight, a key light up and left of the view casts them). Turns shading on; not in MIP, MinIP or
     /// average.
     #[arg(long)]
-    pub(crate) shadows: bool,
+    pub shadows: bool,
     /// Ambient occlusion: the ambient light dimmed where the surroundings are dense. Turns shading on; not in MIP,
     /// MinIP or average.
     #[arg(long)]
-    pub(crate) ambient_occlusion: bool,
+    pub ambient_occlusion: bool,
     /// Density factor for --mode density (the OSG article's model).
     #[arg(long, default_value_t = 1.0)]
-    pub(crate) density: f32,
+    pub density: f32,
     /// Gradient shading (Blinn-Phong; a headlight unless --light says otherwise).
     #[arg(long)]
-    pub(crate) shading: bool,
+    pub shading: bool,
     /// Shading coefficients AMBIENT,DIFFUSE,SPECULAR,SHININESS.
     #[arg(long, value_parser = parse_shading, default_value = "0.2,0.7,0.3,20")]
-    pub(crate) lighting: volcast::scene::settings::Shading,
+    pub lighting: crate::scene::settings::Shading,
     /// Scale opacity by gradient magnitude, full at this value change per voxel (e.g. 0.05).
     #[arg(long)]
-    pub(crate) gradient_opacity: Option<f32>,
+    pub gradient_opacity: Option<f32>,
     /// Fade lighting to flat light where the gradient is below this fraction of the window per voxel (e.g. 0.05):
     /// flat, noisy regions then show no speckled highlights (rule 5).
     #[arg(long)]
-    pub(crate) shading_fade: Option<f32>,
+    pub shading_fade: Option<f32>,
     /// Sample at step midpoints instead of a per-pixel jittered start.
     #[arg(long)]
-    pub(crate) no_jitter: bool,
+    pub no_jitter: bool,
     /// Seed of the jitter pattern.
     #[arg(long, default_value_t = 0)]
-    pub(crate) jitter_seed: u32,
+    pub jitter_seed: u32,
     /// Orthographic projection (same framing at the target as the perspective view).
     #[arg(long)]
-    pub(crate) ortho: bool,
+    pub ortho: bool,
     /// March every brick, also those empty-space skipping would leap over (for comparisons).
     #[arg(long)]
-    pub(crate) no_skip: bool,
+    pub no_skip: bool,
     /// Longest brick stride (1, 2 or 4): faint bricks take every second or fourth sample (emission and density;
     /// default: the quality's, 1 with --step-length).
     #[arg(long)]
-    pub(crate) max_stride: Option<u32>,
+    pub max_stride: Option<u32>,
     /// Where shaded frames take gradients: auto (the texture while it stays within 1 GiB), texture (gradients
     /// precomputed on the grid, smoothed for integer data; 8 bytes per voxel, one fetch) or samples (six samples of
     /// the interpolant).
     #[arg(long, default_value = "auto", value_parser = parse_gradients)]
-    pub(crate) gradients: Gradients,
+    pub gradients: Gradients,
     /// The same as --gradients texture.
     #[arg(long, conflicts_with = "gradients")]
-    pub(crate) gradient_texture: bool,
+    pub gradient_texture: bool,
     /// Opacity of one voxel-length step.
-    #[arg(long, default_value_t = volcast::scene::settings::DEFAULT_STEP_ALPHA)]
-    pub(crate) step_alpha: f32,
+    #[arg(long, default_value_t = crate::scene::settings::DEFAULT_STEP_ALPHA)]
+    pub step_alpha: f32,
     /// Sampling quality: draft, fast, normal or converged (base steps 2, 1, 0.4, 1/8 voxel, shortened where the
     /// transfer function is strong).
     #[arg(long, default_value = "normal", value_parser = parse_quality)]
-    pub(crate) quality: Quality,
+    pub quality: Quality,
     /// Step length in voxels, overriding the quality's (opacity is corrected for it): every sample is taken.
     #[arg(long)]
-    pub(crate) step_length: Option<f32>,
+    pub step_length: Option<f32>,
     /// Opacity = windowed value × step alpha.
     #[arg(long)]
-    pub(crate) multiplied_alpha: bool,
+    pub multiplied_alpha: bool,
     /// Stop a ray once its opacity reaches this.
-    #[arg(long, default_value_t = volcast::scene::settings::DEFAULT_EARLY_TERMINATION)]
-    pub(crate) early_termination: f32,
+    #[arg(long, default_value_t = crate::scene::settings::DEFAULT_EARLY_TERMINATION)]
+    pub early_termination: f32,
     /// Background colour R,G,B in [0,1].
     #[arg(long, value_parser = parse_vec3, default_value = "0,0,0")]
-    pub(crate) background: Vec3,
+    pub background: Vec3,
     /// Slab slicing AXIS:POSITION:WIDTH in [0,1], e.g. x:0.5:0.2 (repeatable, one per axis).
     #[arg(long = "slice", value_parser = parse_slice)]
-    pub(crate) slices: Vec<(usize, f32, f32)>,
+    pub slices: Vec<(usize, f32, f32)>,
     /// Clipping plane NX,NY,NZ[,OFFSET]: keeps the points p (world mm: RAS for anatomical volumes) with
     /// (p − centre)·N ≥ OFFSET, centre the volume box's centre; N points into what stays (default offset 0).
     #[arg(long, value_name = "NX,NY,NZ[,OFFSET]", allow_hyphen_values = true, value_parser = parse_clip_plane)]
-    pub(crate) clip_plane: Option<volcast::scene::clip::ClipPlane>,
+    pub clip_plane: Option<crate::scene::clip::ClipPlane>,
     /// Entry/exit position target format: rgba32f or rgba16f.
     #[arg(long, default_value = "rgba32f", value_parser = ["rgba32f", "rgba16f"])]
-    pub(crate) positions: String,
+    pub positions: String,
     /// Which of these options the command line gave (the rest are defaults): see [`Given`].
     #[arg(skip)]
-    pub(crate) given: Given,
+    pub given: Given,
+    /// A transfer function given as a value instead of a file (the Python module's `tf=TransferFunction`); it
+    /// counts as `--tf` (given has "tf").
+    #[arg(skip)]
+    pub tf_value: Option<crate::transfer::function::TransferFunction>,
 }
 
 /// The options a command line gave, by clap id (the field's name), and whether the volume is a file. `render
 /// --state` applies only these over the saved view; a file without a classification option gets the automatic
 /// transfer function.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct Given {
+pub struct Given {
     ids: BTreeSet<String>,
-    pub(crate) from_file: bool,
+    pub from_file: bool,
 }
 
 impl Given {
     /// The options given on the command line of `matches` (not defaults, not the environment).
-    pub(crate) fn from_matches(matches: &ArgMatches) -> Given {
+    pub fn from_matches(matches: &ArgMatches) -> Given {
         let ids = matches
             .ids()
             .filter(|id| matches.value_source(id.as_str()) == Some(ValueSource::CommandLine))
@@ -203,16 +207,21 @@ impl Given {
         Given { ids, from_file: false }
     }
 
-    pub(crate) fn has(&self, id: &str) -> bool {
+    /// Marks option `id` as given (an option given other than on a command line).
+    pub fn insert(&mut self, id: &str) {
+        self.ids.insert(id.to_string());
+    }
+
+    pub fn has(&self, id: &str) -> bool {
         self.ids.contains(id)
     }
 
-    pub(crate) fn any(&self, ids: &[&str]) -> bool {
+    pub fn any(&self, ids: &[&str]) -> bool {
         ids.iter().any(|id| self.has(id))
     }
 
     #[cfg(test)]
-    pub(crate) fn for_test(ids: &[&str], from_file: bool) -> Given {
+    pub fn for_test(ids: &[&str], from_file: bool) -> Given {
         Given {
             ids: ids.iter().map(|s| s.to_string()).collect(),
             from_file,

@@ -1,12 +1,12 @@
 //! The subcommands of the `volcast` binary: their arguments, value parsers and bodies, one concern per file.
 
-pub(crate) mod args;
-pub(crate) mod commands;
-pub(crate) mod convert;
-pub(crate) mod frame;
-pub(crate) mod parse;
-pub(crate) mod render;
-pub(crate) mod settings;
+pub mod args;
+pub mod commands;
+pub mod convert;
+pub mod frame;
+pub mod parse;
+pub mod render;
+pub mod settings;
 
 use anyhow::{bail, Result};
 
@@ -14,13 +14,13 @@ use anyhow::{bail, Result};
 /// it exits 64 like a value that does not parse, and says what is wrong.
 #[derive(Debug, thiserror::Error)]
 #[error("{0}")]
-pub(crate) struct UsageError(pub(crate) String);
+pub struct UsageError(pub String);
+use crate::gpu::Gpu;
 use args::GpuArgs;
-use volcast::gpu::Gpu;
 
 /// Runs `body` with a GPU and reports validation messages at the end; any validation error or warning fails the
 /// command.
-pub(crate) fn with_gpu<T>(args: &GpuArgs, body: impl FnOnce(&Gpu) -> Result<T>) -> Result<T> {
+pub fn with_gpu<T>(args: &GpuArgs, body: impl FnOnce(&Gpu) -> Result<T>) -> Result<T> {
     let gpu = Gpu::new(&args.options())?;
     let validating = gpu.validation_enabled();
     let log = gpu.log.clone();
@@ -34,4 +34,19 @@ pub(crate) fn with_gpu<T>(args: &GpuArgs, body: impl FnOnce(&Gpu) -> Result<T>) 
         }
     }
     result
+}
+
+/// `e` and its causes, each cause added only where the text so far does not already say it (errors that embed
+/// their source in their own message would otherwise print it twice: "…(os error 2): …(os error 2)").
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let part = cause.to_string();
+        if text.is_empty() {
+            text = part;
+        } else if !text.contains(&part) {
+            text = format!("{text}: {part}");
+        }
+    }
+    text
 }

@@ -1,15 +1,15 @@
 //! Value parsers for clap (`value_parser = parse_*`): sizes, vectors, colours, lights, slabs, planes, named
 //! values; their error texts are what a malformed value prints.
 
+use crate::scene::quality::{Gradients, Quality};
 use glam::Vec3;
-use volcast::scene::quality::{Gradients, Quality};
 
 /// A memory size for --host-budget and --gpu-budget (`volume::budget::parse_size`).
-pub(crate) fn parse_bytes(s: &str) -> Result<u64, String> {
-    volcast::volume::budget::parse_size(s)
+pub fn parse_bytes(s: &str) -> Result<u64, String> {
+    crate::volume::budget::parse_size(s)
 }
 
-pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("size '{s}' must look like 512x512"))?;
@@ -29,46 +29,46 @@ fn parse_floats(s: &str, n: usize, what: &str) -> Result<Vec<f32>, String> {
     }
 }
 
-pub(crate) fn parse_vec3(s: &str) -> Result<Vec3, String> {
+pub fn parse_vec3(s: &str) -> Result<Vec3, String> {
     parse_floats(s, 3, "X,Y,Z").map(|v| Vec3::new(v[0], v[1], v[2]))
 }
 
 /// `--iso-color`: a colour or the classification's.
 #[derive(Clone, Copy, Debug)]
-pub(crate) enum IsoColor {
+pub enum IsoColor {
     Colormap,
     Rgb(Vec3),
 }
 
-pub(crate) fn parse_iso_color(s: &str) -> Result<IsoColor, String> {
+pub fn parse_iso_color(s: &str) -> Result<IsoColor, String> {
     if s.trim().eq_ignore_ascii_case("colormap") {
         return Ok(IsoColor::Colormap);
     }
     parse_floats(s, 3, "R,G,B or colormap").map(|v| IsoColor::Rgb(Vec3::new(v[0], v[1], v[2])))
 }
 
-pub(crate) fn parse_surface(s: &str) -> Result<volcast::scene::lighting::IsoSurface, String> {
-    volcast::scene::lighting::IsoSurface::parse(s)
+pub fn parse_surface(s: &str) -> Result<crate::scene::lighting::IsoSurface, String> {
+    crate::scene::lighting::IsoSurface::parse(s)
 }
 
 /// `--light`: a headlight (None) or a direction towards the light.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct LightDirection(pub(crate) Option<Vec3>);
+pub struct LightDirection(pub Option<Vec3>);
 
-pub(crate) fn parse_light(s: &str) -> Result<LightDirection, String> {
+pub fn parse_light(s: &str) -> Result<LightDirection, String> {
     if s.trim().eq_ignore_ascii_case("head") {
         return Ok(LightDirection(None));
     }
     parse_vec3(s).map(|d| LightDirection(Some(d)))
 }
 
-pub(crate) fn parse_pair(s: &str) -> Result<(f32, f32), String> {
+pub fn parse_pair(s: &str) -> Result<(f32, f32), String> {
     parse_floats(s, 2, "TMIN,TMAX").map(|v| (v[0], v[1]))
 }
 
-pub(crate) fn parse_shading(s: &str) -> Result<volcast::scene::settings::Shading, String> {
+pub fn parse_shading(s: &str) -> Result<crate::scene::settings::Shading, String> {
     let v = parse_floats(s, 4, "AMBIENT,DIFFUSE,SPECULAR,SHININESS")?;
-    Ok(volcast::scene::settings::Shading {
+    Ok(crate::scene::settings::Shading {
         ambient: v[0],
         diffuse: v[1],
         specular: v[2],
@@ -76,11 +76,11 @@ pub(crate) fn parse_shading(s: &str) -> Result<volcast::scene::settings::Shading
     })
 }
 
-pub(crate) fn parse_clip_plane(s: &str) -> Result<volcast::scene::clip::ClipPlane, String> {
-    volcast::scene::clip::ClipPlane::parse(s).map_err(|e| e.to_string())
+pub fn parse_clip_plane(s: &str) -> Result<crate::scene::clip::ClipPlane, String> {
+    crate::scene::clip::ClipPlane::parse(s).map_err(|e| e.to_string())
 }
 
-pub(crate) fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {
+pub fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {
     let parts: Vec<&str> = s.split(':').collect();
     let bad = || format!("slice '{s}' must look like x:0.5:0.2 (axis x|y|z, position, width in [0,1])");
     if parts.len() != 3 {
@@ -115,8 +115,8 @@ fn parse_named<T: Copy>(
 }
 
 /// `--turntable`'s frame count.
-pub(crate) fn parse_turntable(s: &str) -> Result<u32, String> {
-    let max = volcast::movie::MAX_FRAMES;
+pub fn parse_turntable(s: &str) -> Result<u32, String> {
+    let max = crate::movie::MAX_FRAMES;
     match s.trim().parse::<u32>() {
         Ok(n) if (1..=max).contains(&n) => Ok(n),
         _ => Err(format!("a turntable has 1 to {max} frames")),
@@ -124,33 +124,33 @@ pub(crate) fn parse_turntable(s: &str) -> Result<u32, String> {
 }
 
 /// `--fps`: a GIF's frame rate.
-pub(crate) fn parse_fps(s: &str) -> Result<f32, String> {
+pub fn parse_fps(s: &str) -> Result<f32, String> {
     let fps = s
         .trim()
         .parse::<f32>()
         .map_err(|_| format!("'{s}' is not a number of frames per second"))?;
-    volcast::movie::gif::check_fps(fps).map(|()| fps)
+    crate::movie::gif::check_fps(fps).map(|()| fps)
 }
 
 /// `--gradients`' value, for render and bench alike.
-pub(crate) fn parse_gradients(s: &str) -> Result<Gradients, String> {
+pub fn parse_gradients(s: &str) -> Result<Gradients, String> {
     parse_named(s, Gradients::parse, &Gradients::ALL, Gradients::name, "gradient source")
 }
 
 /// `--quality`'s value, for render, view and bench alike.
-pub(crate) fn parse_quality(s: &str) -> Result<Quality, String> {
+pub fn parse_quality(s: &str) -> Result<Quality, String> {
     parse_named(s, Quality::parse, &Quality::ALL, Quality::name, "quality")
 }
 
 /// `--colormap`: a colormap's name.
-pub(crate) fn parse_colormap(s: &str) -> Result<volcast::transfer::Colormap, String> {
-    use volcast::transfer::Colormap;
+pub fn parse_colormap(s: &str) -> Result<crate::transfer::Colormap, String> {
+    use crate::transfer::Colormap;
     parse_named(s, Colormap::parse, &Colormap::ALL, Colormap::name, "colormap")
 }
 
 /// `--mode`: a compositing mode's name.
-pub(crate) fn parse_mode(s: &str) -> Result<volcast::scene::settings::CompositeMode, String> {
-    use volcast::scene::settings::CompositeMode;
+pub fn parse_mode(s: &str) -> Result<crate::scene::settings::CompositeMode, String> {
+    use crate::scene::settings::CompositeMode;
     parse_named(
         s,
         CompositeMode::parse,
@@ -161,27 +161,27 @@ pub(crate) fn parse_mode(s: &str) -> Result<volcast::scene::settings::CompositeM
 }
 
 /// `--view`: a side of the patient.
-pub(crate) fn parse_view(s: &str) -> Result<volcast::scene::camera::ViewPreset, String> {
-    use volcast::scene::camera::ViewPreset;
+pub fn parse_view(s: &str) -> Result<crate::scene::camera::ViewPreset, String> {
+    use crate::scene::camera::ViewPreset;
     parse_named(s, ViewPreset::parse, &ViewPreset::ALL, ViewPreset::name, "view")
 }
 
 /// `--preset`: a preset's name or "auto" (kept as text: `auto` needs the volume to become a function).
-pub(crate) fn parse_preset(s: &str) -> Result<String, String> {
+pub fn parse_preset(s: &str) -> Result<String, String> {
     let name = s.trim();
-    if name == "auto" || volcast::transfer::function::PRESET_NAMES.contains(&name) {
+    if name == "auto" || crate::transfer::function::PRESET_NAMES.contains(&name) {
         Ok(name.to_string())
     } else {
         Err(format!(
             "unknown preset '{name}'; choose one of {}, auto",
-            volcast::transfer::function::PRESET_NAMES.join(", ")
+            crate::transfer::function::PRESET_NAMES.join(", ")
         ))
     }
 }
 
 /// `--builtin`: a built-in volume's name.
-pub(crate) fn parse_builtin(s: &str) -> Result<String, String> {
-    let names = volcast::volume::BUILTIN_NAMES;
+pub fn parse_builtin(s: &str) -> Result<String, String> {
+    let names = crate::volume::BUILTIN_NAMES;
     names
         .contains(&s.trim())
         .then(|| s.trim().to_string())

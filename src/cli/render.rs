@@ -3,46 +3,63 @@
 
 use super::args::RenderArgs;
 use super::with_gpu;
+use crate::gpu::Gpu;
+use crate::render::headless::Headless;
+use crate::scene::settings::{RaySetup, RenderSettings};
+use crate::volume::Volume;
 use anyhow::{Context, Result};
 use std::time::Instant;
-use volcast::gpu::Gpu;
-use volcast::render::headless::Headless;
-use volcast::scene::settings::{RaySetup, RenderSettings};
-use volcast::volume::budget::Budgets;
-use volcast::volume::Volume;
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
 }
 
+/// The saved view `--state` names, if any.
+fn read_state(args: &RenderArgs) -> Result<Option<crate::scene::view_state::ViewState>> {
+    let Some(path) = &args.state else {
+        return Ok(None);
+    };
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    Ok(Some(
+        crate::scene::view_state::ViewState::from_json(&text, &path.display().to_string())
+            .map_err(anyhow::Error::msg)?,
+    ))
+}
+
 /// The volume and settings `render` shows: a saved view's, or the options'. The volume is read within the host
 /// budget; the device decides later whether it is uploaded whole, streamed or reduced further.
-fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
-    let state = match &args.state {
-        Some(path) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            Some(
-                volcast::scene::view_state::ViewState::from_json(&text, &path.display().to_string())
-                    .map_err(anyhow::Error::msg)?,
-            )
-        }
-        None => None,
-    };
+pub fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
+    let state = read_state(args)?;
     let volume_args = match &state {
         Some(st) => args.volume.or_from(&st.volume),
         None => args.volume.clone(),
     };
     let volume = volume_args.load()?;
+    let s = settings_of(args, state, &volume)?;
+    Ok((volume, s))
+}
+
+/// The settings `render` shows `volume` with (the Python module's volumes and arrays): the options', over the
+/// saved view where `--state` names one.
+pub fn view_settings(args: &RenderArgs, volume: &Volume) -> Result<RenderSettings> {
+    settings_of(args, read_state(args)?, volume)
+}
+
+fn settings_of(
+    args: &RenderArgs,
+    state: Option<crate::scene::view_state::ViewState>,
+    volume: &Volume,
+) -> Result<RenderSettings> {
     let mut s = match state {
         // The saved view (its method included), with the options given here over it.
         Some(st) => {
             let mut s = st.settings;
             let quality = st.viewer.and_then(|v| v.quality);
-            args.frame.override_view(&mut s, &volume, quality)?;
+            args.frame.override_view(&mut s, volume, quality)?;
             s
         }
-        None => args.frame.settings(&volume)?,
+        None => args.frame.settings(volume)?,
     };
     if args.state.is_none() || args.frame.given.has("method") {
         s.ray_setup = if args.method == "faces" {
@@ -52,49 +69,130 @@ fn render_view(args: &RenderArgs) -> Result<(Volume, RenderSettings)> {
         };
         s.compute = args.method == "compute";
     }
-    Ok((volume, s))
+    Ok(s)
 }
 
 /// Places `volume` on the GPU within the budgets: whole, or streamed where it is over the GPU budget whole; a
-/// budget without room for one brick takes the finest whole level that fits it. Returns the volume placed.
-fn place(gpu: &Gpu, headless: &mut Headless, args: &RenderArgs, budgets: &Budgets, volume: Volume) -> Result<Volume> {
-    match headless.renderer.place_volume(gpu, &volume, budgets) {
-        Ok(_) => Ok(volume),
-        Err(volcast::gpu::GpuError::NoRoom(_)) => {
-            let volume = args.volume.fit_device(gpu, volume)?;
+/// budget without room for one brick takes the finest whole level that fits it, which is returned.
+pub fn place(gpu: &Gpu, headless: &mut Headless, args: &RenderArgs, volume: &Volume) -> Result<Option<Volume>> {
+    match headless
+        .renderer
+        .place_volume(gpu, volume, &args.volume.budgets_on(gpu))
+    {
+        Ok(_) => Ok(None),
+        Err(crate::gpu::GpuError::NoRoom(_)) => {
+            let volume = args.volume.fit_device(gpu, volume.clone())?;
             headless.set_volume(gpu, &volume)?;
-            Ok(volume)
+            Ok(Some(volume))
         }
         Err(e) => Err(e.into()),
     }
 }
 
-/// `render --turntable` and `render --keyframes`: the frames of `volcast::movie`, as PNGs and a GIF.
-fn movie(args: &RenderArgs) -> Result<()> {
-    use volcast::movie::{MovieError, MovieFiles, Plan};
-    let (volume, plan) = if args.keyframes.is_empty() {
+/// Makes what the view `s` shows of `volume` (placed by [`place`]) resident: a streamed volume's cut (or
+/// `--level` everywhere), and the gradient texture where `s` asks for one.
+pub fn make_resident(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    args: &RenderArgs,
+    volume: &Volume,
+    s: &RenderSettings,
+) -> Result<()> {
+    if headless.renderer.stream().is_some() {
+        let budgets = args.volume.budgets_on(gpu);
+        let gpu_budget = budgets.gpu.map_or(gpu.device_local_bytes, |g| g.bytes);
+        stream_in(gpu, headless, volume, s, args.level, gpu_budget)?;
+    } else if let Some(level) = args.level {
+        show_level(gpu, headless, volume, s, level)?;
+    }
+    if s.gradient_texture && !headless.renderer.has_gradient_texture() {
+        headless.renderer.enable_gradient_texture(gpu, volume)?;
+    }
+    Ok(())
+}
+
+/// The frame of `s` (placed and made resident), with the colour bar where `--colorbar` asks for it.
+pub fn image(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    args: &RenderArgs,
+    volume: &Volume,
+    s: &RenderSettings,
+) -> Result<image::RgbaImage> {
+    let frame = headless.render(gpu, s)?;
+    Ok(if args.colorbar {
+        crate::render::figure::with_colorbar(&frame.image, s, volume)
+    } else {
+        frame.image
+    })
+}
+
+/// What a movie shows: its volume where the options read one (none where `volume` is given), and its plan.
+pub fn movie_plan(args: &RenderArgs, volume: Option<&Volume>) -> Result<(Option<Volume>, crate::movie::Plan)> {
+    use crate::movie::{MovieError, MovieFiles, Plan};
+    if args.keyframes.is_empty() {
         let frames = args.turntable.unwrap_or(1);
         MovieFiles::new(&args.output, frames)?;
-        let (volume, base) = render_view(args)?;
-        (
+        let (volume, base) = match volume {
+            Some(v) => (None, view_settings(args, v)?),
+            None => render_view(args).map(|(v, s)| (Some(v), s))?,
+        };
+        return Ok((
             volume,
             Plan::Turntable {
                 base: Box::new(base),
                 frames,
             },
-        )
-    } else {
-        let frames = args
-            .frames
-            .ok_or_else(|| MovieError::Usage("--keyframes needs --frames N, the movie's length in frames".into()))?;
-        volcast::movie::check_frames(frames, 2, "--frames")?;
-        MovieFiles::new(&args.output, frames)?;
-        let states = volcast::movie::read_keyframes(&args.keyframes)?;
-        let volume = args.volume.or_from(&states[0].volume).load()?;
-        let keys = states.into_iter().map(|st| st.settings).collect();
-        (volume, Plan::Keyframes { keys, frames })
+        ));
+    }
+    let frames = args
+        .frames
+        .ok_or_else(|| MovieError::Usage("--keyframes needs --frames N, the movie's length in frames".into()))?;
+    crate::movie::check_frames(frames, 2, "--frames")?;
+    MovieFiles::new(&args.output, frames)?;
+    let states = crate::movie::read_keyframes(&args.keyframes)?;
+    let volume = match volume {
+        Some(_) => None,
+        None => Some(args.volume.or_from(&states[0].volume).load()?),
     };
-    let files = MovieFiles::new(&args.output, plan.frame_count())?;
+    let keys = states.into_iter().map(|st| st.settings).collect();
+    Ok((volume, Plan::Keyframes { keys, frames }))
+}
+
+/// Records the movie of `plan` with `volume` on `headless` (placed here), saying on stderr when it is streamed;
+/// `progress` hears each frame and stops the movie by returning false. Returns the files' summary.
+pub fn record_movie(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    args: &RenderArgs,
+    volume: &Volume,
+    plan: &crate::movie::Plan,
+    progress: &mut dyn FnMut(u32) -> bool,
+) -> Result<String> {
+    let files = crate::movie::MovieFiles::new(&args.output, plan.frame_count())?;
+    let reduced = place(gpu, headless, args, volume)?;
+    let volume = reduced.as_ref().unwrap_or(volume);
+    if let Some(st) = headless.renderer.stream() {
+        let gpu_budget = args
+            .volume
+            .budgets_on(gpu)
+            .gpu
+            .map_or(gpu.device_local_bytes, |g| g.bytes);
+        eprintln!(
+            "note: {} {}; each frame is streamed through a pool of {} bricks",
+            volume.name,
+            crate::render::placement::streamed_because(volume, gpu_budget),
+            st.capacity()
+        );
+    }
+    crate::movie::record(gpu, headless, volume, plan, &files, args.fps, progress)?;
+    Ok(files.summary(args.fps))
+}
+
+/// `render --turntable` and `render --keyframes`: the frames of `crate::movie`, as PNGs and a GIF.
+fn movie(args: &RenderArgs) -> Result<()> {
+    let (volume, plan) = movie_plan(args, None)?;
+    let volume = volume.context("the movie's volume was not read")?;
     let label = if args.keyframes.is_empty() {
         "turntable"
     } else {
@@ -102,42 +200,20 @@ fn movie(args: &RenderArgs) -> Result<()> {
     };
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
-        let volume = match place(gpu, &mut headless, args, &args.volume.budgets_on(gpu), volume) {
-            Ok(v) => {
-                if let Some(st) = headless.renderer.stream() {
-                    let gpu_budget = args
-                        .volume
-                        .budgets_on(gpu)
-                        .gpu
-                        .map_or(gpu.device_local_bytes, |g| g.bytes);
-                    eprintln!(
-                        "note: {} {}; each frame is streamed through a pool of {} bricks",
-                        v.name,
-                        volcast::render::placement::streamed_because(&v, gpu_budget),
-                        st.capacity()
-                    );
-                }
-                v
-            }
-            Err(e) => {
-                headless.destroy(gpu);
-                return Err(e);
-            }
-        };
-        let mut progress = volcast::movie::Progress::stderr(label, plan.frame_count());
-        let done = volcast::movie::record(gpu, &mut headless, &volume, &plan, &files, args.fps, &mut |k| {
-            progress.update(k)
+        let mut progress = crate::movie::Progress::stderr(label, plan.frame_count());
+        let done = record_movie(gpu, &mut headless, args, &volume, &plan, &mut |k| {
+            progress.update(k);
+            true
         });
         headless.destroy(gpu);
-        done?;
-        println!("{}", files.summary(args.fps));
+        println!("{}", done?);
         Ok(())
     })
 }
 
 /// `--level`: level `level` (at most the coarsest) everywhere, with a note saying which.
 fn show_level(gpu: &Gpu, headless: &mut Headless, volume: &Volume, s: &RenderSettings, level: u32) -> Result<()> {
-    use volcast::render::levels::{top_level, LevelChoice};
+    use crate::render::levels::{top_level, LevelChoice};
     headless
         .renderer
         .show_levels(gpu, volume, s, LevelChoice::Forced(level))?;
@@ -165,9 +241,9 @@ fn stream_in(
     level: Option<u32>,
     budget: u64,
 ) -> Result<()> {
-    use volcast::render::levels::Cut;
+    use crate::render::levels::Cut;
     let r = &mut headless.renderer;
-    let per_step = r.stream_uploads_within(volcast::render::placement::UPLOAD_PER_STEP);
+    let per_step = r.stream_uploads_within(crate::render::placement::UPLOAD_PER_STEP);
     let (capacity, top, grid) = match (r.stream(), r.pool()) {
         (Some(st), Some(p)) => (st.capacity(), st.top, p.grid),
         _ => anyhow::bail!("{}: the stream did not start", volume.name),
@@ -191,7 +267,7 @@ fn stream_in(
         "note: {} {}; streamed through a pool of {capacity} bricks of {bx}x{by}x{bz} in {} step(s) of at most \
          {per_step} uploads: {} of its {} level-0 bricks shown",
         volume.name,
-        volcast::render::placement::streamed_because(volume, budget),
+        crate::render::placement::streamed_because(volume, budget),
         last.steps,
         last.levels_shown(),
         last.per_level.iter().sum::<usize>()
@@ -199,11 +275,11 @@ fn stream_in(
     Ok(())
 }
 
-pub(crate) fn render(args: &RenderArgs) -> Result<()> {
+pub fn render(args: &RenderArgs) -> Result<()> {
     if args.turntable.is_some() || !args.keyframes.is_empty() {
         return movie(args);
     }
-    volcast::render::png::check_name(&args.output).map_err(anyhow::Error::msg)?;
+    crate::render::png::check_name(&args.output).map_err(anyhow::Error::msg)?;
     let t_device = Instant::now();
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
@@ -222,17 +298,10 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         };
         let result = (|| -> Result<()> {
             let t_upload = Instant::now();
-            let budgets = args.volume.budgets_on(gpu);
-            let gpu_budget = budgets.gpu.map_or(gpu.device_local_bytes, |g| g.bytes);
-            volume = place(gpu, &mut headless, args, &budgets, volume)?;
-            if headless.renderer.stream().is_some() {
-                stream_in(gpu, &mut headless, &volume, &s, args.level, gpu_budget)?;
-            } else if let Some(level) = args.level {
-                show_level(gpu, &mut headless, &volume, &s, level)?;
+            if let Some(reduced) = place(gpu, &mut headless, args, &volume)? {
+                volume = reduced;
             }
-            if s.gradient_texture {
-                headless.renderer.enable_gradient_texture(gpu, &volume)?;
-            }
+            make_resident(gpu, &mut headless, args, &volume, &s)?;
             let upload_ms = t_upload.elapsed().as_secs_f64() * 1e3;
             let t0 = Instant::now();
             let mut frame = headless.render(gpu, &s)?;
@@ -263,9 +332,9 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 }
             }
             if args.colorbar {
-                frame.image = volcast::render::figure::with_colorbar(&frame.image, &s, &volume);
+                frame.image = crate::render::figure::with_colorbar(&frame.image, &s, &volume);
             }
-            volcast::render::png::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
+            crate::render::png::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
             println!(
                 "rendered {} ({}x{}x{} {}, spacing {}x{}x{}) at {}x{} with {} ray setup on {} -> {}",
                 volume.name,
@@ -298,7 +367,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 println!("light grid (shadows, occlusion): {ms:.0} ms");
             }
             if args.memory {
-                println!("{}", volcast::measure::bench::memory_line(gpu, &headless, &s)?);
+                println!("{}", crate::measure::bench::memory_line(gpu, &headless, &s)?);
             }
             Ok(())
         })();

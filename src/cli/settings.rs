@@ -5,13 +5,13 @@
 use super::frame::FrameArgs;
 use super::parse::IsoColor;
 use super::UsageError;
+use crate::scene::camera::Camera;
+use crate::scene::quality::{Gradients, Quality};
+use crate::scene::settings::{PositionFormat, RenderSettings, DEFAULT_WINDOW};
+use crate::transfer::function::TransferFunction;
+use crate::volume::Volume;
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
-use volcast::scene::camera::Camera;
-use volcast::scene::quality::{Gradients, Quality};
-use volcast::scene::settings::{PositionFormat, RenderSettings, DEFAULT_WINDOW};
-use volcast::transfer::function::TransferFunction;
-use volcast::volume::Volume;
 
 /// Whether the settings are made whole or override a saved view.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,7 +48,7 @@ const STEP_INPUTS: &[&str] = &[
 impl FrameArgs {
     /// Settings for `volume` from every option (the defaults of those not given). Values that make no valid frame
     /// are a [`UsageError`]: only the command line is to blame.
-    pub(crate) fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
+    pub fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
         let mut s = RenderSettings::new(self.size.0, self.size.1, volume.extent());
         self.apply(&mut s, volume, Scope::Whole, None)?;
         Ok(s)
@@ -56,12 +56,7 @@ impl FrameArgs {
 
     /// A saved view's settings `s` with the options the command line gave applied over it; `quality` is the view's
     /// quality level (re-resolved when an option changes what the step depends on).
-    pub(crate) fn override_view(
-        &self,
-        s: &mut RenderSettings,
-        volume: &Volume,
-        quality: Option<Quality>,
-    ) -> Result<()> {
+    pub fn override_view(&self, s: &mut RenderSettings, volume: &Volume, quality: Option<Quality>) -> Result<()> {
         self.apply(s, volume, Scope::Overrides, quality)
     }
 
@@ -121,7 +116,7 @@ impl FrameArgs {
         let view = match self.view {
             Some(v) => Some(v),
             None if scope == Scope::Whole && anatomical && self.azimuth.is_none() && self.elevation.is_none() => {
-                Some(volcast::scene::camera::ViewPreset::Anterior)
+                Some(crate::scene::camera::ViewPreset::Anterior)
             }
             None => None,
         };
@@ -156,7 +151,7 @@ impl FrameArgs {
         let automatic =
             scope == Scope::Whole && named.is_none() && self.given.from_file && !self.given.any(CLASSIFICATION);
         let tf = if automatic {
-            Some(volcast::transfer::auto::auto_for_volume(volume))
+            Some(crate::transfer::auto::auto_for_volume(volume))
         } else {
             named
         };
@@ -192,10 +187,10 @@ impl FrameArgs {
     /// The function `--preset` or `--tf` names, if any.
     fn transfer_function(&self, volume: &Volume) -> Result<Option<TransferFunction>> {
         Ok(match (&self.preset, &self.tf) {
-            (Some(name), _) if name == "auto" => Some(volcast::transfer::auto::auto_for_volume(volume)),
+            (Some(name), _) if name == "auto" => Some(crate::transfer::auto::auto_for_volume(volume)),
             (Some(name), _) => Some(TransferFunction::preset(name)?),
             (None, Some(path)) => Some(TransferFunction::load(path)?),
-            (None, None) => None,
+            (None, None) => self.tf_value.clone(),
         })
     }
 

@@ -39,6 +39,9 @@ pub enum MovieError {
     Write(String),
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    /// The caller's progress callback asked to stop (Python's KeyboardInterrupt); the frames written are removed.
+    #[error("stopped after {0} frame(s)")]
+    Stopped(u32),
 }
 
 /// Checks a movie's frame count, `option` naming where it came from; `min` is 1 for a turntable and 2 for a path
@@ -144,7 +147,7 @@ pub fn record(
     plan: &Plan,
     files: &MovieFiles,
     fps: f32,
-    progress: &mut dyn FnMut(u32),
+    progress: &mut dyn FnMut(u32) -> bool,
 ) -> Result<(), MovieError> {
     let n = plan.frame_count();
     if files.frames.len() != n as usize {
@@ -167,7 +170,9 @@ pub fn record(
             crate::render::png::save(&frame.image, png).map_err(MovieError::Write)?;
             written += 1;
             gif.push(&frame.image)?;
-            progress(k + 1);
+            if !progress(k + 1) && k + 1 < n {
+                return Err(MovieError::Stopped(k + 1));
+            }
         }
         Ok(())
     })();

@@ -40,7 +40,7 @@ pub use dicom::series::SeriesInfo;
 pub use downsample::downsample_to;
 pub use error::VolumeError;
 pub use open::{detect_format, format_by_name, open, open_with_progress, Format, OpenOptions};
-pub use raw::{load_raw, parse_scivis_name, RawOptions};
+pub use raw::{from_native_bytes, load_raw, parse_scivis_name, RawOptions};
 pub use time::TimeSteps;
 pub(crate) use voxel::stored_offset;
 use voxel::{compute_range, compute_range_of, stored_value};

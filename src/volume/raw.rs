@@ -210,6 +210,46 @@ pub(crate) fn check_file_size(
     })
 }
 
+/// Voxels of `voxel_type` in the host's byte order, x fastest (the bytes of a C-ordered numpy array of shape
+/// (z, y, x)), as a volume: the conversion a raw file of the same bytes gets, so both render alike. Named `name`,
+/// format "array".
+pub fn from_native_bytes(
+    name: &str,
+    dims: [u32; 3],
+    voxel_type: VoxelType,
+    spacing: [f32; 3],
+    bytes: &[u8],
+) -> Result<Volume, VolumeError> {
+    let (count, expected) = sizes(dims, voxel_type, spacing)?;
+    if bytes.len() as u64 != expected {
+        return Err(VolumeError::DataLength {
+            dims,
+            expected: count as u64,
+            actual: bytes.len() / voxel_type.size(),
+        });
+    }
+    let endian = if cfg!(target_endian = "big") {
+        Endian::Big
+    } else {
+        Endian::Little
+    };
+    let mut reader = bytes;
+    let data =
+        decode::read_binary(&mut reader, voxel_type, endian, count, 64 << 20, &mut Progress::none()).map_err(|e| {
+            match e {
+                DecodeError::OutOfMemory => VolumeError::OutOfMemory { dims, bytes: expected },
+                _ => VolumeError::DataLength {
+                    dims,
+                    expected: count as u64,
+                    actual: bytes.len() / voxel_type.size(),
+                },
+            }
+        })?;
+    let mut volume = Volume::new(name, dims, spacing, voxel_type, data)?;
+    volume.format = "array".into();
+    Ok(volume)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
