@@ -42,6 +42,8 @@ pub enum ViewerError {
 pub enum VolumeSource {
     Builtin(String, Option<u32>),
     File(PathBuf, RawOptions),
+    /// A volume already in memory (the Python module's arrays), shown as it is; a session records no file for it.
+    Memory(Arc<crate::volume::Volume>),
 }
 
 pub struct ViewerOptions {
@@ -85,6 +87,16 @@ pub fn run(opts: ViewerOptions) -> Result<Arc<ValidationLog>, ViewerError> {
             "neither DISPLAY nor WAYLAND_DISPLAY is set".into(),
         ));
     }
-    let event_loop = EventLoop::new().map_err(|e| ViewerError::NoDisplay(e.to_string()))?;
-    app::run(event_loop, opts)
+    // winit makes one event loop per process; it is kept on this thread and run again for the next window (the
+    // Python module's `volcast.view`, called more than once).
+    thread_local! {
+        static EVENT_LOOP: std::cell::RefCell<Option<EventLoop<()>>> = const { std::cell::RefCell::new(None) };
+    }
+    let mut event_loop = match EVENT_LOOP.with(|l| l.borrow_mut().take()) {
+        Some(l) => l,
+        None => EventLoop::new().map_err(|e| ViewerError::NoDisplay(e.to_string()))?,
+    };
+    let result = app::run(&mut event_loop, opts);
+    EVENT_LOOP.with(|l| *l.borrow_mut() = Some(event_loop));
+    result
 }

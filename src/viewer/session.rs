@@ -43,7 +43,7 @@ pub fn volume_ref(source: Option<&VolumeSource>, spacing: [f32; 3], time: u32) -
             r.raw_type = raw.voxel_type.map(|t| t.name().to_string());
             r.raw_spacing = raw.spacing;
         }
-        None => {}
+        Some(VolumeSource::Memory(_)) | None => {}
     }
     r
 }

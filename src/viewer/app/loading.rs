@@ -111,6 +111,9 @@ pub(super) fn open_source(
             .and_then(|v| crate::scale::fit(v, &host_only, false))
             .map(|volume| crate::scale::Opened { volume, keep: None })
             .map_err(|e| e.to_string())?,
+        VolumeSource::Memory(v) => crate::scale::fit(v.as_ref().clone(), &host_only, false)
+            .map(|volume| crate::scale::Opened { volume, keep: None })
+            .map_err(|e| e.to_string())?,
         VolumeSource::File(path, raw) => {
             let opts = volume::OpenOptions {
                 raw: raw.clone(),
@@ -136,6 +139,7 @@ pub(super) fn open_source(
 fn load_in_background(source: VolumeSource, limits: Limits, series: Option<String>, channel: Option<u32>) -> Loading {
     let label = match (&source, &series) {
         (VolumeSource::Builtin(name, _), _) => name.clone(),
+        (VolumeSource::Memory(v), _) => v.name.clone(),
         (VolumeSource::File(path, _), None) => path.display().to_string(),
         (VolumeSource::File(path, _), Some(s)) => format!("{} (series {s})", path.display()),
     };

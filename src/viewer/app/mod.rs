@@ -31,7 +31,8 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy}
 use winit::window::WindowId;
 
 /// Runs the event loop until the window closes. Returns the validation log for the caller to report.
-pub(super) fn run(event_loop: EventLoop<()>, opts: ViewerOptions) -> Result<Arc<ValidationLog>, ViewerError> {
+pub(super) fn run(event_loop: &mut EventLoop<()>, opts: ViewerOptions) -> Result<Arc<ValidationLog>, ViewerError> {
+    use winit::platform::run_on_demand::EventLoopExtRunOnDemand;
     let mut app = App {
         waker: event_loop.create_proxy(),
         opts,
@@ -40,7 +41,7 @@ pub(super) fn run(event_loop: EventLoop<()>, opts: ViewerOptions) -> Result<Arc<
         log: None,
     };
     event_loop
-        .run_app(&mut app)
+        .run_app_on_demand(&mut app)
         .map_err(|e| ViewerError::Other(format!("event loop: {e}")))?;
     if let Some(r) = app.running.take() {
         r.destroy();

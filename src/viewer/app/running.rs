@@ -100,7 +100,9 @@ impl Running {
             None => opened.volume,
         };
         let histogram = value_histogram(&first);
-        self.install((first, histogram), false)?;
+        // An array from Python is data, as a file is: it opens with the automatic transfer function.
+        let data = matches!(opts.source, VolumeSource::Memory(_));
+        self.install((first, histogram), data)?;
         self.shown.source = Some(opts.source.clone());
         self.window.set_title(&title::window_title(self.shown.source.as_ref()));
         self.start_at(opts.time)?;
@@ -121,7 +123,7 @@ impl Running {
             initial,
             preview,
         } = arrived;
-        let from_file = matches!(source, VolumeSource::File(..));
+        let from_file = matches!(source, VolumeSource::File(..) | VolumeSource::Memory(_));
         // A multiscale image (OME-Zarr) says which of its levels it shows, and why not a finer one; so does a volume
         // shown at a coarser level than its file's, and a preview.
         let level = volume

@@ -7,6 +7,7 @@ use crate::viewer::VolumeSource;
 pub(super) fn window_title(source: Option<&VolumeSource>) -> String {
     let shown = match source {
         Some(VolumeSource::Builtin(name, _)) => Some(name.clone()),
+        Some(VolumeSource::Memory(v)) => Some(v.name.clone()),
         Some(VolumeSource::File(path, _)) => path
             .file_name()
             .or(Some(path.as_os_str()))
