@@ -1,0 +1,158 @@
+//! `volcast.render` and `volcast.movie`: `volcast render`'s steps on the process's device, for a volume the caller
+//! holds (placed once and kept while it is rendered again) or one the options read (a FILE, `--builtin`).
+
+use crate::device::{Device, Shown};
+use crate::errors::{to_py, While};
+use crate::options::parse_render;
+use crate::volume::PyVolume;
+use crate::wait::wait;
+use numpy::ndarray::Array3;
+use numpy::PyArray3;
+use pyo3::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use volcast::cli::args::RenderArgs;
+use volcast::cli::render as steps;
+use volcast::cli::UsageError;
+use volcast::volume::Volume;
+
+/// The options that say how a volume is read, which a volume already in memory cannot take.
+const READING: &[&str] = &[
+    "builtin",
+    "builtin_size",
+    "dims",
+    "voxel_type",
+    "spacing",
+    "endian",
+    "header_bytes",
+    "array",
+    "series",
+    "channel",
+    "time",
+    "cache_dir",
+    "no_cache",
+];
+
+/// The volume a call renders: one the caller holds, or the one the options name (FILE or `--builtin`).
+fn held(args: &RenderArgs, volume: Option<&PyVolume>) -> anyhow::Result<Option<(u64, Arc<Volume>, bool)>> {
+    let Some(v) = volume else {
+        return Ok(None);
+    };
+    let given: Vec<&str> = READING.iter().copied().filter(|id| args.frame.given.has(id)).collect();
+    if !given.is_empty() || args.volume.file.is_some() {
+        return Err(UsageError(format!(
+            "{} say how a file is read: give them to volcast.open (or Volume.from_array), not with a Volume",
+            given.join(", ")
+        ))
+        .into());
+    }
+    Ok(Some((v.id, v.inner.clone(), v.builtin)))
+}
+
+/// `args` for a call on `held`: a built-in volume is classified as `--builtin` has it (the colormap model), any
+/// other as a file is (the automatic transfer function).
+fn for_held(mut args: RenderArgs, held: Option<(u64, Arc<Volume>, bool)>) -> (RenderArgs, Option<(u64, Arc<Volume>)>) {
+    let Some((id, v, builtin)) = held else {
+        return (args, None);
+    };
+    args.frame.given.from_file = !builtin;
+    (args, Some((id, v)))
+}
+
+/// Places `volume` (number `id`) unless it is the one placed under the same placement options.
+fn place<'d>(dev: &'d mut Device, args: &RenderArgs, id: u64, volume: &Volume) -> anyhow::Result<&'d Shown> {
+    let v = &args.volume;
+    let key = format!(
+        "{id} {:?} {:?} {:?} {} {:?}",
+        v.host_budget, v.gpu_budget, v.max_dim, v.no_downsample, args.level
+    );
+    if dev.shown.as_ref().is_none_or(|s| s.key != key) {
+        dev.shown = None;
+        let reduced = steps::place(&dev.gpu, &mut dev.headless, args, volume)?;
+        dev.shown = Some(Shown { key, reduced });
+    }
+    Ok(dev.shown.as_ref().expect("placed above"))
+}
+
+/// One frame on the device thread: the volume placed (or kept), made resident for the view, rendered.
+fn frame(dev: &mut Device, args: &RenderArgs, held: Option<(u64, Arc<Volume>)>) -> anyhow::Result<image::RgbaImage> {
+    let (id, volume, s) = match held {
+        Some((id, v)) => {
+            let s = steps::view_settings(args, &v)?;
+            (id, v, s)
+        }
+        None => {
+            let (v, s) = steps::render_view(args)?;
+            (0, Arc::new(v), s)
+        }
+    };
+    let reduced = place(dev, args, id, &volume)?.reduced.clone();
+    let shown = reduced.as_ref().unwrap_or(&volume);
+    if id == 0 {
+        // A volume read for this call only: the next call reads its own.
+        dev.shown = None;
+    }
+    steps::make_resident(&dev.gpu, &mut dev.headless, args, shown, &s)?;
+    let image = steps::image(&dev.gpu, &mut dev.headless, args, shown, &s)?;
+    if args.frame.given.has("output") {
+        volcast::render::png::save(&image, &args.output).map_err(anyhow::Error::msg)?;
+    }
+    Ok(image)
+}
+
+/// Renders one frame with `volcast render`'s options (`argv`) of `volume`, or of the volume they name; returns it
+/// as an (H, W, 4) uint8 array of RGBA (sRGB, straight alpha), and writes it to `--output` where that is given.
+#[pyfunction]
+#[pyo3(signature = (volume, argv, tf_json=None))]
+pub fn render<'py>(
+    py: Python<'py>,
+    volume: Option<PyRef<'_, PyVolume>>,
+    argv: Vec<String>,
+    tf_json: Option<String>,
+) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    let args = parse_render(argv, tf_json).map_err(|e| to_py(e, While::Rendering))?;
+    let held = held(&args, volume.as_deref()).map_err(|e| to_py(e, While::Rendering))?;
+    let (args, held) = for_held(args, held);
+    let rx = crate::device::submit(move |slot| frame(slot.device(&args.gpu)?, &args, held))?;
+    let image = wait(py, rx, None)?.map_err(|e| to_py(e, While::Rendering))?;
+    let (w, h) = image.dimensions();
+    let pixels = Array3::from_shape_vec((h as usize, w as usize, 4), image.into_raw())
+        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+    Ok(PyArray3::from_owned_array(py, pixels))
+}
+
+/// Records `volcast render --turntable N` or `--keyframes …` with `argv` (its `--output` naming the frames and the
+/// GIF) of `volume` or of the volume they name; returns the summary line the command prints. Ctrl+C stops it after
+/// the frame being drawn, and removes what it wrote.
+#[pyfunction]
+#[pyo3(signature = (volume, argv, tf_json=None))]
+pub fn movie(
+    py: Python<'_>,
+    volume: Option<PyRef<'_, PyVolume>>,
+    argv: Vec<String>,
+    tf_json: Option<String>,
+) -> PyResult<String> {
+    let args = parse_render(argv, tf_json).map_err(|e| to_py(e, While::Rendering))?;
+    if args.turntable.is_none() && args.keyframes.is_empty() {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "a movie needs turntable=N or keyframes=[...]",
+        ));
+    }
+    let held = held(&args, volume.as_deref()).map_err(|e| to_py(e, While::Rendering))?;
+    let (args, held) = for_held(args, held);
+    let stop = Arc::new(AtomicBool::new(false));
+    let stopping = stop.clone();
+    let rx = crate::device::submit(move |slot| -> anyhow::Result<String> {
+        let dev = slot.device(&args.gpu)?;
+        dev.shown = None;
+        let (read, plan) = steps::movie_plan(&args, held.as_ref().map(|(_, v)| v.as_ref()))?;
+        let volume = match (&read, &held) {
+            (Some(v), _) => v,
+            (None, Some((_, v))) => v.as_ref(),
+            (None, None) => anyhow::bail!("the movie's volume was not read"),
+        };
+        let mut progress = |_: u32| !stopping.load(Ordering::Relaxed);
+        steps::record_movie(&dev.gpu, &mut dev.headless, &args, volume, &plan, &mut progress)
+    })?;
+    wait(py, rx, Some(&stop))?.map_err(|e| to_py(e, While::Rendering))
+}

@@ -1,0 +1,164 @@
+"""volcast for Python: the volume ray caster over numpy arrays, scans and microscopy.
+
+``volcast.render(array_or_volume_or_path, **options)`` renders one frame; its keywords are ``volcast render``'s
+options (``volcast.options()`` lists them), with the same defaults and the same images. ``volcast.open`` reads any
+file the command line reads; ``Volume.from_array`` takes a numpy array of shape (z, y, x). ``volcast.movie``
+writes turntables and keyframe movies, ``volcast.view`` opens the desktop viewer, ``volcast.widget`` a notebook
+widget. The guide: docs/python.md in the repository.
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import pathlib
+import sys
+from typing import Any, Dict, Optional
+
+import numpy as np
+
+from . import _volcast
+from ._image import Image, png_bytes
+from ._inputs import as_source
+from ._options import Option, argv as _argv, options
+from ._tf import TransferFunction
+from ._volume import Volume, builtin, open
+
+__all__ = [
+    "Image", "Option", "Scene", "TransferFunction", "Volume", "builtin", "device", "movie", "open", "options",
+    "png_bytes", "render", "shutdown", "view", "volume", "widget",
+]
+__version__ = "0.1.0"
+
+
+def _command(source: Any, placement: Dict[str, Any], command: str, options_: Dict[str, Any]):
+    """The native volume (or None), the argument list and the transfer function's JSON of a call."""
+    volume, path = as_source(source, **{k: v for k, v in placement.items() if v is not None})
+    tf = options_.pop("tf", None)
+    tf_json = None
+    if isinstance(tf, TransferFunction):
+        tf_json = tf.to_json()
+    elif tf is not None:
+        options_["tf"] = tf
+    argv = _argv(command, options_)
+    if path is not None:
+        argv += ["--", path]
+    return (volume._native if volume is not None else None), argv, tf_json
+
+
+def render(
+    volume: Any = None,
+    *,
+    spacing: Any = None,
+    affine: Any = None,
+    origin: Any = None,
+    **options: Any,
+) -> Image:
+    """Renders one frame of ``volume`` as ``volcast render`` does and returns it: an ``Image``, a numpy array of
+    shape (H, W, 4) uint8 (RGBA) that Jupyter shows inline.
+
+    ``volume`` is a numpy array of shape (z, y, x) (placed by ``spacing``/``origin`` or ``affine``, as
+    ``Volume.from_array``), a ``Volume``, a path, a nibabel or SimpleITK image, or a zarr or dask array; or None with
+    ``builtin="helix"``. Every other keyword is an option of ``volcast render``: ``size=(640, 480)``,
+    ``azimuth=30``, ``view="left"``, ``preset="ct-bone"`` or ``tf=TransferFunction(...)``, ``mode="mip"``,
+    ``window=(0.1, 1)``, ``shading=True``, ``quality="draft"``, ``clip_plane=(0, 0, 1, 0)``, ``output="f.png"``
+    (also writes the PNG), ... The device is made once per process and reused; a volume rendered again is not
+    uploaded again. Raises ``ValueError`` for a bad option or array, ``OSError`` for a file it cannot read,
+    ``RuntimeError`` where there is no Vulkan device (saying what to install).
+    """
+    native, argv, tf_json = _command(volume, dict(spacing=spacing, affine=affine, origin=origin), "render", options)
+    frame = _volcast.render(native, argv, tf_json)
+    return frame.view(Image)
+
+
+def movie(
+    volume: Any = None,
+    output: "str | os.PathLike[str]" = "volcast.png",
+    *,
+    turntable: Optional[int] = None,
+    keyframes: Optional[list] = None,
+    spacing: Any = None,
+    affine: Any = None,
+    origin: Any = None,
+    **options: Any,
+) -> pathlib.Path:
+    """Writes a turntable (``turntable=N`` frames once around) or a keyframed movie (``keyframes=[state.json,
+    ...]`` and ``frames=N``) as ``volcast render --turntable`` does: ``NAME-0000.png`` … beside ``output`` (NAME.png)
+    and a looping ``NAME.gif`` (``fps=``), which is returned. Other keywords as ``render``. Ctrl+C stops it and
+    removes what it wrote."""
+    options.update(output=output, turntable=turntable, keyframes=keyframes)
+    native, argv, tf_json = _command(volume, dict(spacing=spacing, affine=affine, origin=origin), "render", options)
+    _volcast.movie(native, argv, tf_json)
+    out = pathlib.Path(output)
+    return out.with_name(out.stem + ".gif")
+
+
+def view(volume: Any = None, **options: Any) -> None:
+    """Opens the desktop viewer on ``volume`` (as ``render`` takes it; None: the built-in helix) with ``volcast
+    view``'s options (``slices=True``, ``preset=``, ``quality=``, ``size=(1280, 800)``, ...); returns when the window
+    closes. Needs a display."""
+    placement = {k: options.pop(k) for k in ("spacing", "affine", "origin") if k in options}
+    native, argv, _ = _command(volume, placement, "view", options)
+    _volcast.view(native, argv)
+
+
+def volume(obj: Any, **placement: Any) -> Volume:
+    """Anything ``render`` takes as a ``Volume``: an array (placed by ``spacing``/``origin``/``affine``), a nibabel
+    or SimpleITK image (in its patient space), a zarr or dask array, a path (read by ``volcast.open``)."""
+    vol, path = as_source(obj, **placement)
+    if vol is None and path is not None:
+        return open(path)
+    if vol is None:
+        raise TypeError("no volume given")
+    return vol
+
+
+class Scene:
+    """A volume with render options, rendered on demand: Jupyter shows it inline; ``scene.render(**changes)``
+    renders it with some options changed, ``scene.widget()`` adds sliders for the azimuth and the window."""
+
+    def __init__(self, volume: Any, **options: Any) -> None:
+        placement = {k: options.pop(k) for k in ("spacing", "affine", "origin") if k in options}
+        vol, path = as_source(volume, **placement)
+        self.volume = vol if vol is not None else path
+        self.options = options
+
+    def render(self, **changes: Any) -> Image:
+        return render(self.volume, **{**self.options, **changes})
+
+    def _repr_png_(self) -> bytes:
+        return png_bytes(np.asarray(self.render()))
+
+    def widget(self, **changes: Any) -> Any:
+        return widget(self.volume, **{**self.options, **changes})
+
+
+def widget(volume: Any, **options: Any) -> Any:
+    """A notebook widget: the rendered frame with a slider for the azimuth and one for the window (ipywidgets,
+    ``pip install ./python[jupyter]``). Returns the widget box."""
+    from ._widget import make_widget
+
+    return make_widget(Scene(volume, **options))
+
+
+def device() -> str:
+    """The name of the Vulkan device volcast renders on (made now if not yet)."""
+    return _volcast.device_name()
+
+
+def shutdown() -> Optional[Dict[str, int]]:
+    """Destroys the device (the next render makes it again). Returns None if there was none, else the validation
+    layer's counts, ``{"validating": bool, "errors": n, "warnings": n}``, leaked objects included (validation is on
+    with ``VOLCAST_VALIDATION=1`` or ``validate=True``)."""
+    closed = _volcast.shutdown()
+    if closed is None:
+        return None
+    validating, errors, warnings = closed
+    return {"validating": validating, "errors": errors, "warnings": warnings}
+
+
+@atexit.register
+def _at_exit() -> None:
+    counts = shutdown()
+    if counts and counts["validating"]:
+        print(f"volcast validation: {counts['errors']} errors, {counts['warnings']} warnings", file=sys.stderr)
