@@ -74,8 +74,16 @@ fn place<'d>(dev: &'d mut Device, args: &RenderArgs, id: u64, volume: &Volume) -
     Ok(dev.shown.as_ref().expect("placed above"))
 }
 
+/// What a call asked for besides the frame: `--timings`' medians over `--frames` frames (name, ms) and
+/// `--memory`'s line.
+type Report = (Vec<(String, f64)>, Option<String>);
+
 /// One frame on the device thread: the volume placed (or kept), made resident for the view, rendered.
-fn frame(dev: &mut Device, args: &RenderArgs, held: Option<(u64, Arc<Volume>)>) -> anyhow::Result<image::RgbaImage> {
+fn frame(
+    dev: &mut Device,
+    args: &RenderArgs,
+    held: Option<(u64, Arc<Volume>)>,
+) -> anyhow::Result<(image::RgbaImage, Report)> {
     let (id, volume, s) = match held {
         Some((id, v)) => {
             let s = steps::view_settings(args, &v)?;
@@ -86,22 +94,70 @@ fn frame(dev: &mut Device, args: &RenderArgs, held: Option<(u64, Arc<Volume>)>) 
             (0, Arc::new(v), s)
         }
     };
-    let reduced = place(dev, args, id, &volume)?.reduced.clone();
-    let shown = reduced.as_ref().unwrap_or(&volume);
+    place(dev, args, id, &volume)?;
+    let Device {
+        gpu, headless, shown, ..
+    } = dev;
+    let reduced = shown.as_ref().and_then(|s| s.reduced.as_ref());
+    let volume_shown = reduced.unwrap_or(&volume);
+    steps::make_resident(gpu, headless, args, volume_shown, &s)?;
+    let image = steps::image(gpu, headless, args, volume_shown, &s)?;
+    let timings = if args.timings {
+        timed(gpu, headless, args, &s)?
+    } else {
+        Vec::new()
+    };
+    let memory = if args.memory {
+        Some(volcast::measure::bench::memory_line(gpu, headless, &s)?)
+    } else {
+        None
+    };
     if id == 0 {
         // A volume read for this call only: the next call reads its own.
-        dev.shown = None;
+        *shown = None;
     }
-    steps::make_resident(&dev.gpu, &mut dev.headless, args, shown, &s)?;
-    let image = steps::image(&dev.gpu, &mut dev.headless, args, shown, &s)?;
     if args.frame.given.has("output") {
         volcast::render::png::save(&image, &args.output).map_err(anyhow::Error::msg)?;
     }
-    Ok(image)
+    Ok((image, (timings, memory)))
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied()
+}
+
+/// `--timings`: the medians of `--frames` frames (default 5) after the one drawn, as `volcast render` prints
+/// them: wall time and the GPU's per pass.
+fn timed(
+    gpu: &volcast::gpu::Gpu,
+    headless: &mut volcast::render::headless::Headless,
+    args: &RenderArgs,
+    s: &volcast::scene::settings::RenderSettings,
+) -> anyhow::Result<Vec<(String, f64)>> {
+    let mut columns: [Vec<f64>; 5] = Default::default();
+    for _ in 0..args.frames.unwrap_or(5).max(1) {
+        let t = std::time::Instant::now();
+        let frame = headless.render(gpu, s)?;
+        columns[0].push(t.elapsed().as_secs_f64() * 1e3);
+        if let Some(tm) = frame.timings {
+            columns[1].push(tm.total_ms);
+            columns[2].extend(tm.entry_ms);
+            columns[3].extend(tm.exit_ms);
+            columns[4].push(tm.march_ms);
+        }
+    }
+    let names = ["wall_ms", "gpu_ms", "entry_ms", "exit_ms", "march_ms"];
+    Ok(names
+        .iter()
+        .zip(columns)
+        .filter_map(|(n, c)| median(c).map(|m| (n.to_string(), m)))
+        .collect())
 }
 
 /// Renders one frame with `volcast render`'s options (`argv`) of `volume`, or of the volume they name; returns it
-/// as an (H, W, 4) uint8 array of RGBA (sRGB, straight alpha), and writes it to `--output` where that is given.
+/// as an (H, W, 4) uint8 array of RGBA (sRGB, straight alpha) with what `--timings` and `--memory` asked for, and
+/// writes it to `--output` where that is given.
 #[pyfunction]
 #[pyo3(signature = (volume, argv, tf_json=None))]
 pub fn render<'py>(
@@ -109,16 +165,16 @@ pub fn render<'py>(
     volume: Option<PyRef<'_, PyVolume>>,
     argv: Vec<String>,
     tf_json: Option<String>,
-) -> PyResult<Bound<'py, PyArray3<u8>>> {
+) -> PyResult<(Bound<'py, PyArray3<u8>>, Report)> {
     let args = parse_render(argv, tf_json).map_err(|e| to_py(e, While::Rendering))?;
     let held = held(&args, volume.as_deref()).map_err(|e| to_py(e, While::Rendering))?;
     let (args, held) = for_held(args, held);
     let rx = crate::device::submit(move |slot| frame(slot.device(&args.gpu)?, &args, held))?;
-    let image = wait(py, rx, None)?.map_err(|e| to_py(e, While::Rendering))?;
+    let (image, report) = wait(py, rx, None)?.map_err(|e| to_py(e, While::Rendering))?;
     let (w, h) = image.dimensions();
     let pixels = Array3::from_shape_vec((h as usize, w as usize, 4), image.into_raw())
         .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
-    Ok(PyArray3::from_owned_array(py, pixels))
+    Ok((PyArray3::from_owned_array(py, pixels), report))
 }
 
 /// Records `volcast render --turntable N` or `--keyframes …` with `argv` (its `--output` naming the frames and the

@@ -69,6 +69,10 @@ def test_each_option_renders(name, tmp_path):
         assert json.loads((tmp_path / "saved.json").read_text())["opacity"]
     if name == "output":
         assert (tmp_path / "out.png").stat().st_size > 0
+    if name == "timings":
+        assert frame.timings["wall_ms"] > 0 and frame.timings["march_ms"] > 0
+    if name == "memory":
+        assert "MiB" in frame.memory or "MB" in frame.memory, frame.memory
 
 
 def test_the_movie_options_are_keywords(tmp_path):

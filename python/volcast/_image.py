@@ -31,6 +31,11 @@ class Image(np.ndarray):
             raise ValueError(f"an Image is (H, W, 4) uint8; got {a.shape} {a.dtype}")
         return a.view(cls)
 
+    #: With ``render(timings=True)``: medians in ms of ``frames=`` frames (wall_ms, gpu_ms, march_ms, ...).
+    timings: dict
+    #: With ``render(memory=True)``: the command line's memory line.
+    memory: str
+
     def _repr_png_(self) -> bytes:
         return png_bytes(np.asarray(self))
 
