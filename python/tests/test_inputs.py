@@ -93,3 +93,39 @@ def test_a_zarr_array_is_read(tmp_path):
     z[:] = np.arange(720, dtype=np.uint16).reshape(8, 9, 10)
     frame = volcast.render(z, size=24)
     assert np.array_equal(frame, volcast.render(np.asarray(z), size=24))
+
+
+def test_a_zarr_array_over_the_limit_is_read_from_a_file_in_place(tmp_path, monkeypatch):
+    zarr = pytest.importorskip("zarr")
+    import volcast._inputs as inputs
+
+    monkeypatch.setattr(inputs, "LAZY_LIMIT", 1000)
+    monkeypatch.setattr(inputs, "SLAB_BYTES", 3 * 30 * 40)  # several slabs
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    a = np.random.default_rng(6).integers(0, 60000, (20, 30, 40), dtype=np.uint16)
+    z = zarr.open_array(str(tmp_path / "big.zarr"), mode="w", shape=a.shape, chunks=(8, 8, 8), dtype="uint16")
+    z[:] = a
+    v = volcast.volume(z, spacing=(1, 1, 2))
+    assert v.info()["format"] == "raw" and v.spacing == (1.0, 1.0, 2.0)
+    assert np.array_equal(v.array, a)
+    assert np.array_equal(volcast.render(v, size=32), volcast.render(volcast.Volume.from_array(a, spacing=(1, 1, 2)), size=32))
+    spilled = list((tmp_path / "cache" / "volcast" / "python").glob("*.raw"))
+    assert len(spilled) == 1
+    del v
+    import gc
+
+    gc.collect()
+    assert not spilled[0].exists(), "the file goes with its volume"
+
+
+def test_a_dask_array_is_read(tmp_path, monkeypatch):
+    da = pytest.importorskip("dask.array")
+    import volcast._inputs as inputs
+
+    a = np.random.default_rng(7).random((12, 14, 16)).astype(np.float32)
+    lazy = da.from_array(a, chunks=(4, 7, 8)) * 2
+    expected = volcast.render(a * 2, size=24)
+    assert np.array_equal(volcast.render(lazy, size=24), expected)
+    monkeypatch.setattr(inputs, "LAZY_LIMIT", 1000)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    assert np.array_equal(volcast.render(lazy, size=24), expected)

@@ -85,3 +85,16 @@ def test_a_frame_shows_itself_in_jupyter():
 def test_a_builtin_volume_renders_as_the_builtin_option():
     v = volcast.builtin("helix", 32)
     assert np.array_equal(volcast.render(v, size=40), volcast.render(builtin="helix", builtin_size=32, size=40))
+
+
+def test_the_widget_renders_as_its_sliders_move():
+    pytest.importorskip("ipywidgets")
+    box = volcast.widget(field((20, 20, 20), "uint8"), size=32)
+    picture, azimuth, window = box.children
+    first = picture.value
+    assert bytes(first).startswith(b"\x89PNG")
+    azimuth.value = 90.0
+    assert picture.value != first
+    second = picture.value
+    window.value = (0.6, 1.0)
+    assert picture.value != second

@@ -4,14 +4,21 @@
 from __future__ import annotations
 
 import os
+import tempfile
+import weakref
 from typing import Any, Optional, Tuple
 
 import numpy as np
 
-from ._volume import Volume
+from ._volume import _DTYPES, Volume, open as open_file
 
-#: The largest array materialised from a zarr or dask array (bytes); larger ones are refused with what to do.
-LAZY_LIMIT = 4 << 30
+#: The largest zarr or dask array read into memory whole (bytes). A larger one is written slab by slab to a raw
+#: file in the cache folder, which volcast then reads as it reads any large file: within the memory budgets, at the
+#: finest pyramid level they hold, finer bricks read from the file as the view needs them.
+LAZY_LIMIT = 2 << 30
+
+#: Bytes of one slab copied from a lazy array to the raw file.
+SLAB_BYTES = 64 << 20
 
 
 def _nibabel(img: Any) -> Volume:
@@ -44,14 +51,47 @@ def _name(obj: Any, default: str) -> str:
     return os.path.basename(name) if name else default
 
 
+def cache_folder() -> str:
+    """Where large lazy arrays are written: $XDG_CACHE_HOME/volcast/python, else ~/.cache/volcast/python."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    folder = os.path.join(base, "volcast", "python")
+    os.makedirs(folder, exist_ok=True)
+    return folder
+
+
+def _spill(arr: Any, kind: str, spacing: Any = None, **placement: Any) -> Volume:
+    """A lazy array larger than LAZY_LIMIT, written slab by slab (z) to a raw file and opened in place."""
+    if placement:
+        raise ValueError(f"{', '.join(placement)}= cannot place a {kind} array this large; give spacing= only")
+    if len(arr.shape) != 3:
+        raise ValueError(f"a 3-D {kind} array of shape (z, y, x) is needed; got shape {tuple(arr.shape)}")
+    dtype = np.dtype(arr.dtype)
+    name = _DTYPES.get(dtype.newbyteorder("="))
+    if name is None:
+        raise ValueError(f"{kind} arrays of dtype {dtype} are not volumes volcast renders")
+    z, y, x = (int(n) for n in arr.shape)
+    fd, path = tempfile.mkstemp(prefix=f"{kind}-", suffix=".raw", dir=cache_folder())
+    os.close(fd)
+    try:
+        out = np.memmap(path, dtype=dtype.newbyteorder("<"), mode="w+", shape=(z, y, x))
+        step = max(1, SLAB_BYTES // max(1, y * x * dtype.itemsize))
+        for z0 in range(0, z, step):
+            out[z0 : z0 + step] = np.asarray(arr[z0 : z0 + step])
+        out.flush()
+        del out
+        volume = open_file(path, dims=(x, y, z), type=name, spacing=spacing, no_cache=True)
+    except BaseException:
+        os.remove(path)
+        raise
+    # The file is the volume's finer levels: it goes when the volume does.
+    weakref.finalize(volume, os.remove, path)
+    return volume
+
+
 def _lazy(arr: Any, kind: str, **placement: Any) -> Volume:
     nbytes = int(np.prod(arr.shape)) * np.dtype(arr.dtype).itemsize
     if nbytes > LAZY_LIMIT:
-        raise ValueError(
-            f"this {kind} array of shape {tuple(arr.shape)} holds {nbytes / 2**30:.1f} GiB, over the "
-            f"{LAZY_LIMIT / 2**30:.0f} GiB volcast reads into memory from a {kind} array; write it as OME-Zarr "
-            "(ome_zarr.writer or `volcast convert`) and pass the store's path, which volcast reads level by level"
-        )
+        return _spill(arr, kind, **placement)
     return Volume.from_array(np.asarray(arr), **placement)
 
 

@@ -31,7 +31,7 @@ class Volume:
     ``anatomical``).
     """
 
-    __slots__ = ("_native",)
+    __slots__ = ("_native", "__weakref__")
 
     def __init__(self, native: Any) -> None:
         self._native = native
