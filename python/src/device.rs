@@ -87,7 +87,13 @@ fn queue() -> &'static Mutex<Sender<Job>> {
             .spawn(move || {
                 let mut slot = Slot::default();
                 for job in rx {
-                    job(&mut slot);
+                    // A panic (a bug) ends only its job: the caller hears that the worker gave no answer, and the
+                    // device, whose state the job may have left half-changed, is let go rather than used again.
+                    let unwound = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| job(&mut slot)));
+                    if unwound.is_err() {
+                        // Leaked whole: destroying a device whose objects may be mid-change is not valid Vulkan.
+                        std::mem::forget(slot.device.take());
+                    }
                 }
             })
             .expect("cannot start volcast's device thread");

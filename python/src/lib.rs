@@ -21,6 +21,7 @@ fn _volcast(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(volume::builtin, m)?)?;
     m.add_function(wrap_pyfunction!(options::render_options, m)?)?;
     m.add_function(wrap_pyfunction!(options::view_options, m)?)?;
+    m.add_function(wrap_pyfunction!(options::open_options, m)?)?;
     m.add_function(wrap_pyfunction!(options::check_tf, m)?)?;
     m.add_function(wrap_pyfunction!(options::preset_tf, m)?)?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;

@@ -5,7 +5,7 @@
 
 use clap::{ArgAction, CommandFactory, Parser};
 use pyo3::prelude::*;
-use volcast::cli::args::{GpuArgs, RenderArgs, ViewArgs};
+use volcast::cli::args::{GpuArgs, RenderArgs, ViewArgs, VolumeArgs};
 use volcast::cli::frame::Given;
 use volcast::cli::UsageError;
 use volcast::transfer::function::TransferFunction;
@@ -22,6 +22,13 @@ struct RenderLine {
 struct ViewLine {
     #[command(flatten)]
     args: ViewArgs,
+}
+
+#[derive(Parser)]
+#[command(name = "volcast.open", no_binary_name = true, disable_help_flag = true)]
+struct OpenLine {
+    #[command(flatten)]
+    args: VolumeArgs,
 }
 
 #[derive(Parser)]
@@ -93,6 +100,11 @@ pub fn parse_render(argv: Vec<String>, tf_json: Option<String>) -> anyhow::Resul
     Ok(args)
 }
 
+/// The volume options of `open` (a file's path after `--`).
+pub fn parse_open(argv: Vec<String>) -> anyhow::Result<VolumeArgs> {
+    Ok(parse::<OpenLine>(argv)?.0.args)
+}
+
 /// `view`'s arguments from `argv`.
 pub fn parse_view(argv: Vec<String>) -> anyhow::Result<ViewArgs> {
     Ok(parse::<ViewLine>(argv)?.0.args)
@@ -141,6 +153,12 @@ fn specs(command: clap::Command) -> Vec<OptionSpec> {
 #[pyfunction]
 pub fn render_options() -> Vec<OptionSpec> {
     specs(RenderLine::command())
+}
+
+/// Every volume option (how a file is read), as `volcast.open` takes them.
+#[pyfunction]
+pub fn open_options() -> Vec<OptionSpec> {
+    specs(OpenLine::command())
 }
 
 /// Every option of `volcast view`.

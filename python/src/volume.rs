@@ -4,14 +4,12 @@
 
 use crate::errors::{to_py, While};
 use crate::wait::on_thread;
-use clap::{CommandFactory, FromArgMatches, Parser};
 use numpy::ndarray::{Array2, Array3, ArrayView3};
-use numpy::{PyArray2, PyArray3, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{PyArray2, PyArray3, PyArrayDescrMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
-use volcast::cli::args::VolumeArgs;
 use volcast::volume::{Geometry, Volume, VoxelData, VoxelType};
 
 /// A volume and the number that tells it from every other volume of this process (the device keeps the last one
@@ -138,23 +136,11 @@ impl PyVolume {
     }
 }
 
-#[derive(Parser)]
-#[command(name = "volcast.open", no_binary_name = true, disable_help_flag = true)]
-struct OpenLine {
-    #[command(flatten)]
-    args: VolumeArgs,
-}
-
 /// Reads a file (or a built-in, `--builtin`) as `volcast render` does, with its volume options (`argv`: the path,
 /// then `--dims`, `--type`, ...), on a thread of its own.
 #[pyfunction]
 pub fn open(py: Python<'_>, argv: Vec<String>) -> PyResult<PyVolume> {
-    let matches = OpenLine::command()
-        .try_get_matches_from(argv)
-        .map_err(|e| PyValueError::new_err(e.render().to_string().lines().next().unwrap_or_default().to_string()))?;
-    let args = OpenLine::from_arg_matches(&matches)
-        .map_err(|e| PyValueError::new_err(e.to_string()))?
-        .args;
+    let args = crate::options::parse_open(argv).map_err(|e| to_py(e, While::Reading))?;
     let loaded = on_thread(py, move || args.load_without_notes())?;
     loaded.map(PyVolume::new).map_err(|e| to_py(e, While::Reading))
 }
@@ -192,6 +178,18 @@ pub fn from_bytes(
     if shape.len() != 3 || !array.is_c_contiguous() {
         return Err(bad(format!(
             "an array of shape (z, y, x), C-ordered, is needed; got shape {shape:?}"
+        )));
+    }
+    // The bytes read below are the array's only if its elements are what `dtype` says.
+    let descr = array.dtype();
+    let kind = match voxel_type {
+        VoxelType::U8 | VoxelType::U16 | VoxelType::U32 => b'u',
+        VoxelType::I8 | VoxelType::I16 | VoxelType::I32 => b'i',
+        VoxelType::F32 | VoxelType::F64 => b'f',
+    };
+    if descr.itemsize() != voxel_type.size() || descr.kind() != kind || descr.is_native_byteorder() == Some(false) {
+        return Err(bad(format!(
+            "the array's dtype is not {dtype} in the host's byte order"
         )));
     }
     let too_big = |n: usize| u32::try_from(n).map_err(|_| bad(format!("an axis of {n} voxels is too long")));

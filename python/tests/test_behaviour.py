@@ -40,6 +40,22 @@ def test_bad_files_are_os_errors(tmp_path):
         volcast.render(short)
 
 
+def test_the_native_layer_checks_the_dtype_it_is_told():
+    from volcast import _volcast
+
+    with pytest.raises(ValueError, match="dtype"):
+        _volcast.from_bytes(np.zeros((2, 2, 2), np.uint8), "float64", "x", (1.0, 1.0, 1.0))
+    with pytest.raises(ValueError, match="dtype"):
+        _volcast.from_bytes(np.zeros((2, 2, 2), ">u2"), "uint16", "x", (1.0, 1.0, 1.0))
+
+
+def test_unknown_keywords_are_type_errors(tmp_path):
+    with pytest.raises(TypeError, match="open"):
+        volcast.open(tmp_path / "x.raw", dimz=(1, 2, 3))
+    with pytest.raises(TypeError, match="view"):
+        volcast.view(np.zeros((4, 4, 4), np.uint8), slicez=True)
+
+
 def test_options_for_reading_a_file_are_refused_with_a_volume():
     with pytest.raises(ValueError, match="volcast.open"):
         volcast.render(np.zeros((4, 4, 4), np.uint8), dims=(4, 4, 4))

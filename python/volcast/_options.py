@@ -30,9 +30,11 @@ _SPECS: Dict[str, Dict[str, Option]] = {}
 
 
 def options(command: str = "render") -> Dict[str, Option]:
-    """Every option of ``volcast render`` (or ``view``) as a keyword argument, by keyword."""
+    """Every option of ``volcast render`` (or ``view``, or ``open``: how a file is read) as a keyword, by keyword."""
     if command not in _SPECS:
-        listing = _volcast.render_options() if command == "render" else _volcast.view_options()
+        listing = {"render": _volcast.render_options, "view": _volcast.view_options, "open": _volcast.open_options}[
+            command
+        ]()
         _SPECS[command] = {o[0]: Option(*o) for o in listing}
     return _SPECS[command]
 

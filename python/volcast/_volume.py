@@ -147,20 +147,9 @@ def open(path: "str | os.PathLike[str]", **options: Any) -> Volume:  # noqa: A00
     ``spacing=(sx, sy, sz)``, ``endian=``, ``header_bytes=``, ``series=``, ``channel=``, ``time=``, ``max_dim=``,
     ``host_budget="4G"``, ``cache_dir=``, ``no_cache=True``, ``array=`` (a VTK file's array). Raises ``OSError``
     naming the file and the problem where it cannot be read."""
-    from ._options import _text
+    from ._options import argv as to_argv
 
-    argv = [os.fspath(path)]
-    keys = {"type": "--type"}
-    for k, v in options.items():
-        if v is None or v is False:
-            continue
-        flag = keys.get(k, "--" + k.replace("_", "-"))
-        if v is True:
-            argv.append(flag)
-        elif k in ("dims", "spacing"):
-            argv += [flag] + [_text(k, x) for x in v]
-        else:
-            argv.append(f"{flag}={_text(k, v)}")
+    argv = to_argv("open", options) + ["--", os.fspath(path)]
     native = _volcast.open(argv)
     return Volume(native)
 
