@@ -26,6 +26,7 @@ fn _volcast(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(options::preset_tf, m)?)?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(render::movie, m)?)?;
+    m.add_function(wrap_pyfunction!(render::view_state, m)?)?;
     m.add_function(wrap_pyfunction!(view::view, m)?)?;
     m.add_function(wrap_pyfunction!(device::shutdown, m)?)?;
     m.add_function(wrap_pyfunction!(device::device_name, m)?)?;

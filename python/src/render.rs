@@ -212,3 +212,50 @@ pub fn movie(
     })?;
     wait(py, rx, Some(&stop))?.map_err(|e| to_py(e, While::Rendering))
 }
+
+/// Where the options say the volume comes from, as a view state records it (nothing for a volume held in Python).
+fn volume_ref(args: &RenderArgs, spacing: [f32; 3]) -> volcast::scene::view_state::VolumeRef {
+    let a = &args.volume;
+    volcast::scene::view_state::VolumeRef {
+        path: a
+            .file
+            .as_ref()
+            .map(|p| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone())),
+        builtin: a.builtin.clone(),
+        builtin_size: a.builtin_size,
+        raw_dims: a.dims.as_ref().map(|d| [d[0], d[1], d[2]]),
+        raw_type: a.voxel_type.clone(),
+        raw_spacing: a.spacing.as_ref().map(|s| [s[0], s[1], s[2]]),
+        spacing,
+        time: a.time.unwrap_or(0),
+        channel: a.channel,
+    }
+}
+
+/// The view state of `argv`'s options shown on `volume` or on the volume they name: the JSON the viewer's F12
+/// writes, which `--state` and `--keyframes` read.
+#[pyfunction]
+#[pyo3(signature = (volume, argv, tf_json=None))]
+pub fn view_state(
+    py: Python<'_>,
+    volume: Option<PyRef<'_, PyVolume>>,
+    argv: Vec<String>,
+    tf_json: Option<String>,
+) -> PyResult<String> {
+    let args = parse_render(argv, tf_json).map_err(|e| to_py(e, While::Rendering))?;
+    let held = held(&args, volume.as_deref()).map_err(|e| to_py(e, While::Rendering))?;
+    let (args, held) = for_held(args, held);
+    let state = crate::wait::on_thread(py, move || -> anyhow::Result<String> {
+        let (spacing, settings) = match &held {
+            Some((_, v)) => (v.spacing(), steps::view_settings(&args, v)?),
+            None => steps::render_view(&args).map(|(v, s)| (v.spacing(), s))?,
+        };
+        let state = volcast::scene::view_state::ViewState {
+            volume: volume_ref(&args, spacing),
+            settings,
+            viewer: None,
+        };
+        Ok(state.to_json())
+    })?;
+    state.map_err(|e| to_py(e, While::Rendering))
+}

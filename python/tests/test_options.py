@@ -91,3 +91,28 @@ def test_values_follow_the_command_lines_forms():
     assert argv("render", {"clip_plane": np.array([0.0, 0.0, 1.0])}) == ["--clip-plane=0.0,0.0,1.0"]
     with pytest.raises(TypeError):
         argv("render", {"shadows": "yes"})
+
+
+def test_a_keyframed_movie_of_dicts_passes_through_its_keys(tmp_path):
+    a = np.random.default_rng(8).integers(0, 255, (20, 24, 28), dtype=np.uint8)
+    keys = [{"azimuth": 0}, {"azimuth": 90, "window": (0.3, 1)}, {"azimuth": 180}]
+    gif = volcast.movie(a, tmp_path / "path.png", keyframes=keys, frames=5, size=32, preset="qt-example")
+    assert gif == tmp_path / "path.gif" and gif.exists()
+    from PIL import Image as PILImage
+
+    frames = [np.asarray(PILImage.open(tmp_path / f"path-{k:04}.png").convert("RGBA")) for k in range(5)]
+    # Frames 0, 2 and 4 are the keys exactly; the states hold the options given beside them.
+    for k, key in zip((0, 2, 4), keys):
+        assert np.array_equal(frames[k], volcast.render(a, size=32, preset="qt-example", **key)), k
+    state = json.loads(volcast.view_state(a, azimuth=90, size=32))
+    assert state["width"] == 32 and state["volume"]["path"] is None
+
+
+def test_camera_spreads_into_its_options():
+    a = np.random.default_rng(9).integers(0, 255, (16, 16, 16), dtype=np.uint8)
+    assert np.array_equal(
+        volcast.render(a, size=24, camera={"azimuth": 40, "elevation": -10}),
+        volcast.render(a, size=24, azimuth=40, elevation=-10),
+    )
+    with pytest.raises(TypeError):
+        volcast.render(a, camera={"azimuth": 1}, azimuth=2)

@@ -10,6 +10,7 @@ widget. The guide: docs/python.md in the repository.
 from __future__ import annotations
 
 import atexit
+import builtins
 import os
 import pathlib
 import sys
@@ -26,13 +27,33 @@ from ._volume import Volume, builtin, open
 
 __all__ = [
     "Image", "Option", "Scene", "TransferFunction", "Volume", "builtin", "device", "movie", "open", "options",
-    "png_bytes", "render", "shutdown", "view", "volume", "widget",
+    "png_bytes", "render", "shutdown", "view", "view_state", "volume", "widget",
 ]
 __version__ = "0.1.0"
+builtins_open = builtins.open  # `open` here is volcast.open
+
+
+#: The options a ``camera=`` mapping may hold (the command line's camera options).
+CAMERA = ("azimuth", "elevation", "distance", "eye", "look_at", "view_dir", "view", "fov", "ortho", "voxel_axes")
+
+
+def _camera(options_: Dict[str, Any]) -> None:
+    """Spreads ``camera={"azimuth": 30, ...}`` into the options it stands for."""
+    camera = options_.pop("camera", None)
+    if camera is None:
+        return
+    unknown = set(camera) - set(CAMERA)
+    if unknown:
+        raise TypeError(f"camera= takes {', '.join(CAMERA)}; not {', '.join(sorted(unknown))}")
+    twice = set(camera) & set(options_)
+    if twice:
+        raise TypeError(f"{', '.join(sorted(twice))} given both in camera= and as keywords")
+    options_.update(camera)
 
 
 def _command(source: Any, placement: Dict[str, Any], command: str, options_: Dict[str, Any]):
     """The native volume (or None), the argument list and the transfer function's JSON of a call."""
+    _camera(options_)
     volume, path = as_source(source, **{k: v for k, v in placement.items() if v is not None})
     tf = options_.pop("tf", None)
     tf_json = None
@@ -60,7 +81,7 @@ def render(
     ``volume`` is a numpy array of shape (z, y, x) (placed by ``spacing``/``origin`` or ``affine``, as
     ``Volume.from_array``), a ``Volume``, a path, a nibabel or SimpleITK image, or a zarr or dask array; or None with
     ``builtin="helix"``. Every other keyword is an option of ``volcast render``: ``size=(640, 480)``,
-    ``azimuth=30``, ``view="left"``, ``preset="ct-bone"`` or ``tf=TransferFunction(...)``, ``mode="mip"``,
+    ``azimuth=30`` (or ``camera={"azimuth": 30, "elevation": 10}``), ``view="left"``, ``preset="ct-bone"`` or ``tf=TransferFunction(...)``, ``mode="mip"``,
     ``window=(0.1, 1)``, ``shading=True``, ``quality="draft"``, ``clip_plane=(0, 0, 1, 0)``, ``output="f.png"``
     (also writes the PNG), ... ``timings=True`` adds ``frame.timings``, the medians (ms) of ``frames=`` more frames
     (wall, GPU, per pass); ``memory=True`` adds ``frame.memory``, the command line's memory line. The device is made once per process and reused; a volume rendered again is not
@@ -88,15 +109,53 @@ def movie(
     origin: Any = None,
     **options: Any,
 ) -> pathlib.Path:
-    """Writes a turntable (``turntable=N`` frames once around) or a keyframed movie (``keyframes=[state.json,
-    ...]`` and ``frames=N``) as ``volcast render --turntable`` does: ``NAME-0000.png`` … beside ``output`` (NAME.png)
-    and a looping ``NAME.gif`` (``fps=``), which is returned. Other keywords as ``render``. Ctrl+C stops it and
-    removes what it wrote."""
+    """Writes a turntable (``turntable=N`` frames once around) or a keyframed movie (``keyframes=[...]`` and
+    ``frames=N``) as ``volcast render --turntable`` does: ``NAME-0000.png`` … beside ``output`` (NAME.png) and a
+    looping ``NAME.gif`` (``fps=``), which is returned. A keyframe is a view-state file (the viewer's F12, or
+    ``view_state``) or a dict of options (``{"azimuth": 90, "window": (0.2, 1)}``) over the other keywords.
+    Other keywords as ``render``. Ctrl+C stops it and removes what it wrote."""
+    placement = dict(spacing=spacing, affine=affine, origin=origin)
+    if keyframes and any(isinstance(k, dict) for k in keyframes):
+        # Read once, not once per keyframe.
+        held = None if volume is None else _to_volume(volume, placement)
+        return _keyframed(held, output, keyframes, options)
     options.update(output=output, turntable=turntable, keyframes=keyframes)
-    native, argv, tf_json = _command(volume, dict(spacing=spacing, affine=affine, origin=origin), "render", options)
+    native, argv, tf_json = _command(volume, placement, "render", options)
     _volcast.movie(native, argv, tf_json)
     out = pathlib.Path(output)
     return out.with_name(out.stem + ".gif")
+
+
+#: Options of a keyframed movie itself; the others make its keyframes' view states.
+_MOVIE = ("frames", "fps", "validate", "device", "texture", "brick_size", "host_budget", "gpu_budget", "builtin",
+          "builtin_size")
+
+
+def _keyframed(volume: Any, output: Any, keyframes: list, options: Dict[str, Any]) -> pathlib.Path:
+    """A keyframed movie of dicts of options: each becomes a view-state file in a temporary folder."""
+    import tempfile
+
+    movie_options = {k: options.pop(k) for k in _MOVIE if k in options}
+    source = {k: movie_options[k] for k in ("builtin", "builtin_size") if k in movie_options}
+    with tempfile.TemporaryDirectory(prefix="volcast-keyframes-") as folder:
+        files = []
+        for k, key in enumerate(keyframes):
+            path = key
+            if isinstance(key, dict):
+                path = os.path.join(folder, f"key-{k:04}.json")
+                with builtins_open(path, "w", encoding="utf-8") as f:
+                    f.write(view_state(volume, **{**options, **source, **key}))
+            files.append(os.fspath(path))
+        return movie(volume, output, keyframes=files, **movie_options)
+
+
+def view_state(volume: Any = None, **options: Any) -> str:
+    """The view state of ``render``'s options on ``volume``, as JSON: what the viewer's F12 saves and
+    ``render(state=...)`` and ``movie(keyframes=[...])`` read (camera, transfer function, mode, lighting, size, ...).
+    """
+    placement = {k: options.pop(k) for k in ("spacing", "affine", "origin") if k in options}
+    native, argv, tf_json = _command(volume, placement, "render", options)
+    return _volcast.view_state(native, argv, tf_json)
 
 
 def view(volume: Any = None, **options: Any) -> None:
@@ -111,7 +170,11 @@ def view(volume: Any = None, **options: Any) -> None:
 def volume(obj: Any, **placement: Any) -> Volume:
     """Anything ``render`` takes as a ``Volume``: an array (placed by ``spacing``/``origin``/``affine``), a nibabel
     or SimpleITK image (in its patient space), a zarr or dask array, a path (read by ``volcast.open``)."""
-    vol, path = as_source(obj, **placement)
+    return _to_volume(obj, placement)
+
+
+def _to_volume(obj: Any, placement: Dict[str, Any]) -> Volume:
+    vol, path = as_source(obj, **{k: v for k, v in placement.items() if v is not None})
     if vol is None and path is not None:
         return open(path)
     if vol is None:
