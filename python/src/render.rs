@@ -38,7 +38,12 @@ fn held(args: &RenderArgs, volume: Option<&PyVolume>) -> anyhow::Result<Option<(
     let Some(v) = volume else {
         return Ok(None);
     };
-    let given: Vec<&str> = READING.iter().copied().filter(|id| args.frame.given.has(id)).collect();
+    let given: Vec<&str> = READING
+        .iter()
+        .copied()
+        .filter(|id| args.frame.given.has(id))
+        .map(|id| if id == "voxel_type" { "type" } else { id })
+        .collect();
     if !given.is_empty() || args.volume.file.is_some() {
         return Err(UsageError(format!(
             "{} say how a file is read: give them to volcast.open (or Volume.from_array), not with a Volume",

@@ -129,3 +129,16 @@ def test_a_dask_array_is_read(tmp_path, monkeypatch):
     monkeypatch.setattr(inputs, "LAZY_LIMIT", 1000)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     assert np.array_equal(volcast.render(lazy, size=24), expected)
+
+
+def test_spacing_applies_to_a_file_as_the_option_does(cli, tmp_path):
+    raw = tmp_path / "cube_12x12x12_uint8.raw"
+    np.random.default_rng(10).integers(0, 255, (12, 12, 12), dtype=np.uint8).tofile(raw)
+    ours = volcast.render(raw, spacing=(1, 1, 3), size=32)
+    out = tmp_path / "cli.png"
+    subprocess.run([cli, "render", str(raw), "--spacing", "1", "1", "3", "--size", "32x32", "-o", str(out)], check=True)
+    from PIL import Image as PILImage
+
+    assert np.array_equal(ours, np.asarray(PILImage.open(out).convert("RGBA")))
+    with pytest.raises(ValueError, match="header"):
+        volcast.render(raw, origin=(1, 2, 3))

@@ -54,7 +54,14 @@ def _camera(options_: Dict[str, Any]) -> None:
 def _command(source: Any, placement: Dict[str, Any], command: str, options_: Dict[str, Any]):
     """The native volume (or None), the argument list and the transfer function's JSON of a call."""
     _camera(options_)
-    volume, path = as_source(source, **{k: v for k, v in placement.items() if v is not None})
+    placement = {k: v for k, v in placement.items() if v is not None}
+    if isinstance(source, (str, os.PathLike)) or source is None:
+        # A file is placed by its header; spacing= overrides it as --spacing does.
+        if set(placement) - {"spacing"}:
+            raise ValueError("origin= and affine= place arrays; a file is placed by its header (or spacing=)")
+        if "spacing" in placement:
+            options_["spacing"] = placement.pop("spacing")
+    volume, path = as_source(source, **placement)
     tf = options_.pop("tf", None)
     tf_json = None
     if isinstance(tf, TransferFunction):
@@ -187,9 +194,12 @@ class Scene:
     renders it with some options changed, ``scene.widget()`` adds sliders for the azimuth and the window."""
 
     def __init__(self, volume: Any, **options: Any) -> None:
+        if isinstance(volume, (str, os.PathLike)) or volume is None:
+            # A file is read at each render, its placement options with the others.
+            self.volume, self.options = volume, options
+            return
         placement = {k: options.pop(k) for k in ("spacing", "affine", "origin") if k in options}
-        vol, path = as_source(volume, **placement)
-        self.volume = vol if vol is not None else path
+        self.volume = _to_volume(volume, placement)
         self.options = options
 
     def render(self, **changes: Any) -> Image:

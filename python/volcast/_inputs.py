@@ -100,6 +100,8 @@ def as_source(obj: Any, **placement: Any) -> Tuple[Optional[Volume], Optional[st
     if obj is None:
         return None, None
     if isinstance(obj, Volume):
+        if placement:
+            raise ValueError(f"{', '.join(placement)}= place arrays; a Volume is placed already")
         return obj, None
     if isinstance(obj, (str, os.PathLike)):
         return None, os.fspath(obj)
