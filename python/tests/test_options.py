@@ -27,7 +27,8 @@ SAMPLES = {
     "positions": "rgba16f", "output": "OUT", "method": "compute", "timings": True, "memory": True, "colorbar": True,
     "frames": 2, "state": None, "level": 0, "turntable": None, "keyframes": None, "fps": None,
 }
-# Read-a-file options (the walk's volume is built in), the state file, and the movie's options (test_movie.py).
+# Read-a-file options (the walk's volume is built in) and the state file: test_the_file_options_apply_to_a_path;
+# the movie's options: test_the_movie_options_are_keywords.
 NOT_HERE = {"dims", "type", "endian", "header_bytes", "array", "series", "channel", "validate", "state",
             "turntable", "keyframes", "fps"}
 # Options that conflict with another sample, rendered in a call of their own.
@@ -116,3 +117,20 @@ def test_camera_spreads_into_its_options():
     )
     with pytest.raises(TypeError):
         volcast.render(a, camera={"azimuth": 1}, azimuth=2)
+
+
+def test_the_file_options_apply_to_a_path(tmp_path, data):
+    """The walk's NOT_HERE options, on sources they apply to (series and channel share the parser and the reading
+    with the command line, whose tests/cli/series.rs and zarr.rs exercise them)."""
+    voxels = np.random.default_rng(11).integers(-900, 900, (10, 12, 14)).astype(">i2")
+    raw = tmp_path / "scan.bin"
+    raw.write_bytes(b"H" * 16 + voxels.tobytes())
+    ours = volcast.render(raw, dims=(14, 12, 10), type="int16", endian="big", header_bytes=16, size=24)
+    little = volcast.Volume.from_array(voxels.astype("<i2"))
+    assert np.array_equal(ours, volcast.render(little, size=24))
+    multi = data / "vtk" / "legacy_multi_binary.vtk"
+    assert not np.array_equal(volcast.render(multi, size=24), volcast.render(multi, array="density", size=24))
+    state = tmp_path / "state.json"
+    state.write_text(volcast.view_state(little, azimuth=70, size=24, mode="mip"))
+    assert np.array_equal(volcast.render(little, state=state), volcast.render(little, azimuth=70, size=24, mode="mip"))
+    assert volcast.render(little, size=24, validate=True).shape == (24, 24, 4)
