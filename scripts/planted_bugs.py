@@ -300,6 +300,19 @@ BUGS = [
      [("src/render/skip.rs", "*o = (*o).min(x.min(y).max(d8));", "*o = (*o).min(x.max(d8));")]),
 ]
 
+# The Python module's rules (python/): run against its pytest suite (test_command).
+BUGS += [
+    ("array-axes-reversed", "an array of shape (z, y, x) is taken as x, y, z dims (numpy's order not reversed)",
+     [("python/src/volume.rs", "let dims = [too_big(shape[2])?, too_big(shape[1])?, too_big(shape[0])?];",
+       "let dims = [too_big(shape[0])?, too_big(shape[1])?, too_big(shape[2])?];")]),
+    ("nibabel-not-transposed", "a nibabel image's (x, y, z) array is taken as (z, y, x) under its affine",
+     [("python/volcast/_inputs.py", "return Volume.from_array(data.T, affine=", "return Volume.from_array(data, affine=")]),
+    ("sitk-lps-kept", "a SimpleITK image's LPS placement is used as RAS",
+     [("python/volcast/_inputs.py", "ras = np.diag([-1.0, -1.0, 1.0, 1.0]) @ lps", "ras = lps")]),
+    ("size-keyword-as-list", "size=(w, h) becomes '--size w,h', which the command line refuses",
+     [("python/volcast/_options.py", 'sep = "x" if keyword == "size"', 'sep = "," if keyword == "size"')]),
+]
+
 ROOT = Path(__file__).resolve().parent.parent
 SCRATCH = Path(os.environ.get("PLANTED_SCRATCH", "/tmp/volcast-planted"))
 
@@ -325,10 +338,24 @@ def scratch_copy():
     return tree
 
 
-def test_command(edits):
+def python_env(tree, env):
+    """SCRATCH/venv with the Python tests' pinned packages (made once)."""
+    venv = SCRATCH / "venv"
+    if not (venv / "bin" / "python").exists():
+        run([sys.executable, "-m", "venv", str(venv)], tree, env)
+        run([str(venv / "bin" / "pip"), "install", "-q", "-r", "python/tests/requirements.txt"], tree, env)
+    return venv
+
+
+def test_command(edits, tree=None, env=None):
     """The tests a bug is run against: all of them, except the viewer's X tests (about five of the suite's six
     minutes) where the bug lies outside the viewer. Those compare the window with `render --state`, which draws
-    through the same renderer, so a bug in the renderer, a reader or the transfer function shows in both alike."""
+    through the same renderer, so a bug in the renderer, a reader or the transfer function shows in both alike.
+    A bug in the Python module (python/) is run against its pytest suite, the module built from the scratch tree."""
+    if all(rel.startswith("python/") for rel, _, _ in edits):
+        venv = python_env(tree, env)
+        return ["bash", "-c", f"{venv}/bin/pip install -q ./python 2>&1 && {venv}/bin/python -m pytest -q -rf "
+                "python/tests 2>&1"]
     cmd = ["cargo", "test", "--release", "--no-fail-fast"]
     if any(rel.startswith(("src/viewer/", "tests/viewer/")) for rel, _, _ in edits):
         return cmd
@@ -347,6 +374,9 @@ def failing_tests(output):
         m = re.match(r"test (\S+) \.\.\. FAILED", line)
         if m:
             failed.append(f"{binary}::{m.group(1)}")
+        m = re.match(r"FAILED python/tests/(\S+)", line)
+        if m:
+            failed.append(m.group(1).replace(".py::", "::"))
     return failed
 
 
@@ -362,6 +392,7 @@ def main():
     bugs = [b for b in BUGS if not args.only or b[0] in args.only]
     tree = scratch_copy()
     env = dict(os.environ, CARGO_TARGET_DIR=str(SCRATCH / "target"), CI="true")
+    env["VOLCAST_BIN"] = str(SCRATCH / "target" / "release" / "volcast")
     env.setdefault("XDG_RUNTIME_DIR", str(SCRATCH / "xdg"))
     Path(env["XDG_RUNTIME_DIR"]).mkdir(parents=True, exist_ok=True)
     logs = SCRATCH / "logs"
@@ -391,7 +422,7 @@ def main():
                 (tree / rel).write_text(text)
             continue
         start = time.time()
-        out = run(test_command(edits), tree, env, logs / f"{name}.log")
+        out = run(test_command(edits, tree, env), tree, env, logs / f"{name}.log")
         for rel, text in originals.items():
             (tree / rel).write_text(text)
         failed = failing_tests(out.stdout)
