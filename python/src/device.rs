@@ -123,6 +123,19 @@ pub fn shutdown(py: Python<'_>) -> PyResult<Option<(bool, usize, usize)>> {
     crate::wait::wait(py, rx, None)
 }
 
+/// The validation layer's error and warning counts so far on the device kept (None: no device, or not validating).
+#[pyfunction]
+pub fn validation_counts(py: Python<'_>) -> PyResult<Option<(usize, usize)>> {
+    let rx = submit(|slot| {
+        let d = slot.device.as_ref()?;
+        let log = &d.gpu.log;
+        d.gpu
+            .validation_enabled()
+            .then(|| (log.error_count(), log.warning_count()))
+    })?;
+    crate::wait::wait(py, rx, None)
+}
+
 /// The name of the device renders run on (made now if none is yet, with the default options).
 #[pyfunction]
 pub fn device_name(py: Python<'_>) -> PyResult<String> {

@@ -29,6 +29,7 @@ fn _volcast(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::view_state, m)?)?;
     m.add_function(wrap_pyfunction!(view::view, m)?)?;
     m.add_function(wrap_pyfunction!(device::shutdown, m)?)?;
+    m.add_function(wrap_pyfunction!(device::validation_counts, m)?)?;
     m.add_function(wrap_pyfunction!(device::device_name, m)?)?;
     Ok(())
 }

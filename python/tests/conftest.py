@@ -6,6 +6,10 @@ import shutil
 
 import pytest
 
+# Every test renders under the Khronos validation layer with synchronization validation (the processes the tests
+# start inherit it); `validated` below fails a test after which the layer has said anything.
+os.environ["VOLCAST_VALIDATION"] = "1"
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SHARED = ROOT.parent / "shared" / "data"
 IN_CI = os.environ.get("CI") == "true"
@@ -36,3 +40,16 @@ def shared() -> pathlib.Path:
 @pytest.fixture(scope="session")
 def data() -> pathlib.Path:
     return ROOT / "tests" / "data"
+
+
+@pytest.fixture(autouse=True)
+def validated():
+    """Fails the test if the validation layer reported an error or a warning during it (the device is kept across
+    tests, so its counts only grow: any growth is this test's); at the end of the session, leaks are counted by
+    `volcast.shutdown()` in test_zz_shutdown.py."""
+    from volcast import _volcast
+
+    before = _volcast.validation_counts() or (0, 0)
+    yield
+    after = _volcast.validation_counts() or (0, 0)
+    assert after == before, f"validation: {after[0] - before[0]} errors, {after[1] - before[1]} warnings"
