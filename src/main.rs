@@ -8,9 +8,7 @@ use cli::args::{BenchArgs, CacheArgs, CompareArgs, ConvertArgs, GpuArgs, InfoArg
 use cli::commands::{bench, compare, devices, info, view};
 use cli::render::render;
 use std::process::ExitCode;
-use volcast::gpu::GpuError;
 use volcast::scene::quality::Quality;
-use volcast::viewer::ViewerError;
 
 #[derive(Parser)]
 #[command(
@@ -126,16 +124,8 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", cli::error_text(&e));
-            let unavailable = e.downcast_ref::<GpuError>().is_some_and(|g| g.is_unavailable())
-                || e.downcast_ref::<ViewerError>().is_some_and(|v| match v {
-                    ViewerError::NoDisplay(_) => true,
-                    ViewerError::Gpu(g) => g.is_unavailable(),
-                    ViewerError::Other(_) => false,
-                });
-            let usage = e
-                .downcast_ref::<volcast::movie::MovieError>()
-                .is_some_and(|m| matches!(m, volcast::movie::MovieError::Usage(_)))
-                || e.downcast_ref::<cli::UsageError>().is_some();
+            let unavailable = cli::is_unavailable(&e);
+            let usage = cli::is_usage(&e);
             ExitCode::from(if unavailable {
                 2
             } else if usage {

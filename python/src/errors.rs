@@ -4,7 +4,6 @@
 
 use pyo3::exceptions::{PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::PyErr;
-use volcast::gpu::GpuError;
 use volcast::volume::VolumeError;
 
 /// What the failing call was doing, which decides the exception a volume error becomes.
@@ -22,26 +21,13 @@ pub enum While {
 const INSTALL: &str = "volcast needs a Vulkan driver: on Debian or Ubuntu `sudo apt-get install \
                        mesa-vulkan-drivers` (lavapipe, no GPU needed), or your GPU's driver";
 
-fn unavailable(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| {
-        c.downcast_ref::<GpuError>().is_some_and(GpuError::is_unavailable)
-            || c.downcast_ref::<volcast::viewer::ViewerError>()
-                .is_some_and(|v| match v {
-                    volcast::viewer::ViewerError::Gpu(g) => g.is_unavailable(),
-                    _ => false,
-                })
-    })
-}
-
+/// The command line's usage errors, and what only Python meets as one: a transfer function given as points that
+/// is not one (`TfError` other than a file's).
 fn usage(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| {
-        c.downcast_ref::<volcast::cli::UsageError>().is_some()
-            || c.downcast_ref::<clap::Error>().is_some()
-            || c.downcast_ref::<volcast::transfer::function::TfError>()
-                .is_some_and(|t| !matches!(t, volcast::transfer::function::TfError::Io { .. }))
-            || c.downcast_ref::<volcast::movie::MovieError>()
-                .is_some_and(|m| matches!(m, volcast::movie::MovieError::Usage(_)))
-    })
+    use volcast::transfer::function::TfError;
+    volcast::cli::is_usage(e)
+        || e.downcast_ref::<TfError>()
+            .is_some_and(|t| !matches!(t, TfError::Io { .. }))
 }
 
 fn stopped(e: &anyhow::Error) -> bool {
@@ -54,8 +40,11 @@ fn stopped(e: &anyhow::Error) -> bool {
 /// `e` as the Python exception a user of `while_` expects.
 pub fn to_py(e: anyhow::Error, while_: While) -> PyErr {
     let text = volcast::cli::error_text(&e);
-    if unavailable(&e) {
-        return PyRuntimeError::new_err(format!("{text}. {INSTALL}"));
+    if volcast::cli::is_unavailable(&e) {
+        let display = e
+            .downcast_ref::<volcast::viewer::ViewerError>()
+            .is_some_and(|v| matches!(v, volcast::viewer::ViewerError::NoDisplay(_)));
+        return PyRuntimeError::new_err(if display { text } else { format!("{text}. {INSTALL}") });
     }
     if stopped(&e) {
         return PyKeyboardInterrupt::new_err(text);

@@ -33,10 +33,20 @@ const READING: &[&str] = &[
     "no_cache",
 ];
 
-/// The volume a call renders: one the caller holds, or the one the options name (FILE or `--builtin`).
-fn held(args: &RenderArgs, volume: Option<&PyVolume>) -> anyhow::Result<Option<(u64, Arc<Volume>, bool)>> {
+/// A volume the caller holds, with the number that tells it from every other.
+type Held = (u64, Arc<Volume>);
+
+/// A call's arguments from `argv` (a transfer function as JSON counting as `--tf`), and the volume the caller holds,
+/// if any, with its number. A held volume takes no file-reading option, and is classified as a file is (the
+/// automatic transfer function), or as `--builtin` is (the colormap model) where `volcast.builtin` made it.
+fn prepared(
+    volume: Option<&PyVolume>,
+    argv: Vec<String>,
+    tf_json: Option<String>,
+) -> PyResult<(RenderArgs, Option<Held>)> {
+    let mut args = parse_render(argv, tf_json).map_err(|e| to_py(e, While::Rendering))?;
     let Some(v) = volume else {
-        return Ok(None);
+        return Ok((args, None));
     };
     let given: Vec<&str> = READING
         .iter()
@@ -45,23 +55,14 @@ fn held(args: &RenderArgs, volume: Option<&PyVolume>) -> anyhow::Result<Option<(
         .map(|id| if id == "voxel_type" { "type" } else { id })
         .collect();
     if !given.is_empty() || args.volume.file.is_some() {
-        return Err(UsageError(format!(
+        let e = UsageError(format!(
             "{} say how a file is read: give them to volcast.open (or Volume.from_array), not with a Volume",
             given.join(", ")
-        ))
-        .into());
+        ));
+        return Err(to_py(e.into(), While::Rendering));
     }
-    Ok(Some((v.id, v.inner.clone(), v.builtin)))
-}
-
-/// `args` for a call on `held`: a built-in volume is classified as `--builtin` has it (the colormap model), any
-/// other as a file is (the automatic transfer function).
-fn for_held(mut args: RenderArgs, held: Option<(u64, Arc<Volume>, bool)>) -> (RenderArgs, Option<(u64, Arc<Volume>)>) {
-    let Some((id, v, builtin)) = held else {
-        return (args, None);
-    };
-    args.frame.given.from_file = !builtin;
-    (args, Some((id, v)))
+    args.frame.given.from_file = !v.builtin;
+    Ok((args, Some((v.id, v.inner.clone()))))
 }
 
 /// Places `volume` (number `id`) unless it is the one placed under the same placement options.
@@ -108,7 +109,19 @@ fn frame(
     steps::make_resident(gpu, headless, args, volume_shown, &s)?;
     let image = steps::image(gpu, headless, args, volume_shown, &s)?;
     let timings = if args.timings {
-        timed(gpu, headless, args, &s)?
+        let t = steps::time_frames(gpu, headless, args, &s)?;
+        let passes = [
+            ("gpu_ms", t.gpu),
+            ("entry_ms", t.entry),
+            ("exit_ms", t.exit),
+            ("march_ms", t.march),
+        ];
+        let present = passes
+            .into_iter()
+            .filter_map(|(name, ms)| Some((name.to_string(), ms?)));
+        std::iter::once(("wall_ms".to_string(), t.wall))
+            .chain(present)
+            .collect()
     } else {
         Vec::new()
     };
@@ -127,39 +140,6 @@ fn frame(
     Ok((image, (timings, memory)))
 }
 
-fn median(mut v: Vec<f64>) -> Option<f64> {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied()
-}
-
-/// `--timings`: the medians of `--frames` frames (default 5) after the one drawn, as `volcast render` prints
-/// them: wall time and the GPU's per pass.
-fn timed(
-    gpu: &volcast::gpu::Gpu,
-    headless: &mut volcast::render::headless::Headless,
-    args: &RenderArgs,
-    s: &volcast::scene::settings::RenderSettings,
-) -> anyhow::Result<Vec<(String, f64)>> {
-    let mut columns: [Vec<f64>; 5] = Default::default();
-    for _ in 0..args.frames.unwrap_or(5).max(1) {
-        let t = std::time::Instant::now();
-        let frame = headless.render(gpu, s)?;
-        columns[0].push(t.elapsed().as_secs_f64() * 1e3);
-        if let Some(tm) = frame.timings {
-            columns[1].push(tm.total_ms);
-            columns[2].extend(tm.entry_ms);
-            columns[3].extend(tm.exit_ms);
-            columns[4].push(tm.march_ms);
-        }
-    }
-    let names = ["wall_ms", "gpu_ms", "entry_ms", "exit_ms", "march_ms"];
-    Ok(names
-        .iter()
-        .zip(columns)
-        .filter_map(|(n, c)| median(c).map(|m| (n.to_string(), m)))
-        .collect())
-}
-
 /// Renders one frame with `volcast render`'s options (`argv`) of `volume`, or of the volume they name; returns it
 /// as an (H, W, 4) uint8 array of RGBA (sRGB, straight alpha) with what `--timings` and `--memory` asked for, and
 /// writes it to `--output` where that is given.
@@ -171,9 +151,7 @@ pub fn render<'py>(
     argv: Vec<String>,
     tf_json: Option<String>,
 ) -> PyResult<(Bound<'py, PyArray3<u8>>, Report)> {
-    let args = parse_render(argv, tf_json).map_err(|e| to_py(e, While::Rendering))?;
-    let held = held(&args, volume.as_deref()).map_err(|e| to_py(e, While::Rendering))?;
-    let (args, held) = for_held(args, held);
+    let (args, held) = prepared(volume.as_deref(), argv, tf_json)?;
     let rx = crate::device::submit(move |slot| frame(slot.device(&args.gpu)?, &args, held))?;
     let (image, report) = wait(py, rx, None)?.map_err(|e| to_py(e, While::Rendering))?;
     let (w, h) = image.dimensions();
@@ -193,14 +171,12 @@ pub fn movie(
     argv: Vec<String>,
     tf_json: Option<String>,
 ) -> PyResult<String> {
-    let args = parse_render(argv, tf_json).map_err(|e| to_py(e, While::Rendering))?;
+    let (args, held) = prepared(volume.as_deref(), argv, tf_json)?;
     if args.turntable.is_none() && args.keyframes.is_empty() {
         return Err(pyo3::exceptions::PyValueError::new_err(
             "a movie needs turntable=N or keyframes=[...]",
         ));
     }
-    let held = held(&args, volume.as_deref()).map_err(|e| to_py(e, While::Rendering))?;
-    let (args, held) = for_held(args, held);
     let stop = Arc::new(AtomicBool::new(false));
     let stopping = stop.clone();
     let rx = crate::device::submit(move |slot| -> anyhow::Result<String> {
@@ -247,9 +223,7 @@ pub fn view_state(
     argv: Vec<String>,
     tf_json: Option<String>,
 ) -> PyResult<String> {
-    let args = parse_render(argv, tf_json).map_err(|e| to_py(e, While::Rendering))?;
-    let held = held(&args, volume.as_deref()).map_err(|e| to_py(e, While::Rendering))?;
-    let (args, held) = for_held(args, held);
+    let (args, held) = prepared(volume.as_deref(), argv, tf_json)?;
     let state = crate::wait::on_thread(py, move || -> anyhow::Result<String> {
         let (spacing, settings) = match &held {
             Some((_, v)) => (v.spacing(), steps::view_settings(&args, v)?),

@@ -50,3 +50,24 @@ pub fn error_text(e: &anyhow::Error) -> String {
     }
     text
 }
+
+/// Whether `e` says there is no usable Vulkan device or no display (exit status 2; the Python module's
+/// `RuntimeError` that says what to install).
+pub fn is_unavailable(e: &anyhow::Error) -> bool {
+    use crate::viewer::ViewerError;
+    e.downcast_ref::<crate::gpu::GpuError>()
+        .is_some_and(|g| g.is_unavailable())
+        || e.downcast_ref::<ViewerError>().is_some_and(|v| match v {
+            ViewerError::NoDisplay(_) => true,
+            ViewerError::Gpu(g) => g.is_unavailable(),
+            ViewerError::Other(_) => false,
+        })
+}
+
+/// Whether `e` is a usage error: a value or combination of options that cannot work (exit status 64; the Python
+/// module's `ValueError`).
+pub fn is_usage(e: &anyhow::Error) -> bool {
+    e.downcast_ref::<crate::movie::MovieError>()
+        .is_some_and(|m| matches!(m, crate::movie::MovieError::Usage(_)))
+        || e.downcast_ref::<UsageError>().is_some()
+}

@@ -10,9 +10,61 @@ use crate::volume::Volume;
 use anyhow::{Context, Result};
 use std::time::Instant;
 
-fn median(v: &mut [f64]) -> f64 {
+fn median(mut v: Vec<f64>) -> Option<f64> {
     v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
+    v.get(v.len() / 2).copied()
+}
+
+/// `--timings`: medians in ms of `--frames` frames (default 5) drawn after the first: the wall time of each, and the
+/// GPU's total and per pass where the device times them (entry and exit only with the entry/exit setup).
+pub struct FrameTimes {
+    pub frames: usize,
+    pub wall: f64,
+    pub gpu: Option<f64>,
+    pub entry: Option<f64>,
+    pub exit: Option<f64>,
+    pub march: Option<f64>,
+}
+
+/// Renders `--frames` frames of `s` and takes their medians.
+pub fn time_frames(gpu: &Gpu, headless: &mut Headless, args: &RenderArgs, s: &RenderSettings) -> Result<FrameTimes> {
+    let (mut wall, mut march, mut entry, mut exit, mut total) = (vec![], vec![], vec![], vec![], vec![]);
+    for _ in 0..args.frames.unwrap_or(5).max(1) {
+        let t = Instant::now();
+        let frame = headless.render(gpu, s)?;
+        wall.push(t.elapsed().as_secs_f64() * 1e3);
+        if let Some(tm) = frame.timings {
+            march.push(tm.march_ms);
+            total.push(tm.total_ms);
+            entry.extend(tm.entry_ms);
+            exit.extend(tm.exit_ms);
+        }
+    }
+    Ok(FrameTimes {
+        frames: wall.len(),
+        wall: median(wall).unwrap_or(0.0),
+        gpu: median(total),
+        entry: median(entry),
+        exit: median(exit),
+        march: median(march),
+    })
+}
+
+impl FrameTimes {
+    /// The line `render --timings` prints.
+    pub fn line(&self) -> String {
+        let mut line = format!("median of {} frames: {:.2} ms wall", self.frames, self.wall);
+        if let (Some(total), Some(march)) = (self.gpu, self.march) {
+            line += &format!("; GPU {total:.2} ms total");
+            match (self.entry, self.exit) {
+                (Some(entry), Some(exit)) => {
+                    line += &format!(" = entry {entry:.2} + exit {exit:.2} + march {march:.2}")
+                }
+                _ => line += &format!(" (march {march:.2})"),
+            }
+        }
+        line
+    }
 }
 
 /// The saved view `--state` names, if any.
@@ -306,31 +358,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             let t0 = Instant::now();
             let mut frame = headless.render(gpu, &s)?;
             let first_ms = t0.elapsed().as_secs_f64() * 1e3;
-            let mut timing_line = String::new();
-            if args.timings {
-                let (mut wall, mut march, mut entry, mut exit, mut total) = (vec![], vec![], vec![], vec![], vec![]);
-                for _ in 0..args.frames.unwrap_or(5).max(1) {
-                    let t = Instant::now();
-                    frame = headless.render(gpu, &s)?;
-                    wall.push(t.elapsed().as_secs_f64() * 1e3);
-                    if let Some(tm) = frame.timings {
-                        march.push(tm.march_ms);
-                        total.push(tm.total_ms);
-                        entry.extend(tm.entry_ms);
-                        exit.extend(tm.exit_ms);
-                    }
-                }
-                timing_line = format!("median of {} frames: {:.2} ms wall", wall.len(), median(&mut wall));
-                if !total.is_empty() {
-                    timing_line += &format!("; GPU {:.2} ms total", median(&mut total));
-                    if !entry.is_empty() {
-                        timing_line += &format!(" = entry {:.2} + exit {:.2}", median(&mut entry), median(&mut exit));
-                        timing_line += &format!(" + march {:.2}", median(&mut march));
-                    } else {
-                        timing_line += &format!(" (march {:.2})", median(&mut march));
-                    }
-                }
-            }
+            let timing_line = if args.timings {
+                time_frames(gpu, &mut headless, args, &s)?.line()
+            } else {
+                String::new()
+            };
             if args.colorbar {
                 frame.image = crate::render::figure::with_colorbar(&frame.image, &s, &volume);
             }
