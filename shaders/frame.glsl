@@ -37,4 +37,9 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 pool_brick;      // xyz: a brick's size in voxels of its level; w: the border in voxels
     vec4 pool_slot;       // xyz: a slot's size in texels
     vec4 pool_grid;       // xyz: level-0 bricks per axis (the page table's size); w: the step's level (rule 2)
+    // Rule 11, a rank's share of each ray (src/distributed): xyz the voxel of the whole volume where this process's
+    // texture starts (0 for a whole volume); w: 1 = write the share's premultiplied partial output (march.glsl).
+    vec4 part_origin;
+    vec4 part_lo;         // xyz: the box this process owns (texture space of the whole; -1e30/1e30 open sides)
+    vec4 part_hi;
 } frame;

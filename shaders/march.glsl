@@ -67,6 +67,10 @@ vec4 finish(vec3 color, float opacity) {
 }
 
 vec4 background_pixel() {
+    // Rule 11's partial output: nothing (a share adds nothing where its ray misses the volume).
+    if (frame.part_origin.w > 0.5) {
+        return vec4(0.0);
+    }
     return finish(vec3(0.0), 0.0);
 }
 
@@ -77,6 +81,22 @@ vec4 output_pixel(vec4 colour, uint taken) {
         return vec4(vec3(uvec3(taken, taken >> 8u, taken >> 16u) & uvec3(255u)), 255.0) / 255.0;
     }
     return colour;
+}
+
+// Rule 11 (src/distributed): whether this process composites what ends at p -- a sample, or the segment or
+// crossing ending there. The ranks' boxes split space (half-open, outer sides open), so every sample and segment of
+// a ray is composited by exactly one rank, on the one sample grid of the whole ray. A whole volume owns everything.
+bool owned(vec3 p) {
+    return all(greaterThanEqual(p, frame.part_lo.xyz)) && all(lessThan(p, frame.part_hi.xyz));
+}
+
+// Rule 11's partial output: a rank's share before the compositor merges the shares -- premultiplied linear colour and
+// opacity, not yet over the background (emission, density, surfaces).
+vec4 share_or_finish(vec3 color, float opacity, uint taken) {
+    if (frame.part_origin.w > 0.5) {
+        return vec4(color, opacity);
+    }
+    return output_pixel(finish(color, opacity), taken);
 }
 
 // Rule 7's front-to-back step, for segments and surfaces alike: `rgb` at opacity `alpha` behind what the ray has
@@ -105,13 +125,18 @@ vec4 march_projection(WalkRay ray) {
             continue;
         }
         taken += 1u;
-        float v = value_in(w.brick, ray.a + ray.dir * t);
-        if (!visible(v)) {
+        vec3 p = ray.a + ray.dir * t;
+        float v = value_in(w.brick, p);
+        if (!visible(v) || !owned(p)) {
             continue;
         }
         m = mode == MODE_MIP ? max(m, v) : min(m, v);
         sum += v;
         count += 1.0;
+    }
+    // Rule 11's partial output: the share's extreme (or sum) and its count, reduced across ranks before classifying.
+    if (frame.part_origin.w > 0.5) {
+        return vec4(mode == MODE_AVERAGE ? sum : m, count, 0.0, 0.0);
     }
     if (count == 0.0) {
         return output_pixel(background_pixel(), taken);
@@ -153,7 +178,8 @@ vec4 march_isosurface(WalkRay ray, vec3 light, bool cut_start) {
         // the ray starts: a cut face shows what is there) -- except on the clipping plane, which cuts surfaces open:
         // there the first sample meets none and only starts the next crossing's interval.
         bool rising = has_prev && v >= v_prev;
-        int meets = (cut_start && !has_prev) ? 0 : count;
+        // Rule 11: a crossing belongs to the rank owning the sample that ends its interval.
+        int meets = ((cut_start && !has_prev) || !owned(ray.a + ray.dir * t)) ? 0 : count;
         for (int j = 0; j < meets; j++) {
             int i = rising ? j : count - 1 - j;
             float iso = frame.iso_values[i];
@@ -192,7 +218,7 @@ vec4 march_isosurface(WalkRay ray, vec3 light, bool cut_start) {
         t_prev = t;
         has_prev = true;
     }
-    return output_pixel(finish(color, opacity), taken);
+    return share_or_finish(color, opacity, taken);
 }
 #else // FAMILY_EMISSION
 // A pre-integrated segment (rule 6) over `seg_steps` voxel lengths, from its mean (extinction x colour,
@@ -261,7 +287,8 @@ vec4 march_emission(WalkRay ray, vec3 light) {
         }
         // A resample only starts the next segment: the segment to it is not composited.
         vec4 c = segment_to(ray, w.brick, t, light, density_model, t_prev, v_prev, i_prev);
-        if (step == WALK_SAMPLE) {
+        // Rule 11: a segment belongs to the rank owning its end.
+        if (step == WALK_SAMPLE && owned(ray.a + ray.dir * t)) {
             taken += 1u;
             composite(color, opacity, c.rgb, c.a);
         }
@@ -271,12 +298,12 @@ vec4 march_emission(WalkRay ray, vec3 light) {
     }
     // The last segment, from the last point to the ray's end, where the march got there through bricks that hold
     // something (not by early termination; past a leap everything left is invisible).
-    if (w.reached_end && w.walked && opacity < frame.alpha.z) {
-        vec3 end = ray.a + ray.dir * ray.len;
+    vec3 end = ray.a + ray.dir * ray.len;
+    if (w.reached_end && w.walked && opacity < frame.alpha.z && owned(end)) {
         vec4 c = segment_to(ray, brick_at(end), ray.len, light, density_model, t_prev, v_prev, i_prev);
         composite(color, opacity, c.rgb, c.a);
     }
-    return output_pixel(finish(color, opacity), taken);
+    return share_or_finish(color, opacity, taken);
 }
 #endif
 

@@ -68,7 +68,7 @@ Brick brick_at(vec3 p) {
 // A volume kept as one brick (render/pool.rs): the same translation everywhere, and no page table to read (the
 // march variant without POOL_BRICKS, so that small volumes pay nothing for the pool).
 Brick brick_at(vec3 p) {
-    return Brick(frame.dims.xyz, vec3(frame.pool_brick.w));
+    return Brick(frame.dims.xyz, vec3(frame.pool_brick.w) - frame.part_origin.xyz);
 }
 #endif
 

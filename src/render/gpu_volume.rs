@@ -419,6 +419,7 @@ impl GpuVolume {
                 pool: pool.info(),
                 held: 0,
                 step_level: 0,
+                part: None,
             },
             cut: Cut::uniform(pool.grid, 0),
             pool,

@@ -11,6 +11,9 @@ use gpu_allocator::MemoryLocation;
 
 /// The format of offscreen images: 8-bit linear RGBA, written to PNG as is.
 pub const OUTPUT_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+/// The format of a rank's share (rule 11's partial output, `src/distributed`): 32-bit float RGBA, composited before
+/// anything is rounded.
+pub const SHARE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 struct Offscreen {
     image: Image,
@@ -27,14 +30,29 @@ pub struct Frame {
 pub struct Headless {
     pub renderer: Renderer,
     target: Option<Offscreen>,
+    format: vk::Format,
 }
 
 impl Headless {
     pub fn new(gpu: &Gpu) -> Result<Headless, GpuError> {
+        Headless::with_format(gpu, OUTPUT_FORMAT)
+    }
+
+    /// Offscreen images of `format`: [`OUTPUT_FORMAT`], or [`SHARE_FORMAT`] for a rank's share.
+    pub fn with_format(gpu: &Gpu, format: vk::Format) -> Result<Headless, GpuError> {
         Ok(Headless {
-            renderer: Renderer::new(gpu, OUTPUT_FORMAT, 1)?,
+            renderer: Renderer::new(gpu, format, 1)?,
             target: None,
+            format,
         })
+    }
+
+    fn bytes_per_pixel(&self) -> u64 {
+        if self.format == SHARE_FORMAT {
+            16
+        } else {
+            4
+        }
     }
 
     pub fn set_volume(&mut self, gpu: &Gpu, volume: &Volume) -> Result<(), GpuError> {
@@ -56,10 +74,10 @@ impl Headless {
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let image = Image::new(
             gpu,
-            ImageDesc::d2(OUTPUT_FORMAT, width, height, usage),
+            ImageDesc::d2(self.format, width, height, usage),
             "offscreen colour",
         )?;
-        let bytes = width as u64 * height as u64 * 4;
+        let bytes = width as u64 * height as u64 * self.bytes_per_pixel();
         match Buffer::new(
             gpu,
             bytes,
@@ -80,6 +98,33 @@ impl Headless {
 
     /// Renders one frame with `s` and reads it back. Blocks until the GPU is done.
     pub fn render(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<Frame, GpuError> {
+        if self.format != OUTPUT_FORMAT {
+            return Err(GpuError::InvalidSettings(
+                "render() reads 8-bit images; use render_share()".into(),
+            ));
+        }
+        let pixels = self.draw(gpu, s)?;
+        let image = image::RgbaImage::from_raw(s.width, s.height, pixels).ok_or(GpuError::Lost("readback size"))?;
+        Ok(Frame {
+            image,
+            timings: self.renderer.timings(gpu, 0)?,
+        })
+    }
+
+    /// Renders a rank's share with `s` (a [`SHARE_FORMAT`] target): RGBA f32 per pixel, rows top down.
+    pub fn render_share(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<Vec<f32>, GpuError> {
+        if self.format != SHARE_FORMAT {
+            return Err(GpuError::InvalidSettings("render_share() needs a float target".into()));
+        }
+        let bytes = self.draw(gpu, s)?;
+        Ok(bytes
+            .chunks_exact(4)
+            .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
+            .collect())
+    }
+
+    /// Draws `s` and returns the target's bytes.
+    fn draw(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<Vec<u8>, GpuError> {
         s.validate().map_err(GpuError::InvalidSettings)?;
         self.renderer.prepare(gpu, s)?;
         self.ensure_target(gpu, s.width, s.height)?;
@@ -100,16 +145,11 @@ impl Headless {
             }
         })?;
         recorded?;
-        let pixels = target
+        Ok(target
             .readback
             .mapped()
             .ok_or(GpuError::Lost("readback buffer is not mapped"))?
-            .to_vec();
-        let image = image::RgbaImage::from_raw(s.width, s.height, pixels).ok_or(GpuError::Lost("readback size"))?;
-        Ok(Frame {
-            image,
-            timings: self.renderer.timings(gpu, 0)?,
-        })
+            .to_vec())
     }
 
     pub fn destroy(mut self, gpu: &Gpu) {

@@ -13,6 +13,7 @@ mod init;
 pub mod levels;
 pub mod light_volume;
 pub mod march_key;
+mod part;
 pub mod placement;
 pub mod png;
 pub mod pool;
@@ -24,7 +25,8 @@ pub mod stream;
 mod texels;
 mod uniforms;
 
-pub use uniforms::{mirrors, FrameUniforms, PoolInfo, VolumeInfo};
+pub use part::{GHOST_ABOVE, GHOST_BELOW};
+pub use uniforms::{mirrors, FrameUniforms, PartInfo, PoolInfo, VolumeInfo};
 
 use crate::gpu::upload::upload_image_with;
 use gpu_volume::{image_3d_once, upload_3d, GpuVolume};

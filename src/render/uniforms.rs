@@ -56,6 +56,12 @@ pub struct FrameUniforms {
     pub pool_slot: [f32; 4],
     /// xyz: level-0 bricks per axis (the page table's size).
     pub pool_grid: [f32; 4],
+    /// Rule 11 (a rank's share, src/distributed): xyz the whole volume's voxel where this texture starts; w: 1 =
+    /// the partial output.
+    pub part_origin: [f32; 4],
+    /// xyz: the box owned, texture space of the whole (open sides at ±1e30).
+    pub part_lo: [f32; 4],
+    pub part_hi: [f32; 4],
 }
 
 /// GPU facts about the loaded volume that the uniforms need.
@@ -75,6 +81,49 @@ pub struct VolumeInfo {
     /// The march's step is `step_length` voxels of this level: the finest level the pool shows (a cut of coarser
     /// levels takes longer steps; a file's finer levels their own voxel once they are shown).
     pub step_level: u32,
+    /// Where this is one rank's share of a volume rendered over MPI (rule 11): `dims` and `geometry` are then the
+    /// whole volume's, and the texture holds only the part.
+    pub part: Option<PartInfo>,
+}
+
+/// One rank's share of a volume (rule 11, src/distributed): its texture holds the whole volume's voxels
+/// `origin .. origin + texture dims`; it composites the samples (and segments ending at them) inside `lo .. hi`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PartInfo {
+    pub origin: [u32; 3],
+    pub lo: [u32; 3],
+    pub hi: [u32; 3],
+}
+
+impl PartInfo {
+    /// The uniforms' `part_origin`, `part_lo`, `part_hi` for a volume of `dims` (a whole volume: everything owned).
+    fn uniforms(part: Option<PartInfo>, dims: [u32; 3]) -> [[f32; 4]; 3] {
+        let Some(p) = part else {
+            return [[0.0; 4], [-1e30, -1e30, -1e30, 0.0], [1e30, 1e30, 1e30, 0.0]];
+        };
+        let side = |v: u32, a: usize, open: f32| {
+            if (open < 0.0 && v == 0) || (open > 0.0 && v >= dims[a]) {
+                open
+            } else {
+                (f64::from(v) / f64::from(dims[a])) as f32
+            }
+        };
+        [
+            [p.origin[0] as f32, p.origin[1] as f32, p.origin[2] as f32, 1.0],
+            [
+                side(p.lo[0], 0, -1e30),
+                side(p.lo[1], 1, -1e30),
+                side(p.lo[2], 2, -1e30),
+                0.0,
+            ],
+            [
+                side(p.hi[0], 0, 1e30),
+                side(p.hi[1], 1, 1e30),
+                side(p.hi[2], 2, 1e30),
+                0.0,
+            ],
+        ]
+    }
 }
 
 /// The brick pool's shape, as the uniforms carry it.
@@ -274,6 +323,7 @@ impl FrameUniforms {
         let shading = s.shading.unwrap_or_default();
         let surfaces = s.isosurfaces();
         let (iso_values, iso_colors) = iso_tables(&surfaces);
+        let [part_origin, part_lo, part_hi] = PartInfo::uniforms(v.part, v.dims);
         FrameUniforms {
             tex_to_clip: m4(tex_to_clip),
             tex_to_world: m4(model),
@@ -348,6 +398,9 @@ impl FrameUniforms {
                 DVec3::from_array([0, 1, 2].map(|a| f64::from(v.dims[a].div_ceil(v.pool.brick[a].max(1))))),
                 v.step_level as f32,
             ),
+            part_origin,
+            part_lo,
+            part_hi,
         }
     }
 }

@@ -240,7 +240,8 @@ impl Volume {
     }
 
     pub fn voxel_count(&self) -> usize {
-        self.data.len()
+        // The dims' product, which `new` checks the data against (a rank's header of the whole volume holds none).
+        self.dims.iter().map(|&d| d as usize).product()
     }
 
     fn index(&self, x: u32, y: u32, z: u32) -> usize {

@@ -227,6 +227,7 @@ impl SampleCounter {
             pool: PoolInfo::whole(self.dims.map(|d| d as u32)),
             held: 0,
             step_level: 0,
+            part: None,
         };
         let u = FrameUniforms::new(s, &info);
         let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
