@@ -10,6 +10,7 @@
 
 pub mod cli;
 pub mod convert;
+pub mod distributed;
 pub mod gpu;
 pub mod measure;
 pub mod movie;

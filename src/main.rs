@@ -112,7 +112,14 @@ fn main() -> ExitCode {
             tf: None,
         }),
         Some(Command::View(a)) => view(a),
-        Some(Command::Render(a)) => render(a),
+        // Under mpirun: sort-last rendering where built with MPI (one rank included, for measuring), else refused
+        // for more than one rank.
+        Some(Command::Render(a)) => {
+            match volcast::distributed::launched_ranks().filter(|&n| n > 1 || cfg!(feature = "mpi")) {
+                Some(ranks) => distributed(a, ranks),
+                None => render(a),
+            }
+        }
         Some(Command::Compare(a)) => compare(a),
         Some(Command::Bench(a)) => bench(a),
         Some(Command::Info(a)) => info(a),
@@ -135,4 +142,19 @@ fn main() -> ExitCode {
             })
         }
     }
+}
+
+/// `render` as one of `ranks` processes started by mpirun: sort-last rendering (docs/distributed.md), where the binary
+/// was built with the feature `mpi`; else refused, rather than every rank rendering the whole and writing one file.
+#[cfg(feature = "mpi")]
+fn distributed(args: &RenderArgs, _ranks: u32) -> anyhow::Result<()> {
+    volcast::distributed::run::render(args)
+}
+
+#[cfg(not(feature = "mpi"))]
+fn distributed(_args: &RenderArgs, ranks: u32) -> anyhow::Result<()> {
+    anyhow::bail!(cli::UsageError(format!(
+        "volcast was started by mpirun as one of {ranks} processes but built without MPI: build it with `cargo build \
+         --release --features mpi` (docs/distributed.md), or run it as one process"
+    )))
 }
