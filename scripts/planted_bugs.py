@@ -123,7 +123,8 @@ BUGS = [
     ("uneven-not-resampled", "an unevenly spaced DICOM series is not resampled (slices past a gap misplaced)",
      [("src/volume/dicom/geometry.rs", "const UNEVEN_TOLERANCE: f64 = 0.05;", "const UNEVEN_TOLERANCE: f64 = 50.0;")]),
     ("clip-plane-caps-iso", "the clipping plane caps iso-surfaces (the first sample meets them) instead of cutting them open",
-     [("shaders/march.glsl", "int meets = (cut_start && !has_prev) ? 0 : count;", "int meets = count;")]),
+     [("shaders/march.glsl", "int meets = ((cut_start && !has_prev) || !owned(ray.a + ray.dir * t)) ? 0 : count;",
+       "int meets = !owned(ray.a + ray.dir * t) ? 0 : count;")]),
     ("clip-normal-not-transposed", "the clipping plane's normal goes to texture space by the placement, not its transpose",
      [("src/scene/clip.rs", "let m = DMat3::from_mat4(to_world).transpose() * n;",
        "let m = DMat3::from_mat4(to_world) * n;")]),
@@ -313,6 +314,27 @@ BUGS += [
      [("python/volcast/_options.py", 'sep = "x" if keyword == "size"', 'sep = "," if keyword == "size"')]),
 ]
 
+# Sort-last rendering over MPI (src/distributed, rule 11 in src/render/part.rs and march.glsl): run against
+# tests/mpi under mpirun (test_command), with the feature `mpi`.
+BUGS += [
+    ("kd-order-reversed", "the shares are composited back to front (the k-d tree's sides swapped)",
+     [("src/distributed/decompose.rs", "let (first, second) = if below_first { (below, above) } else { (above, below) };",
+       "let (first, second) = if below_first { (above, below) } else { (below, above) };")]),
+    ("no-ghost-layer", "a rank holds only its own box: filtering, gradients and segments at its faces read clamped voxels",
+     [("src/render/part.rs", "pub const GHOST_BELOW: u32 = 2 * BRICK;", "pub const GHOST_BELOW: u32 = 0;"),
+      ("src/render/part.rs", "pub const GHOST_ABOVE: u32 = BRICK + 2;", "pub const GHOST_ABOVE: u32 = 0;")]),
+    ("no-ring-of-bricks", "the bricks around a rank's box are empty in its skip grid: a strided segment entering the box "
+     "starts at the wrong sample",
+     [("src/render/part.rs", "let first = [0, 1, 2].map(|a| (part.lo[a] / BRICK).saturating_sub(1));",
+       "let first = [0, 1, 2].map(|a| part.lo[a] / BRICK);"),
+      ("src/render/part.rs", "let end = [0, 1, 2].map(|a| (part.hi[a].div_ceil(BRICK) + 1).min(bricks[a]));",
+       "let end = [0, 1, 2].map(|a| part.hi[a].div_ceil(BRICK).min(bricks[a]));")]),
+    ("segments-not-owned", "every rank composites every segment it walks, its ring's included",
+     [("shaders/march.glsl", "if (step == WALK_SAMPLE && owned(ray.a + ray.dir * t)) {", "if (step == WALK_SAMPLE) {")]),
+    ("projection-samples-not-owned", "MIP/MinIP/average count the samples of the ghost layer too",
+     [("shaders/march.glsl", "if (!visible(v) || !owned(p)) {", "if (!visible(v)) {")]),
+]
+
 ROOT = Path(__file__).resolve().parent.parent
 SCRATCH = Path(os.environ.get("PLANTED_SCRATCH", "/tmp/volcast-planted"))
 
@@ -357,6 +379,10 @@ def test_command(edits, tree=None, env=None):
         return ["bash", "-c", f"{venv}/bin/pip install -q ./python 2>&1 && {venv}/bin/python -m pytest -q -rf "
                 "python/tests 2>&1"]
     cmd = ["cargo", "test", "--release", "--no-fail-fast"]
+    # Rule 11's bugs: in the MPI code, or a march edit that drops an ownership test (owned()).
+    if all(rel.startswith(("src/distributed/", "src/render/part.rs")) for rel, _, _ in edits) or any(
+            "owned(" in text and "owned(" not in new for _, text, new in edits):
+        return cmd + ["--features", "mpi", "--test", "mpi"]
     if any(rel.startswith(("src/viewer/", "tests/viewer/")) for rel, _, _ in edits):
         return cmd
     binaries = sorted(p.parent.name for p in (ROOT / "tests").glob("*/main.rs") if p.parent.name != "viewer")
