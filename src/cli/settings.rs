@@ -22,7 +22,7 @@ enum Scope {
 
 /// The options that choose the classification's model: given any, a file keeps the simple colormap model (or the
 /// function named) instead of the automatic transfer function.
-const CLASSIFICATION: &[&str] = &["preset", "tf", "colormap", "step_alpha", "multiplied_alpha"];
+pub const CLASSIFICATION: &[&str] = &["preset", "tf", "colormap", "step_alpha", "multiplied_alpha"];
 const CAMERA: &[&str] = &["azimuth", "elevation", "distance", "eye", "look_at", "view_dir", "view"];
 const LIGHTING: &[&str] = &[
     "shading",

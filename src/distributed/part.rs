@@ -184,3 +184,47 @@ pub fn histogram(volume: &Volume, owned: Box3, bins: usize) -> Vec<u64> {
     }
     h
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::distributed::decompose::Decomposition;
+    use crate::volume::VoxelType;
+
+    fn volume(dims: [u32; 3]) -> Volume {
+        let n = dims.iter().product::<u32>() as usize;
+        let data: Vec<i16> = (0..n).map(|i| ((i * 7919) % 3001) as i16 - 1000).collect();
+        let biased = data.iter().map(|&v| (i32::from(v) + 32768) as u16).collect();
+        Volume::new("t", dims, [1.0; 3], VoxelType::I16, VoxelData::U16(biased)).unwrap()
+    }
+
+    /// The ranks' histograms over their own boxes add up to the whole volume's, and crops are the boxes' voxels.
+    #[test]
+    fn box_histograms_add_up_to_the_whole_volumes() {
+        let whole = volume([37, 29, 23]);
+        let want = crate::transfer::auto::value_histogram(&whole, 64);
+        let d = Decomposition::new(whole.dims, 5).unwrap();
+        let mut sum = vec![0u64; 64];
+        for b in &d.boxes {
+            for (s, h) in sum.iter_mut().zip(histogram(&whole, *b, 64)) {
+                *s += h;
+            }
+            let VoxelData::U16(part) = crop(&whole.data, whole.dims, *b) else {
+                panic!()
+            };
+            let at = |x: u32, y: u32, z: u32| whole.data.as_u16().unwrap()[(x + 37 * (y + 29 * z)) as usize];
+            assert_eq!(part[0], at(b.lo[0], b.lo[1], b.lo[2]));
+            assert_eq!(*part.last().unwrap(), at(b.hi[0] - 1, b.hi[1] - 1, b.hi[2] - 1));
+            assert_eq!(part.len() as u64, b.voxels());
+        }
+        assert_eq!(sum, want);
+    }
+
+    #[test]
+    fn the_header_is_the_whole_volume_without_voxels() {
+        let part = volume([8, 8, 8]);
+        let h = header(&part, [100, 90, 80], part.geometry);
+        assert_eq!((h.dims, h.voxel_count(), h.data.len()), ([100, 90, 80], 720_000, 0));
+        assert_eq!((h.range, h.source_type), (part.range, VoxelType::I16));
+    }
+}

@@ -145,8 +145,8 @@ fn with_global_transfer_function(
 ) -> Result<RenderArgs> {
     use crate::transfer::auto::{auto_transfer_function, VolumeFacts, AUTO_BINS};
     let f = &args.frame;
-    let classification = ["preset", "tf", "colormap", "window", "step_alpha", "multiplied_alpha"];
-    let automatic = args.state.is_none() && f.given.from_file && !classification.iter().any(|c| f.given.has(c));
+    // Exactly when the settings would compute it from the (here voxel-less) volume (cli/settings.rs).
+    let automatic = args.state.is_none() && f.given.from_file && !f.given.any(crate::cli::settings::CLASSIFICATION);
     let named_auto = f.preset.as_deref() == Some("auto");
     if !automatic && !named_auto {
         return Ok(args.clone());
