@@ -66,6 +66,25 @@ impl Source {
         Ok((Source::Whole(Box::new(v)), dims, geometry))
     }
 
+    /// Checks that the box `held` fits the host budget `budget` (bytes) as the rank will hold it, before it is read:
+    /// a part over it names the sizes and asks for more ranks. (A volume read whole was fitted by its load.)
+    pub fn check_budget(&self, held: Box3, budget: u64) -> Result<()> {
+        if let Source::ByBox { voxel_type, .. } = self {
+            let bytes = held.voxels() * crate::volume::budget::held_bytes(*voxel_type);
+            if bytes > budget {
+                anyhow::bail!(crate::cli::UsageError(format!(
+                    "this rank's part ({:?}..{:?}, ghost layer included) needs {} MiB, over the host budget of {} MiB \
+                     (--host-budget): use more ranks",
+                    held.lo,
+                    held.hi,
+                    bytes >> 20,
+                    budget >> 20
+                )));
+            }
+        }
+        Ok(())
+    }
+
     /// Reads `held` (a box of the whole volume) as a volume of its own.
     pub fn read(&self, held: Box3, whole_dims: [u32; 3], geometry: Geometry) -> Result<Part> {
         let size = [0, 1, 2].map(|a| held.hi[a] - held.lo[a]);

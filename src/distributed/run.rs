@@ -62,6 +62,7 @@ fn rank_render(world: &SimpleCommunicator, args: &RenderArgs) -> Result<()> {
     let tree = Decomposition::new(dims, size).map_err(|e| UsageError(format!("{e}: use fewer ranks")))?;
     let owned = tree.boxes[rank];
     let held = held_box(owned, dims);
+    source.check_budget(held, args.volume.budgets().host)?;
     let mut part = source.read(held, dims, geometry)?;
     drop(source);
     let read_ms = t_read.elapsed().as_secs_f64() * 1e3;
