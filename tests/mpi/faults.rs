@@ -132,3 +132,15 @@ fn a_rank_without_a_vulkan_device_stops_every_rank() {
     assert!(!out.exists());
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// A part over the host budget is refused before it is read, with its size and the remedy.
+#[test]
+fn a_part_over_the_host_budget_asks_for_more_ranks() {
+    let dir = scratch("budget");
+    let mut args = ct_head();
+    args.extend(["--host-budget", "1M"].map(String::from));
+    let o = mpirun(2, &args, &dir.join("x.png"));
+    let t = text(&o);
+    assert!(!o.status.success() && t.contains("over the host budget of 1 MiB") && t.contains("use more ranks"), "{t}");
+    std::fs::remove_dir_all(dir).ok();
+}
