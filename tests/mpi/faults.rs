@@ -141,6 +141,9 @@ fn a_part_over_the_host_budget_asks_for_more_ranks() {
     args.extend(["--host-budget", "1M"].map(String::from));
     let o = mpirun(2, &args, &dir.join("x.png"));
     let t = text(&o);
-    assert!(!o.status.success() && t.contains("over the host budget of 1 MiB") && t.contains("use more ranks"), "{t}");
+    assert!(
+        !o.status.success() && t.contains("over the host budget of 1 MiB") && t.contains("use more ranks"),
+        "{t}"
+    );
     std::fs::remove_dir_all(dir).ok();
 }
