@@ -56,6 +56,8 @@ fn abort_on_panic(rank: i32, size: i32) {
 
 fn rank_render(world: &SimpleCommunicator, args: &RenderArgs) -> Result<()> {
     refuse_unsupported(args)?;
+    // An output name rank 0 could not write is refused before any rank reads or renders.
+    crate::render::png::check_name(&args.output).map_err(anyhow::Error::msg)?;
     let (rank, size) = (world.rank() as usize, world.size() as usize);
     let t_read = Instant::now();
     let (source, dims, geometry) = Source::open(&args.volume)?;
