@@ -212,7 +212,7 @@ fn share_and_composite(
     let (merged, bytes_sent) = composite(world, s, share, tree.front_to_back(viewer(s, whole)))?;
     let composite_ms = t_composite.elapsed().as_secs_f64() * 1e3;
     let report = [
-        peak_rss_bytes() as f64,
+        crate::measure::bench::peak_rss_bytes().unwrap_or(0) as f64,
         part.bytes_read as f64,
         bytes_sent as f64,
         read_ms + upload_ms,
@@ -347,16 +347,4 @@ fn print_reports(all: &[f64], tree: &Decomposition) {
             f[5]
         );
     }
-}
-
-/// This process's peak resident memory (VmHWM), 0 where the system does not say.
-fn peak_rss_bytes() -> u64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
-        })
-        .map_or(0, |kib| kib * 1024)
 }
