@@ -2,17 +2,20 @@
 //! `volcast convert`'s writer: zstd, 64³ chunks, with its own coarser levels), so the next open of the same file at
 //! that level reads the store instead of the file. The store is a standard OME-Zarr 0.5 one.
 //!
-//! An entry is `<cache>/pyramids/<key>.ome.zarr`, its stamp `<key>.json` and, for a level whose finer levels stay in
-//! the file, level 0's value range per cell `<key>.cells` (`volume::cells`, made by the pass that read the level:
-//! which finer bricks can show anything is known before they are read). The key hashes what makes the level (the
-//! data file's canonical path, where its voxels start, their layout, the level); the stamp records what says the
-//! file is unchanged (its length and modification time) and the cache's version, and is written last, so an
-//! entry without one is unfinished. A stale, corrupt or other-version entry is rebuilt with a note; a cache folder
+//! An entry is `<cache>/pyramids/<key>.ome.zarr`, its stamp `<key>.json` and, for a level whose finer levels are
+//! read by box, level 0's value range per cell `<key>.cells` (`volume::cells`, made by the pass that read the level:
+//! which finer bricks can show anything is known before they are read). A compressed file held at a coarser level
+//! also keeps its level 0 there as raw bytes, `<key>.level0` (`scale::level0`: its finer bricks are read from it).
+//! The key hashes what makes the level (the data file's canonical path, where its voxels start, their layout, the
+//! level); the stamp records what says the file is unchanged (its length and modification time), the cache's
+//! version and whether level 0 was kept, and is written last, so an entry without one is unfinished. A stale, corrupt or other-version entry is rebuilt with a note; a cache folder
 //! that cannot be written is a note, never an error: the volume is shown all the same.
 
+use super::level0::{self, Level0};
 use crate::convert::layout::OmeVersion;
 use crate::convert::pyramid::Reduce;
 use crate::convert::source::Source;
+use crate::convert::source::Tee;
 use crate::convert::{convert, Compression, ConvertOptions};
 use crate::volume::cells::CellRanges;
 use crate::volume::in_place::InPlace;
@@ -43,6 +46,10 @@ struct Stamp {
     /// Level 0's stored value range (the level normalises by it); not part of the file's identity.
     #[serde(default)]
     stored_range: Option<[f64; 2]>,
+    /// For a compressed file (`level0::applies`): whether its level 0 was kept beside the entry; `None` in an entry
+    /// made before level 0 was kept. Not part of the file's identity.
+    #[serde(default)]
+    level0: Option<bool>,
 }
 
 /// What looking a level up found.
@@ -98,6 +105,30 @@ impl PyramidCache {
         stamp.with_extension("cells")
     }
 
+    /// Where a compressed file's level 0 is kept beside an entry's stamp (`scale::level0`).
+    fn level0_path(stamp: &Path) -> PathBuf {
+        stamp.with_extension("level0")
+    }
+
+    /// Starts keeping level 0 of `place`, read as a stream into level `level`, beside that level's entry (whose stamp
+    /// is removed first: the entry is being made again); the tee to give the stream, or why not.
+    pub fn begin_level0(&self, place: &InPlace, level: u32) -> Result<(Level0, Tee), String> {
+        std::fs::create_dir_all(self.folder())
+            .map_err(|e| format!("cannot make the folder {}: {e}", self.folder().display()))?;
+        let stamp = self.entry(place, level).1;
+        let _ = std::fs::remove_file(&stamp);
+        // An older entry's level 0 is never left to pass for this one's.
+        let _ = std::fs::remove_file(PyramidCache::level0_path(&stamp));
+        Level0::begin(PyramidCache::level0_path(&stamp), place.step_bytes())
+    }
+
+    /// The level 0 of `place` kept beside its level `level`'s entry, if it is there whole (its length is the step's).
+    pub fn kept_level0(&self, place: &InPlace, level: u32) -> Option<PathBuf> {
+        let path = PyramidCache::level0_path(&self.entry(place, level).1);
+        let len = std::fs::metadata(&path).ok()?.len();
+        (len == place.step_bytes()).then_some(path)
+    }
+
     /// Level 0's ranges per cell kept beside the entry whose stamp is `stamp`, as `read::read_level` made them for
     /// level `level` of `place` (cells of 8 voxels of that level); `None` if absent or not what they must be.
     fn cells(stamp: &Path, place: &InPlace, level: u32) -> Option<CellRanges> {
@@ -131,6 +162,7 @@ impl PyramidCache {
             level,
             dims: crate::volume::budget::level_dims(place.dims, level),
             stored_range: None,
+            level0: None,
         })
     }
 
@@ -142,6 +174,7 @@ impl PyramidCache {
         let found: Option<Stamp> = serde_json::from_str(&text).ok();
         let now = PyramidCache::stamp(place, level).map(|n| Stamp {
             stored_range: found.as_ref().and_then(|f| f.stored_range),
+            level0: found.as_ref().and_then(|f| f.level0),
             ..n
         });
         let why = match (&found, &now) {
@@ -167,10 +200,23 @@ impl PyramidCache {
         // A level whose finer levels stay in the file needs level 0's ranges (which of their bricks can show
         // anything); an entry without them is read again, once.
         let cells = PyramidCache::cells(&self.entry(place, level).1, place, level).map(std::sync::Arc::new);
-        if place.by_box() && level > 0 && cells.is_none() {
+        let compressed = level0::applies(place, level);
+        if (place.by_box() && level > 0 || compressed) && cells.is_none() {
             return Lookup::Miss {
                 note: Some(format!(
                     "the pyramid cache's entry {store_label} has no readable level-0 ranges beside it: rebuilt"
+                )),
+            };
+        }
+        let why_not = match stamp.level0 {
+            None if compressed => Some("it was made before volcast kept a compressed file's level 0"),
+            Some(true) if self.kept_level0(place, level).is_none() => Some("its level 0 is missing or cut short"),
+            _ => None,
+        };
+        if let Some(why) = why_not {
+            return Lookup::Miss {
+                note: Some(format!(
+                    "the pyramid cache's entry {store_label} was not used ({why}): rebuilt"
                 )),
             };
         }
@@ -239,6 +285,7 @@ impl PyramidCache {
                 std::fs::create_dir(&store).map_err(|e| fail("cannot write", &e))
             });
         if let Err(e) = made {
+            let _ = std::fs::remove_file(PyramidCache::level0_path(&stamp_path));
             return (v, Err(e));
         }
         let opts = ConvertOptions {
@@ -250,6 +297,8 @@ impl PyramidCache {
             step: None,
         };
         stamp.stored_range = Some(v.stored_range);
+        stamp.level0 = level0::applies(place, level).then(|| self.kept_level0(place, level).is_some());
+        let level0_path = PyramidCache::level0_path(&stamp_path);
         let cells_path = PyramidCache::cells_path(&stamp_path);
         let _ = std::fs::remove_file(&cells_path);
         let kept_cells = match &v.cells {
@@ -257,6 +306,7 @@ impl PyramidCache {
             None => Ok(()),
         };
         if let Err(e) = kept_cells {
+            let _ = std::fs::remove_file(&level0_path);
             return (v, Err(e));
         }
         let source = Source::Loaded(Box::new(v));
@@ -278,6 +328,8 @@ impl PyramidCache {
         if stamped.is_err() {
             let _ = std::fs::remove_dir_all(&store);
             let _ = std::fs::remove_file(&cells_path);
+            // A reader that opened it keeps reading it: the file goes when the last handle closes.
+            let _ = std::fs::remove_file(&level0_path);
         }
         (*v, stamped)
     }

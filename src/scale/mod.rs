@@ -6,6 +6,7 @@
 
 pub mod cache;
 pub mod finer;
+pub mod level0;
 pub mod preview;
 pub mod read;
 
@@ -160,9 +161,17 @@ fn read_place(
     let miss_note = match cache.map(|c| c.lookup(&place, level.level)) {
         Some(Lookup::Hit(mut v)) => {
             notes.append(&mut v.notes);
+            let kept = cache.and_then(|c| c.kept_level0(&place, level.level));
+            if level0::applies(&place, level.level) {
+                notes.push(match &kept {
+                    Some(_) => "its finer levels are read from its level 0 kept in the pyramid cache".into(),
+                    None => format!("{NOT_SHOWN}: its level 0 was not kept when this cache entry was made (`volcast cache --clear`, then open it again)"),
+                });
+            }
             v.notes = notes;
+            let finer_place = kept.map_or_else(|| place.clone(), |p| level0::in_place(&place, &p));
             return Ok(Opened {
-                volume: with_finer(after_level(described(*v, &place), opts), &place, level.level)?,
+                volume: with_finer(after_level(described(*v, &place), opts), &finer_place, level.level)?,
                 keep: None,
             });
         }
@@ -183,20 +192,76 @@ fn read_place(
         notes.push("its slices were decoded one file at a time, on every core, into that level".into());
     }
     let source = Source::in_place(place.clone())?;
-    let keep_place = place.clone();
-    let v = described(
-        read::read_level(&source, level.level, host_budget, notes, progress)?,
-        &place,
-    );
+    let level0 = start_level0(&source, &place, level.level, cache, &mut notes);
+    let mut v = read::read_level(&source, level.level, host_budget, notes, progress)?;
+    let finer_place = match level0.map(|l| l.finish(source.take_tee())) {
+        Some(Ok(path)) => {
+            v.notes.push(format!(
+                "its level 0 ({}) was kept in the pyramid cache ({}): its finer levels are read from there as the view \
+                 needs them",
+                budget::show(place.step_bytes()),
+                path.display()
+            ));
+            level0::in_place(&place, &path)
+        }
+        Some(Err(e)) => {
+            v.notes.push(format!(
+                "{NOT_SHOWN}: its level 0 was not kept in the pyramid cache ({e})"
+            ));
+            place.clone()
+        }
+        None => place.clone(),
+    };
+    let v = described(v, &place);
     let keep = cache.map(|c| Keep {
         cache: c.clone(),
         place,
         level: level.level,
     });
     Ok(Opened {
-        volume: with_finer(after_level(v, opts), &keep_place, level.level)?,
+        volume: with_finer(after_level(v, opts), &finer_place, level.level)?,
         keep,
     })
+}
+
+/// How a note that a compressed file's finer levels are not shown begins.
+const NOT_SHOWN: &str = "its finer levels will not be shown";
+
+/// Where `place` is a compressed stream read into level `level` (`level0::applies`), starts keeping its level 0 in
+/// `cache` as the stream is decoded, so that its finer levels can be read by box; else, or where the cache cannot
+/// take it, `None` and a note saying why.
+fn start_level0(
+    source: &Source,
+    place: &InPlace,
+    level: u32,
+    cache: Option<&PyramidCache>,
+    notes: &mut Vec<String>,
+) -> Option<level0::Level0> {
+    if !level0::applies(place, level) {
+        return None;
+    }
+    let Some(cache) = cache else {
+        notes.push(format!(
+            "{NOT_SHOWN}: a compressed file's level 0 is kept in the pyramid cache to read them, and the cache is \
+             off (--no-cache)"
+        ));
+        return None;
+    };
+    match cache.begin_level0(place, level) {
+        Ok((l0, tee)) => match source.tee_stream(tee) {
+            Ok(()) => Some(l0),
+            Err(tee) => {
+                let _ = l0.finish(Some(tee));
+                None
+            }
+        },
+        Err(e) => {
+            notes.push(format!(
+                "{NOT_SHOWN}: its level 0 is not kept in the pyramid cache ({e})"
+            ));
+            None
+        }
+    }
 }
 
 /// `v`, level `level` of `place`, with its finer levels in the file ([`finer::Finer`]) where they can be read by

@@ -288,6 +288,84 @@ fn the_pyramid_cache_is_used_rebuilt_when_stale_or_corrupt_and_never_fatal() {
     assert!(stdout(&o).contains("(0 entries, 0 MiB)"), "{}", stdout(&o));
 }
 
+/// A gzip file over the host budget is decoded once, as a stream, into level 1, and its level 0 is kept in the pyramid
+/// cache as it is decoded: level 0's bricks are read from there where the view wants them, so the render equals the
+/// full-resolution one. The next open reads both from the cache; a level 0 cut short is rebuilt; without the cache,
+/// the note says why the finer levels are not shown.
+#[test]
+fn a_gzip_file_over_the_host_budget_shows_full_resolution_from_its_kept_level_0() {
+    let dir = common::scratch("cli-scale-gzip-level0");
+    let raw = write_volume(&dir);
+    let gz = dir.join("ball.nrrd");
+    common::scratch::gzip_nrrd(Path::new(&raw), [160, 96, 80], "int16", &gz);
+    let full = dir.join("full.png");
+    volcast_ok(&["render", &raw, "-o", &full.to_string_lossy()]);
+    let full = image::open(&full).unwrap().to_rgba8();
+    let cache = dir.join("cache").to_string_lossy().into_owned();
+    let gz_name = gz.to_string_lossy().into_owned();
+    let render = |name: &str, cache_args: &[&str]| {
+        let out = dir.join(name).to_string_lossy().into_owned();
+        let args = [
+            &["render", &gz_name, "--host-budget", "700K"],
+            cache_args,
+            &["-o", &out],
+        ]
+        .concat();
+        let o = volcast_ok(&args);
+        let shot = image::open(dir.join(name)).unwrap().to_rgba8();
+        let worst = shot
+            .as_raw()
+            .iter()
+            .zip(full.as_raw())
+            .map(|(p, q)| p.abs_diff(*q))
+            .max();
+        (stderr(&o), worst)
+    };
+    let (first, worst) = render("first.png", &["--cache-dir", &cache]);
+    assert!(first.contains("decoded once, as a stream"), "{first}");
+    assert!(
+        first.contains("its level 0 (3 MiB) was kept in the pyramid cache (")
+            && first.contains("holds level 1 of its 160x96x80 voxels")
+            && first.contains("level 0 in"),
+        "{first}"
+    );
+    assert!(
+        worst <= Some(1),
+        "full resolution from the kept level 0: differs by {worst:?}"
+    );
+    let level0 = std::fs::read_dir(dir.join("cache/pyramids"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|x| x == "level0"))
+        .expect("level 0 beside the entry");
+    assert_eq!(std::fs::metadata(&level0).unwrap().len(), 160 * 96 * 80 * 2);
+    let (hit, worst) = render("hit.png", &["--cache-dir", &cache]);
+    assert!(
+        hit.contains("read from the pyramid cache")
+            && hit.contains("its finer levels are read from its level 0 kept in the pyramid cache")
+            && !hit.contains("decoded once"),
+        "{hit}"
+    );
+    assert!(worst <= Some(1), "from the cache: differs by {worst:?}");
+    // Cut short (a full disk, another program): never trusted, rebuilt.
+    let bytes = std::fs::read(&level0).unwrap();
+    std::fs::write(&level0, &bytes[..bytes.len() / 2]).unwrap();
+    let (cut, worst) = render("cut.png", &["--cache-dir", &cache]);
+    assert!(
+        cut.contains("(its level 0 is missing or cut short): rebuilt") && cut.contains("was kept in the pyramid cache"),
+        "{cut}"
+    );
+    assert!(worst <= Some(1), "rebuilt: differs by {worst:?}");
+    let (off, worst) = render("off.png", &["--no-cache"]);
+    assert!(
+        off.contains("its finer levels will not be shown: a compressed file's level 0 is kept in the pyramid cache")
+            && off.contains("(--no-cache)"),
+        "{off}"
+    );
+    assert!(worst > Some(1), "level 1 alone is not the full-resolution image");
+}
+
 fn render_no_cache(raw: &str, dir: &Path) -> (String, ()) {
     let out = dir.join("none.png");
     let o = volcast_ok(&[

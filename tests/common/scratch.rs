@@ -65,3 +65,17 @@ pub fn write_raw(path: &Path, dims: [usize; 3], voxel: impl Fn([usize; 3], [f64;
     }
     std::fs::write(path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
 }
+
+/// The raw file `raw` of `dims` voxels of NRRD `type_name` (little-endian) as a gzip NRRD at `path` (header and
+/// data in one file, as pynrrd and Slicer write it): a compressed stream volcast decodes front to back.
+pub fn gzip_nrrd(raw: &Path, dims: [u32; 3], type_name: &str, path: &Path) {
+    use std::io::Write;
+    let [x, y, z] = dims;
+    let mut out =
+        format!("NRRD0004\ntype: {type_name}\ndimension: 3\nsizes: {x} {y} {z}\nencoding: gzip\nendian: little\n\n")
+            .into_bytes();
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(&std::fs::read(raw).expect("the raw file")).unwrap();
+    out.extend(e.finish().unwrap());
+    std::fs::write(path, out).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+}

@@ -3,7 +3,8 @@
 //! screenshot then equals the headless render of the whole file. Under a `--gpu-budget` it is over whole, the viewer
 //! streams it through a pool of bricks, says so, refines (again after a real drag), and its screenshots equal the
 //! headless render streamed within the same budget, as does its exported figure. Under a `--host-budget` that holds
-//! only level 1, level 0's bricks are read from the file where the still view wants them.
+//! only level 1, level 0's bricks are read from the file where the still view wants them (from its OME-Zarr store's
+//! level 0, and from a gzip file's level 0 kept in the pyramid cache, alike).
 
 use crate::common;
 
@@ -88,6 +89,18 @@ fn viewer_shows_full_resolution_from_an_ome_zarr_store_within_the_host_budget() 
     full_resolution_within_the_host_budget(&store, &dir);
 }
 
+/// The same for a gzip NRRD of the file: decoded once, as a stream, into level 1, its level 0 kept in the pyramid
+/// cache as it is decoded, and level 0's bricks read from there.
+#[test]
+fn viewer_shows_full_resolution_from_a_gzip_file_within_the_host_budget() {
+    let dir = common::scratch("viewer-finer-gzip");
+    let raw = write_large(&dir);
+    let gz = dir.join("large.nrrd");
+    common::scratch::gzip_nrrd(&raw, [512, 512, 256], "uint8", &gz);
+    std::fs::remove_file(&raw).expect("the raw file is not needed");
+    full_resolution_within_the_host_budget(&gz, &dir);
+}
+
 fn full_resolution_within_the_host_budget(path: &Path, dir: &Path) {
     let Some(x) = xvfb() else { return };
     if !have("xdotool", "version") {
@@ -97,7 +110,9 @@ fn full_resolution_within_the_host_budget(path: &Path, dir: &Path) {
     let d = &x.display;
     let file = path.to_string_lossy().into_owned();
     let budgets = volcast::volume::budget::Budgets::host(Some(20 << 20));
-    let held = volcast::scale::open(path, &Default::default(), budgets, None, &mut |_| {}).expect("held");
+    // Its own cache: a compressed file's level 0 is kept there (the viewer keeps its own in `cache` below).
+    let held_cache = volcast::scale::cache::PyramidCache::new(Some(dir.join("held-cache")));
+    let held = volcast::scale::open(path, &Default::default(), budgets, Some(&held_cache), &mut |_| {}).expect("held");
     assert_eq!(held.dims, [256, 256, 128]);
     assert!(held.finer.is_some(), "level 0 stays behind the held level");
     let args = [
