@@ -8,7 +8,7 @@
 use crate::convert::source::Tee;
 use crate::volume::budget::show;
 use crate::volume::in_place::InPlace;
-use std::io::BufWriter;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Free space left on the cache's disk after level 0 is written: a cache never fills the disk.
@@ -35,7 +35,7 @@ impl Level0 {
         room(bytes, free_bytes(folder), folder)?;
         let partial = path.with_extension("level0.partial");
         let file = std::fs::File::create(&partial).map_err(|e| format!("cannot write {}: {e}", partial.display()))?;
-        let tee = Tee::new(Box::new(BufWriter::with_capacity(1 << 20, file)));
+        let tee = Tee::new(Box::new(Behind::new(BufWriter::with_capacity(1 << 20, file))));
         Ok((Level0 { partial, path, bytes }, tee))
     }
 
@@ -53,6 +53,65 @@ impl Level0 {
             let _ = std::fs::remove_file(&self.partial);
         }
         done.map(|_| self.path)
+    }
+}
+
+/// A writer that writes on its own thread, so the stream's decode does not wait for the disk: what is written is
+/// sent in pieces of at most [`Behind::PIECE`], at most [`Behind::QUEUED`] of them waiting (32 MiB). The first error
+/// is returned by the write after it, or by `flush`, which waits for every piece and ends the thread.
+struct Behind {
+    queue: Option<std::sync::mpsc::SyncSender<Vec<u8>>>,
+    thread: Option<std::thread::JoinHandle<std::io::Result<()>>>,
+}
+
+impl Behind {
+    const PIECE: usize = 8 << 20;
+    const QUEUED: usize = 4;
+
+    fn new(mut out: impl Write + Send + 'static) -> Behind {
+        let (queue, pieces) = std::sync::mpsc::sync_channel::<Vec<u8>>(Behind::QUEUED);
+        let thread = std::thread::spawn(move || {
+            for piece in pieces {
+                out.write_all(&piece)?;
+            }
+            out.flush()
+        });
+        Behind {
+            queue: Some(queue),
+            thread: Some(thread),
+        }
+    }
+
+    /// Waits for the thread: its error, or `Ok` once everything sent was written.
+    fn join(&mut self) -> std::io::Result<()> {
+        self.queue = None;
+        match self.thread.take().map(|t| t.join()) {
+            Some(Ok(done)) => done,
+            Some(Err(_)) => Err(std::io::Error::other("the writing thread panicked")),
+            None => Err(std::io::Error::other("written after the end")),
+        }
+    }
+}
+
+impl Write for Behind {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        let piece = &bytes[..bytes.len().min(Behind::PIECE)];
+        let sent = self.queue.as_ref().map(|q| q.send(piece.to_vec()));
+        match sent {
+            Some(Ok(())) => Ok(piece.len()),
+            // The thread ended: it failed.
+            _ => self.join().and(Err(std::io::Error::other("the writing thread ended"))),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.join()
+    }
+}
+
+impl Drop for Behind {
+    fn drop(&mut self) {
+        let _ = self.join();
     }
 }
 
@@ -109,7 +168,6 @@ pub fn in_place(place: &InPlace, path: &Path) -> InPlace {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::io::Write;
 
     #[test]
     fn a_disk_without_room_for_level_0_and_its_reserve_is_named() {
@@ -163,5 +221,34 @@ mod tests {
         assert!(e.contains("k.level0.partial: No space left on device"), "{e}");
         assert!(!partial.exists() && !dir.join("k.level0").exists());
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// A `Vec` the writing thread fills and the test reads after.
+    struct Shared(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+
+    impl Write for Shared {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().unwrap().extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn the_writing_thread_keeps_the_order_and_reports_a_full_disk() {
+        let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let mut behind = Behind::new(Shared(seen.clone()));
+        let bytes: Vec<u8> = (0..Behind::PIECE * 5 / 2 + 7).map(|i| (i % 251) as u8).collect();
+        behind.write_all(&bytes).unwrap();
+        behind.write_all(&bytes[..3]).unwrap();
+        behind.flush().unwrap();
+        assert!(*seen.lock().unwrap() == [&bytes[..], &bytes[..3]].concat());
+        assert!(behind.write(b"late").is_err(), "nothing is written after the end");
+        let mut full = Behind::new(Full { room: 60 });
+        let sent = full.write_all(&[1; 100]);
+        let e = sent.and_then(|_| full.flush()).unwrap_err();
+        assert_eq!(e.raw_os_error(), Some(libc::ENOSPC), "{e}");
     }
 }
