@@ -299,6 +299,13 @@ BUGS = [
      [("src/render/brick_upload.rs", "let lo = self.within.map_or(0, |b| b.lo[a]);", "let lo = self.within.map_or(0, |_| 0);")]),
     ("reach-one-sided", "the skip grid's reach along y and z looks only at the bricks before, not after",
      [("src/render/skip.rs", "*o = (*o).min(x.min(y).max(d8));", "*o = (*o).min(x.max(d8));")]),
+    ("level0-at-the-stream-offset", "a compressed file's kept level 0 is read from where its stream starts in the file, "
+     "not from the kept file's first byte",
+     [("src/scale/level0.rs", "        offset: 0,\n        inflate: None,", "        inflate: None,")]),
+    ("level0-cut-trusted", "a kept level 0 shorter than its stamp says is used as it is",
+     [("src/scale/cache.rs", "Some(true) if self.kept_level0(place, level).is_none() =>", "Some(true) if false =>")]),
+    ("tee-lost-on-restart", "a stream read back from its start forgets where its voxel bytes are copied",
+     [("src/convert/source.rs", "            self.tee = tee;\n", "            drop(tee);\n")]),
 ]
 
 # The Python module's rules (python/): run against its pytest suite (test_command).
