@@ -299,13 +299,15 @@ BUGS = [
      [("src/render/brick_upload.rs", "let lo = self.within.map_or(0, |b| b.lo[a]);", "let lo = self.within.map_or(0, |_| 0);")]),
     ("reach-one-sided", "the skip grid's reach along y and z looks only at the bricks before, not after",
      [("src/render/skip.rs", "*o = (*o).min(x.min(y).max(d8));", "*o = (*o).min(x.max(d8));")]),
-    ("level0-at-the-stream-offset", "a compressed file's kept level 0 is read from where its stream starts in the file, "
+    ("level0-at-the-stream-offset", "a decoded file's kept level 0 is read from where its voxels start in the file, "
      "not from the kept file's first byte",
-     [("src/scale/level0.rs", "        offset: 0,\n        inflate: None,", "        inflate: None,")]),
+     [("src/scale/level0.rs", "        offset: 0,\n        voxel_type: kept_type", "        voxel_type: kept_type")]),
     ("level0-cut-trusted", "a kept level 0 shorter than its stamp says is used as it is",
      [("src/scale/cache.rs", "Some(true) if self.kept_level0(place, level).is_none() =>", "Some(true) if false =>")]),
-    ("tee-lost-on-restart", "a stream read back from its start forgets where its voxel bytes are copied",
-     [("src/convert/source.rs", "            self.tee = tee;\n", "            drop(tee);\n")]),
+    ("level0-slab-at-its-level-slice", "a slab of a decoded file is kept at its output slice's place in level 0, not "
+     "its own",
+     [("src/scale/read.rs", "keep.write_at(u64::from(z0) * slice0_bytes, bytemuck::cast_slice(buf));",
+       "keep.write_at(oz as u64 * slice0_bytes, bytemuck::cast_slice(buf));")]),
 ]
 
 # The Python module's rules (python/): run against its pytest suite (test_command).

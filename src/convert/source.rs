@@ -6,7 +6,7 @@ use crate::volume::in_place::{InPlace, Inflate};
 use crate::volume::{Endian, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
 use rayon::prelude::*;
 use std::fs::File;
-use std::io::{BufReader, Read, Seek, SeekFrom, Write};
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::os::unix::fs::FileExt;
 use std::sync::Mutex;
 
@@ -22,55 +22,10 @@ pub enum Source {
     Slices(Box<InPlace>),
 }
 
-/// A compressed stream being decoded, how many of its voxel bytes were read, and where they are copied.
+/// A compressed stream being decoded, and how many of its voxel bytes were read.
 pub struct Inflating {
     reader: Box<dyn Read + Send>,
     at: u64,
-    tee: Option<Tee>,
-}
-
-/// Where a stream's voxel bytes are copied, in order, as they are decoded (the pyramid cache keeps a compressed
-/// file's level 0 so: `scale::level0`). A byte decoded again (the stream read back from its start) is not copied
-/// twice; a failed write stops the copy and is kept for [`Tee::finish`], never failing the read.
-pub struct Tee {
-    out: Box<dyn Write + Send>,
-    written: u64,
-    error: Option<std::io::Error>,
-}
-
-impl Tee {
-    pub fn new(out: Box<dyn Write + Send>) -> Tee {
-        Tee {
-            out,
-            written: 0,
-            error: None,
-        }
-    }
-
-    /// Copies the voxel bytes `at..at + bytes.len()` where they continue what was copied.
-    pub(crate) fn keep(&mut self, at: u64, bytes: &[u8]) {
-        let end = at + bytes.len() as u64;
-        if self.error.is_some() || end <= self.written {
-            return;
-        }
-        if at > self.written {
-            let gap = format!("bytes {}..{at} were decoded before the copy began", self.written);
-            self.error = Some(std::io::Error::other(gap));
-            return;
-        }
-        match self.out.write_all(&bytes[(self.written - at) as usize..]) {
-            Ok(()) => self.written = end,
-            Err(e) => self.error = Some(e),
-        }
-    }
-
-    /// The bytes copied, flushed, or the first error.
-    pub fn finish(mut self) -> std::io::Result<u64> {
-        match self.error.take() {
-            Some(e) => Err(e),
-            None => self.out.flush().map(|_| self.written),
-        }
-    }
 }
 
 impl Inflating {
@@ -89,26 +44,14 @@ impl Inflating {
         } else {
             Box::new(flate2::read::MultiGzDecoder::new(file))
         };
-        let mut s = Inflating {
-            reader,
-            at: 0,
-            tee: None,
-        };
+        let mut s = Inflating { reader, at: 0 };
         s.skip_to(v, inflate.skip)?;
         s.at = 0;
         Ok(s)
     }
 
-    /// Discards inflated bytes up to `to` (bytes of voxels read so far), copying them to the tee.
+    /// Discards inflated bytes up to `to` (bytes of voxels read so far).
     fn skip_to(&mut self, v: &InPlace, to: u64) -> Result<(), VolumeError> {
-        if self.tee.is_some() {
-            let mut buf = vec![0u8; (to - self.at).min(1 << 20) as usize];
-            while self.at < to {
-                let n = buf.len().min((to - self.at) as usize);
-                self.read_at(v, self.at, &mut buf[..n])?;
-            }
-            return Ok(());
-        }
         let want = to - self.at;
         let skipped =
             std::io::copy(&mut (&mut self.reader).take(want), &mut std::io::sink()).map_err(|e| corrupt(v, e))?;
@@ -122,9 +65,7 @@ impl Inflating {
     /// `len` bytes of voxels from `at`: read forward (from the stream's start again if `at` was passed).
     fn read_at(&mut self, v: &InPlace, at: u64, out: &mut [u8]) -> Result<(), VolumeError> {
         if at < self.at {
-            let tee = self.tee.take();
             *self = Inflating::open(v)?;
-            self.tee = tee;
         }
         self.skip_to(v, at)?;
         let mut got = 0;
@@ -135,9 +76,6 @@ impl Inflating {
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
                 Err(e) => return Err(corrupt(v, e)),
             }
-        }
-        if let Some(tee) = &mut self.tee {
-            tee.keep(self.at, out);
         }
         self.at += got as u64;
         Ok(())
@@ -418,29 +356,6 @@ impl Source {
         matches!(self, Source::Stream(..))
     }
 
-    /// Copies a compressed stream's voxel bytes into `tee` from here on, as they are decoded ([`Tee`]); gives
-    /// `tee` back for any other source.
-    pub fn tee_stream(&self, tee: Tee) -> Result<(), Tee> {
-        match self {
-            Source::Stream(_, stream) => match stream.lock() {
-                Ok(mut s) => {
-                    s.tee = Some(tee);
-                    Ok(())
-                }
-                Err(_) => Err(tee),
-            },
-            _ => Err(tee),
-        }
-    }
-
-    /// The tee [`tee_stream`](Self::tee_stream) set, taken back.
-    pub fn take_tee(&self) -> Option<Tee> {
-        match self {
-            Source::Stream(_, stream) => stream.lock().ok()?.tee.take(),
-            _ => None,
-        }
-    }
-
     /// The voxel bytes `at..at + out.len()` (from the first voxel of the first step) of a file read in place or
     /// decoded.
     fn read_bytes(&self, at: u64, out: &mut [u8]) -> Result<(), VolumeError> {
@@ -534,50 +449,5 @@ mod tests {
             }
             std::fs::remove_dir_all(path.parent().unwrap()).ok();
         }
-    }
-
-    /// A `Vec` that a tee writes into and the test reads after.
-    struct Shared(std::sync::Arc<Mutex<Vec<u8>>>);
-
-    impl Write for Shared {
-        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-            self.0.lock().unwrap().extend_from_slice(b);
-            Ok(b.len())
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-
-    /// Read out of order (a skip, a read back that starts the stream again, the rest), a stream's tee holds each
-    /// voxel byte once, in order; a tee set after bytes were decoded says so instead of leaving a gap.
-    #[test]
-    fn a_tee_copies_each_voxel_byte_of_a_stream_once_in_order() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/world/nifti_ras.nii.gz");
-        let place = crate::volume::in_place::compressed(&path, &Default::default())
-            .unwrap()
-            .unwrap();
-        let n = place.step_bytes() as usize;
-        let mut want = vec![0u8; n];
-        Source::in_place(place.clone())
-            .unwrap()
-            .read_bytes(0, &mut want)
-            .unwrap();
-        let copied = std::sync::Arc::new(Mutex::new(Vec::new()));
-        let source = Source::in_place(place.clone()).unwrap();
-        assert!(source.tee_stream(Tee::new(Box::new(Shared(copied.clone())))).is_ok());
-        let mut buf = vec![0u8; n];
-        for (from, to) in [(n / 3, n / 2), (0, 10), (n / 2, n)] {
-            source.read_bytes(from as u64, &mut buf[from..to]).unwrap();
-            assert_eq!(buf[from..to], want[from..to]);
-        }
-        assert_eq!(source.take_tee().unwrap().finish().unwrap(), n as u64);
-        assert!(*copied.lock().unwrap() == want, "the copy is the stream's voxel bytes");
-        let late = Source::in_place(place).unwrap();
-        late.read_bytes(0, &mut buf[..10]).unwrap();
-        assert!(late.tee_stream(Tee::new(Box::new(std::io::sink()))).is_ok());
-        late.read_bytes(20, &mut buf[..10]).unwrap();
-        let e = late.take_tee().unwrap().finish().unwrap_err().to_string();
-        assert!(e.contains("bytes 0..10 were decoded before the copy began"), "{e}");
     }
 }

@@ -4,18 +4,18 @@
 //!
 //! An entry is `<cache>/pyramids/<key>.ome.zarr`, its stamp `<key>.json` and, for a level whose finer levels are
 //! read by box, level 0's value range per cell `<key>.cells` (`volume::cells`, made by the pass that read the level:
-//! which finer bricks can show anything is known before they are read). A compressed file held at a coarser level
-//! also keeps its level 0 there as raw bytes, `<key>.level0` (`scale::level0`: its finer bricks are read from it).
-//! The key hashes what makes the level (the data file's canonical path, where its voxels start, their layout, the
-//! level); the stamp records what says the file is unchanged (its length and modification time), the cache's
-//! version and whether level 0 was kept, and is written last, so an entry without one is unfinished. A stale, corrupt or other-version entry is rebuilt with a note; a cache folder
-//! that cannot be written is a note, never an error: the volume is shown all the same.
+//! which finer bricks can show anything is known before they are read). A decoded file (compressed, or a DICOM
+//! series) held at a coarser level also keeps its level 0 there as raw bytes, `<key>.level0` (`scale::level0`: its
+//! finer bricks are read from it). The key hashes what makes the level (the data file's canonical path, where its
+//! voxels start, their layout, the level); the stamp records what says the file is unchanged (its length and
+//! modification time), the cache's version and whether level 0 was kept, and is written last, so an entry without
+//! one is unfinished. A stale, corrupt or other-version entry is rebuilt with a note; a cache folder that cannot be
+//! written is a note, never an error: the volume is shown all the same.
 
 use super::level0::{self, Level0};
 use crate::convert::layout::OmeVersion;
 use crate::convert::pyramid::Reduce;
 use crate::convert::source::Source;
-use crate::convert::source::Tee;
 use crate::convert::{convert, Compression, ConvertOptions};
 use crate::volume::cells::CellRanges;
 use crate::volume::in_place::InPlace;
@@ -46,7 +46,7 @@ struct Stamp {
     /// Level 0's stored value range (the level normalises by it); not part of the file's identity.
     #[serde(default)]
     stored_range: Option<[f64; 2]>,
-    /// For a compressed file (`level0::applies`): whether its level 0 was kept beside the entry; `None` in an entry
+    /// For a decoded file (`level0::applies`): whether its level 0 was kept beside the entry; `None` in an entry
     /// made before level 0 was kept. Not part of the file's identity.
     #[serde(default)]
     level0: Option<bool>,
@@ -105,28 +105,28 @@ impl PyramidCache {
         stamp.with_extension("cells")
     }
 
-    /// Where a compressed file's level 0 is kept beside an entry's stamp (`scale::level0`).
+    /// Where a decoded file's level 0 is kept beside an entry's stamp (`scale::level0`).
     fn level0_path(stamp: &Path) -> PathBuf {
         stamp.with_extension("level0")
     }
 
-    /// Starts keeping level 0 of `place`, read as a stream into level `level`, beside that level's entry (whose stamp
-    /// is removed first: the entry is being made again); the tee to give the stream, or why not.
-    pub fn begin_level0(&self, place: &InPlace, level: u32) -> Result<(Level0, Tee), String> {
+    /// Starts keeping level 0 of `place`, decoded into level `level`, beside that level's entry (whose stamp is
+    /// removed first: the entry is being made again); else why not.
+    pub fn begin_level0(&self, place: &InPlace, level: u32) -> Result<Level0, String> {
         std::fs::create_dir_all(self.folder())
             .map_err(|e| format!("cannot make the folder {}: {e}", self.folder().display()))?;
         let stamp = self.entry(place, level).1;
         let _ = std::fs::remove_file(&stamp);
         // An older entry's level 0 is never left to pass for this one's.
         let _ = std::fs::remove_file(PyramidCache::level0_path(&stamp));
-        Level0::begin(PyramidCache::level0_path(&stamp), place.step_bytes())
+        Level0::begin(PyramidCache::level0_path(&stamp), level0::kept_bytes(place))
     }
 
     /// The level 0 of `place` kept beside its level `level`'s entry, if it is there whole (its length is the step's).
     pub fn kept_level0(&self, place: &InPlace, level: u32) -> Option<PathBuf> {
         let path = PyramidCache::level0_path(&self.entry(place, level).1);
         let len = std::fs::metadata(&path).ok()?.len();
-        (len == place.step_bytes()).then_some(path)
+        (len == level0::kept_bytes(place)).then_some(path)
     }
 
     /// Level 0's ranges per cell kept beside the entry whose stamp is `stamp`, as `read::read_level` made them for
@@ -200,8 +200,8 @@ impl PyramidCache {
         // A level whose finer levels stay in the file needs level 0's ranges (which of their bricks can show
         // anything); an entry without them is read again, once.
         let cells = PyramidCache::cells(&self.entry(place, level).1, place, level).map(std::sync::Arc::new);
-        let compressed = level0::applies(place, level);
-        if (place.by_box() && level > 0 || compressed) && cells.is_none() {
+        let decoded = level0::applies(place, level);
+        if (place.by_box() && level > 0 || decoded) && cells.is_none() {
             return Lookup::Miss {
                 note: Some(format!(
                     "the pyramid cache's entry {store_label} has no readable level-0 ranges beside it: rebuilt"
@@ -209,7 +209,7 @@ impl PyramidCache {
             };
         }
         let why_not = match stamp.level0 {
-            None if compressed => Some("it was made before volcast kept a compressed file's level 0"),
+            None if decoded => Some("it was made before volcast kept a decoded file's level 0"),
             Some(true) if self.kept_level0(place, level).is_none() => Some("its level 0 is missing or cut short"),
             _ => None,
         };

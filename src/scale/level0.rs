@@ -1,117 +1,119 @@
-//! A compressed file's level 0, kept in the pyramid cache. A deflate stream cannot be read by box, so a gzip NIfTI or
-//! NRRD, or a zlib MetaImage, held at a coarser level would never show its finer levels. While the stream is decoded
-//! into the held level (`read::read_level`), its voxel bytes are copied as they are, in the file's byte order, to
-//! `<key>.level0` beside the cache entry ([`Tee`]); that file then lies in place like a raw file, and the finer levels'
-//! bricks are read from it by box (`finer::Finer`), as an uncompressed file's are. The stream is still decoded once.
-//! docs/large-volumes.md, "Full resolution from the file".
+//! A decoded file's level 0, kept in the pyramid cache. A file whose voxels must be decoded (a gzip NIfTI or NRRD, a
+//! zlib MetaImage, a compressed or base64 `.vti` array, a DICOM series) cannot be read by box cheaply: a brick of a
+//! deflate stream means inflating the file from its start. So while such a file is read into the held level
+//! (`read::read_level`), each slab of level-0 voxels it decodes is also written, as the level holds the type (native
+//! byte order; 32-bit integers and float64 as float32), at its place in `<key>.level0` beside the cache entry; that
+//! file then lies in place like a raw file, and the finer levels' bricks are read from it by box (`finer::Finer`), as
+//! an uncompressed file's are. The file is still decoded once. docs/large-volumes.md, "A decoded file's level 0".
 
-use crate::convert::source::Tee;
 use crate::volume::budget::show;
 use crate::volume::in_place::InPlace;
-use std::io::{BufWriter, Write};
+use crate::volume::{Endian, VoxelType};
+use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
+use std::sync::mpsc::SyncSender;
+use std::thread::JoinHandle;
 
 /// Free space left on the cache's disk after level 0 is written: a cache never fills the disk.
 pub const RESERVE: u64 = 1 << 30;
 
-/// Whether level `level` of `place` keeps level 0 in the cache: a compressed stream of one step, not rescaled (the
-/// finer levels of a series or a rescaled file are not read by box), held at a coarser level.
+/// Whether level `level` of `place` keeps level 0 in the cache: a file that is decoded (not by box), of one step and
+/// not rescaled (the finer levels of a series or a rescaled file are not read by box), held at a coarser level.
 pub fn applies(place: &InPlace, level: u32) -> bool {
-    place.inflate.is_some() && level > 0 && place.timesteps == 1 && place.scaling.is_identity()
+    level > 0 && place.timesteps == 1 && place.scaling.is_identity() && !place.by_box()
 }
 
-/// Level 0 being written: the file being written and the one it becomes when whole.
+/// The type level 0 is kept in: the one the level is made in (`read::level_data`).
+pub fn kept_type(t: VoxelType) -> VoxelType {
+    match t {
+        VoxelType::U8 | VoxelType::I8 | VoxelType::U16 | VoxelType::I16 => t,
+        _ => VoxelType::F32,
+    }
+}
+
+/// Bytes of `place`'s level 0 as kept.
+pub fn kept_bytes(place: &InPlace) -> u64 {
+    place.dims.iter().map(|&d| u64::from(d)).product::<u64>() * kept_type(place.voxel_type).size() as u64
+}
+
+/// Level 0 being written, on its own thread so the read does not wait for the disk: slabs are sent in pieces of at
+/// most [`Level0::PIECE`], at most [`Level0::QUEUED`] of them waiting (32 MiB), and written where they belong.
 pub struct Level0 {
     partial: PathBuf,
     path: PathBuf,
     bytes: u64,
+    queue: Option<SyncSender<(u64, Vec<u8>)>>,
+    thread: Option<JoinHandle<std::io::Result<u64>>>,
 }
 
 impl Level0 {
+    const PIECE: usize = 8 << 20;
+    const QUEUED: usize = 4;
+
     /// Starts writing `bytes` of level 0 to `path` (through `<path>.partial`), where the disk has room for it and
-    /// [`RESERVE`]; the tee to give the stream (`Source::tee_stream`), or why not.
-    pub fn begin(path: PathBuf, bytes: u64) -> Result<(Level0, Tee), String> {
+    /// [`RESERVE`]; else why not.
+    pub fn begin(path: PathBuf, bytes: u64) -> Result<Level0, String> {
         let folder = path.parent().unwrap_or(Path::new("."));
         room(bytes, free_bytes(folder), folder)?;
         let partial = path.with_extension("level0.partial");
         let file = std::fs::File::create(&partial).map_err(|e| format!("cannot write {}: {e}", partial.display()))?;
-        let tee = Tee::new(Box::new(Behind::new(BufWriter::with_capacity(1 << 20, file))));
-        Ok((Level0 { partial, path, bytes }, tee))
+        let (queue, pieces) = std::sync::mpsc::sync_channel::<(u64, Vec<u8>)>(Level0::QUEUED);
+        let thread = std::thread::spawn(move || {
+            let mut written = 0;
+            for (at, piece) in pieces {
+                file.write_all_at(&piece, at)?;
+                written += piece.len() as u64;
+            }
+            Ok(written)
+        });
+        Ok(Level0 {
+            partial,
+            path,
+            bytes,
+            queue: Some(queue),
+            thread: Some(thread),
+        })
     }
 
-    /// The kept level 0, once the stream was read: `tee` (taken back from the stream) must have copied every byte.
-    /// A partial file is removed.
-    pub fn finish(self, tee: Option<Tee>) -> Result<PathBuf, String> {
-        let done = match tee.map(Tee::finish) {
-            Some(Ok(n)) if n == self.bytes => std::fs::rename(&self.partial, &self.path)
-                .map_err(|e| format!("cannot write {}: {e}", self.path.display())),
-            Some(Ok(n)) => Err(format!("{n} of its {} bytes were copied", self.bytes)),
-            Some(Err(e)) => Err(format!("cannot write {}: {e}", self.partial.display())),
-            None => Err("its stream was not copied".into()),
+    /// Writes `bytes` at byte `at` of level 0 (any thread). A failed write is reported by [`finish`](Self::finish),
+    /// never here: the read goes on.
+    pub fn write_at(&self, at: u64, bytes: &[u8]) {
+        let Some(queue) = &self.queue else { return };
+        for (k, piece) in bytes.chunks(Level0::PIECE).enumerate() {
+            // A send fails only once the thread has stopped on an error, which `finish` reports.
+            if queue.send((at + (k * Level0::PIECE) as u64, piece.to_vec())).is_err() {
+                return;
+            }
+        }
+    }
+
+    /// The kept level 0, once the read is over: every byte must have been written. A partial file is removed.
+    pub fn finish(mut self) -> Result<PathBuf, String> {
+        self.queue = None;
+        let written = match self.thread.take().map(JoinHandle::join) {
+            Some(Ok(written)) => written.map_err(|e| format!("cannot write {}: {e}", self.partial.display())),
+            _ => Err("its writing thread panicked".into()),
         };
+        let done = written.and_then(|n| match n == self.bytes {
+            true => std::fs::rename(&self.partial, &self.path)
+                .map_err(|e| format!("cannot write {}: {e}", self.path.display())),
+            false => Err(format!("{n} of its {} bytes were written", self.bytes)),
+        });
         if done.is_err() {
             let _ = std::fs::remove_file(&self.partial);
         }
-        done.map(|_| self.path)
+        done.map(|_| self.path.clone())
     }
 }
 
-/// A writer that writes on its own thread, so the stream's decode does not wait for the disk: what is written is
-/// sent in pieces of at most [`Behind::PIECE`], at most [`Behind::QUEUED`] of them waiting (32 MiB). The first error
-/// is returned by the write after it, or by `flush`, which waits for every piece and ends the thread.
-struct Behind {
-    queue: Option<std::sync::mpsc::SyncSender<Vec<u8>>>,
-    thread: Option<std::thread::JoinHandle<std::io::Result<()>>>,
-}
-
-impl Behind {
-    const PIECE: usize = 8 << 20;
-    const QUEUED: usize = 4;
-
-    fn new(mut out: impl Write + Send + 'static) -> Behind {
-        let (queue, pieces) = std::sync::mpsc::sync_channel::<Vec<u8>>(Behind::QUEUED);
-        let thread = std::thread::spawn(move || {
-            for piece in pieces {
-                out.write_all(&piece)?;
-            }
-            out.flush()
-        });
-        Behind {
-            queue: Some(queue),
-            thread: Some(thread),
-        }
-    }
-
-    /// Waits for the thread: its error, or `Ok` once everything sent was written.
-    fn join(&mut self) -> std::io::Result<()> {
-        self.queue = None;
-        match self.thread.take().map(|t| t.join()) {
-            Some(Ok(done)) => done,
-            Some(Err(_)) => Err(std::io::Error::other("the writing thread panicked")),
-            None => Err(std::io::Error::other("written after the end")),
-        }
-    }
-}
-
-impl Write for Behind {
-    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
-        let piece = &bytes[..bytes.len().min(Behind::PIECE)];
-        let sent = self.queue.as_ref().map(|q| q.send(piece.to_vec()));
-        match sent {
-            Some(Ok(())) => Ok(piece.len()),
-            // The thread ended: it failed.
-            _ => self.join().and(Err(std::io::Error::other("the writing thread ended"))),
-        }
-    }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.join()
-    }
-}
-
-impl Drop for Behind {
+impl Drop for Level0 {
+    /// A read that failed: the thread ends and the partial file goes.
     fn drop(&mut self) {
-        let _ = self.join();
+        self.queue = None;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+            let _ = std::fs::remove_file(&self.partial);
+        }
     }
 }
 
@@ -152,15 +154,23 @@ fn free_bytes(_folder: &Path) -> Option<u64> {
     None
 }
 
-/// The kept level 0 at `path` as a file in place: `place`'s voxels, uncompressed, from the file's first byte.
+/// The kept level 0 at `path` as a file in place: `place`'s voxels in the type they are kept in, native byte order,
+/// from the file's first byte.
 pub fn in_place(place: &InPlace, path: &Path) -> InPlace {
     InPlace {
         data_file: path.to_path_buf(),
         offset: 0,
+        voxel_type: kept_type(place.voxel_type),
+        endian: if cfg!(target_endian = "big") {
+            Endian::Big
+        } else {
+            Endian::Little
+        },
         inflate: None,
         blocks: None,
         slices: None,
         notes: Vec::new(),
+        arrays: Vec::new(),
         ..place.clone()
     }
 }
@@ -189,66 +199,40 @@ mod tests {
         assert!(free_bytes(&std::env::temp_dir()).is_some_and(|b| b > 0));
     }
 
-    /// A writer that fails after `room` bytes, as a full disk does.
-    struct Full {
-        room: usize,
-    }
-
-    impl Write for Full {
-        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-            if self.room == 0 {
-                return Err(std::io::Error::from_raw_os_error(libc::ENOSPC));
-            }
-            let n = b.len().min(self.room);
-            self.room -= n;
-            Ok(n)
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-
+    /// Pieces written out of order, from several threads, land where they belong; a level 0 short of its bytes is
+    /// not kept, and a read that failed leaves no partial file.
     #[test]
-    fn a_full_disk_leaves_no_partial_level_0_and_says_why() {
+    fn level_0_is_kept_whole_or_not_at_all() {
         let dir = std::env::temp_dir().join(format!("volcast-level0-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let (l0, _) = Level0::begin(dir.join("k.level0"), 100).unwrap();
-        let partial = dir.join("k.level0.partial");
-        assert!(partial.exists());
-        let mut failing = Tee::new(Box::new(Full { room: 60 }));
-        failing.keep(0, &[7; 100]);
-        let e = l0.finish(Some(failing)).unwrap_err();
-        assert!(e.contains("k.level0.partial: No space left on device"), "{e}");
-        assert!(!partial.exists() && !dir.join("k.level0").exists());
+        let bytes: Vec<u8> = (0..Level0::PIECE * 5 / 2 + 7).map(|i| (i % 251) as u8).collect();
+        let l0 = Level0::begin(dir.join("k.level0"), bytes.len() as u64).unwrap();
+        let half = bytes.len() / 2;
+        std::thread::scope(|s| {
+            s.spawn(|| l0.write_at(half as u64, &bytes[half..]));
+            s.spawn(|| l0.write_at(0, &bytes[..half]));
+        });
+        let kept = l0.finish().unwrap();
+        assert!(std::fs::read(&kept).unwrap() == bytes);
+        let short = Level0::begin(dir.join("s.level0"), 100).unwrap();
+        short.write_at(0, &[1; 60]);
+        let e = short.finish().unwrap_err();
+        assert!(e.contains("60 of its 100 bytes were written"), "{e}");
+        let failed = Level0::begin(dir.join("f.level0"), 100).unwrap();
+        failed.write_at(0, &[1; 60]);
+        drop(failed);
+        // A full disk (/dev/full refuses every write): the error, and nothing left.
+        std::os::unix::fs::symlink("/dev/full", dir.join("d.level0.partial")).unwrap();
+        let full = Level0::begin(dir.join("d.level0"), 100).unwrap();
+        full.write_at(0, &[1; 100]);
+        let e = full.finish().unwrap_err();
+        assert!(e.contains("d.level0.partial: No space left on device"), "{e}");
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name())
+            .collect();
+        assert_eq!(left, vec![std::ffi::OsString::from("k.level0")]);
         std::fs::remove_dir_all(&dir).ok();
-    }
-
-    /// A `Vec` the writing thread fills and the test reads after.
-    struct Shared(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
-
-    impl Write for Shared {
-        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-            self.0.lock().unwrap().extend_from_slice(b);
-            Ok(b.len())
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-
-    #[test]
-    fn the_writing_thread_keeps_the_order_and_reports_a_full_disk() {
-        let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-        let mut behind = Behind::new(Shared(seen.clone()));
-        let bytes: Vec<u8> = (0..Behind::PIECE * 5 / 2 + 7).map(|i| (i % 251) as u8).collect();
-        behind.write_all(&bytes).unwrap();
-        behind.write_all(&bytes[..3]).unwrap();
-        behind.flush().unwrap();
-        assert!(*seen.lock().unwrap() == [&bytes[..], &bytes[..3]].concat());
-        assert!(behind.write(b"late").is_err(), "nothing is written after the end");
-        let mut full = Behind::new(Full { room: 60 });
-        let sent = full.write_all(&[1; 100]);
-        let e = sent.and_then(|_| full.flush()).unwrap_err();
-        assert_eq!(e.raw_os_error(), Some(libc::ENOSPC), "{e}");
     }
 }

@@ -192,14 +192,14 @@ fn read_place(
         notes.push("its slices were decoded one file at a time, on every core, into that level".into());
     }
     let source = Source::in_place(place.clone())?;
-    let level0 = start_level0(&source, &place, level.level, cache, &mut notes);
-    let mut v = read::read_level(&source, level.level, host_budget, notes, progress)?;
-    let finer_place = match level0.map(|l| l.finish(source.take_tee())) {
+    let level0 = start_level0(&place, level.level, cache, &mut notes);
+    let mut v = read::read_level_keeping(&source, level.level, host_budget, notes, level0.as_ref(), progress)?;
+    let finer_place = match level0.map(level0::Level0::finish) {
         Some(Ok(path)) => {
             v.notes.push(format!(
                 "its level 0 ({}) was kept in the pyramid cache ({}): its finer levels are read from there as the view \
                  needs them",
-                budget::show(place.step_bytes()),
+                budget::show(level0::kept_bytes(&place)),
                 path.display()
             ));
             level0::in_place(&place, &path)
@@ -224,14 +224,13 @@ fn read_place(
     })
 }
 
-/// How a note that a compressed file's finer levels are not shown begins.
+/// How a note that a decoded file's finer levels are not shown begins.
 const NOT_SHOWN: &str = "its finer levels will not be shown";
 
-/// Where `place` is a compressed stream read into level `level` (`level0::applies`), starts keeping its level 0 in
-/// `cache` as the stream is decoded, so that its finer levels can be read by box; else, or where the cache cannot
-/// take it, `None` and a note saying why.
+/// Where `place` is a file decoded into level `level` (`level0::applies`), starts keeping its level 0 in `cache` as
+/// it is decoded, so that its finer levels can be read by box; else, or where the cache cannot take it, `None` and a
+/// note saying why.
 fn start_level0(
-    source: &Source,
     place: &InPlace,
     level: u32,
     cache: Option<&PyramidCache>,
@@ -242,19 +241,13 @@ fn start_level0(
     }
     let Some(cache) = cache else {
         notes.push(format!(
-            "{NOT_SHOWN}: a compressed file's level 0 is kept in the pyramid cache to read them, and the cache is \
-             off (--no-cache)"
+            "{NOT_SHOWN}: a decoded file's level 0 is kept in the pyramid cache to read them, and the cache is off \
+             (--no-cache)"
         ));
         return None;
     };
     match cache.begin_level0(place, level) {
-        Ok((l0, tee)) => match source.tee_stream(tee) {
-            Ok(()) => Some(l0),
-            Err(tee) => {
-                let _ = l0.finish(Some(tee));
-                None
-            }
-        },
+        Ok(l0) => Some(l0),
         Err(e) => {
             notes.push(format!(
                 "{NOT_SHOWN}: its level 0 is not kept in the pyramid cache ({e})"

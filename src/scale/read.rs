@@ -4,6 +4,7 @@
 //! cascade inside it is exactly the pyramid's: the result equals level L of `volcast convert`'s store.
 
 use super::budget::level_dims;
+use super::level0::Level0;
 use crate::convert::pyramid::{downsample, downsample_into, factors, Reduce};
 use crate::convert::sample::Sample;
 use crate::convert::source::Source;
@@ -18,19 +19,21 @@ fn batch(threads: usize, slab_bytes: u64, host_budget: u64) -> usize {
 }
 
 /// Level `level` of time step `t` of `source`, held as volcast holds the type (biased 8/16-bit integers, float32
-/// for wider types). `progress` gets the fraction of output slices made.
+/// for wider types), each slab of level 0 also written to `keep` where given. `progress` gets the fraction of output
+/// slices made.
 fn level_step<T: Sample + Element>(
     source: &Source,
-    t: u32,
-    level: u32,
+    (t, level): (u32, u32),
     host_budget: u64,
+    keep: Option<&Level0>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Read<Vec<T>>, VolumeError> {
     let full = source.dims();
     let out = level_dims(full, level);
     let slice = out[0] as usize * out[1] as usize;
     let span = 1u32 << level;
-    let slab_bytes = u64::from(full[0]) * u64::from(full[1]) * u64::from(span) * std::mem::size_of::<T>() as u64;
+    let slice0_bytes = u64::from(full[0]) * u64::from(full[1]) * std::mem::size_of::<T>() as u64;
+    let slab_bytes = slice0_bytes * u64::from(span);
     check_slab(source, level, slab_bytes, host_budget)?;
     let step = batch(rayon::current_num_threads(), slab_bytes, host_budget);
     let mut dst = vec![T::default(); slice * out[2] as usize];
@@ -39,6 +42,9 @@ fn level_step<T: Sample + Element>(
         let z0 = oz as u32 * span;
         let n = span.min(full[2] - z0);
         source.read_slab_into(t, z0, n, crate::volume::Scaling::IDENTITY, buf)?;
+        if let Some(keep) = keep {
+            keep.write_at(u64::from(z0) * slice0_bytes, bytemuck::cast_slice(buf));
+        }
         Ok(n)
     };
     // Level 0's value range, from the voxels read: the level stands in for level 0 and normalises as it does.
@@ -169,9 +175,9 @@ type Read<V> = (V, Option<[f64; 2]>, CellRanges);
 /// range of the level-0 voxels it was made from.
 fn level_data(
     source: &Source,
-    t: u32,
-    level: u32,
+    at: (u32, u32),
     host_budget: u64,
+    keep: Option<&Level0>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Read<VoxelData>, VolumeError> {
     fn held<T>((v, r, c): Read<Vec<T>>, f: fn(Vec<T>) -> VoxelData) -> Read<VoxelData> {
@@ -181,21 +187,21 @@ fn level_data(
         (v.into_par_iter().map(f).collect(), r, c)
     }
     Ok(match source.held_type() {
-        VoxelType::U8 => held::<u8>(level_step(source, t, level, host_budget, progress)?, VoxelData::U8),
+        VoxelType::U8 => held::<u8>(level_step(source, at, host_budget, keep, progress)?, VoxelData::U8),
         VoxelType::I8 => {
-            let r = biased(level_step::<i8>(source, t, level, host_budget, progress)?, |v| {
+            let r = biased(level_step::<i8>(source, at, host_budget, keep, progress)?, |v| {
                 (i16::from(v) + 128) as u8
             });
             held::<u8>(r, VoxelData::U8)
         }
-        VoxelType::U16 => held::<u16>(level_step(source, t, level, host_budget, progress)?, VoxelData::U16),
+        VoxelType::U16 => held::<u16>(level_step(source, at, host_budget, keep, progress)?, VoxelData::U16),
         VoxelType::I16 => {
-            let r = biased(level_step::<i16>(source, t, level, host_budget, progress)?, |v| {
+            let r = biased(level_step::<i16>(source, at, host_budget, keep, progress)?, |v| {
                 (i32::from(v) + 32768) as u16
             });
             held::<u16>(r, VoxelData::U16)
         }
-        _ => held::<f32>(level_step(source, t, level, host_budget, progress)?, VoxelData::F32),
+        _ => held::<f32>(level_step(source, at, host_budget, keep, progress)?, VoxelData::F32),
     })
 }
 
@@ -217,13 +223,26 @@ pub fn read_level(
     notes: Vec<String>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Volume, VolumeError> {
+    read_level_keeping(source, level, host_budget, notes, None, progress)
+}
+
+/// [`read_level`], writing each slab of level 0 it reads to `keep` as well (`scale::level0`; one step only).
+pub fn read_level_keeping(
+    source: &Source,
+    level: u32,
+    host_budget: u64,
+    notes: Vec<String>,
+    keep: Option<&Level0>,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Volume, VolumeError> {
     let steps = source.timesteps().max(1);
     let mut data = Vec::with_capacity(steps as usize);
     let mut stored: Option<[f64; 2]> = None;
     let mut cells = None;
     for t in 0..steps {
         let (t0, n) = (t as f32, steps as f32);
-        let (d, r, c) = level_data(source, t, level, host_budget, &mut |f| progress((t0 + f) / n))?;
+        let keep = keep.filter(|_| steps == 1);
+        let (d, r, c) = level_data(source, (t, level), host_budget, keep, &mut |f| progress((t0 + f) / n))?;
         data.push(d);
         // One step's cells: a series streams no finer levels.
         cells = (steps == 1 && level > 0).then_some(c);

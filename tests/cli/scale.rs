@@ -359,7 +359,7 @@ fn a_gzip_file_over_the_host_budget_shows_full_resolution_from_its_kept_level_0(
     assert!(worst <= Some(1), "rebuilt: differs by {worst:?}");
     let (off, worst) = render("off.png", &["--no-cache"]);
     assert!(
-        off.contains("its finer levels will not be shown: a compressed file's level 0 is kept in the pyramid cache")
+        off.contains("its finer levels will not be shown: a decoded file's level 0 is kept in the pyramid cache")
             && off.contains("(--no-cache)"),
         "{off}"
     );

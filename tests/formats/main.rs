@@ -6,6 +6,7 @@
 #[path = "../common/mod.rs"]
 pub mod common;
 
+mod decoded_finer;
 mod dicom;
 mod dicom_slices;
 mod headers;
