@@ -35,15 +35,17 @@ pub fn fits_gpu_whole(volume: &Volume, budgets: &Budgets) -> bool {
 }
 
 /// Why `volume` is streamed, as the notes say it after its name: over the GPU budget whole (`gpu_budget` bytes),
-/// or holding a coarser level of its file whose finer levels' bricks are read from the file.
+/// or holding a coarser level of its file whose finer levels' bricks are read from the file (or from where
+/// [`FinerLevels::origin`](crate::volume::FinerLevels::origin) says).
 pub fn streamed_because(volume: &Volume, gpu_budget: u64) -> String {
     match &volume.finer {
         Some(f) => {
             let [x, y, z] = f.dims();
             format!(
-                "holds level {} of its {x}x{y}x{z} voxels; the finer levels' bricks are read from the file as the \
-                 view needs them",
-                f.held()
+                "holds level {} of its {x}x{y}x{z} voxels; the finer levels' bricks are read from {} as the view \
+                 needs them",
+                f.held(),
+                f.origin()
             )
         }
         None => format!(

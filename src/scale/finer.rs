@@ -53,6 +53,8 @@ pub struct Finer {
     geometry: Geometry,
     /// The level the volume holds: levels 0..held come from the file.
     held: u32,
+    /// Where the boxes are read from, as a note says it.
+    origin: &'static str,
 }
 
 impl std::fmt::Debug for Finer {
@@ -80,6 +82,15 @@ impl Finer {
             dims: place.dims,
             geometry: place.geometry,
             held,
+            origin: "the file",
+        }))
+    }
+
+    /// [`Finer::of`] a decoded file's level 0 kept in the pyramid cache (`scale::level0`), as the notes name it.
+    pub fn of_kept(place: &InPlace, held: u32) -> Result<Option<Finer>, VolumeError> {
+        Ok(Finer::of(place, held)?.map(|f| Finer {
+            origin: "its level 0 kept in the pyramid cache",
+            ..f
         }))
     }
 
@@ -90,6 +101,7 @@ impl Finer {
             geometry: boxes.geometry,
             source: Boxes::Zarr(Box::new(boxes)),
             held,
+            origin: "the store's level 0",
         }
     }
 
@@ -121,6 +133,10 @@ impl FinerLevels for Finer {
 
     fn held(&self) -> u32 {
         self.held
+    }
+
+    fn origin(&self) -> &'static str {
+        self.origin
     }
 
     /// The box must lie within the level; the representation is the held level's (biased 8/16-bit integers,

@@ -169,9 +169,14 @@ fn read_place(
                 });
             }
             v.notes = notes;
-            let finer_place = kept.map_or_else(|| place.clone(), |p| level0::in_place(&place, &p));
+            let kept = kept.map(|p| level0::in_place(&place, &p));
             return Ok(Opened {
-                volume: with_finer(after_level(described(*v, &place), opts), &finer_place, level.level)?,
+                volume: with_finer(
+                    after_level(described(*v, &place), opts),
+                    &place,
+                    kept.as_ref(),
+                    level.level,
+                )?,
                 keep: None,
             });
         }
@@ -194,7 +199,7 @@ fn read_place(
     let source = Source::in_place(place.clone())?;
     let level0 = start_level0(&place, level.level, cache, &mut notes);
     let mut v = read::read_level_keeping(&source, level.level, host_budget, notes, level0.as_ref(), progress)?;
-    let finer_place = match level0.map(level0::Level0::finish) {
+    let kept = match level0.map(level0::Level0::finish) {
         Some(Ok(path)) => {
             v.notes.push(format!(
                 "its level 0 ({}) was kept in the pyramid cache ({}): its finer levels are read from there as the view \
@@ -202,26 +207,24 @@ fn read_place(
                 budget::show(level0::kept_bytes(&place)),
                 path.display()
             ));
-            level0::in_place(&place, &path)
+            Some(level0::in_place(&place, &path))
         }
         Some(Err(e)) => {
             v.notes.push(format!(
                 "{NOT_SHOWN}: its level 0 was not kept in the pyramid cache ({e})"
             ));
-            place.clone()
+            None
         }
-        None => place.clone(),
+        None => None,
     };
     let v = described(v, &place);
+    let volume = with_finer(after_level(v, opts), &place, kept.as_ref(), level.level)?;
     let keep = cache.map(|c| Keep {
         cache: c.clone(),
         place,
         level: level.level,
     });
-    Ok(Opened {
-        volume: with_finer(after_level(v, opts), &finer_place, level.level)?,
-        keep,
-    })
+    Ok(Opened { volume, keep })
 }
 
 /// How a note that a decoded file's finer levels are not shown begins.
@@ -258,11 +261,15 @@ fn start_level0(
 }
 
 /// `v`, level `level` of `place`, with its finer levels in the file ([`finer::Finer`]) where they can be read by
-/// box and `v` is that level as read (not reduced further by `--max-dim`).
-fn with_finer(mut v: Volume, place: &InPlace, level: u32) -> Result<Volume, VolumeError> {
+/// box, or in `kept`, a decoded file's level 0 kept in the pyramid cache (`level0::in_place`), and `v` is that level
+/// as read (not reduced further by `--max-dim`).
+fn with_finer(mut v: Volume, place: &InPlace, kept: Option<&InPlace>, level: u32) -> Result<Volume, VolumeError> {
     if v.dims == budget::level_dims(place.dims, level) {
-        v.finer =
-            finer::Finer::of(place, level)?.map(|f| std::sync::Arc::new(f) as std::sync::Arc<dyn volume::FinerLevels>);
+        let finer = match kept {
+            Some(k) => finer::Finer::of_kept(k, level)?,
+            None => finer::Finer::of(place, level)?,
+        };
+        v.finer = finer.map(|f| std::sync::Arc::new(f) as std::sync::Arc<dyn volume::FinerLevels>);
     }
     Ok(v)
 }

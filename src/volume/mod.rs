@@ -121,6 +121,10 @@ pub trait FinerLevels: std::fmt::Debug + Send + Sync {
     fn geometry(&self) -> Geometry;
     /// The level the volume holds (levels 0..held are read from the file).
     fn held(&self) -> u32;
+    /// Where the finer bricks are read from, as a note says it ("the file", "the store's level 0", …).
+    fn origin(&self) -> &'static str {
+        "the file"
+    }
     /// Voxels `lo..lo + size` of level `level` (below the held one), x fastest, in the representation the volume
     /// holds its level in.
     fn read(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<VoxelData, VolumeError>;
