@@ -308,6 +308,12 @@ BUGS = [
      "its own",
      [("src/scale/read.rs", "keep.write_at(u64::from(z0) * slice0_bytes, bytemuck::cast_slice(buf));",
        "keep.write_at(oz as u64 * slice0_bytes, bytemuck::cast_slice(buf));")]),
+    ("cache-rescale-dropped", "a rescaled file's level is cached as stored values without its rescale",
+     [("src/convert/mod.rs", "s if opts.stored => (Scaling::IDENTITY, Some(s).filter(|s| !s.is_identity())),",
+       "s if opts.stored => (Scaling::IDENTITY, None),")]),
+    ("cache-stores-rescaled-values", "a rescaled file's level is cached in rescaled values, not in the stored ones its "
+     "finer bricks are read in",
+     [("src/scale/cache.rs", "            stored: true,\n", "            stored: false,\n")]),
 ]
 
 # The Python module's rules (python/): run against its pytest suite (test_command).

@@ -32,6 +32,7 @@ pub fn convert(args: &ConvertArgs) -> Result<()> {
             None => Reduce::Mean,
         },
         step: args.volume.time,
+        stored: false,
     };
     // Options and an existing output are refused before the input is loaded; the store's folder is made only once
     // the input has opened.

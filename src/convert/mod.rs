@@ -12,7 +12,7 @@ pub mod source;
 mod store;
 mod write;
 
-use crate::volume::{VolumeError, VoxelType};
+use crate::volume::{Scaling, VolumeError, VoxelType};
 use layout::{OmeVersion, Placement};
 use pyramid::Reduce;
 use source::Source;
@@ -39,6 +39,10 @@ pub struct ConvertOptions {
     pub reduce: Reduce,
     /// Write only this time step (as a 3-D store); `None`: every step, with a t axis for a series.
     pub step: Option<u32>,
+    /// Write the values as the file stores them, in the type volcast holds them, with the file's rescale under
+    /// volcast's metadata (which volcast's reader applies) instead of the rescaled values: the pyramid cache's
+    /// stores, whose levels must be the values a file's finer bricks are read in. `false` for `volcast convert`.
+    pub stored: bool,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -162,7 +166,15 @@ pub fn convert(
             source.timesteps() - 1
         )));
     }
-    let (data_type, type_reason) = output_type(source)?;
+    let (data_type, type_reason) = if opts.stored {
+        let held = source.held_type();
+        (
+            held,
+            format!("{held}, the values as stored (the rescale is in volcast's metadata)"),
+        )
+    } else {
+        output_type(source)?
+    };
     macro_rules! run {
         ($t:ty) => {
             write_store::<$t>(source, out, opts, progress)?
@@ -220,10 +232,16 @@ fn write_store<T: sample::Sample>(
         steps: series.then_some(steps.len() as u64),
     };
     let placement = Placement::of(&source.geometry());
-    let attributes = layout::root_attributes(
-        opts.version,
-        layout::multiscale(source.name(), opts.version, series, &placement, &levels),
-    );
+    // The values written: rescaled, or as stored with the rescale beside them for volcast's reader.
+    let (scaling, hint) = match source.scaling() {
+        s if opts.stored => (Scaling::IDENTITY, Some(s).filter(|s| !s.is_identity())),
+        s => (s, None),
+    };
+    let mut multiscale = layout::multiscale(source.name(), opts.version, series, &placement, &levels);
+    if let Some(s) = hint {
+        multiscale["metadata"]["volcast"]["scaling"] = serde_json::json!({"slope": s.slope, "intercept": s.intercept});
+    }
+    let attributes = layout::root_attributes(opts.version, multiscale);
     write_group(&store, opts.version, attributes)?;
     let mut arrays = Vec::new();
     for (k, &d) in levels.iter().enumerate() {
@@ -235,7 +253,7 @@ fn write_store<T: sample::Sample>(
         let mut cascade = Cascade::<T>::new(arrays, depth, opts.reduce, series.then_some(i as u64));
         for z0 in (0..dims[2]).step_by(depth as usize) {
             let n = depth.min(dims[2] - z0);
-            let slab = source.read_slab::<T>(t, z0 as u32, n as u32, source.scaling())?;
+            let slab = source.read_slab::<T>(t, z0 as u32, n as u32, scaling)?;
             cascade.push(0, slab)?;
             progress(((i as f64 * dims[2] as f64 + (z0 + n) as f64) / total) as f32);
         }

@@ -265,11 +265,10 @@ impl PyramidCache {
     }
 
     /// Keeps `v`, level `level` of `place`, in the cache, and gives it back; the error says why it could not (the
-    /// caller notes it). A rescaled file is not kept: the store would hold rescaled values in another type.
+    /// caller notes it). A rescaled file's level is kept as its stored values with the rescale in volcast's metadata
+    /// (`ConvertOptions::stored`): read back, it is the level read from the file, in the values its finer bricks are
+    /// read in.
     pub fn store(&self, place: &InPlace, level: u32, v: Volume) -> (Volume, Result<(), String>) {
-        if !place.scaling.is_identity() {
-            return (v, Err("a rescaled file's levels are not cached".into()));
-        }
         let (store, stamp_path) = self.entry(place, level);
         let Some(mut stamp) = PyramidCache::stamp(place, level) else {
             return (v, Err("the file's size and time cannot be read".into()));
@@ -295,6 +294,7 @@ impl PyramidCache {
             compression: Compression::Zstd,
             reduce: Reduce::Mean,
             step: None,
+            stored: true,
         };
         stamp.stored_range = Some(v.stored_range);
         stamp.level0 = level0::applies(place, level).then(|| self.kept_level0(place, level).is_some());
@@ -421,5 +421,43 @@ mod tests {
         };
         assert!(note.contains("no readable level-0 ranges"), "{note}");
         std::fs::remove_dir_all(&folder).ok();
+    }
+
+    #[test]
+    fn a_rescaled_level_is_kept_as_stored_with_its_rescale() {
+        // A NIfTI with a negative slope: the store holds the stored int16 values, volcast's metadata the rescale.
+        let dims = [36u32, 20, 18];
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        let src: Vec<i16> = (0..n).map(|i| ((i * 37) % 1201) as i16 - 600).collect();
+        let dir = std::env::temp_dir().join(format!("volcast-cache-rescaled-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("v.nii");
+        let header = [3i16, 36, 20, 18, 1, 1, 1, 1];
+        let bytes = crate::volume::nifti::tests::nifti_bytes(
+            &header,
+            4,
+            [1.0; 3],
+            (-0.5, 100.0),
+            false,
+            bytemuck::cast_slice(&src),
+        );
+        std::fs::write(&path, bytes).unwrap();
+        let cache = PyramidCache::new(Some(dir.join("cache")));
+        let opts = OpenOptions::default();
+        let place = in_place(&path, &opts).unwrap().unwrap();
+        assert!(place.by_box(), "a rescale does not keep the finer levels in the file");
+        let source = Source::in_place(place.clone()).unwrap();
+        let level = crate::scale::read::read_level(&source, 1, 1 << 30, Vec::new(), &mut |_| {}).unwrap();
+        let (level, kept) = cache.store(&place, 1, level);
+        kept.unwrap();
+        let Lookup::Hit(back) = cache.lookup(&place, 1) else {
+            panic!("a rescaled level is kept")
+        };
+        assert_eq!((back.scaling, back.range), (level.scaling, level.range));
+        assert_eq!((back.source_type, back.data == level.data), (level.source_type, true));
+        assert_eq!(level.value(3, 2, 1), -0.5 * level.stored(3, 2, 1) + 100.0);
+        let preview = cache.preview(&place, 1, 9).expect("a preview");
+        assert_eq!(preview.scaling, level.scaling, "the preview is rescaled too");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

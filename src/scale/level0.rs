@@ -17,10 +17,11 @@ use std::thread::JoinHandle;
 /// Free space left on the cache's disk after level 0 is written: a cache never fills the disk.
 pub const RESERVE: u64 = 1 << 30;
 
-/// Whether level `level` of `place` keeps level 0 in the cache: a file that is decoded (not by box), of one step and
-/// not rescaled (the finer levels of a series or a rescaled file are not read by box), held at a coarser level.
+/// Whether level `level` of `place` keeps level 0 in the cache: a file that is decoded (not by box), of one step (the
+/// finer levels of a series are not read by box), held at a coarser level. A rescaled file's level 0 is kept as
+/// stored, as its levels are: the rescale stays the volume's.
 pub fn applies(place: &InPlace, level: u32) -> bool {
-    level > 0 && place.timesteps == 1 && place.scaling.is_identity() && !place.by_box()
+    level > 0 && place.timesteps == 1 && !place.by_box()
 }
 
 /// The type level 0 is kept in: the one the level is made in (`read::level_data`).
@@ -161,11 +162,7 @@ pub fn in_place(place: &InPlace, path: &Path) -> InPlace {
         data_file: path.to_path_buf(),
         offset: 0,
         voxel_type: kept_type(place.voxel_type),
-        endian: if cfg!(target_endian = "big") {
-            Endian::Big
-        } else {
-            Endian::Little
-        },
+        endian: Endian::NATIVE,
         inflate: None,
         blocks: None,
         slices: None,

@@ -18,6 +18,13 @@ pub enum Endian {
 }
 
 impl Endian {
+    /// This machine's byte order: what bytes written from memory are in.
+    pub const NATIVE: Endian = if cfg!(target_endian = "big") {
+        Endian::Big
+    } else {
+        Endian::Little
+    };
+
     pub fn parse(s: &str) -> Option<Endian> {
         match s.trim().to_ascii_lowercase().as_str() {
             "little" | "le" => Some(Endian::Little),

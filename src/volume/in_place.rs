@@ -46,11 +46,12 @@ pub struct Inflate {
 }
 
 impl InPlace {
-    /// Whether any box of voxels can be read with positioned reads (uncompressed, one step, not rescaled): the
-    /// finer levels of a level held from such a file stay in it (`scale::finer`).
+    /// Whether any box of voxels can be read with positioned reads (uncompressed, one step): the finer levels of a
+    /// level held from such a file stay in it (`scale::finer`), read as stored, as the level is (a rescale is the
+    /// volume's, applied to every level alike).
     pub fn by_box(&self) -> bool {
         let decoded = self.inflate.is_some() || self.blocks.is_some() || self.slices.is_some();
-        !decoded && self.timesteps == 1 && self.scaling.is_identity()
+        !decoded && self.timesteps == 1
     }
 
     /// Bytes of one time step.

@@ -23,7 +23,7 @@ pub mod geometry;
 pub mod huge_pages;
 pub mod in_place;
 mod metaimage;
-mod nifti;
+pub(crate) mod nifti;
 mod nrrd;
 mod open;
 mod raw;

@@ -228,11 +228,7 @@ pub fn from_native_bytes(
             actual: bytes.len() / voxel_type.size(),
         });
     }
-    let endian = if cfg!(target_endian = "big") {
-        Endian::Big
-    } else {
-        Endian::Little
-    };
+    let endian = Endian::NATIVE;
     let mut reader = bytes;
     let data =
         decode::read_binary(&mut reader, voxel_type, endian, count, 64 << 20, &mut Progress::none()).map_err(|e| {

@@ -366,6 +366,57 @@ fn a_gzip_file_over_the_host_budget_shows_full_resolution_from_its_kept_level_0(
     assert!(worst > Some(1), "level 1 alone is not the full-resolution image");
 }
 
+/// A rescaled file (a NIfTI with `scl_slope` 2 and `scl_inter` −1024, as a CT's rescale) over the host budget, read
+/// in place and decoded from gzip: its finer bricks are read as stored, as the held level is, so the render equals
+/// the full-resolution one. The level is cached as stored values with the rescale beside them: the next open reads it
+/// from the cache with the file's scaled range, and renders the same image.
+#[test]
+fn a_rescaled_file_over_the_host_budget_shows_full_resolution_and_is_cached() {
+    let dir = common::scratch("cli-scale-rescaled");
+    let raw = write_volume(&dir);
+    let json = |o: &std::process::Output| serde_json::from_str::<serde_json::Value>(&stdout(o)).unwrap();
+    for name in ["ct.nii", "ct.nii.gz"] {
+        let file = dir.join(name);
+        common::scratch::nifti(Path::new(&raw), [160, 96, 80], 4, (2.0, -1024.0), &file);
+        let f = file.to_string_lossy().into_owned();
+        let full = dir.join(format!("{name}-full.png"));
+        volcast_ok(&["render", &f, "-o", &full.to_string_lossy()]);
+        let full = image::open(&full).unwrap().to_rgba8();
+        let whole = json(&volcast(&["info", &f, "--json"]));
+        let cache = dir.join(format!("{name}-cache")).to_string_lossy().into_owned();
+        for open in ["first", "cached"] {
+            let out = dir.join(format!("{name}-{open}.png"));
+            let budget = ["--host-budget", "700K", "--cache-dir", &cache];
+            let o = volcast_ok(&[&["render", &f], &budget[..], &["-o", &out.to_string_lossy()]].concat());
+            let err = stderr(&o);
+            assert!(
+                err.contains("holds level 1 of its 160x96x80 voxels; the finer levels' bricks are read from")
+                    && err.contains("level 0 in"),
+                "{name} {open}: {err}"
+            );
+            assert_eq!(
+                err.contains("read from the pyramid cache"),
+                open == "cached",
+                "{name} {open}: {err}"
+            );
+            let shot = image::open(&out).unwrap().to_rgba8();
+            let worst = shot
+                .as_raw()
+                .iter()
+                .zip(full.as_raw())
+                .map(|(p, q)| p.abs_diff(*q))
+                .max();
+            assert!(worst <= Some(1), "{name} {open}: full resolution differs by {worst:?}");
+            let held = json(&volcast(&[&["info", &f], &budget[..], &["--json"]].concat()));
+            assert_eq!(held["dims"], serde_json::json!([80, 48, 40]), "{name} {open}");
+            assert_eq!(
+                held["scaled_range"], whole["scaled_range"],
+                "{name} {open}: the file's rescaled range"
+            );
+        }
+    }
+}
+
 fn render_no_cache(raw: &str, dir: &Path) -> (String, ()) {
     let out = dir.join("none.png");
     let o = volcast_ok(&[

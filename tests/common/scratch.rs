@@ -79,3 +79,38 @@ pub fn gzip_nrrd(raw: &Path, dims: [u32; 3], type_name: &str, path: &Path) {
     out.extend(e.finish().unwrap());
     std::fs::write(path, out).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
 }
+
+/// The raw file `raw` of `dims` voxels of NIfTI `datatype` (little-endian) as a NIfTI-1 file at `path` with the
+/// rescale `slope_inter` (`scl_slope`, `scl_inter`), gzip-compressed if `path` ends in `.gz`, as nibabel writes one.
+pub fn nifti(raw: &Path, dims: [u32; 3], datatype: i16, slope_inter: (f32, f32), path: &Path) {
+    use std::io::Write;
+    let mut h = vec![0u8; 352];
+    h[0..4].copy_from_slice(&348i32.to_le_bytes());
+    let bits = match datatype {
+        2 => 8i16,
+        4 | 512 => 16,
+        _ => 32,
+    };
+    for (i, d) in [3, dims[0], dims[1], dims[2], 1, 1, 1, 1].into_iter().enumerate() {
+        h[40 + 2 * i..42 + 2 * i].copy_from_slice(&(d as i16).to_le_bytes());
+    }
+    h[70..72].copy_from_slice(&datatype.to_le_bytes());
+    h[72..74].copy_from_slice(&bits.to_le_bytes());
+    for (i, p) in [1.0f32, 1.0, 1.0, 1.0].into_iter().enumerate() {
+        h[76 + 4 * i..80 + 4 * i].copy_from_slice(&p.to_le_bytes());
+    }
+    h[108..112].copy_from_slice(&352f32.to_le_bytes());
+    h[112..116].copy_from_slice(&slope_inter.0.to_le_bytes());
+    h[116..120].copy_from_slice(&slope_inter.1.to_le_bytes());
+    h[123] = 2;
+    h[344..348].copy_from_slice(b"n+1\0");
+    h.extend(std::fs::read(raw).expect("the raw file"));
+    let bytes = if path.extension().is_some_and(|e| e == "gz") {
+        let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        e.write_all(&h).unwrap();
+        e.finish().unwrap()
+    } else {
+        h
+    };
+    std::fs::write(path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+}

@@ -3,7 +3,8 @@
 //! arrays in zlib, LZ4 and LZMA blocks and base64 from VTK, DICOM series in every codec gdcmconv wrote) and held at
 //! a coarser level keeps its level 0 in the pyramid cache as it is decoded. Level 0 read back from there, whole and
 //! by box, equals the file loaded whole by its format's reader, voxel for voxel, and so it does from the cache on
-//! the next open. A rescaled file (the int16 series here) is not cached, and keeps its level alone.
+//! the next open. A rescaled file (the int16 series here, CT's rescale intercept) does so in its stored values, and
+//! its held level, read back from the cache, keeps the rescale and the file's range.
 
 use crate::common;
 use std::path::PathBuf;
@@ -61,19 +62,23 @@ fn decoded_files_show_their_level_0_from_the_pyramid_cache() {
         // A budget one voxel short of level 0: level 1 held.
         let host = whole.dims.iter().map(|&d| u64::from(d)).product::<u64>() * whole.source_type.size() as u64 - 1;
         let cache = PyramidCache::new(Some(dir.join(format!("cache-{k}"))));
+        let mut first: Option<volume::Volume> = None;
         for open in ["first", "cached"] {
             let v = volcast::scale::open(&path, &opts, Budgets::host(Some(host)), Some(&cache), &mut |_| {})
                 .unwrap_or_else(|e| panic!("{what}: {e}"));
-            if !whole.scaling.is_identity() {
-                // A rescaled file (these int16 series carry a rescale) is not cached, so it keeps its level alone.
-                assert!(v.finer.is_none(), "{what}");
+            // The held level carries the file's rescale (the int16 series have one) and its range, from the file
+            // and from the cache alike: the cache keeps the stored values and the rescale beside them.
+            assert_eq!((v.scaling, v.range), (whole.scaling, whole.range), "{what} ({open})");
+            assert_eq!(
+                v.notes.iter().any(|n| n.contains("read from the pyramid cache")),
+                open == "cached",
+                "{what}"
+            );
+            if let Some(f) = &first {
                 assert!(
-                    v.notes
-                        .iter()
-                        .any(|n| n.contains("a rescaled file's levels are not cached")),
-                    "{what}"
+                    v.data == f.data && v.source_type == f.source_type,
+                    "{what}: the cached level differs"
                 );
-                continue;
             }
             let finer = v
                 .finer
@@ -92,6 +97,7 @@ fn decoded_files_show_their_level_0_from_the_pyramid_cache() {
                 inner == cut(&whole.data, dims, lo, size),
                 "{what} ({open}): a box of level 0"
             );
+            first.get_or_insert(v);
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

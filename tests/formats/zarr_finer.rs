@@ -104,6 +104,7 @@ fn a_store_volcast_wrote_streams_its_level_0_across_chunks() {
         compression: volcast::convert::Compression::Zstd,
         reduce: volcast::convert::pyramid::Reduce::Mean,
         step: None,
+        stored: false,
     };
     let source = Source::Loaded(Box::new(whole.clone()));
     volcast::convert::convert(&source, &store, &opts, &mut |_| {}).expect("convert");
