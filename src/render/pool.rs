@@ -278,6 +278,12 @@ pub fn slots_within(max_slots: u64, brick: [u32; 3], max_dim: u32) -> u64 {
         .unwrap_or(0)
 }
 
+/// The slots of the pool arranged for `count` bricks (at least `count`: whole rows and layers), if they fit `max_dim`
+/// per side: a pool that holds every brick of a pyramid holds them all, not the most a smaller count arranges.
+pub fn slots_holding(count: u64, brick: [u32; 3], max_dim: u32) -> Option<u64> {
+    arrange(count, brick.map(slot_side), max_dim).map(|s| s.iter().map(|&v| u64::from(v)).product())
+}
+
 /// Slots per axis for `count` slots of `side` texels within `max_dim` per pool side: close to a cube of slots
 /// (neighbouring bricks stay near in the pool), else as few rows and layers as fit. None when they cannot fit.
 fn arrange(count: u64, side: [u32; 3], max_dim: u32) -> Option<[u32; 3]> {
@@ -318,6 +324,14 @@ mod tests {
         let p = Pool::whole([400, 16, 16], Some(16), 100).unwrap();
         assert_eq!(p.slots, [3, 3, 3]);
         assert!(Pool::whole([256, 256, 256], Some(16), 200).is_err());
+    }
+
+    #[test]
+    fn a_pool_for_a_whole_pyramid_rounds_up_to_its_arrangement() {
+        // 15 bricks of 64³ (a 160x96x80 pyramid) arrange as 3x2x3 slots; within 15 the most are 12 (3x2x2).
+        assert_eq!(slots_holding(15, [64; 3], 2048), Some(18));
+        assert_eq!(slots_within(15, [64; 3], 2048), 12);
+        assert_eq!(slots_holding(15, [64; 3], 64), None, "a slot (a brick and its border) is wider than 64");
     }
 
     #[test]

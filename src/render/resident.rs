@@ -133,8 +133,11 @@ impl GpuVolume {
             })
             .sum::<u64>();
         let limit = gpu.properties.limits.max_image_dimension3_d;
-        let fit = (pool_bytes / (slot_texels * layout.bytes_per_voxel())).min(bricks_in_pyramid);
-        let capacity = super::pool::slots_within(fit, brick3, limit);
+        let fit = pool_bytes / (slot_texels * layout.bytes_per_voxel());
+        // Every brick of the pyramid where the budget takes their arrangement; else as many as it takes.
+        let capacity = super::pool::slots_holding(bricks_in_pyramid, brick3, limit)
+            .filter(|&n| n <= fit)
+            .unwrap_or_else(|| super::pool::slots_within(fit.min(bricks_in_pyramid), brick3, limit));
         if capacity == 0 {
             return Err(GpuError::NoRoom(format!(
                 "a brick of {}x{}x{} needs {} KiB on the GPU as {} and the pool may take {} KiB",

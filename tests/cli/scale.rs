@@ -366,18 +366,20 @@ fn a_gzip_file_over_the_host_budget_shows_full_resolution_from_its_kept_level_0(
     assert!(worst > Some(1), "level 1 alone is not the full-resolution image");
 }
 
-/// A rescaled file (a NIfTI with `scl_slope` 2 and `scl_inter` −1024, as a CT's rescale) over the host budget, read
-/// in place and decoded from gzip: its finer bricks are read as stored, as the held level is, so the render equals
+/// A rescaled file (a NIfTI with `scl_slope` 2 and `scl_inter` −1024, as a CT's rescale; gzip with a negative slope)
+/// over the host budget, read in place and decoded from gzip: its finer bricks are read as stored, as the held level is, so the render equals
 /// the full-resolution one. The level is cached as stored values with the rescale beside them: the next open reads it
-/// from the cache with the file's scaled range, and renders the same image.
+/// from the cache with the file's scaled range, and renders the same image. The pool holds every brick of the
+/// pyramid (15, in 18 slots: its arrangement's whole rows and layers), so every level-0 brick is shown.
 #[test]
 fn a_rescaled_file_over_the_host_budget_shows_full_resolution_and_is_cached() {
     let dir = common::scratch("cli-scale-rescaled");
     let raw = write_volume(&dir);
     let json = |o: &std::process::Output| serde_json::from_str::<serde_json::Value>(&stdout(o)).unwrap();
-    for name in ["ct.nii", "ct.nii.gz"] {
+    // The gzip one with a negative slope: the finer bricks' ranges (what can be seen) map with their ends swapped.
+    for (name, rescale) in [("ct.nii", (2.0, -1024.0)), ("ct.nii.gz", (-0.5, 3000.0))] {
         let file = dir.join(name);
-        common::scratch::nifti(Path::new(&raw), [160, 96, 80], 4, (2.0, -1024.0), &file);
+        common::scratch::nifti(Path::new(&raw), [160, 96, 80], 4, rescale, &file);
         let f = file.to_string_lossy().into_owned();
         let full = dir.join(format!("{name}-full.png"));
         volcast_ok(&["render", &f, "-o", &full.to_string_lossy()]);
@@ -391,7 +393,8 @@ fn a_rescaled_file_over_the_host_budget_shows_full_resolution_and_is_cached() {
             let err = stderr(&o);
             assert!(
                 err.contains("holds level 1 of its 160x96x80 voxels; the finer levels' bricks are read from")
-                    && err.contains("level 0 in"),
+                    && err.contains("a pool of 18 bricks")
+                    && err.contains("level 0 in 12 of its 12 level-0 bricks shown"),
                 "{name} {open}: {err}"
             );
             assert_eq!(
