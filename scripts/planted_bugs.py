@@ -310,7 +310,7 @@ BUGS = [
        "keep.write_at(oz as u64 * slice0_bytes, bytemuck::cast_slice(buf));")]),
     ("cache-rescale-dropped", "a rescaled file's level is cached as stored values without its rescale",
      [("src/convert/mod.rs", "s if opts.stored => (Scaling::IDENTITY, Some(s).filter(|s| !s.is_identity())),",
-       "s if opts.stored => (Scaling::IDENTITY, None),")]),
+       "s if opts.stored => (Scaling::IDENTITY, None::<Scaling>),")]),
     ("cache-stores-rescaled-values", "a rescaled file's level is cached in rescaled values, not in the stored ones its "
      "finer bricks are read in",
      [("src/scale/cache.rs", "            stored: true,\n", "            stored: false,\n")]),

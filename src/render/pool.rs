@@ -331,7 +331,11 @@ mod tests {
         // 15 bricks of 64³ (a 160x96x80 pyramid) arrange as 3x2x3 slots; within 15 the most are 12 (3x2x2).
         assert_eq!(slots_holding(15, [64; 3], 2048), Some(18));
         assert_eq!(slots_within(15, [64; 3], 2048), 12);
-        assert_eq!(slots_holding(15, [64; 3], 64), None, "a slot (a brick and its border) is wider than 64");
+        assert_eq!(
+            slots_holding(15, [64; 3], 64),
+            None,
+            "a slot (a brick and its border) is wider than 64"
+        );
     }
 
     #[test]

@@ -13,7 +13,7 @@ pub mod read;
 use crate::convert::source::Source;
 use crate::volume::budget::{self, Budgets, Shape};
 use crate::volume::in_place::{in_place, InPlace};
-use crate::volume::{self, OpenOptions, Volume, VolumeError};
+use crate::volume::{self, OpenOptions, Volume, VolumeError, VoxelType};
 use cache::{Lookup, PyramidCache};
 use std::path::Path;
 
@@ -116,29 +116,33 @@ pub fn open_deferred(
 
 /// A folder of DICOM slices that may not fit `budgets` at full resolution (its first image times its files, an
 /// upper bound read from one header): the series read slice by slice (`dicom::slices`), so that its level is made
-/// without holding it. `None` for any other file, and for a series that surely fits: the loader reads it whole.
+/// without holding it. One multi-frame DICOM file that does not fit them is read frame by frame the same way.
+/// `None` for any other file, and for a series or file that fits: the loader reads it whole.
 fn dicom_by_slices(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result<Option<InPlace>, VolumeError> {
     use crate::volume::dicom::slices;
-    let Some((dims, voxel_type)) = slices::claimed_bound(path) else {
-        return Ok(None);
+    let fits = |dims: [u32; 3], voxel_type: VoxelType| {
+        let shape = Shape {
+            dims,
+            voxel_type,
+            steps: 1,
+        };
+        budget::choose(&shape, budgets).is_ok_and(|l| l.level == 0)
     };
-    let shape = Shape {
-        dims,
-        voxel_type,
-        steps: 1,
-    };
-    if budget::choose(&shape, budgets).is_ok_and(|l| l.level == 0) {
-        return Ok(None);
+    if !path.is_dir() {
+        return slices::frames_in_place(path, &fits);
     }
-    slices::series_in_place(path, opts.series.as_deref())
+    match slices::claimed_bound(path) {
+        Some((dims, voxel_type)) if !fits(dims, voxel_type) => slices::series_in_place(path, opts.series.as_deref()),
+        _ => Ok(None),
+    }
 }
 
 /// `v` as read from `place`: its arrays, and a DICOM series' modality and the folder's series, as its loader says.
 fn described(mut v: Volume, place: &InPlace) -> Volume {
     v.format = place.format.to_string();
     v.arrays = place.arrays.clone();
+    v.modality = place.modality.clone();
     if let Some(s) = &place.slices {
-        v.modality = s.modality.clone();
         v.series = s.series.clone();
     }
     v
@@ -193,8 +197,11 @@ fn read_place(
             _ => "its encoded voxels were decoded once, on every core, into that level".into(),
         });
     }
-    if place.slices.is_some() {
-        notes.push("its slices were decoded one file at a time, on every core, into that level".into());
+    if let Some(series) = &place.slices {
+        notes.push(match series.is_one_file() {
+            true => "its frames were decoded one at a time from where they lie in the file, on every core, into that level",
+            false => "its slices were decoded one file at a time, on every core, into that level",
+        }.into());
     }
     let source = Source::in_place(place.clone())?;
     let level0 = start_level0(&place, level.level, cache, &mut notes);

@@ -12,6 +12,7 @@
 //! slope/intercept becomes [`Volume::scaling`](super::Volume::scaling); the stored integers reach the GPU as is.
 
 pub(crate) mod codec;
+mod frames;
 mod geometry;
 mod lengths;
 mod pixels;

@@ -36,6 +36,8 @@ pub struct InPlace {
     pub slices: Option<std::sync::Arc<super::dicom::slices::SeriesReader>>,
     /// The file's data arrays, as `volcast info` lists them (a multi-array `.vti`); empty for one-array formats.
     pub arrays: Vec<super::ArrayInfo>,
+    /// The modality a DICOM file names ("CT", "MR"), as its loader gives it to the volume.
+    pub modality: Option<String>,
 }
 
 /// A compressed stream's kind, and the inflated bytes before the voxels (a `.nii.gz`'s header and extensions).
@@ -318,6 +320,7 @@ fn header_in_place_unchecked(
         blocks: None,
         slices: None,
         arrays: header.arrays,
+        modality: None,
     }
 }
 
@@ -350,5 +353,6 @@ fn raw_in_place(path: &Path, opts: &OpenOptions) -> Result<InPlace, VolumeError>
         blocks: None,
         slices: None,
         arrays: Vec::new(),
+        modality: None,
     })
 }

@@ -45,6 +45,12 @@ fn decoded_files_show_their_level_0_from_the_pyramid_cache() {
     .map(|r| (r.to_string(), None))
     .collect();
     cases.push(("vtk/vti_zlib.vti".into(), Some("label")));
+    // One multi-frame file each, read frame by frame: frames stored shuffled, a rescale, native and compressed.
+    for codec in ["native", "rle", "j2k"] {
+        cases.push((format!("dicom/enhanced_ct_{codec}.dcm"), None));
+    }
+    // Frames in order: read in place, its finer levels by box from the file itself.
+    cases.push(("dicom/multiframe_ct_native.dcm".into(), None));
     for kind in ["u8", "u16", "i16"] {
         for codec in ["native", "rle", "jpeg", "jpegls", "j2k"] {
             cases.push((format!("dicom/{kind}_{codec}"), None));

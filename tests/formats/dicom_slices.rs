@@ -20,14 +20,16 @@ fn open_within(path: &Path, opts: &OpenOptions, host: u64) -> Result<volume::Vol
 /// Opens `path` within `host` bytes, asserts it was read slice by slice into a level of `dims`, and that the level
 /// equals the one made from the series loaded whole.
 fn assert_sliced_level_is_the_whole_ones(path: &Path, opts: &OpenOptions, host: u64, dims: [u32; 3]) {
+    let by = match path.file_name().and_then(|n| n.to_str()) {
+        _ if path.is_dir() => "slices were decoded one file at a time",
+        Some("multiframe_ct_native.dcm") => "frames lie uncompressed and in order in the file: read in place",
+        _ => "frames were decoded one at a time from where they lie in the file",
+    };
     let name = path.display();
     let sliced = open_within(path, opts, host).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert_eq!(sliced.dims, dims, "{name}");
     assert!(
-        sliced
-            .notes
-            .iter()
-            .any(|n| n.contains("slices were decoded one file at a time")),
+        sliced.notes.iter().any(|n| n.contains(by)),
         "{name}: {:?}",
         sliced.notes
     );
@@ -62,6 +64,62 @@ fn series_over_the_host_budget_are_read_slice_by_slice_into_their_level() {
     for rel in ["world/dicom_series", "world/dicom_oblique", "world/dicom_uneven"] {
         assert_sliced_level_is_the_whole_ones(&data(rel), &OpenOptions::default(), 16 << 10, [24, 22, 8]);
     }
+}
+
+/// One multi-frame file (pydicom's enhanced CT, frames stored shuffled, placed and rescaled by its functional groups;
+/// gdcmconv's RLE and JPEG 2000 of it, one fragment per frame) over the host budget is read frame by frame from where
+/// each frame lies into its level; one whose frames lie in order, every bit stored (pydicom's classic multi-frame CT),
+/// is read in place like a raw file, its finer levels by box from it. A file cut short is refused naming it, never
+/// read past its end.
+#[test]
+fn a_multi_frame_file_over_the_host_budget_is_read_frame_by_frame_into_its_level() {
+    let dir = common::scratch("dicom-frames");
+    let in_place = data("dicom/multiframe_ct_native.dcm");
+    let v = open_within(&in_place, &OpenOptions::default(), 1 << 10).expect("in place");
+    assert!(v.finer.is_some(), "finer levels from the file without the cache");
+    for name in [
+        "enhanced_ct_native",
+        "enhanced_ct_rle",
+        "enhanced_ct_j2k",
+        "multiframe_ct_native",
+    ] {
+        let path = data(&format!("dicom/{name}.dcm"));
+        // 16x12x6 int16 (2.25 KiB); 1 KiB holds level 1 only.
+        assert_sliced_level_is_the_whole_ones(&path, &OpenOptions::default(), 1 << 10, [8, 6, 3]);
+        let bytes = std::fs::read(&path).unwrap();
+        let cut = dir.write(&format!("cut_{name}.dcm"), &bytes[..bytes.len() - 100]);
+        let e = open_within(&cut, &OpenOptions::default(), 1 << 10).expect_err("a cut file");
+        let e = e.to_string();
+        assert!(
+            e.contains(&format!("cut_{name}.dcm")) && e.contains("truncated"),
+            "{name}: {e}"
+        );
+    }
+}
+
+/// The fuzz findings (hostile DICOM files) opened within a budget that would read them frame by frame: each is
+/// refused with an error naming the file, as the loader refuses it, never a panic or an allocation by a claimed size.
+#[test]
+fn hostile_dicom_files_within_a_small_budget_are_refused_naming_the_file() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap().flatten() {
+        let path = entry.path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if !name.starts_with("fuzz-dicom") {
+            continue;
+        }
+        let e = open_within(&path, &OpenOptions::default(), 64)
+            .expect_err(&name)
+            .to_string();
+        let loader = volume::open(&path, &OpenOptions::default())
+            .expect_err(&name)
+            .to_string();
+        assert!(e.starts_with(&format!("{name}: ")), "{e}");
+        assert_eq!(e, loader, "{name}: the loader's error");
+        seen += 1;
+    }
+    assert!(seen >= 10, "the fuzz findings are in tests/data");
 }
 
 #[test]

@@ -104,36 +104,55 @@ impl FrameShape {
 }
 
 /// The byte ranges of each frame's compressed data: one fragment per frame, all fragments for a single frame,
-/// or grouped by the Basic Offset Table.
+/// or grouped by the Basic Offset Table ([`frame_groups`]).
 pub(super) fn frames<'a>(
     fragments: &'a [Vec<u8>],
     offset_table: &[u32],
     frames: u32,
 ) -> Result<Vec<Cow<'a, [u8]>>, String> {
+    let lengths: Vec<u64> = fragments.iter().map(|f| f.len() as u64).collect();
+    Ok(frame_groups(&lengths, offset_table, frames)?
+        .into_iter()
+        .map(|r| match r.len() {
+            1 => Cow::Borrowed(&fragments[r.start][..]),
+            _ => Cow::Owned(fragments[r].concat()),
+        })
+        .collect())
+}
+
+/// Which fragments (of `lengths` bytes each) make each of `frames` frames: one fragment per frame, every fragment
+/// for a single frame, or grouped by the Basic Offset Table (offsets from the first fragment's item, 8-byte item
+/// headers included).
+pub(super) fn frame_groups(
+    lengths: &[u64],
+    offset_table: &[u32],
+    frames: u32,
+) -> Result<Vec<std::ops::Range<usize>>, String> {
     let n = frames as usize;
-    if fragments.is_empty() {
+    if lengths.is_empty() {
         return Err("the encapsulated PixelData holds no fragments".into());
     }
-    if fragments.len() == n {
-        return Ok(fragments.iter().map(|f| Cow::Borrowed(&f[..])).collect());
+    if lengths.len() == n {
+        return Ok((0..n).map(|k| k..k + 1).collect());
     }
     if n == 1 {
-        return Ok(vec![Cow::Owned(fragments.concat())]);
+        return Ok(std::iter::once(0..lengths.len()).collect());
     }
     if offset_table.len() != n || offset_table[0] != 0 || offset_table.windows(2).any(|w| w[1] <= w[0]) {
         return Err(format!(
             "{} fragments for {n} frames and no usable Basic Offset Table ({} entries) to group them",
-            fragments.len(),
+            lengths.len(),
             offset_table.len()
         ));
     }
-    // Each fragment's offset from the first item, as the offset table counts (8-byte item headers included).
-    let mut starts = Vec::with_capacity(fragments.len());
-    let mut at = 0u64;
-    for f in fragments {
-        starts.push(at);
-        at += f.len() as u64 + 8;
-    }
+    let starts: Vec<u64> = lengths
+        .iter()
+        .scan(0u64, |at, &len| {
+            let start = *at;
+            *at += len + 8;
+            Some(start)
+        })
+        .collect();
     let mut out = Vec::with_capacity(n);
     for (k, &offset) in offset_table.iter().enumerate() {
         let first = starts
@@ -141,13 +160,8 @@ pub(super) fn frames<'a>(
             .position(|&s| s == u64::from(offset))
             .ok_or_else(|| format!("the Basic Offset Table entry for frame {k} ({offset}) is not a fragment start"))?;
         let end = offset_table.get(k + 1).map_or(u64::MAX, |&e| u64::from(e));
-        let parts: Vec<&[u8]> = fragments[first..]
-            .iter()
-            .zip(&starts[first..])
-            .take_while(|(_, &s)| s < end)
-            .map(|(f, _)| &f[..])
-            .collect();
-        out.push(Cow::Owned(parts.concat()));
+        let count = starts[first..].iter().take_while(|&&s| s < end).count();
+        out.push(first..first + count);
     }
     Ok(out)
 }
@@ -459,4 +473,27 @@ pub(super) fn decode(codec: Kind, uid: &str, data: &[u8], shape: &FrameShape) ->
         ));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::frame_groups;
+
+    #[test]
+    fn fragments_group_into_frames_as_the_offset_table_says() {
+        // One fragment per frame; all fragments for one frame.
+        assert_eq!(frame_groups(&[5, 6, 7], &[], 3).unwrap(), vec![0..1, 1..2, 2..3]);
+        assert_eq!(
+            frame_groups(&[5, 6, 7], &[], 1).unwrap(),
+            std::iter::once(0..3).collect::<Vec<_>>()
+        );
+        // Two frames in four fragments: the table counts each fragment's 8-byte item header.
+        let lengths = [10, 20, 30, 40];
+        assert_eq!(frame_groups(&lengths, &[0, 46], 2).unwrap(), vec![0..2, 2..4]);
+        assert_eq!(frame_groups(&lengths, &[0, 84], 2).unwrap(), vec![0..3, 3..4]);
+        let e = frame_groups(&lengths, &[0, 45], 2).unwrap_err();
+        assert!(e.contains("is not a fragment start"), "{e}");
+        let e = frame_groups(&lengths, &[], 2).unwrap_err();
+        assert!(e.contains("no usable Basic Offset Table"), "{e}");
+    }
 }

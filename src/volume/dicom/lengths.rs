@@ -44,6 +44,12 @@ pub(super) fn short_length_vr(vr: [u8; 2]) -> bool {
 /// set in its transfer syntax, descending into sequences and items; returns where parsing should stop: the end of
 /// PixelData (bytes after it, such as the junk in one GE slice of the test data, are never parsed) or the end.
 pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeError> {
+    let (data_set, explicit) = data_set_start(bytes, label)?;
+    walk_data_set(bytes, data_set, explicit, label, false)
+}
+
+/// Where the data set starts after the file meta group, and whether its VR is explicit.
+fn data_set_start(bytes: &[u8], label: &str) -> Result<(usize, bool), VolumeError> {
     let pos = if is_dicom(bytes) {
         132
     } else if bytes.starts_with(b"DICM") {
@@ -55,8 +61,34 @@ pub(super) fn check_lengths(bytes: &[u8], label: &str) -> Result<usize, VolumeEr
         ));
     };
     let (data_set, transfer_syntax) = walk_meta_group(bytes, pos, label)?;
-    let explicit = is_explicit_vr(&transfer_syntax, label)?;
-    walk_data_set(bytes, data_set, explicit, label)
+    Ok((data_set, is_explicit_vr(&transfer_syntax, label)?))
+}
+
+/// The top-level PixelData element of a file whose first bytes are `prefix`, every element before it checked as
+/// [`check_lengths`] checks them: where its header starts, where its value starts, and its length (`None`:
+/// undefined, encapsulated). `Ok(None)` where `prefix` ends before that header (read more of the file); an error
+/// where the bytes before it are not a readable DICOM file or run past `prefix`.
+pub(super) fn pixel_data_header(prefix: &[u8], label: &str) -> Result<Option<PixelDataAt>, VolumeError> {
+    let (data_set, explicit) = data_set_start(prefix, label)?;
+    let end = walk_data_set(prefix, data_set, explicit, label, true)?;
+    let head = (end + 8 <= prefix.len())
+        .then(|| ElementHeader::read(prefix, end, explicit))
+        .flatten();
+    Ok(head
+        .filter(|h| (h.group, h.element) == (0x7FE0, 0x0010))
+        .map(|h| PixelDataAt {
+            header: end,
+            value: end + h.size,
+            length: (h.length != u32::MAX).then_some(u64::from(h.length)),
+        }))
+}
+
+/// Where a top-level PixelData element lies in a file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct PixelDataAt {
+    pub header: usize,
+    pub value: usize,
+    pub length: Option<u64>,
 }
 
 fn meta_error(label: &str) -> VolumeError {
@@ -161,7 +193,15 @@ fn is_explicit_vr(transfer_syntax: &str, label: &str) -> Result<bool, VolumeErro
 
 /// The data set's elements in little endian (big endian is refused before the walk), descending into sequences
 /// and items; returns where parsing should stop.
-fn walk_data_set(bytes: &[u8], start: usize, explicit: bool, label: &str) -> Result<usize, VolumeError> {
+///
+/// With `until_pixels`, stops at the top-level PixelData element's header and returns where it starts.
+fn walk_data_set(
+    bytes: &[u8],
+    start: usize,
+    explicit: bool,
+    label: &str,
+    until_pixels: bool,
+) -> Result<usize, VolumeError> {
     let mut pos = start;
     let mut encapsulated = false;
     // The sequences the walk is inside: where a defined-length one ends, None for an undefined length (ended by
@@ -176,6 +216,9 @@ fn walk_data_set(bytes: &[u8], start: usize, explicit: bool, label: &str) -> Res
             break;
         };
         let (group, element) = (head.group, head.element);
+        if until_pixels && (group, element) == (0x7FE0, 0x0010) && open.is_empty() {
+            return Ok(pos);
+        }
         pos += head.size;
         head.check_delimiter_length(label)?;
         if head.length == u32::MAX {

@@ -147,6 +147,20 @@ pub(super) fn append_file(
     })?;
     let offsets = element.value().offset_table().unwrap_or(&[]);
     let frames = codec::frames(fragments, offsets, s.frames).map_err(err)?;
+    for &k in order {
+        append_compressed(&frames[k], k, s, out, label)?;
+    }
+    Ok(())
+}
+
+/// Decodes frame `k` of slice `s` from its compressed bytes `data` and appends it.
+pub(super) fn append_compressed(
+    data: &[u8],
+    k: usize,
+    s: &Slice,
+    out: &mut VoxelData,
+    label: &str,
+) -> Result<(), VolumeError> {
     let shape = FrameShape {
         rows: s.rows as u16,
         columns: s.columns as u16,
@@ -154,12 +168,9 @@ pub(super) fn append_file(
         bits_allocated: s.bits_allocated,
         bits_stored: s.bits_stored,
     };
-    for &k in order {
-        let decoded = codec::decode(s.kind, &s.transfer_syntax, &frames[k], &shape)
-            .map_err(|e| err(format!("frame {} of {}: {e}", k + 1, s.frames)))?;
-        append_frame(Pixels::Bytes(&decoded), s, out, label)?;
-    }
-    Ok(())
+    let decoded = codec::decode(s.kind, &s.transfer_syntax, data, &shape)
+        .map_err(|e| header_error(label, format!("frame {} of {}: {e}", k + 1, s.frames)))?;
+    append_frame(Pixels::Bytes(&decoded), s, out, label)
 }
 
 /// The files must back the volume before it is allocated: native pixels byte for byte, compressed ones within

@@ -3,6 +3,7 @@
 //! decodes them, uneven spacing resampled as the loader resamples it). `scale::read` then makes a pyramid level on
 //! every core without holding the series: a series larger than the host budget is decoded once, into the level.
 
+use super::frames::Frames;
 use super::geometry::resample_slices;
 use super::pixels::{append_slice, check_files_back, empty_data};
 use super::series::SeriesInfo;
@@ -25,37 +26,80 @@ pub struct SeriesReader {
     dims: [u32; 3],
     voxel_type: VoxelType,
     label: String,
-    /// The series' modality and the folder's series, as the loader gives them to the volume.
-    pub modality: Option<String>,
+    /// The folder's series, as the loader gives them to the volume.
     pub series: Vec<SeriesInfo>,
+    /// One multi-frame file read frame by frame, and its frames in volume order; `None` for a folder of slices.
+    frames: Option<(Frames, Vec<usize>)>,
 }
 
 /// The folder `path` as a series read slice by slice, choosing `series` as the loader does; `None` where the loader
-/// must read it: one file (a multi-frame object is parsed whole), or slices at several temporal positions.
+/// must read it: one file ([`frames_in_place`] reads a multi-frame one), or slices at several temporal positions.
 pub(crate) fn series_in_place(path: &Path, series: Option<&str>) -> Result<Option<InPlace>, VolumeError> {
     if !path.is_dir() {
         return Ok(None);
     }
     let found: Headers = headers(path, series)?;
-    let (files, label, mut notes) = (found.files, found.label, found.notes);
+    let (files, label, notes) = (found.files, found.label, found.notes);
     if temporal_positions(&found.slices).is_some() || found.slices.iter().any(|s| s.frames > 1) {
         return Ok(None);
     }
-    let mut plan = plan(found.slices, &label)?;
+    let plan = plan(found.slices, &label)?;
     let needed = check_dims(plan.dims)? * plan.voxel_type.size() as u64;
     check_files_back(&plan, &files, needed, &label)?;
+    let files = plan.slices.iter().map(|s| files[s.source].clone()).collect();
+    Ok(Some(placed(path, plan, files, found.listed, None, label, notes)))
+}
+
+/// The one multi-frame file `path` as a volume read frame by frame ([`Frames`]), placed, ordered and rescaled as the
+/// loader does, where `fits` does not take its frames whole; `None` where the loader reads it (see [`Frames::of`]).
+pub(crate) fn frames_in_place(
+    path: &Path,
+    fits: &dyn Fn([u32; 3], VoxelType) -> bool,
+) -> Result<Option<InPlace>, VolumeError> {
+    let Some(frames) = Frames::of(path, fits)? else {
+        return Ok(None);
+    };
+    let label = format::file_label(path);
+    let plan = plan(vec![frames.slice.clone()], &label)?;
+    check_dims(plan.dims)?;
+    let in_order = plan.frame_order.iter().enumerate().all(|(i, &k)| i == k) && plan.resample.is_none();
+    let plain = frames.plain_at().filter(|_| in_order);
+    let (files, order) = (vec![frames.path().to_path_buf()], plan.frame_order.clone());
+    let mut place = placed(path, plan, files, Vec::new(), Some((frames, order)), label, Vec::new());
+    if let Some(offset) = plain {
+        // The frames lie in the file as a raw volume's voxels do: read by box like one (`InPlace::by_box`).
+        place.offset = offset;
+        place.slices = None;
+        place.notes.push(
+            "its frames lie uncompressed and in order in the file: read in place like a raw file's voxels".into(),
+        );
+    }
+    Ok(Some(place))
+}
+
+/// `plan`'s volume read by a [`SeriesReader`] of `files` (or of one file's `frames`), as an [`InPlace`] at `path`.
+fn placed(
+    path: &Path,
+    mut plan: super::Plan,
+    files: Vec<PathBuf>,
+    series: Vec<SeriesInfo>,
+    frames: Option<(Frames, Vec<usize>)>,
+    label: String,
+    mut notes: Vec<String>,
+) -> InPlace {
     notes.append(&mut plan.notes);
+    let modality = Some(plan.modality).filter(|m| !m.is_empty());
     let reader = SeriesReader {
-        files: plan.slices.iter().map(|s| files[s.source].clone()).collect(),
+        files,
         resample: plan.resample,
         dims: plan.dims,
         voxel_type: plan.voxel_type,
         label,
-        modality: Some(plan.modality).filter(|m| !m.is_empty()),
-        series: found.listed,
+        series,
         slices: plan.slices,
+        frames,
     };
-    Ok(Some(InPlace {
+    InPlace {
         name: format::volume_name(path),
         format: FORMAT,
         data_file: path.to_path_buf(),
@@ -71,7 +115,8 @@ pub(crate) fn series_in_place(path: &Path, series: Option<&str>) -> Result<Optio
         blocks: None,
         slices: Some(Arc::new(reader)),
         arrays: Vec::new(),
-    }))
+        modality,
+    }
 }
 
 impl SeriesReader {
@@ -115,7 +160,7 @@ impl SeriesReader {
             return self.decode(z0, n);
         };
         // Each output slice blends the two sorted slices around its fractional index.
-        let last = self.slices.len() - 1;
+        let last = self.frames.as_ref().map_or(self.slices.len(), |(_, order)| order.len()) - 1;
         let lo = (at[z0].floor() as usize).min(last);
         let hi = (at[z0 + n - 1].floor() as usize + 1).min(last);
         let data = self.decode(lo, hi + 1 - lo)?;
@@ -131,7 +176,10 @@ impl SeriesReader {
         let bytes = count as u64 * self.voxel_type.size() as u64;
         let mut data = empty_data(self.voxel_type, count, [w, h, n as u32], bytes)?;
         for k in first..first + n {
-            append_slice(&self.slices[k], &self.files[k], &[0], &mut data)?;
+            match &self.frames {
+                Some((frames, order)) => frames.append(order[k], &mut data)?,
+                None => append_slice(&self.slices[k], &self.files[k], &[0], &mut data)?,
+            }
         }
         Ok(data)
     }
@@ -149,6 +197,11 @@ impl SeriesReader {
                 .as_nanos();
             Some((len + meta.len(), latest.max(modified)))
         })
+    }
+
+    /// Whether this is one multi-frame file read frame by frame (not a folder of slices).
+    pub fn is_one_file(&self) -> bool {
+        self.frames.is_some()
     }
 
     /// The series' instance UID: a folder of several series keeps one cache entry per series.
