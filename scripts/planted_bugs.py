@@ -317,6 +317,13 @@ BUGS = [
     ("pool-short-of-its-pyramid", "a pool that the budget lets hold every brick of the pyramid is rounded down to the "
      "most slots its count arranges, so some bricks never refine",
      [("src/render/resident.rs", ".filter(|&n| n <= fit)", ".filter(|&n| n <= fit.min(bricks_in_pyramid))")]),
+    ("frames-in-file-order", "a multi-frame file's frames are read in the order they are stored, not sorted along the "
+     "slice normal",
+     [("src/volume/dicom/slices.rs", "Some((frames, order)) => frames.append(order[k], &mut data)?,",
+       "Some((frames, _)) => frames.append(k, &mut data)?,")]),
+    ("shuffled-frames-read-in-place", "native frames stored out of slice order are read in place as a raw volume",
+     [("src/volume/dicom/slices.rs", "let plain = frames.plain_at().filter(|_| in_order);",
+       "let plain = frames.plain_at();")]),
 ]
 
 # The Python module's rules (python/): run against its pytest suite (test_command).
