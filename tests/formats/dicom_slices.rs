@@ -120,6 +120,21 @@ fn hostile_dicom_files_within_a_small_budget_are_refused_naming_the_file() {
         seen += 1;
     }
     assert!(seen >= 10, "the fuzz findings are in tests/data");
+    // NumberOfFrames claiming 99999 frames of 6 stored: refused by its size before any frame is looked for.
+    let bytes = std::fs::read(data("dicom/multiframe_ct_native.dcm")).unwrap();
+    let (six, many) = (b"\x28\x00\x08\x00IS\x02\x006 ", b"\x28\x00\x08\x00IS\x06\x0099999 ");
+    let at = bytes.windows(six.len()).position(|w| w == six).expect("NumberOfFrames");
+    let claim = common::scratch("dicom-frames-claim").write(
+        "claim.dcm",
+        &[&bytes[..at], &many[..], &bytes[at + six.len()..]].concat(),
+    );
+    let e = open_within(&claim, &OpenOptions::default(), 1 << 10)
+        .expect_err("99999 frames")
+        .to_string();
+    let loader = volume::open(&claim, &OpenOptions::default())
+        .expect_err("99999 frames")
+        .to_string();
+    assert!(e.contains("99999") && e == loader, "{e} / {loader}");
 }
 
 #[test]

@@ -11,7 +11,7 @@ use super::pixels::{append_compressed, append_frame, check_backed, short, Pixels
 use super::slice::{slice_info, Slice};
 use super::{is_dicom, parse_bytes};
 use crate::volume::format::{self, header_error};
-use crate::volume::{VolumeError, VoxelData, VoxelType};
+use crate::volume::{check_extent, VolumeError, VoxelData, VoxelType};
 use std::fs::File;
 use std::io::{BufReader, Read, Seek};
 use std::os::unix::fs::FileExt;
@@ -50,6 +50,11 @@ impl Frames {
         };
         let obj = parse_bytes(&header, &label, true)?;
         let slice = slice_info(&obj, 0, &label)?;
+        // Sizes first: no frame index is made for a claimed count past the limits.
+        check_extent([slice.columns, slice.rows, slice.frames]).map_err(|e| VolumeError::Header {
+            file: path.display().to_string(),
+            problem: e.to_string(),
+        })?;
         let held = super::voxel_type(slice.bits_allocated, slice.signed);
         let big_endian = slice.kind == Kind::Native && !slice.native_little_endian;
         if slice.frames < 2 || big_endian || fits([slice.columns, slice.rows, slice.frames], held) {
