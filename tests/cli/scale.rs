@@ -9,6 +9,11 @@ use crate::common;
 use common::{stderr, stdout, volcast, volcast_ok};
 use std::path::Path;
 
+/// The largest difference of two images' channels, in 1/255.
+fn max_diff(a: &image::RgbaImage, b: &image::RgbaImage) -> Option<u8> {
+    a.as_raw().iter().zip(b.as_raw()).map(|(p, q)| p.abs_diff(*q)).max()
+}
+
 /// A 160x96x80 int16 raw file (levels 160x96x80, 80x48x40, 40x24x20) with negative values and structure.
 fn write_volume(dir: &Path) -> String {
     let path = dir.join("ball_160x96x80_int16.raw");
@@ -71,7 +76,7 @@ fn over_the_gpu_budget_a_file_shows_the_level_convert_writes() {
         image::open(&a).unwrap().to_rgba8(),
         image::open(&full).unwrap().to_rgba8(),
     );
-    let worst = a.as_raw().iter().zip(full.as_raw()).map(|(p, q)| p.abs_diff(*q)).max();
+    let worst = max_diff(&a, &full);
     assert!(
         worst <= Some(1),
         "within the host budget, full resolution from the file: differs by {worst:?}"
@@ -93,7 +98,7 @@ fn over_the_gpu_budget_a_file_shows_the_level_convert_writes() {
         "{err}"
     );
     let z = image::open(&z).unwrap().to_rgba8();
-    let worst = z.as_raw().iter().zip(full.as_raw()).map(|(p, q)| p.abs_diff(*q)).max();
+    let worst = max_diff(&z, &full);
     assert!(
         worst <= Some(1),
         "within the host budget, full resolution from the store: differs by {worst:?}"
@@ -313,12 +318,7 @@ fn a_gzip_file_over_the_host_budget_shows_full_resolution_from_its_kept_level_0(
         .concat();
         let o = volcast_ok(&args);
         let shot = image::open(dir.join(name)).unwrap().to_rgba8();
-        let worst = shot
-            .as_raw()
-            .iter()
-            .zip(full.as_raw())
-            .map(|(p, q)| p.abs_diff(*q))
-            .max();
+        let worst = max_diff(&shot, &full);
         (stderr(&o), worst)
     };
     let (first, worst) = render("first.png", &["--cache-dir", &cache]);
@@ -403,12 +403,7 @@ fn a_rescaled_file_over_the_host_budget_shows_full_resolution_and_is_cached() {
                 "{name} {open}: {err}"
             );
             let shot = image::open(&out).unwrap().to_rgba8();
-            let worst = shot
-                .as_raw()
-                .iter()
-                .zip(full.as_raw())
-                .map(|(p, q)| p.abs_diff(*q))
-                .max();
+            let worst = max_diff(&shot, &full);
             assert!(worst <= Some(1), "{name} {open}: full resolution differs by {worst:?}");
             let held = json(&volcast(&[&["info", &f], &budget[..], &["--json"]].concat()));
             assert_eq!(held["dims"], serde_json::json!([80, 48, 40]), "{name} {open}");
