@@ -97,6 +97,24 @@ fn a_multi_frame_file_over_the_host_budget_is_read_frame_by_frame_into_its_level
     }
 }
 
+/// A multi-frame file whose header runs past the first prefix read (a 3 MiB private element before PixelData) is
+/// found by reading more, and read in place all the same.
+#[test]
+fn a_multi_frame_file_with_a_long_header_is_read_in_place() {
+    let bytes = std::fs::read(data("dicom/multiframe_ct_native.dcm")).unwrap();
+    let pixels = bytes
+        .windows(8)
+        .rposition(|w| w == b"\xE0\x7F\x10\x00OW\x00\x00")
+        .expect("PixelData");
+    let pad = 3 << 20;
+    let mut element = b"\xDF\x7F\x10\x00OB\x00\x00".to_vec();
+    element.extend((pad as u32).to_le_bytes());
+    element.resize(element.len() + pad, 7);
+    let long = [&bytes[..pixels], &element[..], &bytes[pixels..]].concat();
+    let path = common::scratch("dicom-frames-long").write("multiframe_ct_native.dcm", &long);
+    assert_sliced_level_is_the_whole_ones(&path, &OpenOptions::default(), 1 << 10, [8, 6, 3]);
+}
+
 /// The fuzz findings (hostile DICOM files) opened within a budget that would read them frame by frame: each is
 /// refused with an error naming the file, as the loader refuses it, never a panic or an allocation by a claimed size.
 #[test]

@@ -147,7 +147,7 @@ fn header(path: &Path, label: &str) -> Result<Option<(Vec<u8>, PixelDataAt)>, Vo
                 return Ok(Some((header, at)));
             }
             // An element cut by the prefix reads as one running past the file: read more.
-            Ok(None) | Err(_) if !whole && size < HEADER_LIMIT => size *= 8,
+            Ok(None) | Err(_) if !whole && size < HEADER_LIMIT => size = (size * 8).min(HEADER_LIMIT),
             // The loader reads the file and says what is wrong with it.
             _ => return Ok(None),
         }
