@@ -198,10 +198,12 @@ fn read_place(
         });
     }
     if let Some(series) = &place.slices {
-        notes.push(match series.is_one_file() {
-            true => "its frames were decoded one at a time from where they lie in the file, on every core, into that level",
-            false => "its slices were decoded one file at a time, on every core, into that level",
-        }.into());
+        notes.push(if series.is_one_file() {
+            "its frames were decoded one at a time from where they lie in the file, on every core, into that level"
+                .into()
+        } else {
+            "its slices were decoded one file at a time, on every core, into that level".into()
+        });
     }
     let source = Source::in_place(place.clone())?;
     let level0 = start_level0(&place, level.level, cache, &mut notes);

@@ -31,6 +31,8 @@ pub(crate) struct Frames {
     pub(super) slice: Slice,
     file: File,
     path: PathBuf,
+    /// The file's name, as errors name it.
+    label: String,
     /// Each frame's byte ranges (offset, length): one for native data, its fragments for compressed data.
     at: Vec<Vec<(u64, u64)>>,
 }
@@ -88,13 +90,13 @@ impl Frames {
             slice,
             file,
             path: path.to_path_buf(),
+            label,
             at,
         }))
     }
 
     /// Appends frame `k` (in the file's order), read and decoded, to `out`.
     pub(super) fn append(&self, k: usize, out: &mut VoxelData) -> Result<(), VolumeError> {
-        let label = format::file_label(&self.path);
         let parts = &self.at[k];
         let mut bytes = vec![0u8; parts.iter().map(|&(_, n)| n as usize).sum()];
         let mut into = &mut bytes[..];
@@ -109,8 +111,8 @@ impl Frames {
             into = rest;
         }
         match self.slice.kind {
-            Kind::Native => append_frame(Pixels::Bytes(&bytes), &self.slice, out, &label),
-            _ => append_compressed(&bytes, k, &self.slice, out, &label),
+            Kind::Native => append_frame(Pixels::Bytes(&bytes), &self.slice, out, &self.label),
+            _ => append_compressed(&bytes, k, &self.slice, out, &self.label),
         }
     }
 
