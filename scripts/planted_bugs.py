@@ -324,6 +324,16 @@ BUGS = [
     ("shuffled-frames-read-in-place", "native frames stored out of slice order are read in place as a raw volume",
      [("src/volume/dicom/slices.rs", "let plain = frames.plain_at().filter(|_| in_order);",
        "let plain = frames.plain_at();")]),
+    ("spaced-rays-framed-at-their-own-aspect", "spaced rays (rule 11) are projected with the marched image's aspect, "
+     "not the output's",
+     [("src/render/uniforms.rs", "    s.width as f32 / s.height as f32\n",
+       "    s.marched_size().0 as f32 / s.marched_size().1 as f32\n")]),
+    ("spaced-rays-stretched-nearest", "the marched image is stretched over the output by its nearest pixel, not "
+     "bilinearly",
+     [("src/render/spacing.rs", "vk::Filter::LINEAR,", "vk::Filter::NEAREST,")]),
+    ("draft-casts-every-ray", "draft casts a ray for every pixel (the ray spacing it needs for its speed dropped)",
+     [("src/scene/quality.rs", "            Quality::Draft => 2,\n            Quality::Fast | Quality::Normal",
+       "            Quality::Draft => 1,\n            Quality::Fast | Quality::Normal")]),
 ]
 
 # The Python module's rules (python/): run against its pytest suite (test_command).

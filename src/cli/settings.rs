@@ -315,6 +315,9 @@ impl FrameArgs {
         if let Some(stride) = self.max_stride {
             s.max_stride = stride;
         }
+        if let Some(k) = self.ray_spacing {
+            s.ray_spacing = k;
+        }
         let reads_gradients = self.given.any(LIGHTING) || self.given.any(&["mode", "gradient_opacity"]);
         if wants("gradients") || wants("gradient_texture") || reads_gradients {
             let gradients = if self.gradient_texture {

@@ -69,9 +69,12 @@ impl Headless {
             old.readback.destroy(gpu);
             old.image.destroy(gpu);
         }
-        // STORAGE for the compute march (RGBA8 storage images are required of every Vulkan device).
-        let usage =
-            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        // STORAGE for the compute march (RGBA8 storage images are required of every Vulkan device), TRANSFER_DST
+        // for the blit of spaced rays (rule 11).
+        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST;
         let image = Image::new(
             gpu,
             ImageDesc::d2(self.format, width, height, usage),
@@ -116,6 +119,11 @@ impl Headless {
         if self.format != SHARE_FORMAT {
             return Err(GpuError::InvalidSettings("render_share() needs a float target".into()));
         }
+        // One ray per pixel: a share's partial colours are composited before anything could stretch them.
+        let s = &RenderSettings {
+            ray_spacing: 1,
+            ..s.clone()
+        };
         let bytes = self.draw(gpu, s)?;
         Ok(bytes
             .chunks_exact(4)

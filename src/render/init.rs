@@ -114,6 +114,7 @@ impl Renderer {
             texel_policy: gpu.texel_policy,
             brick_side: gpu.brick_side,
             positions: None,
+            spaced: None,
             timestamp_period_ns: gpu.properties.limits.timestamp_period as f64,
         };
         match r.init(gpu, all, frag, frames_in_flight.max(1)) {

@@ -17,10 +17,12 @@ mod part;
 pub mod placement;
 pub mod png;
 pub mod pool;
+mod positions;
 mod record;
 pub mod refinable;
 mod resident;
 pub mod skip;
+mod spacing;
 pub mod stream;
 mod texels;
 mod uniforms;
@@ -33,15 +35,17 @@ use gpu_volume::{image_3d_once, upload_3d, GpuVolume};
 pub use gpu_volume::{VolumeLayout, AUTO_LIMIT};
 
 use crate::gpu::pipeline::{compute_pipeline, graphics_pipeline, shader, GraphicsDesc, ShaderCode};
-use crate::gpu::resources::{Buffer, Filling, Image, ImageDesc};
+use crate::gpu::resources::{Buffer, Filling};
 pub use crate::gpu::TexelPolicy;
 use crate::gpu::{Gpu, GpuError};
-use crate::scene::settings::{PositionFormat, RaySetup, RenderSettings};
+use crate::scene::settings::{RaySetup, RenderSettings};
 use crate::transfer::function::{bake, Classification};
 use crate::transfer::preintegrate::integral_table;
 use crate::volume::Volume;
 use ash::vk;
 use march_key::{Family, Lighting, MarchKey, Sampling, Setup};
+pub use positions::position_bytes_per_pixel;
+use positions::PositionTargets;
 
 /// GPU time per pass of the last frame, from timestamp queries.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -99,26 +103,6 @@ impl OccupancyKey {
     }
 }
 
-struct PositionTargets {
-    entry: Image,
-    exit: Image,
-    format: PositionFormat,
-}
-
-impl PositionTargets {
-    fn vk_format(format: PositionFormat) -> vk::Format {
-        match format {
-            PositionFormat::Rgba32f => vk::Format::R32G32B32A32_SFLOAT,
-            PositionFormat::Rgba16f => vk::Format::R16G16B16A16_SFLOAT,
-        }
-    }
-
-    fn destroy(self, gpu: &Gpu) {
-        self.exit.destroy(gpu);
-        self.entry.destroy(gpu);
-    }
-}
-
 /// Rows of the table buffer: the baked classification (opacity per voxel-length step, f32 RGBA), which the
 /// projection and isosurface marches read.
 const LUT_ROWS: usize = 1;
@@ -139,14 +123,6 @@ impl StepRule {
 }
 
 include!(concat!(env!("OUT_DIR"), "/march_shaders.rs"));
-
-/// Bytes per pixel that the entry/exit method needs beyond the output image (both position targets).
-pub fn position_bytes_per_pixel(format: PositionFormat) -> u64 {
-    match format {
-        PositionFormat::Rgba32f => 32,
-        PositionFormat::Rgba16f => 16,
-    }
-}
 
 const QUERIES: u32 = 4;
 
@@ -188,6 +164,8 @@ pub struct Renderer {
     /// The brick side volumes are cut into (render/pool.rs; None: one brick where it fits).
     pub brick_side: Option<u32>,
     positions: Option<PositionTargets>,
+    /// The march's target where rays are spaced (rule 11), stretched over the output.
+    spaced: Option<spacing::SpacedTarget>,
     timestamp_period_ns: f64,
 }
 
@@ -449,6 +427,7 @@ impl Renderer {
             RaySetup::Analytic => self.positions.is_none(),
         };
         !targets_fit
+            || !spacing::fits(&self.spaced, s)
             || !self.lut_is_current(s)
             || !self.occupancy_is_current(s)
             || self.march_pipelines[self.march_key(s).index()] == vk::Pipeline::null()
@@ -464,11 +443,7 @@ impl Renderer {
     }
 
     fn positions_fit(&self, s: &RenderSettings) -> bool {
-        self.positions.as_ref().is_some_and(|p| {
-            p.format == s.position_format
-                && p.entry.desc.extent.width == s.width
-                && p.entry.desc.extent.height == s.height
-        })
+        self.positions.as_ref().is_some_and(|p| p.fit(s))
     }
 
     /// The loaded volume's value range (what data-unit transfer functions are baked against).
@@ -517,52 +492,13 @@ impl Renderer {
         if s.uses_light_volume() {
             self.prepare_light(gpu, s)?;
         }
+        spacing::prepare(gpu, &mut self.spaced, self.output_format, s)?;
         if s.ray_setup == RaySetup::Faces {
             if !self.positions_fit(s) {
                 if let Some(old) = self.positions.take() {
                     old.destroy(gpu);
                 }
-                let format = PositionTargets::vk_format(s.position_format);
-                let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
-                let entry = Image::new(gpu, ImageDesc::d2(format, s.width, s.height, usage), "entry positions")?;
-                let exit = match Image::new(gpu, ImageDesc::d2(format, s.width, s.height, usage), "exit positions") {
-                    Ok(i) => i,
-                    Err(e) => {
-                        entry.destroy(gpu);
-                        return Err(e);
-                    }
-                };
-                let targets = PositionTargets {
-                    entry,
-                    exit,
-                    format: s.position_format,
-                };
-                let infos = [targets.entry.view, targets.exit.view].map(|v| {
-                    [vk::DescriptorImageInfo::default()
-                        .image_view(v)
-                        .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
-                });
-                let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.point_sampler)];
-                let writes = [
-                    vk::WriteDescriptorSet::default()
-                        .dst_set(self.positions_set)
-                        .dst_binding(0)
-                        .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
-                        .image_info(&infos[0]),
-                    vk::WriteDescriptorSet::default()
-                        .dst_set(self.positions_set)
-                        .dst_binding(1)
-                        .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
-                        .image_info(&infos[1]),
-                    vk::WriteDescriptorSet::default()
-                        .dst_set(self.positions_set)
-                        .dst_binding(2)
-                        .descriptor_type(vk::DescriptorType::SAMPLER)
-                        .image_info(&sampler_info),
-                ];
-                // SAFETY: no submitted work uses the set (prepare's contract).
-                unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
-                self.positions = Some(targets);
+                self.positions = Some(PositionTargets::new(gpu, s, self.point_sampler, self.positions_set)?);
             }
         } else if let Some(old) = self.positions.take() {
             // The analytic method needs no position targets: free their memory.
@@ -590,12 +526,17 @@ impl Renderer {
         )
     }
 
-    /// Bytes the current ray setup needs on the GPU for extra targets at `width`×`height`.
+    /// Bytes the current ray setup needs on the GPU for extra targets at `width`×`height`: the position targets
+    /// and, where rays are spaced, the march's own (4 bytes a pixel), all at the marched size.
     pub fn extra_target_bytes(s: &RenderSettings) -> u64 {
-        match s.ray_setup {
-            RaySetup::Faces => position_bytes_per_pixel(s.position_format) * s.width as u64 * s.height as u64,
-            RaySetup::Analytic => 0,
-        }
+        let (w, h) = s.marched_size();
+        let pixels = u64::from(w) * u64::from(h);
+        let spaced = if s.spacing() > 1 { 4 * pixels } else { 0 };
+        spaced
+            + match s.ray_setup {
+                RaySetup::Faces => position_bytes_per_pixel(s.position_format) * pixels,
+                RaySetup::Analytic => 0,
+            }
     }
 
     pub fn destroy(mut self, gpu: &Gpu) {
@@ -609,6 +550,9 @@ impl Renderer {
             }
             if let Some(p) = self.positions.take() {
                 p.destroy(gpu);
+            }
+            if let Some(t) = self.spaced.take() {
+                t.destroy(gpu);
             }
             if let Some(v) = self.volume.take() {
                 v.destroy(gpu);

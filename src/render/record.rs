@@ -3,6 +3,7 @@
 //! reading the timestamps back.
 
 use super::march_key::Setup;
+use super::spacing::Stretch;
 use super::{mirrors, FrameUniforms, PassTimings, Renderer, QUERIES};
 use crate::gpu::sync::{image_barriers, Access, ImageTransition};
 use crate::gpu::{Gpu, GpuError, VkContext};
@@ -17,9 +18,12 @@ struct FrameRecording<'a> {
     query_pool: vk::QueryPool,
     frame_set: vk::DescriptorSet,
     march_pipeline: vk::Pipeline,
+    /// What the march writes: the output, or where rays are spaced (rule 11) the spaced target.
     output: (vk::Image, vk::ImageView),
-    /// The output from its last use to a colour attachment, its old contents discarded.
+    /// That image from its last use to a colour attachment, its old contents discarded.
     output_to_attachment: ImageTransition,
+    /// Where rays are spaced: the blit from the march's image over the output.
+    stretch: Option<Stretch>,
 }
 
 impl FrameRecording<'_> {
@@ -80,6 +84,13 @@ impl FrameRecording<'_> {
             self.dev.cmd_end_rendering(self.cb);
         }
     }
+
+    /// After the march (its image a colour attachment written): where rays are spaced, the blit over the output.
+    fn stretch(&self) {
+        if let Some(stretch) = &self.stretch {
+            stretch.record(self.dev, self.cb);
+        }
+    }
 }
 
 impl Renderer {
@@ -106,23 +117,38 @@ impl Renderer {
         slot.uniforms.write(bytemuck::bytes_of(&uniforms))?;
         slot.recorded = Some(s.ray_setup);
         let (query_pool, storage_set) = (slot.query_pool, slot.storage_set);
+        let (width, height) = s.marched_size();
+        let extent = vk::Extent2D { width, height };
+        // Spaced rays (rule 11): the march writes its own target, which the last frame's blit read.
+        let spaced = match &self.spaced {
+            Some(t) if s.spacing() > 1 && t.fits(s) => Some(&t.image),
+            _ if s.spacing() > 1 => return Err(GpuError::Lost("prepare() was not called for these settings")),
+            _ => None,
+        };
+        let (marched, marched_from) = spaced.map_or((output, from), |i| ((i.raw, i.view), Access::TransferRead));
         let frame = FrameRecording {
             dev: &gpu.device,
             cb,
-            extent: vk::Extent2D {
-                width: s.width,
-                height: s.height,
-            },
+            extent,
             query_pool,
             frame_set: slot.set,
             march_pipeline: self.march_pipelines[key.index()],
-            output,
+            output: marched,
             output_to_attachment: ImageTransition {
-                image: output.0,
-                from,
+                image: marched.0,
+                from: marched_from,
                 to: Access::ColorAttachmentWrite,
                 discard: true,
             },
+            stretch: spaced.map(|i| Stretch {
+                from: (i.raw, extent),
+                output: output.0,
+                last: from,
+                extent: vk::Extent2D {
+                    width: s.width,
+                    height: s.height,
+                },
+            }),
         };
         if frame.march_pipeline == vk::Pipeline::null() {
             return Err(GpuError::Lost("prepare() was not called for these settings"));
@@ -133,7 +159,7 @@ impl Renderer {
         match key.setup {
             Setup::Faces => self.record_faces(&frame, s)?,
             Setup::Analytic => self.record_analytic(&frame),
-            Setup::Compute => self.record_compute(&frame, storage_set, s),
+            Setup::Compute => self.record_compute(&frame, storage_set),
         }
         Ok(())
     }
@@ -195,6 +221,7 @@ impl Renderer {
             self.march_faces_layout,
             &[f.frame_set, self.volume_set, self.positions_set],
         );
+        f.stretch();
         f.timestamp(3);
         Ok(())
     }
@@ -203,12 +230,13 @@ impl Renderer {
     fn record_analytic(&self, f: &FrameRecording) {
         image_barriers(f.dev, f.cb, &[f.output_to_attachment]);
         f.draw_march(self.march_analytic_layout, &[f.frame_set, self.volume_set]);
+        f.stretch();
         f.timestamp(1);
     }
 
     /// The analytic method as a compute dispatch writing the output as a storage image (`storage_set`, the
     /// slot's; timestamp 1), which then becomes a colour attachment as `record` promises.
-    fn record_compute(&self, f: &FrameRecording, storage_set: vk::DescriptorSet, s: &RenderSettings) {
+    fn record_compute(&self, f: &FrameRecording, storage_set: vk::DescriptorSet) {
         let image_info = [vk::DescriptorImageInfo::default()
             .image_view(f.output.1)
             .image_layout(vk::ImageLayout::GENERAL)];
@@ -239,9 +267,9 @@ impl Renderer {
                 &[f.frame_set, self.volume_set, storage_set],
                 &[],
             );
-            f.dev.cmd_dispatch(f.cb, s.width.div_ceil(8), s.height.div_ceil(8), 1);
+            f.dev
+                .cmd_dispatch(f.cb, f.extent.width.div_ceil(8), f.extent.height.div_ceil(8), 1);
         }
-        f.timestamp(1);
         image_barriers(
             f.dev,
             f.cb,
@@ -252,6 +280,8 @@ impl Renderer {
                 discard: false,
             }],
         );
+        f.stretch();
+        f.timestamp(1);
     }
 
     /// GPU times of the last frame recorded in `slot`; call after its submission has completed.

@@ -232,7 +232,7 @@ impl CameraRays {
     }
 }
 
-/// The image's width over its height, as the projection takes it (f32).
+/// The output's width over its height, as the projection takes it (f32; rule 11: also where rays are spaced).
 fn aspect(s: &RenderSettings) -> f32 {
     s.width as f32 / s.height as f32
 }
@@ -352,8 +352,8 @@ impl FrameUniforms {
                 1.0,
             ],
             viewport: [
-                s.width as f32,
-                s.height as f32,
+                s.marched_size().0 as f32,
+                s.marched_size().1 as f32,
                 max_steps(linear, h),
                 s.count_samples as u32 as f32,
             ],

@@ -144,11 +144,22 @@ impl Quality {
         }
     }
 
-    /// Applies the level to `s` (data of value range `range`): its step length and brick strides.
+    /// One ray per this many pixels along each axis (rule 11 of `RenderSettings`): `draft` marches a quarter of
+    /// the rays and stretches them over the image, which keeps it within its target (docs/performance.md,
+    /// Quality levels); the others take every pixel.
+    pub fn ray_spacing(self) -> u32 {
+        match self {
+            Quality::Draft => 2,
+            Quality::Fast | Quality::Normal | Quality::Converged => 1,
+        }
+    }
+
+    /// Applies the level to `s` (data of value range `range`): its step length, brick strides and ray spacing.
     pub fn apply(self, s: &mut RenderSettings, range: [f64; 2]) {
         s.step_length = self.step_length(s, range);
         s.max_stride = self.max_stride();
         s.stride_tolerance = self.stride_tolerance();
+        s.ray_spacing = self.ray_spacing();
     }
 }
 

@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::bounds::{POSITIONS_RGBA16F, REFERENCE, REFERENCE_R8};
+use common::bounds::{POSITIONS_RGBA16F, REFERENCE, REFERENCE_R8, SPACED};
 use common::compare::{against_reference, diff, write_failure_images, Bounds};
 use common::gpu::Judge;
 use common::reference::Reference;
@@ -82,6 +82,9 @@ fn resolve_quality(s: &mut RenderSettings, args: &[&str], range: [f64; 2]) {
     if let Some(stride) = value("--max-stride") {
         s.max_stride = stride.parse().expect("a stride");
     }
+    if let Some(k) = value("--ray-spacing") {
+        s.ray_spacing = k.parse().expect("a ray spacing");
+    }
 }
 
 /// Renders each rule through the binary and checks it against the reference of its settings, and that it
@@ -97,12 +100,12 @@ fn check_rules(rules: Vec<Rule>) {
         let mut s = defaults(v.extent());
         (r.settings)(&mut s, v.extent());
         // The step each rule states is the one `render` resolves (the quality rule, src/scene/quality.rs).
-        let stated = (s.step_length, s.max_stride);
+        let stated = (s.step_length, s.max_stride, s.ray_spacing);
         resolve_quality(&mut s, r.args, v.range);
-        if (s.step_length - stated.0).abs() > 1e-6 || s.max_stride != stated.1 {
+        if (s.step_length - stated.0).abs() > 1e-6 || (s.max_stride, s.ray_spacing) != (stated.1, stated.2) {
             failures.push(format!(
-                "{:?}: the quality rule gives step {} (strides up to {}), the test states {stated:?}",
-                r.args, s.step_length, s.max_stride
+                "{:?}: the quality rule gives step {} (strides up to {}, ray spacing {}), the test states {stated:?}",
+                r.args, s.step_length, s.max_stride, s.ray_spacing
             ));
         }
         let expected = reference.render_full(&s);
@@ -192,11 +195,19 @@ fn classification_options_take_effect() {
             s.step_length = 0.125;
             s.max_stride = 1;
         }),
-        rule(&["--quality", "draft"], |s, _| {
-            s.step_length = 3.0;
-            s.max_stride = 2;
-            s.stride_tolerance = 4.0;
-        }),
+        Rule {
+            bounds: SPACED,
+            ..rule(&["--quality", "draft"], |s, _| {
+                s.step_length = 3.0;
+                s.max_stride = 2;
+                s.stride_tolerance = 4.0;
+                s.ray_spacing = 2;
+            })
+        },
+        Rule {
+            bounds: SPACED,
+            ..rule(&["--ray-spacing", "4"], |s, _| s.ray_spacing = 4)
+        },
         // A faint opacity (extinction 0.0202 per voxel) lets every occupied brick stride 4 steps; --max-stride
         // caps it.
         rule(&["--step-alpha", "0.02"], |s, _| s.step_alpha = 0.02),

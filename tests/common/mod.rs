@@ -20,6 +20,7 @@ pub mod reference;
 pub mod run;
 pub mod scratch;
 pub mod segments;
+pub mod stretch;
 pub mod strides;
 pub mod ui_wait;
 pub mod x11;

@@ -513,7 +513,8 @@ impl Reference {
     /// Renders rows in parallel bands, one per available core, keeping what each pixel's ray did.
     pub fn render_full(&self, s: &RenderSettings) -> Rendered {
         let frame = Frame::new(self, s);
-        let (width, height) = (s.width as usize, s.height as usize);
+        let marched = super::stretch::marched(s);
+        let (width, height) = (marched.0 as usize, marched.1 as usize);
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
             .min(height)
@@ -535,7 +536,7 @@ impl Reference {
                 .map(|h| h.join().expect("reference render thread panicked"))
                 .collect()
         });
-        let mut image = RgbaImage::new(s.width, s.height);
+        let mut image = RgbaImage::new(marched.0, marched.1);
         let mut object = Vec::with_capacity(width * height);
         let mut samples = Vec::with_capacity(width * height);
         let mut stats = RenderStats::default();
@@ -550,6 +551,12 @@ impl Reference {
                 terminated_early: u64::from(trace.terminated_early),
                 pixels: 1,
             });
+        }
+        if marched != (s.width, s.height) {
+            // Rule 11: the marched image stretched over the output (the stats stay the rays').
+            image = super::stretch::stretch(&image, s.width, s.height);
+            object = super::stretch::nearest(&object, marched, s.width, s.height);
+            samples = super::stretch::nearest(&samples, marched, s.width, s.height);
         }
         Rendered {
             image,

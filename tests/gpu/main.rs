@@ -16,6 +16,7 @@ mod methods_agree;
 mod pool;
 mod quality;
 mod refinable;
+mod spacing;
 mod stream;
 mod validation_canary;
 mod vs_reference;

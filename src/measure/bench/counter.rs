@@ -243,7 +243,7 @@ impl SampleCounter {
             to_world: Mat3::from_mat4(Mat4::from_cols_array(&u.tex_to_world)),
             h: u.extent[3],
             max_steps: u.viewport[2] as u64,
-            viewport: [s.width as f32, s.height as f32],
+            viewport: [s.marched_size().0 as f32, s.marched_size().1 as f32],
             window: s.window,
             classes: s.looks_up_bricks().then(|| self.bricks.classify(&lut, s)),
             integrals: preintegrate::integral_table(&lut, (s.mode == CompositeMode::Density).then_some(s.density)),
@@ -342,20 +342,22 @@ impl SampleCounter {
         }
     }
 
-    /// Counts over the whole image of `s`, rows split across the available cores.
+    /// Counts over the whole image of `s`, rows split across the available cores: its rays (rule 11: one per
+    /// `ray_spacing`² pixels where they are spaced), per pixel of the output.
     pub fn count(&self, s: &RenderSettings) -> SampleCount {
         let frame = self.frame(s);
+        let (width, height) = s.marched_size();
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
-            .clamp(1, s.height as usize);
+            .clamp(1, height as usize);
         let totals: Vec<(u64, u64)> = std::thread::scope(|scope| {
             let handles: Vec<_> = (0..threads)
                 .map(|t| {
                     let frame = &frame;
                     scope.spawn(move || {
                         let mut sum = (0u64, 0u64);
-                        for y in (t as u32..s.height).step_by(threads) {
-                            for x in 0..s.width {
+                        for y in (t as u32..height).step_by(threads) {
+                            for x in 0..width {
                                 let (seg, taken) = self.pixel(frame, x, y);
                                 sum.0 += seg;
                                 sum.1 += taken;

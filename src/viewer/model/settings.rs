@@ -51,6 +51,8 @@ impl Model {
             };
             s.max_stride = s.max_stride.max(Quality::Draft.max_stride());
             s.stride_tolerance = s.stride_tolerance.max(Quality::Draft.stride_tolerance());
+            // The divisor already spaces the rays.
+            s.ray_spacing = 1;
         }
         s
     }

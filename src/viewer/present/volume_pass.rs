@@ -173,7 +173,10 @@ impl VolumePass {
             if let Some(old) = self.view.take() {
                 old.destroy(gpu);
             }
-            let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC;
+            // TRANSFER_DST: a frame of spaced rays (rule 11, `draft`) is blitted into it.
+            let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST;
             self.view = Some(Image::new(
                 gpu,
                 ImageDesc::d2(OUTPUT_FORMAT, settings.width, settings.height, usage),
