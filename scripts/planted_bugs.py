@@ -331,9 +331,12 @@ BUGS = [
     ("spaced-rays-stretched-nearest", "the marched image is stretched over the output by its nearest pixel, not "
      "bilinearly",
      [("src/render/spacing.rs", "vk::Filter::LINEAR,", "vk::Filter::NEAREST,")]),
-    ("draft-casts-every-ray", "draft casts a ray for every pixel (the ray spacing it needs for its speed dropped)",
-     [("src/scene/quality.rs", "            Quality::Draft => 2,\n            Quality::Fast | Quality::Normal",
-       "            Quality::Draft => 1,\n            Quality::Fast | Quality::Normal")]),
+    ("draft-spaces-sharp-edges", "draft spaces its rays whatever the classification, blurring sharp edges past its "
+     "target",
+     [("src/scene/quality.rs", "&& opacity_edge(s, range) <= SOFT_EDGE;", ";")]),
+    ("draft-casts-every-ray", "draft casts a ray for every pixel even where its classification is soft (the spacing "
+     "it is fast by dropped)",
+     [("src/scene/quality.rs", "if self == Quality::Draft && soft {\n            2", "if self == Quality::Draft && soft {\n            1")]),
 ]
 
 # The Python module's rules (python/): run against its pytest suite (test_command).

@@ -26,6 +26,32 @@ pub const SEGMENT_DEPTH: f64 = 0.25;
 /// How far below its base step a level may go for a strong transfer function.
 pub const MIN_SCALE: f64 = 0.25;
 
+/// The sharpest classification whose `draft` frames space their rays ([`opacity_edge`]). Measured on the bench
+/// scenes at 512² (docs/performance.md, Quality levels): spaced, the helix (an edge of 0.1 at its window) errs
+/// 7.0 / 86 and the CT head (0.6) 6.7 / 59, past `draft`'s target, while `vtk-helix` (0.003) errs 0.90 / 3 and
+/// `dense` (0) 0.80 / 8; the MRI brain (0.05) stays within it (3.0 / 8), too close to count on.
+pub const SOFT_EDGE: f32 = 0.02;
+
+/// How sharp the edges a classification draws can be: the largest change of its opacity (per voxel-length step)
+/// across 1/64 of the value range, nothing showing outside the window (so a window edge with values beyond it
+/// counts as a jump to its opacity there).
+pub fn opacity_edge(s: &RenderSettings, range: [f64; 2]) -> f32 {
+    let lut = bake(&s.classification(), s.window, range);
+    let last = (LUT_SIZE - 1) as f32;
+    let alpha = |i: usize| {
+        let shown = (s.window[0]..=s.window[1]).contains(&(i as f32 / last));
+        if shown {
+            lut[i][3]
+        } else {
+            0.0
+        }
+    };
+    let span = LUT_SIZE / 64;
+    (0..LUT_SIZE - span)
+        .map(|i| (alpha(i + span) - alpha(i)).abs())
+        .fold(0.0, f32::max)
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Quality {
@@ -145,12 +171,19 @@ impl Quality {
     }
 
     /// One ray per this many pixels along each axis (rule 11 of `RenderSettings`): `draft` marches a quarter of
-    /// the rays and stretches them over the image, which keeps it within its target (docs/performance.md,
-    /// Quality levels); the others take every pixel.
-    pub fn ray_spacing(self) -> u32 {
-        match self {
-            Quality::Draft => 2,
-            Quality::Fast | Quality::Normal | Quality::Converged => 1,
+    /// the rays and stretches them over the image where its classification draws no sharp edge (emission or
+    /// density, no gradient opacity, [`opacity_edge`] at most [`SOFT_EDGE`]), which keeps it within its target
+    /// (docs/performance.md, Quality levels); the others, and `draft` elsewhere, take every pixel.
+    pub fn ray_spacing(self, s: &RenderSettings, range: [f64; 2]) -> u32 {
+        let absorbing = matches!(s.mode, CompositeMode::Emission | CompositeMode::Density);
+        let soft = absorbing
+            && s.gradient_opacity.is_none()
+            && s.window[0] < s.window[1]
+            && opacity_edge(s, range) <= SOFT_EDGE;
+        if self == Quality::Draft && soft {
+            2
+        } else {
+            1
         }
     }
 
@@ -159,7 +192,7 @@ impl Quality {
         s.step_length = self.step_length(s, range);
         s.max_stride = self.max_stride();
         s.stride_tolerance = self.stride_tolerance();
-        s.ray_spacing = self.ray_spacing();
+        s.ray_spacing = self.ray_spacing(s, range);
     }
 }
 
@@ -226,6 +259,33 @@ impl Gradients {
 mod tests {
     use super::*;
     use glam::Vec3;
+
+    #[test]
+    fn draft_spaces_its_rays_only_where_the_classification_draws_no_sharp_edge() {
+        let range = [0.0, 1.0];
+        // The helix's default: opacity 0.1 from the window's lower edge, values below it: a sharp edge.
+        let mut s = RenderSettings::new(8, 8, Vec3::ONE);
+        assert!((opacity_edge(&s, range) - 0.1).abs() < 1e-6);
+        assert_eq!(Quality::Draft.ray_spacing(&s, range), 1);
+        // vtk-helix's ramp from 0 at the window's edge: soft.
+        s.multiplied_alpha = true;
+        s.step_alpha = 0.2;
+        s.window = [0.08, 1.0];
+        assert!(opacity_edge(&s, range) < 0.004, "{}", opacity_edge(&s, range));
+        assert_eq!(Quality::Draft.ray_spacing(&s, range), 2);
+        for q in [Quality::Fast, Quality::Normal, Quality::Converged] {
+            assert_eq!(q.ray_spacing(&s, range), 1, "{q:?}");
+        }
+        // A window from 0 has no values below it: no edge there.
+        s.multiplied_alpha = false;
+        s.step_alpha = 0.02;
+        s.window = [0.0, 1.0];
+        assert_eq!(opacity_edge(&s, range), 0.0);
+        assert_eq!(Quality::Draft.ray_spacing(&s, range), 2);
+        // Surfaces and maxima draw sharp edges whatever the table.
+        s.mode = CompositeMode::Mip;
+        assert_eq!(Quality::Draft.ray_spacing(&s, range), 1);
+    }
 
     #[test]
     fn faint_classifications_keep_the_base_step_strong_ones_shorten_it() {

@@ -195,12 +195,20 @@ fn classification_options_take_effect() {
             s.step_length = 0.125;
             s.max_stride = 1;
         }),
+        // The helix's default opacity starts sharply at the window's edge: draft takes every pixel there, and
+        // spaces its rays (rule 11) for a ramp from 0.
+        rule(&["--quality", "draft"], |s, _| {
+            s.step_length = 3.0;
+            s.max_stride = 2;
+            s.stride_tolerance = 4.0;
+        }),
         Rule {
             bounds: SPACED,
-            ..rule(&["--quality", "draft"], |s, _| {
+            ..rule(&["--quality", "draft", "--multiplied-alpha"], |s, _| {
                 s.step_length = 3.0;
                 s.max_stride = 2;
                 s.stride_tolerance = 4.0;
+                s.multiplied_alpha = true;
                 s.ray_spacing = 2;
             })
         },
