@@ -324,7 +324,7 @@ BUGS = [
     ("shuffled-frames-read-in-place", "native frames stored out of slice order are read in place as a raw volume",
      [("src/volume/dicom/slices.rs", "let plain = frames.plain_at().filter(|_| in_order);",
        "let plain = frames.plain_at();")]),
-    ("spaced-rays-framed-at-their-own-aspect", "spaced rays (rule 11) are projected with the marched image's aspect, "
+    ("spaced-rays-framed-at-their-own-aspect", "spaced rays (rule 12) are projected with the marched image's aspect, "
      "not the output's",
      [("src/render/uniforms.rs", "    s.width as f32 / s.height as f32\n",
        "    s.marched_size().0 as f32 / s.marched_size().1 as f32\n")]),

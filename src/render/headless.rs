@@ -70,7 +70,7 @@ impl Headless {
             old.image.destroy(gpu);
         }
         // STORAGE for the compute march (RGBA8 storage images are required of every Vulkan device), TRANSFER_DST
-        // for the blit of spaced rays (rule 11).
+        // for the blit of spaced rays (rule 12).
         let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
             | vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::TRANSFER_SRC

@@ -164,7 +164,7 @@ pub struct Renderer {
     /// The brick side volumes are cut into (render/pool.rs; None: one brick where it fits).
     pub brick_side: Option<u32>,
     positions: Option<PositionTargets>,
-    /// The march's target where rays are spaced (rule 11), stretched over the output.
+    /// The march's target where rays are spaced (rule 12), stretched over the output.
     spaced: Option<spacing::SpacedTarget>,
     timestamp_period_ns: f64,
 }

@@ -1,5 +1,5 @@
 //! The entry/exit method's two position targets (passes 1 and 2 write them, the march reads them), at the size
-//! the march works at (`RenderSettings::marched_size`, rule 11).
+//! the march works at (`RenderSettings::marched_size`, rule 12).
 
 use crate::gpu::resources::{Image, ImageDesc};
 use crate::gpu::{Gpu, GpuError};

@@ -18,7 +18,7 @@ struct FrameRecording<'a> {
     query_pool: vk::QueryPool,
     frame_set: vk::DescriptorSet,
     march_pipeline: vk::Pipeline,
-    /// What the march writes: the output, or where rays are spaced (rule 11) the spaced target.
+    /// What the march writes: the output, or where rays are spaced (rule 12) the spaced target.
     output: (vk::Image, vk::ImageView),
     /// That image from its last use to a colour attachment, its old contents discarded.
     output_to_attachment: ImageTransition,
@@ -119,7 +119,7 @@ impl Renderer {
         let (query_pool, storage_set) = (slot.query_pool, slot.storage_set);
         let (width, height) = s.marched_size();
         let extent = vk::Extent2D { width, height };
-        // Spaced rays (rule 11): the march writes its own target, which the last frame's blit read.
+        // Spaced rays (rule 12): the march writes its own target, which the last frame's blit read.
         let spaced = match &self.spaced {
             Some(t) if s.spacing() > 1 && t.fits(s) => Some(&t.image),
             _ if s.spacing() > 1 => return Err(GpuError::Lost("prepare() was not called for these settings")),

@@ -1,4 +1,4 @@
-//! Rule 11's spaced rays (`RenderSettings::ray_spacing`): the march writes an image of
+//! Rule 12's spaced rays (`RenderSettings::ray_spacing`): the march writes an image of
 //! `RenderSettings::marched_size` into a target of its own, and a linear blit stretches it over the output. On
 //! lavapipe a frame costs about what its rays do, so `draft`'s one ray per 2×2 pixels takes a quarter of the time
 //! (docs/performance.md, Quality levels); VTK's `ImageSampleDistance` does the same while the user interacts.
@@ -60,7 +60,7 @@ pub struct Stretch {
 }
 
 impl Stretch {
-    /// Records the blit that stretches the march's image over the output (rule 11's bilinear filter): the output
+    /// Records the blit that stretches the march's image over the output (rule 12's bilinear filter): the output
     /// ends in `Access::ColorAttachmentWrite`, as `Renderer::record` promises.
     pub fn record(&self, dev: &ash::Device, cb: vk::CommandBuffer) {
         image_barriers(

@@ -232,7 +232,7 @@ impl CameraRays {
     }
 }
 
-/// The output's width over its height, as the projection takes it (f32; rule 11: also where rays are spaced).
+/// The output's width over its height, as the projection takes it (f32; rule 12: also where rays are spaced).
 fn aspect(s: &RenderSettings) -> f32 {
     s.width as f32 / s.height as f32
 }

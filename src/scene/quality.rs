@@ -170,7 +170,7 @@ impl Quality {
         }
     }
 
-    /// One ray per this many pixels along each axis (rule 11 of `RenderSettings`): `draft` marches a quarter of
+    /// One ray per this many pixels along each axis (rule 12 of `RenderSettings`): `draft` marches a quarter of
     /// the rays and stretches them over the image where its classification draws no sharp edge (emission or
     /// density, no gradient opacity, [`opacity_edge`] at most [`SOFT_EDGE`]), which keeps it within its target
     /// (docs/performance.md, Quality levels); the others, and `draft` elsewhere, take every pixel.

@@ -245,7 +245,8 @@ pub const STRIDES: [u32; 3] = [1, 2, 4];
 ///     k = 0 case) and only serves as `v_{k−1}` for sample 1, so a cut surface shows its inside (a mesh cut
 ///     open), not a lid. Rule 9's light grid ignores the plane, as it ignores the slab box: material clipped away
 ///     still casts shadows and occludes.
-/// 11. **Ray spacing** (`ray_spacing` k): rules 1–8 make an image of `w_k × h_k = ceil(width/k) × ceil(height/k)`
+/// 11. **A rank's share** of each ray in a distributed render: `render::part` and docs/distributed.md.
+/// 12. **Ray spacing** (`ray_spacing` k): rules 1–8 make an image of `w_k × h_k = ceil(width/k) × ceil(height/k)`
 ///     pixels (rule 1's ndc from that size), framed as the output is (its projection takes the output's
 ///     `width/height`). Output pixel (x, y) is that image filtered bilinearly at `((x + 0.5)·w_k/width,
 ///     (y + 0.5)·h_k/height)`, its pixel centres at i + 0.5 and its edge repeated beyond them, in the 8-bit values
@@ -316,7 +317,7 @@ pub struct RenderSettings {
     /// March in a compute pass instead of a fullscreen fragment pass (analytic ray setup only; the output image
     /// must allow storage). The same rays and rules: a measured alternative for lavapipe (docs/performance.md).
     pub compute: bool,
-    /// Rule 11's ray spacing: one ray per `ray_spacing`² output pixels (1, 2 or 4). The quality levels set it
+    /// Rule 12's ray spacing: one ray per `ray_spacing`² output pixels (1, 2 or 4). The quality levels set it
     /// (`draft` 2, as VTK's `ImageSampleDistance` while interacting; `Quality::apply`).
     pub ray_spacing: u32,
     /// Render in voxel index space: the box along the world's axes by its voxel sizes, ignoring the file's
@@ -498,13 +499,13 @@ impl RenderSettings {
         STRIDE_SPREAD * f64::from(self.stride_tolerance)
     }
 
-    /// The size of the image rules 1–8 make (rule 11): the output's, divided by the ray spacing and rounded up.
+    /// The size of the image rules 1–8 make (rule 12): the output's, divided by the ray spacing and rounded up.
     pub fn marched_size(&self) -> (u32, u32) {
         let k = self.spacing();
         (self.width.div_ceil(k), self.height.div_ceil(k))
     }
 
-    /// Rule 11's k as frames take it: 1 for a `count_samples` frame, whose counts are not colours to filter.
+    /// Rule 12's k as frames take it: 1 for a `count_samples` frame, whose counts are not colours to filter.
     pub fn spacing(&self) -> u32 {
         if self.count_samples {
             1

@@ -196,7 +196,7 @@ fn classification_options_take_effect() {
             s.max_stride = 1;
         }),
         // The helix's default opacity starts sharply at the window's edge: draft takes every pixel there, and
-        // spaces its rays (rule 11) for a ramp from 0.
+        // spaces its rays (rule 12) for a ramp from 0.
         rule(&["--quality", "draft"], |s, _| {
             s.step_length = 3.0;
             s.max_stride = 2;

@@ -18,7 +18,7 @@ pub const REFERENCE: Bounds = Bounds {
     outliers: 6,
 };
 
-/// Spaced rays (rule 11): [`REFERENCE`]'s image, stretched by the device's linear blit. Vulkan leaves the precision
+/// Spaced rays (rule 12): [`REFERENCE`]'s image, stretched by the device's linear blit. Vulkan leaves the precision
 /// of linear filtering to the implementation, and lavapipe blends 8-bit values with 8-bit fixed-point weights, so
 /// about half the stretched pixels land one step from the reference's rounding. Measured (the 64³ helix, plain
 /// and mirrored, at 77×53 with k = 2 and 4, every ray setup): worst mean 0.50, p99 1, max 1. Catches a marched

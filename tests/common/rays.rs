@@ -62,7 +62,7 @@ impl CameraBasis {
             right,
             up,
             tan_half_fov,
-            // Rule 11: spaced rays are framed as the output is, over fewer pixels.
+            // Rule 12: spaced rays are framed as the output is, over fewer pixels.
             aspect: f64::from(s.width) / f64::from(s.height),
             width: f64::from(super::stretch::marched(s).0),
             height: f64::from(super::stretch::marched(s).1),

@@ -553,7 +553,7 @@ impl Reference {
             });
         }
         if marched != (s.width, s.height) {
-            // Rule 11: the marched image stretched over the output (the stats stay the rays').
+            // Rule 12: the marched image stretched over the output (the stats stay the rays').
             image = super::stretch::stretch(&image, s.width, s.height);
             object = super::stretch::nearest(&object, marched, s.width, s.height);
             samples = super::stretch::nearest(&samples, marched, s.width, s.height);

@@ -1,4 +1,4 @@
-//! Rule 11's spaced rays in the reference: the size of the image rays are marched for, and that image stretched
+//! Rule 12's spaced rays in the reference: the size of the image rays are marched for, and that image stretched
 //! over the output by bilinear filtering, written from the rule (and the Vulkan specification's blit), not from the
 //! renderer.
 

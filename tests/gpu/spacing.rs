@@ -1,4 +1,4 @@
-//! Rule 11's spaced rays (`draft`'s one ray per 2×2 pixels) against the reference, which marches the same smaller
+//! Rule 12's spaced rays (`draft`'s one ray per 2×2 pixels) against the reference, which marches the same smaller
 //! image and stretches it by the rule's bilinear filter (tests/common/stretch.rs): at odd, non-square sizes whose
 //! marched image does not divide them, where a wrong aspect, pixel centre or rounding shows; with every ray setup.
 

@@ -11,7 +11,7 @@
 //! | `isosurfaces` | 7's iso-surfaces, with 5's directional light |
 //! | `light` | 9 shadows and ambient occlusion |
 //! | `clip` | 10 clipping plane |
-//! | `spacing` | 11 ray spacing |
+//! | `spacing` | 12 ray spacing |
 //! | `harness` | the image comparison the GPU tests judge by, and the reference's speed |
 //!
 //! `scenes` holds what they share. Nothing here needs a GPU.

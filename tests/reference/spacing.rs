@@ -1,4 +1,4 @@
-//! Rule 11's spaced rays in the reference: the marched size, and the stretch's taps and values worked by hand.
+//! Rule 12's spaced rays in the reference: the marched size, and the stretch's taps and values worked by hand.
 
 use crate::common;
 

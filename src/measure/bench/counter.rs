@@ -342,7 +342,7 @@ impl SampleCounter {
         }
     }
 
-    /// Counts over the whole image of `s`, rows split across the available cores: its rays (rule 11: one per
+    /// Counts over the whole image of `s`, rows split across the available cores: its rays (rule 12: one per
     /// `ray_spacing`² pixels where they are spaced), per pixel of the output.
     pub fn count(&self, s: &RenderSettings) -> SampleCount {
         let frame = self.frame(s);

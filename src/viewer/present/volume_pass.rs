@@ -173,7 +173,7 @@ impl VolumePass {
             if let Some(old) = self.view.take() {
                 old.destroy(gpu);
             }
-            // TRANSFER_DST: a frame of spaced rays (rule 11, `draft`) is blitted into it.
+            // TRANSFER_DST: a frame of spaced rays (rule 12, `draft`) is blitted into it.
             let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
                 | vk::ImageUsageFlags::TRANSFER_SRC
                 | vk::ImageUsageFlags::TRANSFER_DST;
