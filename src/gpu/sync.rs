@@ -142,7 +142,7 @@ pub const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
     layer_count: 1,
 };
 
-/// The colour aspect's one mip level and layer, for buffer/image copies.
+/// The colour aspect's one mip level and layer, for buffer/image copies and blits.
 pub const COLOR_LAYERS: vk::ImageSubresourceLayers = vk::ImageSubresourceLayers {
     aspect_mask: vk::ImageAspectFlags::COLOR,
     mip_level: 0,

@@ -4,7 +4,7 @@
 //! (docs/performance.md, Quality levels); VTK's `ImageSampleDistance` does the same while the user interacts.
 
 use crate::gpu::resources::{Image, ImageDesc};
-use crate::gpu::sync::{image_barriers, Access, ImageTransition};
+use crate::gpu::sync::{image_barriers, Access, ImageTransition, COLOR_LAYERS};
 use crate::gpu::{Gpu, GpuError};
 use crate::scene::settings::RenderSettings;
 use ash::vk;
@@ -91,12 +91,7 @@ impl Stretch {
                 },
             ]
         };
-        let layers = vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        };
+        let layers = COLOR_LAYERS;
         let region = vk::ImageBlit::default()
             .src_subresource(layers)
             .src_offsets(corner(self.from.1))

@@ -3,7 +3,7 @@
 
 use super::screen::Acquired;
 use crate::gpu::resources::Image;
-use crate::gpu::sync::{image_barrier, memory_barrier, Access, COLOR_RANGE};
+use crate::gpu::sync::{image_barrier, memory_barrier, Access, COLOR_LAYERS, COLOR_RANGE};
 use crate::viewer::ViewerError;
 use ash::vk;
 
@@ -85,12 +85,7 @@ pub(super) fn record_blit(dev: &ash::Device, cb: vk::CommandBuffer, view: &Image
         y: blit.offset.y,
         z: 0,
     };
-    let layers = vk::ImageSubresourceLayers {
-        aspect_mask: vk::ImageAspectFlags::COLOR,
-        mip_level: 0,
-        base_array_layer: 0,
-        layer_count: 1,
-    };
+    let layers = COLOR_LAYERS;
     let region = vk::ImageBlit::default()
         .src_subresource(layers)
         .src_offsets([vk::Offset3D::default(), corner])
