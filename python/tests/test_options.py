@@ -21,7 +21,7 @@ SAMPLES = {
     "iso_opacity": 0.7, "surface": [(0.2, 0.9, 0.6, 0.5, 0.3)], "light": (1, 1, 0), "light_color": (1, 0.9, 0.8),
     "light_intensity": 1.2, "shadows": True, "ambient_occlusion": True, "density": 2, "shading": True,
     "lighting": (0.3, 0.6, 0.2, 10), "gradient_opacity": 0.05, "shading_fade": 0.05, "no_jitter": True,
-    "jitter_seed": 3, "ortho": True, "no_skip": True, "max_stride": 2, "gradients": "samples",
+    "jitter_seed": 3, "ortho": True, "no_skip": True, "max_stride": 2, "ray_spacing": 2, "gradients": "samples",
     "gradient_texture": True, "step_alpha": 0.05, "quality": "fast", "step_length": 0.7, "multiplied_alpha": True,
     "early_termination": 0.9, "background": (0.1, 0.1, 0.2), "slice": ("x", 0.5, 0.4), "clip_plane": (0, 0, 1, 0),
     "positions": "rgba16f", "output": "OUT", "method": "compute", "timings": True, "memory": True, "colorbar": True,
