@@ -131,7 +131,7 @@ pub fn prepare(
     format: vk::Format,
     s: &RenderSettings,
 ) -> Result<(), GpuError> {
-    if s.spacing() > 1 && target.as_ref().is_some_and(|t| t.fits(s)) {
+    if fits(target, s) {
         return Ok(());
     }
     if let Some(old) = target.take() {

@@ -324,6 +324,7 @@ impl FrameUniforms {
         let surfaces = s.isosurfaces();
         let (iso_values, iso_colors) = iso_tables(&surfaces);
         let [part_origin, part_lo, part_hi] = PartInfo::uniforms(v.part, v.dims);
+        let (marched_width, marched_height) = s.marched_size();
         FrameUniforms {
             tex_to_clip: m4(tex_to_clip),
             tex_to_world: m4(model),
@@ -352,8 +353,8 @@ impl FrameUniforms {
                 1.0,
             ],
             viewport: [
-                s.marched_size().0 as f32,
-                s.marched_size().1 as f32,
+                marched_width as f32,
+                marched_height as f32,
                 max_steps(linear, h),
                 s.count_samples as u32 as f32,
             ],

@@ -176,11 +176,13 @@ impl Quality {
     /// (docs/performance.md, Quality levels); the others, and `draft` elsewhere, take every pixel.
     pub fn ray_spacing(self, s: &RenderSettings, range: [f64; 2]) -> u32 {
         let absorbing = matches!(s.mode, CompositeMode::Emission | CompositeMode::Density);
-        let soft = absorbing
-            && s.gradient_opacity.is_none()
-            && s.window[0] < s.window[1]
-            && opacity_edge(s, range) <= SOFT_EDGE;
-        if self == Quality::Draft && soft {
+        let soft = || {
+            absorbing
+                && s.gradient_opacity.is_none()
+                && s.window[0] < s.window[1]
+                && opacity_edge(s, range) <= SOFT_EDGE
+        };
+        if self == Quality::Draft && soft() {
             2
         } else {
             1
