@@ -40,9 +40,11 @@ pub fn take_tab_presses(input: &mut egui::RawInput) -> usize {
 }
 
 /// Where to cut a frame's `events` (deliver `events[..cut]`, keep the rest for the next frame), or None to deliver
-/// them all: before a drag's motion, before its release, and between a click and keys typed after it. `held` is where the press began if a button is still down from an earlier frame; `click_dist` is how
-/// far the pointer may move and still click (egui's `max_click_dist`). The cut is never 0, so every frame makes
-/// progress.
+/// them all: before a drag's motion, before its release, between a click and keys typed after it, and between a
+/// click and the pointer leaving it (egui hit-tests a frame's clicks where the pointer ends up, so a second click
+/// elsewhere in one slow frame took the first one with it). `held` is where the press began if a button is still
+/// down from an earlier frame; `click_dist` is how far the pointer may move and still click (egui's
+/// `max_click_dist`). The cut is never 0, so every frame makes progress.
 pub fn drag_cut(events: &[Event], held: Option<Pos2>, click_dist: f32) -> Option<usize> {
     // The press the pointer is measured from, whether it happened in this frame, and whether the pointer has left
     // it by more than a click's distance in this frame.
@@ -51,8 +53,14 @@ pub fn drag_cut(events: &[Event], held: Option<Pos2>, click_dist: f32) -> Option
     let mut moved_far = false;
     // Just after the last click's release in this frame: where typing that follows it is cut off.
     let mut after_click = None;
+    // Where the last click in this frame was released: the pointer leaving it cuts.
+    let mut released: Option<Pos2> = None;
+    let left = |released: Option<Pos2>, pos: Pos2| released.is_some_and(|r| r.distance(pos) > click_dist);
     for (i, event) in events.iter().enumerate() {
         match *event {
+            Event::PointerMoved(pos) | Event::PointerButton { pos, .. } if left(released, pos) => {
+                return Some(i);
+            }
             Event::PointerButton { pos, pressed: true, .. } => {
                 if moved_far {
                     return Some(i);
@@ -67,11 +75,14 @@ pub fn drag_cut(events: &[Event], held: Option<Pos2>, click_dist: f32) -> Option
                 }
                 moved_far = true;
             }
-            Event::PointerButton { pressed: false, .. } => {
+            Event::PointerButton {
+                pos, pressed: false, ..
+            } => {
                 if moved_far {
                     return Some(i);
                 }
                 after_click = Some(i + 1);
+                released = Some(pos);
                 (origin, pressed_here) = (None, false);
             }
             Event::Text(_) | Event::Paste(_) | Event::Key { pressed: true, .. } if after_click.is_some() => {
@@ -153,6 +164,31 @@ mod tests {
         assert_eq!(frames(double.clone()), vec![double]);
         let hover = vec![moved(1.0), moved(50.0), moved(90.0)];
         assert_eq!(drag_cut(&hover, None, 6.0), None);
+    }
+
+    #[test]
+    fn a_click_then_a_click_elsewhere_take_a_frame_each() {
+        // Under a slow frame both clicks arrived together, and egui gave both to the widget under the second.
+        let events = vec![
+            moved(10.0),
+            button(10.0, true),
+            button(10.0, false),
+            moved(80.0),
+            button(80.0, true),
+            button(80.0, false),
+            moved(200.0),
+        ];
+        assert_eq!(
+            frames(events),
+            vec![
+                vec![moved(10.0), button(10.0, true), button(10.0, false)],
+                vec![moved(80.0), button(80.0, true), button(80.0, false)],
+                vec![moved(200.0)],
+            ]
+        );
+        // A press far from the release without a motion event between them cuts too.
+        let jump = vec![button(10.0, true), button(10.0, false), button(90.0, true)];
+        assert_eq!(drag_cut(&jump, None, 6.0), Some(2));
     }
 
     #[test]
