@@ -48,16 +48,6 @@ pub enum Mods {
     Shift,
 }
 
-impl Shortcut {
-    /// Captures happen once per press: two quick presses may arrive within one frame.
-    fn per_press(self) -> bool {
-        matches!(
-            self,
-            Shortcut::Screenshot | Shortcut::ScreenshotAsShown | Shortcut::Record | Shortcut::RecordAsShown
-        )
-    }
-}
-
 /// One key binding: the key, its modifiers, what it does, and how the overlay names it.
 #[derive(Clone, Copy, Debug)]
 pub struct Binding {
@@ -195,17 +185,23 @@ fn presses(input: &egui::InputState, binding: &Binding) -> usize {
         .count()
 }
 
-/// The shortcuts pressed in this frame, in the table's order: a capture once per press, anything else once.
+/// The shortcuts pressed in this frame, in the table's order, each as many times as it was pressed: a slow frame
+/// may hold two quick presses (Q twice lowers the quality twice, Space twice leaves auto-rotation as it was). A
+/// shortcut with two bindings counts the one that saw more presses, so a press both see ("?" and F1, or Ctrl+Shift+Z
+/// and Ctrl+Y) counts once.
 fn fired_in(input: &egui::InputState) -> Vec<Shortcut> {
-    let mut fired = Vec::new();
+    let mut counted: Vec<(Shortcut, usize)> = Vec::new();
     for binding in KEYS {
         let n = presses(input, binding);
-        let times = if binding.shortcut.per_press() { n } else { n.min(1) };
-        fired.extend(std::iter::repeat_n(binding.shortcut, times));
+        match counted.iter_mut().find(|(s, _)| *s == binding.shortcut) {
+            Some((_, most)) => *most = (*most).max(n),
+            None => counted.push((binding.shortcut, n)),
+        }
     }
-    // "?" and F1 at once (or Ctrl+Shift+Z and Ctrl+Y) are one press of the same shortcut.
-    fired.dedup_by(|a, b| a == b && !a.per_press());
-    fired
+    counted
+        .into_iter()
+        .flat_map(|(s, n)| std::iter::repeat_n(s, n))
+        .collect()
 }
 
 /// The keyboard shortcuts of [`KEYS`] pressed in this frame, unless a text field has the keyboard.
@@ -326,7 +322,7 @@ mod tests {
     }
 
     #[test]
-    fn each_capture_press_counts_and_shift_captures_the_view_as_shown() {
+    fn each_press_counts_and_shift_captures_the_view_as_shown() {
         use egui::Key;
         let release = egui::Event::Key {
             key: Key::F12,
@@ -342,6 +338,23 @@ mod tests {
             release,
         ];
         assert_eq!(fired(twice), [Shortcut::Screenshot, Shortcut::Screenshot]);
+        // Every shortcut counts its presses: Q twice in one slow frame lowers the quality twice.
+        let q = key_event(Key::Q, false, false);
+        let q_up = egui::Event::Key {
+            key: Key::Q,
+            physical_key: None,
+            pressed: false,
+            repeat: false,
+            modifiers: Default::default(),
+        };
+        let q_twice = vec![q.clone(), q_up.clone(), q, q_up];
+        assert_eq!(fired(q_twice), [Shortcut::Quality, Shortcut::Quality]);
+        // One press seen by two bindings of a shortcut counts once.
+        let help = vec![
+            key_event(Key::F1, false, false),
+            key_event(Key::Questionmark, false, false),
+        ];
+        assert_eq!(fired(help), [Shortcut::ShortcutOverlay]);
         assert_eq!(
             fired(vec![key_event(Key::F12, false, true)]),
             [Shortcut::ScreenshotAsShown]
