@@ -31,7 +31,9 @@ impl Running {
         }
         let ui = self.ui(&tick)?;
         let planned = self.settings(&ui, &tick)?;
-        let readback = match self.present(&planned, &ui)? {
+        let drawn = self.present(&planned, &ui)?;
+        self.gui.drawn();
+        let readback = match drawn {
             Drawn::Presented(readback) => readback,
             Drawn::OutOfDate => {
                 self.window.request_redraw();

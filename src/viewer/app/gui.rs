@@ -7,9 +7,11 @@ use crate::viewer::model::Model;
 use crate::viewer::present::EguiFrame;
 use crate::viewer::widgets::keys;
 use crate::viewer::widgets::layout::frame_ui;
+use crate::viewer::widgets::rects;
 use crate::viewer::widgets::slice_view::SliceImages;
 use crate::volume::Volume;
-use std::time::Duration;
+use std::time::{Duration, Instant};
+use winit::event::WindowEvent;
 use winit::window::Window;
 
 pub(super) struct Gui {
@@ -17,7 +19,18 @@ pub(super) struct Gui {
     winit: egui_winit::State,
     /// Input held back for the next frame so that a quick drag is seen as one (`drag_cut`).
     deferred: Vec<egui::Event>,
+    /// What egui's clock counts from, and its last reading (see [`Gui::frame_time`]).
+    start: Instant,
+    last_time: f64,
+    /// When the last frame was drawn ([`Gui::drawn`]).
+    drawn_at: Option<Instant>,
+    /// When the first input since the last frame arrived, and whether it had waited while that frame was drawn.
+    first_input: Option<(Instant, bool)>,
 }
+
+/// Input that arrives this soon after a frame was drawn had waited while it was drawn: the event loop reads the
+/// window's events only between frames.
+const QUEUED: Duration = Duration::from_millis(50);
 
 /// What one UI pass produced.
 pub(super) struct GuiPass {
@@ -44,12 +57,49 @@ impl Gui {
             ctx,
             winit,
             deferred: Vec::new(),
+            start: Instant::now(),
+            last_time: 0.0,
+            drawn_at: None,
+            first_input: None,
         }
     }
 
     /// Hands a window event to egui; true when egui wants a new frame for it.
-    pub(super) fn on_window_event(&mut self, window: &Window, event: &winit::event::WindowEvent) -> bool {
+    pub(super) fn on_window_event(&mut self, window: &Window, event: &WindowEvent) -> bool {
+        let input = matches!(
+            event,
+            WindowEvent::CursorMoved { .. }
+                | WindowEvent::MouseInput { .. }
+                | WindowEvent::MouseWheel { .. }
+                | WindowEvent::KeyboardInput { .. }
+                | WindowEvent::Touch(_)
+        );
+        if input && self.first_input.is_none() {
+            let now = Instant::now();
+            let queued = self.drawn_at.is_some_and(|d| now.duration_since(d) < QUEUED);
+            self.first_input = Some((now, queued));
+        }
         self.winit.on_window_event(window, event).repaint
+    }
+
+    /// The time egui gives this frame: when its first input arrived; for input that waited while the last frame
+    /// was drawn (its real time is unknown, somewhere in that frame), just after that frame's time; else now. egui
+    /// times clicks by their frame, so with the time of drawing, the two clicks of a double click that a slow frame
+    /// split (the first drawn at once, the second waiting while it was) were a frame's length apart: no double
+    /// click once a frame took 0.3 s, which lavapipe's frames of a large volume, or a loaded machine's, do.
+    fn frame_time(&mut self) -> f64 {
+        let time = match self.first_input.take() {
+            Some((_, true)) => self.last_time + 1e-3,
+            Some((at, false)) => at.duration_since(self.start).as_secs_f64(),
+            None => self.start.elapsed().as_secs_f64(),
+        };
+        self.last_time = time.max(self.last_time);
+        self.last_time
+    }
+
+    /// The frame is drawn: input from now on waited for it only if it comes within [`QUEUED`].
+    pub(super) fn drawn(&mut self) {
+        self.drawn_at = Some(Instant::now());
     }
 
     /// Input is waiting for the next frame.
@@ -67,6 +117,7 @@ impl Gui {
         images: &mut SliceImages<'_>,
     ) -> GuiPass {
         let mut raw_input = self.winit.take_egui_input(window);
+        raw_input.time = Some(self.frame_time());
         // Events a slow frame held back for a drag come first; again some may wait.
         raw_input.events.splice(0..0, std::mem::take(&mut self.deferred));
         let held = self
@@ -91,6 +142,7 @@ impl Gui {
         let viewport_output = std::mem::take(&mut full.viewport_output);
         self.winit.handle_platform_output(window, platform_output);
         let repaint_delay = viewport_output.get(&egui::ViewportId::ROOT).map(|v| v.repaint_delay);
+        rects::end_frame(repaint_delay.is_none_or(|d| d > rects::STILL));
         let primitives = self.ctx.tessellate(shapes, pixels_per_point);
         GuiPass {
             actions,
