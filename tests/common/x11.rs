@@ -352,7 +352,11 @@ impl Drop for Viewer {
         // read without running it again.
         if std::thread::panicking() {
             self.drain();
-            let said: Vec<&str> = self.stderr.lines().filter(|l| !l.starts_with("ui rect ")).collect();
+            let said: Vec<&str> = self
+                .stderr
+                .lines()
+                .filter(|l| !l.starts_with("ui rect ") && !l.starts_with("ui gone ") && *l != "ui still")
+                .collect();
             let from = said.len().saturating_sub(120);
             eprintln!("--- the viewer's stderr (last {} lines) ---", said.len() - from);
             for line in &said[from..] {

@@ -1,22 +1,43 @@
 //! Where the panel's widgets are, for tests that drive the viewer through real X input: with `VOLCAST_UI_RECTS`
-//! set, each named widget's rectangle goes to stderr as `ui rect NAME LEFT TOP RIGHT BOTTOM` (points) whenever it
-//! changes. The input itself still comes through the window system; this only says where to point.
+//! set, each named widget's rectangle goes to stderr as `ui rect NAME LEFT TOP RIGHT BOTTOM` (points) when it is
+//! first drawn and whenever it moves, `ui gone NAME` after a frame that did not draw it (so a widget shown again,
+//! a chooser reopened, is logged again), and `ui still` after a frame that left the UI at rest (no animation under
+//! way) once anything changed. The input itself still comes through the window system; this only says where to
+//! point, and when.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, OnceLock};
+use std::time::Duration;
 
-/// Logs `rect` under `name` if logging is on and it moved since the last time.
-pub fn log(name: &'static str, rect: egui::Rect) {
+/// A frame after which egui wants no new frame sooner than this leaves the UI at rest.
+pub const STILL: Duration = Duration::from_millis(100);
+
+/// Each widget's last logged rect, and whether this frame drew it.
+static LAST: Mutex<Vec<(&'static str, egui::Rect, bool)>> = Mutex::new(Vec::new());
+
+/// Whether anything was logged, or the UI was under way, since the last `ui still`.
+static CHANGED: AtomicBool = AtomicBool::new(true);
+
+fn on() -> bool {
     static ON: OnceLock<bool> = OnceLock::new();
-    static LAST: Mutex<Vec<(&'static str, egui::Rect)>> = Mutex::new(Vec::new());
-    if !*ON.get_or_init(|| std::env::var_os("VOLCAST_UI_RECTS").is_some_and(|v| !v.is_empty())) {
+    *ON.get_or_init(|| std::env::var_os("VOLCAST_UI_RECTS").is_some_and(|v| !v.is_empty()))
+}
+
+/// Logs `rect` under `name` if logging is on and it is new or moved since the frame that last drew it.
+pub fn log(name: &'static str, rect: egui::Rect) {
+    if !on() {
         return;
     }
     let Ok(mut last) = LAST.lock() else { return };
-    match last.iter_mut().find(|(n, _)| *n == name) {
-        Some((_, r)) if *r == rect => return,
-        Some((_, r)) => *r = rect,
-        None => last.push((name, rect)),
+    match last.iter_mut().find(|(n, ..)| *n == name) {
+        Some((_, r, seen)) if *r == rect => {
+            *seen = true;
+            return;
+        }
+        Some((_, r, seen)) => (*r, *seen) = (rect, true),
+        None => last.push((name, rect, true)),
     }
+    CHANGED.store(true, Ordering::Relaxed);
     eprintln!(
         "ui rect {name} {} {} {} {}",
         rect.left(),
@@ -24,4 +45,27 @@ pub fn log(name: &'static str, rect: egui::Rect) {
         rect.right(),
         rect.bottom()
     );
+}
+
+/// Ends a frame: forgets (`ui gone`) the widgets it did not draw, then, when `still` (egui asks for no frame
+/// within [`STILL`]) and anything changed since the last time, says `ui still`: a rect logged before it is where
+/// the widget rests.
+pub fn end_frame(still: bool) {
+    if !on() {
+        return;
+    }
+    if let Ok(mut last) = LAST.lock() {
+        last.retain_mut(|(name, _, seen)| {
+            if !*seen {
+                CHANGED.store(true, Ordering::Relaxed);
+                eprintln!("ui gone {name}");
+            }
+            std::mem::replace(seen, false)
+        });
+    }
+    if !still {
+        CHANGED.store(true, Ordering::Relaxed);
+    } else if CHANGED.swap(false, Ordering::Relaxed) {
+        eprintln!("ui still");
+    }
 }
