@@ -23,6 +23,7 @@ mod shortcut_overlay;
 mod slice_tools;
 mod slices;
 mod small_window;
+mod spaced;
 mod tf;
 mod time;
 mod turns;

@@ -31,7 +31,7 @@ use volcast::scene::settings::RenderSettings;
 /// feather, hence 3 px), the orientation gizmo's disc (`framing::gizmo_place`: radius 52 centred 60 px from the
 /// bottom-right corner at full size, smaller in small views) and the light
 /// gizmo's from the top-right. The box is projected as the overlay projects it, from the frame's own camera.
-fn volume_only(settings: &RenderSettings, extent: glam::Vec3, view: egui::Rect) -> Vec<bool> {
+pub(crate) fn volume_only(settings: &RenderSettings, extent: glam::Vec3, view: egui::Rect) -> Vec<bool> {
     let cam = &settings.camera;
     let view_proj = cam.projection(view.width() / view.height()) * cam.view();
     let corners: [Option<egui::Pos2>; 8] = std::array::from_fn(|i| {
@@ -99,7 +99,13 @@ fn is_lit(p: &image::Rgba<u8>) -> bool {
 /// Captures the view (`view` of the window) until it equals the F12 screenshot outside the overlay, for at
 /// most a few seconds (the frame F12 saved was presented before the file was written, but the X server may put it
 /// a moment later; later frames draw the same). Returns the last capture.
-fn capture_view(display: &str, window: &str, view: egui::Rect, shot: &RgbaImage, mask: &[bool]) -> RgbaImage {
+pub(crate) fn capture_view(
+    display: &str,
+    window: &str,
+    view: egui::Rect,
+    shot: &RgbaImage,
+    mask: &[bool],
+) -> RgbaImage {
     let deadline = Instant::now() + Duration::from_secs(5);
     loop {
         let whole = capture(display, window);
@@ -121,7 +127,13 @@ fn capture_view(display: &str, window: &str, view: egui::Rect, shot: &RgbaImage,
 
 /// The window's view must be the headless render and the F12 PNG, within 1/255, outside the overlay; and far from
 /// what an sRGB swapchain would show.
-fn assert_window_shows(name: &str, window: &RgbaImage, shot: &RgbaImage, expected: &RgbaImage, mask: &[bool]) {
+pub(crate) fn assert_window_shows(
+    name: &str,
+    window: &RgbaImage,
+    shot: &RgbaImage,
+    expected: &RgbaImage,
+    mask: &[bool],
+) {
     let compared = mask.iter().filter(|&&m| m).count();
     assert!(
         compared > mask.len() * 3 / 4,

@@ -4,7 +4,7 @@
 use crate::scene::quality::Quality;
 use crate::transfer::Colormap;
 use crate::viewer::model::Model;
-use crate::viewer::widgets::tf_editor;
+use crate::viewer::widgets::{rects, tf_editor};
 use egui::{Color32, Pos2};
 
 fn color_of(rgba: [u8; 4]) -> Color32 {
@@ -68,7 +68,8 @@ pub fn transfer_function_section(ui: &mut egui::Ui, model: &mut Model) {
                         }
                     });
                 ui.add(egui::Slider::new(&mut look.step_alpha, 0.0..=1.0).text("step alpha"));
-                ui.checkbox(&mut look.multiplied_alpha, "multiplied alpha");
+                let multiplied = ui.checkbox(&mut look.multiplied_alpha, "multiplied alpha");
+                rects::log("multiplied-alpha", multiplied.rect);
             }
             let name = |q: Option<Quality>| q.map_or("custom step", Quality::name);
             egui::ComboBox::from_label("quality (Q)")
