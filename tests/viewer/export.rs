@@ -4,6 +4,7 @@
 
 use crate::common;
 
+use common::ui_wait::settled_rect;
 use common::x11::{button, pointer, read_screenshot, type_keys, worst_channel_diff, x_session, Viewer};
 use image::RgbaImage;
 use std::time::Duration;
@@ -53,16 +54,8 @@ pub(crate) fn scroll_to_export(viewer: &mut Viewer, display: &str, window: &str)
     for _ in 0..25 {
         button(display, "click", "5");
     }
-    // The scroll glides: wait until the section stays put.
-    let mut at = viewer.ui_rect("export-button");
-    for _ in 0..20 {
-        std::thread::sleep(Duration::from_millis(250));
-        let now = viewer.ui_rect("export-button");
-        if now == at {
-            break;
-        }
-        at = now;
-    }
+    // The scroll glides: wait until the viewer says it came to rest.
+    let at = settled_rect(viewer, "export-button");
     assert!(at.bottom() < 600.0, "the section scrolled into view: {at:?}");
 }
 

@@ -22,7 +22,8 @@ pub(super) struct Gui {
     /// What egui's clock counts from, and its last reading (see [`Gui::frame_time`]).
     start: Instant,
     last_time: f64,
-    /// When the last frame was drawn ([`Gui::drawn`]).
+    /// When the last frame began (took its input) and when it was drawn ([`Gui::drawn`]).
+    began_at: Option<Instant>,
     drawn_at: Option<Instant>,
     /// When the first input since the last frame arrived, and whether it had waited while that frame was drawn.
     first_input: Option<(Instant, bool)>,
@@ -59,6 +60,7 @@ impl Gui {
             deferred: Vec::new(),
             start: Instant::now(),
             last_time: 0.0,
+            began_at: None,
             drawn_at: None,
             first_input: None,
         }
@@ -83,16 +85,20 @@ impl Gui {
     }
 
     /// The time egui gives this frame: when its first input arrived; for input that waited while the last frame
-    /// was drawn (its real time is unknown, somewhere in that frame), just after that frame's time; else now. egui
+    /// was drawn (its real time is unknown, somewhere in that frame), just after that frame began; else now. egui
     /// times clicks by their frame, so with the time of drawing, the two clicks of a double click that a slow frame
     /// split (the first drawn at once, the second waiting while it was) were a frame's length apart: no double
-    /// click once a frame took 0.3 s, which lavapipe's frames of a large volume, or a loaded machine's, do.
+    /// click once a frame took 0.3 s, which lavapipe's frames of a large volume, or a loaded machine's, do. The
+    /// clock lags by at most a frame, so animations (a scroll gliding) keep their pace.
     fn frame_time(&mut self) -> f64 {
-        let time = match self.first_input.take() {
-            Some((_, true)) => self.last_time + 1e-3,
-            Some((at, false)) => at.duration_since(self.start).as_secs_f64(),
-            None => self.start.elapsed().as_secs_f64(),
+        let now = Instant::now();
+        let since = |at: Instant| at.duration_since(self.start).as_secs_f64();
+        let time = match (self.first_input.take(), self.began_at) {
+            (Some((_, true)), Some(began)) => since(began) + 1e-3,
+            (Some((at, _)), _) => since(at),
+            (None, _) => since(now),
         };
+        self.began_at = Some(now);
         self.last_time = time.max(self.last_time);
         self.last_time
     }
