@@ -11,7 +11,6 @@ use crate::window::{assert_window_shows, capture_view, volume_only};
 
 use common::x11::{read_screenshot, type_keys, x_session, Viewer};
 use std::time::Duration;
-use volcast::gpu::{Gpu, GpuOptions};
 use volcast::render::headless::Headless;
 use volcast::scene::quality::Quality;
 
@@ -45,21 +44,14 @@ fn draft_on_a_soft_classification_shows_its_spaced_rays_as_rendered_headless() {
     let mask = volume_only(&settings, helix.extent(), view);
     let shown = capture_view(d, w, view, &shot, &mask);
 
-    let gpu = Gpu::new(&GpuOptions {
-        validation: true,
-        ..Default::default()
-    })
-    .expect("Vulkan");
+    let gpu = common::gpu::validated_gpu();
     let mut headless = Headless::new(&gpu).expect("renderer");
     headless.set_volume(&gpu, &helix).unwrap();
     let spaced = headless.render(&gpu, &settings).expect("render").image;
     let mut every_pixel = settings.clone();
     every_pixel.ray_spacing = 1;
     let unspaced = headless.render(&gpu, &every_pixel).expect("render").image;
-    headless.destroy(&gpu);
-    let log = gpu.log.clone();
-    drop(gpu);
-    assert!(log.problems().is_empty(), "{:#?}", log.problems());
+    common::gpu::close(gpu, headless);
 
     assert_window_shows("spaced", &shown, &shot, &spaced, &mask);
     let apart = common::compare::diff_where(&shown, &unspaced, &mask);
