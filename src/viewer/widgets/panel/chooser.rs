@@ -65,7 +65,9 @@ fn chooser_ui(ui: &mut egui::Ui, chooser: &mut FileChooser) -> Chosen {
             if let Some(name) = ["chooser-0", "chooser-1"].get(i) {
                 rects::log(name, row.rect);
             }
-            if row.double_clicked() {
+            // egui counts a click as the third of a triple click when the one before the last was within 0.6 s,
+            // wherever it was: Open… clicked and a file double-clicked quickly is a "triple click" on the file.
+            if row.double_clicked() || row.triple_clicked() {
                 chosen = if entry.is_dir {
                     Chosen::Enter(path.clone())
                 } else {
