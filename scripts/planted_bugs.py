@@ -341,6 +341,13 @@ BUGS = [
      "under the last",
      [("src/viewer/app/input.rs", "Event::PointerButton { pos, .. } if left(released, pos) => {",
        "Event::PointerButton { pos, .. } if left(released, pos) && false => {")]),
+    ("triple-click-ignored", "a double click soon after a click elsewhere, which egui counts as a triple click, does "
+     "nothing (the file chooser's Open… then a file)",
+     [("src/viewer/widgets/clicks.rs", "|| response.triple_clicked() && {", "|| false && response.triple_clicked() && {")]),
+    ("slow-frame-splits-double-click", "the second click of a double click that waited while a slow frame was drawn "
+     "is timed after that frame: no double click",
+     [("src/viewer/app/clock.rs", "(Some((_, true)), Some(began)) => since(began) + 1e-3,",
+       "(Some((_, true)), Some(_)) => since(now),")]),
 ]
 
 # The Python module's rules (python/): run against its pytest suite (test_command).

@@ -1,6 +1,7 @@
 //! egui in the window: its context and winit glue, the window's input prepared for it (`input`), one frame's UI
 //! pass over the model (`widgets::layout::frame_ui`) and what it painted, tessellated for the presenter.
 
+use super::clock::{self, FrameClock};
 use super::input::{drag_cut, take_tab_presses};
 use crate::viewer::model::actions::UiAction;
 use crate::viewer::model::Model;
@@ -19,19 +20,9 @@ pub(super) struct Gui {
     winit: egui_winit::State,
     /// Input held back for the next frame so that a quick drag is seen as one (`drag_cut`).
     deferred: Vec<egui::Event>,
-    /// What egui's clock counts from, and its last reading (see [`Gui::frame_time`]).
-    start: Instant,
-    last_time: f64,
-    /// When the last frame began (took its input) and when it was drawn ([`Gui::drawn`]).
-    began_at: Option<Instant>,
-    drawn_at: Option<Instant>,
-    /// When the first input since the last frame arrived, and whether it had waited while that frame was drawn.
-    first_input: Option<(Instant, bool)>,
+    /// The time egui gives each frame: when its input arrived.
+    clock: FrameClock,
 }
-
-/// Input that arrives this soon after a frame was drawn had waited while it was drawn: the event loop reads the
-/// window's events only between frames.
-const QUEUED: Duration = Duration::from_millis(50);
 
 /// What one UI pass produced.
 pub(super) struct GuiPass {
@@ -58,11 +49,7 @@ impl Gui {
             ctx,
             winit,
             deferred: Vec::new(),
-            start: Instant::now(),
-            last_time: 0.0,
-            began_at: None,
-            drawn_at: None,
-            first_input: None,
+            clock: FrameClock::new(Instant::now()),
         }
     }
 
@@ -76,36 +63,15 @@ impl Gui {
                 | WindowEvent::KeyboardInput { .. }
                 | WindowEvent::Touch(_)
         );
-        if input && self.first_input.is_none() {
-            let now = Instant::now();
-            let queued = self.drawn_at.is_some_and(|d| now.duration_since(d) < QUEUED);
-            self.first_input = Some((now, queued));
+        if input {
+            self.clock.input(Instant::now());
         }
         self.winit.on_window_event(window, event).repaint
     }
 
-    /// The time egui gives this frame: when its first input arrived; for input that waited while the last frame
-    /// was drawn (its real time is unknown, somewhere in that frame), just after that frame began; else now. egui
-    /// times clicks by their frame, so with the time of drawing, the two clicks of a double click that a slow frame
-    /// split (the first drawn at once, the second waiting while it was) were a frame's length apart: no double
-    /// click once a frame took 0.3 s, which lavapipe's frames of a large volume, or a loaded machine's, do. The
-    /// clock lags by at most a frame, so animations (a scroll gliding) keep their pace.
-    fn frame_time(&mut self) -> f64 {
-        let now = Instant::now();
-        let since = |at: Instant| at.duration_since(self.start).as_secs_f64();
-        let time = match (self.first_input.take(), self.began_at) {
-            (Some((_, true)), Some(began)) => since(began) + 1e-3,
-            (Some((at, _)), _) => since(at),
-            (None, _) => since(now),
-        };
-        self.began_at = Some(now);
-        self.last_time = time.max(self.last_time);
-        self.last_time
-    }
-
-    /// The frame is drawn: input from now on waited for it only if it comes within [`QUEUED`].
+    /// The frame is drawn: input from now on waited for it only if it comes soon ([`clock::QUEUED`]).
     pub(super) fn drawn(&mut self) {
-        self.drawn_at = Some(Instant::now());
+        self.clock.drawn(Instant::now());
     }
 
     /// Input is waiting for the next frame.
@@ -123,7 +89,7 @@ impl Gui {
         images: &mut SliceImages<'_>,
     ) -> GuiPass {
         let mut raw_input = self.winit.take_egui_input(window);
-        raw_input.time = Some(self.frame_time());
+        raw_input.time = Some(self.clock.frame_time(Instant::now()));
         // Events a slow frame held back for a drag come first; again some may wait.
         raw_input.events.splice(0..0, std::mem::take(&mut self.deferred));
         let held = self

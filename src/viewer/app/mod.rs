@@ -5,6 +5,7 @@
 
 mod actions;
 mod capture;
+mod clock;
 mod figure;
 mod file_names;
 mod frame;

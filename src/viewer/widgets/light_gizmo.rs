@@ -5,6 +5,7 @@
 
 use crate::scene::settings::CompositeMode;
 use crate::viewer::model::Model;
+use crate::viewer::widgets::clicks;
 use egui::{Color32, Pos2, Stroke};
 use glam::{Quat, Vec2, Vec3};
 
@@ -64,7 +65,7 @@ pub fn light_gizmo(ui: &egui::Ui, model: &mut Model, rect: egui::Rect, response:
             dragging = true;
         }
     }
-    if response.double_clicked() && response.interact_pointer_pos().is_some_and(on_disc) {
+    if clicks::double_clicked(&response) && response.interact_pointer_pos().is_some_and(on_disc) {
         model.look.light.direction = None;
     }
     let painter = ui.painter_at(rect);

@@ -6,6 +6,7 @@
 //! [`layout::frame_ui`] is one frame's whole UI: the settings panel ([`panel`]) and the view area, the 3D view's
 //! overlay ([`overlay`]: boxes, gizmos, clipping plane, colour bar) alone or beside the slice views.
 
+pub mod clicks;
 pub mod clip_plane;
 pub mod colorbar;
 pub mod keys;

@@ -5,7 +5,7 @@ use crate::viewer::model::actions::UiAction;
 use crate::viewer::model::chooser::FileChooser;
 use crate::viewer::model::files::FileFields;
 use crate::viewer::widgets::panel::ERROR_COLOR;
-use crate::viewer::widgets::rects;
+use crate::viewer::widgets::{clicks, rects};
 use std::path::PathBuf;
 
 /// What the user did in the chooser this frame.
@@ -65,9 +65,8 @@ fn chooser_ui(ui: &mut egui::Ui, chooser: &mut FileChooser) -> Chosen {
             if let Some(name) = ["chooser-0", "chooser-1"].get(i) {
                 rects::log(name, row.rect);
             }
-            // egui counts a click as the third of a triple click when the one before the last was within 0.6 s,
-            // wherever it was: Open… clicked and a file double-clicked quickly is a "triple click" on the file.
-            if row.double_clicked() || row.triple_clicked() {
+            // Open… clicked and a file double-clicked quickly is a "triple click" to egui (`clicks`).
+            if clicks::double_clicked(&row) {
                 chosen = if entry.is_dir {
                     Chosen::Enter(path.clone())
                 } else {
