@@ -9,6 +9,7 @@
 
 use crate::common;
 
+use common::ui_wait::settled_rect;
 use common::x11::{button, four_up_rects, pointer, read_screenshot, type_keys, x_session, Viewer};
 use glam::{DVec2, DVec3};
 use std::path::Path;
@@ -17,20 +18,10 @@ use volcast::scene::slice::{SliceView, WindowLevel};
 use volcast::viewer::model::Model;
 use volcast::viewer::widgets::slice_view;
 
-/// Moves the pointer onto the widget `name` once it stays put: egui lays out a new popup in its first frame and
-/// may place it elsewhere in the next (the pointer's motion brings that frame).
+/// Moves the pointer onto the widget `name` once the viewer has drawn it and come to rest: egui lays out a new
+/// popup in a first, invisible frame and places it in the next.
 fn point_at(viewer: &mut Viewer, display: &str, window: &str, name: &str) {
-    let mut at = viewer.ui_rect(name);
-    for _ in 0..10 {
-        pointer(display, window, at.center());
-        std::thread::sleep(Duration::from_millis(300));
-        let now = viewer.ui_rect(name);
-        if now == at {
-            return;
-        }
-        at = now;
-    }
-    panic!("{name} keeps moving: {at:?}");
+    pointer(display, window, settled_rect(viewer, name).center());
 }
 
 #[test]
@@ -47,10 +38,8 @@ fn window_level_presets_and_the_ruler_in_the_slice_views() {
     let wl0 = opened.window_level.expect("the CT's own window");
 
     // W/L ▸ Bone: 3D Slicer's CT-Bone, in HU.
-    std::thread::sleep(Duration::from_millis(300));
-    pointer(d, w, viewer.ui_rect("wl-menu").center());
+    point_at(&mut viewer, d, w, "wl-menu");
     button(d, "click", "1");
-    viewer.wait_for("ui rect wl-bone ", Duration::from_secs(30));
     point_at(&mut viewer, d, w, "wl-bone");
     button(d, "click", "1");
     let bone = viewer.save_session(d, w, &dir).viewer.unwrap().window_level;
@@ -60,9 +49,8 @@ fn window_level_presets_and_the_ruler_in_the_slice_views() {
     };
     assert_eq!(bone, Some(expected), "the Bone preset");
     // W/L ▸ auto: the window the CT opened with.
-    pointer(d, w, viewer.ui_rect("wl-menu").center());
+    point_at(&mut viewer, d, w, "wl-menu");
     button(d, "click", "1");
-    std::thread::sleep(Duration::from_millis(300));
     point_at(&mut viewer, d, w, "wl-auto");
     button(d, "click", "1");
     let auto = viewer.save_session(d, w, &dir).viewer.unwrap().window_level.unwrap();
