@@ -355,7 +355,12 @@ impl Drop for Viewer {
             let said: Vec<&str> = self
                 .stderr
                 .lines()
-                .filter(|l| !l.starts_with("ui rect ") && !l.starts_with("ui gone ") && *l != "ui still")
+                .filter(|l| {
+                    !l.starts_with("ui rect ")
+                        && !l.starts_with("ui label ")
+                        && !l.starts_with("ui gone ")
+                        && *l != "ui still"
+                })
                 .collect();
             let from = said.len().saturating_sub(120);
             eprintln!("--- the viewer's stderr (last {} lines) ---", said.len() - from);

@@ -6,7 +6,7 @@
 
 use crate::common;
 
-use common::ui_wait::settled_rect;
+use common::ui_wait::{labelled_rect, settled_rect};
 use common::x11::{button, pointer, type_keys, x_client, x_session, Viewer, HOLD};
 use std::path::Path;
 use std::time::Duration;
@@ -103,13 +103,6 @@ fn a_bad_file_on_the_command_line_opens_the_viewer_with_its_error() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Waits until the viewer has logged a rect for `name` and returns it.
-fn wait_for_rect(viewer: &mut Viewer, name: &str) -> egui::Rect {
-    let prefix = format!("ui rect {name} ");
-    viewer.wait_for(&prefix, Duration::from_secs(30));
-    viewer.ui_rect(name)
-}
-
 /// Double-clicks `at` with the left button.
 fn double_click(d: &str, w: &str, at: egui::Pos2) {
     pointer(d, w, at);
@@ -137,15 +130,15 @@ fn open_without_a_portal_uses_the_built_in_chooser() {
     let open = scroll_to(&mut viewer, d, w, "open");
     click(d, w, open.center());
     // The chooser opens on the working folder: a-vols/ first (folders first), then xdg/ (the test's runtime dir).
-    let first = wait_for_rect(&mut viewer, "chooser-0");
-    std::thread::sleep(Duration::from_millis(500));
-    double_click(d, w, first.center());
-    click(d, w, viewer.ui_rect("chooser-up").center());
-    std::thread::sleep(Duration::from_millis(500));
-    double_click(d, w, viewer.ui_rect("chooser-0").center());
-    std::thread::sleep(Duration::from_millis(500));
+    // Each step waits for the rows it expects, at rest: a new window's first frame is laid out invisibly and takes
+    // no clicks (a double click there once went to the panel under it, and the rest of the test astray).
+    let vols = "🗁 a-vols/";
+    double_click(d, w, labelled_rect(&mut viewer, "chooser-0", vols).center());
+    labelled_rect(&mut viewer, "chooser-0", "bad.nii");
+    click(d, w, settled_rect(&mut viewer, "chooser-up").center());
+    double_click(d, w, labelled_rect(&mut viewer, "chooser-0", vols).center());
     // a-vols/: bad.nii, then head.vti. The broken file's error shows under the path field; Open… stays put.
-    double_click(d, w, viewer.ui_rect("chooser-0").center());
+    double_click(d, w, labelled_rect(&mut viewer, "chooser-0", "bad.nii").center());
     let said = viewer.wait_for("could not load ", Duration::from_secs(60));
     assert!(said.contains("a-vols/bad.nii"), "{said}");
     assert_eq!(
@@ -155,12 +148,9 @@ fn open_without_a_portal_uses_the_built_in_chooser() {
     );
     // The error shows in a frame after the one that said so.
     assert!(settled_rect(&mut viewer, "load-error").top() >= viewer.ui_rect("load-path").bottom());
-    // Again: the chooser opens on the folder of the path field's file.
+    // Again: the chooser opens on the folder of the path field's file (its rows were forgotten when it closed).
     click(d, w, open.center());
-    // Drawn again once it is open (its rows were forgotten when it closed): a slow frame once left the double
-    // click below to the panel under it.
-    let second = wait_for_rect(&mut viewer, "chooser-1");
-    double_click(d, w, second.center());
+    double_click(d, w, labelled_rect(&mut viewer, "chooser-1", "head.vti").center());
     let loaded = viewer.wait_for("loaded ", Duration::from_secs(60));
     assert!(loaded.ends_with("a-vols/head.vti"), "{loaded}");
     viewer.finish_clean();

@@ -1,7 +1,7 @@
 //! egui in the window: its context and winit glue, the window's input prepared for it (`input`), one frame's UI
 //! pass over the model (`widgets::layout::frame_ui`) and what it painted, tessellated for the presenter.
 
-use super::clock::{self, FrameClock};
+use super::clock::FrameClock;
 use super::input::{drag_cut, take_tab_presses};
 use crate::viewer::model::actions::UiAction;
 use crate::viewer::model::Model;
@@ -69,7 +69,7 @@ impl Gui {
         self.winit.on_window_event(window, event).repaint
     }
 
-    /// The frame is drawn: input from now on waited for it only if it comes soon ([`clock::QUEUED`]).
+    /// The frame is drawn: input from now on waited for it only if it comes soon ([`super::clock::QUEUED`]).
     pub(super) fn drawn(&mut self) {
         self.clock.drawn(Instant::now());
     }

@@ -61,9 +61,9 @@ fn chooser_ui(ui: &mut egui::Ui, chooser: &mut FileChooser) -> Chosen {
             };
             let path = chooser.path_of(&entry.name);
             let selected = chooser.typed == path.display().to_string();
-            let row = ui.selectable_label(selected, name);
-            if let Some(name) = ["chooser-0", "chooser-1"].get(i) {
-                rects::log(name, row.rect);
+            let row = ui.selectable_label(selected, name.as_str());
+            if let Some(id) = ["chooser-0", "chooser-1"].get(i) {
+                rects::log_labelled(id, row.rect, Some(&name));
             }
             // Open… clicked and a file double-clicked quickly is a "triple click" to egui (`clicks`).
             if clicks::double_clicked(&row) {
