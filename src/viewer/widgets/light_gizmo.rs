@@ -65,7 +65,7 @@ pub fn light_gizmo(ui: &egui::Ui, model: &mut Model, rect: egui::Rect, response:
             dragging = true;
         }
     }
-    if clicks::double_clicked(&response) && response.interact_pointer_pos().is_some_and(on_disc) {
+    if clicks::double_clicked(response) && response.interact_pointer_pos().is_some_and(on_disc) {
         model.look.light.direction = None;
     }
     let painter = ui.painter_at(rect);
