@@ -39,7 +39,7 @@ impl FrameClock {
         }
     }
 
-    /// The frame that begins at `now` is drawn at `now`: input from then on waited for it only within [`QUEUED`].
+    /// The last frame was drawn at `now`: input from then on waited for it only if it comes within [`QUEUED`].
     pub fn drawn(&mut self, now: Instant) {
         self.drawn_at = Some(now);
     }
