@@ -343,11 +343,11 @@ BUGS = [
        "Event::PointerButton { pos, .. } if left(released, pos) && false => {")]),
     ("triple-click-ignored", "a double click soon after a click elsewhere, which egui counts as a triple click, does "
      "nothing (the file chooser's Open… then a file)",
-     [("src/viewer/widgets/clicks.rs", "let double = response.double_clicked() || response.triple_clicked() && !after_double;",
+     [("src/viewer/widgets/clicks.rs", "let double = response.double_clicked() || (response.triple_clicked() && !after_double);",
        "let double = response.double_clicked();")]),
     ("triple-click-opens-twice", "the third click of a real triple click counts as a second double click (a folder "
      "entered, then the row under the third click opened)",
-     [("src/viewer/widgets/clicks.rs", "response.triple_clicked() && !after_double;", "response.triple_clicked();")]),
+     [("src/viewer/widgets/clicks.rs", "(response.triple_clicked() && !after_double);", "response.triple_clicked();")]),
     ("slow-frame-splits-double-click", "the second click of a double click that waited while a slow frame was drawn "
      "is timed after that frame: no double click",
      [("src/viewer/app/clock.rs", "(Some((_, true)), Some(began)) => since(began) + 1e-3,",

@@ -19,7 +19,7 @@ pub fn double_clicked(response: &Response) -> bool {
     }
     let ctx = &response.ctx;
     let after_double = ctx.data(|d| d.get_temp::<bool>(last_was_double_id())).unwrap_or(false);
-    let double = response.double_clicked() || response.triple_clicked() && !after_double;
+    let double = response.double_clicked() || (response.triple_clicked() && !after_double);
     ctx.data_mut(|d| d.insert_temp(last_was_double_id(), double));
     double
 }
