@@ -269,6 +269,13 @@ impl LightPass {
         if self.pipelines[li] == vk::Pipeline::null() {
             self.pipelines[li] = compute_pipeline(gpu, &LIGHT_SHADERS[li], self.layout)?;
         }
+        self.bind(gpu, extinction, image)?;
+        let pipeline = self.pipelines[li];
+        gpu.submit_and_wait(|cb| self.record(&gpu.device, cb, pipeline, grid, image, sets))
+    }
+
+    /// Points the pass's own set at `image` and at the table `extinction`, written into its buffer.
+    fn bind(&mut self, gpu: &Gpu, extinction: &[f32], image: &Image) -> Result<(), GpuError> {
         self.extinction.write(bytemuck::cast_slice(extinction))?;
         let image_info = [vk::DescriptorImageInfo::default()
             .image_view(image.view)
@@ -292,6 +299,19 @@ impl LightPass {
         ];
         // SAFETY: no submitted work uses the set (Renderer::prepare's contract).
         unsafe { gpu.device.update_descriptor_sets(&writes, &[]) };
+        Ok(())
+    }
+
+    /// Records [`Self::fill`]'s passes into `cb`.
+    fn record(
+        &self,
+        d: &ash::Device,
+        cb: vk::CommandBuffer,
+        pipeline: vk::Pipeline,
+        grid: &LightGrid,
+        image: &Image,
+        sets: [vk::DescriptorSet; 2],
+    ) {
         let n = grid.cells;
         let grid_push = [n[0] as f32, n[1] as f32, n[2] as f32, grid.voxel as f32];
         let delta = [
@@ -305,55 +325,51 @@ impl LightPass {
             1 => (0, 2),
             _ => (0, 1),
         };
-        let pipeline = self.pipelines[li];
-        let d = &gpu.device;
-        gpu.submit_and_wait(|cb| {
-            let all_sets = [sets[0], sets[1], self.set];
-            let push = |cb, p: Push| {
-                // SAFETY: `cb` is recording with this layout bound; the range matches the layout's.
-                unsafe {
-                    d.cmd_push_constants(
-                        cb,
-                        self.layout,
-                        vk::ShaderStageFlags::COMPUTE,
-                        0,
-                        bytemuck::bytes_of(&p),
-                    )
-                };
-            };
-            image_barrier(d, cb, image.raw, Access::Undefined, Access::ComputeReadWrite);
-            // SAFETY: `cb` is recording; pipeline, layout and sets are live and compatible.
+        let all_sets = [sets[0], sets[1], self.set];
+        let push = |cb, p: Push| {
+            // SAFETY: `cb` is recording with this layout bound; the range matches the layout's.
             unsafe {
-                d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, pipeline);
-                d.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &all_sets, &[]);
+                d.cmd_push_constants(
+                    cb,
+                    self.layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    bytemuck::bytes_of(&p),
+                )
+            };
+        };
+        image_barrier(d, cb, image.raw, Access::Undefined, Access::ComputeReadWrite);
+        // SAFETY: `cb` is recording; pipeline, layout and sets are live and compatible.
+        unsafe {
+            d.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, pipeline);
+            d.cmd_bind_descriptor_sets(cb, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &all_sets, &[]);
+        }
+        push(
+            cb,
+            Push {
+                info: [0, 0, 0, i32::from(grid.occlusion)],
+                delta,
+                grid: grid_push,
+            },
+        );
+        // SAFETY: as above; the shader bounds-checks the rounded-up groups.
+        unsafe { d.cmd_dispatch(cb, n[0].div_ceil(8), n[1].div_ceil(8), n[2]) };
+        if grid.shadows {
+            for (i, slice) in grid.slices().into_iter().enumerate() {
+                memory_barrier(d, cb, Access::ComputeReadWrite, Access::ComputeReadWrite);
+                push(
+                    cb,
+                    Push {
+                        info: [1, slice as i32, grid.axis as i32, i32::from(i == 0)],
+                        delta,
+                        grid: grid_push,
+                    },
+                );
+                // SAFETY: as above.
+                unsafe { d.cmd_dispatch(cb, n[o1].div_ceil(8), n[o2].div_ceil(8), 1) };
             }
-            push(
-                cb,
-                Push {
-                    info: [0, 0, 0, i32::from(grid.occlusion)],
-                    delta,
-                    grid: grid_push,
-                },
-            );
-            // SAFETY: as above; the shader bounds-checks the rounded-up groups.
-            unsafe { d.cmd_dispatch(cb, n[0].div_ceil(8), n[1].div_ceil(8), n[2]) };
-            if grid.shadows {
-                for (i, slice) in grid.slices().into_iter().enumerate() {
-                    memory_barrier(d, cb, Access::ComputeReadWrite, Access::ComputeReadWrite);
-                    push(
-                        cb,
-                        Push {
-                            info: [1, slice as i32, grid.axis as i32, i32::from(i == 0)],
-                            delta,
-                            grid: grid_push,
-                        },
-                    );
-                    // SAFETY: as above.
-                    unsafe { d.cmd_dispatch(cb, n[o1].div_ceil(8), n[o2].div_ceil(8), 1) };
-                }
-            }
-            image_barrier(d, cb, image.raw, Access::ComputeReadWrite, Access::FragmentSampled);
-        })
+        }
+        image_barrier(d, cb, image.raw, Access::ComputeReadWrite, Access::FragmentSampled);
     }
 
     pub(super) fn destroy(self, gpu: &Gpu) {
