@@ -146,29 +146,7 @@ impl Compositor {
         order: &[i32],
     ) -> Result<Option<Composited>, String> {
         let pixels = self.width as usize * self.height as usize;
-        if rgba.len() != pixels * 4 {
-            return Err(format!(
-                "rgba has {} floats, {}x{} RGBA needs {}",
-                rgba.len(),
-                self.width,
-                self.height,
-                pixels * 4
-            ));
-        }
-        let depth_ptr = match (blend, depth) {
-            (Blend::Over, None) => ptr::null(),
-            (Blend::Over, Some(_)) => return Err("Blend::Over takes no depth".to_owned()),
-            (Blend::ClosestDepth, None) => return Err("Blend::ClosestDepth needs a depth buffer".to_owned()),
-            (Blend::ClosestDepth, Some(d)) if d.len() != pixels => {
-                return Err(format!(
-                    "depth has {} floats, {}x{} needs {pixels}",
-                    d.len(),
-                    self.width,
-                    self.height
-                ));
-            }
-            (Blend::ClosestDepth, Some(d)) => d.as_ptr(),
-        };
+        let depth_ptr = self.check_buffers(rgba, depth, blend)?;
         if blend == Blend::Over {
             check_order(order, self.ranks)?;
         }
@@ -181,25 +159,8 @@ impl Compositor {
         unsafe { sys::icetSetContext(self.context) };
         // A stale error from before this call is not this composite's.
         let _ = take_error();
-        // SAFETY: the context is current; `order` holds each of the ICET_NUM_PROCESSES ranks exactly once
-        // (check_order), which is what icetCompositeOrder indexes with.
-        unsafe {
-            match blend {
-                Blend::Over => {
-                    sys::icetCompositeMode(sys::ICET_COMPOSITE_MODE_BLEND);
-                    sys::icetSetDepthFormat(sys::ICET_IMAGE_DEPTH_NONE);
-                    sys::icetEnable(sys::ICET_ORDERED_COMPOSITE);
-                    sys::icetCompositeOrder(order.as_ptr());
-                }
-                Blend::ClosestDepth => {
-                    sys::icetCompositeMode(sys::ICET_COMPOSITE_MODE_Z_BUFFER);
-                    sys::icetSetDepthFormat(sys::ICET_IMAGE_DEPTH_FLOAT);
-                    sys::icetDisable(sys::ICET_ORDERED_COMPOSITE);
-                    // On by default, it would drop the composited depth from the result.
-                    sys::icetDisable(sys::ICET_COMPOSITE_ONE_BUFFER);
-                }
-            }
-        }
+        // SAFETY: the context was made current above, under the lock; check_order passed for Blend::Over.
+        unsafe { set_mode(blend, order) };
         take_error()?;
 
         // SAFETY: the colour (pixels * 4 f32) and depth (pixels f32, or null when the depth format is none) buffers
@@ -235,6 +196,33 @@ impl Compositor {
         }
         // SAFETY: as above; the copies below finish before the next IceT call can reuse the image's buffer.
         unsafe { self.copy_out(image, blend, pixels) }.map(Some)
+    }
+
+    /// The depth buffer's pointer for IceT (null without depth), once `rgba` and `depth` have the lengths this
+    /// tile and `blend` need.
+    fn check_buffers(&self, rgba: &[f32], depth: Option<&[f32]>, blend: Blend) -> Result<*const f32, String> {
+        let pixels = self.width as usize * self.height as usize;
+        if rgba.len() != pixels * 4 {
+            return Err(format!(
+                "rgba has {} floats, {}x{} RGBA needs {}",
+                rgba.len(),
+                self.width,
+                self.height,
+                pixels * 4
+            ));
+        }
+        match (blend, depth) {
+            (Blend::Over, None) => Ok(ptr::null()),
+            (Blend::Over, Some(_)) => Err("Blend::Over takes no depth".to_owned()),
+            (Blend::ClosestDepth, None) => Err("Blend::ClosestDepth needs a depth buffer".to_owned()),
+            (Blend::ClosestDepth, Some(d)) if d.len() != pixels => Err(format!(
+                "depth has {} floats, {}x{} needs {pixels}",
+                d.len(),
+                self.width,
+                self.height
+            )),
+            (Blend::ClosestDepth, Some(d)) => Ok(d.as_ptr()),
+        }
     }
 
     /// What the last composite cost this rank (zero before the first).
@@ -293,6 +281,32 @@ impl Drop for Compositor {
         unsafe {
             sys::icetDestroyContext(self.context);
             sys::icetDestroyMPICommunicator(self.communicator);
+        }
+    }
+}
+
+/// Sets IceT's composite mode for `blend`: ordered blending in `order`, or the closest depth.
+///
+/// # Safety
+/// An IceT context is current, and for [`Blend::Over`] `order` holds each of its ICET_NUM_PROCESSES ranks exactly
+/// once ([`check_order`]), which is what icetCompositeOrder indexes with.
+unsafe fn set_mode(blend: Blend, order: &[i32]) {
+    // SAFETY: the caller's contract above.
+    unsafe {
+        match blend {
+            Blend::Over => {
+                sys::icetCompositeMode(sys::ICET_COMPOSITE_MODE_BLEND);
+                sys::icetSetDepthFormat(sys::ICET_IMAGE_DEPTH_NONE);
+                sys::icetEnable(sys::ICET_ORDERED_COMPOSITE);
+                sys::icetCompositeOrder(order.as_ptr());
+            }
+            Blend::ClosestDepth => {
+                sys::icetCompositeMode(sys::ICET_COMPOSITE_MODE_Z_BUFFER);
+                sys::icetSetDepthFormat(sys::ICET_IMAGE_DEPTH_FLOAT);
+                sys::icetDisable(sys::ICET_ORDERED_COMPOSITE);
+                // On by default, it would drop the composited depth from the result.
+                sys::icetDisable(sys::ICET_COMPOSITE_ONE_BUFFER);
+            }
         }
     }
 }
