@@ -164,6 +164,13 @@ impl SamplePass {
     }
 
     fn init(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<(), GpuError> {
+        self.init_pipeline(gpu)?;
+        self.init_set(gpu)?;
+        self.init_resources(gpu, width, height)
+    }
+
+    /// The set layout (uniforms, the texture, its sampler), the pipeline layout and the pipeline.
+    fn init_pipeline(&mut self, gpu: &Gpu) -> Result<(), GpuError> {
         use vk::DescriptorType as D;
         let dev = &gpu.device;
         let frag = vk::ShaderStageFlags::FRAGMENT;
@@ -183,10 +190,12 @@ impl SamplePass {
             dev.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
         }
         .ctx("vkCreateDescriptorSetLayout")?;
-        let set_layouts = [self.set_layout];
         // SAFETY: the set layout is live.
         self.layout = unsafe {
-            dev.create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts), None)
+            dev.create_pipeline_layout(
+                &vk::PipelineLayoutCreateInfo::default().set_layouts(&[self.set_layout]),
+                None,
+            )
         }
         .ctx("vkCreatePipelineLayout")?;
         self.pipeline = graphics_pipeline(
@@ -199,6 +208,13 @@ impl SamplePass {
                 cull: vk::CullModeFlags::NONE,
             },
         )?;
+        Ok(())
+    }
+
+    /// The descriptor pool and its one set.
+    fn init_set(&mut self, gpu: &Gpu) -> Result<(), GpuError> {
+        use vk::DescriptorType as D;
+        let dev = &gpu.device;
         let sizes = [D::UNIFORM_BUFFER, D::SAMPLED_IMAGE, D::SAMPLER].map(|ty| vk::DescriptorPoolSize {
             ty,
             descriptor_count: 1,
@@ -216,10 +232,16 @@ impl SamplePass {
             dev.allocate_descriptor_sets(
                 &vk::DescriptorSetAllocateInfo::default()
                     .descriptor_pool(self.pool)
-                    .set_layouts(&set_layouts),
+                    .set_layouts(&[self.set_layout]),
             )
         }
         .ctx("vkAllocateDescriptorSets")?[0];
+        Ok(())
+    }
+
+    /// The sampler, the timestamp queries, the uniform buffer and the `width`×`height` target.
+    fn init_resources(&mut self, gpu: &Gpu, width: u32, height: u32) -> Result<(), GpuError> {
+        let dev = &gpu.device;
         let sampler_info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::LINEAR)
             .min_filter(vk::Filter::LINEAR)
