@@ -413,6 +413,13 @@ pub struct BenchArgs {
     /// Where --scale keeps its generated files (default: $XDG_CACHE_HOME/volcast/bench, else ~/.cache/volcast/bench).
     #[arg(long, requires = "scale")]
     pub cache: Option<PathBuf>,
+    /// With --scale: the host budget instead of the default (a quarter of the machine's memory), like 512M.
+    #[arg(long, value_name = "SIZE", value_parser = parse_bytes, requires = "scale")]
+    pub host_budget: Option<u64>,
+    /// With --scale: the GPU budget instead of the default (the device's largest heap), like 64M: a scene over it
+    /// streams through a pool of half of it, as `render --gpu-budget` does.
+    #[arg(long, value_name = "SIZE", value_parser = parse_bytes, requires = "scale")]
+    pub gpu_budget: Option<u64>,
     /// Sampling quality of every scene, as `render --quality`: draft, fast, normal or converged. Repeat it to
     /// time each level against the same converged image (default: normal).
     #[arg(long = "quality", value_parser = parse_quality)]

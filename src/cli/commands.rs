@@ -185,6 +185,7 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
 /// `bench --scale`.
 fn scale_bench(args: &BenchArgs) -> Result<()> {
     use crate::measure::scale_bench::{self, ScaleScene};
+    use crate::volume::budget::{Budgets, GpuBudget};
     let scenes: Vec<ScaleScene> = if args.scale_edges.is_empty() {
         ScaleScene::DEFAULT.to_vec()
     } else {
@@ -209,12 +210,18 @@ fn scale_bench(args: &BenchArgs) -> Result<()> {
     };
     let size = args.sizes.first().copied().unwrap_or(512);
     with_gpu(&args.gpu, |gpu| {
-        let rows = scale_bench::run(gpu, &scenes, &dir, size, args.frames, &mut |l| eprintln!("{l}"))
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let budgets = Budgets::host(args.host_budget).with_gpu(GpuBudget {
+            bytes: args.gpu_budget.unwrap_or(gpu.device_local_bytes),
+            max_dim: gpu.properties.limits.max_image_dimension3_d,
+        });
+        let rows = scale_bench::run(gpu, &scenes, &dir, budgets, (size, args.frames), &mut |l| {
+            eprintln!("{l}")
+        })
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
         if args.json {
             println!("{}", serde_json::to_string_pretty(&rows)?);
         } else {
-            print!("{}", scale_bench::table(&rows, &gpu.device_name, size));
+            print!("{}", scale_bench::table(&rows, &gpu.device_name, size, budgets));
         }
         Ok(())
     })

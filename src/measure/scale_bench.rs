@@ -1,5 +1,5 @@
 //! `volcast bench --scale`: volumes from 256³ to 2048³ (8 and 16 GiB), opened as a user opens them, within the
-//! default budgets (docs/large-volumes.md). Each scene is one procedural field (rings in a ball), generated once
+//! default budgets or the ones given (docs/large-volumes.md). Each scene is one procedural field (rings in a ball), generated once
 //! into a cache folder as a raw file (never committed) and read in place from there.
 //!
 //! Per scene, in this process, after evicting the file from the page cache (`posix_fadvise(DONTNEED)`, a cold
@@ -17,7 +17,7 @@ use crate::render::headless::Headless;
 use crate::scale::cache::PyramidCache;
 use crate::scene::quality::Quality;
 use crate::scene::settings::RenderSettings;
-use crate::volume::budget::{Budgets, GpuBudget};
+use crate::volume::budget::Budgets;
 use crate::volume::{OpenOptions, Volume, VoxelType};
 use rayon::prelude::*;
 use std::fs::File;
@@ -209,15 +209,31 @@ fn settings(v: &Volume, size: u32) -> (RenderSettings, RenderSettings) {
     (rest, drag)
 }
 
-/// Opens, shows and times `path` once (see the module's description).
+/// Opens, shows and times `path` once within `budgets` (see the module's description); `frames`: the frame's
+/// edge and the frames timed per view.
 pub fn measure(
     gpu: &Gpu,
     path: &Path,
     cache: &'static str,
     pyramids: &PyramidCache,
-    size: u32,
-    frames: u32,
+    budgets: Budgets,
+    frames: (u32, u32),
 ) -> Result<ScaleRow, Box<dyn std::error::Error>> {
+    forget(path, cache, pyramids)?;
+    let marks = Marks {
+        peak_known: reset_peak_rss(),
+        io: io_counters(),
+    };
+    let mut headless = Headless::new(gpu)?;
+    let result =
+        measure_in(gpu, &mut headless, path, (pyramids, budgets), frames).and_then(|m| m.row(gpu, path, cache, &marks));
+    headless.destroy(gpu);
+    result
+}
+
+/// Empties or evicts what `cache` says a run starts without: the file from the page cache unless "warm", and the
+/// pyramid cache unless "cached", where only its files leave the page cache.
+fn forget(path: &Path, cache: &str, pyramids: &PyramidCache) -> std::io::Result<()> {
     if cache != "warm" {
         // SAFETY: sync(2) takes no arguments and touches no memory; dirty pages (a file just written) cannot be
         // evicted until they are written back.
@@ -226,73 +242,134 @@ pub fn measure(
     }
     if cache == "cached" {
         evict_tree(&pyramids.root);
+        Ok(())
     } else {
-        pyramids.clear()?;
+        pyramids.clear().map(drop)
     }
-    let peak_known = reset_peak_rss();
-    let io0 = io_counters();
-    let budgets = Budgets::host(None).with_gpu(GpuBudget {
-        bytes: gpu.device_local_bytes,
-        max_dim: gpu.properties.limits.max_image_dimension3_d,
-    });
+}
+
+/// What a run reads before it opens the file: whether the peak-RSS mark was reset, and the I/O counters.
+struct Marks {
+    peak_known: bool,
+    io: Option<(u64, u64)>,
+}
+
+/// What one open measured, before the row is made of it.
+struct Measured {
+    volume: Volume,
+    first_s: Option<f64>,
+    refined_s: f64,
+    io_refined: Option<(u64, u64)>,
+    rest_ms: Stats,
+    drag_ms: Stats,
+    streamed: Option<(usize, String)>,
+    close: Option<Close>,
+    peak: Option<u64>,
+    cache_write_s: Option<f64>,
+}
+
+/// Opens `path` as the viewer does (the preview, then the level the budgets take), refines the rest view, and
+/// times it at rest, dragging and four times closer; then writes the level into the pyramid cache. `frames`:
+/// (the frame's edge, the frames timed per view).
+fn measure_in(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    path: &Path,
+    (pyramids, budgets): (&PyramidCache, Budgets),
+    (size, frames): (u32, u32),
+) -> Result<Measured, Box<dyn std::error::Error>> {
     let opts = OpenOptions::default();
-    let mut headless = Headless::new(gpu)?;
-    let result = (|| -> Result<ScaleRow, Box<dyn std::error::Error>> {
-        let start = Instant::now();
-        // Read within the host budget; over the GPU budget whole, streamed as the viewer does.
-        let read = Budgets { gpu: None, ..budgets };
-        let preview = crate::scale::preview_within(path, &opts, read, Some(pyramids))?;
-        let had_preview = preview.is_some();
-        if let Some(p) = preview {
+    let start = Instant::now();
+    // Read within the host budget; over the GPU budget whole, streamed as the viewer does.
+    let read = Budgets { gpu: None, ..budgets };
+    let preview = crate::scale::preview_within(path, &opts, read, Some(pyramids))?;
+    let first_s = match preview {
+        Some(p) => {
             headless.set_volume(gpu, &p)?;
             headless.render(gpu, &settings(&p, size).0)?;
+            Some(start.elapsed().as_secs_f64())
         }
-        let first = start.elapsed().as_secs_f64();
-        let opened = crate::scale::open_deferred(path, &opts, read, Some(pyramids), &mut |_| {})?;
-        let v = opened.volume;
-        headless.renderer.place_volume(gpu, &v, &budgets)?;
-        let (rest, drag) = settings(&v, size);
-        let at_rest = headless.renderer.refine(gpu, &v, &rest)?;
-        headless.render(gpu, &rest)?;
-        let refined = start.elapsed().as_secs_f64();
-        let io1 = io_counters();
+        None => None,
+    };
+    let opened = crate::scale::open_deferred(path, &opts, read, Some(pyramids), &mut |_| {})?;
+    let v = opened.volume;
+    headless.renderer.place_volume(gpu, &v, &budgets)?;
+    let (rest, drag) = settings(&v, size);
+    let at_rest = headless.renderer.refine(gpu, &v, &rest)?;
+    headless.render(gpu, &rest)?;
+    let refined_s = start.elapsed().as_secs_f64();
+    let io_refined = io_counters();
+    let rest_ms = timed_frames(gpu, headless, &rest, frames)?;
+    // Dragging, the viewer wants one level coarser (factor 2) of the still view's cut.
+    if let Some(wanted) = headless.renderer.stream_wanted(&v, &rest, 2.0) {
+        headless.renderer.refine_to(gpu, &v, &wanted)?;
+    }
+    let drag_ms = timed_frames(gpu, headless, &drag, frames)?;
+    let streamed = at_rest.map(|p| (headless.renderer.stream().map_or(0, |s| s.capacity()), p.levels_shown()));
+    let close = match streamed {
+        Some(_) => Some(close_view(gpu, headless, &v, &rest, frames)?),
+        None => None,
+    };
+    let peak = peak_rss_bytes();
+    let write = Instant::now();
+    let cache_write_s = opened.keep.map(|k| {
+        drop(k.write(v.clone()));
+        write.elapsed().as_secs_f64()
+    });
+    Ok(Measured {
+        volume: v,
+        first_s,
+        refined_s,
+        io_refined,
+        rest_ms,
+        drag_ms,
+        streamed,
+        close,
+        peak,
+        cache_write_s,
+    })
+}
+
+/// The view four times closer than `rest`, refined from the rest view's pool and timed.
+fn close_view(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    v: &Volume,
+    rest: &RenderSettings,
+    frames: u32,
+) -> Result<Close, GpuError> {
+    let s = closer(rest);
+    let t = Instant::now();
+    let levels = headless
+        .renderer
+        .refine(gpu, v, &s)?
+        .map(|p| p.levels_shown())
+        .unwrap_or_default();
+    headless.render(gpu, &s)?;
+    let refined_s = t.elapsed().as_secs_f64();
+    let rest_ms = timed_frames(gpu, headless, &s, frames)?;
+    Ok(Close {
+        levels,
+        refined_s,
+        rest_ms,
+    })
+}
+
+impl Measured {
+    /// The scene's row: `marks` as taken before the open.
+    fn row(
+        self,
+        gpu: &Gpu,
+        path: &Path,
+        cache: &'static str,
+        marks: &Marks,
+    ) -> Result<ScaleRow, Box<dyn std::error::Error>> {
+        let v = &self.volume;
         let level = v
             .notes
             .iter()
             .find_map(|n| n.strip_prefix("pyramid level ")?.split(' ').next()?.parse().ok());
-        let rest_ms = timed_frames(gpu, &mut headless, &rest, frames)?;
-        // Dragging, the viewer wants one level coarser (factor 2) of the still view's cut.
-        if let Some(wanted) = headless.renderer.stream_wanted(&v, &rest, 2.0) {
-            headless.renderer.refine_to(gpu, &v, &wanted)?;
-        }
-        let drag_ms = timed_frames(gpu, &mut headless, &drag, frames)?;
-        let streamed = at_rest.map(|p| (headless.renderer.stream().map_or(0, |s| s.capacity()), p.levels_shown()));
-        let close = match streamed {
-            Some(_) => {
-                let s = closer(&rest);
-                let t = Instant::now();
-                let levels = headless
-                    .renderer
-                    .refine(gpu, &v, &s)?
-                    .map(|p| p.levels_shown())
-                    .unwrap_or_default();
-                headless.render(gpu, &s)?;
-                let refined_s = t.elapsed().as_secs_f64();
-                let rest_ms = timed_frames(gpu, &mut headless, &s, frames)?;
-                Some(Close {
-                    levels,
-                    refined_s,
-                    rest_ms,
-                })
-            }
-            None => None,
-        };
-        let peak = if peak_known { peak_rss_bytes() } else { None };
-        let write = Instant::now();
-        let cache_write_s = opened.keep.map(|k| {
-            drop(k.write(v.clone()));
-            write.elapsed().as_secs_f64()
-        });
+        let io = marks.io.zip(self.io_refined);
         Ok(ScaleRow {
             scene: path
                 .file_name()
@@ -302,31 +379,30 @@ pub fn measure(
             // The file's size where its finer levels stream from it.
             shown: v.finer.as_ref().map_or(v.dims, |f| f.dims()),
             level: level.unwrap_or(0),
-            first_image_s: if had_preview { first } else { refined },
-            preview: had_preview,
-            refined_s: refined,
-            rest_ms,
-            drag_ms,
-            peak_rss_bytes: peak,
+            first_image_s: self.first_s.unwrap_or(self.refined_s),
+            preview: self.first_s.is_some(),
+            refined_s: self.refined_s,
+            rest_ms: self.rest_ms,
+            drag_ms: self.drag_ms,
+            peak_rss_bytes: self.peak.filter(|_| marks.peak_known),
             gpu_bytes: gpu_allocated(gpu)?.0,
-            read_from_files: io0.zip(io1).map(|(a, b)| b.0 - a.0),
-            read_from_disk: io0.zip(io1).map(|(a, b)| b.1 - a.1),
-            cache_write_s,
-            streamed,
-            close,
+            read_from_files: io.map(|(a, b)| b.0 - a.0),
+            read_from_disk: io.map(|(a, b)| b.1 - a.1),
+            cache_write_s: self.cache_write_s,
+            streamed: self.streamed,
+            close: self.close,
         })
-    })();
-    headless.destroy(gpu);
-    result
+    }
 }
 
-/// Every scene, cold and then warm, at `size`²: files generated into `dir` where missing.
+/// Every scene, cold, warm and cached, within `budgets` at `frames.0`² (`frames.1` frames timed per view): files
+/// generated into `dir` where missing.
 pub fn run(
     gpu: &Gpu,
     scenes: &[ScaleScene],
     dir: &Path,
-    size: u32,
-    frames: u32,
+    budgets: Budgets,
+    frames: (u32, u32),
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<ScaleRow>, Box<dyn std::error::Error>> {
     let mut rows = Vec::new();
@@ -335,7 +411,7 @@ pub fn run(
         let path = generate(*scene, dir, log)?;
         for cache in ["cold", "warm", "cached"] {
             log(&format!("scale: {} ({cache})", scene.file_name()));
-            rows.push(measure(gpu, &path, cache, &pyramids, size, frames)?);
+            rows.push(measure(gpu, &path, cache, &pyramids, budgets, frames)?);
         }
     }
     pyramids.clear()?;
@@ -343,14 +419,15 @@ pub fn run(
 }
 
 /// The table `bench --scale` prints.
-pub fn table(rows: &[ScaleRow], device: &str, size: u32) -> String {
+pub fn table(rows: &[ScaleRow], device: &str, size: u32, budgets: Budgets) -> String {
     let mib = |b: u64| format!("{}", b >> 20);
     let opt = |b: Option<u64>| b.map_or("-".to_string(), mib);
     let mut out = format!(
-        "scale scenes on {device} at {size}x{size}, default budgets (host {} MiB)\n\
+        "scale scenes on {device} at {size}x{size}, budgets: host {} MiB, GPU {} MiB\n\
          | scene | cache | shown (level) | first image s | refined s | rest ms | drag ms | peak RSS MiB | GPU MiB | read MiB (disk) | cache write s |\n\
          |---|---|---|---|---|---|---|---|---|---|---|\n",
-        crate::volume::budget::default_host() >> 20
+        budgets.host >> 20,
+        budgets.gpu.map_or(0, |g| g.bytes >> 20)
     );
     for r in rows {
         let [x, y, z] = r.shown;

@@ -286,3 +286,66 @@ fn bench_times_each_quality_level_against_one_converged_image() {
         [want(Quality::Draft), want(Quality::Normal), serde_json::Value::Null]
     );
 }
+
+/// `bench --scale` on one small scene, as the docs' table is made: the field generated into `--cache`, opened cold,
+/// warm and from the pyramid cache within the default budgets, each row with positive times, the scene's own size at
+/// level 0 and the bytes it read; then a larger scene over a small `--gpu-budget`, streamed through a pool, whose
+/// view four times closer refines some bricks to level 0. No validation message. The generated files stay for the
+/// next run; the pyramid cache is emptied.
+#[test]
+fn scale_bench_opens_its_scenes_cold_warm_and_cached() {
+    let dir = common::scratch("scale-bench");
+    let cache = dir.join("cache");
+    let cache_arg = cache.to_str().expect("utf-8 path");
+    let args = ["--scale", "--frames", "1", "--cache", cache_arg, "--validate"];
+    let out = bench(&[&args[..], &["--scale-edge", "48", "--size", "64", "--json"]].concat());
+    let (json, log) = (stdout(&out), stderr(&out));
+    assert!(out.status.success(), "stdout:\n{json}\nstderr:\n{log}");
+    assert!(
+        log.contains("validation: 0 errors, 0 warnings"),
+        "validation must be clean:\n{log}"
+    );
+    let rows: serde_json::Value = serde_json::from_str(&json).unwrap_or_else(|e| panic!("not JSON ({e}):\n{json}"));
+    let rows = rows.as_array().expect("an array of rows");
+    let caches: Vec<&str> = rows.iter().map(|r| r["cache"].as_str().unwrap_or("?")).collect();
+    assert_eq!(caches, ["cold", "warm", "cached"], "{json}");
+    let file = cache.join(rows[0]["scene"].as_str().expect("scene"));
+    let file_bytes = std::fs::metadata(&file).map_or(0, |m| m.len());
+    assert_eq!(file_bytes, 48 * 48 * 48, "{}", file.display());
+    for r in rows {
+        assert_eq!(r["file_bytes"].as_u64(), Some(file_bytes), "{r}");
+        assert_eq!(r["shown"], serde_json::json!([48, 48, 48]), "{r}");
+        assert_eq!(r["level"].as_u64(), Some(0), "{r}");
+        assert!(r["streamed"].is_null() && r["close"].is_null(), "{r}");
+        for key in ["first_image_s", "refined_s"] {
+            let x = r[key].as_f64().unwrap_or(f64::NAN);
+            assert!(x.is_finite() && x > 0.0, "{key} = {x} in {r}");
+        }
+        assert!(r["first_image_s"].as_f64() <= r["refined_s"].as_f64(), "{r}");
+        for key in ["rest_ms", "drag_ms"] {
+            let x = r[key]["median"].as_f64().unwrap_or(f64::NAN);
+            assert!(x.is_finite() && x > 0.0, "{key} = {x} in {r}");
+        }
+        assert!(r["gpu_bytes"].as_u64().is_some_and(|b| b > 0), "{r}");
+        // The whole file is read on each open (rchar counts page-cache reads too).
+        assert!(r["read_from_files"].as_u64().is_some_and(|b| b >= file_bytes), "{r}");
+    }
+
+    // 256³ over a GPU budget of 32 MiB: a pool of 16 MiB, some 48 bricks of 64³.
+    let over = ["--scale-edge", "256", "--size", "128", "--gpu-budget", "32M"];
+    let out = bench(&[&args[..], &over[..]].concat());
+    let (table, log) = (stdout(&out), stderr(&out));
+    assert!(out.status.success(), "stdout:\n{table}\nstderr:\n{log}");
+    assert!(log.contains("validation: 0 errors, 0 warnings"), "{log}");
+    assert!(
+        table.contains("budgets: host ") && table.contains(", GPU 32 MiB"),
+        "{table}"
+    );
+    assert!(table.contains("| scene | cache | shown (level) |"), "{table}");
+    let streamed = |l: &&str| l.contains("| 256x256x256 (streamed, ") && l.contains(" slots: level ");
+    assert_eq!(table.lines().filter(streamed).count(), 3, "{table}");
+    let (_, closer) = table
+        .split_once("four times closer")
+        .unwrap_or_else(|| panic!("no close view:\n{table}"));
+    assert_eq!(closer.matches("| level 0 in ").count(), 3, "{table}");
+}
