@@ -13,7 +13,7 @@ pub struct FrameClock {
     start: Instant,
     /// The last time given, which no later time goes below.
     last_time: f64,
-    /// When the last frame began (took its input) and when it was done ([`Self::drawn`]).
+    /// When the last frame began (took its input) and when it was drawn.
     began_at: Option<Instant>,
     drawn_at: Option<Instant>,
     /// When the first input since the last frame arrived, and whether it had waited while that frame was drawn.
@@ -39,8 +39,7 @@ impl FrameClock {
         }
     }
 
-    /// The last frame was drawn at `now`, and the event loop is back to read input (the whole frame, its work after
-    /// presenting included, is done): input from then on waited for it only if it comes within [`QUEUED`].
+    /// The last frame was drawn at `now`: input from then on waited for it only if it comes within [`QUEUED`].
     pub fn drawn(&mut self, now: Instant) {
         self.drawn_at = Some(now);
     }

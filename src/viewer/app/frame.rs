@@ -23,14 +23,6 @@ struct Planned {
 
 impl Running {
     pub(super) fn redraw(&mut self) -> Result<Flow, ViewerError> {
-        let flow = self.redraw_steps();
-        // The event loop reads input again only now: what it reads soon had waited for this frame, its uploads
-        // and captures included.
-        self.gui.drawn();
-        flow
-    }
-
-    fn redraw_steps(&mut self) -> Result<Flow, ViewerError> {
         let tick = self.pacing.tick(self.activity().any());
         self.poll(&tick)?;
         if self.window_hidden() {
@@ -40,6 +32,7 @@ impl Running {
         let ui = self.ui(&tick)?;
         let planned = self.settings(&ui, &tick)?;
         let drawn = self.present(&planned, &ui)?;
+        self.gui.drawn();
         let readback = match drawn {
             Drawn::Presented(readback) => readback,
             Drawn::OutOfDate => {

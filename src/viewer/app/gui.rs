@@ -69,8 +69,7 @@ impl Gui {
         self.winit.on_window_event(window, event).repaint
     }
 
-    /// The frame's handler has returned (drawn, presented, its uploads and captures done): input from now on
-    /// waited for it only if it comes soon ([`super::clock::QUEUED`]).
+    /// The frame is drawn: input from now on waited for it only if it comes soon ([`super::clock::QUEUED`]).
     pub(super) fn drawn(&mut self) {
         self.clock.drawn(Instant::now());
     }
