@@ -1,6 +1,6 @@
 //! `volcast bench --scale`: volumes from 256³ to 2048³ (8 and 16 GiB), opened as a user opens them, within the
-//! default budgets or the ones given (docs/large-volumes.md). Each scene is one procedural field (rings in a ball), generated once
-//! into a cache folder as a raw file (never committed) and read in place from there.
+//! default budgets or the ones given (docs/large-volumes.md). Each scene is one procedural field (rings in a ball),
+//! generated once into a cache folder as a raw file (never committed) and read in place from there.
 //!
 //! Per scene, in this process, after evicting the file from the page cache (`posix_fadvise(DONTNEED)`, a cold
 //! read) and resetting the peak-RSS mark (`/proc/self/clear_refs`): time to the first image (the strided preview
