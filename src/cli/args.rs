@@ -80,6 +80,15 @@ pub struct VolumeArgs {
     pub time: Option<u32>,
 }
 
+/// The budgets on `gpu` from `--host-budget` and `--gpu-budget` (defaults: a quarter of RAM, the device's largest
+/// heap), with the device's 3-D texture limit.
+pub fn budgets_on(gpu: &crate::gpu::Gpu, host: Option<u64>, device: Option<u64>) -> volume::budget::Budgets {
+    volume::budget::Budgets::host(host).with_gpu(volume::budget::GpuBudget {
+        bytes: device.unwrap_or(gpu.device_local_bytes),
+        max_dim: gpu.properties.limits.max_image_dimension3_d,
+    })
+}
+
 impl VolumeArgs {
     /// These arguments with the volume of a view state where none is given here.
     pub fn or_from(&self, r: &crate::scene::view_state::VolumeRef) -> VolumeArgs {
@@ -106,10 +115,7 @@ impl VolumeArgs {
     /// The budgets on `gpu`: the host's, and `--gpu-budget` (default the device's largest heap) with the device's
     /// 3-D texture limit.
     pub fn budgets_on(&self, gpu: &crate::gpu::Gpu) -> volume::budget::Budgets {
-        self.budgets().with_gpu(volume::budget::GpuBudget {
-            bytes: self.gpu_budget.unwrap_or(gpu.device_local_bytes),
-            max_dim: gpu.properties.limits.max_image_dimension3_d,
-        })
+        budgets_on(gpu, self.host_budget, self.gpu_budget)
     }
 
     /// `v` at the finest pyramid level that `gpu` and the budgets take, its note said on stderr when that is not

@@ -185,7 +185,6 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
 /// `bench --scale`.
 fn scale_bench(args: &BenchArgs) -> Result<()> {
     use crate::measure::scale_bench::{self, ScaleScene};
-    use crate::volume::budget::{Budgets, GpuBudget};
     let scenes: Vec<ScaleScene> = if args.scale_edges.is_empty() {
         ScaleScene::DEFAULT.to_vec()
     } else {
@@ -210,10 +209,7 @@ fn scale_bench(args: &BenchArgs) -> Result<()> {
     };
     let size = args.sizes.first().copied().unwrap_or(512);
     with_gpu(&args.gpu, |gpu| {
-        let budgets = Budgets::host(args.host_budget).with_gpu(GpuBudget {
-            bytes: args.gpu_budget.unwrap_or(gpu.device_local_bytes),
-            max_dim: gpu.properties.limits.max_image_dimension3_d,
-        });
+        let budgets = super::args::budgets_on(gpu, args.host_budget, args.gpu_budget);
         let rows = scale_bench::run(gpu, &scenes, &dir, budgets, (size, args.frames), &mut |l| {
             eprintln!("{l}")
         })
