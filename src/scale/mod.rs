@@ -301,16 +301,16 @@ fn with_store_finer(mut v: Volume, path: &Path, opts: &OpenOptions) -> Volume {
     v
 }
 
-/// A preview of `path` when it is a file read in place that is large at the level `budgets` give it: from the
-/// pyramid cache's coarser levels where `cache` holds that level, else strided from the file
-/// ([`preview::preview`]); `None` for everything else.
+/// A preview of `path` when it is a file read in place, a DICOM series or a multi-frame DICOM file that is large at
+/// the level `budgets` give it: from the pyramid cache's coarser levels where `cache` holds that level, else strided
+/// from the file ([`preview::preview`]); `None` for everything else.
 pub fn preview_within(
     path: &Path,
     opts: &OpenOptions,
     budgets: Budgets,
     cache: Option<&PyramidCache>,
 ) -> Result<Option<Volume>, VolumeError> {
-    let Some(place) = in_place(path, opts)? else {
+    let Some(place) = previewed(path, opts, &budgets)? else {
         return Ok(None);
     };
     let shape = Shape {
@@ -325,7 +325,40 @@ pub fn preview_within(
     if let Some(v) = cached.and_then(|c| c.preview(&place, level.level, preview::PREVIEW_SIDE)) {
         return Ok(Some(v));
     }
-    preview::preview(path, opts, level.level)
+    preview::preview(&place, level.level)
+}
+
+/// `path` as its preview reads it: in place, or a DICOM series or multi-frame file decoded slice by slice
+/// ([`dicom_slice_by_slice`]). A folder's headers are read only where the bound from its first header
+/// ([`claimed_bound`](crate::volume::dicom::slices::claimed_bound)) is large enough for a preview.
+fn previewed(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result<Option<InPlace>, VolumeError> {
+    if let Some(place) = in_place(path, opts)? {
+        return Ok(Some(place));
+    }
+    let large = |(dims, voxel_type): ([u32; 3], VoxelType)| {
+        let shape = Shape {
+            dims,
+            voxel_type,
+            steps: 1,
+        };
+        budget::choose(&shape, budgets).is_ok_and(|l| preview::large_at(dims, l.level))
+    };
+    if path.is_dir() && !crate::volume::dicom::slices::claimed_bound(path).is_some_and(large) {
+        return Ok(None);
+    }
+    dicom_slice_by_slice(path, opts)
+}
+
+/// `path` as a volume read slice by slice whatever the budgets, if it is a folder holding a DICOM series (chosen by
+/// `opts.series` as the loader chooses it) or one multi-frame DICOM file; `None` for anything else, and for slices at
+/// several temporal positions. The loader may still read it whole: this is how its preview reads it.
+pub fn dicom_slice_by_slice(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, VolumeError> {
+    use crate::volume::dicom::slices;
+    if path.is_dir() {
+        slices::series_in_place(path, opts.series.as_deref())
+    } else {
+        slices::frames_in_place(path, &|_, _| false)
+    }
 }
 
 /// A file neither in place nor a compressed stream (`in_place::compressed`), such as ASCII NRRD, is read whole before

@@ -1,6 +1,6 @@
-//! A DICOM folder holding several series, made at run time from the shared MRI series (`native/brain_pd_mr`):
-//! slices copied and some rewritten with another SeriesInstanceUID, SeriesNumber and SeriesDescription through
-//! dicom-object, the reader volcast itself uses.
+//! DICOM folders made at run time through dicom-object, the reader volcast itself uses: one holding several series,
+//! from the shared MRI series (`native/brain_pd_mr`), slices copied and some rewritten with another
+//! SeriesInstanceUID, SeriesNumber and SeriesDescription; and one large series, from pydicom's `u8_native`.
 
 use dicom_core::{DataElement, PrimitiveValue, Tag, VR};
 use std::path::{Path, PathBuf};
@@ -70,6 +70,45 @@ pub fn make(dir: &Path) -> Option<PathBuf> {
         }
     }
     Some(dir.to_path_buf())
+}
+
+/// A series of `n` slices of `w`×`h` uint8 voxels, `(x + 2y + 3z) mod 251`, 1.5 mm apart, written into `dir` as
+/// pydicom wrote `tests/data/dicom/u8_native` (its first file with another size, place and pixels), each file's
+/// name shuffled from its place.
+pub fn large(dir: &Path, [w, h, n]: [u32; 3]) -> PathBuf {
+    let template = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom/u8_native/00.dcm");
+    let mut obj = dicom_object::open_file(&template).unwrap_or_else(|e| panic!("{}: {e}", template.display()));
+    obj.put(DataElement::new(
+        Tag(0x0028, 0x0010),
+        VR::US,
+        PrimitiveValue::from(h as u16),
+    ));
+    obj.put(DataElement::new(
+        Tag(0x0028, 0x0011),
+        VR::US,
+        PrimitiveValue::from(w as u16),
+    ));
+    std::fs::create_dir_all(dir).unwrap();
+    for z in 0..n {
+        let pixels: Vec<u8> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| ((x + 2 * y + 3 * z) % 251) as u8))
+            .collect();
+        obj.put(DataElement::new(
+            Tag(0x7FE0, 0x0010),
+            VR::OB,
+            PrimitiveValue::from(pixels),
+        ));
+        let position = format!("5.0\\-7.0\\{:.1}", 1.5 * f64::from(z));
+        obj.put(DataElement::new(
+            Tag(0x0020, 0x0032),
+            VR::DS,
+            PrimitiveValue::from(position),
+        ));
+        let to = dir.join(format!("{:04}.dcm", (z * 97) % n));
+        obj.write_to_file(&to)
+            .unwrap_or_else(|e| panic!("{}: {e}", to.display()));
+    }
+    dir.to_path_buf()
 }
 
 /// Where an explicit-VR little-endian file's PixelData element ends (elements of defined length only, as in the

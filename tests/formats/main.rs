@@ -8,6 +8,7 @@ pub mod common;
 
 mod decoded_finer;
 mod dicom;
+mod dicom_preview;
 mod dicom_slices;
 mod headers;
 mod open;

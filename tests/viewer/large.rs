@@ -1,10 +1,11 @@
 //! A large file in the viewer (docs/large-volumes.md): launched on a 512x512x256 file (2^26 voxels), the window
 //! first shows a strided preview (1 voxel in 4 per axis) while the file is read, then the volume itself, and the F12
-//! screenshot then equals the headless render of the whole file. Under a `--gpu-budget` it is over whole, the viewer
-//! streams it through a pool of bricks, says so, refines (again after a real drag), and its screenshots equal the
-//! headless render streamed within the same budget, as does its exported figure. Under a `--host-budget` that holds
-//! only level 1, level 0's bricks are read from the file where the still view wants them (from its OME-Zarr store's
-//! level 0, and from a gzip file's level 0 kept in the pyramid cache, alike).
+//! screenshot then equals the headless render of the whole file; a DICOM series of that size alike. Under a
+//! `--gpu-budget` it is over whole, the viewer streams it through a pool of bricks, says so, refines (again after a
+//! real drag), and its screenshots equal the headless render streamed within the same budget, as does its exported
+//! figure. Under a `--host-budget` that holds only level 1, level 0's bricks are read from the file where the still
+//! view wants them (from its OME-Zarr store's level 0, and from a gzip file's level 0 kept in the pyramid cache,
+//! alike).
 
 use crate::common;
 
@@ -64,6 +65,32 @@ fn viewer_previews_a_large_file_then_shows_it() {
             "loaded ",
         ],
     );
+}
+
+/// A large DICOM series (512x512x256, its files shuffled) is previewed too, from every 4th slice decoded from its
+/// own file, then replaced by the series read whole.
+#[test]
+fn viewer_previews_a_large_dicom_series_then_shows_it() {
+    let Some(x) = xvfb() else { return };
+    if !have("xdotool", "version") {
+        common::skip("xdotool not found; apt-get install xdotool");
+        return;
+    }
+    let dir = common::scratch("viewer-large-series");
+    let series = common::dicom_series::large(&dir.join("series"), [512, 512, 256]);
+    let folder = series.to_string_lossy().into_owned();
+    let whole = volcast::volume::open(&series, &Default::default()).expect("volume");
+    shot_matches(
+        &x.display,
+        &dir,
+        &[&folder],
+        &whole,
+        &[
+            "a preview of 1 voxel in 4 per axis (128x128x64 of 512x512x256)",
+            "loaded ",
+        ],
+    );
+    std::fs::remove_dir_all(&series).ok();
 }
 
 /// Within a host budget that holds only level 1 of the file, the viewer streams level 0's bricks from the file
