@@ -23,7 +23,7 @@ struct Planned {
 
 impl Running {
     pub(super) fn redraw(&mut self) -> Result<Flow, ViewerError> {
-        let tick = self.pacing.tick(self.activity().any());
+        let tick = self.pacing.tick(self.activity().continuous());
         self.poll(&tick)?;
         if self.window_hidden() {
             // Nothing to draw into. Keep the event loop (and a running script) going.

@@ -12,6 +12,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use winit::event_loop::EventLoopProxy;
 
 /// No file from the desktop's dialog this soon after *Open…*: no dialog was shown (rfd found no xdg-desktop-portal
 /// and no zenity, as under Xvfb, and says so only in its log), so the viewer's own chooser opens instead. A person
@@ -64,6 +65,8 @@ pub(super) struct Loader {
     /// The load under way showed a preview: the transfer function it opened with (the volume replacing it keeps
     /// one the user set since). Forgotten when a load starts or fails.
     pub(super) preview_tf: Option<Option<crate::transfer::function::TransferFunction>>,
+    /// Wakes the event loop when the loading thread delivers (frames are paced while a load is under way).
+    waker: EventLoopProxy<()>,
 }
 
 /// The viewer's histogram of normalised values, over every step of a series (as its range is): the automatic
@@ -136,7 +139,12 @@ pub(super) fn open_source(
     Ok(opened)
 }
 
-fn load_in_background(source: VolumeSource, limits: Limits, series: Option<String>, channel: Option<u32>) -> Loading {
+fn load_in_background(
+    source: VolumeSource,
+    limits: Limits,
+    (series, channel): (Option<String>, Option<u32>),
+    waker: EventLoopProxy<()>,
+) -> Loading {
     let label = match (&source, &series) {
         (VolumeSource::Builtin(name, _), _) => name.clone(),
         (VolumeSource::Memory(v), _) => v.name.clone(),
@@ -145,19 +153,26 @@ fn load_in_background(source: VolumeSource, limits: Limits, series: Option<Strin
     };
     let progress = Arc::new(AtomicU32::new(0));
     let (tx, rx) = std::sync::mpsc::channel();
+    // Each delivery wakes the event loop, so that it is shown at once.
+    let send = move |d: Delivery| {
+        let _ = tx.send(d);
+        let _ = waker.send_event(());
+    };
     let p = progress.clone();
     let recorded = source.clone();
     std::thread::spawn(move || {
-        // A large file read in place is shown first from every k-th voxel (scale::preview), then refined.
+        // A large file read in place or a large DICOM series is shown first from every k-th voxel (scale::preview),
+        // then refined.
         if let VolumeSource::File(path, raw) = &source {
             let opts = volume::OpenOptions {
                 raw: raw.clone(),
+                series: series.clone(),
                 ..Default::default()
             };
             let budgets = limits.read_budgets();
             if let Ok(Some(v)) = crate::scale::preview_within(path, &opts, budgets, limits.cache.as_ref()) {
                 let h = value_histogram(&v);
-                let _ = tx.send(Delivery::Preview(v, h));
+                send(Delivery::Preview(v, h));
             }
         }
         // Reading is 90% of the bar, the histogram the rest.
@@ -173,7 +188,7 @@ fn load_in_background(source: VolumeSource, limits: Limits, series: Option<Strin
             (opened.volume, h)
         });
         p.store(1.0f32.to_bits(), Ordering::Relaxed);
-        let _ = tx.send(Delivery::Done(analysed));
+        send(Delivery::Done(analysed));
         if let Some((k, copy)) = keep {
             let written = k.write(copy);
             if let Some(note) = written
@@ -194,7 +209,7 @@ fn load_in_background(source: VolumeSource, limits: Limits, series: Option<Strin
 }
 
 impl Loader {
-    pub(super) fn new(limits: Limits, restore: Option<ViewState>) -> Loader {
+    pub(super) fn new(limits: Limits, restore: Option<ViewState>, waker: EventLoopProxy<()>) -> Loader {
         Loader {
             loading: None,
             initial: None,
@@ -204,6 +219,7 @@ impl Loader {
             limits,
             channel: None,
             preview_tf: None,
+            waker,
         }
     }
 
@@ -242,7 +258,13 @@ impl Loader {
         messages.error = None;
         messages.about = Topic::Volume;
         self.preview_tf = None;
-        self.loading = Some(load_in_background(source, self.limits.clone(), series, self.channel));
+        let waker = self.waker.clone();
+        self.loading = Some(load_in_background(
+            source,
+            self.limits.clone(),
+            (series, self.channel),
+            waker,
+        ));
     }
 
     /// Shows the platform's file dialog (unless one is open); it blocks until the user answers, so it runs on

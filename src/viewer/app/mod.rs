@@ -102,7 +102,7 @@ impl ApplicationHandler for App {
                 r.window.request_redraw();
             }
             WindowEvent::RedrawRequested => match r.redraw() {
-                Ok(Flow::Continue) => {}
+                Ok(Flow::Continue) => r.pacing.drawn(std::time::Instant::now()),
                 Ok(Flow::Exit) => event_loop.exit(),
                 Err(e) => {
                     self.error = Some(e);

@@ -54,6 +54,7 @@ impl Running {
                     cache: (!opts.no_cache).then(|| PyramidCache::new(opts.cache_dir.clone())),
                 },
                 opts.restore.clone(),
+                waker.clone(),
             ),
             window,
             presenter,
