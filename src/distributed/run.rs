@@ -32,10 +32,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     match rank_render(&world, args) {
         Ok(()) => Ok(()),
         Err(e) => {
-            eprintln!(
+            say(format!(
                 "volcast: rank {rank} of {size} failed: {}; stopping every rank",
                 crate::cli::error_text(&e)
-            );
+            ));
             world.abort(if crate::cli::is_usage(&e) { 64 } else { 1 })
         }
     }
@@ -46,12 +46,19 @@ fn abort_on_panic(rank: i32, size: i32) {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         default(info);
-        eprintln!("volcast: rank {rank} of {size} panicked; stopping every rank");
+        say(format!("volcast: rank {rank} of {size} panicked; stopping every rank"));
         // SAFETY: MPI is initialised (the hook is set after `mpi::initialize`) and MPI_Abort does not return.
         unsafe {
             mpi::ffi::MPI_Abort(mpi::ffi::RSMPI_COMM_WORLD, 101);
         }
     }));
+}
+
+/// Writes `line` and a newline to stderr in one write. mpirun forwards each write as it comes, and `eprintln!` writes
+/// its pieces one by one, so MPI_Abort's banner from mpirun once landed inside the line (CI, 29 Nov).
+fn say(line: String) {
+    use std::io::Write;
+    let _ = std::io::stderr().lock().write_all(format!("{line}\n").as_bytes());
 }
 
 fn rank_render(world: &SimpleCommunicator, args: &RenderArgs) -> Result<()> {
