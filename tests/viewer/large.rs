@@ -43,52 +43,37 @@ fn shot_matches(display: &str, dir: &Path, args: &[&str], expected: &volcast::vo
     viewer.finish_clean();
 }
 
-#[test]
-fn viewer_previews_a_large_file_then_shows_it() {
+/// Starts the viewer on `path` (a file or a DICOM folder) and asserts that it first logs a preview whose note ends in
+/// `preview` (before the read ends), then the volume replacing it, whose F12 screenshot equals the headless render.
+fn previews_then_shows(dir: &Path, path: &Path, preview: &str) {
     let Some(x) = xvfb() else { return };
     if !have("xdotool", "version") {
         common::skip("xdotool not found; apt-get install xdotool");
         return;
     }
+    let file = path.to_string_lossy().into_owned();
+    let whole = volcast::volume::open(path, &Default::default()).expect("volume");
+    shot_matches(&x.display, dir, &[&file], &whole, &[preview, "loaded "]);
+}
+
+#[test]
+fn viewer_previews_a_large_file_then_shows_it() {
     let dir = common::scratch("viewer-large");
     let path = write_large(&dir);
-    let file = path.to_string_lossy().into_owned();
-    let whole = volcast::volume::open(&path, &Default::default()).expect("volume");
-    // The preview comes first (before the read ends), then the volume replaces it.
-    shot_matches(
-        &x.display,
-        &dir,
-        &[&file],
-        &whole,
-        &[
-            "large_512x512x256_uint8.raw: a preview of 1 voxel in 4 per axis (128x128x64 of 512x512x256)",
-            "loaded ",
-        ],
-    );
+    let preview = "large_512x512x256_uint8.raw: a preview of 1 voxel in 4 per axis (128x128x64 of 512x512x256)";
+    previews_then_shows(&dir, &path, preview);
 }
 
 /// A large DICOM series (512x512x256, its files shuffled) is previewed too, from every 4th slice decoded from its
 /// own file, then replaced by the series read whole.
 #[test]
 fn viewer_previews_a_large_dicom_series_then_shows_it() {
-    let Some(x) = xvfb() else { return };
-    if !have("xdotool", "version") {
-        common::skip("xdotool not found; apt-get install xdotool");
-        return;
-    }
     let dir = common::scratch("viewer-large-series");
     let series = common::dicom_series::large(&dir.join("series"), [512, 512, 256]);
-    let folder = series.to_string_lossy().into_owned();
-    let whole = volcast::volume::open(&series, &Default::default()).expect("volume");
-    shot_matches(
-        &x.display,
+    previews_then_shows(
         &dir,
-        &[&folder],
-        &whole,
-        &[
-            "a preview of 1 voxel in 4 per axis (128x128x64 of 512x512x256)",
-            "loaded ",
-        ],
+        &series,
+        "series: a preview of 1 voxel in 4 per axis (128x128x64 of 512x512x256)",
     );
     std::fs::remove_dir_all(&series).ok();
 }
