@@ -34,7 +34,11 @@ impl Running {
         let drawn = self.present(&planned, &ui)?;
         self.gui.drawn();
         let readback = match drawn {
-            Drawn::Presented(readback) => readback,
+            Drawn::Presented { readback, marched } => {
+                self.model.stats.drawn += 1;
+                self.model.stats.marched += u64::from(marched);
+                readback
+            }
             Drawn::OutOfDate => {
                 self.window.request_redraw();
                 return Ok(Flow::Continue);
@@ -120,7 +124,8 @@ impl Running {
         self.refine(view_size, moving)?;
         self.presenter.prepare(&settings, self.shown.kept())?;
         let reduced = settings.width < view_size.width;
-        if let Some(slot) = self.presenter.begin_frame(reduced)? {
+        // A slot whose frame showed the view unchanged measured nothing: the last march's times stand.
+        if let Some(slot) = self.presenter.begin_frame(reduced)?.filter(|s| s.gpu.is_some()) {
             let stats = &mut self.model.stats;
             stats.gpu = slot.gpu;
             if !slot.was_reduced {

@@ -189,6 +189,17 @@ impl Script {
         self.drag_frames.push(ms);
     }
 
+    /// The session ends: what its frames cost is said on stderr.
+    fn end(&mut self, model: &Model) -> Next {
+        self.report_drag(model.sampling.lod);
+        let stats = &model.stats;
+        eprintln!(
+            "frames: {} drawn, {} of them marched (the rest showed the view unchanged)",
+            stats.drawn, stats.marched
+        );
+        Next::Exit
+    }
+
     /// Prints the frame times of scripted drags (the first frame of each drag includes the switch of detail).
     fn report_drag(&mut self, lod: bool) {
         if self.drag_frames.len() < 3 {
@@ -235,8 +246,7 @@ impl Script {
             return Ok(Next::Continue);
         }
         let Some(step) = self.steps.pop_front() else {
-            self.report_drag(model.sampling.lod);
-            return Ok(Next::Exit);
+            return Ok(self.end(model));
         };
         eprintln!("script: {step:?}");
         self.take(step, model)
@@ -304,10 +314,7 @@ impl Script {
                 self.zero_size = true;
                 return Ok(Next::Continue);
             }
-            ScriptStep::Exit => {
-                self.report_drag(model.sampling.lod);
-                return Ok(Next::Exit);
-            }
+            ScriptStep::Exit => return Ok(self.end(model)),
             ScriptStep::Dialog => Command::Dialog,
             ScriptStep::Drop(path) => {
                 self.waiting_for_load = true;

@@ -173,6 +173,9 @@ pub struct FrameStats {
     pub gpu: Option<PassTimings>,
     /// GPU time of the last full-quality frame, for choosing the level of detail.
     pub full_frame_ms: Option<f64>,
+    /// Frames presented since the start, and how many of them marched the view (the rest showed it unchanged).
+    pub drawn: u64,
+    pub marched: u64,
 }
 
 /// What the pointer is doing in the 3D view, as the last UI pass saw it.

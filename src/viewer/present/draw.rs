@@ -1,10 +1,12 @@
-//! One frame on the GPU: wait for its slot, acquire a swapchain image, record [march into the view image → blit
-//! into the swapchain image → egui over it (→ read the view image and/or the view as shown back)], submit, present.
+//! One frame on the GPU: wait for its slot, acquire a swapchain image, record [march into the view image (unless it
+//! holds this frame already) → blit into the swapchain image → egui over it (→ read the view image and/or the view
+//! as shown back)], submit, present.
 
 use super::readback::{Place, Readback, Wanted};
 use super::record::{record_blit, record_egui, Blit};
 use super::screen::Acquired;
 use super::Presenter;
+use crate::gpu::sync::Access;
 use crate::gpu::{GpuError, VkContext};
 use crate::render::PassTimings;
 use crate::scene::settings::RenderSettings;
@@ -41,8 +43,12 @@ pub struct SlotTimings {
 pub enum Drawn {
     /// The swapchain was out of date: nothing was drawn; it is made again for the next frame.
     OutOfDate,
-    /// Presented, with the view image's pixels when asked for.
-    Presented(Option<Box<Readback>>),
+    /// Presented, with the view image's pixels when asked for; `marched`: the view was marched anew (else the
+    /// last march's image was shown again).
+    Presented {
+        readback: Option<Box<Readback>>,
+        marched: bool,
+    },
 }
 
 impl Presenter {
@@ -70,7 +76,7 @@ impl Presenter {
         };
         self.upload_textures(&frame.egui.textures)?;
         self.begin_commands(cb, fence)?;
-        self.pass.record(&self.gpu, cb, slot, frame.settings)?;
+        let view_access = self.pass.record(&self.gpu, cb, slot, frame.settings)?;
         let dev = &self.gpu.device;
         let view = self.pass.view()?;
         let blit = Blit {
@@ -81,7 +87,7 @@ impl Presenter {
             offset: frame.view_offset,
             size: frame.view_size,
         };
-        record_blit(dev, cb, view, target.image, blit);
+        record_blit(dev, cb, (view, view_access), target.image, blit);
         let egui = self.egui.as_mut().ok_or(GpuError::Lost("egui renderer"))?;
         record_egui(
             dev,
@@ -107,7 +113,10 @@ impl Presenter {
         self.submit(cb, fence, image_available, &target)?;
         self.screen.present(&self.gpu, &target)?;
         self.slots.advance();
-        Ok(Drawn::Presented(readback))
+        Ok(Drawn::Presented {
+            readback,
+            marched: view_access != Access::TransferRead,
+        })
     }
 
     /// Frees the textures egui no longer uses (after the device is done with them).

@@ -8,6 +8,7 @@ mod draw;
 mod figure;
 mod readback;
 mod record;
+mod reuse;
 mod screen;
 pub mod slice_textures;
 mod slots;

@@ -50,10 +50,20 @@ pub fn view_pixels(
     )
 }
 
-/// Clears the swapchain image `target` (just acquired) and blits the view image (after its march) into its
-/// place; leaves `target` ready to be drawn on as a colour attachment.
-pub(super) fn record_blit(dev: &ash::Device, cb: vk::CommandBuffer, view: &Image, target: vk::Image, blit: Blit) {
-    image_barrier(dev, cb, view.raw, Access::ColorAttachmentWrite, Access::TransferRead);
+/// Clears the swapchain image `target` (just acquired) and blits the view image into its place; the view was last
+/// accessed as `view.1` (marched just now, or read by the last frame's transfers). Leaves `target` ready to be drawn
+/// on as a colour attachment.
+pub(super) fn record_blit(
+    dev: &ash::Device,
+    cb: vk::CommandBuffer,
+    (view, view_was): (&Image, Access),
+    target: vk::Image,
+    blit: Blit,
+) {
+    // After a march its writes must be done; shown again, the last frame's reads need nothing before these reads.
+    if view_was != Access::TransferRead {
+        image_barrier(dev, cb, view.raw, view_was, Access::TransferRead);
+    }
     image_barrier(dev, cb, target, Access::SwapchainAcquired, Access::TransferWrite);
     // Cleared first: the panel covers the rest, but not while it is hidden or being laid out.
     let black = vk::ClearColorValue {

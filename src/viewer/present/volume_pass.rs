@@ -1,8 +1,11 @@
 //! The volume's pass: the same [`Renderer`] as `volcast render`, marching into an offscreen view image, and the
 //! volume on the GPU — installed, switched to another step of a series, the next step uploaded ahead while a
-//! series plays, the gradient texture made on the first frame that reads it.
+//! series plays, the gradient texture made on the first frame that reads it. A frame whose view has not changed
+//! does not march ([`ViewContent`]).
 
+use super::reuse::ViewContent;
 use crate::gpu::resources::{Image, ImageDesc};
+use crate::gpu::sync::Access;
 use crate::gpu::{Gpu, GpuError, VkContext};
 use crate::render::headless::OUTPUT_FORMAT;
 use crate::render::levels::Cut;
@@ -23,6 +26,10 @@ pub(super) struct VolumePass {
     /// A volume streamed through a pool: the cut its view last reached (nothing to do until the view wants
     /// another), and how far it came.
     stream: Option<Reached>,
+    /// What the view image holds: a frame that would march it again shows it instead.
+    content: ViewContent,
+    /// Per frame slot: whether the frame last recorded there marched (else it wrote no GPU times).
+    slot_marched: Vec<bool>,
 }
 
 #[derive(Default)]
@@ -43,6 +50,8 @@ impl VolumePass {
             view: None,
             ahead: None,
             stream: None,
+            content: ViewContent::default(),
+            slot_marched: vec![false; frames_in_flight],
         })
     }
 
@@ -63,6 +72,7 @@ impl VolumePass {
             old.destroy(gpu);
         }
         self.stream = None;
+        self.content.changed();
         let renderer = self.renderer()?;
         let placed = if volume.timesteps() > 1 {
             renderer.set_volume(gpu, volume)?;
@@ -86,7 +96,9 @@ impl VolumePass {
         moving: bool,
         volume: &Volume,
     ) -> Result<Option<(Progress, bool)>, GpuError> {
-        let (Some(reached), Some(renderer)) = (self.stream.as_mut(), self.renderer.as_mut()) else {
+        let (Some(reached), Some(renderer), content) =
+            (self.stream.as_mut(), self.renderer.as_mut(), &mut self.content)
+        else {
             return Ok(None);
         };
         let factor = if moving { 2.0 } else { 1.0 };
@@ -98,6 +110,7 @@ impl VolumePass {
         }
         // The page table, and the pool's slots uploaded, are read by the frames in flight.
         wait_idle(gpu)?;
+        content.changed();
         let progress = renderer.refine_towards(gpu, volume, &wanted)?;
         if progress.done {
             reached.cut = Some(wanted);
@@ -111,6 +124,7 @@ impl VolumePass {
     pub(super) fn show_step(&mut self, gpu: &Gpu, series: &Volume, step: u32) -> Result<(), GpuError> {
         // The volume replaced is one that in-flight frames use.
         wait_idle(gpu)?;
+        self.content.changed();
         let ahead = self.ahead.take();
         let renderer = self.renderer()?;
         match ahead {
@@ -163,12 +177,14 @@ impl VolumePass {
         if settings.gradient_texture && self.renderer.as_ref().is_some_and(|r| !r.has_gradient_texture()) {
             let volume = kept.ok_or(GpuError::Lost("no volume kept for gradients"))?;
             wait_idle(gpu)?;
+            self.content.changed();
             self.renderer()?.enable_gradient_texture(gpu, volume)?;
         }
         if view_fits && !self.renderer()?.needs_prepare(settings) {
             return Ok(());
         }
         wait_idle(gpu)?;
+        self.content.changed();
         if !view_fits {
             if let Some(old) = self.view.take() {
                 old.destroy(gpu);
@@ -186,24 +202,38 @@ impl VolumePass {
         self.renderer()?.prepare(gpu, settings)
     }
 
-    /// The GPU times of the frame last recorded in `slot` (its fence waited).
+    /// The GPU times of the frame last recorded in `slot` (its fence waited); `None` where it did not march.
     pub(super) fn timings(&self, gpu: &Gpu, slot: usize) -> Result<Option<PassTimings>, GpuError> {
+        if !self.slot_marched.get(slot).copied().unwrap_or(false) {
+            return Ok(None);
+        }
         let renderer = self.renderer.as_ref().ok_or(GpuError::Lost("renderer"))?;
         renderer.timings(gpu, slot)
     }
 
-    /// Records the march into the view image, which is left ready to be read by transfers (the blit).
+    /// Records the march into the view image unless it holds this frame already. Returns how the view image is
+    /// left for the blit: written as a colour attachment (marched), or still as the last frame's transfers read it.
     pub(super) fn record(
         &mut self,
         gpu: &Gpu,
         cb: vk::CommandBuffer,
         slot: usize,
         settings: &RenderSettings,
-    ) -> Result<(), GpuError> {
+    ) -> Result<Access, GpuError> {
+        let marches = self.content.stale(settings);
+        if let Some(m) = self.slot_marched.get_mut(slot) {
+            *m = marches;
+        }
+        if !marches {
+            return Ok(Access::TransferRead);
+        }
+        self.content.marched(None);
         let view = self.view.as_ref().ok_or(GpuError::Lost("view image"))?;
         let target = (view.raw, view.view);
         let renderer = self.renderer.as_mut().ok_or(GpuError::Lost("renderer"))?;
-        renderer.record(gpu, cb, slot, target, crate::gpu::sync::Access::TransferRead, settings)
+        renderer.record(gpu, cb, slot, target, Access::TransferRead, settings)?;
+        self.content.marched(Some(settings));
+        Ok(Access::ColorAttachmentWrite)
     }
 
     /// Destroys the volume uploaded ahead, the renderer and the view image. The device must be idle.
