@@ -397,6 +397,33 @@ pub fn read_screenshot(dir: &Path, saved_line: &str) -> (RgbaImage, RenderSettin
     (image, serde_json::from_str(&json).expect("settings JSON"))
 }
 
+/// What F12 saved, beside the headless render of the view state it saved with it.
+pub struct Rerendered {
+    pub shot: RgbaImage,
+    /// `render --state` of F12's JSON.
+    pub again: RgbaImage,
+    pub json: std::path::PathBuf,
+}
+
+impl Rerendered {
+    /// F12 in the viewer's `window`, then `render --state` of its JSON (the screenshot lies in `dir`).
+    pub fn take(viewer: &mut Viewer, display: &str, window: &str, dir: &Path) -> Rerendered {
+        type_keys(display, window, &["F12"]);
+        let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
+        let (shot, _) = read_screenshot(dir, &saved);
+        let name = saved.split_once("saved screenshot ").expect("a file name").1.trim();
+        let json = dir.join(name).with_extension("json");
+        let again = render_state(dir, &json);
+        assert_eq!(again.dimensions(), shot.dimensions(), "F12 and its render");
+        Rerendered { shot, again, json }
+    }
+
+    /// The largest channel difference between the screenshot and its render.
+    pub fn worst(&self) -> u8 {
+        worst_channel_diff(&self.again, &self.shot)
+    }
+}
+
 /// Moves the pointer to `p` (window points) and lets the viewer see it.
 pub fn pointer(display: &str, window: &str, p: egui::Pos2) {
     let (x, y) = (format!("{}", p.x.round()), format!("{}", p.y.round()));

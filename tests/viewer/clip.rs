@@ -14,7 +14,9 @@
 
 use crate::common;
 
-use common::x11::{capture, drag, four_up_rects, read_screenshot, render_state, type_keys, x_session, Viewer};
+use common::x11::{
+    capture, drag, four_up_rects, read_screenshot, render_state, type_keys, x_session, Rerendered, Viewer,
+};
 use image::RgbaImage;
 use std::path::Path;
 use std::time::Duration;
@@ -135,21 +137,17 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
     assert!(turned.settings.camera == camera, "the camera stayed");
 
     // The GPU clips what the viewer showed: F12 equals `render --state`, and the unclipped view differs.
-    type_keys(&x.display, window, &["F12"]);
-    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
-    let (clipped, _) = read_screenshot(&dir, &saved);
-    let name = saved.split_once("saved screenshot ").unwrap().1.trim();
-    let json = dir.join(name).with_extension("json");
-    let again = render_state(&dir, &json);
-    let worst = common::x11::worst_channel_diff(&again, &clipped);
+    let f12 = Rerendered::take(&mut viewer, &x.display, window, &dir);
+    let (clipped, json) = (&f12.shot, &f12.json);
+    let worst = f12.worst();
     assert!(worst <= 1, "render --state differs from F12 by up to {worst}/255");
-    let mut unclipped = ViewState::from_json(&std::fs::read_to_string(&json).unwrap(), "F12's JSON").unwrap();
+    let mut unclipped = ViewState::from_json(&std::fs::read_to_string(json).unwrap(), "F12's JSON").unwrap();
     unclipped.settings.clip_plane = None;
     let unclipped_json = dir.join("unclipped.json");
     std::fs::write(&unclipped_json, unclipped.to_json()).unwrap();
     let whole = render_state(&dir, &unclipped_json);
     assert!(
-        common::x11::worst_channel_diff(&whole, &clipped) > 20,
+        common::x11::worst_channel_diff(&whole, clipped) > 20,
         "the plane cuts the volume"
     );
 

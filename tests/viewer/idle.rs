@@ -3,9 +3,7 @@
 //! Measured as the process's CPU time (/proc/PID/stat) over seconds of idleness. And a frame in which only the
 //! panel changed shows the last march's image again instead of marching.
 
-use crate::common::x11::{
-    pointer, read_screenshot, render_state, type_keys, worst_channel_diff, x_session, Viewer, HOLD,
-};
+use crate::common::x11::{pointer, type_keys, x_session, Rerendered, Viewer, HOLD};
 use std::time::Duration;
 
 /// CPU seconds (user + system) the process has used so far.
@@ -104,12 +102,7 @@ fn frames_that_change_only_the_panel_do_not_march_the_view() {
         let off = if k % 2 == 0 { 0.0 } else { 3.0 * checkbox.height() };
         pointer(d, w, checkbox.center() + egui::vec2(0.0, off));
     }
-    type_keys(d, w, &["F12"]);
-    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
-    let (shot, _) = read_screenshot(&dir, &saved);
-    let name = saved.split_once("saved screenshot ").unwrap().1.trim();
-    let again = render_state(&dir, &dir.join(name).with_extension("json"));
-    let worst = worst_channel_diff(&again, &shot);
+    let worst = Rerendered::take(&mut viewer, d, w, &dir).worst();
     assert!(
         worst <= 1,
         "the view shown again differs from its render by up to {worst}/255"

@@ -71,19 +71,13 @@ fn a_file_from_the_command_line_loads_behind_the_window() {
     assert!(loaded.contains("cranium_ct"), "{loaded}");
     viewer.wait_for("script: Hold", Duration::from_secs(60));
     let window = &viewer.window(&x.display);
-    type_keys(&x.display, window, &["F12"]);
-    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
-    let (shot, _) = read_screenshot(&dir, &saved);
+    // F12's JSON is a view state: `render --state` renders the same view again, volume included.
+    let f12 = common::x11::Rerendered::take(&mut viewer, &x.display, window, &dir);
     assert!(
-        shot.pixels().filter(|p| p.0[..3] != [0, 0, 0]).count() > 1000,
+        f12.shot.pixels().filter(|p| p.0[..3] != [0, 0, 0]).count() > 1000,
         "the CT shows once loaded"
     );
-    // F12's JSON is a view state: `render --state` renders the same view again, volume included.
-    let name = saved.split_once("saved screenshot ").unwrap().1.trim();
-    let json = dir.join(name).with_extension("json");
-    let again = common::x11::render_state(&dir, &json);
-    assert_eq!(again.dimensions(), shot.dimensions());
-    let worst = common::x11::worst_channel_diff(&again, &shot);
+    let worst = f12.worst();
     assert!(
         worst <= 1,
         "render --state differs from the F12 screenshot by up to {worst}/255"

@@ -12,8 +12,7 @@
 
 use crate::common;
 
-use common::x11::worst_channel_diff;
-use common::x11::{button, drag, pointer, read_screenshot, render_state, type_keys, x_client, x_session, Viewer};
+use common::x11::{button, drag, pointer, x_client, x_session, Rerendered, Viewer};
 use std::path::Path;
 use std::time::Duration;
 use volcast::scene::view_state::ViewState;
@@ -145,12 +144,7 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     assert_eq!(loaded, coloured, "Load reads it back");
 
     // The GPU renders the edited function as the viewer shows it.
-    type_keys(d, w, &["F12"]);
-    let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
-    let (shot, _) = read_screenshot(&dir, &saved);
-    let name = saved.split_once("saved screenshot ").unwrap().1.trim();
-    let again = render_state(&dir, &dir.join(name).with_extension("json"));
-    let worst = worst_channel_diff(&again, &shot);
+    let worst = Rerendered::take(&mut viewer, d, w, &dir).worst();
     assert!(worst <= 1, "render --state differs from F12 by up to {worst}/255");
 
     viewer.finish_clean();
