@@ -13,7 +13,8 @@ use std::time::{Duration, Instant};
 /// While only a load is under way, a frame at most this often after the last one ended, and never sooner than twice
 /// that frame's time: enough for its progress, and a frame of the preview shown meanwhile (the whole march, on
 /// lavapipe's cores: 0.43 s at 900x600 on 2 idle cores, some 2 s beside a load) takes at most a third of the time
-/// from the load.
+/// from the load. (A frame whose view has not changed does not march, `present::reuse`: a still preview's paced frames
+/// cost the blit and egui; the pace bounds those that march, the preview's first and the volume's.)
 pub(super) const LOADING_INTERVAL: Duration = Duration::from_millis(250);
 
 /// Everything that asks for frames to follow each other.
