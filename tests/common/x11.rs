@@ -383,13 +383,19 @@ pub fn screenshot_step(saved_line: &str) -> Option<u32> {
     rest.split(')').next()?.parse().ok()
 }
 
-/// The PNG and settings that F12 wrote, named by the viewer's "saved screenshot NAME" line.
-pub fn read_screenshot(dir: &Path, saved_line: &str) -> (RgbaImage, RenderSettings) {
+/// The PNG that F12 wrote into `dir`, named by the viewer's "saved screenshot NAME [(time step N)]" line; its view
+/// state is the JSON beside it.
+pub fn screenshot_png(dir: &Path, saved_line: &str) -> std::path::PathBuf {
     let name = saved_line
         .split_once("saved screenshot ")
         .map(|(_, n)| n.split(" (time step ").next().unwrap_or(n).trim())
         .expect("file name");
-    let png = dir.join(name);
+    dir.join(name)
+}
+
+/// The PNG and settings that F12 wrote, named by the viewer's "saved screenshot NAME" line.
+pub fn read_screenshot(dir: &Path, saved_line: &str) -> (RgbaImage, RenderSettings) {
+    let png = screenshot_png(dir, saved_line);
     let image = image::open(&png)
         .unwrap_or_else(|e| panic!("{}: {e}", png.display()))
         .to_rgba8();
@@ -411,8 +417,7 @@ impl Rerendered {
         type_keys(display, window, &["F12"]);
         let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
         let (shot, _) = read_screenshot(dir, &saved);
-        let name = saved.split_once("saved screenshot ").expect("a file name").1.trim();
-        let json = dir.join(name).with_extension("json");
+        let json = screenshot_png(dir, &saved).with_extension("json");
         let again = render_state(dir, &json);
         assert_eq!(again.dimensions(), shot.dimensions(), "F12 and its render");
         Rerendered { shot, again, json }

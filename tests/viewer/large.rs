@@ -43,8 +43,8 @@ fn shot_matches(display: &str, dir: &Path, args: &[&str], expected: &volcast::vo
     viewer.finish_clean();
 }
 
-/// Starts the viewer on `path` (a file or a DICOM folder) and asserts that it first logs a preview whose note ends in
-/// `preview` (before the read ends), then the volume replacing it, whose F12 screenshot equals the headless render.
+/// Starts the viewer on `path` (a file or a DICOM folder) and asserts that it first logs a line containing `preview`
+/// (before the read ends), then the volume replacing it, whose F12 screenshot equals the headless render.
 fn previews_then_shows(dir: &Path, path: &Path, preview: &str) {
     let Some(x) = xvfb() else { return };
     if !have("xdotool", "version") {

@@ -144,8 +144,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     type_keys(&x.display, window, &["F12"]);
     let saved = again.wait_for("saved screenshot ", Duration::from_secs(60));
     let (restored_shot, _) = common::x11::read_screenshot(&dir, &saved);
-    let name = saved.split_once("saved screenshot ").unwrap().1.trim();
-    let restored = read_state(&dir.join(name).with_extension("json"));
+    let restored = read_state(&common::x11::screenshot_png(&dir, &saved).with_extension("json"));
     assert_eq!(restored.viewer, dragged.viewer, "the viewer's state comes back");
     assert_eq!(restored_shot.dimensions(), final_shot.dimensions());
     let worst = common::x11::worst_channel_diff(&restored_shot, &final_shot);
