@@ -11,6 +11,7 @@ viewer: ~3 minutes a bug on 2 cores):
 
     python3 scripts/planted_bugs.py               # every bug; writes target/planted-bugs.md
     python3 scripts/planted_bugs.py --list        # the bugs, without running
+    python3 scripts/planted_bugs.py --check       # that every bug still applies to the working tree (seconds, no build)
     python3 scripts/planted_bugs.py --only srgb-twice --only no-opacity-correction
 
 Exits 1 if any bug survives or no longer applies (its source line changed: update the bug).
@@ -469,15 +470,46 @@ def failing_tests(output):
     return failed
 
 
+def problems(tree, edits):
+    """Why `edits` would not apply to `tree`, applied one after another as a run applies them: [] if they do."""
+    texts, out = {}, []
+    for rel, old, new in edits:
+        path = tree / rel
+        if rel not in texts:
+            if not path.exists():
+                out.append(f"{rel}: no such file")
+                continue
+            texts[rel] = path.read_text()
+        n = texts[rel].count(old)
+        if n != 1:
+            out.append(f"{rel}: the text to change occurs {n} times")
+        else:
+            texts[rel] = texts[rel].replace(old, new)
+    return out
+
+
+def check(tree):
+    """Exit 0 if every bug applies to `tree`; prints each one that does not."""
+    bad = [(name, p) for name, _, edits in BUGS for p in problems(tree, edits)]
+    for name, p in bad:
+        print(f"{name}: does not apply ({p})")
+    print(f"{len(BUGS) - len({n for n, _ in bad})} of {len(BUGS)} bugs apply")
+    return 1 if bad else 0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--list", action="store_true", help="list the bugs and exit")
     ap.add_argument("--only", action="append", default=[], help="run only this bug (repeatable)")
+    ap.add_argument("--check", action="store_true",
+                    help="check that every bug's texts occur exactly once in the working tree, build nothing")
     args = ap.parse_args()
     if args.list:
         for name, what, _ in BUGS:
             print(f"{name:28} {what}")
         return 0
+    if args.check:
+        return check(ROOT)
     bugs = [b for b in BUGS if not args.only or b[0] in args.only]
     tree = scratch_copy()
     env = dict(os.environ, CARGO_TARGET_DIR=str(SCRATCH / "target"), CI="true")
