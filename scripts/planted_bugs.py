@@ -4,7 +4,8 @@
 A test suite proves something only if it fails when the code is wrong. Each bug below is a small, realistic
 source change (a wrong sign, a dropped factor, an edge off by one); for each, this script applies it to a scratch
 copy of the committed tree, runs `cargo test --release --no-fail-fast` there, and records the failing tests. A bug
-that no test catches is a *survivor*: a hole in the proof. docs/planted-bugs.md lists the last result (docs/testing.md explains it).
+that no test catches is a *survivor*: a hole in the proof. A run writes its table to target/planted-bugs.md;
+docs/testing.md, "Planted bugs", states the rules.
 
 Runs by hand, not in CI (each bug rebuilds the crate and runs the suite, the viewer's X tests only for bugs in the
 viewer: ~3 minutes a bug on 2 cores):
