@@ -157,3 +157,15 @@ fn distributed(_args: &RenderArgs, ranks: u32) -> anyhow::Result<()> {
          --release --features mpi` (docs/distributed.md), or run it as one process"
     )))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// clap checks ids, conflicts and requirements only in debug builds: this runs its checks in any build, over
+    /// the option groups every subcommand flattens.
+    #[test]
+    fn the_command_line_definition_is_consistent() {
+        Cli::command().debug_assert();
+    }
+}

@@ -72,7 +72,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let volume = args.volume.load()?;
     let base = args.frame.settings(&volume)?;
     let mut views = compare::builtin_views(&base, volume.extent());
-    if args.frame.eye.is_some() {
+    if args.frame.camera.eye.is_some() {
         views.push(compare::View {
             name: "eye".into(),
             settings: base.clone(),
