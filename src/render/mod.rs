@@ -108,21 +108,6 @@ impl OccupancyKey {
 /// projection and isosurface marches read.
 const LUT_ROWS: usize = 1;
 
-/// What the integral table (`preintegrate::integral_table`) depends on beyond the classification and window:
-/// for the density model, its density factor (the emission model's extinction does not depend on the step).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct StepRule {
-    density: Option<f32>,
-}
-
-impl StepRule {
-    fn of(s: &RenderSettings) -> StepRule {
-        StepRule {
-            density: (s.mode == crate::scene::settings::CompositeMode::Density).then_some(s.density),
-        }
-    }
-}
-
 include!(concat!(env!("OUT_DIR"), "/march_shaders.rs"));
 
 const QUERIES: u32 = 4;
@@ -164,7 +149,7 @@ impl Renderer {
     /// may be in flight (prepare's contract).
     fn upload_lut(&mut self, s: &RenderSettings, range: [f64; 2]) -> Result<(), GpuError> {
         let classification = s.classification();
-        let rule = StepRule::of(s);
+        let rule = parts::StepRule::of(s);
         let lut = bake(&classification, s.window, range);
         let rows: Vec<[u32; 4]> = lut.iter().map(|e| e.map(f32::to_bits)).collect();
         self.table.lut.write(bytemuck::cast_slice(&rows))?;
@@ -432,7 +417,7 @@ impl Renderer {
     fn lut_is_current(&self, s: &RenderSettings) -> bool {
         let range = self.volume_range();
         self.table.baked.as_ref().is_some_and(|(c, w, r, rule)| {
-            *w == s.window && *r == range && *rule == StepRule::of(s) && *c == s.classification()
+            *w == s.window && *r == range && *rule == parts::StepRule::of(s) && *c == s.classification()
         })
     }
 

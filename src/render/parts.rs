@@ -8,6 +8,7 @@ use super::positions::PositionTargets;
 use super::spacing::SpacedTarget;
 use crate::gpu::resources::Buffer;
 use crate::gpu::Gpu;
+use crate::scene::settings::RenderSettings;
 use crate::transfer::function::Classification;
 use ash::vk;
 
@@ -108,7 +109,7 @@ pub(super) struct Table {
     pub integrals: Buffer,
     /// What the table holds: classification, window, data range and step rule it was baked for, and row 0
     /// itself (the brick occupancy is computed from it).
-    pub baked: Option<(Classification, [f32; 2], [f64; 2], super::StepRule)>,
+    pub baked: Option<(Classification, [f32; 2], [f64; 2], StepRule)>,
     pub entries: Vec<[f32; 4]>,
 }
 
@@ -134,6 +135,21 @@ impl Targets {
         }
         if let Some(t) = self.spaced.take() {
             t.destroy(gpu);
+        }
+    }
+}
+
+/// What the integral table (`preintegrate::integral_table`) depends on beyond the classification and window:
+/// for the density model, its density factor (the emission model's extinction does not depend on the step).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct StepRule {
+    pub density: Option<f32>,
+}
+
+impl StepRule {
+    pub fn of(s: &RenderSettings) -> StepRule {
+        StepRule {
+            density: (s.mode == crate::scene::settings::CompositeMode::Density).then_some(s.density),
         }
     }
 }
