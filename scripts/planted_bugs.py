@@ -118,7 +118,7 @@ BUGS = [
     ("metaimage-matrix-rows", "MetaImage's TransformMatrix is read row by row instead of axis by axis",
      [("src/volume/metaimage.rs", "DVec3::new(m[n * i], m[n * i + 1], m[n * i + 2])", "DVec3::new(m[i], m[i + n], m[i + 2 * n])")]),
     ("mirror-cull-not-swapped", "a mirrored placement keeps the entry pass culling back faces",
-     [("src/render/record.rs", "self.position_pipelines[pi][j ^ flip]", "self.position_pipelines[pi][j + flip * 0]")]),
+     [("src/render/record.rs", "self.pipelines.position[pi][j ^ flip]", "self.pipelines.position[pi][j + flip * 0]")]),
     ("normals-not-inverse-transposed", "gradients go to the world by the placement itself, not its inverse transpose",
      [("src/render/uniforms.rs", "gradient_to_world: m4(DMat4::from_mat3(index_to_world.inverse().transpose())),",
        "gradient_to_world: m4(DMat4::from_mat3(index_to_world)),")]),

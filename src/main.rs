@@ -87,8 +87,7 @@ fn main() -> ExitCode {
                 endian: None,
                 header_bytes: None,
                 max_dim: None,
-                host_budget: None,
-                gpu_budget: None,
+                budgets: Default::default(),
                 cache_dir: None,
                 no_cache: false,
                 no_downsample: false,
@@ -157,4 +156,16 @@ fn distributed(_args: &RenderArgs, ranks: u32) -> anyhow::Result<()> {
         "volcast was started by mpirun as one of {ranks} processes but built without MPI: build it with `cargo build \
          --release --features mpi` (docs/distributed.md), or run it as one process"
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// clap checks ids, conflicts and requirements only in debug builds: this runs its checks in any build, over
+    /// the option groups every subcommand flattens.
+    #[test]
+    fn the_command_line_definition_is_consistent() {
+        Cli::command().debug_assert();
+    }
 }

@@ -91,10 +91,10 @@ pub fn parse_render(argv: Vec<String>, tf_json: Option<String>) -> anyhow::Resul
     args.frame.given = Given::from_matches(&matches);
     args.frame.given.from_file = args.volume.builtin.is_none();
     if let Some(json) = tf_json {
-        if args.frame.preset.is_some() || args.frame.tf.is_some() {
+        if args.frame.colour.preset.is_some() || args.frame.colour.tf.is_some() {
             return Err(UsageError("tf= takes a TransferFunction or a file; preset= is another".into()).into());
         }
-        args.frame.tf_value = Some(tf_from_json(&json)?);
+        args.frame.colour.tf_value = Some(tf_from_json(&json)?);
         args.frame.given.insert("tf");
     }
     Ok(args)

@@ -70,7 +70,7 @@ fn place<'d>(dev: &'d mut Device, args: &RenderArgs, id: u64, volume: &Volume) -
     let v = &args.volume;
     let key = format!(
         "{id} {:?} {:?} {:?} {} {:?}",
-        v.host_budget, v.gpu_budget, v.max_dim, v.no_downsample, args.level
+        v.budgets.host_budget, v.budgets.gpu_budget, v.max_dim, v.no_downsample, args.level
     );
     if dev.shown.as_ref().is_none_or(|s| s.key != key) {
         dev.shown = None;

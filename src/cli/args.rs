@@ -1,9 +1,10 @@
 //! The subcommands' arguments (clap structs) and the option groups they share: which volume to load and how,
 //! and which GPU to run on.
 
+use super::budgets::BudgetArgs;
 use super::frame::FrameArgs;
 use super::parse::{
-    parse_builtin, parse_bytes, parse_fps, parse_gradients, parse_preset, parse_quality, parse_size, parse_turntable,
+    parse_builtin, parse_fps, parse_gradients, parse_preset, parse_quality, parse_size, parse_turntable,
 };
 use crate::gpu::GpuOptions;
 use crate::scene::quality::{Gradients, Quality};
@@ -43,16 +44,8 @@ pub struct VolumeArgs {
     /// limit but the budgets' and the device's.
     #[arg(long, value_name = "N")]
     pub max_dim: Option<u32>,
-    /// Host memory the voxels may take, like 6G or 512M (default: a quarter of the machine's memory). A larger
-    /// volume is shown at the finest pyramid level that fits, read level by level from files whose voxels lie on
-    /// disk.
-    #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
-    pub host_budget: Option<u64>,
-    /// Device memory the volume may take, upload included, like 1G (default: the device's largest heap). Over it,
-    /// `render` streams the volume brick by brick through a pool of half of it, each brick at the level its size on
-    /// screen asks; the viewer and movies show the finest pyramid level that fits.
-    #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
-    pub gpu_budget: Option<u64>,
+    #[command(flatten)]
+    pub budgets: BudgetArgs,
     /// Where levels read from large files are kept for the next open, as OME-Zarr stores (default:
     /// $XDG_CACHE_HOME/volcast, else ~/.cache/volcast); `volcast cache` shows and empties it.
     #[arg(long, value_name = "DIR")]
@@ -80,15 +73,6 @@ pub struct VolumeArgs {
     pub time: Option<u32>,
 }
 
-/// The budgets on `gpu` from `--host-budget` and `--gpu-budget` (defaults: a quarter of RAM, the device's largest
-/// heap), with the device's 3-D texture limit.
-pub fn budgets_on(gpu: &crate::gpu::Gpu, host: Option<u64>, device: Option<u64>) -> volume::budget::Budgets {
-    volume::budget::Budgets::host(host).with_gpu(volume::budget::GpuBudget {
-        bytes: device.unwrap_or(gpu.device_local_bytes),
-        max_dim: gpu.properties.limits.max_image_dimension3_d,
-    })
-}
-
 impl VolumeArgs {
     /// These arguments with the volume of a view state where none is given here.
     pub fn or_from(&self, r: &crate::scene::view_state::VolumeRef) -> VolumeArgs {
@@ -109,13 +93,12 @@ impl VolumeArgs {
 
     /// The host budget (no device known yet).
     pub fn budgets(&self) -> volume::budget::Budgets {
-        volume::budget::Budgets::host(self.host_budget)
+        self.budgets.host()
     }
 
-    /// The budgets on `gpu`: the host's, and `--gpu-budget` (default the device's largest heap) with the device's
-    /// 3-D texture limit.
+    /// The budgets on `gpu`.
     pub fn budgets_on(&self, gpu: &crate::gpu::Gpu) -> volume::budget::Budgets {
-        budgets_on(gpu, self.host_budget, self.gpu_budget)
+        self.budgets.on(gpu)
     }
 
     /// `v` at the finest pyramid level that `gpu` and the budgets take, its note said on stderr when that is not
@@ -419,13 +402,10 @@ pub struct BenchArgs {
     /// Where --scale keeps its generated files (default: $XDG_CACHE_HOME/volcast/bench, else ~/.cache/volcast/bench).
     #[arg(long, requires = "scale")]
     pub cache: Option<PathBuf>,
-    /// With --scale: the host budget instead of the default (a quarter of the machine's memory), like 512M.
-    #[arg(long, value_name = "SIZE", value_parser = parse_bytes, requires = "scale")]
-    pub host_budget: Option<u64>,
-    /// With --scale: the GPU budget instead of the default (the device's largest heap), like 64M: a scene over it
-    /// streams through a pool of half of it, as `render --gpu-budget` does.
-    #[arg(long, value_name = "SIZE", value_parser = parse_bytes, requires = "scale")]
-    pub gpu_budget: Option<u64>,
+    /// The memory budgets: `bench --scale` opens its scenes within them (a scene over the GPU budget streams
+    /// through a pool of half of it, as `render --gpu-budget` does); the other benchmarks refuse them.
+    #[command(flatten)]
+    pub budgets: BudgetArgs,
     /// Sampling quality of every scene, as `render --quality`: draft, fast, normal or converged. Repeat it to
     /// time each level against the same converged image (default: normal).
     #[arg(long = "quality", value_parser = parse_quality)]

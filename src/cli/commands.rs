@@ -47,8 +47,8 @@ pub fn view_source(args: &ViewArgs, source: Option<VolumeSource>) -> Result<()> 
         size: args.size,
         script,
         time: args.volume.time.or(restore.as_ref().map(|s| s.volume.time)),
-        host_budget: args.volume.host_budget,
-        gpu_budget: args.volume.gpu_budget,
+        host_budget: args.volume.budgets.host_budget,
+        gpu_budget: args.volume.budgets.gpu_budget,
         max_dim: args.volume.max_dim,
         cache_dir: args.volume.cache_dir.clone(),
         no_cache: args.volume.no_cache,
@@ -72,7 +72,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let volume = args.volume.load()?;
     let base = args.frame.settings(&volume)?;
     let mut views = compare::builtin_views(&base, volume.extent());
-    if args.frame.eye.is_some() {
+    if args.frame.camera.eye.is_some() {
         views.push(compare::View {
             name: "eye".into(),
             settings: base.clone(),
@@ -155,6 +155,13 @@ pub fn bench(args: &BenchArgs) -> Result<()> {
     if args.scale {
         return scale_bench(args);
     }
+    // The other benchmarks show their scenes whole: a budget they would ignore is refused, as clap refused it
+    // before the budgets were one group of flags.
+    if args.budgets.given() {
+        bail!(super::UsageError(
+            "--host-budget and --gpu-budget apply to bench --scale only".into()
+        ));
+    }
     if args.playback {
         let play = if args.quick {
             crate::measure::playback::PlaybackOptions::QUICK
@@ -209,7 +216,7 @@ fn scale_bench(args: &BenchArgs) -> Result<()> {
     };
     let size = args.sizes.first().copied().unwrap_or(512);
     with_gpu(&args.gpu, |gpu| {
-        let budgets = super::args::budgets_on(gpu, args.host_budget, args.gpu_budget);
+        let budgets = args.budgets.on(gpu);
         let rows = scale_bench::run(gpu, &scenes, &dir, budgets, (size, args.frames), &mut |l| {
             eprintln!("{l}")
         })

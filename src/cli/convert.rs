@@ -110,6 +110,6 @@ fn open_source(args: &ConvertArgs) -> Result<Source> {
     }
     // Converted at full resolution: no host budget (a volume held whole is still within volcast's voxel limit).
     let mut full = args.volume.clone();
-    full.host_budget = Some(u64::MAX);
+    full.budgets.host_budget = Some(u64::MAX);
     Ok(Source::Loaded(Box::new(full.load()?)))
 }

@@ -17,12 +17,42 @@ use glam::Vec3;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 
-/// What a frame shows: camera, transfer function, slicing. Shared by `render` and `compare`.
+/// What a frame shows, by the groups its options travel in. Shared by `render` and `compare`.
 #[derive(Args, Clone)]
 pub struct FrameArgs {
+    #[command(flatten)]
+    pub output: OutputArgs,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub colour: ColourArgs,
+    #[command(flatten)]
+    pub compositing: CompositingArgs,
+    #[command(flatten)]
+    pub lighting: LightingArgs,
+    #[command(flatten)]
+    pub sampling: SamplingArgs,
+    #[command(flatten)]
+    pub cut: CutArgs,
+    /// Which of these options the command line gave (the rest are defaults): see [`Given`].
+    #[arg(skip)]
+    pub given: Given,
+}
+
+/// The image: its size and what shows where no ray adds anything.
+#[derive(Args, Clone)]
+pub struct OutputArgs {
     /// Image size WxH.
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
     pub size: (u32, u32),
+    /// Background colour R,G,B in [0,1].
+    #[arg(long, value_parser = parse_vec3, default_value = "0,0,0")]
+    pub background: Vec3,
+}
+
+/// Where the camera is, where it looks and how it projects; the box's placement (`--voxel-axes`).
+#[derive(Args, Clone)]
+pub struct CameraArgs {
     /// Camera azimuth in degrees (about +z, from +y) [default: 35, or 0 for an anatomical volume].
     #[arg(long, allow_negative_numbers = true, conflicts_with = "view")]
     pub azimuth: Option<f32>,
@@ -53,6 +83,14 @@ pub struct FrameArgs {
     /// Vertical field of view in degrees.
     #[arg(long, default_value_t = crate::scene::camera::DEFAULT_FOV_Y_DEG)]
     pub fov: f32,
+    /// Orthographic projection (same framing at the target as the perspective view).
+    #[arg(long)]
+    pub ortho: bool,
+}
+
+/// The classification (rule 4): the colormap model or a transfer function, and the value window.
+#[derive(Args, Clone)]
+pub struct ColourArgs {
     /// Colormap: cool-warm, plasma, viridis, rainbow, gnuplot, grayscale.
     #[arg(long, default_value = "cool-warm", value_parser = parse_colormap)]
     pub colormap: Colormap,
@@ -72,6 +110,21 @@ pub struct FrameArgs {
     /// Write the transfer function in use (preset or file) as JSON, to start your own from.
     #[arg(long)]
     pub save_tf: Option<PathBuf>,
+    /// Opacity of one voxel-length step.
+    #[arg(long, default_value_t = crate::scene::settings::DEFAULT_STEP_ALPHA)]
+    pub step_alpha: f32,
+    /// Opacity = windowed value × step alpha.
+    #[arg(long)]
+    pub multiplied_alpha: bool,
+    /// A transfer function given as a value instead of a file (the Python module's `tf=TransferFunction`); it
+    /// counts as `--tf` (given has "tf").
+    #[arg(skip)]
+    pub tf_value: Option<crate::transfer::function::TransferFunction>,
+}
+
+/// How samples combine into a pixel: the mode, its iso-surfaces and density, and when a ray stops.
+#[derive(Args, Clone)]
+pub struct CompositingArgs {
     /// Compositing: emission, mip, minip, average, iso, density.
     #[arg(long, default_value = "emission", value_parser = parse_mode)]
     pub mode: CompositeMode,
@@ -90,6 +143,17 @@ pub struct FrameArgs {
     /// --mode iso --iso 0.45 --surface 0.2,0.9,0.6,0.5,0.3.
     #[arg(long = "surface", value_parser = parse_surface)]
     pub surfaces: Vec<crate::scene::lighting::IsoSurface>,
+    /// Density factor for --mode density (the OSG article's model).
+    #[arg(long, default_value_t = 1.0)]
+    pub density: f32,
+    /// Stop a ray once its opacity reaches this.
+    #[arg(long, default_value_t = crate::scene::settings::DEFAULT_EARLY_TERMINATION)]
+    pub early_termination: f32,
+}
+
+/// Shading, the light, shadows and ambient occlusion, and what the gradient does to a frame.
+#[derive(Args, Clone)]
+pub struct LightingArgs {
     /// The light: "head" (a headlight, the default) or the direction X,Y,Z towards a light fixed to the volume, in
     /// world coordinates (RAS for anatomical volumes). Turns shading on.
     #[arg(long, value_parser = parse_light, allow_hyphen_values = true)]
@@ -109,9 +173,6 @@ pub struct FrameArgs {
     /// MinIP or average.
     #[arg(long)]
     pub ambient_occlusion: bool,
-    /// Density factor for --mode density (the OSG article's model).
-    #[arg(long, default_value_t = 1.0)]
-    pub density: f32,
     /// Gradient shading (Blinn-Phong; a headlight unless --light says otherwise).
     #[arg(long)]
     pub shading: bool,
@@ -125,18 +186,19 @@ pub struct FrameArgs {
     /// flat, noisy regions then show no speckled highlights (rule 5).
     #[arg(long)]
     pub shading_fade: Option<f32>,
-    /// Sample at step midpoints instead of a per-pixel jittered start.
+}
+
+/// How finely rays are sampled: the quality level or its overrides, jitter, skipping, gradients and the position
+/// targets' precision.
+#[derive(Args, Clone)]
+pub struct SamplingArgs {
+    /// Sampling quality: draft, fast, normal or converged (base steps 2, 1, 0.4, 1/8 voxel, shortened where the
+    /// transfer function is strong; draft also casts one ray per 2×2 pixels).
+    #[arg(long, default_value = "normal", value_parser = parse_quality)]
+    pub quality: Quality,
+    /// Step length in voxels, overriding the quality's (opacity is corrected for it): every sample is taken.
     #[arg(long)]
-    pub no_jitter: bool,
-    /// Seed of the jitter pattern.
-    #[arg(long, default_value_t = 0)]
-    pub jitter_seed: u32,
-    /// Orthographic projection (same framing at the target as the perspective view).
-    #[arg(long)]
-    pub ortho: bool,
-    /// March every brick, also those empty-space skipping would leap over (for comparisons).
-    #[arg(long)]
-    pub no_skip: bool,
+    pub step_length: Option<f32>,
     /// Longest brick stride (1, 2 or 4): faint bricks take every second or fourth sample (emission and density;
     /// default: the quality's, 1 with --step-length).
     #[arg(long)]
@@ -145,6 +207,15 @@ pub struct FrameArgs {
     /// device, softer edges (default: the quality's, 2 for draft; VTK's ImageSampleDistance).
     #[arg(long)]
     pub ray_spacing: Option<u32>,
+    /// March every brick, also those empty-space skipping would leap over (for comparisons).
+    #[arg(long)]
+    pub no_skip: bool,
+    /// Sample at step midpoints instead of a per-pixel jittered start.
+    #[arg(long)]
+    pub no_jitter: bool,
+    /// Seed of the jitter pattern.
+    #[arg(long, default_value_t = 0)]
+    pub jitter_seed: u32,
     /// Where shaded frames take gradients: auto (the texture while it stays within 1 GiB), texture (gradients
     /// precomputed on the grid, smoothed for integer data; 8 bytes per voxel, one fetch) or samples (six samples of
     /// the interpolant).
@@ -153,25 +224,14 @@ pub struct FrameArgs {
     /// The same as --gradients texture.
     #[arg(long, conflicts_with = "gradients")]
     pub gradient_texture: bool,
-    /// Opacity of one voxel-length step.
-    #[arg(long, default_value_t = crate::scene::settings::DEFAULT_STEP_ALPHA)]
-    pub step_alpha: f32,
-    /// Sampling quality: draft, fast, normal or converged (base steps 2, 1, 0.4, 1/8 voxel, shortened where the
-    /// transfer function is strong; draft also casts one ray per 2×2 pixels).
-    #[arg(long, default_value = "normal", value_parser = parse_quality)]
-    pub quality: Quality,
-    /// Step length in voxels, overriding the quality's (opacity is corrected for it): every sample is taken.
-    #[arg(long)]
-    pub step_length: Option<f32>,
-    /// Opacity = windowed value × step alpha.
-    #[arg(long)]
-    pub multiplied_alpha: bool,
-    /// Stop a ray once its opacity reaches this.
-    #[arg(long, default_value_t = crate::scene::settings::DEFAULT_EARLY_TERMINATION)]
-    pub early_termination: f32,
-    /// Background colour R,G,B in [0,1].
-    #[arg(long, value_parser = parse_vec3, default_value = "0,0,0")]
-    pub background: Vec3,
+    /// Entry/exit position target format: rgba32f or rgba16f.
+    #[arg(long, default_value = "rgba32f", value_parser = ["rgba32f", "rgba16f"])]
+    pub positions: String,
+}
+
+/// What is cut away: slabs along the axes and a clipping plane.
+#[derive(Args, Clone)]
+pub struct CutArgs {
     /// Slab slicing AXIS:POSITION:WIDTH in [0,1], e.g. x:0.5:0.2 (repeatable, one per axis).
     #[arg(long = "slice", value_parser = parse_slice)]
     pub slices: Vec<(usize, f32, f32)>,
@@ -179,16 +239,6 @@ pub struct FrameArgs {
     /// (p − centre)·N ≥ OFFSET, centre the volume box's centre; N points into what stays (default offset 0).
     #[arg(long, value_name = "NX,NY,NZ[,OFFSET]", allow_hyphen_values = true, value_parser = parse_clip_plane)]
     pub clip_plane: Option<crate::scene::clip::ClipPlane>,
-    /// Entry/exit position target format: rgba32f or rgba16f.
-    #[arg(long, default_value = "rgba32f", value_parser = ["rgba32f", "rgba16f"])]
-    pub positions: String,
-    /// Which of these options the command line gave (the rest are defaults): see [`Given`].
-    #[arg(skip)]
-    pub given: Given,
-    /// A transfer function given as a value instead of a file (the Python module's `tf=TransferFunction`); it
-    /// counts as `--tf` (given has "tf").
-    #[arg(skip)]
-    pub tf_value: Option<crate::transfer::function::TransferFunction>,
 }
 
 /// The options a command line gave, by clap id (the field's name), and whether the volume is a file. `render

@@ -1,6 +1,7 @@
 //! The subcommands of the `volcast` binary: their arguments, value parsers and bodies, one concern per file.
 
 pub mod args;
+pub mod budgets;
 pub mod commands;
 pub mod convert;
 pub mod frame;

@@ -1,8 +1,11 @@
 //! How `FrameArgs` become `RenderSettings`: whole (every option, defaults included, over the volume's default
 //! view), or as overrides of a saved view (`render --state`: only the options the command line gave, each over
-//! the view's own value). One function per group of options; each applies an option where `wants` says so.
+//! the view's own value). One function per group of options (`frame.rs`); each applies an option where `wants` says
+//! so.
 
-use super::frame::FrameArgs;
+use super::frame::{
+    CameraArgs, ColourArgs, CompositingArgs, CutArgs, FrameArgs, Given, LightingArgs, OutputArgs, SamplingArgs,
+};
 use super::parse::IsoColor;
 use super::UsageError;
 use crate::scene::camera::Camera;
@@ -45,11 +48,28 @@ const STEP_INPUTS: &[&str] = &[
     "density",
 ];
 
+/// Whether an option is applied: every option when the settings are made whole, over a saved view only those given.
+struct Wants<'a> {
+    scope: Scope,
+    given: &'a Given,
+}
+
+impl Wants<'_> {
+    fn id(&self, id: &str) -> bool {
+        self.scope == Scope::Whole || self.given.has(id)
+    }
+
+    fn whole(&self) -> bool {
+        self.scope == Scope::Whole
+    }
+}
+
 impl FrameArgs {
     /// Settings for `volume` from every option (the defaults of those not given). Values that make no valid frame
     /// are a [`UsageError`]: only the command line is to blame.
     pub fn settings(&self, volume: &Volume) -> Result<RenderSettings> {
-        let mut s = RenderSettings::new(self.size.0, self.size.1, volume.extent());
+        let (width, height) = self.output.size;
+        let mut s = RenderSettings::new(width, height, volume.extent());
         self.apply(&mut s, volume, Scope::Whole, None)?;
         Ok(s)
     }
@@ -61,18 +81,16 @@ impl FrameArgs {
     }
 
     fn apply(&self, s: &mut RenderSettings, volume: &Volume, scope: Scope, quality: Option<Quality>) -> Result<()> {
-        let wants = |id: &str| scope == Scope::Whole || self.given.has(id);
-        if wants("size") {
-            (s.width, s.height) = self.size;
-        }
-        if wants("voxel_axes") {
-            s.voxel_axes = self.voxel_axes;
-        }
-        self.apply_camera(s, volume, scope)?;
-        self.apply_classification(s, volume, scope)?;
-        self.apply_compositing(s, &wants);
-        self.apply_lighting(s, scope);
-        self.apply_sampling(s, &wants);
+        let wants = Wants {
+            scope,
+            given: &self.given,
+        };
+        self.output.apply(s, &wants);
+        self.camera.apply(s, volume, &wants)?;
+        self.colour.apply(s, volume, &wants)?;
+        self.compositing.apply(s, &wants);
+        self.lighting.apply(s, &wants);
+        self.cut.apply(s, &wants);
         // The quality's step depends on the classification, so it is resolved last, from valid settings.
         let invalid = |m: String| match scope {
             Scope::Whole => anyhow::Error::new(UsageError(m)),
@@ -80,20 +98,35 @@ impl FrameArgs {
             Scope::Overrides => anyhow::Error::msg(m),
         };
         s.validate().map_err(invalid)?;
-        self.apply_quality(s, volume, scope, quality);
+        self.sampling.apply(s, volume, &wants, quality);
         s.validate().map_err(invalid)
     }
+}
 
+impl OutputArgs {
+    fn apply(&self, s: &mut RenderSettings, wants: &Wants) {
+        if wants.id("size") {
+            (s.width, s.height) = self.size;
+        }
+        if wants.id("background") {
+            s.background = self.background;
+        }
+    }
+}
+
+impl CameraArgs {
     /// The camera: `--eye`, `--view-dir`, `--view` or the orbit. Over a saved view, the angles and distance not
     /// given are the view's own.
-    fn apply_camera(&self, s: &mut RenderSettings, volume: &Volume, scope: Scope) -> Result<()> {
-        let given = |id: &str| scope == Scope::Whole || self.given.has(id);
-        let fov = if given("fov") { self.fov } else { s.camera.fov_y_deg };
-        if scope == Scope::Whole || self.given.any(CAMERA) {
-            s.camera = self.camera(s, volume, scope, fov)?;
+    fn apply(&self, s: &mut RenderSettings, volume: &Volume, wants: &Wants) -> Result<()> {
+        if wants.id("voxel_axes") {
+            s.voxel_axes = self.voxel_axes;
+        }
+        let fov = if wants.id("fov") { self.fov } else { s.camera.fov_y_deg };
+        if wants.whole() || wants.given.any(CAMERA) {
+            s.camera = self.camera(s, volume, wants.scope, fov)?;
         }
         s.camera.fov_y_deg = fov;
-        if given("ortho") {
+        if wants.id("ortho") {
             s.camera.ortho = self.ortho;
         }
         Ok(())
@@ -142,27 +175,28 @@ impl FrameArgs {
             ),
         })
     }
+}
 
+impl ColourArgs {
     /// The classification: a transfer function (`--preset`, `--tf`, or for a file given none of the
     /// classification options the automatic one), else the colormap model; the value window.
-    fn apply_classification(&self, s: &mut RenderSettings, volume: &Volume, scope: Scope) -> Result<()> {
-        let wants = |id: &str| scope == Scope::Whole || self.given.has(id);
+    fn apply(&self, s: &mut RenderSettings, volume: &Volume, wants: &Wants) -> Result<()> {
+        let (given, scope) = (wants.given, wants.scope);
         let named = self.transfer_function(volume)?;
-        let automatic =
-            scope == Scope::Whole && named.is_none() && self.given.from_file && !self.given.any(CLASSIFICATION);
+        let automatic = scope == Scope::Whole && named.is_none() && given.from_file && !given.any(CLASSIFICATION);
         let tf = if automatic {
             Some(crate::transfer::auto::auto_for_volume(volume))
         } else {
             named
         };
-        let new_function = tf.is_some() && (automatic || wants("preset") || wants("tf"));
+        let new_function = tf.is_some() && (automatic || wants.id("preset") || wants.id("tf"));
         // Over a saved view, --colormap alone leaves its transfer function for the colormap model, whose window
         // the function's [0, 1] is not.
-        let to_colormap = scope == Scope::Overrides && self.given.has("colormap") && s.transfer_function.is_some();
-        if wants("colormap") {
+        let to_colormap = scope == Scope::Overrides && given.has("colormap") && s.transfer_function.is_some();
+        if wants.id("colormap") {
             s.colormap = self.colormap;
         }
-        if new_function || scope == Scope::Whole || self.given.has("colormap") {
+        if new_function || scope == Scope::Whole || given.has("colormap") {
             s.transfer_function = tf;
         }
         s.window = match (self.window, scope) {
@@ -172,10 +206,10 @@ impl FrameArgs {
             (None, Scope::Overrides) if to_colormap && !new_function => DEFAULT_WINDOW,
             (None, Scope::Overrides) => s.window,
         };
-        if wants("step_alpha") {
+        if wants.id("step_alpha") {
             s.step_alpha = self.step_alpha;
         }
-        if wants("multiplied_alpha") {
+        if wants.id("multiplied_alpha") {
             s.multiplied_alpha = self.multiplied_alpha;
         }
         if let (Some(path), Some(tf)) = (&self.save_tf, &s.transfer_function) {
@@ -193,48 +227,64 @@ impl FrameArgs {
             (None, None) => self.tf_value.clone(),
         })
     }
+}
 
-    fn apply_compositing(&self, s: &mut RenderSettings, wants: &dyn Fn(&str) -> bool) {
-        if wants("mode") {
+impl CompositingArgs {
+    fn apply(&self, s: &mut RenderSettings, wants: &Wants) {
+        if wants.id("mode") {
             s.mode = self.mode;
         }
-        if wants("iso") {
+        if wants.id("iso") {
             s.iso_value = self.iso;
         }
-        if wants("iso_color") {
+        if wants.id("iso_color") {
             match self.iso_color {
                 Some(IsoColor::Colormap) => s.iso_color = None,
                 Some(IsoColor::Rgb(c)) => s.iso_color = Some(c),
                 None => {}
             }
         }
-        if wants("iso_opacity") {
+        if wants.id("iso_opacity") {
             s.iso_opacity = self.iso_opacity;
         }
-        if wants("surfaces") {
+        if wants.id("surfaces") {
             s.extra_isosurfaces = self.surfaces.clone();
         }
-        if wants("density") {
+        if wants.id("density") {
             s.density = self.density;
+        }
+        if wants.id("early_termination") {
+            s.early_termination = self.early_termination;
+        }
+    }
+}
+
+impl LightingArgs {
+    /// Shading and the light, and what the gradient does to a frame.
+    fn apply(&self, s: &mut RenderSettings, wants: &Wants) {
+        if wants.id("gradient_opacity") {
+            s.gradient_opacity = self.gradient_opacity;
+        }
+        if wants.id("shading_fade") {
+            s.shading_fade = self.shading_fade.unwrap_or(0.0);
+        }
+        if wants.whole() || wants.given.any(LIGHTING) {
+            self.apply_light(s, wants);
         }
     }
 
-    /// Shading and the light. A light option, shadows or occlusion turn shading on; over a saved view shading stays
-    /// as it was unless such an option is given.
-    fn apply_lighting(&self, s: &mut RenderSettings, scope: Scope) {
-        let wants = |id: &str| scope == Scope::Whole || self.given.has(id);
-        if scope == Scope::Overrides && !self.given.any(LIGHTING) {
-            return;
-        }
+    /// A light option, shadows or occlusion turn shading on; over a saved view shading stays as it was unless such
+    /// an option is given.
+    fn apply_light(&self, s: &mut RenderSettings, wants: &Wants) {
         let lit = self.light.is_some()
             || self.light_color.is_some()
             || self.light_intensity.is_some()
             || self.shadows
             || self.ambient_occlusion;
-        if wants("shadows") {
+        if wants.id("shadows") {
             s.shadows = self.shadows;
         }
-        if wants("ambient_occlusion") {
+        if wants.id("ambient_occlusion") {
             s.ambient_occlusion = self.ambient_occlusion;
         }
         if (s.shadows || s.ambient_occlusion) && s.mode.is_projection() {
@@ -243,67 +293,46 @@ impl FrameArgs {
                 s.mode.name()
             );
         }
-        let was_on = scope == Scope::Overrides && s.shading.is_some();
+        let was_on = !wants.whole() && s.shading.is_some();
         let coefficients = match s.shading {
-            Some(c) if !wants("lighting") => c,
+            Some(c) if !wants.id("lighting") => c,
             _ => self.lighting,
         };
         s.shading = (self.shading || lit || was_on).then_some(coefficients);
-        if wants("light") {
+        if wants.id("light") {
             s.light.direction = self.light.and_then(|l| l.0);
         }
-        if wants("light_color") {
+        if wants.id("light_color") {
             s.light.color = self.light_color.unwrap_or(Vec3::ONE);
         }
-        if wants("light_intensity") {
+        if wants.id("light_intensity") {
             s.light.intensity = self.light_intensity.unwrap_or(1.0);
         }
     }
+}
 
-    /// Gradient opacity, jitter, skipping, early termination, background, slabs, the clipping plane and the
-    /// position targets' format.
-    fn apply_sampling(&self, s: &mut RenderSettings, wants: &dyn Fn(&str) -> bool) {
-        if wants("gradient_opacity") {
-            s.gradient_opacity = self.gradient_opacity;
-        }
-        if wants("shading_fade") {
-            s.shading_fade = self.shading_fade.unwrap_or(0.0);
-        }
-        if wants("no_jitter") || wants("jitter_seed") {
-            s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
-        }
-        if wants("no_skip") {
-            s.skip_empty = !self.no_skip;
-        }
-        if wants("early_termination") {
-            s.early_termination = self.early_termination;
-        }
-        if wants("background") {
-            s.background = self.background;
-        }
+impl CutArgs {
+    /// The slabs and the clipping plane.
+    fn apply(&self, s: &mut RenderSettings, wants: &Wants) {
         for &(axis, pos, width) in &self.slices {
             s.set_slab(axis, pos, width);
         }
-        if wants("clip_plane") {
+        if wants.id("clip_plane") {
             s.clip_plane = self.clip_plane;
         }
-        if wants("positions") {
-            s.position_format = if self.positions == "rgba16f" {
-                PositionFormat::Rgba16f
-            } else {
-                PositionFormat::Rgba32f
-            };
-        }
     }
+}
 
-    /// The step and strides (the quality level's, or `--step-length`), and where gradients come from. Over a saved
+impl SamplingArgs {
+    /// The step and strides (the quality level's, or `--step-length`), where gradients come from, jitter, skipping
+    /// and the position targets' format. Over a saved
     /// view, its own quality level is resolved again where an option changed what the step depends on.
-    fn apply_quality(&self, s: &mut RenderSettings, volume: &Volume, scope: Scope, saved: Option<Quality>) {
-        let wants = |id: &str| scope == Scope::Whole || self.given.has(id);
-        let level = match scope {
+    fn apply(&self, s: &mut RenderSettings, volume: &Volume, wants: &Wants, saved: Option<Quality>) {
+        let given = wants.given;
+        let level = match wants.scope {
             Scope::Whole => Some(self.quality),
-            Scope::Overrides if self.given.has("quality") => Some(self.quality),
-            Scope::Overrides => saved.filter(|_| self.given.any(STEP_INPUTS)),
+            Scope::Overrides if given.has("quality") => Some(self.quality),
+            Scope::Overrides => saved.filter(|_| given.any(STEP_INPUTS)),
         };
         if let Some(q) = level {
             q.apply(s, volume.range);
@@ -318,14 +347,27 @@ impl FrameArgs {
         if let Some(k) = self.ray_spacing {
             s.ray_spacing = k;
         }
-        let reads_gradients = self.given.any(LIGHTING) || self.given.any(&["mode", "gradient_opacity"]);
-        if wants("gradients") || wants("gradient_texture") || reads_gradients {
+        let reads_gradients = given.any(LIGHTING) || given.any(&["mode", "gradient_opacity"]);
+        if wants.id("gradients") || wants.id("gradient_texture") || reads_gradients {
             let gradients = if self.gradient_texture {
                 Gradients::Texture
             } else {
                 self.gradients
             };
             gradients.apply(s, volume.voxel_count() as u64);
+        }
+        if wants.id("no_jitter") || wants.id("jitter_seed") {
+            s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
+        }
+        if wants.id("no_skip") {
+            s.skip_empty = !self.no_skip;
+        }
+        if wants.id("positions") {
+            s.position_format = if self.positions == "rgba16f" {
+                PositionFormat::Rgba16f
+            } else {
+                PositionFormat::Rgba32f
+            };
         }
     }
 }

@@ -9,7 +9,7 @@ use anyhow::{Context, Result};
 
 /// A rank's part and what it cost to read.
 pub struct Part {
-    /// The held box's voxels, as a volume of its own (range and scaling still the part's own until `globalise`).
+    /// The held box's voxels, as a volume of its own (range and scaling still the part's own until `run::globalise_range`).
     pub volume: Volume,
     pub whole_dims: [u32; 3],
     pub geometry: Geometry,

@@ -157,7 +157,7 @@ fn with_global_transfer_function(
     let f = &args.frame;
     // Exactly when the settings would compute it from the (here voxel-less) volume (cli/settings.rs).
     let automatic = args.state.is_none() && f.given.from_file && !f.given.any(crate::cli::settings::CLASSIFICATION);
-    let named_auto = f.preset.as_deref() == Some("auto");
+    let named_auto = f.colour.preset.as_deref() == Some("auto");
     if !automatic && !named_auto {
         return Ok(args.clone());
     }
@@ -166,8 +166,8 @@ fn with_global_transfer_function(
     world.all_reduce_into(&mine[..], &mut sum[..], SystemOperation::sum());
     let tf = auto_transfer_function(&VolumeFacts::of(whole), &sum);
     let mut out = args.clone();
-    out.frame.preset = None;
-    out.frame.tf_value = Some(tf);
+    out.frame.colour.preset = None;
+    out.frame.colour.tf_value = Some(tf);
     out.frame.given.insert("tf");
     Ok(out)
 }

@@ -79,3 +79,15 @@ impl<T> VkContext<T> for Result<T, vk::Result> {
         self.map_err(|e| GpuError::vk(what, e))
     }
 }
+
+impl Gpu {
+    /// The budgets a volume is shown within on this device, from `--host-budget` and `--gpu-budget` (`None`: a
+    /// quarter of the machine's memory, the device's largest heap), with its 3-D texture side limit. Every command
+    /// and the viewer map the two flags through here.
+    pub fn budgets(&self, host: Option<u64>, device: Option<u64>) -> crate::volume::budget::Budgets {
+        crate::volume::budget::Budgets::host(host).with_gpu(crate::volume::budget::GpuBudget {
+            bytes: device.unwrap_or(self.device_local_bytes),
+            max_dim: self.properties.limits.max_image_dimension3_d,
+        })
+    }
+}

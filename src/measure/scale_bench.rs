@@ -15,7 +15,7 @@ use crate::gpu::{Gpu, GpuError};
 use crate::measure::bench::{gpu_allocated, peak_rss_bytes, Stats};
 use crate::render::headless::Headless;
 use crate::scale::cache::PyramidCache;
-use crate::scene::quality::Quality;
+use crate::scene::quality::{moving_view, Quality};
 use crate::scene::settings::RenderSettings;
 use crate::volume::budget::Budgets;
 use crate::volume::{OpenOptions, Volume, VoxelType};
@@ -196,16 +196,11 @@ fn timed_frames(gpu: &Gpu, headless: &mut Headless, s: &RenderSettings, frames: 
 }
 
 /// The settings at `size`² for `v`: normal quality at rest; dragging as the viewer draws it (half the resolution,
-/// the draft step and strides).
+/// the draft step and strides: [`moving_view`]).
 fn settings(v: &Volume, size: u32) -> (RenderSettings, RenderSettings) {
     let mut rest = RenderSettings::new(size, size, v.extent());
     Quality::Normal.apply(&mut rest, v.range);
-    let mut drag = rest.clone();
-    drag.width = size / 2;
-    drag.height = size / 2;
-    drag.step_length = drag.step_length.max(Quality::Draft.step_length(&drag, v.range));
-    drag.max_stride = drag.max_stride.max(Quality::Draft.max_stride());
-    drag.stride_tolerance = drag.stride_tolerance.max(Quality::Draft.stride_tolerance());
+    let drag = moving_view(&rest, 2, Some(Quality::Normal), v.range);
     (rest, drag)
 }
 

@@ -96,7 +96,7 @@ fn extent_3d(dims: [u32; 3]) -> vk::Extent3D {
 /// The most memory `TexelPolicy::Auto` spends on a volume beyond its native format.
 pub const AUTO_LIMIT: u64 = 1 << 30;
 
-/// How the march reads the loaded volume (shaders/volume.glsl, `sample_raw`).
+/// How the march reads the loaded volume (shaders/volume.glsl, `sample_in`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VolumeLayout {
     /// A 3D texture of this format, filtered by the sampler.

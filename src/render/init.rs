@@ -1,7 +1,6 @@
 //! Creating the renderer: descriptor set and pipeline layouts, samplers, pipelines for every variant, the
 //! table buffer and the frame slots.
 
-use super::march_key::MarchKey;
 use super::{FrameSlot, FrameUniforms, PositionTargets, Renderer, LUT_ROWS, QUERIES};
 use crate::gpu::pipeline::{graphics_pipeline, shader, GraphicsDesc};
 use crate::gpu::resources::Buffer;
@@ -88,33 +87,22 @@ impl Renderer {
         };
         let mut r = Renderer {
             output_format,
-            frame_set_layout: vk::DescriptorSetLayout::null(),
-            volume_set_layout: vk::DescriptorSetLayout::null(),
-            positions_set_layout: vk::DescriptorSetLayout::null(),
-            faces_layout: vk::PipelineLayout::null(),
-            march_faces_layout: vk::PipelineLayout::null(),
-            march_analytic_layout: vk::PipelineLayout::null(),
-            storage_set_layout: vk::DescriptorSetLayout::null(),
-            march_compute_layout: vk::PipelineLayout::null(),
-            position_pipelines: [[vk::Pipeline::null(); 2]; 2],
-            march_pipelines: [vk::Pipeline::null(); MarchKey::COUNT],
-            light_pass: None,
-            light_ms: None,
-            descriptor_pool: vk::DescriptorPool::null(),
-            volume_set: vk::DescriptorSet::null(),
-            positions_set: vk::DescriptorSet::null(),
+            layouts: Default::default(),
+            pipelines: Default::default(),
+            descriptors: Default::default(),
+            samplers: Default::default(),
             slots: Vec::new(),
-            linear_sampler: vk::Sampler::null(),
-            point_sampler: vk::Sampler::null(),
-            lut,
-            integrals,
-            baked: None,
-            lut_table: Vec::new(),
+            table: super::parts::Table {
+                lut,
+                integrals,
+                baked: None,
+                entries: Vec::new(),
+            },
+            targets: Default::default(),
             volume: None,
             texel_policy: gpu.texel_policy,
             brick_side: gpu.brick_side,
-            positions: None,
-            spaced: None,
+            light_ms: None,
             timestamp_period_ns: gpu.properties.limits.timestamp_period as f64,
         };
         match r.init(gpu, all, frag, frames_in_flight.max(1)) {
@@ -134,14 +122,14 @@ impl Renderer {
         slots: usize,
     ) -> Result<(), GpuError> {
         self.create_layouts(gpu, all, frag)?;
-        let light_pass = super::light_volume::LightPass::new(gpu, self.frame_set_layout, self.volume_set_layout)?;
-        self.light_pass = Some(light_pass);
-        self.linear_sampler = sampler(gpu, vk::Filter::LINEAR)?;
-        self.point_sampler = sampler(gpu, vk::Filter::NEAREST)?;
+        let light_pass = super::light_volume::LightPass::new(gpu, self.layouts.frame_set, self.layouts.volume_set)?;
+        self.pipelines.light = Some(light_pass);
+        self.samplers.linear = sampler(gpu, vk::Filter::LINEAR)?;
+        self.samplers.point = sampler(gpu, vk::Filter::NEAREST)?;
         self.create_position_pipelines(gpu)?;
         let sets = self.allocate_sets(gpu, slots)?;
-        (self.volume_set, self.positions_set) = (sets[0], sets[1]);
-        if let Some(pass) = &mut self.light_pass {
+        (self.descriptors.volume_set, self.descriptors.positions_set) = (sets[0], sets[1]);
+        if let Some(pass) = &mut self.pipelines.light {
             pass.set = sets[2];
         }
         for (&set, &storage_set) in sets[3..3 + slots].iter().zip(&sets[3 + slots..]) {
@@ -162,8 +150,8 @@ impl Renderer {
         frag: vk::ShaderStageFlags,
     ) -> Result<(), GpuError> {
         use vk::DescriptorType as D;
-        self.frame_set_layout = set_layout(gpu, &[(D::UNIFORM_BUFFER, all)])?;
-        self.volume_set_layout = set_layout(
+        self.layouts.frame_set = set_layout(gpu, &[(D::UNIFORM_BUFFER, all)])?;
+        self.layouts.volume_set = set_layout(
             gpu,
             &[
                 (D::SAMPLED_IMAGE, frag),
@@ -178,20 +166,28 @@ impl Renderer {
                 (D::SAMPLED_IMAGE, frag),
             ],
         )?;
-        self.positions_set_layout = set_layout(
+        self.layouts.positions_set = set_layout(
             gpu,
             &[(D::SAMPLED_IMAGE, frag), (D::SAMPLED_IMAGE, frag), (D::SAMPLER, frag)],
         )?;
-        self.faces_layout = pipeline_layout(gpu, &[self.frame_set_layout])?;
-        self.march_faces_layout = pipeline_layout(
+        self.layouts.faces = pipeline_layout(gpu, &[self.layouts.frame_set])?;
+        self.layouts.march_faces = pipeline_layout(
             gpu,
-            &[self.frame_set_layout, self.volume_set_layout, self.positions_set_layout],
+            &[
+                self.layouts.frame_set,
+                self.layouts.volume_set,
+                self.layouts.positions_set,
+            ],
         )?;
-        self.march_analytic_layout = pipeline_layout(gpu, &[self.frame_set_layout, self.volume_set_layout])?;
-        self.storage_set_layout = set_layout(gpu, &[(D::STORAGE_IMAGE, vk::ShaderStageFlags::COMPUTE)])?;
-        self.march_compute_layout = pipeline_layout(
+        self.layouts.march_analytic = pipeline_layout(gpu, &[self.layouts.frame_set, self.layouts.volume_set])?;
+        self.layouts.storage_set = set_layout(gpu, &[(D::STORAGE_IMAGE, vk::ShaderStageFlags::COMPUTE)])?;
+        self.layouts.march_compute = pipeline_layout(
             gpu,
-            &[self.frame_set_layout, self.volume_set_layout, self.storage_set_layout],
+            &[
+                self.layouts.frame_set,
+                self.layouts.volume_set,
+                self.layouts.storage_set,
+            ],
         )?;
         Ok(())
     }
@@ -208,12 +204,12 @@ impl Renderer {
                 .into_iter()
                 .enumerate()
             {
-                self.position_pipelines[i][j] = graphics_pipeline(
+                self.pipelines.position[i][j] = graphics_pipeline(
                     gpu,
                     &GraphicsDesc {
                         vertex: &faces_vert,
                         fragment: &faces_frag,
-                        layout: self.faces_layout,
+                        layout: self.layouts.faces,
                         color_format: PositionTargets::vk_format(format),
                         cull,
                     },
@@ -240,14 +236,19 @@ impl Renderer {
             .max_sets(3 + 2 * n)
             .pool_sizes(&sizes);
         // SAFETY: valid create info on a live device.
-        self.descriptor_pool =
+        self.descriptors.pool =
             unsafe { gpu.device.create_descriptor_pool(&pool_info, None) }.ctx("vkCreateDescriptorPool")?;
-        let light_set_layout = self.light_pass.as_ref().map(|p| p.set_layout()).unwrap_or_default();
-        let mut layouts = vec![self.volume_set_layout, self.positions_set_layout, light_set_layout];
-        layouts.extend(std::iter::repeat_n(self.frame_set_layout, slots));
-        layouts.extend(std::iter::repeat_n(self.storage_set_layout, slots));
+        let light_set_layout = self
+            .pipelines
+            .light
+            .as_ref()
+            .map(|p| p.set_layout())
+            .unwrap_or_default();
+        let mut layouts = vec![self.layouts.volume_set, self.layouts.positions_set, light_set_layout];
+        layouts.extend(std::iter::repeat_n(self.layouts.frame_set, slots));
+        layouts.extend(std::iter::repeat_n(self.layouts.storage_set, slots));
         let alloc = vk::DescriptorSetAllocateInfo::default()
-            .descriptor_pool(self.descriptor_pool)
+            .descriptor_pool(self.descriptors.pool)
             .set_layouts(&layouts);
         // SAFETY: the pool has room for exactly these sets.
         unsafe { gpu.device.allocate_descriptor_sets(&alloc) }.ctx("vkAllocateDescriptorSets")

@@ -428,7 +428,7 @@ impl Renderer {
             return Ok(());
         }
         let sampling = self.sampling();
-        let (Some(vol), Some(pass), Some(slot)) = (&mut self.volume, &mut self.light_pass, self.slots.first_mut())
+        let (Some(vol), Some(pass), Some(slot)) = (&mut self.volume, &mut self.pipelines.light, self.slots.first_mut())
         else {
             return Ok(());
         };
@@ -448,9 +448,16 @@ impl Renderer {
             Some(l) => l.image,
             None => light_image(gpu, &grid)?,
         };
-        let extinction = extinction_table(s, &self.lut_table);
+        let extinction = extinction_table(s, &self.table.entries);
         let started = std::time::Instant::now();
-        let filled = pass.fill(gpu, sampling, &extinction, &grid, &image, [slot.set, self.volume_set]);
+        let filled = pass.fill(
+            gpu,
+            sampling,
+            &extinction,
+            &grid,
+            &image,
+            [slot.set, self.descriptors.volume_set],
+        );
         self.light_ms = Some(started.elapsed().as_secs_f64() * 1e3);
         if let Err(e) = filled {
             image.destroy(gpu);

@@ -14,6 +14,7 @@ pub mod levels;
 pub mod light_volume;
 pub mod march_key;
 mod part;
+mod parts;
 pub mod placement;
 pub mod png;
 pub mod pool;
@@ -107,65 +108,27 @@ impl OccupancyKey {
 /// projection and isosurface marches read.
 const LUT_ROWS: usize = 1;
 
-/// What the integral table (`preintegrate::integral_table`) depends on beyond the classification and window:
-/// for the density model, its density factor (the emission model's extinction does not depend on the step).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct StepRule {
-    density: Option<f32>,
-}
-
-impl StepRule {
-    fn of(s: &RenderSettings) -> StepRule {
-        StepRule {
-            density: (s.mode == crate::scene::settings::CompositeMode::Density).then_some(s.density),
-        }
-    }
-}
-
 include!(concat!(env!("OUT_DIR"), "/march_shaders.rs"));
 
 const QUERIES: u32 = 4;
 
 pub struct Renderer {
     output_format: vk::Format,
-    frame_set_layout: vk::DescriptorSetLayout,
-    volume_set_layout: vk::DescriptorSetLayout,
-    positions_set_layout: vk::DescriptorSetLayout,
-    faces_layout: vk::PipelineLayout,
-    march_faces_layout: vk::PipelineLayout,
-    march_analytic_layout: vk::PipelineLayout,
-    storage_set_layout: vk::DescriptorSetLayout,
-    march_compute_layout: vk::PipelineLayout,
-    /// Entry and exit pipelines per position format: [Rgba32f, Rgba16f] × [entry, exit].
-    position_pipelines: [[vk::Pipeline; 2]; 2],
-    /// March pipelines by `MarchKey::index`, created when first needed.
-    march_pipelines: [vk::Pipeline; MarchKey::COUNT],
-    /// Rule 9's light grid pass (None only while the renderer is being made).
-    light_pass: Option<light_volume::LightPass>,
-    /// How long the last light grid took to fill (wall clock, submission to completion).
-    light_ms: Option<f64>,
-    descriptor_pool: vk::DescriptorPool,
-    volume_set: vk::DescriptorSet,
-    positions_set: vk::DescriptorSet,
+    layouts: parts::Layouts,
+    pipelines: parts::Pipelines,
+    descriptors: parts::Descriptors,
+    samplers: parts::Samplers,
+    /// What each frame in flight needs of its own.
     slots: Vec<FrameSlot>,
-    linear_sampler: vk::Sampler,
-    point_sampler: vk::Sampler,
-    /// The baked table (shaders/volume.glsl `Lut`): [`LUT_ROWS`] rows of [`LUT_SIZE`] entries.
-    lut: Buffer,
-    /// Its integral functions (shaders/volume.glsl `Integrals`, a uniform buffer of [`LUT_SIZE`] vec4).
-    integrals: Buffer,
-    /// What the table holds: classification, window, data range and step rule it was baked for, and row 0
-    /// itself (the brick occupancy is computed from it).
-    baked: Option<(Classification, [f32; 2], [f64; 2], StepRule)>,
-    lut_table: Vec<[f32; 4]>,
+    table: parts::Table,
+    targets: parts::Targets,
     volume: Option<GpuVolume>,
     /// How the next `set_volume` stores voxels (see [`TexelPolicy`]); starts as the GPU's option.
     pub texel_policy: TexelPolicy,
     /// The brick side volumes are cut into (render/pool.rs; None: one brick where it fits).
     pub brick_side: Option<u32>,
-    positions: Option<PositionTargets>,
-    /// The march's target where rays are spaced (rule 12), stretched over the output.
-    spaced: Option<spacing::SpacedTarget>,
+    /// How long the last light grid took to fill (wall clock, submission to completion).
+    light_ms: Option<f64>,
     timestamp_period_ns: f64,
 }
 
@@ -186,14 +149,14 @@ impl Renderer {
     /// may be in flight (prepare's contract).
     fn upload_lut(&mut self, s: &RenderSettings, range: [f64; 2]) -> Result<(), GpuError> {
         let classification = s.classification();
-        let rule = StepRule::of(s);
+        let rule = parts::StepRule::of(s);
         let lut = bake(&classification, s.window, range);
         let rows: Vec<[u32; 4]> = lut.iter().map(|e| e.map(f32::to_bits)).collect();
-        self.lut.write(bytemuck::cast_slice(&rows))?;
+        self.table.lut.write(bytemuck::cast_slice(&rows))?;
         let integrals = integral_table(&lut, rule.density);
-        self.integrals.write(bytemuck::cast_slice(&integrals))?;
-        self.baked = Some((classification, s.window, range, rule));
-        self.lut_table = lut;
+        self.table.integrals.write(bytemuck::cast_slice(&integrals))?;
+        self.table.baked = Some((classification, s.window, range, rule));
+        self.table.entries = lut;
         Ok(())
     }
 
@@ -205,14 +168,14 @@ impl Renderer {
         let volume_info = [vk::DescriptorImageInfo::default()
             .image_view(volume_view)
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
-        let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.linear_sampler)];
+        let sampler_info = [vk::DescriptorImageInfo::default().sampler(self.samplers.linear)];
         let lut_info = [vk::DescriptorBufferInfo {
-            buffer: self.lut.raw,
+            buffer: self.table.lut.raw,
             offset: 0,
             range: vk::WHOLE_SIZE,
         }];
         let integrals_info = [vk::DescriptorBufferInfo {
-            buffer: self.integrals.raw,
+            buffer: self.table.integrals.raw,
             offset: 0,
             range: vk::WHOLE_SIZE,
         }];
@@ -236,47 +199,47 @@ impl Renderer {
             .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)];
         let writes = [
             vk::WriteDescriptorSet::default()
-                .dst_set(self.volume_set)
+                .dst_set(self.descriptors.volume_set)
                 .dst_binding(4)
                 .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
                 .image_info(&gradient_info),
             vk::WriteDescriptorSet::default()
-                .dst_set(self.volume_set)
+                .dst_set(self.descriptors.volume_set)
                 .dst_binding(3)
                 .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
                 .image_info(&occupancy_info),
             vk::WriteDescriptorSet::default()
-                .dst_set(self.volume_set)
+                .dst_set(self.descriptors.volume_set)
                 .dst_binding(0)
                 .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
                 .image_info(&volume_info),
             vk::WriteDescriptorSet::default()
-                .dst_set(self.volume_set)
+                .dst_set(self.descriptors.volume_set)
                 .dst_binding(1)
                 .descriptor_type(vk::DescriptorType::SAMPLER)
                 .image_info(&sampler_info),
             vk::WriteDescriptorSet::default()
-                .dst_set(self.volume_set)
+                .dst_set(self.descriptors.volume_set)
                 .dst_binding(2)
                 .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                 .buffer_info(&lut_info),
             vk::WriteDescriptorSet::default()
-                .dst_set(self.volume_set)
+                .dst_set(self.descriptors.volume_set)
                 .dst_binding(5)
                 .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
                 .image_info(&corners_info),
             vk::WriteDescriptorSet::default()
-                .dst_set(self.volume_set)
+                .dst_set(self.descriptors.volume_set)
                 .dst_binding(6)
                 .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
                 .buffer_info(&integrals_info),
             vk::WriteDescriptorSet::default()
-                .dst_set(self.volume_set)
+                .dst_set(self.descriptors.volume_set)
                 .dst_binding(7)
                 .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
                 .image_info(&light_info),
             vk::WriteDescriptorSet::default()
-                .dst_set(self.volume_set)
+                .dst_set(self.descriptors.volume_set)
                 .dst_binding(8)
                 .descriptor_type(vk::DescriptorType::SAMPLED_IMAGE)
                 .image_info(&directory_info),
@@ -424,13 +387,13 @@ impl Renderer {
     pub fn needs_prepare(&self, s: &RenderSettings) -> bool {
         let targets_fit = match s.ray_setup {
             RaySetup::Faces => self.positions_fit(s),
-            RaySetup::Analytic => self.positions.is_none(),
+            RaySetup::Analytic => self.targets.positions.is_none(),
         };
         !targets_fit
-            || !spacing::fits(&self.spaced, s)
+            || !spacing::fits(&self.targets.spaced, s)
             || !self.lut_is_current(s)
             || !self.occupancy_is_current(s)
-            || self.march_pipelines[self.march_key(s).index()] == vk::Pipeline::null()
+            || self.pipelines.march[self.march_key(s).index()] == vk::Pipeline::null()
             || !self.light_is_current(s)
     }
 
@@ -443,7 +406,7 @@ impl Renderer {
     }
 
     fn positions_fit(&self, s: &RenderSettings) -> bool {
-        self.positions.as_ref().is_some_and(|p| p.fit(s))
+        self.targets.positions.as_ref().is_some_and(|p| p.fit(s))
     }
 
     /// The loaded volume's value range (what data-unit transfer functions are baked against).
@@ -453,8 +416,8 @@ impl Renderer {
 
     fn lut_is_current(&self, s: &RenderSettings) -> bool {
         let range = self.volume_range();
-        self.baked.as_ref().is_some_and(|(c, w, r, rule)| {
-            *w == s.window && *r == range && *rule == StepRule::of(s) && *c == s.classification()
+        self.table.baked.as_ref().is_some_and(|(c, w, r, rule)| {
+            *w == s.window && *r == range && *rule == parts::StepRule::of(s) && *c == s.classification()
         })
     }
 
@@ -468,8 +431,8 @@ impl Renderer {
                 "gradient_texture needs enable_gradient_texture() first".into(),
             ));
         }
-        if self.march_pipelines[key.index()] == vk::Pipeline::null() {
-            self.march_pipelines[key.index()] = self.march_pipeline(gpu, key)?;
+        if self.pipelines.march[key.index()] == vk::Pipeline::null() {
+            self.pipelines.march[key.index()] = self.march_pipeline(gpu, key)?;
         }
         if !self.lut_is_current(s) {
             self.upload_lut(s, self.volume_range())?;
@@ -482,7 +445,7 @@ impl Renderer {
                 let stepped = vol.info.stepped(s);
                 let grid = vol.skip_grid();
                 let (occupancy, depth) = (
-                    skip::encode_reach(&grid.classify(&self.lut_table, &stepped), grid.bricks),
+                    skip::encode_reach(&grid.classify(&self.table.entries, &stepped), grid.bricks),
                     grid.bricks[2],
                 );
                 upload_3d(gpu, &mut vol.occupancy, &occupancy, depth)?;
@@ -492,15 +455,20 @@ impl Renderer {
         if s.uses_light_volume() {
             self.prepare_light(gpu, s)?;
         }
-        spacing::prepare(gpu, &mut self.spaced, self.output_format, s)?;
+        spacing::prepare(gpu, &mut self.targets.spaced, self.output_format, s)?;
         if s.ray_setup == RaySetup::Faces {
             if !self.positions_fit(s) {
-                if let Some(old) = self.positions.take() {
+                if let Some(old) = self.targets.positions.take() {
                     old.destroy(gpu);
                 }
-                self.positions = Some(PositionTargets::new(gpu, s, self.point_sampler, self.positions_set)?);
+                self.targets.positions = Some(PositionTargets::new(
+                    gpu,
+                    s,
+                    self.samplers.point,
+                    self.descriptors.positions_set,
+                )?);
             }
-        } else if let Some(old) = self.positions.take() {
+        } else if let Some(old) = self.targets.positions.take() {
             // The analytic method needs no position targets: free their memory.
             old.destroy(gpu);
         }
@@ -510,9 +478,9 @@ impl Renderer {
     fn march_pipeline(&self, gpu: &Gpu, key: MarchKey) -> Result<vk::Pipeline, GpuError> {
         let code = &MARCH_SHADERS[key.index()];
         let layout = match key.setup {
-            Setup::Faces => self.march_faces_layout,
-            Setup::Analytic => self.march_analytic_layout,
-            Setup::Compute => return compute_pipeline(gpu, code, self.march_compute_layout),
+            Setup::Faces => self.layouts.march_faces,
+            Setup::Analytic => self.layouts.march_analytic,
+            Setup::Compute => return compute_pipeline(gpu, code, self.layouts.march_compute),
         };
         graphics_pipeline(
             gpu,
@@ -540,45 +508,24 @@ impl Renderer {
     }
 
     pub fn destroy(mut self, gpu: &Gpu) {
+        let d = &gpu.device;
         // SAFETY: callers destroy the renderer after its last frame completed; null handles are ignored by Vulkan.
         unsafe {
-            let d = &gpu.device;
             let _ = d.device_wait_idle();
             for slot in self.slots.drain(..) {
                 d.destroy_query_pool(slot.query_pool, None);
                 slot.uniforms.destroy(gpu);
             }
-            if let Some(p) = self.positions.take() {
-                p.destroy(gpu);
-            }
-            if let Some(t) = self.spaced.take() {
-                t.destroy(gpu);
-            }
-            if let Some(v) = self.volume.take() {
-                v.destroy(gpu);
-            }
-            d.destroy_descriptor_pool(self.descriptor_pool, None);
-            for p in self.position_pipelines.iter().flatten() {
-                d.destroy_pipeline(*p, None);
-            }
-            for p in self.march_pipelines {
-                d.destroy_pipeline(p, None);
-            }
-            if let Some(pass) = self.light_pass.take() {
-                pass.destroy(gpu);
-            }
-            d.destroy_pipeline_layout(self.march_compute_layout, None);
-            d.destroy_descriptor_set_layout(self.storage_set_layout, None);
-            d.destroy_pipeline_layout(self.faces_layout, None);
-            d.destroy_pipeline_layout(self.march_faces_layout, None);
-            d.destroy_pipeline_layout(self.march_analytic_layout, None);
-            d.destroy_descriptor_set_layout(self.frame_set_layout, None);
-            d.destroy_descriptor_set_layout(self.volume_set_layout, None);
-            d.destroy_descriptor_set_layout(self.positions_set_layout, None);
-            d.destroy_sampler(self.linear_sampler, None);
-            d.destroy_sampler(self.point_sampler, None);
         }
-        self.integrals.destroy(gpu);
-        self.lut.destroy(gpu);
+        self.targets.destroy(gpu);
+        if let Some(v) = self.volume.take() {
+            v.destroy(gpu);
+        }
+        // SAFETY: as above; the sets it holds are not used again.
+        unsafe { d.destroy_descriptor_pool(self.descriptors.pool, None) };
+        self.pipelines.destroy(gpu);
+        self.layouts.destroy(gpu);
+        self.samplers.destroy(gpu);
+        self.table.destroy(gpu);
     }
 }

@@ -120,7 +120,7 @@ impl Renderer {
         let (width, height) = s.marched_size();
         let extent = vk::Extent2D { width, height };
         // Spaced rays (rule 12): the march writes its own target, which the last frame's blit read.
-        let spaced = match &self.spaced {
+        let spaced = match &self.targets.spaced {
             Some(t) if s.spacing() > 1 && t.fits(s) => Some(&t.image),
             _ if s.spacing() > 1 => return Err(GpuError::Lost("prepare() was not called for these settings")),
             _ => None,
@@ -132,7 +132,7 @@ impl Renderer {
             extent,
             query_pool,
             frame_set: slot.set,
-            march_pipeline: self.march_pipelines[key.index()],
+            march_pipeline: self.pipelines.march[key.index()],
             output: marched,
             output_to_attachment: ImageTransition {
                 image: marched.0,
@@ -167,6 +167,7 @@ impl Renderer {
     /// The entry/exit method: the entry pass, the exit pass (timestamps 1 and 2) and the march reading both (3).
     fn record_faces(&self, f: &FrameRecording, s: &RenderSettings) -> Result<(), GpuError> {
         let p = self
+            .targets
             .positions
             .as_ref()
             .ok_or(GpuError::Lost("prepare() was not called"))?;
@@ -195,12 +196,12 @@ impl Renderer {
                 f.dev.cmd_bind_pipeline(
                     f.cb,
                     vk::PipelineBindPoint::GRAPHICS,
-                    self.position_pipelines[pi][j ^ flip],
+                    self.pipelines.position[pi][j ^ flip],
                 );
                 f.dev.cmd_bind_descriptor_sets(
                     f.cb,
                     vk::PipelineBindPoint::GRAPHICS,
-                    self.faces_layout,
+                    self.layouts.faces,
                     0,
                     &[f.frame_set],
                     &[],
@@ -218,8 +219,8 @@ impl Renderer {
         };
         image_barriers(f.dev, f.cb, &[to_sampled(p.entry.raw), to_sampled(p.exit.raw)]);
         f.draw_march(
-            self.march_faces_layout,
-            &[f.frame_set, self.volume_set, self.positions_set],
+            self.layouts.march_faces,
+            &[f.frame_set, self.descriptors.volume_set, self.descriptors.positions_set],
         );
         f.stretch();
         f.timestamp(3);
@@ -229,7 +230,7 @@ impl Renderer {
     /// The analytic method in a fullscreen fragment pass: the march alone (timestamp 1).
     fn record_analytic(&self, f: &FrameRecording) {
         image_barriers(f.dev, f.cb, &[f.output_to_attachment]);
-        f.draw_march(self.march_analytic_layout, &[f.frame_set, self.volume_set]);
+        f.draw_march(self.layouts.march_analytic, &[f.frame_set, self.descriptors.volume_set]);
         f.stretch();
         f.timestamp(1);
     }
@@ -262,9 +263,9 @@ impl Renderer {
             f.dev.cmd_bind_descriptor_sets(
                 f.cb,
                 vk::PipelineBindPoint::COMPUTE,
-                self.march_compute_layout,
+                self.layouts.march_compute,
                 0,
-                &[f.frame_set, self.volume_set, storage_set],
+                &[f.frame_set, self.descriptors.volume_set, storage_set],
                 &[],
             );
             f.dev

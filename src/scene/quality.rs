@@ -198,6 +198,24 @@ impl Quality {
     }
 }
 
+/// The moving view's frame, one rule for the viewer's level of detail while the view moves and for `bench --scale`'s
+/// drag: the still frame `still` at `1/divisor` of its size on each side (rounded up; upscaled where it is shown),
+/// the draft quality's step (at least the still frame's; with a custom step, `quality` None, twice it) and at least
+/// its brick strides. The divisor already spaces the rays, so rule 12's spacing is 1.
+pub fn moving_view(still: &RenderSettings, divisor: u32, quality: Option<Quality>, range: [f64; 2]) -> RenderSettings {
+    let mut s = still.clone();
+    s.width = still.width.div_ceil(divisor).max(1);
+    s.height = still.height.div_ceil(divisor).max(1);
+    s.step_length = match quality {
+        Some(_) => s.step_length.max(Quality::Draft.step_length(&s, range)),
+        None => (s.step_length * 2.0).min(64.0),
+    };
+    s.max_stride = s.max_stride.max(Quality::Draft.max_stride());
+    s.stride_tolerance = s.stride_tolerance.max(Quality::Draft.stride_tolerance());
+    s.ray_spacing = 1;
+    s
+}
+
 /// Where shaded and gradient-modulated frames take their gradients (`--gradients`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Gradients {

@@ -602,14 +602,4 @@ impl RenderSettings {
         }
         Ok(())
     }
-
-    /// World-space step length for a box `extent` sampled by `dims` voxels.
-    pub fn step_world(&self, extent: Vec3, dims: [u32; 3]) -> f32 {
-        self.step_length * voxel_size(extent, dims)
-    }
-}
-
-/// The smallest voxel side in world units.
-pub fn voxel_size(extent: Vec3, dims: [u32; 3]) -> f32 {
-    (0..3).map(|i| extent[i] / dims[i] as f32).fold(f32::INFINITY, f32::min)
 }

@@ -13,7 +13,6 @@ use crate::viewer::model::history::Snapshot;
 use crate::viewer::model::Model;
 use crate::viewer::present::Presenter;
 use crate::viewer::{ViewerError, ViewerOptions, VolumeSource};
-use crate::volume::budget::Budgets;
 use crate::volume::{Volume, VoxelData, VoxelType};
 use winit::event_loop::{ActiveEventLoop, EventLoopProxy};
 use winit::window::Window;
@@ -49,7 +48,7 @@ impl Running {
             gui: Gui::new(&window, presenter.max_texture_side()),
             loader: Loader::new(
                 Limits {
-                    budgets: Budgets::host(opts.host_budget).with_gpu(presenter.gpu_budget(opts.gpu_budget)),
+                    budgets: presenter.budgets(opts.host_budget, opts.gpu_budget),
                     max_dim: opts.max_dim,
                     cache: (!opts.no_cache).then(|| PyramidCache::new(opts.cache_dir.clone())),
                 },

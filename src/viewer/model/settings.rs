@@ -2,7 +2,7 @@
 //! [`Model::frame_settings`], which lowers the detail while the view moves.
 
 use super::Model;
-use crate::scene::quality::{Gradients, Quality};
+use crate::scene::quality::{moving_view, Gradients, Quality};
 use crate::scene::settings::RenderSettings;
 
 impl Model {
@@ -36,25 +36,15 @@ impl Model {
         s
     }
 
-    /// What a frame of `width`×`height` renders: full quality, or — while the view moves, with `lod` on — a
-    /// fraction of the resolution (upscaled when shown; see [`Model::lod_divisor`]), the draft quality's step (at
-    /// least the still frame's; with a custom step, twice it) and at least its brick strides.
+    /// What a frame of `width`×`height` renders: full quality, or — while the view moves, with `lod` on — the
+    /// moving view's frame ([`moving_view`]) reduced by [`Model::lod_divisor`].
     pub fn frame_settings(&self, width: u32, height: u32, moving: bool) -> RenderSettings {
-        let mut s = self.render_settings(width, height);
+        let still = self.render_settings(width, height);
         if self.sampling.lod && moving {
-            let f = self.lod_divisor();
-            s.width = width.div_ceil(f).max(1);
-            s.height = height.div_ceil(f).max(1);
-            s.step_length = match self.sampling.quality {
-                Some(_) => s.step_length.max(Quality::Draft.step_length(&s, self.volume.range)),
-                None => (s.step_length * 2.0).min(64.0),
-            };
-            s.max_stride = s.max_stride.max(Quality::Draft.max_stride());
-            s.stride_tolerance = s.stride_tolerance.max(Quality::Draft.stride_tolerance());
-            // The divisor already spaces the rays.
-            s.ray_spacing = 1;
+            moving_view(&still, self.lod_divisor(), self.sampling.quality, self.volume.range)
+        } else {
+            still
         }
-        s
     }
 
     /// How much to shrink each side while moving: aims the reduced frame (which also takes half the steps) at

@@ -122,13 +122,9 @@ impl Presenter {
         self.gpu.properties.limits.max_image_dimension2_d as usize
     }
 
-    /// What the device takes: `bytes` (default its largest heap) and its 3-D texture side limit. Larger volumes
-    /// are shown at a coarser pyramid level.
-    pub fn gpu_budget(&self, bytes: Option<u64>) -> crate::volume::budget::GpuBudget {
-        crate::volume::budget::GpuBudget {
-            bytes: bytes.unwrap_or(self.gpu.device_local_bytes),
-            max_dim: self.gpu.properties.limits.max_image_dimension3_d,
-        }
+    /// The budgets a volume is shown within on this presenter's device ([`Gpu::budgets`]).
+    pub fn budgets(&self, host: Option<u64>, device: Option<u64>) -> crate::volume::budget::Budgets {
+        self.gpu.budgets(host, device)
     }
 
     /// Makes the swapchain fit a window of `width`×`height` (or take a new vsync) if it no longer does; returns
