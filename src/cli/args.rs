@@ -82,8 +82,8 @@ pub struct VolumeArgs {
 
 /// The budgets on `gpu` from `--host-budget` and `--gpu-budget` (defaults: a quarter of RAM, the device's largest
 /// heap), with the device's 3-D texture limit.
-pub fn budgets_on(gpu: &crate::gpu::Gpu, host: Option<u64>, device: Option<u64>) -> volume::budget::Budgets {
-    volume::budget::Budgets::host(host).with_gpu(volume::budget::GpuBudget {
+pub fn budgets_on(gpu: &crate::gpu::Gpu, host: Option<u64>, device: Option<u64>) -> crate::pyramid::budget::Budgets {
+    crate::pyramid::budget::Budgets::host(host).with_gpu(crate::pyramid::budget::GpuBudget {
         bytes: device.unwrap_or(gpu.device_local_bytes),
         max_dim: gpu.properties.limits.max_image_dimension3_d,
     })
@@ -108,13 +108,13 @@ impl VolumeArgs {
     }
 
     /// The host budget (no device known yet).
-    pub fn budgets(&self) -> volume::budget::Budgets {
-        volume::budget::Budgets::host(self.host_budget)
+    pub fn budgets(&self) -> crate::pyramid::budget::Budgets {
+        crate::pyramid::budget::Budgets::host(self.host_budget)
     }
 
     /// The budgets on `gpu`: the host's, and `--gpu-budget` (default the device's largest heap) with the device's
     /// 3-D texture limit.
-    pub fn budgets_on(&self, gpu: &crate::gpu::Gpu) -> volume::budget::Budgets {
+    pub fn budgets_on(&self, gpu: &crate::gpu::Gpu) -> crate::pyramid::budget::Budgets {
         budgets_on(gpu, self.host_budget, self.gpu_budget)
     }
 
@@ -134,7 +134,7 @@ impl VolumeArgs {
         self.load_within(self.budgets())
     }
 
-    fn load_within(&self, budgets: volume::budget::Budgets) -> Result<Volume> {
+    fn load_within(&self, budgets: crate::pyramid::budget::Budgets) -> Result<Volume> {
         let v = self.load_without_notes_within(budgets)?;
         for note in &v.notes {
             eprintln!("note: {note}");
@@ -148,7 +148,7 @@ impl VolumeArgs {
         self.load_without_notes_within(self.budgets())
     }
 
-    fn load_without_notes_within(&self, budgets: volume::budget::Budgets) -> Result<Volume> {
+    fn load_without_notes_within(&self, budgets: crate::pyramid::budget::Budgets) -> Result<Volume> {
         if let Some(name) = &self.builtin {
             let mut v = volume::builtin(name, self.builtin_size)?;
             // --spacing overrides every volume's own, the built-ins' included.

@@ -1,4 +1,4 @@
-//! Volumes larger than memory or the device, shown within budgets (`volume::budget`): the level of the resolution
+//! Volumes larger than memory or the device, shown within budgets (`pyramid::budget`): the level of the resolution
 //! pyramid that fits is read, never the full resolution first. A file whose voxels lie in place on disk (raw,
 //! uncompressed NRRD, NIfTI, Analyze and MetaImage) is read level by level from the file with positioned reads, on
 //! every core ([`read`]); an OME-Zarr store gives its own level; any other file is read whole and then reduced.
@@ -11,7 +11,8 @@ pub mod preview;
 pub mod read;
 
 use crate::convert::source::Source;
-use crate::volume::budget::{self, Budgets, Shape};
+use crate::pyramid::budget::{self, Budgets, Shape};
+use crate::pyramid::geometry::level_dims;
 use crate::volume::in_place::{in_place, InPlace};
 use crate::volume::{self, OpenOptions, Volume, VolumeError, VoxelType};
 use cache::{Lookup, PyramidCache};
@@ -273,7 +274,7 @@ fn start_level0(
 /// box, or in `kept`, a decoded file's level 0 kept in the pyramid cache (`level0::in_place`), and `v` is that level
 /// as read (not reduced further by `--max-dim`).
 fn with_finer(mut v: Volume, place: &InPlace, kept: Option<&InPlace>, level: u32) -> Result<Volume, VolumeError> {
-    if v.dims == budget::level_dims(place.dims, level) {
+    if v.dims == level_dims(place.dims, level) {
         let finer = match kept {
             Some(k) => finer::Finer::of_kept(k, level)?,
             None => finer::Finer::of(place, level)?,

@@ -59,7 +59,7 @@ pub struct OpenOptions {
     pub channel: Option<u32>,
     /// The memory budgets an OME-Zarr level must fit to be chosen (`None`: none). Other formats are read whole
     /// here; `crate::scale::open` reads them within the budgets.
-    pub budgets: Option<super::budget::Budgets>,
+    pub budgets: Option<crate::pyramid::budget::Budgets>,
 }
 
 /// Which reader a path needs. A folder is decided by its files: TIFFs make a TIFF stack, DICOM files a DICOM

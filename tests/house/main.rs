@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 type Module = Vec<String>;
 
-const PURE: &[&str] = &["volume", "convert", "scale", "transfer", "scene"];
+const PURE: &[&str] = &["volume", "pyramid", "convert", "scale", "transfer", "scene"];
 const GPU: &[&str] = &["gpu", "render", "measure", "movie", "viewer"];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {

@@ -124,8 +124,8 @@ impl Presenter {
 
     /// What the device takes: `bytes` (default its largest heap) and its 3-D texture side limit. Larger volumes
     /// are shown at a coarser pyramid level.
-    pub fn gpu_budget(&self, bytes: Option<u64>) -> crate::volume::budget::GpuBudget {
-        crate::volume::budget::GpuBudget {
+    pub fn gpu_budget(&self, bytes: Option<u64>) -> crate::pyramid::budget::GpuBudget {
+        crate::pyramid::budget::GpuBudget {
             bytes: bytes.unwrap_or(self.gpu.device_local_bytes),
             max_dim: self.gpu.properties.limits.max_image_dimension3_d,
         }
@@ -150,7 +150,7 @@ impl Presenter {
     pub fn set_volume(
         &mut self,
         volume: &Volume,
-        budgets: &crate::volume::budget::Budgets,
+        budgets: &crate::pyramid::budget::Budgets,
     ) -> Result<crate::render::placement::Placed, GpuError> {
         self.pass.set_volume(&self.gpu, volume, budgets)
     }
