@@ -205,7 +205,6 @@ impl VolumeArgs {
             },
             header_bytes: self.header_bytes.unwrap_or(0),
             max_dim: self.max_dim,
-            budgets: Some(self.budgets()),
             no_downsample: self.no_downsample,
             array: self.array.clone(),
             series: self.series.clone(),

@@ -68,10 +68,6 @@ pub fn open_deferred(
     cache: Option<&PyramidCache>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Opened, VolumeError> {
-    let opts = OpenOptions {
-        budgets: Some(budgets),
-        ..opts.clone()
-    };
     let named = |problem: String| VolumeError::Header {
         file: path.display().to_string(),
         problem,
@@ -79,11 +75,11 @@ pub fn open_deferred(
     // A file in place is read level by level with positioned reads; a compressed one is decoded once, front to
     // back, into the level (never held whole). Either only where the level is not full resolution: level 0 is read
     // by the format's own loader.
-    let place = match in_place(path, &opts)? {
+    let place = match in_place(path, opts)? {
         Some(p) => Some(p),
-        None => match crate::volume::in_place::compressed(path, &opts)? {
+        None => match crate::volume::in_place::compressed(path, opts)? {
             Some(p) => Some(p),
-            None => dicom_by_slices(path, &opts, &budgets)?,
+            None => dicom_by_slices(path, opts, &budgets)?,
         },
     };
     if let Some(place) = place {
@@ -94,23 +90,23 @@ pub fn open_deferred(
         };
         let level = budget::choose(&shape, &budgets).map_err(named)?;
         if level.level > 0 {
-            refuse_if_asked(&opts, shape.dims, &level).map_err(named)?;
-            return read_place(place, &level, &opts, budgets.host, cache, progress);
+            refuse_if_asked(opts, shape.dims, &level).map_err(named)?;
+            return read_place(place, &level, &budgets, opts, cache, progress);
         }
         if place.blocks.is_some() {
             // Appended `.vti` data are decoded by range at full resolution too: the file is never held beside its
             // voxels (the format's reader holds both). Level 0 is not cached: it is the file.
-            return read_place(place, &level, &opts, budgets.host, None, progress);
+            return read_place(place, &level, &budgets, opts, None, progress);
         }
     }
     refuse_whole_over_budget(path, &budgets).map_err(named)?;
-    let v = volume::open_with_progress(path, &opts, progress)?;
+    let v = volume::open_within(path, opts, Some(&budgets), progress)?;
     let volume = fit(v, &budgets, opts.no_downsample).map_err(|e| match e {
         VolumeError::Header { problem, .. } => named(problem),
         e => e,
     })?;
     Ok(Opened {
-        volume: with_store_finer(volume, path, &opts),
+        volume: with_store_finer(volume, path, opts),
         keep: None,
     })
 }
@@ -150,12 +146,12 @@ fn described(mut v: Volume, place: &InPlace) -> Volume {
 }
 
 /// Level `level` of the file `place` describes: from the pyramid cache where `cache` holds it, else read from the
-/// file within `host_budget` (with the cache write left to the caller).
+/// file within the host budget of `budgets` (with the cache write left to the caller).
 fn read_place(
     place: InPlace,
     level: &budget::Level,
+    budgets: &Budgets,
     opts: &OpenOptions,
-    host_budget: u64,
     cache: Option<&PyramidCache>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Opened, VolumeError> {
@@ -208,7 +204,7 @@ fn read_place(
     }
     let source = Source::in_place(place.clone())?;
     let level0 = start_level0(&place, level.level, cache, &mut notes);
-    let mut v = read::read_level_keeping(&source, level.level, host_budget, notes, level0.as_ref(), progress)?;
+    let mut v = read::read_level_keeping(&source, level.level, budgets.host, notes, level0.as_ref(), progress)?;
     let kept = match level0.map(level0::Level0::finish) {
         Some(Ok(path)) => {
             v.notes.push(format!(

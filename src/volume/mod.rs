@@ -39,7 +39,7 @@ pub use decode::Endian;
 pub use dicom::series::SeriesInfo;
 pub use downsample::downsample_to;
 pub use error::VolumeError;
-pub use open::{detect_format, format_by_name, open, open_with_progress, Format, OpenOptions};
+pub use open::{detect_format, format_by_name, open, open_with_progress, open_within, Format, OpenOptions};
 pub use raw::{from_native_bytes, load_raw, parse_scivis_name, RawOptions};
 pub use time::TimeSteps;
 pub(crate) use voxel::stored_offset;
