@@ -1,12 +1,14 @@
 //! volcast: a volume ray caster on raw Vulkan. The binary (`src/main.rs`, `src/cli/`) and the tests drive this
 //! library, so both exercise one render path. ARCHITECTURE.md draws the map of these rooms.
 //!
-//! Pure rooms (no Vulkan): `volume` (files to a `Volume`), `convert` (volumes to OME-Zarr stores), `scale` (volumes
-//! within memory budgets: pyramid levels, the preview, the pyramid cache), `transfer` (values to colour and opacity),
-//! `scene` (what a frame shows, as plain data). Rooms that drive the GPU: `gpu` (the Vulkan layer), `render` (the passes
-//! and the headless path), `measure` (compare, fidelity, bench, playback), `movie` and `viewer`. `cli` holds the
-//! command line's options and subcommand bodies, here so that the Python module (`python/`) parses the same options
-//! and renders through the same steps as `volcast render`.
+//! Pure rooms (no Vulkan): `volume` (files to a `Volume`), `pyramid` (the resolution pyramid: level sizes and
+//! placement, the reduction from one level to the next, bricks across levels, the level that fits the budgets),
+//! `convert` (volumes to OME-Zarr stores), `scale` (volumes within memory budgets: reading a level, the preview, the
+//! pyramid cache), `transfer` (values to colour and opacity), `scene` (what a frame shows, as plain data). Rooms
+//! that drive the GPU: `gpu` (the Vulkan layer), `render` (the passes and the headless path), `measure` (compare,
+//! fidelity, bench, playback), `movie` and `viewer`. `cli` holds the command line's options and subcommand bodies,
+//! here so that the Python module (`python/`) parses the same options and renders through the same steps as
+//! `volcast render`.
 
 pub mod cli;
 pub mod convert;
@@ -14,6 +16,7 @@ pub mod distributed;
 pub mod gpu;
 pub mod measure;
 pub mod movie;
+pub mod pyramid;
 pub mod render;
 pub mod scale;
 pub mod scene;

@@ -92,12 +92,12 @@ impl VolumeArgs {
     }
 
     /// The host budget (no device known yet).
-    pub fn budgets(&self) -> volume::budget::Budgets {
+    pub fn budgets(&self) -> crate::pyramid::budget::Budgets {
         self.budgets.host()
     }
 
     /// The budgets on `gpu`.
-    pub fn budgets_on(&self, gpu: &crate::gpu::Gpu) -> volume::budget::Budgets {
+    pub fn budgets_on(&self, gpu: &crate::gpu::Gpu) -> crate::pyramid::budget::Budgets {
         self.budgets.on(gpu)
     }
 
@@ -117,7 +117,7 @@ impl VolumeArgs {
         self.load_within(self.budgets())
     }
 
-    fn load_within(&self, budgets: volume::budget::Budgets) -> Result<Volume> {
+    fn load_within(&self, budgets: crate::pyramid::budget::Budgets) -> Result<Volume> {
         let v = self.load_without_notes_within(budgets)?;
         for note in &v.notes {
             eprintln!("note: {note}");
@@ -131,7 +131,7 @@ impl VolumeArgs {
         self.load_without_notes_within(self.budgets())
     }
 
-    fn load_without_notes_within(&self, budgets: volume::budget::Budgets) -> Result<Volume> {
+    fn load_without_notes_within(&self, budgets: crate::pyramid::budget::Budgets) -> Result<Volume> {
         if let Some(name) = &self.builtin {
             let mut v = volume::builtin(name, self.builtin_size)?;
             // --spacing overrides every volume's own, the built-ins' included.
@@ -188,7 +188,6 @@ impl VolumeArgs {
             },
             header_bytes: self.header_bytes.unwrap_or(0),
             max_dim: self.max_dim,
-            budgets: Some(self.budgets()),
             no_downsample: self.no_downsample,
             array: self.array.clone(),
             series: self.series.clone(),

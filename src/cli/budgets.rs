@@ -3,7 +3,7 @@
 
 use super::parse::parse_bytes;
 use crate::gpu::Gpu;
-use crate::volume::budget::Budgets;
+use crate::pyramid::budget::Budgets;
 use clap::Args;
 
 #[derive(Args, Clone, Copy, Debug, Default)]

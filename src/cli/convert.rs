@@ -3,9 +3,9 @@
 
 use super::args::ConvertArgs;
 use crate::convert::layout::OmeVersion;
-use crate::convert::pyramid::Reduce;
 use crate::convert::source::Source;
 use crate::convert::{self, Compression, ConvertError, ConvertOptions};
+use crate::pyramid::reduce::Reduce;
 use crate::volume;
 use anyhow::{Context, Result};
 use std::time::Instant;

@@ -4,9 +4,9 @@
 use crate::scene::quality::{Gradients, Quality};
 use glam::Vec3;
 
-/// A memory size for --host-budget and --gpu-budget (`volume::budget::parse_size`).
+/// A memory size for --host-budget and --gpu-budget (`pyramid::budget::parse_size`).
 pub fn parse_bytes(s: &str) -> Result<u64, String> {
-    crate::volume::budget::parse_size(s)
+    crate::pyramid::budget::parse_size(s)
 }
 
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {

@@ -265,7 +265,8 @@ fn movie(args: &RenderArgs) -> Result<()> {
 
 /// `--level`: level `level` (at most the coarsest) everywhere, with a note saying which.
 fn show_level(gpu: &Gpu, headless: &mut Headless, volume: &Volume, s: &RenderSettings, level: u32) -> Result<()> {
-    use crate::render::levels::{top_level, LevelChoice};
+    use crate::pyramid::bricks::top_level;
+    use crate::render::levels::LevelChoice;
     headless
         .renderer
         .show_levels(gpu, volume, s, LevelChoice::Forced(level))?;

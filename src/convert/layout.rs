@@ -7,6 +7,7 @@
 //! scale_k = f * scale_0 and translation_k = translation_0 + (f - 1) / 2 * scale_0, the centre of its block.
 //! The full affine is always stored too, under the multiscale's `metadata.volcast` key, with the anatomical frame.
 
+use crate::pyramid::geometry::spans;
 use crate::volume::Geometry;
 use serde_json::{json, Map, Value};
 
@@ -52,18 +53,6 @@ impl Placement {
         let translation = [0, 1, 2].map(|i| self.translation[i] + (f[i] - 1.0) / 2.0 * self.scale[i]);
         (scale, translation)
     }
-}
-
-/// Per level, how many level-0 voxels (x, y, z) one of its voxels spans.
-pub fn spans(levels: &[[u64; 3]]) -> Vec<[u64; 3]> {
-    let mut span = [1u64; 3];
-    let mut out = vec![span];
-    for pair in levels.windows(2) {
-        let f = super::pyramid::factors(pair[0]);
-        span = [0, 1, 2].map(|i| span[i] * f[i] as u64);
-        out.push(span);
-    }
-    out
 }
 
 /// The multiscale object: name, axes, one dataset per level ("0", "1", ...), and volcast's placement.

@@ -6,15 +6,16 @@
 //! and a loaded volume is held once. docs/cli.md (convert) states the rules: levels, data type, placement.
 
 pub mod layout;
-pub mod pyramid;
 pub mod sample;
 pub mod source;
 mod store;
 mod write;
 
+use crate::pyramid::geometry::store_levels;
+use crate::pyramid::reduce::Reduce;
+use crate::pyramid::sample::Sample;
 use crate::volume::{Scaling, VolumeError, VoxelType};
 use layout::{OmeVersion, Placement};
-use pyramid::Reduce;
 use source::Source;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -210,7 +211,7 @@ pub fn convert(
 }
 
 /// The store's metadata, then every step's slabs through the cascade. Returns the levels and steps written.
-fn write_store<T: sample::Sample>(
+fn write_store<T: Sample>(
     source: &Source,
     out: &Path,
     opts: &ConvertOptions,
@@ -218,7 +219,7 @@ fn write_store<T: sample::Sample>(
 ) -> Result<(Vec<[u64; 3]>, u32), ConvertError> {
     let store = Arc::new(ChunkStore::new(out.to_path_buf()).map_err(ConvertError::Zarr)?);
     let dims = source.dims().map(u64::from);
-    let levels = pyramid::level_dims(dims);
+    let levels = store_levels(dims);
     let steps: Vec<u32> = match opts.step {
         Some(t) => vec![t],
         None => (0..source.timesteps()).collect(),

@@ -1,7 +1,7 @@
 //! Where the converter's voxels come from, slab by slab: a volume loaded once (any format), or a file whose voxels
 //! lie in place on disk, read with positioned reads so it is never held whole.
 
-use super::sample::Sample;
+use crate::pyramid::sample::Sample;
 use crate::volume::in_place::{InPlace, Inflate};
 use crate::volume::{Endian, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
 use rayon::prelude::*;

@@ -3,10 +3,12 @@
 //! slabs of the one above, so memory stays a few slabs whatever the volume's size.
 
 use super::layout::OmeVersion;
-use super::pyramid::{self, Reduce};
-use super::sample::{numpy_dtype, zarr_data_type, Sample};
+use super::sample::{numpy_dtype, zarr_data_type};
 use super::store::ChunkStore;
 use super::{Compression, ConvertError};
+use crate::pyramid::geometry::factors;
+use crate::pyramid::reduce::{downsample, Reduce};
+use crate::pyramid::sample::Sample;
 use std::num::NonZeroU64;
 use std::sync::Arc;
 use zarrs::array::codec::{BloscCodec, BloscCompressionLevel, BloscCompressor, BloscShuffleMode, ZstdCodec};
@@ -215,10 +217,10 @@ impl<T: Sample> Cascade<T> {
         }
         ranges.extend([z..z + n, 0..h, 0..w]);
         let coarse = coarser.then(|| {
-            pyramid::downsample(
+            downsample(
                 &block,
                 [w as usize, h as usize, n as usize],
-                pyramid::factors([w, h, d]),
+                factors([w, h, d]),
                 self.reduce,
             )
         });

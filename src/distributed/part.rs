@@ -70,7 +70,7 @@ impl Source {
     /// a part over it names the sizes and asks for more ranks. (A volume read whole was fitted by its load.)
     pub fn check_budget(&self, held: Box3, budget: u64) -> Result<()> {
         if let Source::ByBox { voxel_type, .. } = self {
-            let bytes = held.voxels() * crate::volume::budget::held_bytes(*voxel_type);
+            let bytes = held.voxels() * crate::pyramid::budget::held_bytes(*voxel_type);
             if bytes > budget {
                 anyhow::bail!(crate::cli::UsageError(format!(
                     "this rank's part ({:?}..{:?}, ghost layer included) needs {} MiB, over the host budget of {} MiB \

@@ -84,8 +84,8 @@ impl Gpu {
     /// The budgets a volume is shown within on this device, from `--host-budget` and `--gpu-budget` (`None`: a
     /// quarter of the machine's memory, the device's largest heap), with its 3-D texture side limit. Every command
     /// and the viewer map the two flags through here.
-    pub fn budgets(&self, host: Option<u64>, device: Option<u64>) -> crate::volume::budget::Budgets {
-        crate::volume::budget::Budgets::host(host).with_gpu(crate::volume::budget::GpuBudget {
+    pub fn budgets(&self, host: Option<u64>, device: Option<u64>) -> crate::pyramid::budget::Budgets {
+        crate::pyramid::budget::Budgets::host(host).with_gpu(crate::pyramid::budget::GpuBudget {
             bytes: device.unwrap_or(self.device_local_bytes),
             max_dim: self.properties.limits.max_image_dimension3_d,
         })

@@ -13,11 +13,11 @@
 
 use crate::gpu::{Gpu, GpuError};
 use crate::measure::bench::{gpu_allocated, peak_rss_bytes, Stats};
+use crate::pyramid::budget::Budgets;
 use crate::render::headless::Headless;
 use crate::scale::cache::PyramidCache;
 use crate::scene::quality::{moving_view, Quality};
 use crate::scene::settings::RenderSettings;
-use crate::volume::budget::Budgets;
 use crate::volume::{OpenOptions, Volume, VoxelType};
 use rayon::prelude::*;
 use std::fs::File;

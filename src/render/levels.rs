@@ -1,9 +1,8 @@
 //! Which level of the resolution pyramid each brick shows (docs/large-volumes.md, "Bricks, levels and the page
 //! table"). Pure code: the renderer's pool (pool.rs) holds the bricks a [`Cut`] names.
 //!
-//! - The pyramid: level L + 1 halves every axis of level L, rounding up (an axis of 1 stays 1); a voxel is the mean
-//!   of the up-to-2×2×2 voxels it covers (`convert::pyramid::downsample`). Level L's voxel i covers level-0 voxels
-//!   [i·2^L, (i + 1)·2^L), so level-L bricks nest over 2^L level-0 bricks per axis.
+//! - The pyramid (`crate::pyramid`): its geometry, its bricks across levels (`pyramid::bricks`: level-L bricks nest
+//!   over 2^L level-0 bricks per axis) and its levels of a volume held in memory (`pyramid::in_memory`).
 //! - The screen rule: starting from the top level (one brick), a brick of level L ≥ 1 is replaced by its children
 //!   while its voxel (2^L level-0 voxels, smallest side) is larger than `factor` pixels at its distance: the distance
 //!   from the eye to its centre less half its diagonal (world units), a pixel there being 2·d·tan(fov/2)/height
@@ -11,8 +10,7 @@
 //! - Within a bound on the bricks (the pool's slots), refinement goes by need (voxel / pixel, largest first; ties to
 //!   the coarser brick, then the lower index), and a brick whose children do not fit stays as it is.
 
-use crate::volume::budget::level_dims;
-use crate::volume::{Volume, VoxelData};
+use crate::pyramid::bricks::{children, covering, grid_at};
 use glam::{DMat4, DVec3};
 use std::collections::BinaryHeap;
 
@@ -64,17 +62,6 @@ impl View {
     }
 }
 
-/// The top level for bricks of `brick`: the first whose grid is one brick (at most 16).
-pub fn top_level(dims: [u32; 3], brick: [u32; 3]) -> u32 {
-    (0..16).find(|&l| grid_at(dims, brick, l) == [1, 1, 1]).unwrap_or(16)
-}
-
-/// Bricks per axis of level `l`.
-pub fn grid_at(dims: [u32; 3], brick: [u32; 3], l: u32) -> [u32; 3] {
-    let d = level_dims(dims, l);
-    [0, 1, 2].map(|a| d[a].div_ceil(brick[a]))
-}
-
 impl Cut {
     pub fn uniform(grid: [u32; 3], level: u32) -> Cut {
         Cut {
@@ -88,7 +75,7 @@ impl Cut {
         let mut out: Vec<(u32, [u32; 3])> = (0..self.level.len())
             .map(|i| {
                 let l = self.level[i];
-                (l, self.brick_of(i).map(|b| b >> l))
+                (l, covering(self.brick_of(i), l))
             })
             .collect();
         out.sort_unstable();
@@ -165,11 +152,7 @@ pub fn screen_cut(
     consider(&mut heap, top, [0, 0, 0]);
     let mut count = 1usize;
     while let Some(Item(_, l, b)) = heap.pop() {
-        let g = grid_at(dims, brick, l - 1);
-        let children: Vec<[u32; 3]> = (0..8u32)
-            .map(|i| [0, 1, 2].map(|a| 2 * b[a] + (i >> a & 1)))
-            .filter(|c| (0..3).all(|a| c[a] < g[a]))
-            .collect();
+        let children = children(dims, brick, l, b);
         if count - 1 + children.len() > bricks {
             continue;
         }
@@ -193,27 +176,6 @@ pub fn screen_cut(
         }
     }
     cut
-}
-
-/// Grows `pyramid`, levels 1.. of `volume` (level 0 is the volume), up to level `top`, each level made from the one
-/// before it: a [`Volume`] with level 0's value range, so that its elements normalise the same way.
-pub fn extend_pyramid(volume: &Volume, pyramid: &mut Vec<Volume>, top: u32) -> Result<(), crate::volume::VolumeError> {
-    use crate::convert::pyramid::{downsample, Reduce};
-    while pyramid.len() < top as usize {
-        let from = pyramid.last().unwrap_or(volume);
-        let dims = from.dims.map(|d| d as usize);
-        let data = match &from.data {
-            VoxelData::U8(v) => VoxelData::U8(downsample(v, dims, [2, 2, 2], Reduce::Mean)),
-            VoxelData::U16(v) => VoxelData::U16(downsample(v, dims, [2, 2, 2], Reduce::Mean)),
-            VoxelData::F32(v) => VoxelData::F32(downsample(v, dims, [2, 2, 2], Reduce::Mean)),
-        };
-        let dims = from.dims.map(|d| d.div_ceil(2));
-        let mut level =
-            Volume::new(volume.name.clone(), dims, [1.0; 3], volume.source_type, data)?.with_scaling(volume.scaling)?;
-        (level.range, level.stored_range) = (volume.range, volume.stored_range);
-        pyramid.push(level);
-    }
-    Ok(())
 }
 
 /// The normalised value range of each skip cell a brick read from the file below the held level covers, by (level,
@@ -293,15 +255,6 @@ mod tests {
         }
     }
 
-    #[test]
-    fn levels_nest_and_the_top_is_one_brick() {
-        assert_eq!(top_level([32, 32, 32], [16; 3]), 1);
-        assert_eq!(top_level([40, 24, 16], [8; 3]), 3);
-        assert_eq!(grid_at([40, 24, 16], [8; 3], 0), [5, 3, 2]);
-        assert_eq!(grid_at([40, 24, 16], [8; 3], 2), [2, 1, 1]);
-        assert_eq!(grid_at([40, 24, 16], [8; 3], 3), [1, 1, 1]);
-    }
-
     /// Refining the top brick of a 32³ volume in 16³ bricks replaces one brick by eight: a bound of 8 holds them,
     /// 7 does not (the top brick stays).
     #[test]
@@ -330,6 +283,8 @@ mod tests {
     #[test]
     fn skip_ranges_follow_the_cut() {
         use super::super::skip::BrickGrid;
+        use crate::pyramid::in_memory::extend_pyramid;
+        use crate::volume::{Volume, VoxelData};
         let n = 32u32;
         let data: Vec<u8> = (0..n * n * n).map(|i| if i % n == 5 { 255 } else { 0 }).collect();
         let v = Volume::new("t", [n; 3], [1.0; 3], crate::volume::VoxelType::U8, VoxelData::U8(data)).unwrap();

@@ -7,8 +7,8 @@ use super::levels::Cut;
 use super::stream::Step;
 use super::Renderer;
 use crate::gpu::{Gpu, GpuError};
+use crate::pyramid::budget::{misfit, Budgets, Shape};
 use crate::scene::settings::RenderSettings;
-use crate::volume::budget::{misfit, Budgets, Shape};
 use crate::volume::Volume;
 
 /// Bytes of bricks uploaded per stream step (Voreen's bound per frame): a step never stalls a frame on a large
@@ -50,7 +50,7 @@ pub fn streamed_because(volume: &Volume, gpu_budget: u64) -> String {
         }
         None => format!(
             "is over the GPU budget whole ({})",
-            crate::volume::budget::show(gpu_budget)
+            crate::pyramid::budget::show(gpu_budget)
         ),
     }
 }

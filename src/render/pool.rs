@@ -17,11 +17,12 @@
 //! entry, its walk's spans those of the skip grid alone); larger ones, or any under `--brick-size`, are tiled.
 
 use super::levels::Cut;
-use crate::volume::budget::level_dims;
+use crate::pyramid::bricks::{covering, grid_at};
+use crate::pyramid::geometry::level_dims;
 
 /// Voxels of border on each side of a brick in its slot: a point in the brick, moved one voxel (gradients) and
 /// filtered (one more), reads at most two voxels beyond it.
-pub const BORDER: u32 = crate::volume::budget::BRICK_BORDER;
+pub const BORDER: u32 = crate::pyramid::budget::BRICK_BORDER;
 
 /// The brick side used when a volume does not fit the device's 3D limit in one slot (docs/large-volumes.md has
 /// the measurements).
@@ -71,7 +72,7 @@ impl Pool {
             None if one => dims,
             None => dims.map(|d| TILED_BRICK.min(d)),
         };
-        let grid = [0, 1, 2].map(|a| dims[a].div_ceil(brick[a]));
+        let grid = grid_at(dims, brick, 0);
         // Refused before a page table of that size is made.
         let count = grid.iter().map(|&g| u64::from(g)).product::<u64>();
         if arrange(count, brick.map(slot_side), max_dim).is_none() {
@@ -94,7 +95,7 @@ impl Pool {
         let directory = (0..cut.level.len())
             .map(|i| {
                 let l = cut.level[i];
-                let key = (l, cut.brick_of(i).map(|b| b >> l));
+                let key = (l, covering(cut.brick_of(i), l));
                 shown.binary_search(&key).map_or(0, |slot| slot as u32)
             })
             .collect();
@@ -122,7 +123,7 @@ impl Pool {
     ) -> Result<Pool, String> {
         let count = capacity.max(1) as u64;
         let slots = arrange(count, brick.map(slot_side), max_dim).ok_or_else(|| too_many(count, brick, max_dim))?;
-        let grid = [0, 1, 2].map(|a| dims[a].div_ceil(brick[a]));
+        let grid = grid_at(dims, brick, 0);
         Ok(Pool {
             dims,
             brick,

@@ -7,8 +7,8 @@
 //! would change no pixel, so they take no slot in the pool and are never read. 2^L voxels cover the apron that a
 //! trilinear sample of the brick, or of any brick below it, reads.
 
-use super::levels::grid_at;
 use super::skip::BrickGrid;
+use crate::pyramid::bricks::grid_at;
 use crate::scene::settings::RenderSettings;
 use crate::volume::cells::CellRanges;
 use crate::volume::Volume;

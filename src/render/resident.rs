@@ -13,6 +13,8 @@ use super::stream::{Step, Stream};
 use super::texels::Levels;
 use super::Renderer;
 use crate::gpu::{Gpu, GpuError, TexelPolicy};
+use crate::pyramid::bricks::{grid_at, top_level};
+use crate::pyramid::in_memory::extend_pyramid;
 use crate::scene::settings::RenderSettings;
 use crate::volume::cells::CellRanges;
 use crate::volume::Volume;
@@ -27,7 +29,7 @@ impl GpuVolume {
             return Ok(false);
         }
         let top = cut.level.iter().copied().max().unwrap_or(0) as usize;
-        levels::extend_pyramid(volume, &mut self.pyramid, top as u32)
+        extend_pyramid(volume, &mut self.pyramid, top as u32)
             .map_err(|e| GpuError::TooLarge(format!("pyramid of {}: {e}", volume.name)))?;
         let limit = gpu.properties.limits.max_image_dimension3_d;
         let pool = Pool::with_cut(volume.dims, self.pool.brick, limit, cut).map_err(GpuError::TooLarge)?;
@@ -123,14 +125,9 @@ impl GpuVolume {
         };
         let slot_texels = brick3.iter().map(|&b| u64::from(slot_side(b))).product::<u64>();
         let layout = layout_for(gpu, policy, volume, slot_texels);
-        let top = levels::top_level(dims, brick3);
+        let top = top_level(dims, brick3);
         let bricks_in_pyramid = (0..=top)
-            .map(|l| {
-                levels::grid_at(dims, brick3, l)
-                    .iter()
-                    .map(|&g| g as u64)
-                    .product::<u64>()
-            })
+            .map(|l| grid_at(dims, brick3, l).iter().map(|&g| g as u64).product::<u64>())
             .sum::<u64>();
         let limit = gpu.properties.limits.max_image_dimension3_d;
         let fit = pool_bytes / (slot_texels * layout.bytes_per_voxel());
@@ -172,8 +169,8 @@ impl GpuVolume {
     fn start_stream(&mut self, gpu: &Gpu, volume: &Volume, brick: u32, capacity: usize) -> Result<(), GpuError> {
         let (dims, held) = level0(volume);
         let brick = dims.map(|d| brick.clamp(1, d));
-        let top = levels::top_level(dims, brick);
-        levels::extend_pyramid(volume, &mut self.pyramid, top.saturating_sub(held))
+        let top = top_level(dims, brick);
+        extend_pyramid(volume, &mut self.pyramid, top.saturating_sub(held))
             .map_err(|e| GpuError::TooLarge(format!("pyramid of {}: {e}", volume.name)))?;
         let limit = gpu.properties.limits.max_image_dimension3_d;
         let pool = Pool::with_capacity(dims, brick, limit, capacity, top).map_err(GpuError::TooLarge)?;
@@ -387,7 +384,7 @@ impl Renderer {
             return Err(GpuError::Lost("no volume loaded"));
         };
         let brick = vol.pool.brick;
-        let top = levels::top_level(volume.dims, brick);
+        let top = top_level(volume.dims, brick);
         let grid = vol.pool.grid;
         let cut = match choice {
             levels::LevelChoice::Finest => levels::Cut::uniform(grid, 0),

@@ -13,6 +13,7 @@
 
 use super::levels::Cut;
 use super::pool::{Pool, Resident};
+use crate::pyramid::bricks::covering;
 use std::collections::HashMap;
 
 /// A brick of some level: (level, index in that level's grid).
@@ -131,7 +132,7 @@ impl Stream {
             pool.resident[slot] = held.map(|((level, brick), _)| Resident { level, brick });
         }
         for (i, &l) in shown.level.iter().enumerate() {
-            let key = (l, shown.brick_of(i).map(|b| b >> l));
+            let key = (l, covering(shown.brick_of(i), l));
             pool.directory[i] = self.index.get(&key).copied().unwrap_or(0);
         }
     }
@@ -156,7 +157,7 @@ impl Stream {
         for (i, l) in shown.level.iter_mut().enumerate() {
             let b = wanted.brick_of(i);
             *l = (*l..self.top)
-                .find(|&level| self.is_resident((level, b.map(|v| v >> level))))
+                .find(|&level| self.is_resident((level, covering(b, level))))
                 .unwrap_or(self.top);
         }
         shown

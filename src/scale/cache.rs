@@ -14,9 +14,9 @@
 
 use super::level0::{self, Level0};
 use crate::convert::layout::OmeVersion;
-use crate::convert::pyramid::Reduce;
 use crate::convert::source::Source;
 use crate::convert::{convert, Compression, ConvertOptions};
+use crate::pyramid::reduce::Reduce;
 use crate::volume::cells::CellRanges;
 use crate::volume::in_place::InPlace;
 use crate::volume::{self, OpenOptions, Volume};
@@ -160,7 +160,7 @@ impl PyramidCache {
             len,
             modified_ns,
             level,
-            dims: crate::volume::budget::level_dims(place.dims, level),
+            dims: crate::pyramid::geometry::level_dims(place.dims, level),
             stored_range: None,
             level0: None,
         })

@@ -1,13 +1,14 @@
 //! The levels finer than the one a volume holds. A file whose voxels lie in place on disk is held at the finest
 //! level of the pyramid that the host budget takes; its finer levels stay in the file, and a streamed pool reads
 //! their bricks as the view needs them: one box of level-0 voxels per brick (a positioned read per row), reduced
-//! to the brick's level by the pyramid's rule (`convert::pyramid`, recursively, each box aligned to 2^L so that the
+//! to the brick's level by the pyramid's rule (`pyramid::reduce`, recursively, each box aligned to 2^L so that the
 //! cascade inside it is exactly the pyramid's). docs/large-volumes.md, "Full resolution from the file".
 
-use crate::convert::pyramid::{downsample, factors, Reduce};
-use crate::convert::sample::Sample;
 use crate::convert::source::Source;
-use crate::volume::budget::level_dims;
+use crate::pyramid::bricks::level0_box;
+use crate::pyramid::geometry::level_dims;
+use crate::pyramid::reduce::mean_to_level;
+use crate::pyramid::sample::Sample;
 use crate::volume::in_place::InPlace;
 use crate::volume::zarr::boxes::ZarrBoxes;
 use crate::volume::{FinerLevels, Geometry, VolumeError, VoxelData, VoxelType};
@@ -107,16 +108,9 @@ impl Finer {
 
     /// The box of level `level` from the level-0 box under it, halved `level` times.
     fn box_at<T: Sample>(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<Vec<T>, VolumeError> {
-        let lo0 = lo.map(|v| v << level);
-        let hi0 = [0, 1, 2].map(|a| ((lo[a] + size[a]) << level).min(self.dims[a]));
-        let mut dims = [0, 1, 2].map(|a| (hi0[a] - lo0[a]) as usize);
-        let mut data = self.source.read_box::<T>(lo0, dims.map(|d| d as u32))?;
-        for l in 0..level {
-            // The factors of the whole level, not of the box: an axis of length 1 is not halved.
-            let f = factors(level_dims(self.dims, l).map(u64::from));
-            data = downsample(&data, dims, f, Reduce::Mean);
-            dims = [0, 1, 2].map(|a| dims[a].div_ceil(f[a]));
-        }
+        let (lo0, size0) = level0_box(self.dims, level, lo, size);
+        let data = self.source.read_box::<T>(lo0, size0)?;
+        let (data, dims) = mean_to_level(data, size0.map(|d| d as usize), self.dims, level);
         debug_assert_eq!(dims, size.map(|s| s as usize));
         Ok(data)
     }

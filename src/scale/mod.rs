@@ -1,4 +1,4 @@
-//! Volumes larger than memory or the device, shown within budgets (`volume::budget`): the level of the resolution
+//! Volumes larger than memory or the device, shown within budgets (`pyramid::budget`): the level of the resolution
 //! pyramid that fits is read, never the full resolution first. A file whose voxels lie in place on disk (raw,
 //! uncompressed NRRD, NIfTI, Analyze and MetaImage) is read level by level from the file with positioned reads, on
 //! every core ([`read`]); an OME-Zarr store gives its own level; any other file is read whole and then reduced.
@@ -11,7 +11,8 @@ pub mod preview;
 pub mod read;
 
 use crate::convert::source::Source;
-use crate::volume::budget::{self, Budgets, Shape};
+use crate::pyramid::budget::{self, Budgets, Shape};
+use crate::pyramid::geometry::level_dims;
 use crate::volume::in_place::{in_place, InPlace};
 use crate::volume::{self, OpenOptions, Volume, VolumeError, VoxelType};
 use cache::{Lookup, PyramidCache};
@@ -67,10 +68,6 @@ pub fn open_deferred(
     cache: Option<&PyramidCache>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Opened, VolumeError> {
-    let opts = OpenOptions {
-        budgets: Some(budgets),
-        ..opts.clone()
-    };
     let named = |problem: String| VolumeError::Header {
         file: path.display().to_string(),
         problem,
@@ -78,11 +75,11 @@ pub fn open_deferred(
     // A file in place is read level by level with positioned reads; a compressed one is decoded once, front to
     // back, into the level (never held whole). Either only where the level is not full resolution: level 0 is read
     // by the format's own loader.
-    let place = match in_place(path, &opts)? {
+    let place = match in_place(path, opts)? {
         Some(p) => Some(p),
-        None => match crate::volume::in_place::compressed(path, &opts)? {
+        None => match crate::volume::in_place::compressed(path, opts)? {
             Some(p) => Some(p),
-            None => dicom_by_slices(path, &opts, &budgets)?,
+            None => dicom_by_slices(path, opts, &budgets)?,
         },
     };
     if let Some(place) = place {
@@ -93,23 +90,23 @@ pub fn open_deferred(
         };
         let level = budget::choose(&shape, &budgets).map_err(named)?;
         if level.level > 0 {
-            refuse_if_asked(&opts, shape.dims, &level).map_err(named)?;
-            return read_place(place, &level, &opts, budgets.host, cache, progress);
+            refuse_if_asked(opts, shape.dims, &level).map_err(named)?;
+            return read_place(place, &level, &budgets, opts, cache, progress);
         }
         if place.blocks.is_some() {
             // Appended `.vti` data are decoded by range at full resolution too: the file is never held beside its
             // voxels (the format's reader holds both). Level 0 is not cached: it is the file.
-            return read_place(place, &level, &opts, budgets.host, None, progress);
+            return read_place(place, &level, &budgets, opts, None, progress);
         }
     }
     refuse_whole_over_budget(path, &budgets).map_err(named)?;
-    let v = volume::open_with_progress(path, &opts, progress)?;
+    let v = volume::open_within(path, opts, Some(&budgets), progress)?;
     let volume = fit(v, &budgets, opts.no_downsample).map_err(|e| match e {
         VolumeError::Header { problem, .. } => named(problem),
         e => e,
     })?;
     Ok(Opened {
-        volume: with_store_finer(volume, path, &opts),
+        volume: with_store_finer(volume, path, opts),
         keep: None,
     })
 }
@@ -149,12 +146,12 @@ fn described(mut v: Volume, place: &InPlace) -> Volume {
 }
 
 /// Level `level` of the file `place` describes: from the pyramid cache where `cache` holds it, else read from the
-/// file within `host_budget` (with the cache write left to the caller).
+/// file within the host budget of `budgets` (with the cache write left to the caller).
 fn read_place(
     place: InPlace,
     level: &budget::Level,
+    budgets: &Budgets,
     opts: &OpenOptions,
-    host_budget: u64,
     cache: Option<&PyramidCache>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Opened, VolumeError> {
@@ -207,7 +204,7 @@ fn read_place(
     }
     let source = Source::in_place(place.clone())?;
     let level0 = start_level0(&place, level.level, cache, &mut notes);
-    let mut v = read::read_level_keeping(&source, level.level, host_budget, notes, level0.as_ref(), progress)?;
+    let mut v = read::read_level_keeping(&source, level.level, budgets.host, notes, level0.as_ref(), progress)?;
     let kept = match level0.map(level0::Level0::finish) {
         Some(Ok(path)) => {
             v.notes.push(format!(
@@ -273,7 +270,7 @@ fn start_level0(
 /// box, or in `kept`, a decoded file's level 0 kept in the pyramid cache (`level0::in_place`), and `v` is that level
 /// as read (not reduced further by `--max-dim`).
 fn with_finer(mut v: Volume, place: &InPlace, kept: Option<&InPlace>, level: u32) -> Result<Volume, VolumeError> {
-    if v.dims == budget::level_dims(place.dims, level) {
+    if v.dims == level_dims(place.dims, level) {
         let finer = match kept {
             Some(k) => finer::Finer::of_kept(k, level)?,
             None => finer::Finer::of(place, level)?,

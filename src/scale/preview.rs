@@ -33,7 +33,7 @@ pub fn stride(dims: [u32; 3]) -> u32 {
 /// Whether a `dims` volume shown at level `level` is large enough for a preview: at least [`PREVIEW_FROM`] voxels
 /// there (a smaller one opens fast enough without one).
 pub fn large_at(dims: [u32; 3], level: u32) -> bool {
-    let shown = crate::volume::budget::level_dims(dims, level);
+    let shown = crate::pyramid::geometry::level_dims(dims, level);
     shown.iter().map(|&d| u64::from(d)).product::<u64>() >= PREVIEW_FROM
 }
 

@@ -1,15 +1,16 @@
 //! Reading one level of the resolution pyramid without holding the level above it: output slices are made on every
 //! core, each from the 2^L source slices under it (read with positioned reads from a file in place, or copied from a
-//! loaded volume), reduced level by level with `convert::pyramid`'s mean. Because the slab is aligned to 2^L, the
-//! cascade inside it is exactly the pyramid's: the result equals level L of `volcast convert`'s store.
+//! loaded volume), reduced level by level with the pyramid's mean (`pyramid::reduce`). Because the slab is aligned
+//! to 2^L, the cascade inside it is exactly the pyramid's: the result equals level L of `volcast convert`'s store.
 
-use super::budget::level_dims;
 use super::level0::Level0;
-use crate::convert::pyramid::{downsample, downsample_into, factors, Reduce};
-use crate::convert::sample::Sample;
 use crate::convert::source::Source;
+use crate::pyramid::budget::show;
+use crate::pyramid::geometry::{level_dims, level_geometry};
+use crate::pyramid::reduce::mean_to_level_into;
+use crate::pyramid::sample::Sample;
 use crate::volume::cells::{CellRanges, Element};
-use crate::volume::{Geometry, Volume, VolumeError, VoxelData, VoxelType};
+use crate::volume::{Volume, VolumeError, VoxelData, VoxelType};
 use rayon::prelude::*;
 
 /// Output slices made at once: enough to keep every core busy, few enough to bound the slabs held.
@@ -55,7 +56,8 @@ fn level_step<T: Sample + Element>(
         if let (Some([a, b]), Ok(mut r)) = (found, range.lock()) {
             *r = Some(r.map_or([a, b], |[lo, hi]| [lo.min(a), hi.max(b)]));
         }
-        cascade(slab, (full, n), level, into);
+        let dims = [full[0] as usize, full[1] as usize, n as usize];
+        mean_to_level_into(slab, dims, full, level, into);
         cells
     };
     let mut cells = CellRanges::unseen(full, cell);
@@ -113,8 +115,8 @@ fn check_slab(source: &Source, level: u32, slab_bytes: u64, host_budget: u64) ->
             1u32 << level,
             full[0],
             full[1],
-            crate::volume::budget::show(slab_bytes),
-            crate::volume::budget::show(host_budget)
+            show(slab_bytes),
+            show(host_budget)
         ),
     })
 }
@@ -147,24 +149,6 @@ fn slab_ranges<T: Sample + Element>(slab: &[T], dims: [u32; 3], cell: u32) -> (V
             .map(|r| r.map(|v| v - offset))
     };
     (cells, found)
-}
-
-/// Reduces `slab` (whole slices of level 0 of a volume of `full`, `n` of them: 2^`level` but at the end) by the
-/// pyramid's rule to its slice of level `level`, into `into`.
-fn cascade<T: Sample>(slab: &[T], (full, n): ([u32; 3], u32), level: u32, into: &mut [T]) {
-    let mut dims = [full[0] as usize, full[1] as usize, n as usize];
-    let mut made: Option<Vec<T>> = None;
-    for l in 0..level {
-        // The factors of the whole level, not of the slab: an axis of length 1 is not halved.
-        let f = factors(level_dims(full, l).map(u64::from));
-        let src = made.as_deref().unwrap_or(slab);
-        if l + 1 == level {
-            return downsample_into(src, dims, f, Reduce::Mean, into);
-        }
-        made = Some(downsample(src, dims, f, Reduce::Mean));
-        dims = [0, 1, 2].map(|i| dims[i].div_ceil(f[i]));
-    }
-    into.copy_from_slice(slab);
 }
 
 /// A level of one step as read: its voxels, level 0's stored value range (finite values) and level 0's range per
@@ -202,15 +186,6 @@ fn level_data(
             held::<u16>(r, VoxelData::U16)
         }
         _ => held::<f32>(level_step(source, at, host_budget, keep, progress)?, VoxelData::F32),
-    })
-}
-
-/// The geometry of level `level`: each level's voxel spans the 2 (or 1) voxels of the level below along each
-/// axis, centred on them, as `volcast convert` places its levels.
-pub fn level_geometry(geometry: Geometry, full: [u32; 3], level: u32) -> Geometry {
-    (0..level).fold(geometry, |g, l| {
-        let f = factors(level_dims(full, l).map(u64::from));
-        g.downsampled(f.map(|v| v as u32))
     })
 }
 
@@ -278,7 +253,7 @@ mod tests {
             let [x, y, z] = at.map(|v| v as usize);
             return f64::from(src[x + dims[0] as usize * (y + dims[1] as usize * z)]);
         }
-        let below = crate::volume::budget::level_dims(dims, l - 1);
+        let below = level_dims(dims, l - 1);
         let f = below.map(|n| if n > 1 { 2 } else { 1 });
         let mut values = Vec::new();
         for dz in 0..f[2] {
@@ -306,7 +281,7 @@ mod tests {
         for level in 1..=3 {
             let a = read_level(&from_file, level, 1 << 30, Vec::new(), &mut |_| {}).unwrap();
             let b = read_level(&loaded, level, 1 << 30, Vec::new(), &mut |_| {}).unwrap();
-            let out = crate::volume::budget::level_dims(dims, level);
+            let out = level_dims(dims, level);
             assert_eq!(a.dims, out);
             for z in 0..out[2] {
                 for y in 0..out[1] {

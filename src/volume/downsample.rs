@@ -1,6 +1,9 @@
-//! Halving a volume along the axes that exceed a limit (2× box filter), for volumes larger than the device allows.
+//! Halving a volume along the axes that exceed a limit (2× box filter), for volumes larger than `--max-dim` allows.
+//! A halved axis follows the pyramid's rule ([`halve`]); unlike the pyramid's levels, only the axes over the limit
+//! are halved, and NaN voxels are left out of a mean.
 
 use super::{Volume, VoxelData};
+use crate::pyramid::geometry::halve;
 
 /// Halves every axis longer than `max_dim` (repeatedly) with a 2-voxel box filter. An odd axis keeps its last
 /// voxel on its own. Voxels grow to twice their size along a halved
@@ -10,8 +13,8 @@ pub fn downsample_to(mut volume: Volume, max_dim: u32) -> Volume {
     let max_dim = max_dim.max(1);
     let original = volume.dims;
     while volume.dims.iter().any(|&d| d > max_dim) {
-        let halve = volume.dims.map(|d| d > max_dim);
-        volume = halve_axes(volume, halve);
+        let over = volume.dims.map(|d| d > max_dim);
+        volume = halve_axes(volume, over);
     }
     if volume.dims != original {
         let [a, b, c] = original;
@@ -23,12 +26,18 @@ pub fn downsample_to(mut volume: Volume, max_dim: u32) -> Volume {
     volume
 }
 
-fn halve_axes(volume: Volume, halve: [bool; 3]) -> Volume {
+fn halve_axes(volume: Volume, halved: [bool; 3]) -> Volume {
     let src = volume.dims.map(|d| d as usize);
     let dst: Vec<usize> = (0..3)
-        .map(|i| if halve[i] { src[i].div_ceil(2) } else { src[i] })
+        .map(|i| {
+            if halved[i] {
+                halve(src[i] as u64) as usize
+            } else {
+                src[i]
+            }
+        })
         .collect();
-    let factor = halve.map(|h| if h { 2 } else { 1 });
+    let factor = halved.map(|h| if h { 2 } else { 1 });
     // Averages the (up to 8) source voxels of output voxel (x, y, z) through `get`.
     let average = |x: usize, y: usize, z: usize, get: &dyn Fn(usize) -> f64| -> f64 {
         let (mut sum, mut n) = (0.0, 0u32);

@@ -11,7 +11,6 @@
 //! [`Volume::range`] and [`Volume::gpu_scale_bias`], so a 12-bit CT with an intercept of -1024 still takes two
 //! bytes per voxel on the GPU and no precision is lost.
 
-pub mod budget;
 mod builtin;
 pub mod cells;
 mod decode;
@@ -22,6 +21,7 @@ mod format;
 pub mod geometry;
 pub mod huge_pages;
 pub mod in_place;
+pub(crate) mod limits;
 mod metaimage;
 pub(crate) mod nifti;
 mod nrrd;
@@ -30,7 +30,7 @@ mod raw;
 mod tiff_stack;
 mod time;
 mod unsupported;
-mod voxel;
+pub(crate) mod voxel;
 mod vtk;
 pub(crate) mod zarr;
 
@@ -39,7 +39,7 @@ pub use decode::Endian;
 pub use dicom::series::SeriesInfo;
 pub use downsample::downsample_to;
 pub use error::VolumeError;
-pub use open::{detect_format, format_by_name, open, open_with_progress, Format, OpenOptions};
+pub use open::{detect_format, format_by_name, open, open_with_progress, open_within, Format, OpenOptions};
 pub use raw::{from_native_bytes, load_raw, parse_scivis_name, RawOptions};
 pub use time::TimeSteps;
 pub(crate) use voxel::stored_offset;
@@ -61,14 +61,7 @@ pub mod from_bytes {
 }
 
 pub use geometry::Geometry;
-
-/// Largest dimension accepted at load; the device's own limit is checked later at upload.
-pub const MAX_DIM: u32 = 16384;
-
-/// Most voxels accepted at load (2^36, 64 Gi): a bound on what a header may claim. What is actually held is set
-/// by the budgets (`budget.rs`): the host holds the finest level within its budget, and the GPU streams bricks of
-/// it through a pool within its own (render/stream.rs).
-pub const MAX_VOXELS: u64 = 1 << 36;
+pub use limits::{MAX_DIM, MAX_VOXELS};
 
 /// A volume ready for upload.
 #[derive(Clone, Debug)]

@@ -4,6 +4,7 @@
 use super::decode::{Endian, Progress};
 use super::{dicom, downsample, format, metaimage, nifti, nrrd, raw, tiff_stack, unsupported, vtk, zarr};
 use super::{RawOptions, Volume, VolumeError};
+use crate::pyramid::budget::Budgets;
 use std::path::Path;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,9 +58,6 @@ pub struct OpenOptions {
     pub series: Option<String>,
     /// The channel to load from an OME-Zarr image with a `c` axis (`None`: channel 0).
     pub channel: Option<u32>,
-    /// The memory budgets an OME-Zarr level must fit to be chosen (`None`: none). Other formats are read whole
-    /// here; `crate::scale::open` reads them within the budgets.
-    pub budgets: Option<super::budget::Budgets>,
 }
 
 /// Which reader a path needs. A folder is decided by its files: TIFFs make a TIFF stack, DICOM files a DICOM
@@ -191,7 +189,19 @@ pub fn open_with_progress(
     opts: &OpenOptions,
     progress: &mut dyn FnMut(f32),
 ) -> Result<Volume, VolumeError> {
-    open_unnamed(path, opts, progress).map_err(|e| {
+    open_within(path, opts, None, progress)
+}
+
+/// [`open_with_progress`], an OME-Zarr store's level chosen within `budgets` (`None`: the finest that fits
+/// `opts.max_dim`). Other formats are read whole here; `crate::scale::open` reads them within the budgets, and is
+/// where budgets come in.
+pub fn open_within(
+    path: &Path,
+    opts: &OpenOptions,
+    budgets: Option<&Budgets>,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Volume, VolumeError> {
+    open_unnamed(path, opts, budgets, progress).map_err(|e| {
         let text = e.to_string();
         let name = path
             .file_name()
@@ -208,7 +218,12 @@ pub fn open_with_progress(
     })
 }
 
-fn open_unnamed(path: &Path, opts: &OpenOptions, progress: &mut dyn FnMut(f32)) -> Result<Volume, VolumeError> {
+fn open_unnamed(
+    path: &Path,
+    opts: &OpenOptions,
+    budgets: Option<&Budgets>,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Volume, VolumeError> {
     let mut progress = Progress::new(Some(progress));
     // A file of a format volcast does not read can still be read as raw when the layout is given explicitly.
     let explicit_raw = opts.raw.dims.is_some() && opts.raw.voxel_type.is_some();
@@ -235,7 +250,7 @@ fn open_unnamed(path: &Path, opts: &OpenOptions, progress: &mut dyn FnMut(f32)) 
             let zarr_opts = zarr::ZarrOptions {
                 channel: opts.channel,
                 max_dim: opts.max_dim,
-                budgets: opts.budgets,
+                budgets: budgets.copied(),
             };
             zarr::load(path, zarr_opts, &mut progress)?
         }

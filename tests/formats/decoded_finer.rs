@@ -8,8 +8,8 @@
 
 use crate::common;
 use std::path::PathBuf;
+use volcast::pyramid::budget::Budgets;
 use volcast::scale::cache::PyramidCache;
-use volcast::volume::budget::Budgets;
 use volcast::volume::{self, OpenOptions, VoxelData};
 
 fn data(rel: &str) -> PathBuf {

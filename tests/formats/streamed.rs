@@ -6,7 +6,7 @@
 
 use crate::common;
 use std::path::{Path, PathBuf};
-use volcast::volume::budget::Budgets;
+use volcast::pyramid::budget::Budgets;
 use volcast::volume::{self, OpenOptions};
 
 fn data(rel: &str) -> PathBuf {

@@ -325,7 +325,7 @@ fn hostile_vti_files_are_refused() {
         assert!(e.contains(expected), "{name}: {e} should contain '{expected}'");
         // Within a host budget smaller than the claim, an appended array is read where it lies (by range): refused
         // as clearly, before any block is decoded past what the file holds.
-        let budgets = volcast::volume::budget::Budgets::host(Some(100));
+        let budgets = volcast::pyramid::budget::Budgets::host(Some(100));
         let e = volcast::scale::open(&path, &Default::default(), budgets, None, &mut |_| {}).expect_err(name);
         assert!(e.to_string().contains(name), "{name}: within the budget: {e}");
     }

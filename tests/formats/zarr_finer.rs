@@ -7,7 +7,7 @@
 use crate::common;
 use std::path::{Path, PathBuf};
 use volcast::convert::source::Source;
-use volcast::volume::budget::Budgets;
+use volcast::pyramid::budget::Budgets;
 use volcast::volume::{self, OpenOptions, Volume, VoxelData};
 
 fn data(rel: &str) -> PathBuf {
@@ -102,7 +102,7 @@ fn a_store_volcast_wrote_streams_its_level_0_across_chunks() {
         chunk: 8,
         shard: None,
         compression: volcast::convert::Compression::Zstd,
-        reduce: volcast::convert::pyramid::Reduce::Mean,
+        reduce: volcast::pyramid::reduce::Reduce::Mean,
         step: None,
         stored: false,
     };

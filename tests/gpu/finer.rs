@@ -10,11 +10,11 @@ use common::bounds::REFERENCE;
 use common::gpu::{finish, validated_gpu, Judge};
 use common::levels::Cut as RefCut;
 use common::reference::{Reference, Rendered};
+use volcast::pyramid::budget::Budgets;
 use volcast::render::headless::Headless;
 use volcast::render::levels::Cut;
 use volcast::scene::camera::Camera;
 use volcast::scene::settings::{RenderSettings, Shading};
-use volcast::volume::budget::Budgets;
 use volcast::volume::{self, OpenOptions, Volume};
 
 /// The helix and the same voxels opened from a raw file within a host budget one byte short of level 0.

@@ -241,7 +241,7 @@ fn the_screen_rule_within_a_small_pool() {
         if under.clone().all(|i| free.level[i] >= l) {
             continue;
         }
-        let g = volcast::render::levels::grid_at([128; 3], [16; 3], l - 1);
+        let g = volcast::pyramid::bricks::grid_at([128; 3], [16; 3], l - 1);
         let children = (0..8u32)
             .filter(|i| (0..3).all(|a| 2 * b[a] + (i >> a & 1) < g[a]))
             .count();

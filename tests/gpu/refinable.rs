@@ -13,10 +13,10 @@ use common::levels::{may_refine, pyramid, screen_cut, screen_cut_where, Cut as R
 use common::reference::Reference;
 use common::segments::Segments;
 use common::strides::visible_emission;
+use volcast::pyramid::budget::Budgets;
 use volcast::render::headless::Headless;
 use volcast::render::levels::{Cut, LevelChoice};
 use volcast::scene::settings::RenderSettings;
-use volcast::volume::budget::Budgets;
 use volcast::volume::{OpenOptions, Volume};
 
 const BRICK: [usize; 3] = [16; 3];

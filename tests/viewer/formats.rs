@@ -143,7 +143,7 @@ pub(crate) fn headless_render_within(
     match gpu_budget {
         None => headless.set_volume(&gpu, volume).expect("upload"),
         Some(bytes) => {
-            let budgets = volcast::volume::budget::Budgets::host(None).with_gpu(volcast::volume::budget::GpuBudget {
+            let budgets = volcast::pyramid::budget::Budgets::host(None).with_gpu(volcast::pyramid::budget::GpuBudget {
                 bytes,
                 max_dim: gpu.properties.limits.max_image_dimension3_d,
             });

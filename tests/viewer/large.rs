@@ -121,7 +121,7 @@ fn full_resolution_within_the_host_budget(path: &Path, dir: &Path) {
     }
     let d = &x.display;
     let file = path.to_string_lossy().into_owned();
-    let budgets = volcast::volume::budget::Budgets::host(Some(20 << 20));
+    let budgets = volcast::pyramid::budget::Budgets::host(Some(20 << 20));
     // Its own cache: a compressed file's level 0 is kept there (the viewer keeps its own in `cache` below).
     let held_cache = volcast::scale::cache::PyramidCache::new(Some(dir.join("held-cache")));
     let held = volcast::scale::open(path, &Default::default(), budgets, Some(&held_cache), &mut |_| {}).expect("held");

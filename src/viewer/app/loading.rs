@@ -79,7 +79,7 @@ pub(super) fn value_histogram(v: &Volume) -> Vec<u64> {
 /// user's `--max-dim`.
 #[derive(Clone, Debug)]
 pub(super) struct Limits {
-    pub(super) budgets: volume::budget::Budgets,
+    pub(super) budgets: crate::pyramid::budget::Budgets,
     pub(super) max_dim: Option<u32>,
     /// Where levels read from files are kept (`None`: `--no-cache`).
     pub(super) cache: Option<crate::scale::cache::PyramidCache>,
@@ -88,8 +88,8 @@ pub(super) struct Limits {
 impl Limits {
     /// What a volume is read within: the host budget alone (the GPU budget decides whether it is uploaded whole
     /// or streamed).
-    pub(super) fn read_budgets(&self) -> volume::budget::Budgets {
-        volume::budget::Budgets {
+    pub(super) fn read_budgets(&self) -> crate::pyramid::budget::Budgets {
+        crate::pyramid::budget::Budgets {
             gpu: None,
             ..self.budgets
         }
@@ -373,10 +373,11 @@ mod tests {
         // A series is shown whole, step by step: read at the level the GPU budget takes whole, even where its file
         // is decoded as a stream (and that level kept in the pyramid cache).
         let dir = std::env::temp_dir().join(format!("volcast-loading-series-{}", std::process::id()));
-        let budgets = volume::budget::Budgets::host(Some(10 << 10)).with_gpu(volume::budget::GpuBudget {
-            bytes: 2 << 10,
-            max_dim: 16384,
-        });
+        let budgets =
+            crate::pyramid::budget::Budgets::host(Some(10 << 10)).with_gpu(crate::pyramid::budget::GpuBudget {
+                bytes: 2 << 10,
+                max_dim: 16384,
+            });
         let limits = Limits {
             budgets,
             max_dim: None,

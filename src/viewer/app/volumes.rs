@@ -2,11 +2,11 @@
 //! showing the step of a series the time controls ask for, and uploading the next one ahead while it plays.
 
 use crate::gpu::GpuError;
+use crate::pyramid::budget::Budgets;
 use crate::render::placement::Placed;
 use crate::viewer::model::{Model, Streaming};
 use crate::viewer::present::Presenter;
 use crate::viewer::VolumeSource;
-use crate::volume::budget::Budgets;
 use crate::volume::Volume;
 
 /// The shown volume on the CPU, and where it came from.

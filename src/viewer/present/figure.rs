@@ -3,9 +3,9 @@
 
 use super::Presenter;
 use crate::gpu::GpuError;
+use crate::pyramid::budget::Budgets;
 use crate::render::headless::Headless;
 use crate::scene::settings::RenderSettings;
-use crate::volume::budget::Budgets;
 use crate::volume::Volume;
 
 impl Presenter {

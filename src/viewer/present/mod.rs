@@ -123,7 +123,7 @@ impl Presenter {
     }
 
     /// The budgets a volume is shown within on this presenter's device ([`Gpu::budgets`]).
-    pub fn budgets(&self, host: Option<u64>, device: Option<u64>) -> crate::volume::budget::Budgets {
+    pub fn budgets(&self, host: Option<u64>, device: Option<u64>) -> crate::pyramid::budget::Budgets {
         self.gpu.budgets(host, device)
     }
 
@@ -146,7 +146,7 @@ impl Presenter {
     pub fn set_volume(
         &mut self,
         volume: &Volume,
-        budgets: &crate::volume::budget::Budgets,
+        budgets: &crate::pyramid::budget::Budgets,
     ) -> Result<crate::render::placement::Placed, GpuError> {
         self.pass.set_volume(&self.gpu, volume, budgets)
     }

@@ -7,12 +7,12 @@ use super::reuse::ViewContent;
 use crate::gpu::resources::{Image, ImageDesc};
 use crate::gpu::sync::Access;
 use crate::gpu::{Gpu, GpuError, VkContext};
+use crate::pyramid::budget::Budgets;
 use crate::render::headless::OUTPUT_FORMAT;
 use crate::render::levels::Cut;
 use crate::render::placement::{Placed, Progress};
 use crate::render::{PassTimings, PreparedVolume, Renderer};
 use crate::scene::settings::RenderSettings;
-use crate::volume::budget::Budgets;
 use crate::volume::Volume;
 use ash::vk;
 

@@ -5,8 +5,8 @@
 
 use super::metadata::{AxisRole, Multiscale};
 use super::{group_attributes, guard, metadata, place, read};
-use crate::convert::sample::Sample;
-use crate::volume::budget::level_dims;
+use crate::pyramid::geometry::{level_geometry, level_of};
+use crate::pyramid::sample::Sample;
 use crate::volume::{format, Geometry, Volume, VolumeError, VoxelType};
 use std::path::Path;
 use std::sync::Arc;
@@ -59,12 +59,12 @@ pub(crate) fn finer_of(path: &Path, v: &Volume, channel: Option<u32>) -> Result<
         return Ok(None);
     };
     let dims = [dims[0], dims[1], dims[2]];
-    let Some(held) = (1..32).find(|&l| level_dims(dims, l) == v.dims) else {
+    let Some(held) = level_of(dims, v.dims) else {
         return Ok(None);
     };
     let (affine, anatomical) = place::affine(&ms, 0, &mut Vec::new());
     let geometry = Geometry { affine, anatomical };
-    let placed = crate::scale::read::level_geometry(geometry, dims, held);
+    let placed = level_geometry(geometry, dims, held);
     let tolerance = 1e-6 * placed.affine.to_cols_array().iter().fold(1.0f64, |m, x| m.max(x.abs()));
     if !placed.affine.abs_diff_eq(v.geometry.affine, tolerance) {
         return Ok(None);

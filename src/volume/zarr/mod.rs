@@ -9,9 +9,9 @@ pub(crate) mod metadata;
 mod place;
 mod read;
 
-use super::budget::{self, Budgets, Shape};
 use super::decode::Progress;
 use super::{format, Scaling, Volume, VolumeError, VoxelType, MAX_DIM};
+use crate::pyramid::budget::{self, Budgets, Shape};
 use levels::LevelSize;
 pub use metadata::ChannelInfo;
 use metadata::{AxisRole, Multiscale};
@@ -28,7 +28,7 @@ pub(crate) struct ZarrOptions {
     pub channel: Option<u32>,
     /// Largest dimension a level may have to be chosen.
     pub max_dim: Option<u32>,
-    /// The memory budgets a level must fit to be chosen (`volume::budget`); `None`: no budget.
+    /// The memory budgets a level must fit to be chosen (`pyramid::budget`); `None`: no budget.
     pub budgets: Option<Budgets>,
 }
 

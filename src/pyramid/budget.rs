@@ -1,10 +1,12 @@
 //! The memory budgets a volume is shown within, and the rule that picks the level of its resolution pyramid that
 //! fits them: the finest level whose voxels fit the host budget (every time step held) and whose cheapest texture
 //! fits half the GPU budget (the upload's staging copy needs the other half), within the device's texture size
-//! and volcast's in-memory voxel limit. Level L halves every axis longer than 1, rounding up, L times: the levels
-//! of `volcast convert`'s pyramid (`convert::pyramid`), without its stop at 64³.
+//! and volcast's in-memory voxel limit. The levels are the pyramid's ([`super::geometry`]), without `volcast
+//! convert`'s stop at 64³.
 
-use crate::volume::{VoxelType, MAX_VOXELS};
+use super::geometry::level_dims;
+use crate::volume::limits::MAX_VOXELS;
+use crate::volume::voxel::VoxelType;
 
 /// Where no budget is given: a quarter of the machine's memory (`MemTotal`), or 4 GiB where the system does not
 /// say.
@@ -84,15 +86,6 @@ pub fn show(bytes: u64) -> String {
     } else {
         format!("{} MiB", bytes.div_ceil(1 << 20))
     }
-}
-
-/// The (x, y, z) shape of pyramid level `level` of a `dims` volume.
-pub fn level_dims(dims: [u32; 3], level: u32) -> [u32; 3] {
-    let mut d = dims;
-    for _ in 0..level {
-        d = d.map(|n| if n > 1 { n.div_ceil(2) } else { 1 });
-    }
-    d
 }
 
 /// Bytes per voxel the volume is held in on the host (32-bit integers and float64 are held as float32).
@@ -217,12 +210,6 @@ mod tests {
         assert!(parse_size("0").is_err());
         assert!(parse_size("lots").is_err());
         assert!(parse_size("-1G").is_err());
-    }
-
-    #[test]
-    fn levels_halve_rounding_up() {
-        assert_eq!(level_dims([2048, 1025, 1], 1), [1024, 513, 1]);
-        assert_eq!(level_dims([5, 3, 1], 3), [1, 1, 1]);
     }
 
     #[test]

@@ -1,11 +1,9 @@
-//! The multiscale pyramid: which levels there are, and how a block of up to 2x2x2 voxels of one level becomes one
-//! voxel of the next (the mean for intensities, the most common value or the first voxel for labels).
+//! How a level follows from the one below: a block of up to 2x2x2 voxels becomes one voxel (the mean for
+//! intensities, the most common value or the first voxel for labels), on every core.
 
+use super::geometry::factors_at;
 use super::sample::Sample;
 use rayon::prelude::*;
-
-/// The coarsest level fits in this many voxels per axis.
-pub const COARSEST: u64 = 64;
 
 /// How a block of fine voxels becomes one coarse voxel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -19,27 +17,10 @@ pub enum Reduce {
     Nearest,
 }
 
-/// The (x, y, z) shape of every level, finest first: each level halves (rounding up) every axis longer than 1 of
-/// the one before, until every axis is at most [`COARSEST`]. A volume already that small has one level.
-pub fn level_dims(dims: [u64; 3]) -> Vec<[u64; 3]> {
-    let mut levels = vec![dims];
-    let mut d = dims;
-    while d.iter().any(|&n| n > COARSEST) {
-        d = d.map(|n| if n > 1 { n.div_ceil(2) } else { 1 });
-        levels.push(d);
-    }
-    levels
-}
-
-/// Per axis, how many fine voxels one coarse voxel of the next level spans: 2, or 1 along an axis of length 1.
-pub fn factors(fine: [u64; 3]) -> [usize; 3] {
-    fine.map(|n| if n > 1 { 2 } else { 1 })
-}
-
 /// Reduces `src` (`dims` = width, height, slices; x fastest) by `factor` per axis with `how`; the result has
 /// `ceil(dims / factor)` voxels per axis. Rows are reduced on every core.
 pub fn downsample<T: Sample>(src: &[T], dims: [usize; 3], factor: [usize; 3], how: Reduce) -> Vec<T> {
-    let out = [0, 1, 2].map(|i| dims[i].div_ceil(factor[i]));
+    let out = reduced(dims, factor);
     let mut dst = vec![T::default(); out[0] * out[1] * out[2]];
     downsample_into(src, dims, factor, how, &mut dst);
     dst
@@ -49,7 +30,7 @@ pub fn downsample<T: Sample>(src: &[T], dims: [usize; 3], factor: [usize; 3], ho
 pub fn downsample_into<T: Sample>(src: &[T], dims: [usize; 3], factor: [usize; 3], how: Reduce, dst: &mut [T]) {
     let [w, h, d] = dims;
     assert_eq!(src.len(), w * h * d, "slab size");
-    let out = [0, 1, 2].map(|i| dims[i].div_ceil(factor[i]));
+    let out = reduced(dims, factor);
     assert_eq!(dst.len(), out[0] * out[1] * out[2], "result size");
     if dst.is_empty() {
         return;
@@ -87,6 +68,40 @@ pub fn downsample_into<T: Sample>(src: &[T], dims: [usize; 3], factor: [usize; 3
             *slot = reduce(&mut block[..n], how);
         }
     });
+}
+
+/// `src`, a box of level 0 of a `full` volume (`dims`, its corner on a multiple of 2^`level`, so that the cascade
+/// inside it is exactly the pyramid's), reduced level by level with the mean to the box of level `level` over it,
+/// into `into`. The factors are the whole level's, not the box's: an axis of length 1 is not halved.
+pub fn mean_to_level_into<T: Sample>(src: &[T], dims: [usize; 3], full: [u32; 3], level: u32, into: &mut [T]) {
+    let mut dims = dims;
+    let mut made: Option<Vec<T>> = None;
+    for l in 0..level {
+        let f = factors_at(full, l);
+        let src = made.as_deref().unwrap_or(src);
+        if l + 1 == level {
+            return downsample_into(src, dims, f, Reduce::Mean, into);
+        }
+        made = Some(downsample(src, dims, f, Reduce::Mean));
+        dims = reduced(dims, f);
+    }
+    into.copy_from_slice(src);
+}
+
+/// [`mean_to_level_into`], returning the box (`src` itself at level 0) and its shape.
+pub fn mean_to_level<T: Sample>(src: Vec<T>, dims: [usize; 3], full: [u32; 3], level: u32) -> (Vec<T>, [usize; 3]) {
+    let (mut data, mut dims) = (src, dims);
+    for l in 0..level {
+        let f = factors_at(full, l);
+        data = downsample(&data, dims, f, Reduce::Mean);
+        dims = reduced(dims, f);
+    }
+    (data, dims)
+}
+
+/// The shape [`downsample`] makes of `dims` by `factor`.
+fn reduced(dims: [usize; 3], factor: [usize; 3]) -> [usize; 3] {
+    [0, 1, 2].map(|i| dims[i].div_ceil(factor[i]))
 }
 
 /// One coarse voxel from the fine voxels of its block (at least one).
@@ -132,16 +147,6 @@ mod tests {
             }
         }
         out
-    }
-
-    #[test]
-    fn levels_halve_until_64() {
-        assert_eq!(level_dims([64, 10, 1]), vec![[64, 10, 1]]);
-        assert_eq!(
-            level_dims([257, 65, 1]),
-            vec![[257, 65, 1], [129, 33, 1], [65, 17, 1], [33, 9, 1]]
-        );
-        assert_eq!(factors([129, 33, 1]), [2, 2, 1]);
     }
 
     #[test]
