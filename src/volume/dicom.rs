@@ -23,7 +23,7 @@ mod temporal;
 
 use super::decode::Progress;
 use super::format::{self, clip, header_error};
-use super::{check_dims, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
+use super::{check_dims, Geometry, Scaling, SeriesInfo, Volume, VolumeError, VoxelData, VoxelType};
 use codec::Kind;
 use dicom_object::file::ReadPreamble;
 use dicom_object::{DefaultDicomObject, OpenFileOptions, Tag};
@@ -235,7 +235,7 @@ struct Headers {
     files: Vec<PathBuf>,
     slices: Vec<Slice>,
     notes: Vec<String>,
-    listed: Vec<series::SeriesInfo>,
+    listed: Vec<SeriesInfo>,
     label: String,
 }
 

@@ -4,6 +4,8 @@
 
 use super::decode::{self, DecodeError, Endian, Progress};
 use super::{check_dims, check_spacing, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
+/// Readers quote header text in their messages as the model's own errors do.
+pub(crate) use crate::volume::clip;
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Component, Path, PathBuf};
@@ -215,16 +217,6 @@ pub(crate) fn not_one_component(file: &str, name: &str, components: u32) -> Volu
             clip(name)
         ),
     )
-}
-
-/// At most 40 characters of user text in a message.
-pub(crate) fn clip(text: &str) -> String {
-    let t = text.trim();
-    if t.chars().count() > 40 {
-        t.chars().take(40).collect::<String>() + "..."
-    } else {
-        t.to_string()
-    }
 }
 
 /// Spacing must be positive: the absolute value is used (a negative one flips the axis in the file's physical

@@ -14,6 +14,7 @@
 pub mod budget;
 mod builtin;
 pub mod cells;
+mod contents;
 mod decode;
 pub(crate) mod dicom;
 mod downsample;
@@ -35,9 +36,10 @@ mod vtk;
 pub(crate) mod zarr;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
+pub use contents::{ArrayInfo, ChannelInfo, SeriesInfo};
 pub use decode::Endian;
-pub use dicom::series::SeriesInfo;
 pub use downsample::downsample_to;
+pub(crate) use error::clip;
 pub use error::VolumeError;
 pub use open::{detect_format, format_by_name, open, open_with_progress, Format, OpenOptions};
 pub use raw::{from_native_bytes, load_raw, parse_scivis_name, RawOptions};
@@ -45,7 +47,6 @@ pub use time::TimeSteps;
 pub(crate) use voxel::stored_offset;
 use voxel::{compute_range, compute_range_of, stored_value};
 pub use voxel::{element_range, Scaling, VoxelData, VoxelType};
-pub use zarr::ChannelInfo;
 
 /// Parsers that read from memory and never touch the file system: the fuzz targets drive these.
 pub mod from_bytes {
@@ -128,18 +129,6 @@ pub trait FinerLevels: std::fmt::Debug + Send + Sync {
     /// Voxels `lo..lo + size` of level `level` (below the held one), x fastest, in the representation the volume
     /// holds its level in.
     fn read(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<VoxelData, VolumeError>;
-}
-
-/// One data array of a multi-array file, as `volcast info` lists it.
-#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct ArrayInfo {
-    pub name: String,
-    /// The type as the file names it (`unsigned_char`, `Float32`, ...).
-    #[serde(rename = "type")]
-    pub type_name: String,
-    pub components: u32,
-    /// This is the array the volume holds.
-    pub loaded: bool,
 }
 
 impl Volume {

@@ -2,52 +2,7 @@
 //! the list of them that `volcast info`, the notes and the viewer's chooser show.
 
 use super::slice::Slice;
-use crate::volume::format::clip;
-use crate::volume::VolumeError;
-
-/// One series of a DICOM folder, as `volcast info` lists it.
-#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct SeriesInfo {
-    /// SeriesNumber, if the files give one.
-    pub number: Option<i64>,
-    /// SeriesInstanceUID (empty when the files give none).
-    pub uid: String,
-    pub description: String,
-    pub modality: String,
-    pub slices: usize,
-    /// Columns x rows of its first slice.
-    pub size: [u32; 2],
-    /// This is the series the volume holds.
-    pub loaded: bool,
-}
-
-impl SeriesInfo {
-    /// What `--series` takes to pick this one: its number where that names it alone, else its UID.
-    pub fn selector(&self, all: &[SeriesInfo]) -> String {
-        match self.number {
-            Some(n) if all.iter().filter(|s| s.number == Some(n)).count() == 1 => n.to_string(),
-            _ => self.uid.clone(),
-        }
-    }
-
-    /// One line: number, UID, description, modality, slice count and size.
-    pub fn line(&self) -> String {
-        let number = self.number.map_or_else(|| "-".to_string(), |n| n.to_string());
-        let description = if self.description.is_empty() {
-            "(no description)".to_string()
-        } else {
-            format!("'{}'", self.description)
-        };
-        let modality = if self.modality.is_empty() { "?" } else { &self.modality };
-        format!(
-            "{number}: {description}, {modality}, {} slices of {} x {}, UID {}",
-            self.slices,
-            self.size[0],
-            self.size[1],
-            clip(&self.uid)
-        )
-    }
-}
+use crate::volume::{SeriesInfo, VolumeError};
 
 /// The series in `slices`, in order of SeriesNumber (then UID), none marked loaded yet.
 fn list(slices: &[Slice]) -> Vec<SeriesInfo> {

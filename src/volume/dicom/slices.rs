@@ -6,12 +6,11 @@
 use super::frames::Frames;
 use super::geometry::resample_slices;
 use super::pixels::{append_slice, check_files_back, empty_data};
-use super::series::SeriesInfo;
 use super::{headers, plan, temporal_positions, Headers, Slice, FORMAT};
 use crate::volume::decode::Endian;
 use crate::volume::format::{self, header_error};
 use crate::volume::in_place::InPlace;
-use crate::volume::{check_dims, VolumeError, VoxelData, VoxelType};
+use crate::volume::{check_dims, SeriesInfo, VolumeError, VoxelData, VoxelType};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 

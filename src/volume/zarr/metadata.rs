@@ -3,6 +3,7 @@
 //! names, windows and colours; and volcast's own placement hint. Parsing is ome_zarr_metadata's; this file only
 //! interprets it.
 
+use crate::volume::ChannelInfo;
 use ome_zarr_metadata::v0_4::{AxisType, AxisUnit, AxisUnitSpace, CoordinateTransform, Omero};
 use ome_zarr_metadata::v0_4::{CoordinateTransformScale, CoordinateTransformTranslation};
 use ome_zarr_metadata::AnyOmeFields;
@@ -34,17 +35,6 @@ pub(crate) struct LevelInfo {
     pub path: String,
     pub scale: Vec<f64>,
     pub translation: Vec<f64>,
-}
-
-/// A channel's display settings from `omero`.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct ChannelInfo {
-    pub name: String,
-    /// omero `window.start`, `window.end`: the display range.
-    pub window: [f64; 2],
-    pub color: [u8; 3],
-    /// This is the channel the volume holds.
-    pub loaded: bool,
 }
 
 /// volcast's own placement, written by `volcast convert` (see docs/formats.md): the level-0 voxel-to-world affine

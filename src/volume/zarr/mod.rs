@@ -13,7 +13,6 @@ use super::budget::{self, Budgets, Shape};
 use super::decode::Progress;
 use super::{format, Scaling, Volume, VolumeError, VoxelType, MAX_DIM};
 use levels::LevelSize;
-pub use metadata::ChannelInfo;
 use metadata::{AxisRole, Multiscale};
 use std::path::Path;
 use std::sync::Arc;
