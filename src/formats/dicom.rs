@@ -33,7 +33,7 @@ use pixels::{append_file, check_backed, empty_data, load_planned};
 use slice::{slice_info, Slice};
 use std::path::{Path, PathBuf};
 
-const FORMAT: &str = "DICOM";
+pub(crate) const FORMAT: &str = "DICOM";
 const PIXEL_DATA: Tag = Tag(0x7FE0, 0x0010);
 
 /// Most files looked at in a folder: more slices than [`crate::volume::MAX_DIM`] cannot make a volume anyway.

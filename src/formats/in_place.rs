@@ -3,11 +3,15 @@
 //! whole. The formats' own header parsers decide everything; this only says where the bytes are.
 
 use super::decode::Endian;
+use super::dicom::{
+    self,
+    slices::{self, PlacedSeries},
+};
 use super::format::{self, DataLocation, Encoding, Header};
-use super::open::{detect_format, Format};
+use super::open::{detect_format, Format, OpenOptions};
 use super::vtk::vti;
 use super::vtk::vti_blocks::{BlockIndex, Text};
-use super::{metaimage, nifti, nrrd, raw, OpenOptions};
+use super::{metaimage, nifti, nrrd, raw};
 use crate::volume::{check_extent, Geometry, Scaling, VolumeError, VoxelType};
 use std::path::{Path, PathBuf};
 
@@ -34,7 +38,7 @@ pub struct InPlace {
     pub blocks: Option<std::sync::Arc<BlockIndex>>,
     /// The voxels are a DICOM series' slices, each decoded from its own file (`dicom::slices`); `data_file` is the
     /// folder.
-    pub slices: Option<std::sync::Arc<super::dicom::slices::SeriesReader>>,
+    pub slices: Option<std::sync::Arc<slices::SeriesReader>>,
     /// The file's data arrays, as `volcast info` lists them (a multi-array `.vti`); empty for one-array formats.
     pub arrays: Vec<crate::volume::ArrayInfo>,
     /// The modality a DICOM file names ("CT", "MR"), as its loader gives it to the volume.
@@ -100,6 +104,53 @@ pub fn in_place(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, Volu
         return Ok(None);
     }
     header_in_place(path, header, opts).map(Some)
+}
+
+/// The DICOM folder `path` as a series read slice by slice, choosing `series` as the loader does; `None` where the
+/// loader must read it: one file ([`frames_in_place`] reads a multi-frame one), or slices at several temporal
+/// positions.
+pub(crate) fn series_in_place(path: &Path, series: Option<&str>) -> Result<Option<InPlace>, VolumeError> {
+    Ok(slices::series_placed(path, series)?.map(|s| series_of(path, s)))
+}
+
+/// The one multi-frame DICOM file `path` as a volume read frame by frame, where `fits` does not take its frames
+/// whole; `None` where the loader reads it.
+pub(crate) fn frames_in_place(
+    path: &Path,
+    fits: &dyn Fn([u32; 3], VoxelType) -> bool,
+) -> Result<Option<InPlace>, VolumeError> {
+    Ok(slices::frames_placed(path, fits)?.map(|s| series_of(path, s)))
+}
+
+/// A placed DICOM series as an [`InPlace`] at `path`, its bytes from the series' reader.
+fn series_of(path: &Path, s: PlacedSeries) -> InPlace {
+    let mut place = InPlace {
+        name: format::volume_name(path),
+        format: dicom::FORMAT,
+        data_file: path.to_path_buf(),
+        offset: 0,
+        dims: s.reader.dims(),
+        voxel_type: s.reader.voxel_type(),
+        endian: Endian::Little,
+        geometry: s.geometry,
+        scaling: s.scaling,
+        timesteps: 1,
+        notes: s.notes,
+        inflate: None,
+        blocks: None,
+        slices: Some(std::sync::Arc::new(s.reader)),
+        arrays: Vec::new(),
+        modality: s.modality,
+    };
+    if let Some(offset) = s.plain_at {
+        // The frames lie in the file as a raw volume's voxels do: read by box like one (`InPlace::by_box`).
+        place.offset = offset;
+        place.slices = None;
+        place.notes.push(
+            "its frames lie uncompressed and in order in the file: read in place like a raw file's voxels".into(),
+        );
+    }
+    place
 }
 
 /// What a NRRD, MetaImage, NIfTI or Analyze header claims (dims, voxel type, time steps) whatever its encoding, a

@@ -2,7 +2,7 @@
 //! extension second, then applies the caller's overrides and the maximum dimension.
 
 use super::decode::{Endian, Progress};
-use super::RawOptions;
+use super::raw::RawOptions;
 use super::{dicom, format, metaimage, nifti, nrrd, raw, tiff_stack, unsupported, vtk, zarr};
 use crate::volume::{downsample_to, Volume, VolumeError};
 use std::path::Path;

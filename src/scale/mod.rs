@@ -122,6 +122,7 @@ pub fn open_deferred(
 /// `None` for any other file, and for a series or file that fits: the loader reads it whole.
 fn dicom_by_slices(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result<Option<InPlace>, VolumeError> {
     use crate::formats::dicom::slices;
+    use crate::formats::in_place::{frames_in_place, series_in_place};
     let fits = |dims: [u32; 3], voxel_type: VoxelType| {
         let shape = Shape {
             dims,
@@ -131,10 +132,10 @@ fn dicom_by_slices(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result
         budget::choose(&shape, budgets).is_ok_and(|l| l.level == 0)
     };
     if !path.is_dir() {
-        return slices::frames_in_place(path, &fits);
+        return frames_in_place(path, &fits);
     }
     match slices::claimed_bound(path) {
-        Some((dims, voxel_type)) if !fits(dims, voxel_type) => slices::series_in_place(path, opts.series.as_deref()),
+        Some((dims, voxel_type)) if !fits(dims, voxel_type) => series_in_place(path, opts.series.as_deref()),
         _ => Ok(None),
     }
 }
@@ -355,11 +356,11 @@ fn previewed(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result<Optio
 /// `opts.series` as the loader chooses it) or one multi-frame DICOM file; `None` for anything else, and for slices at
 /// several temporal positions. The loader may still read it whole: this is how its preview reads it.
 pub fn dicom_slice_by_slice(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, VolumeError> {
-    use crate::formats::dicom::slices;
+    use crate::formats::in_place::{frames_in_place, series_in_place};
     if path.is_dir() {
-        slices::series_in_place(path, opts.series.as_deref())
+        series_in_place(path, opts.series.as_deref())
     } else {
-        slices::frames_in_place(path, &|_, _| false)
+        frames_in_place(path, &|_, _| false)
     }
 }
 

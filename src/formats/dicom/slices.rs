@@ -1,4 +1,4 @@
-//! A DICOM series read slice by slice: pass 1's headers place it as an [`InPlace`] volume whose bytes come from a
+//! A DICOM series read slice by slice: pass 1's headers place it ([`PlacedSeries`]), and its bytes come from a
 //! [`SeriesReader`], which decodes any run of output slices from their own files (compressed ones as the loader
 //! decodes them, uneven spacing resampled as the loader resamples it). `scale::read` then makes a pyramid level on
 //! every core without holding the series: a series larger than the host budget is decoded once, into the level.
@@ -6,13 +6,10 @@
 use super::frames::Frames;
 use super::geometry::resample_slices;
 use super::pixels::{append_slice, check_files_back, empty_data};
-use super::{headers, plan, temporal_positions, Headers, Slice, FORMAT};
-use crate::formats::decode::Endian;
+use super::{headers, plan, temporal_positions, Headers, Slice};
 use crate::formats::format::{self, header_error};
-use crate::formats::in_place::InPlace;
-use crate::volume::{check_dims, SeriesInfo, VolumeError, VoxelData, VoxelType};
+use crate::volume::{check_dims, Geometry, Scaling, SeriesInfo, VolumeError, VoxelData, VoxelType};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// The sorted slices of one series and how to decode any run of them.
 #[derive(Debug)]
@@ -31,9 +28,22 @@ pub struct SeriesReader {
     frames: Option<(Frames, Vec<usize>)>,
 }
 
+/// A series placed for reading slice by slice: its reader and what the loader would say of the volume (placement,
+/// rescale, notes, modality). `formats::in_place` describes the volume from it; DICOM knows nothing of that
+/// description, so this room never names the code that uses it.
+pub struct PlacedSeries {
+    pub reader: SeriesReader,
+    pub geometry: Geometry,
+    pub scaling: Scaling,
+    pub notes: Vec<String>,
+    pub modality: Option<String>,
+    /// The one file's frames lie uncompressed and in order from this byte: read by box like a raw volume's voxels.
+    pub plain_at: Option<u64>,
+}
+
 /// The folder `path` as a series read slice by slice, choosing `series` as the loader does; `None` where the loader
-/// must read it: one file ([`frames_in_place`] reads a multi-frame one), or slices at several temporal positions.
-pub(crate) fn series_in_place(path: &Path, series: Option<&str>) -> Result<Option<InPlace>, VolumeError> {
+/// must read it: one file ([`frames_placed`] reads a multi-frame one), or slices at several temporal positions.
+pub(crate) fn series_placed(path: &Path, series: Option<&str>) -> Result<Option<PlacedSeries>, VolumeError> {
     if !path.is_dir() {
         return Ok(None);
     }
@@ -46,15 +56,15 @@ pub(crate) fn series_in_place(path: &Path, series: Option<&str>) -> Result<Optio
     let needed = check_dims(plan.dims)? * plan.voxel_type.size() as u64;
     check_files_back(&plan, &files, needed, &label)?;
     let files = plan.slices.iter().map(|s| files[s.source].clone()).collect();
-    Ok(Some(placed(path, plan, files, found.listed, None, label, notes)))
+    Ok(Some(placed(plan, files, found.listed, None, label, notes)))
 }
 
 /// The one multi-frame file `path` as a volume read frame by frame ([`Frames`]), placed, ordered and rescaled as the
 /// loader does, where `fits` does not take its frames whole; `None` where the loader reads it (see [`Frames::of`]).
-pub(crate) fn frames_in_place(
+pub(crate) fn frames_placed(
     path: &Path,
     fits: &dyn Fn([u32; 3], VoxelType) -> bool,
-) -> Result<Option<InPlace>, VolumeError> {
+) -> Result<Option<PlacedSeries>, VolumeError> {
     let Some(frames) = Frames::of(path, fits)? else {
         return Ok(None);
     };
@@ -64,28 +74,20 @@ pub(crate) fn frames_in_place(
     let in_order = plan.frame_order.iter().enumerate().all(|(i, &k)| i == k) && plan.resample.is_none();
     let plain = frames.plain_at().filter(|_| in_order);
     let (files, order) = (vec![frames.path().to_path_buf()], plan.frame_order.clone());
-    let mut place = placed(path, plan, files, Vec::new(), Some((frames, order)), label, Vec::new());
-    if let Some(offset) = plain {
-        // The frames lie in the file as a raw volume's voxels do: read by box like one (`InPlace::by_box`).
-        place.offset = offset;
-        place.slices = None;
-        place.notes.push(
-            "its frames lie uncompressed and in order in the file: read in place like a raw file's voxels".into(),
-        );
-    }
+    let mut place = placed(plan, files, Vec::new(), Some((frames, order)), label, Vec::new());
+    place.plain_at = plain;
     Ok(Some(place))
 }
 
-/// `plan`'s volume read by a [`SeriesReader`] of `files` (or of one file's `frames`), as an [`InPlace`] at `path`.
+/// `plan`'s volume read by a [`SeriesReader`] of `files` (or of one file's `frames`).
 fn placed(
-    path: &Path,
     mut plan: super::Plan,
     files: Vec<PathBuf>,
     series: Vec<SeriesInfo>,
     frames: Option<(Frames, Vec<usize>)>,
     label: String,
     mut notes: Vec<String>,
-) -> InPlace {
+) -> PlacedSeries {
     notes.append(&mut plan.notes);
     let modality = Some(plan.modality).filter(|m| !m.is_empty());
     let reader = SeriesReader {
@@ -98,27 +100,27 @@ fn placed(
         slices: plan.slices,
         frames,
     };
-    InPlace {
-        name: format::volume_name(path),
-        format: FORMAT,
-        data_file: path.to_path_buf(),
-        offset: 0,
-        dims: plan.dims,
-        voxel_type: plan.voxel_type,
-        endian: Endian::Little,
+    PlacedSeries {
+        reader,
         geometry: plan.geometry,
         scaling: plan.scaling,
-        timesteps: 1,
         notes,
-        inflate: None,
-        blocks: None,
-        slices: Some(Arc::new(reader)),
-        arrays: Vec::new(),
         modality,
+        plain_at: None,
     }
 }
 
 impl SeriesReader {
+    /// The volume's size in voxels, x fastest.
+    pub fn dims(&self) -> [u32; 3] {
+        self.dims
+    }
+
+    /// The type the files give the voxels.
+    pub fn voxel_type(&self) -> VoxelType {
+        self.voxel_type
+    }
+
     /// The voxel bytes `at..at + out.len()` as the file types them (little endian, signed values unbiased): whole
     /// output slices, as `scale::read` asks for them.
     pub fn read_at(&self, at: u64, out: &mut [u8]) -> Result<(), VolumeError> {
