@@ -1,6 +1,8 @@
 //! Volumes whose voxels lie on disk as they are used (raw files; NRRD, NIfTI-1 and MetaImage with uncompressed
 //! data): where they start, so a converter can read them slab by slab with positioned reads instead of loading them
 //! whole. The formats' own header parsers decide everything; this only says where the bytes are.
+//! Compressed streams, a `.vti`'s compressed blocks and a DICOM series' slices are described here too, each with how
+//! to decode it; the readers only parse, and never name this description.
 
 use super::decode::Endian;
 use super::dicom::{

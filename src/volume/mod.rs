@@ -1,6 +1,6 @@
 //! Volumes on the CPU: voxel types, the `Volume` the renderer uploads, its placement in the world, time steps and
-//! value ranges, and generated test volumes ([`builtin`]). Pure code, no Vulkan, and no files: the readers in
-//! `crate::formats` make volumes from files.
+//! value ranges, and generated test volumes ([`builtin`]). Pure code, no Vulkan, and no files: the readers of the
+//! `formats` room make volumes from files, and nothing here names them.
 //!
 //! Layout everywhere: x fastest, then y, then z; voxel (x, y, z) is at `x + W·(y + H·z)`.
 //!
