@@ -3,7 +3,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use volcast::volume::from_bytes;
+use volcast::formats::from_bytes;
 
 fuzz_target!(|data: &[u8]| {
     let _ = from_bytes::nrrd_header(data);

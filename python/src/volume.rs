@@ -207,7 +207,7 @@ pub fn from_bytes(
             anyhow::bail!("{name}: the array holds NaN or infinite values; replace them (numpy.nan_to_num) first");
         }
         let s = [spacing.0, spacing.1, spacing.2];
-        let mut v = volcast::volume::from_native_bytes(name, dims, voxel_type, s, bytes)?;
+        let mut v = volcast::formats::from_native_bytes(name, dims, voxel_type, s, bytes)?;
         if let Some(g) = geometry {
             v = v.with_geometry(g)?;
         }

@@ -6,9 +6,11 @@ use super::frame::FrameArgs;
 use super::parse::{
     parse_builtin, parse_fps, parse_gradients, parse_preset, parse_quality, parse_size, parse_turntable,
 };
+use crate::formats;
+use crate::formats::RawOptions;
 use crate::gpu::GpuOptions;
 use crate::scene::quality::{Gradients, Quality};
-use crate::volume::{self, RawOptions, Volume, VoxelType};
+use crate::volume::{self, Volume, VoxelType};
 use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -179,12 +181,12 @@ impl VolumeArgs {
     }
 
     /// How to open the file these arguments name.
-    pub fn open_options(&self) -> Result<volume::OpenOptions> {
-        Ok(volume::OpenOptions {
+    pub fn open_options(&self) -> Result<formats::OpenOptions> {
+        Ok(formats::OpenOptions {
             raw: self.raw_options()?,
             endian: match self.endian.as_deref() {
-                Some("big") => volume::Endian::Big,
-                _ => volume::Endian::Little,
+                Some("big") => formats::Endian::Big,
+                _ => formats::Endian::Little,
             },
             header_bytes: self.header_bytes.unwrap_or(0),
             max_dim: self.max_dim,

@@ -5,8 +5,8 @@ use super::args::ConvertArgs;
 use crate::convert::layout::OmeVersion;
 use crate::convert::source::Source;
 use crate::convert::{self, Compression, ConvertError, ConvertOptions};
+use crate::formats;
 use crate::pyramid::reduce::Reduce;
-use crate::volume;
 use anyhow::{Context, Result};
 use std::time::Instant;
 
@@ -100,7 +100,7 @@ fn usage(e: ConvertError) -> anyhow::Error {
 fn open_source(args: &ConvertArgs) -> Result<Source> {
     if let Some(path) = &args.volume.file {
         let opts = args.volume.open_options()?;
-        if let Some(v) = volume::in_place::in_place(path, &opts)? {
+        if let Some(v) = formats::in_place::in_place(path, &opts)? {
             for note in &v.notes {
                 eprintln!("note: {note}");
             }

@@ -2,7 +2,7 @@
 //! with a multiscale pyramid, written with the zarrs crate. Pure code, no Vulkan.
 //!
 //! The voxels stream through in z-slabs of one chunk (or shard) depth: level 0's chunks are encoded on every core
-//! and each slab feeds the next level's, so a file read in place ([`crate::volume::in_place`]) is never held whole,
+//! and each slab feeds the next level's, so a file read in place ([`crate::formats::in_place`]) is never held whole,
 //! and a loaded volume is held once. docs/cli.md (convert) states the rules: levels, data type, placement.
 
 pub mod layout;

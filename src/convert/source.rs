@@ -1,9 +1,10 @@
 //! Where the converter's voxels come from, slab by slab: a volume loaded once (any format), or a file whose voxels
 //! lie in place on disk, read with positioned reads so it is never held whole.
 
+use crate::formats::in_place::{InPlace, Inflate};
+use crate::formats::Endian;
 use crate::pyramid::sample::Sample;
-use crate::volume::in_place::{InPlace, Inflate};
-use crate::volume::{Endian, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
+use crate::volume::{Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
 use rayon::prelude::*;
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
@@ -431,7 +432,7 @@ mod tests {
             let n = (dims[0] * dims[1] * dims[2]) as usize;
             let src: Vec<i16> = (0..n).map(|i| ((i * 7919) % 601) as i16 - 300).collect();
             let (path, opts) = crate::scale::test_file::int16_raw(&format!("box-{tag}"), dims, &src, None);
-            let place = crate::volume::in_place::in_place(&path, &opts).unwrap().unwrap();
+            let place = crate::formats::in_place::in_place(&path, &opts).unwrap().unwrap();
             let source = Source::in_place(place).unwrap();
             let whole: Vec<i16> = source.read_slab(0, 0, dims[2], Scaling::IDENTITY).unwrap();
             let (lo, size) = ([3, 1, 1], [dims[0] - 5, dims[1] - 2, dims[2] - 2]);

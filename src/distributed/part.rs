@@ -36,7 +36,7 @@ impl Source {
     pub fn open(args: &VolumeArgs) -> Result<(Source, [u32; 3], Geometry)> {
         if let (Some(path), None) = (&args.file, &args.time) {
             let opts = args.open_options()?;
-            if let Some(place) = crate::volume::in_place::in_place(path, &opts)? {
+            if let Some(place) = crate::formats::in_place::in_place(path, &opts)? {
                 if place.by_box() && place.timesteps <= 1 {
                     let (dims, mut geometry) = (place.dims, place.geometry);
                     // --spacing overrides the file's, as `VolumeArgs::load` applies it.

@@ -11,6 +11,7 @@
 //! cache (the time to write the level into it is reported apart), and once more from the pyramid cache, file and
 //! cache evicted (cached).
 
+use crate::formats::OpenOptions;
 use crate::gpu::{Gpu, GpuError};
 use crate::measure::bench::{gpu_allocated, peak_rss_bytes, Stats};
 use crate::pyramid::budget::Budgets;
@@ -18,7 +19,7 @@ use crate::render::headless::Headless;
 use crate::scale::cache::PyramidCache;
 use crate::scene::quality::{moving_view, Quality};
 use crate::scene::settings::RenderSettings;
-use crate::volume::{OpenOptions, Volume, VoxelType};
+use crate::volume::{Volume, VoxelType};
 use rayon::prelude::*;
 use std::fs::File;
 use std::os::unix::fs::FileExt;

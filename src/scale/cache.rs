@@ -16,10 +16,12 @@ use super::level0::{self, Level0};
 use crate::convert::layout::OmeVersion;
 use crate::convert::source::Source;
 use crate::convert::{convert, Compression, ConvertOptions};
+use crate::formats;
+use crate::formats::in_place::InPlace;
+use crate::formats::OpenOptions;
 use crate::pyramid::reduce::Reduce;
 use crate::volume::cells::CellRanges;
-use crate::volume::in_place::InPlace;
-use crate::volume::{self, OpenOptions, Volume};
+use crate::volume::Volume;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::UNIX_EPOCH;
@@ -220,7 +222,7 @@ impl PyramidCache {
                 )),
             };
         }
-        match volume::open(&store, &OpenOptions::default()) {
+        match formats::open(&store, &OpenOptions::default()) {
             Ok(v) if v.dims == stamp.dims => {
                 let mut v = match stamp.stored_range {
                     Some(r) => v.with_stored_range(r),
@@ -254,7 +256,7 @@ impl PyramidCache {
             max_dim: Some(side),
             ..Default::default()
         };
-        let mut v = volume::open(&store, &opts).ok()?;
+        let mut v = formats::open(&store, &opts).ok()?;
         let [x, y, z] = v.dims;
         v.name = place.name.clone();
         v.format = place.format.to_string();
@@ -381,7 +383,7 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::in_place::in_place;
+    use crate::formats::in_place::in_place;
 
     #[test]
     fn a_kept_level_reads_back_whole_and_as_a_preview() {
@@ -433,7 +435,7 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("v.nii");
         let header = [3i16, 36, 20, 18, 1, 1, 1, 1];
-        let bytes = crate::volume::nifti::tests::nifti_bytes(
+        let bytes = crate::formats::nifti::tests::nifti_bytes(
             &header,
             4,
             [1.0; 3],

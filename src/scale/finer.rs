@@ -5,12 +5,12 @@
 //! cascade inside it is exactly the pyramid's). docs/large-volumes.md, "Full resolution from the file".
 
 use crate::convert::source::Source;
+use crate::formats::in_place::InPlace;
+use crate::formats::zarr::boxes::ZarrBoxes;
 use crate::pyramid::bricks::level0_box;
 use crate::pyramid::geometry::level_dims;
 use crate::pyramid::reduce::mean_to_level;
 use crate::pyramid::sample::Sample;
-use crate::volume::in_place::InPlace;
-use crate::volume::zarr::boxes::ZarrBoxes;
 use crate::volume::{FinerLevels, Geometry, VolumeError, VoxelData, VoxelType};
 use rayon::prelude::*;
 
@@ -164,8 +164,8 @@ impl FinerLevels for Finer {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::formats::in_place::in_place;
     use crate::scale::read::read_level;
-    use crate::volume::in_place::in_place;
 
     /// Every box of every finer level equals that level of the pyramid read whole, at odd sizes and offsets.
     #[test]
@@ -179,7 +179,7 @@ mod tests {
         let whole = Source::in_place(place).unwrap();
         for level in 0..3 {
             let full = if level == 0 {
-                crate::volume::open(&path, &opts).unwrap()
+                crate::formats::open(&path, &opts).unwrap()
             } else {
                 read_level(&whole, level, 1 << 30, Vec::new(), &mut |_| {}).unwrap()
             };

@@ -6,9 +6,10 @@
 //! file then lies in place like a raw file, and the finer levels' bricks are read from it by box (`finer::Finer`), as
 //! an uncompressed file's are. The file is still decoded once. docs/large-volumes.md, "A decoded file's level 0".
 
+use crate::formats::in_place::InPlace;
+use crate::formats::Endian;
 use crate::pyramid::budget::show;
-use crate::volume::in_place::InPlace;
-use crate::volume::{Endian, VoxelType};
+use crate::volume::VoxelType;
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::SyncSender;

@@ -11,14 +11,16 @@ pub mod preview;
 pub mod read;
 
 use crate::convert::source::Source;
+use crate::formats;
+use crate::formats::in_place::{in_place, InPlace};
+use crate::formats::OpenOptions;
 use crate::pyramid::budget::{self, Budgets, Shape};
 use crate::pyramid::geometry::level_dims;
-use crate::volume::in_place::{in_place, InPlace};
-use crate::volume::{self, OpenOptions, Volume, VolumeError, VoxelType};
+use crate::volume::{self, Volume, VolumeError, VoxelType};
 use cache::{Lookup, PyramidCache};
 use std::path::Path;
 
-/// Opens `path` as [`volume::open`] does, within `budgets`: the finest level that fits them, with a note saying
+/// Opens `path` as [`formats::open`] does, within `budgets`: the finest level that fits them, with a note saying
 /// why when that is not full resolution. A volume that fits no budget (not even one voxel) is refused before it is
 /// read; `--no-downsample` (`opts.no_downsample`) refuses any level but full resolution. With `cache`, a level of a
 /// file read in place is read from the pyramid cache where it is there, and kept there where it is not.
@@ -77,7 +79,7 @@ pub fn open_deferred(
     // by the format's own loader.
     let place = match in_place(path, opts)? {
         Some(p) => Some(p),
-        None => match crate::volume::in_place::compressed(path, opts)? {
+        None => match crate::formats::in_place::compressed(path, &opts)? {
             Some(p) => Some(p),
             None => dicom_by_slices(path, opts, &budgets)?,
         },
@@ -100,7 +102,7 @@ pub fn open_deferred(
         }
     }
     refuse_whole_over_budget(path, &budgets).map_err(named)?;
-    let v = volume::open_within(path, opts, Some(&budgets), progress)?;
+    let v = formats::open_within(path, &opts, Some(&budgets), progress)?;
     let volume = fit(v, &budgets, opts.no_downsample).map_err(|e| match e {
         VolumeError::Header { problem, .. } => named(problem),
         e => e,
@@ -116,7 +118,8 @@ pub fn open_deferred(
 /// without holding it. One multi-frame DICOM file that does not fit them is read frame by frame the same way.
 /// `None` for any other file, and for a series or file that fits: the loader reads it whole.
 fn dicom_by_slices(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result<Option<InPlace>, VolumeError> {
-    use crate::volume::dicom::slices;
+    use crate::formats::dicom::slices;
+    use crate::formats::in_place::{frames_in_place, series_in_place};
     let fits = |dims: [u32; 3], voxel_type: VoxelType| {
         let shape = Shape {
             dims,
@@ -126,10 +129,10 @@ fn dicom_by_slices(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result
         budget::choose(&shape, budgets).is_ok_and(|l| l.level == 0)
     };
     if !path.is_dir() {
-        return slices::frames_in_place(path, &fits);
+        return frames_in_place(path, &fits);
     }
     match slices::claimed_bound(path) {
-        Some((dims, voxel_type)) if !fits(dims, voxel_type) => slices::series_in_place(path, opts.series.as_deref()),
+        Some((dims, voxel_type)) if !fits(dims, voxel_type) => series_in_place(path, opts.series.as_deref()),
         _ => Ok(None),
     }
 }
@@ -288,7 +291,7 @@ fn with_store_finer(mut v: Volume, path: &Path, opts: &OpenOptions) -> Volume {
     if v.format != "OME-Zarr" || v.finer.is_some() || opts.max_dim.is_some() {
         return v;
     }
-    match crate::volume::zarr::boxes::finer_of(path, &v, opts.channel) {
+    match crate::formats::zarr::boxes::finer_of(path, &v, opts.channel) {
         Ok(Some((boxes, held))) => {
             v.finer = Some(std::sync::Arc::new(finer::Finer::of_zarr(boxes, held)));
         }
@@ -327,7 +330,7 @@ pub fn preview_within(
 
 /// `path` as its preview reads it: in place, or a DICOM series or multi-frame file decoded slice by slice
 /// ([`dicom_slice_by_slice`]). A folder's headers are read only where the bound from its first header
-/// ([`claimed_bound`](crate::volume::dicom::slices::claimed_bound)) is large enough for a preview.
+/// ([`claimed_bound`](crate::formats::dicom::slices::claimed_bound)) is large enough for a preview.
 fn previewed(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result<Option<InPlace>, VolumeError> {
     if let Some(place) = in_place(path, opts)? {
         return Ok(Some(place));
@@ -340,7 +343,7 @@ fn previewed(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result<Optio
         };
         budget::choose(&shape, budgets).is_ok_and(|l| preview::large_at(dims, l.level))
     };
-    if path.is_dir() && !crate::volume::dicom::slices::claimed_bound(path).is_some_and(large) {
+    if path.is_dir() && !crate::formats::dicom::slices::claimed_bound(path).is_some_and(large) {
         return Ok(None);
     }
     dicom_slice_by_slice(path, opts)
@@ -350,11 +353,11 @@ fn previewed(path: &Path, opts: &OpenOptions, budgets: &Budgets) -> Result<Optio
 /// `opts.series` as the loader chooses it) or one multi-frame DICOM file; `None` for anything else, and for slices at
 /// several temporal positions. The loader may still read it whole: this is how its preview reads it.
 pub fn dicom_slice_by_slice(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, VolumeError> {
-    use crate::volume::dicom::slices;
+    use crate::formats::in_place::{frames_in_place, series_in_place};
     if path.is_dir() {
-        slices::series_in_place(path, opts.series.as_deref())
+        series_in_place(path, opts.series.as_deref())
     } else {
-        slices::frames_in_place(path, &|_, _| false)
+        frames_in_place(path, &|_, _| false)
     }
 }
 
@@ -362,7 +365,7 @@ pub fn dicom_slice_by_slice(path: &Path, opts: &OpenOptions) -> Result<Option<In
 /// it can be reduced: one whose header claims more than the host budget is refused before anything else is read,
 /// saying what to do.
 fn refuse_whole_over_budget(path: &Path, budgets: &Budgets) -> Result<(), String> {
-    let Some((dims, voxel_type, steps)) = crate::volume::in_place::claimed_shape(path) else {
+    let Some((dims, voxel_type, steps)) = crate::formats::in_place::claimed_shape(path) else {
         return Ok(());
     };
     let shape = Shape {
@@ -393,7 +396,7 @@ fn refuse_whole_over_budget(path: &Path, budgets: &Budgets) -> Result<(), String
 /// `--max-dim`, where given, still applies to a level read from a file.
 fn after_level(v: Volume, opts: &OpenOptions) -> Volume {
     match opts.max_dim {
-        Some(m) if v.dims.iter().any(|&d| d > m) => v.map_steps(|s| volume::downsample_to(s, m)),
+        Some(m) if v.dims.iter().any(|&d| d > m) => v.map_steps(|s| crate::pyramid::max_dim::downsample_to(s, m)),
         _ => v,
     }
 }
@@ -453,7 +456,8 @@ pub fn fit(v: Volume, budgets: &Budgets, no_downsample: bool) -> Result<Volume, 
 /// What the unit tests of this room share.
 #[cfg(test)]
 pub(crate) mod test_file {
-    use crate::volume::{OpenOptions, RawOptions, VoxelType};
+    use crate::formats::{OpenOptions, RawOptions};
+    use crate::volume::VoxelType;
     use std::path::PathBuf;
 
     /// `values` (x fastest) as an int16 raw file in a fresh temporary folder named by `tag`, and the options that

@@ -5,8 +5,8 @@
 //! read ends. Values are samples, not means: the preview aliases, the level read after it does not.
 
 use crate::convert::source::decode;
-use crate::volume::dicom::slices::SeriesReader;
-use crate::volume::in_place::InPlace;
+use crate::formats::dicom::slices::SeriesReader;
+use crate::formats::in_place::InPlace;
 use crate::volume::{Geometry, Volume, VolumeError, VoxelData, VoxelType};
 use glam::{DMat4, DVec4};
 use rayon::prelude::*;
@@ -87,7 +87,7 @@ fn row_samples(place: &InPlace, k: u32, out: [u32; 3]) -> Result<Vec<Vec<f64>>, 
     })?;
     let h = place.dims[1];
     let size = place.voxel_type.size();
-    let big = place.endian == crate::volume::Endian::Big;
+    let big = place.endian == crate::formats::Endian::Big;
     let row_bytes = place.dims[0] as usize * size;
     (0..out[1] as usize * out[2] as usize)
         .into_par_iter()
@@ -136,7 +136,7 @@ fn slice_samples(place: &InPlace, series: &SeriesReader, k: u32, out: [u32; 3]) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::in_place::in_place;
+    use crate::formats::in_place::in_place;
 
     #[test]
     fn strides_keep_every_kth_voxel_where_it_lies() {
@@ -150,7 +150,7 @@ mod tests {
         let place = in_place(&path, &opts).unwrap().unwrap();
         let v = strided(&place, 4).unwrap();
         assert_eq!(v.dims, [3, 2, 2]);
-        let full = crate::volume::open(&path, &opts).unwrap();
+        let full = crate::formats::open(&path, &opts).unwrap();
         for (x, y, z) in [(0, 0, 0), (2, 1, 1), (1, 0, 1)] {
             assert_eq!(v.value(x, y, z), full.value(x * 4, y * 4, z * 4), "({x}, {y}, {z})");
             let p = v

@@ -244,7 +244,7 @@ pub fn read_level_keeping(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::volume::in_place::in_place;
+    use crate::formats::in_place::in_place;
 
     /// Level `l` voxel (x, y, z) by the pyramid's definition, recursively: the mean of the up-to-8 voxels of level
     /// `l - 1` it covers (an axis of length 1 is not halved), rounded half away from zero.
@@ -277,7 +277,7 @@ mod tests {
         let (path, opts) = crate::scale::test_file::int16_raw("level", dims, &src, None);
         let place = in_place(&path, &opts).unwrap().expect("raw is read in place");
         let from_file = Source::in_place(place).unwrap();
-        let loaded = Source::Loaded(Box::new(crate::volume::open(&path, &opts).unwrap()));
+        let loaded = Source::Loaded(Box::new(crate::formats::open(&path, &opts).unwrap()));
         for level in 1..=3 {
             let a = read_level(&from_file, level, 1 << 30, Vec::new(), &mut |_| {}).unwrap();
             let b = read_level(&loaded, level, 1 << 30, Vec::new(), &mut |_| {}).unwrap();

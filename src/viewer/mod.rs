@@ -21,8 +21,8 @@ pub mod widgets;
 
 pub use app::script::{parse_script, ScriptStep};
 
+use crate::formats::RawOptions;
 use crate::gpu::{GpuError, GpuOptions, ValidationLog};
-use crate::volume::RawOptions;
 use std::path::PathBuf;
 use std::sync::Arc;
 use winit::event_loop::EventLoop;

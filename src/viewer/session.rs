@@ -4,8 +4,9 @@
 //! --state` renders the same file. Here: reading and writing them, and where their volume comes from.
 
 use super::VolumeSource;
+use crate::formats::RawOptions;
 use crate::scene::view_state::{ViewState, VolumeRef};
-use crate::volume::{RawOptions, VoxelType};
+use crate::volume::VoxelType;
 use std::path::Path;
 
 /// Reads a session (or any view state) file; the error names it.

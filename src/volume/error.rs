@@ -130,3 +130,13 @@ pub enum VolumeError {
     #[error("{file}: no series '{given}' in the folder; pass --series with a number or UID of one it holds:\n{list}")]
     UnknownSeries { file: String, given: String, list: String },
 }
+
+/// At most 40 characters of user text in a message.
+pub(crate) fn clip(text: &str) -> String {
+    let t = text.trim();
+    if t.chars().count() > 40 {
+        t.chars().take(40).collect::<String>() + "..."
+    } else {
+        t.to_string()
+    }
+}

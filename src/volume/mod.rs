@@ -1,5 +1,6 @@
-//! Volumes on the CPU: voxel types, the `Volume` the renderer uploads, and where volumes come from
-//! (files through [`open`], generated test volumes in [`builtin`]). Pure code, no Vulkan.
+//! Volumes on the CPU: voxel types, the `Volume` the renderer uploads, its placement in the world, time steps and
+//! value ranges, and generated test volumes ([`builtin`]). Pure code, no Vulkan, and no files: the readers of the
+//! `formats` room make volumes from files, and nothing here names them.
 //!
 //! Layout everywhere: x fastest, then y, then z; voxel (x, y, z) is at `x + W·(y + H·z)`.
 //!
@@ -13,52 +14,22 @@
 
 mod builtin;
 pub mod cells;
-mod decode;
-pub(crate) mod dicom;
-mod downsample;
+mod contents;
 mod error;
-mod format;
 pub mod geometry;
 pub mod huge_pages;
-pub mod in_place;
 pub(crate) mod limits;
-mod metaimage;
-pub(crate) mod nifti;
-mod nrrd;
-mod open;
-mod raw;
-mod tiff_stack;
-mod time;
-mod unsupported;
+pub(crate) mod time;
 pub(crate) mod voxel;
-mod vtk;
-pub(crate) mod zarr;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
-pub use decode::Endian;
-pub use dicom::series::SeriesInfo;
-pub use downsample::downsample_to;
+pub use contents::{ArrayInfo, ChannelInfo, SeriesInfo};
+pub(crate) use error::clip;
 pub use error::VolumeError;
-pub use open::{detect_format, format_by_name, open, open_with_progress, open_within, Format, OpenOptions};
-pub use raw::{from_native_bytes, load_raw, parse_scivis_name, RawOptions};
 pub use time::TimeSteps;
 pub(crate) use voxel::stored_offset;
 use voxel::{compute_range, compute_range_of, stored_value};
 pub use voxel::{element_range, Scaling, VoxelData, VoxelType};
-pub use zarr::ChannelInfo;
-
-/// Parsers that read from memory and never touch the file system: the fuzz targets drive these.
-pub mod from_bytes {
-    pub use super::dicom::from_bytes as dicom;
-    pub use super::format::{DataLocation, Encoding, Header};
-    pub use super::metaimage::{from_bytes as metaimage, parse_header as metaimage_header};
-    pub use super::nifti::{from_bytes as nifti, parse_header as nifti_header};
-    pub use super::nrrd::{from_bytes as nrrd, parse_header as nrrd_header};
-    pub use super::tiff_stack::from_bytes as tiff;
-    pub use super::vtk::vti::from_bytes as vti;
-    pub use super::vtk::{from_bytes as vtk, parse_header as vtk_header};
-    pub use super::zarr::from_bytes::{zarr_chunk, zarr_meta};
-}
 
 pub use geometry::Geometry;
 pub use limits::{MAX_DIM, MAX_VOXELS};
@@ -121,18 +92,6 @@ pub trait FinerLevels: std::fmt::Debug + Send + Sync {
     /// Voxels `lo..lo + size` of level `level` (below the held one), x fastest, in the representation the volume
     /// holds its level in.
     fn read(&self, level: u32, lo: [u32; 3], size: [u32; 3]) -> Result<VoxelData, VolumeError>;
-}
-
-/// One data array of a multi-array file, as `volcast info` lists it.
-#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct ArrayInfo {
-    pub name: String,
-    /// The type as the file names it (`unsigned_char`, `Float32`, ...).
-    #[serde(rename = "type")]
-    pub type_name: String,
-    pub components: u32,
-    /// This is the array the volume holds.
-    pub loaded: bool,
 }
 
 impl Volume {
@@ -380,7 +339,7 @@ pub(crate) fn check_dims(dims: [u32; 3]) -> Result<u64, VolumeError> {
     Ok(count)
 }
 
-fn check_spacing(dims: [u32; 3], spacing: [f32; 3]) -> Result<(), VolumeError> {
+pub(crate) fn check_spacing(dims: [u32; 3], spacing: [f32; 3]) -> Result<(), VolumeError> {
     let physical_ok = (0..3).all(|i| {
         let s = spacing[i];
         s.is_finite() && s > 0.0 && (f64::from(dims[i]) * f64::from(s)) < f64::from(f32::MAX)

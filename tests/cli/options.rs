@@ -480,7 +480,10 @@ fn volume_options_take_effect() {
             ),
             v.clone(),
         ),
-        (raw(&named, &["--max-dim", "32"]), volume::downsample_to(v.clone(), 32)),
+        (
+            raw(&named, &["--max-dim", "32"]),
+            volcast::pyramid::max_dim::downsample_to(v.clone(), 32),
+        ),
     ];
     let mut failures = Vec::new();
     for (i, (args, volume)) in cases.iter().enumerate() {

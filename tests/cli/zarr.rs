@@ -85,7 +85,7 @@ fn a_state_keeps_the_channel() {
         assert!(o.status.success(), "{}", stderr(&o));
         std::fs::read(out).unwrap()
     };
-    let extent = volcast::volume::open(&path, &Default::default()).unwrap().extent();
+    let extent = volcast::formats::open(&path, &Default::default()).unwrap().extent();
     let state = volcast::scene::view_state::ViewState {
         volume: volcast::scene::view_state::VolumeRef {
             path: Some(path.clone()),

@@ -194,11 +194,11 @@ pub fn gradient_cases(v: &Volume, size: u32) -> Vec<Case> {
 /// The CT head from `../shared/data` at its true spacing (None after a skip where the file is missing).
 pub fn ct_head() -> Option<Volume> {
     let path = super::shared_data("raw/cranium_ct_256x256x108_int16.raw")?;
-    let opts = volcast::volume::RawOptions {
+    let opts = volcast::formats::RawOptions {
         spacing: Some([0.957031, 0.957031, 1.5]),
         ..Default::default()
     };
-    Some(volcast::volume::load_raw(&path, &opts).expect("CT head"))
+    Some(volcast::formats::load_raw(&path, &opts).expect("CT head"))
 }
 
 pub fn marschner_lobb_as(ty: VoxelType) -> Volume {

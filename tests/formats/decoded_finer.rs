@@ -8,9 +8,11 @@
 
 use crate::common;
 use std::path::PathBuf;
+use volcast::formats;
+use volcast::formats::OpenOptions;
 use volcast::pyramid::budget::Budgets;
 use volcast::scale::cache::PyramidCache;
-use volcast::volume::{self, OpenOptions, VoxelData};
+use volcast::volume::{self, VoxelData};
 
 fn data(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
@@ -64,7 +66,7 @@ fn decoded_files_show_their_level_0_from_the_pyramid_cache() {
             array: array.map(String::from),
             ..Default::default()
         };
-        let whole = volume::open(&path, &opts).expect("whole");
+        let whole = formats::open(&path, &opts).expect("whole");
         // A budget one voxel short of level 0: level 1 held.
         let host = whole.dims.iter().map(|&d| u64::from(d)).product::<u64>() * whole.source_type.size() as u64 - 1;
         let cache = PyramidCache::new(Some(dir.join(format!("cache-{k}"))));

@@ -6,7 +6,8 @@
 use crate::common;
 
 use std::path::{Path, PathBuf};
-use volcast::volume::{self, VoxelType};
+use volcast::formats;
+use volcast::volume::VoxelType;
 
 fn data() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom")
@@ -25,7 +26,7 @@ fn every_oracle_case_loads_with_its_geometry_and_voxels() {
         if e.get("dims").is_none() {
             continue;
         }
-        let v = volume::open(&data().join(name), &Default::default()).unwrap_or_else(|err| panic!("{name}: {err}"));
+        let v = formats::open(&data().join(name), &Default::default()).unwrap_or_else(|err| panic!("{name}: {err}"));
         let f = |x: &serde_json::Value| x.as_f64().unwrap();
         let dims: Vec<u32> = e["dims"]
             .as_array()
@@ -85,7 +86,7 @@ fn every_oracle_case_loads_with_its_geometry_and_voxels() {
 }
 
 fn load_err(path: &Path) -> String {
-    match volume::open(path, &Default::default()) {
+    match formats::open(path, &Default::default()) {
         Ok(_) => panic!("{} was accepted", path.display()),
         Err(e) => e.to_string(),
     }

@@ -6,8 +6,10 @@
 
 use crate::common;
 use std::path::PathBuf;
+use volcast::formats;
+use volcast::formats::OpenOptions;
 use volcast::pyramid::budget::Budgets;
-use volcast::volume::{self, OpenOptions, Volume};
+use volcast::volume::Volume;
 
 fn data(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
@@ -64,7 +66,7 @@ fn a_preview_keeps_every_kth_voxel_of_a_series_or_multi_frame_file() {
         let place = volcast::scale::dicom_slice_by_slice(&path, &OpenOptions::default())
             .unwrap_or_else(|e| panic!("{name}: {e}"))
             .unwrap_or_else(|| panic!("{name}: not read slice by slice"));
-        let whole = volume::open(&path, &OpenOptions::default()).expect("whole");
+        let whole = formats::open(&path, &OpenOptions::default()).expect("whole");
         for k in [2, 4] {
             let preview = volcast::scale::preview::strided(&place, k).unwrap_or_else(|e| panic!("{name}: {e}"));
             assert_every_kth_voxel(&name, &preview, &whole, k);
@@ -87,7 +89,7 @@ fn a_large_series_is_previewed_before_it_is_read() {
         "{:?}",
         preview.notes
     );
-    let whole = volume::open(&dir, &opts).expect("whole");
+    let whole = formats::open(&dir, &opts).expect("whole");
     assert_eq!(
         whole.value(3, 5, 7),
         f64::from(3 + 2 * 5 + 3 * 7),

@@ -6,8 +6,10 @@
 
 use crate::common;
 use std::path::{Path, PathBuf};
+use volcast::formats;
+use volcast::formats::OpenOptions;
 use volcast::pyramid::budget::Budgets;
-use volcast::volume::{self, OpenOptions};
+use volcast::volume;
 
 fn data(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
@@ -33,7 +35,7 @@ fn assert_sliced_level_is_the_whole_ones(path: &Path, opts: &OpenOptions, host: 
         "{name}: {:?}",
         sliced.notes
     );
-    let whole = volume::open(path, opts).expect("whole");
+    let whole = formats::open(path, opts).expect("whole");
     let reduced = volcast::scale::fit(whole, &Budgets::host(Some(host)), false).expect("reduced");
     assert_eq!(reduced.dims, dims, "{name}");
     assert!(
@@ -130,7 +132,7 @@ fn hostile_dicom_files_within_a_small_budget_are_refused_naming_the_file() {
         let e = open_within(&path, &OpenOptions::default(), 64)
             .expect_err(&name)
             .to_string();
-        let loader = volume::open(&path, &OpenOptions::default())
+        let loader = formats::open(&path, &OpenOptions::default())
             .expect_err(&name)
             .to_string();
         assert!(e.starts_with(&format!("{name}: ")), "{e}");
@@ -149,7 +151,7 @@ fn hostile_dicom_files_within_a_small_budget_are_refused_naming_the_file() {
     let e = open_within(&claim, &OpenOptions::default(), 1 << 10)
         .expect_err("99999 frames")
         .to_string();
-    let loader = volume::open(&claim, &OpenOptions::default())
+    let loader = formats::open(&claim, &OpenOptions::default())
         .expect_err("99999 frames")
         .to_string();
     assert!(e.contains("99999") && e == loader, "{e} / {loader}");
@@ -160,7 +162,7 @@ fn the_shared_mri_series_and_one_series_of_several_read_slice_by_slice() {
     let Some(brain) = common::shared_data("native/brain_pd_mr") else {
         return;
     };
-    let whole = volume::open(&brain, &OpenOptions::default()).expect("brain");
+    let whole = formats::open(&brain, &OpenOptions::default()).expect("brain");
     let [x, y, z] = whole.dims;
     let half = [x.div_ceil(2), y.div_ceil(2), z.div_ceil(2)];
     let bytes = u64::from(x * y * z) * 2;

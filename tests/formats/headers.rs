@@ -6,7 +6,9 @@ use crate::common;
 
 use glam::DMat4;
 use std::path::{Path, PathBuf};
-use volcast::volume::{self, from_bytes, OpenOptions, Volume};
+use volcast::formats;
+use volcast::formats::{from_bytes, OpenOptions};
+use volcast::volume::{self, Volume};
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -15,7 +17,7 @@ fn data(name: &str) -> PathBuf {
 }
 
 fn open(path: &Path) -> Result<Volume, volume::VolumeError> {
-    volume::open(path, &OpenOptions::default())
+    formats::open(path, &OpenOptions::default())
 }
 
 fn err(path: &Path) -> String {
@@ -198,7 +200,7 @@ fn hostile_nifti2_headers_are_refused_clearly() {
     assert!(v.notes.iter().any(|n| n.contains("only the first of")), "{:?}", v.notes);
     // Found by content whatever the name.
     let p = dir.write("renamed.dat", &ok);
-    assert_eq!(volume::detect_format(&p).expect("a format"), volume::Format::Nifti);
+    assert_eq!(formats::detect_format(&p).expect("a format"), formats::Format::Nifti);
     assert_eq!(open(&p).expect("NIfTI-2").format, "NIfTI-2");
     let mut magic = ok.clone();
     magic[4..8].copy_from_slice(b"n+3\0");

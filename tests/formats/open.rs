@@ -1,13 +1,15 @@
-//! Volume file formats end to end through `volume::open`: files written here (round trips, known values,
+//! Volume file formats end to end through `formats::open`: files written here (round trips, known values,
 //! detached data, path escapes, hostile input) and the real volumes in ../shared/data against their raw twins.
 
 use crate::common;
 
 use std::path::{Path, PathBuf};
-use volcast::volume::{self, Endian, Format, OpenOptions, RawOptions, Volume, VoxelType};
+use volcast::formats;
+use volcast::formats::{Endian, Format, OpenOptions, RawOptions};
+use volcast::volume::{self, Volume, VoxelType};
 
 fn open(path: &Path) -> Result<Volume, volume::VolumeError> {
-    volume::open(path, &OpenOptions::default())
+    formats::open(path, &OpenOptions::default())
 }
 
 fn err(path: &Path) -> String {
@@ -64,26 +66,26 @@ fn formats_are_detected_by_content_not_just_name() {
     let dir = common::scratch("formats-formats_are_detected_by_content_not_just_name");
     let vtk = b"# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 1 1\nPOINT_DATA 2\nSCALARS s float\nLOOKUP_TABLE default\n1 2\n";
     let p = dir.write("data.bin", vtk);
-    assert_eq!(volume::detect_format(&p).unwrap(), Format::Vtk);
+    assert_eq!(formats::detect_format(&p).unwrap(), Format::Vtk);
     assert_eq!(open(&p).unwrap().value(1, 0, 0), 2.0);
     let p = dir.write(
         "x.dat",
         b"NRRD0004\ntype: uchar\ndimension: 1\nsizes: 2\nencoding: raw\n\n\x07\x09",
     );
-    assert_eq!(volume::detect_format(&p).unwrap(), Format::Nrrd);
+    assert_eq!(formats::detect_format(&p).unwrap(), Format::Nrrd);
     let p = dir.write(
         "x.mha",
         b"NDims = 1\nDimSize = 1\nElementType = MET_UCHAR\nElementDataFile = LOCAL\n\x05",
     );
-    assert_eq!(volume::detect_format(&p).unwrap(), Format::MetaImage);
+    assert_eq!(formats::detect_format(&p).unwrap(), Format::MetaImage);
     // A folder is judged by its files: this one holds none that is TIFF or DICOM; one with a DICOM file is a series.
-    assert!(volume::detect_format(&dir).is_err());
+    assert!(formats::detect_format(&dir).is_err());
     let series = common::scratch("formats-formats_are_detected_by_content_not_just_name-series");
     let slice = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/slice.dcm")).unwrap();
     series.write("1.dcm", &slice);
-    assert_eq!(volume::detect_format(&series).unwrap(), Format::Dicom);
+    assert_eq!(formats::detect_format(&series).unwrap(), Format::Dicom);
     let p = dir.write("thing_2x1x1_uint8.raw", &[1, 2]);
-    assert_eq!(volume::detect_format(&p).unwrap(), Format::Raw);
+    assert_eq!(formats::detect_format(&p).unwrap(), Format::Raw);
 }
 
 #[test]
@@ -104,10 +106,10 @@ fn raw_endian_and_header_bytes() {
         header_bytes: 8,
         ..OpenOptions::default()
     };
-    let v = volume::open(&p, &opts).unwrap();
+    let v = formats::open(&p, &opts).unwrap();
     assert_eq!(v.value(1, 1, 0), f64::from(0x1234));
     assert_eq!(v.format, "raw");
-    let e = volume::open(
+    let e = formats::open(
         &p,
         &OpenOptions {
             header_bytes: 9,
@@ -240,11 +242,11 @@ fn max_dim_downsamples_or_refuses() {
         max_dim: Some(4),
         ..OpenOptions::default()
     };
-    let v = volume::open(&p, &opts).unwrap();
+    let v = formats::open(&p, &opts).unwrap();
     assert_eq!((v.dims, v.spacing()), ([4, 2, 1], [2.0, 1.0, 1.0]));
     assert_eq!(v.value(0, 0, 0), 15.0);
     assert!(v.notes[0].starts_with("downsampled from 8x2x1 to 4x2x1"));
-    let e = volume::open(
+    let e = formats::open(
         &p,
         &OpenOptions {
             no_downsample: true,
@@ -268,7 +270,7 @@ fn progress_is_reported() {
     let dir = common::scratch("formats-progress_is_reported");
     let p = dir.write("p_64x64x64_uint8.raw", &vec![1u8; 64 * 64 * 64]);
     let mut seen = Vec::new();
-    volume::open_with_progress(&p, &OpenOptions::default(), &mut |f| seen.push(f)).unwrap();
+    formats::open_with_progress(&p, &OpenOptions::default(), &mut |f| seen.push(f)).unwrap();
     assert_eq!(seen.last(), Some(&1.0));
 }
 
@@ -381,11 +383,11 @@ fn real_ct_head_loads_with_its_range_and_gpu_mapping() {
     let Some(path) = common::shared_data("raw/cranium_ct_256x256x108_int16.raw") else {
         return;
     };
-    let opts = volume::RawOptions {
+    let opts = formats::RawOptions {
         spacing: Some([0.957031, 0.957031, 1.5]),
         ..Default::default()
     };
-    let v = volume::load_raw(&path, &opts).unwrap();
+    let v = formats::load_raw(&path, &opts).unwrap();
     assert_eq!(v.name, "cranium_ct");
     assert_eq!(v.dims, [256, 256, 108]);
     assert_eq!(v.source_type, VoxelType::I16);

@@ -6,8 +6,10 @@
 
 use crate::common;
 use std::path::{Path, PathBuf};
+use volcast::formats;
+use volcast::formats::OpenOptions;
 use volcast::pyramid::budget::Budgets;
-use volcast::volume::{self, OpenOptions};
+use volcast::volume;
 
 fn data(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
@@ -44,7 +46,7 @@ fn compressed_files_over_the_host_budget_are_decoded_as_a_stream_into_their_leve
             "{rel}: {:?}",
             streamed.notes
         );
-        let whole = volume::open(&path, &OpenOptions::default()).expect("whole");
+        let whole = formats::open(&path, &OpenOptions::default()).expect("whole");
         let reduced = volcast::scale::fit(whole, &Budgets::host(Some(host)), false).expect("reduced");
         assert_eq!(reduced.dims, dims, "{rel}");
         assert_eq!(streamed.timesteps(), reduced.timesteps(), "{rel}");
@@ -92,7 +94,7 @@ fn a_truncated_compressed_stream_is_refused_naming_the_file() {
 /// the same level of the file loaded whole, with the same placement; inline arrays are still read whole.
 #[test]
 fn vti_files_over_the_host_budget_are_read_where_they_lie() {
-    use volcast::volume::in_place::{compressed, in_place};
+    use volcast::formats::in_place::{compressed, in_place};
     // (file, encoded: read by range rather than in place): all 7x6x5, written by VTK (tests/data/README.md).
     let cases = [
         ("vtk/vti_appended_raw.vti", false),
@@ -125,7 +127,7 @@ fn vti_files_over_the_host_budget_are_read_where_they_lie() {
             assert_ne!(level.dims, [7, 6, 5], "{what}: a coarser level");
             let noted = level.notes.iter().any(|n| n.contains("decoded once, on every core"));
             assert_eq!(noted, packed, "{what}: {:?}", level.notes);
-            let whole = volume::open(&path, &opts).expect("whole");
+            let whole = formats::open(&path, &opts).expect("whole");
             let reduced = volcast::scale::fit(whole, &budgets, false).expect("reduced");
             assert_eq!(level.dims, reduced.dims, "{what}");
             assert!(
@@ -138,7 +140,7 @@ fn vti_files_over_the_host_budget_are_read_where_they_lie() {
             // Within the budget, an encoded array is decoded by range at full resolution: the loader's volume.
             let full = volcast::scale::open(&path, &opts, Budgets::host(Some(1 << 20)), None, &mut |_| {});
             let full = full.expect(&what);
-            let loaded = volume::open(&path, &opts).expect("whole");
+            let loaded = formats::open(&path, &opts).expect("whole");
             assert!(
                 full.data == loaded.data && full.range == loaded.range,
                 "{what}: level 0"

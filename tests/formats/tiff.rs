@@ -1,19 +1,21 @@
 //! TIFF stacks against files written by tifffile and read back by it (tests/data/tiff/expected.json, made by
 //! tests/data/tiff/make.py); hostile TIFFs built byte by byte; formats volcast does not read named, through
-//! `volume::open` and through the `volcast` binary.
+//! `formats::open` and through the `volcast` binary.
 
 use crate::common;
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use volcast::volume::{self, Format, OpenOptions, RawOptions, Volume, VoxelType};
+use volcast::formats;
+use volcast::formats::{Format, OpenOptions, RawOptions};
+use volcast::volume::{Volume, VoxelType};
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiff").join(name)
 }
 
 fn err(path: &Path) -> String {
-    match volume::open(path, &OpenOptions::default()) {
+    match formats::open(path, &OpenOptions::default()) {
         Ok(v) => panic!("{} loaded as {:?} {}", path.display(), v.dims, v.format),
         Err(e) => e.to_string(),
     }
@@ -47,7 +49,7 @@ fn tifffile_oracles_load_with_their_values_and_spacing() {
             continue;
         }
         let path = data(name);
-        assert_eq!(volume::detect_format(&path).unwrap(), Format::Tiff, "{name}");
+        assert_eq!(formats::detect_format(&path).unwrap(), Format::Tiff, "{name}");
         let v = Volume::open(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(v.format, "TIFF");
         let dims: Vec<u32> = e["dims"]
@@ -118,7 +120,7 @@ fn folders_are_judged_by_their_files() {
     let slice = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/slice.dcm")).unwrap();
     dir.write("d/1.dcm", &slice);
     dir.write("d/notes.txt", b"x");
-    assert_eq!(volume::detect_format(&dir.join("d")).unwrap(), Format::Dicom);
+    assert_eq!(formats::detect_format(&dir.join("d")).unwrap(), Format::Dicom);
     dir.write("mixed/1.dcm", &slice);
     dir.write("mixed/z1.tif", &std::fs::read(data("stack/z1.tif")).unwrap());
     let e = err(&dir.join("mixed"));
@@ -231,7 +233,7 @@ fn hostile_tiffs_are_refused_naming_the_file() {
     // Every truncation of a real file is an error or a volume, never a panic.
     let full = std::fs::read(data("u16_imagej_lzw.tif")).unwrap();
     for len in 0..full.len() {
-        let _ = volume::from_bytes::tiff(&full[..len]);
+        let _ = formats::from_bytes::tiff(&full[..len]);
     }
     let e = err(&dir.write("cut.tif", &full[..full.len() / 2]));
     assert!(e.starts_with("cut.tif: "), "{e}");
@@ -412,13 +414,13 @@ fn raw_files_still_load_whatever_their_first_bytes() {
     let dir = common::scratch("formats-tiff-raw_files_still_load_whatever_their_first_bytes");
     // Named like a raw file: raw, even with PNG magic.
     let p = dir.write("t_8x1x1_uint8.raw", b"\x89PNG\r\n\x1a\n");
-    assert_eq!(volume::detect_format(&p).unwrap(), Format::Raw);
+    assert_eq!(formats::detect_format(&p).unwrap(), Format::Raw);
     assert_eq!(Volume::open(&p).unwrap().value(1, 0, 0), f64::from(b'P'));
     let p = dir.write("plain.raw", b"\x89HDF\r\n\x1a\n");
-    assert_eq!(volume::detect_format(&p).unwrap(), Format::Raw);
+    assert_eq!(formats::detect_format(&p).unwrap(), Format::Raw);
     // An unnamed file without magic is raw and still asks for its layout.
     let p = dir.write("plain.dat", &[1, 2, 3, 4]);
-    assert_eq!(volume::detect_format(&p).unwrap(), Format::Raw);
+    assert_eq!(formats::detect_format(&p).unwrap(), Format::Raw);
     assert!(err(&p).contains("cannot tell the dimensions and voxel type of plain.dat"));
     // An unsupported format read as raw when the layout is given explicitly.
     let p = dir.write("x.h5", b"\x89HDF\r\n\x1a\n");
@@ -430,7 +432,7 @@ fn raw_files_still_load_whatever_their_first_bytes() {
         },
         ..OpenOptions::default()
     };
-    let v = volume::open(&p, &opts).unwrap();
+    let v = formats::open(&p, &opts).unwrap();
     assert_eq!(v.format, "raw");
     assert_eq!(v.value(1, 0, 0), f64::from(b'H'));
 }

@@ -11,8 +11,9 @@ use common::compare::diff;
 use common::gpu::{finish, validated_gpu, Judge, METHODS};
 use common::{stderr, stdout, volcast};
 use std::path::{Path, PathBuf};
+use volcast::formats;
 use volcast::render::headless::Headless;
-use volcast::volume::{self, Volume};
+use volcast::volume::Volume;
 
 fn data() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/time")
@@ -23,7 +24,7 @@ fn expected() -> serde_json::Value {
 }
 
 fn open(name: &str) -> Volume {
-    volume::open(&data().join(name), &Default::default()).unwrap_or_else(|e| panic!("{name}: {e}"))
+    formats::open(&data().join(name), &Default::default()).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 #[test]
@@ -172,7 +173,7 @@ fn series_beyond_memory_are_refused_up_front() {
     let dir = common::scratch("formats-time-hostile");
     let path = dir.join("huge_series.nii");
     std::fs::write(&path, &nii).unwrap();
-    let e = volume::open(&path, &Default::default())
+    let e = formats::open(&path, &Default::default())
         .map(|_| ())
         .unwrap_err()
         .to_string();
@@ -182,7 +183,7 @@ fn series_beyond_memory_are_refused_up_front() {
     );
     nii[48..50].copy_from_slice(&20000i16.to_le_bytes());
     std::fs::write(&path, &nii).unwrap();
-    let e = volume::open(&path, &Default::default())
+    let e = formats::open(&path, &Default::default())
         .map(|_| ())
         .unwrap_err()
         .to_string();

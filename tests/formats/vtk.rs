@@ -1,5 +1,5 @@
 //! VTK legacy and VTK XML ImageData files written by VTK 9.7's own writers (tests/data/vtk/make.py), loaded through
-//! `volume::open` and compared with what VTK's readers read back from the same files (tests/data/vtk/expected.json):
+//! `formats::open` and compared with what VTK's readers read back from the same files (tests/data/vtk/expected.json):
 //! dims, spacing, placement, every one-component point array's sum and samples. Then hostile `.vti` files built
 //! here: each must give an error that names the file, never a panic or an allocation the file cannot back.
 
@@ -7,7 +7,9 @@ use crate::common;
 
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use volcast::volume::{self, OpenOptions, Volume};
+use volcast::formats;
+use volcast::formats::OpenOptions;
+use volcast::volume::{self, Volume};
 
 fn data() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/vtk")
@@ -23,7 +25,7 @@ fn open(path: &Path, array: Option<&str>) -> Result<Volume, volume::VolumeError>
         array: array.map(str::to_string),
         ..OpenOptions::default()
     };
-    volume::open(path, &opts)
+    formats::open(path, &opts)
 }
 
 fn f(v: &Value) -> f64 {
@@ -183,12 +185,12 @@ fn clear_refusals_name_the_file() {
         .to_string();
     assert!(e.contains("legacy_u8_ascii.vtk") && e.contains("ramp"), "{e}");
     assert_eq!(
-        volume::detect_format(&data().join("vti_ascii.vti")).unwrap(),
-        volume::Format::Vti
+        formats::detect_format(&data().join("vti_ascii.vti")).unwrap(),
+        formats::Format::Vti
     );
     assert_eq!(
-        volume::detect_format(&data().join("unsupported.vtu")).unwrap(),
-        volume::Format::Vti
+        formats::detect_format(&data().join("unsupported.vtu")).unwrap(),
+        formats::Format::Vti
     );
 }
 

@@ -105,7 +105,7 @@ fn markers_are_where_the_patient_has_them() {
         .map(|e| e.path)
         .filter(|p| p.starts_with("tests/data/world"))
     {
-        let v = volcast::volume::open(&root().join(rel), &Default::default()).expect("loads");
+        let v = volcast::formats::open(&root().join(rel), &Default::default()).expect("loads");
         let [nx, ny, nz] = v.dims;
         // A marker cube sampled on a coarse grid has its centroid up to about a third of a voxel off (measured
         // 1.6 mm at 4 mm voxels); without resampling the uneven series is 3.2 mm off.

@@ -7,7 +7,9 @@ use crate::common;
 
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
-use volcast::volume::{self, OpenOptions, Volume, VoxelType};
+use volcast::formats;
+use volcast::formats::OpenOptions;
+use volcast::volume::{Volume, VoxelType};
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/zarr").join(name)
@@ -18,11 +20,11 @@ fn expected(name: &str) -> Value {
 }
 
 fn open_with(path: &Path, opts: &OpenOptions) -> Volume {
-    volume::open(path, opts).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    formats::open(path, opts).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 fn err_with(path: &Path, opts: &OpenOptions) -> String {
-    match volume::open(path, opts) {
+    match formats::open(path, opts) {
         Ok(v) => panic!("{} opened: {:?}", path.display(), v.dims),
         Err(e) => e.to_string(),
     }
@@ -463,5 +465,5 @@ fn fuzz_finding_non_ascii_colour_is_not_a_panic() {
         "/fuzz/seeds/zarr_meta/fuzz-non-ascii-colour.json"
     );
     let bytes = std::fs::read(path).unwrap();
-    let _ = volume::from_bytes::zarr_meta(&bytes);
+    let _ = formats::from_bytes::zarr_meta(&bytes);
 }

@@ -7,8 +7,10 @@
 use crate::common;
 use std::path::{Path, PathBuf};
 use volcast::convert::source::Source;
+use volcast::formats;
+use volcast::formats::OpenOptions;
 use volcast::pyramid::budget::Budgets;
-use volcast::volume::{self, OpenOptions, Volume, VoxelData};
+use volcast::volume::{Volume, VoxelData};
 
 fn data(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(rel)
@@ -65,7 +67,7 @@ fn stores_from_ome_zarr_py_stream_their_level_0() {
             ..Default::default()
         };
         let v = held(&path, &opts, bytes - 1);
-        let whole = volume::open(&path, &opts).expect("level 0");
+        let whole = formats::open(&path, &opts).expect("level 0");
         assert_eq!(
             v.finer.as_ref().map(|f| (f.held(), f.dims())),
             Some((1, whole.dims)),
@@ -95,7 +97,7 @@ fn a_store_volcast_wrote_streams_its_level_0_across_chunks() {
         .collect();
     let dir = common::scratch("zarr-finer-convert");
     let raw = dir.write("v_37x21x40_int16.raw", bytemuck::cast_slice(&values));
-    let whole = volume::open(&raw, &OpenOptions::default()).expect("raw");
+    let whole = formats::open(&raw, &OpenOptions::default()).expect("raw");
     let store = dir.join("v.ome.zarr");
     let opts = volcast::convert::ConvertOptions {
         version: volcast::convert::layout::OmeVersion::V05,
@@ -112,7 +114,7 @@ fn a_store_volcast_wrote_streams_its_level_0_across_chunks() {
     let v = held(&store, &OpenOptions::default(), level1 - 1);
     assert_eq!((v.dims, v.finer.as_ref().map(|f| f.held())), ([10, 6, 10], Some(2)));
     assert_boxes_are_the_pyramid("convert", &v, |l| match l {
-        0 => volume::open(&store, &OpenOptions::default()).expect("level 0"),
+        0 => formats::open(&store, &OpenOptions::default()).expect("level 0"),
         _ => volcast::scale::read::read_level(&source, l, 1 << 30, Vec::new(), &mut |_| {}).unwrap(),
     });
     assert!(

@@ -10,12 +10,14 @@ use common::bounds::REFERENCE;
 use common::gpu::{finish, validated_gpu, Judge};
 use common::levels::Cut as RefCut;
 use common::reference::{Reference, Rendered};
+use volcast::formats;
+use volcast::formats::OpenOptions;
 use volcast::pyramid::budget::Budgets;
 use volcast::render::headless::Headless;
 use volcast::render::levels::Cut;
 use volcast::scene::camera::Camera;
 use volcast::scene::settings::{RenderSettings, Shading};
-use volcast::volume::{self, OpenOptions, Volume};
+use volcast::volume::{self, Volume};
 
 /// The helix and the same voxels opened from a raw file within a host budget one byte short of level 0.
 pub(crate) fn helix_held_at_level_1(folder: &str) -> (Volume, Volume) {
@@ -135,7 +137,7 @@ fn bricks_read_from_the_file_are_skipped_by_their_own_range() {
     common::scratch::write_raw(&path, [64, 64, 64], |[x, _, _], _, out| {
         out.push(if x == 21 { 250 } else { 10 })
     });
-    let full = volume::open(&path, &OpenOptions::default()).expect("whole");
+    let full = formats::open(&path, &OpenOptions::default()).expect("whole");
     let budgets = Budgets {
         host: 64 * 64 * 64 - 1,
         gpu: None,

@@ -11,6 +11,7 @@ use common::bounds::{METHODS, REFERENCE, REFERENCE_R8};
 use common::compare::{between, diff, write_failure_images};
 use common::gpu::{validated_gpu, Judge};
 use common::reference::Reference;
+use volcast::formats;
 use volcast::measure::compare::{builtin_views, compare_view};
 use volcast::render::headless::Headless;
 use volcast::render::VolumeLayout;
@@ -89,11 +90,11 @@ fn methods_agree_on_the_ct_head() {
     let Some(path) = common::shared_data("raw/cranium_ct_256x256x108_int16.raw") else {
         return;
     };
-    let opts = volume::RawOptions {
+    let opts = formats::RawOptions {
         spacing: Some([0.957031, 0.957031, 1.5]),
         ..Default::default()
     };
-    let ct = volume::load_raw(&path, &opts).expect("CT head");
+    let ct = formats::load_raw(&path, &opts).expect("CT head");
     check(&ct, 112, [0.3, 1.0]);
 }
 

@@ -16,6 +16,7 @@ use common::compare::{against_reference, write_failure_images};
 use common::gpu::{close, validated_gpu};
 use common::reference::Reference;
 use glam::Vec3;
+use volcast::formats;
 use volcast::render::headless::Headless;
 use volcast::scene::camera::Camera;
 use volcast::scene::quality::{Gradients, Quality};
@@ -73,11 +74,11 @@ fn cases() -> Vec<Case> {
     }
     let raw = |file: &str, spacing: [f32; 3]| {
         let path = common::shared_data(file)?;
-        let opts = volume::RawOptions {
+        let opts = formats::RawOptions {
             spacing: Some(spacing),
             ..Default::default()
         };
-        Some(volume::load_raw(&path, &opts).expect("load real volume"))
+        Some(formats::load_raw(&path, &opts).expect("load real volume"))
     };
     if let Some(ct) = raw("raw/cranium_ct_256x256x108_int16.raw", [0.957031, 0.957031, 1.5]) {
         // The bench's ct-head scene.

@@ -13,11 +13,12 @@ use common::levels::{may_refine, pyramid, screen_cut, screen_cut_where, Cut as R
 use common::reference::Reference;
 use common::segments::Segments;
 use common::strides::visible_emission;
+use volcast::formats::OpenOptions;
 use volcast::pyramid::budget::Budgets;
 use volcast::render::headless::Headless;
 use volcast::render::levels::{Cut, LevelChoice};
 use volcast::scene::settings::RenderSettings;
-use volcast::volume::{OpenOptions, Volume};
+use volcast::volume::Volume;
 
 const BRICK: [usize; 3] = [16; 3];
 
@@ -71,7 +72,7 @@ fn balls(folder: &str) -> (Volume, Volume) {
                 .round() as u8,
         )
     });
-    let whole = volcast::volume::open(&path, &OpenOptions::default()).expect("whole");
+    let whole = volcast::formats::open(&path, &OpenOptions::default()).expect("whole");
     let budgets = Budgets {
         host: 128 * 128 * 128 - 1,
         gpu: None,

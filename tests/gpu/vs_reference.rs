@@ -12,6 +12,7 @@ use common::cases::{
 };
 use common::compare::Bounds;
 use common::gpu::{finish, validated_gpu, Judge, METHODS};
+use volcast::formats;
 use volcast::gpu::Gpu;
 use volcast::render::headless::Headless;
 use volcast::render::{TexelPolicy, VolumeLayout};
@@ -180,11 +181,11 @@ fn real_volumes_match_the_reference() {
         let Some(path) = common::shared_data(file) else {
             continue;
         };
-        let opts = volume::RawOptions {
+        let opts = formats::RawOptions {
             spacing: Some(spacing),
             ..Default::default()
         };
-        let v = volume::load_raw(&path, &opts).expect("load real volume");
+        let v = formats::load_raw(&path, &opts).expect("load real volume");
         let mut cases = standard_cases(&v, 80);
         if v.name.starts_with("cranium") {
             cases.push(with(&v, 96, "bone-window", |s| s.window = [0.45, 1.0]));
@@ -243,7 +244,7 @@ fn real_volumes_match_the_reference() {
         let Some(path) = common::shared_data(native) else {
             continue;
         };
-        let v = volume::open(&path, &Default::default()).expect("load a native file");
+        let v = formats::open(&path, &Default::default()).expect("load a native file");
         let mut cases = standard_cases(&v, 72).into_iter().take(4).collect::<Vec<_>>();
         cases.push(with(&v, 72, "shaded", |s| s.shading = Some(Shading::default())));
         cases.push(with(&v, 72, "voxel-axes", |s| s.voxel_axes = true));

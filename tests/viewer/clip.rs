@@ -60,7 +60,7 @@ fn plane(state: &ViewState) -> ClipPlane {
 #[test]
 fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
     let phantom = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/world/nifti_coronal.nii.gz");
-    let volume = volcast::volume::open(&phantom, &Default::default()).expect("phantom");
+    let volume = volcast::formats::open(&phantom, &Default::default()).expect("phantom");
     let Some((x, dir)) = x_session("viewer-clip") else {
         return;
     };

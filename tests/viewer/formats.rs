@@ -1,7 +1,7 @@
 //! The desktop viewer opens every format of issue 12 the way a dropped file is opened: the script's `drop:PATH`
 //! step calls the window's `DroppedFile` handler path (`FileFields::load_action`, then the background load),
 //! under its own Xvfb and validation. For each file the viewer must say it loaded, and its F12-path screenshot
-//! must equal, within 1/255, the headless render of the same file (opened by `volume::open`) under the
+//! must equal, within 1/255, the headless render of the same file (opened by `formats::open`) under the
 //! screenshot's own settings; a time series opens on step 0.
 //!
 //! A second test drops a file for real: `common::xdnd` is an XDND drag source (what a file manager is), so the
@@ -59,7 +59,7 @@ fn viewer_opens_every_new_format_as_a_dropped_file() {
         let shot = image::open(&png).unwrap_or_else(|e| panic!("{f}: {e}")).to_rgba8();
         let json = std::fs::read_to_string(png.with_extension("json")).expect("settings beside the screenshot");
         let settings: RenderSettings = serde_json::from_str(&json).expect("settings JSON");
-        let volume = volcast::volume::open(&data.join(f), &Default::default()).expect("volume");
+        let volume = volcast::formats::open(&data.join(f), &Default::default()).expect("volume");
         assert_eq!(volume.shown_step(), 0);
         headless.set_volume(&gpu, &volume).expect("upload");
         let expected = headless.render(&gpu, &settings).expect("render").image;
@@ -98,7 +98,7 @@ fn viewer_loads_a_file_dropped_by_xdnd() {
     let (mut viewer, window) = drop_for_real(&x.display, &dir, &file, "tests/data/vtk/vti_zlib.vti");
     type_keys(&x.display, &window, &["F12"]);
     let (shot, settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
-    let volume = volcast::volume::open(&file, &Default::default()).expect("volume");
+    let volume = volcast::formats::open(&file, &Default::default()).expect("volume");
     let d = diff(&shot, &headless_render(&volume, &settings));
     assert!(
         d.max <= 1.0,

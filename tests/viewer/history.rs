@@ -24,7 +24,7 @@ fn same_camera(a: &Camera, b: &Camera) -> bool {
 #[test]
 fn ctrl_z_undoes_a_point_a_drag_and_a_turn_and_ctrl_shift_z_redoes_them() {
     let ct = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom/enhanced_ct_native.dcm");
-    let volume = volcast::volume::open(&ct, &Default::default()).expect("the CT");
+    let volume = volcast::formats::open(&ct, &Default::default()).expect("the CT");
     let range = volume.range;
     let Some((x, dir)) = x_session("viewer-history") else {
         return;

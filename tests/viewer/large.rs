@@ -52,7 +52,7 @@ fn previews_then_shows(dir: &Path, path: &Path, preview: &str) {
         return;
     }
     let file = path.to_string_lossy().into_owned();
-    let whole = volcast::volume::open(path, &Default::default()).expect("volume");
+    let whole = volcast::formats::open(path, &Default::default()).expect("volume");
     shot_matches(&x.display, dir, &[&file], &whole, &[preview, "loaded "]);
 }
 
@@ -174,7 +174,7 @@ fn viewer_streams_a_file_over_the_gpu_budget_and_refines_again_after_a_drag() {
     let dir = common::scratch("viewer-streamed");
     let path = write_large(&dir);
     let file = path.to_string_lossy().into_owned();
-    let whole = volcast::volume::open(&path, &Default::default()).expect("volume");
+    let whole = volcast::formats::open(&path, &Default::default()).expect("volume");
     // 40 MiB of GPU budget: the 64 MiB file is over it whole, so it is read at full resolution and streamed
     // through a pool of 20 MiB (64 bricks of 64^3), refined to the screen rule's cut for the still view.
     let mut viewer = Viewer::start(

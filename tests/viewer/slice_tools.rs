@@ -27,7 +27,7 @@ fn point_at(viewer: &mut Viewer, display: &str, window: &str, name: &str) {
 #[test]
 fn window_level_presets_and_the_ruler_in_the_slice_views() {
     let ct = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom/enhanced_ct_native.dcm");
-    let volume = volcast::volume::open(&ct, &Default::default()).expect("the CT");
+    let volume = volcast::formats::open(&ct, &Default::default()).expect("the CT");
     let Some((x, dir)) = x_session("viewer-slice-tools") else {
         return;
     };

@@ -31,7 +31,7 @@ fn region(img: &RgbaImage, r: egui::Rect) -> Vec<u8> {
 #[test]
 fn slice_views_follow_the_crosshair_and_sessions_restore() {
     let phantom = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/world/nifti_coronal.nii.gz");
-    let volume = volcast::volume::open(&phantom, &Default::default()).expect("phantom");
+    let volume = volcast::formats::open(&phantom, &Default::default()).expect("phantom");
     let Some((x, dir)) = x_session("viewer-slices") else {
         return;
     };

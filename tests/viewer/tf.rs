@@ -26,7 +26,7 @@ fn tf_of(state: &ViewState) -> TransferFunction {
 #[test]
 fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     let ct = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom/enhanced_ct_native.dcm");
-    let volume = volcast::volume::open(&ct, &Default::default()).expect("the CT");
+    let volume = volcast::formats::open(&ct, &Default::default()).expect("the CT");
     let range = volume.range;
     let Some((x, dir)) = x_session("viewer-tf") else {
         return;

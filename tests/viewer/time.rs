@@ -81,7 +81,7 @@ fn viewer_opens_plays_and_pauses_a_series_from_real_keys() {
     })
     .expect("Vulkan");
     let mut headless = Headless::new(&gpu).expect("renderer");
-    let mut series = volcast::volume::open(&file, &Default::default()).expect("series");
+    let mut series = volcast::formats::open(&file, &Default::default()).expect("series");
     let (mut start_matches, mut after_matches) = (Vec::new(), Vec::new());
     for t in 0..series.timesteps() {
         series.show_step(t).unwrap();

@@ -1,6 +1,6 @@
 //! An OME-Zarr store is a folder: dropped on the viewer by a real XDND source (`common::xdnd`, what a file
 //! manager is), the window must accept the drop, load the store (its log says so) and show it: the F12 screenshot
-//! equals the headless render of the same store (opened by `volume::open`) under the screenshot's settings.
+//! equals the headless render of the same store (opened by `formats::open`) under the screenshot's settings.
 
 use crate::common;
 
@@ -25,7 +25,7 @@ fn viewer_loads_a_dropped_zarr_folder() {
     assert_eq!(level, "showing level 0 of 2 (8x6x4)");
     type_keys(&x.display, &window, &["F12"]);
     let (shot, settings) = read_screenshot(&dir, &viewer.wait_for("saved screenshot ", Duration::from_secs(60)));
-    let volume = volcast::volume::open(&store, &Default::default()).expect("volume");
+    let volume = volcast::formats::open(&store, &Default::default()).expect("volume");
     assert_eq!(volume.format, "OME-Zarr");
     let d = diff(&shot, &headless_render(&volume, &settings));
     assert!(

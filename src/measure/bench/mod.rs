@@ -20,13 +20,15 @@ pub use report::*;
 pub use sample_only::*;
 pub use scenes::*;
 
+use crate::formats;
+use crate::formats::RawOptions;
 use crate::gpu::{Gpu, GpuError};
 use crate::measure::fidelity::{converged, Fidelity};
 use crate::render::headless::Headless;
 use crate::render::VolumeLayout;
 use crate::scene::quality::{Quality, CONVERGED_STEP};
 use crate::scene::settings::RenderSettings;
-use crate::volume::{self, RawOptions, Volume, VolumeError};
+use crate::volume::{self, Volume, VolumeError};
 use ash::vk;
 use image::RgbaImage;
 use std::path::Path;
@@ -58,7 +60,7 @@ fn load_scene_volume(scene: &Scene, opts: &BenchOptions) -> Result<Result<Volume
                 spacing: Some(spacing),
                 ..Default::default()
             };
-            Ok(Ok(volume::load_raw(&path, &raw)?))
+            Ok(Ok(formats::load_raw(&path, &raw)?))
         }
         Source::VtkHelix => match &opts.vtk_raw {
             Some(path) => {
@@ -67,7 +69,7 @@ fn load_scene_volume(scene: &Scene, opts: &BenchOptions) -> Result<Result<Volume
                     voxel_type: Some(volume::VoxelType::U8),
                     spacing: Some([1.0; 3]),
                 };
-                let mut v = volume::load_raw(path, &raw)?;
+                let mut v = formats::load_raw(path, &raw)?;
                 v.name = format!("vtk-helix from {}", file_name(path));
                 Ok(Ok(v))
             }

@@ -2,6 +2,7 @@
 //! drawing, and the platform's file dialog on a thread of its own. What arrives is installed by the app
 //! (`volumes`).
 
+use crate::formats;
 use crate::scene::view_state::ViewState;
 use crate::viewer::model::chooser::FileChooser;
 use crate::viewer::model::{Messages, Model, Topic};
@@ -96,7 +97,7 @@ impl Limits {
     }
 }
 
-/// Loads any format `volume::open` reads (raw with the given options) within `limits`: read at the finest level
+/// Loads any format `formats::open` reads (raw with the given options) within `limits`: read at the finest level
 /// the host budget holds (one step over the GPU budget whole is streamed through a pool of bricks); a time series,
 /// shown whole step by step, at the finest level that fits the GPU budget too. A volume larger than they allow is
 /// shown at a coarser pyramid level, with a note, rather than refused. A level read from its file comes with its
@@ -118,7 +119,7 @@ pub(super) fn open_source(
             .map(|volume| crate::scale::Opened { volume, keep: None })
             .map_err(|e| e.to_string())?,
         VolumeSource::File(path, raw) => {
-            let opts = volume::OpenOptions {
+            let opts = formats::OpenOptions {
                 raw: raw.clone(),
                 max_dim: limits.max_dim,
                 series: series.map(str::to_string),
@@ -127,7 +128,7 @@ pub(super) fn open_source(
             };
             // A series whose header says so (in place or compressed) is read at its GPU level at once; one read
             // whole by its format's reader is reduced to it below.
-            let steps = volume::in_place::claimed_shape(path).map_or(1, |(_, _, steps)| steps);
+            let steps = formats::in_place::claimed_shape(path).map_or(1, |(_, _, steps)| steps);
             let budgets = if steps > 1 { limits.budgets } else { host_only };
             crate::scale::open_deferred(path, &opts, budgets, limits.cache.as_ref(), progress)
                 .map_err(|e| e.to_string())?
@@ -164,7 +165,7 @@ fn load_in_background(
         // A large file read in place or a large DICOM series is shown first from every k-th voxel (scale::preview),
         // then refined.
         if let VolumeSource::File(path, raw) = &source {
-            let opts = volume::OpenOptions {
+            let opts = formats::OpenOptions {
                 raw: raw.clone(),
                 series: series.clone(),
                 ..Default::default()

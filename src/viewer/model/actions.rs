@@ -1,7 +1,7 @@
 //! What the widgets ask of the app beyond editing the model: loading, files, captures — work that needs the GPU,
 //! a thread or the file system.
 
-use crate::volume::RawOptions;
+use crate::formats::RawOptions;
 use std::path::PathBuf;
 
 /// What the panel (or a shortcut) asks the viewer to do.

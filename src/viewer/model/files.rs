@@ -3,7 +3,8 @@
 
 use super::actions::UiAction;
 use super::chooser::FileChooser;
-use crate::volume::{parse_scivis_name, RawOptions, VoxelType};
+use crate::formats::{parse_scivis_name, RawOptions};
+use crate::volume::VoxelType;
 use std::path::{Path, PathBuf};
 
 /// The paths and raw-format fields the panel edits.
@@ -99,8 +100,8 @@ impl FileFields {
 /// The panel's dims/type/scale describe raw files; other formats carry their own (and the scale would override
 /// their spacing), so they get none.
 pub fn raw_only(path: &Path, opts: RawOptions) -> RawOptions {
-    match crate::volume::detect_format(path) {
-        Ok(crate::volume::Format::Raw) | Err(_) => opts,
+    match crate::formats::detect_format(path) {
+        Ok(crate::formats::Format::Raw) | Err(_) => opts,
         Ok(_) => RawOptions::default(),
     }
 }
@@ -111,10 +112,10 @@ pub fn read_as_raw(path: &Path) -> bool {
     if path.as_os_str().is_empty() || is_session_file(path) || path.is_dir() {
         return false;
     }
-    match crate::volume::detect_format(path) {
-        Ok(format) => format == crate::volume::Format::Raw,
+    match crate::formats::detect_format(path) {
+        Ok(format) => format == crate::formats::Format::Raw,
         Err(crate::volume::VolumeError::Unsupported { .. }) => false,
-        Err(_) => crate::volume::format_by_name(path).is_none(),
+        Err(_) => crate::formats::format_by_name(path).is_none(),
     }
 }
 

@@ -109,7 +109,7 @@ fn click(at: egui::Pos2) -> Vec<egui::Event> {
 /// the text each widget painted that was cut short (egui elided it) or runs past the panel's edges.
 fn cut_text_at_default_size() -> (Vec<String>, usize) {
     let ct = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/dicom/enhanced_ct_native.dcm");
-    let v = crate::volume::open(&ct, &Default::default()).expect("the CT");
+    let v = crate::formats::open(&ct, &Default::default()).expect("the CT");
     let mut model = Model::new(glam::Vec3::ONE, String::new());
     model.show_volume(&v, vec![1; 8].into(), false);
     model.time = crate::viewer::model::time::TimeControl::new(12, 0);
