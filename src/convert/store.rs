@@ -1,6 +1,6 @@
 //! The store convert writes through: zarrs' filesystem store for everything but whole-value writes, which skip its
 //! `sync_all` per value. zarrs syncs every chunk file before returning, which halved convert's speed on a 1 GiB volume
-//! (4687 fsyncs; 7.9-8.2 s against 3.9-4.5 s with fsync made a no-op, docs/cli.md). zarr-python's and ome-zarr-py's
+//! (4687 fsyncs; 7.9-8.2 s against 3.9-4.5 s with fsync made a no-op). zarr-python's and ome-zarr-py's
 //! local stores leave flushing to the operating system too; a store cut short by a crash is a half-written store,
 //! which volcast's reader names.
 

@@ -24,8 +24,8 @@ use crate::pyramid::geometry::level_dims;
 /// filtered (one more), reads at most two voxels beyond it.
 pub const BORDER: u32 = crate::pyramid::budget::BRICK_BORDER;
 
-/// The brick side used when a volume does not fit the device's 3D limit in one slot (docs/large-volumes.md has
-/// the measurements).
+/// The brick side used when a volume does not fit the device's 3D limit in one slot (docs/large-volumes.md,
+/// "Bricks, levels and the page table", states the rule).
 pub const TILED_BRICK: u32 = 64;
 
 /// Where bricks lie in the pool and which one each level-0 brick shows.

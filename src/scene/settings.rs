@@ -119,7 +119,7 @@ pub const STRIDE_DEPTH: f64 = 0.05;
 /// for the whole segment). Measured: the shaded MRI bench scene erred 1.09/255 on average with strides at 0.05
 /// (0.46 without); Marschner–Lobb under a faint flat table (0.012 depth per step), lit, erred p99 5/255, max 10
 /// against every step at 0.025 (stride 2), beyond the strides bound (p99 4). Half that keeps such segments at
-/// stride 1; docs/performance.md, Quality levels.
+/// stride 1; docs/rendering.md, Sampling, skipping and strides, states the rule.
 pub const STRIDE_DEPTH_LIT: f64 = 0.0125;
 
 /// Rule 2's most optical depth by which a strided segment may vary between the brick's faintest and strongest

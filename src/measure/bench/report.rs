@@ -182,7 +182,7 @@ const TABLE_LEGEND: &str = "\nms per frame (wall: render + readback; gpu: timest
     samples taken per pixel, gradients included (CPU replay of the march rules); Gsamples/s: spp x pixels / gpu_med; of_raw: that / \
     sample-only rate of the volume's format; quality: --quality's level (or the --step-length forced); step: in voxels; stride: the longest brick stride; err_mean/p99/max: the last frame \
     against the same scene converged (1/8-voxel steps, approximations off), in 1/255 over object \
-    pixels; target: whether err_mean and err_p99 are within the quality level's error target (docs/rendering.md, \
+    pixels; target: whether err_mean and err_p99 are within the quality level's error target (docs/performance.md, \
     Quality levels): met or over\n";
 
 impl BenchReport {
