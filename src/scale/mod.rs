@@ -79,7 +79,7 @@ pub fn open_deferred(
     // by the format's own loader.
     let place = match in_place(path, opts)? {
         Some(p) => Some(p),
-        None => match crate::formats::in_place::compressed(path, &opts)? {
+        None => match crate::formats::in_place::compressed(path, opts)? {
             Some(p) => Some(p),
             None => dicom_by_slices(path, opts, &budgets)?,
         },
@@ -102,7 +102,7 @@ pub fn open_deferred(
         }
     }
     refuse_whole_over_budget(path, &budgets).map_err(named)?;
-    let v = formats::open_within(path, &opts, Some(&budgets), progress)?;
+    let v = formats::open_within(path, opts, Some(&budgets), progress)?;
     let volume = fit(v, &budgets, opts.no_downsample).map_err(|e| match e {
         VolumeError::Header { problem, .. } => named(problem),
         e => e,
