@@ -3,6 +3,7 @@ GIL released, Ctrl+C, threads, flat memory, and no validation message."""
 
 import _thread
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -106,6 +107,17 @@ def test_the_gil_is_released_while_rendering():
 
 
 def test_ctrl_c_stops_a_movie(tmp_path):
+    # A Python started in the background by a shell without job control (`cmd &` in a script, nohup) inherits SIGINT
+    # ignored and installs no KeyboardInterrupt handler, so interrupt_main would do nothing and the 62 s movie would
+    # run out: the test failed so in a CI run started that way. A user at a terminal has the handler; so does the test.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        interrupted_movie(tmp_path)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def interrupted_movie(tmp_path):
     out = tmp_path / "long.png"
     volcast.render(builtin="helix", builtin_size=48, size=128)  # the device and pipelines first
     timer = threading.Timer(1.0, _thread.interrupt_main)
