@@ -3,14 +3,17 @@
 
 A test suite proves something only if it fails when the code is wrong. Each bug below is a small, realistic
 source change (a wrong sign, a dropped factor, an edge off by one); for each, this script applies it to a scratch
-copy of the committed tree, runs `cargo test --release --no-fail-fast` there, and records the failing tests. A bug
+copy of the committed tree, runs `cargo test` there, and records the failing tests. A bug
 that no test catches is a *survivor*: a hole in the proof. A run writes its table to target/planted-bugs.md;
 docs/testing.md, "Planted bugs", states the rules.
 
-Runs by hand, not in CI (each bug rebuilds the crate and runs the suite, the viewer's X tests only for bugs in the
-viewer: ~3 minutes a bug on 2 cores):
+Runs by hand, not in CI. Each bug rebuilds the crate incrementally (profile `planted`, which the script adds to the
+scratch copy: release code, incremental) and runs the suite until the first test binary that fails, the viewer's X
+tests only for bugs in the viewer. The whole table takes hours on 2 cores, so a run records each verdict as it goes
+and can be resumed, on the same commit, in a later session:
 
-    python3 scripts/planted_bugs.py               # every bug; writes target/planted-bugs.md
+    python3 scripts/planted_bugs.py               # every bug on HEAD; writes target/planted-bugs.md
+    python3 scripts/planted_bugs.py --record R.tsv --commit 602609e   # resumable: skips the bugs R.tsv has
     python3 scripts/planted_bugs.py --list        # the bugs, without running
     python3 scripts/planted_bugs.py --check       # that every bug still applies to the working tree (seconds, no build)
     python3 scripts/planted_bugs.py --only srgb-twice --only no-opacity-correction
@@ -411,14 +414,26 @@ def run(cmd, cwd, env=None, log=None):
     return out
 
 
-def scratch_copy():
-    """The committed tree (HEAD) in SCRATCH/tree, beside ../shared, with its own target folder kept across runs."""
+# Release code rebuilt incrementally: a one-line bug then costs seconds of compiling, not the crate's minutes.
+# Codegen units change no float result (Rust has no fast-math), so the tests see what a release build computes.
+PLANTED_PROFILE = """
+[profile.planted]
+inherits = "release"
+incremental = true
+codegen-units = 256
+"""
+
+
+def scratch_copy(commit):
+    """The tree of `commit` in SCRATCH/main, beside ../shared, with its own target folder kept across runs."""
     tree = SCRATCH / "main"
     if tree.exists():
         shutil.rmtree(tree)
     tree.mkdir(parents=True)
-    archive = subprocess.run(["git", "archive", "HEAD"], cwd=ROOT, stdout=subprocess.PIPE, check=True).stdout
+    archive = subprocess.run(["git", "archive", commit], cwd=ROOT, stdout=subprocess.PIPE, check=True).stdout
     subprocess.run(["tar", "-x", "-C", str(tree)], input=archive, check=True)
+    with open(tree / "Cargo.toml", "a") as f:
+        f.write(PLANTED_PROFILE)
     shared = SCRATCH / "shared"
     if not shared.exists() and (ROOT.parent / "shared").exists():
         shared.symlink_to(ROOT.parent / "shared")
@@ -441,9 +456,9 @@ def test_command(edits, tree=None, env=None):
     A bug in the Python module (python/) is run against its pytest suite, the module built from the scratch tree."""
     if all(rel.startswith("python/") for rel, _, _ in edits):
         venv = python_env(tree, env)
-        return ["bash", "-c", f"{venv}/bin/pip install -q ./python 2>&1 && {venv}/bin/python -m pytest -q -rf "
-                "python/tests 2>&1"]
-    cmd = ["cargo", "test", "--release", "--no-fail-fast"]
+        return ["bash", "-c", f"cargo build --profile planted 2>&1 && {venv}/bin/pip install -q ./python 2>&1 && "
+                f"{venv}/bin/python -m pytest -q -rf python/tests 2>&1"]
+    cmd = ["cargo", "test", "--profile", "planted"]
     # Rule 11's bugs: in the MPI code, or a march edit that drops an ownership test (owned()).
     if all(rel.startswith(("src/distributed/", "src/render/part.rs")) for rel, _, _ in edits) or any(
             "owned(" in text and "owned(" not in new for _, text, new in edits):
@@ -498,12 +513,60 @@ def check(tree):
     return 1 if bad else 0
 
 
+def read_record(path, commit):
+    """The verdicts already in `path` for `commit`: {bug: (what, verdict)}. A record of another commit is refused."""
+    if not path.exists():
+        path.write_text(f"# planted bugs run on commit {commit}\n")
+        return {}
+    lines = path.read_text().splitlines()
+    if not lines or lines[0] != f"# planted bugs run on commit {commit}":
+        raise SystemExit(f"{path} records a run on another commit ({lines[0] if lines else 'empty'}); "
+                         f"pass that commit, or a new file")
+    return {n: (w, v) for n, w, v in (line.split("\t") for line in lines[1:] if line)}
+
+
+def plant(tree, edits):
+    """Applies `edits` to `tree`; returns the files' original texts, or raises ValueError (nothing left changed)."""
+    originals = {}
+    try:
+        for rel, old, new in edits:
+            path = tree / rel
+            originals.setdefault(rel, path.read_text())
+            current = path.read_text()
+            if current.count(old) != 1:
+                raise ValueError(f"{rel}: the text to change occurs {current.count(old)} times")
+            path.write_text(current.replace(old, new))
+    except ValueError:
+        restore(tree, originals)
+        raise
+    return originals
+
+
+def restore(tree, originals):
+    for rel, text in originals.items():
+        (tree / rel).write_text(text)
+
+
+def verdict_of(out):
+    failed = failing_tests(out.stdout)
+    if "could not compile" in out.stdout:
+        return "does not build (fix the bug's edit)"
+    if failed:
+        return "caught by " + ", ".join(f"`{t}`" for t in failed)
+    if out.returncode != 0:
+        return f"run failed without a failing test (exit {out.returncode}; see its log)"
+    return "**SURVIVES**"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--list", action="store_true", help="list the bugs and exit")
     ap.add_argument("--only", action="append", default=[], help="run only this bug (repeatable)")
     ap.add_argument("--check", action="store_true",
                     help="check that every bug's texts occur exactly once in the working tree, build nothing")
+    ap.add_argument("--commit", default="HEAD", help="the commit to plant the bugs in (default HEAD)")
+    ap.add_argument("--record", type=Path,
+                    help="a TSV that each verdict is appended to as it comes; bugs it already has are skipped")
     args = ap.parse_args()
     if args.list:
         for name, what, _ in BUGS:
@@ -511,61 +574,49 @@ def main():
         return 0
     if args.check:
         return check(ROOT)
-    bugs = [b for b in BUGS if not args.only or b[0] in args.only]
-    tree = scratch_copy()
+    commit = run(["git", "rev-parse", args.commit], ROOT).stdout.strip()
+    done = read_record(args.record, commit) if args.record else {}
+    bugs = [b for b in BUGS if (not args.only or b[0] in args.only) and b[0] not in done]
+    tree = scratch_copy(commit)
     env = dict(os.environ, CARGO_TARGET_DIR=str(SCRATCH / "target"), CI="true")
-    env["VOLCAST_BIN"] = str(SCRATCH / "target" / "release" / "volcast")
+    env["VOLCAST_BIN"] = str(SCRATCH / "target" / "planted" / "volcast")
     env.setdefault("XDG_RUNTIME_DIR", str(SCRATCH / "xdg"))
     Path(env["XDG_RUNTIME_DIR"]).mkdir(parents=True, exist_ok=True)
     logs = SCRATCH / "logs"
     logs.mkdir(exist_ok=True)
 
-    print("building the unchanged tree and running its tests once (they must pass)...", flush=True)
-    clean = run(["cargo", "test", "--release", "--no-fail-fast"], tree, env, logs / "clean.log")
+    print(f"commit {commit}: building the unchanged tree and running its tests once (they must pass)...", flush=True)
+    clean = run(["cargo", "test", "--profile", "planted", "--no-fail-fast"], tree, env, logs / "clean.log")
     if clean.returncode != 0:
         print(f"the unchanged tree fails its tests: see {logs / 'clean.log'}", file=sys.stderr)
         return 2
 
-    rows, bad = [], 0
+    rows = dict(done)
     for name, what, edits in bugs:
-        originals = {}
         try:
-            for rel, old, new in edits:
-                path = tree / rel
-                text = originals.setdefault(rel, path.read_text())
-                current = path.read_text()
-                if current.count(old) != 1:
-                    raise ValueError(f"{rel}: the text to change occurs {current.count(old)} times")
-                path.write_text(current.replace(old, new))
+            originals = plant(tree, edits)
         except ValueError as e:
-            rows.append((name, what, f"does not apply ({e})"))
-            bad += 1
-            for rel, text in originals.items():
-                (tree / rel).write_text(text)
-            continue
-        start = time.time()
-        out = run(test_command(edits, tree, env), tree, env, logs / f"{name}.log")
-        for rel, text in originals.items():
-            (tree / rel).write_text(text)
-        failed = failing_tests(out.stdout)
-        if "could not compile" in out.stdout:
-            verdict = "does not build (fix the bug's edit)"
-            bad += 1
-        elif failed:
-            verdict = "caught by " + ", ".join(f"`{t}`" for t in failed)
+            verdict = f"does not apply ({e})"
         else:
-            verdict = "**SURVIVES**"
-            bad += 1
-        print(f"{name}: {verdict} ({time.time() - start:.0f} s)", flush=True)
-        rows.append((name, what, verdict))
+            start = time.time()
+            out = run(test_command(edits, tree, env), tree, env, logs / f"{name}.log")
+            restore(tree, originals)
+            verdict = verdict_of(out)
+            print(f"{name}: {verdict} ({time.time() - start:.0f} s)", flush=True)
+        rows[name] = (what, verdict)
+        if args.record:
+            with open(args.record, "a") as f:
+                f.write(f"{name}\t{what}\t{verdict}\n")
 
-    table = "| bug | what it breaks | result |\n|---|---|---|\n"
-    table += "".join(f"| `{n}` | {w} | {v} |\n" for n, w, v in rows)
+    order = [n for n, _, _ in BUGS if n in rows]
+    table = f"Planted bugs on commit {commit}\n\n| bug | what it breaks | result |\n|---|---|---|\n"
+    table += "".join(f"| `{n}` | {rows[n][0]} | {rows[n][1]} |\n" for n in order)
     report = ROOT / "target" / "planted-bugs.md"
     report.parent.mkdir(exist_ok=True)
     report.write_text(table)
     print("\n" + table)
     print(f"written to {report}; logs in {logs}")
+    bad = [n for n in order if not rows[n][1].startswith("caught by")]
     return 1 if bad else 0
 
 
