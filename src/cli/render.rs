@@ -114,12 +114,12 @@ fn settings_of(
         None => args.frame.settings(volume)?,
     };
     if args.state.is_none() || args.frame.given.has("method") {
-        s.ray_setup = if args.method == "faces" {
+        s.pipeline.ray_setup = if args.method == "faces" {
             RaySetup::Faces
         } else {
             RaySetup::Analytic
         };
-        s.compute = args.method == "compute";
+        s.pipeline.compute = args.method == "compute";
     }
     Ok(s)
 }
@@ -157,7 +157,7 @@ pub fn make_resident(
     } else if let Some(level) = args.level {
         show_level(gpu, headless, volume, s, level)?;
     }
-    if s.gradient_texture && !headless.renderer.has_gradient_texture() {
+    if s.lighting.gradient_texture && !headless.renderer.has_gradient_texture() {
         headless.renderer.enable_gradient_texture(gpu, volume)?;
     }
     Ok(())
@@ -380,7 +380,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
                 volume.spacing()[2],
                 s.width,
                 s.height,
-                match (s.ray_setup, s.compute) {
+                match (s.pipeline.ray_setup, s.pipeline.compute) {
                     (RaySetup::Faces, _) => "entry/exit faces",
                     (RaySetup::Analytic, false) => "analytic",
                     (RaySetup::Analytic, true) => "analytic (compute pass)",
@@ -411,18 +411,18 @@ pub fn render(args: &RenderArgs) -> Result<()> {
 
 /// What `s` classifies with, in words: the transfer function's name, or the colormap model's parts.
 fn classification_text(s: &RenderSettings) -> String {
-    match &s.transfer_function {
+    match &s.colour.transfer_function {
         Some(tf) => format!(
             "transfer function '{}' (window {:.2}-{:.2}; --preset, --tf or --colormap choose another)",
-            tf.name, s.window[0], s.window[1]
+            tf.name, s.colour.window[0], s.colour.window[1]
         ),
         None => format!(
             "colormap {}, window {:.2}-{:.2}, step alpha {}{}",
-            s.colormap.name(),
-            s.window[0],
-            s.window[1],
-            s.step_alpha,
-            if s.multiplied_alpha { " x value" } else { "" }
+            s.colour.colormap.name(),
+            s.colour.window[0],
+            s.colour.window[1],
+            s.colour.step_alpha,
+            if s.colour.multiplied_alpha { " x value" } else { "" }
         ),
     }
 }

@@ -192,27 +192,27 @@ impl ColourArgs {
         let new_function = tf.is_some() && (automatic || wants.id("preset") || wants.id("tf"));
         // Over a saved view, --colormap alone leaves its transfer function for the colormap model, whose window
         // the function's [0, 1] is not.
-        let to_colormap = scope == Scope::Overrides && given.has("colormap") && s.transfer_function.is_some();
+        let to_colormap = scope == Scope::Overrides && given.has("colormap") && s.colour.transfer_function.is_some();
         if wants.id("colormap") {
-            s.colormap = self.colormap;
+            s.colour.colormap = self.colormap;
         }
         if new_function || scope == Scope::Whole || given.has("colormap") {
-            s.transfer_function = tf;
+            s.colour.transfer_function = tf;
         }
-        s.window = match (self.window, scope) {
+        s.colour.window = match (self.window, scope) {
             (Some(w), _) => [w.0, w.1],
             _ if new_function => [0.0, 1.0],
             (None, Scope::Whole) => DEFAULT_WINDOW,
             (None, Scope::Overrides) if to_colormap && !new_function => DEFAULT_WINDOW,
-            (None, Scope::Overrides) => s.window,
+            (None, Scope::Overrides) => s.colour.window,
         };
         if wants.id("step_alpha") {
-            s.step_alpha = self.step_alpha;
+            s.colour.step_alpha = self.step_alpha;
         }
         if wants.id("multiplied_alpha") {
-            s.multiplied_alpha = self.multiplied_alpha;
+            s.colour.multiplied_alpha = self.multiplied_alpha;
         }
-        if let (Some(path), Some(tf)) = (&self.save_tf, &s.transfer_function) {
+        if let (Some(path), Some(tf)) = (&self.save_tf, &s.colour.transfer_function) {
             std::fs::write(path, tf.to_json()).with_context(|| format!("writing {}", path.display()))?;
         }
         Ok(())
@@ -232,29 +232,29 @@ impl ColourArgs {
 impl CompositingArgs {
     fn apply(&self, s: &mut RenderSettings, wants: &Wants) {
         if wants.id("mode") {
-            s.mode = self.mode;
+            s.compositing.mode = self.mode;
         }
         if wants.id("iso") {
-            s.iso_value = self.iso;
+            s.compositing.iso_value = self.iso;
         }
         if wants.id("iso_color") {
             match self.iso_color {
-                Some(IsoColor::Colormap) => s.iso_color = None,
-                Some(IsoColor::Rgb(c)) => s.iso_color = Some(c),
+                Some(IsoColor::Colormap) => s.compositing.iso_color = None,
+                Some(IsoColor::Rgb(c)) => s.compositing.iso_color = Some(c),
                 None => {}
             }
         }
         if wants.id("iso_opacity") {
-            s.iso_opacity = self.iso_opacity;
+            s.compositing.iso_opacity = self.iso_opacity;
         }
         if wants.id("surfaces") {
-            s.extra_isosurfaces = self.surfaces.clone();
+            s.compositing.extra_isosurfaces = self.surfaces.clone();
         }
         if wants.id("density") {
-            s.density = self.density;
+            s.compositing.density = self.density;
         }
         if wants.id("early_termination") {
-            s.early_termination = self.early_termination;
+            s.compositing.early_termination = self.early_termination;
         }
     }
 }
@@ -263,10 +263,10 @@ impl LightingArgs {
     /// Shading and the light, and what the gradient does to a frame.
     fn apply(&self, s: &mut RenderSettings, wants: &Wants) {
         if wants.id("gradient_opacity") {
-            s.gradient_opacity = self.gradient_opacity;
+            s.lighting.gradient_opacity = self.gradient_opacity;
         }
         if wants.id("shading_fade") {
-            s.shading_fade = self.shading_fade.unwrap_or(0.0);
+            s.lighting.shading_fade = self.shading_fade.unwrap_or(0.0);
         }
         if wants.whole() || wants.given.any(LIGHTING) {
             self.apply_light(s, wants);
@@ -282,31 +282,31 @@ impl LightingArgs {
             || self.shadows
             || self.ambient_occlusion;
         if wants.id("shadows") {
-            s.shadows = self.shadows;
+            s.lighting.shadows = self.shadows;
         }
         if wants.id("ambient_occlusion") {
-            s.ambient_occlusion = self.ambient_occlusion;
+            s.lighting.ambient_occlusion = self.ambient_occlusion;
         }
-        if (s.shadows || s.ambient_occlusion) && s.mode.is_projection() {
+        if (s.lighting.shadows || s.lighting.ambient_occlusion) && s.compositing.mode.is_projection() {
             eprintln!(
                 "note: {} is not lit: shadows and ambient occlusion do not apply",
-                s.mode.name()
+                s.compositing.mode.name()
             );
         }
-        let was_on = !wants.whole() && s.shading.is_some();
-        let coefficients = match s.shading {
+        let was_on = !wants.whole() && s.lighting.shading.is_some();
+        let coefficients = match s.lighting.shading {
             Some(c) if !wants.id("lighting") => c,
             _ => self.lighting,
         };
-        s.shading = (self.shading || lit || was_on).then_some(coefficients);
+        s.lighting.shading = (self.shading || lit || was_on).then_some(coefficients);
         if wants.id("light") {
-            s.light.direction = self.light.and_then(|l| l.0);
+            s.lighting.light.direction = self.light.and_then(|l| l.0);
         }
         if wants.id("light_color") {
-            s.light.color = self.light_color.unwrap_or(Vec3::ONE);
+            s.lighting.light.color = self.light_color.unwrap_or(Vec3::ONE);
         }
         if wants.id("light_intensity") {
-            s.light.intensity = self.light_intensity.unwrap_or(1.0);
+            s.lighting.light.intensity = self.light_intensity.unwrap_or(1.0);
         }
     }
 }
@@ -315,10 +315,10 @@ impl CutArgs {
     /// The slabs and the clipping plane.
     fn apply(&self, s: &mut RenderSettings, wants: &Wants) {
         for &(axis, pos, width) in &self.slices {
-            s.set_slab(axis, pos, width);
+            s.cut.set_slab(axis, pos, width);
         }
         if wants.id("clip_plane") {
-            s.clip_plane = self.clip_plane;
+            s.cut.clip_plane = self.clip_plane;
         }
     }
 }
@@ -338,14 +338,14 @@ impl SamplingArgs {
             q.apply(s, volume.range);
         }
         if let Some(step) = self.step_length {
-            s.step_length = step;
-            s.max_stride = 1;
+            s.sampling.step_length = step;
+            s.sampling.max_stride = 1;
         }
         if let Some(stride) = self.max_stride {
-            s.max_stride = stride;
+            s.sampling.max_stride = stride;
         }
         if let Some(k) = self.ray_spacing {
-            s.ray_spacing = k;
+            s.sampling.ray_spacing = k;
         }
         let reads_gradients = given.any(LIGHTING) || given.any(&["mode", "gradient_opacity"]);
         if wants.id("gradients") || wants.id("gradient_texture") || reads_gradients {
@@ -357,13 +357,13 @@ impl SamplingArgs {
             gradients.apply(s, volume.voxel_count() as u64);
         }
         if wants.id("no_jitter") || wants.id("jitter_seed") {
-            s.jitter = (!self.no_jitter).then_some(self.jitter_seed);
+            s.sampling.jitter = (!self.no_jitter).then_some(self.jitter_seed);
         }
         if wants.id("no_skip") {
-            s.skip_empty = !self.no_skip;
+            s.sampling.skip_empty = !self.no_skip;
         }
         if wants.id("positions") {
-            s.position_format = if self.positions == "rgba16f" {
+            s.pipeline.position_format = if self.positions == "rgba16f" {
                 PositionFormat::Rgba16f
             } else {
                 PositionFormat::Rgba32f

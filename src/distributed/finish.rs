@@ -58,9 +58,9 @@ pub struct Finisher {
 impl Finisher {
     pub fn new(s: &RenderSettings, range: [f64; 2]) -> Finisher {
         Finisher {
-            lut: bake(&s.classification(), s.window, range),
+            lut: bake(&s.classification(), s.colour.window, range),
             background: [s.background.x, s.background.y, s.background.z].map(srgb_to_linear),
-            mode: s.mode,
+            mode: s.compositing.mode,
         }
     }
 

@@ -84,7 +84,7 @@ fn rank_render(world: &SimpleCommunicator, args: &RenderArgs) -> Result<()> {
     let args = with_global_transfer_function(world, args, &part.volume, &whole, own_local)?;
     let mut s = crate::cli::render::view_settings(&args, &whole)?;
     // The fragment march: the compute pass writes 8-bit pixels, and its rays are the analytic setup's.
-    s.compute = false;
+    s.pipeline.compute = false;
     refuse_unsupported_settings(&s)?;
     let info = PartInfo {
         origin: held.lo,
@@ -128,7 +128,7 @@ fn refuse_unsupported_settings(s: &RenderSettings) -> Result<()> {
                 .into()
         ));
     }
-    if s.count_samples {
+    if s.pipeline.count_samples {
         bail!(UsageError("--count-samples is not available under mpirun".into()));
     }
     Ok(())
@@ -208,7 +208,7 @@ fn share_and_composite(
     headless
         .renderer
         .set_volume_part(gpu, &part.volume, info, part.whole_dims, part.geometry)?;
-    if s.gradient_texture {
+    if s.lighting.gradient_texture {
         headless.renderer.enable_gradient_texture(gpu, &part.volume)?;
     }
     let upload_ms = t_upload.elapsed().as_secs_f64() * 1e3;
@@ -245,7 +245,7 @@ fn composite(
     order: Vec<usize>,
 ) -> Result<(Option<Vec<f32>>, u64)> {
     let order: Vec<i32> = order.into_iter().map(|r| r as i32).collect();
-    match Merge::of(s.mode) {
+    match Merge::of(s.compositing.mode) {
         Merge::Sum => {
             let root = world.process_at_rank(0);
             let bytes = (share.len() * 4) as u64;
@@ -280,7 +280,7 @@ fn closest_share(s: &RenderSettings, share: &[f32]) -> (Vec<f32>, Vec<f32>) {
     for (i, p) in share.chunks_exact(4).enumerate() {
         if p[1] > 0.0 {
             rgba[4 * i..4 * i + 4].copy_from_slice(&[p[0], 0.0, 0.0, 1.0]);
-            depth[i] = depth_of(s.mode, p[0]);
+            depth[i] = depth_of(s.compositing.mode, p[0]);
         }
     }
     (rgba, depth)
@@ -307,7 +307,7 @@ fn write_image(
         whole.source_type,
         s.width,
         s.height,
-        if s.ray_setup == RaySetup::Faces {
+        if s.pipeline.ray_setup == RaySetup::Faces {
             "entry/exit faces"
         } else {
             "analytic"

@@ -66,8 +66,8 @@ pub fn builtin_views(base: &RenderSettings, extent: Vec3) -> Vec<View> {
         "slab-inside",
         Camera::looking_at(Vec3::new(0.05, 0.0, 0.05) * e, Vec3::new(-0.3, 0.4, 0.0) * e),
     );
-    slab.settings.set_slab(0, 0.45, 0.5);
-    slab.settings.set_slab(1, 0.5, 0.4);
+    slab.settings.cut.set_slab(0, 0.45, 0.5);
+    slab.settings.cut.set_slab(1, 0.5, 0.4);
     views.push(slab);
     views
 }
@@ -126,7 +126,7 @@ pub fn run_method(
     frames: u32,
 ) -> Result<MethodRun, GpuError> {
     let mut s = s.clone();
-    s.ray_setup = method;
+    s.pipeline.ray_setup = method;
     let mut frame = headless.render(gpu, &s)?;
     let mut all = Vec::new();
     for _ in 0..frames {

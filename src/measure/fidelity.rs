@@ -13,8 +13,8 @@ use image::RgbaImage;
 /// `s` with the converged step and brick strides off.
 pub fn converged(s: &RenderSettings) -> RenderSettings {
     let mut c = s.clone();
-    c.step_length = CONVERGED_STEP;
-    c.max_stride = 1;
+    c.sampling.step_length = CONVERGED_STEP;
+    c.sampling.max_stride = 1;
     c
 }
 
@@ -49,13 +49,23 @@ mod tests {
     #[test]
     fn converged_settings_keep_the_view_and_the_gradient_rule_and_drop_strides() {
         let mut s = RenderSettings::new(8, 8, glam::Vec3::ONE);
-        s.step_length = 2.0;
-        s.max_stride = 4;
-        s.gradient_texture = true;
-        s.jitter = Some(7);
+        s.sampling.step_length = 2.0;
+        s.sampling.max_stride = 4;
+        s.lighting.gradient_texture = true;
+        s.sampling.jitter = Some(7);
         let c = converged(&s);
-        assert_eq!((c.step_length, c.max_stride, c.gradient_texture), (0.125, 1, true));
-        assert_eq!((c.jitter, c.camera.eye, c.window), (s.jitter, s.camera.eye, s.window));
+        assert_eq!(
+            (
+                c.sampling.step_length,
+                c.sampling.max_stride,
+                c.lighting.gradient_texture
+            ),
+            (0.125, 1, true)
+        );
+        assert_eq!(
+            (c.sampling.jitter, c.camera.eye, c.colour.window),
+            (s.sampling.jitter, s.camera.eye, s.colour.window)
+        );
     }
 
     #[test]

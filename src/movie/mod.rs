@@ -163,7 +163,7 @@ pub fn record(
         for (k, png) in (0..n).zip(&files.frames) {
             let s = plan.frame(k);
             headless.renderer.refine(gpu, volume, &s)?;
-            if s.gradient_texture && !headless.renderer.has_gradient_texture() {
+            if s.lighting.gradient_texture && !headless.renderer.has_gradient_texture() {
                 headless.renderer.enable_gradient_texture(gpu, volume)?;
             }
             let frame = headless.render(gpu, &s)?;

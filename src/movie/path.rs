@@ -79,28 +79,31 @@ pub fn keyframe_frame(keys: &[RenderSettings], k: u32, n: u32) -> RenderSettings
 pub fn between(a: &RenderSettings, b: &RenderSettings, t: f64) -> RenderSettings {
     let mut s = a.clone();
     s.camera = camera_between(&a.camera, &b.camera, t);
-    s.window = [lerp(a.window[0], b.window[0], t), lerp(a.window[1], b.window[1], t)];
-    s.slab_lo = lerp3(a.slab_lo, b.slab_lo, t);
-    s.slab_hi = lerp3(a.slab_hi, b.slab_hi, t);
-    s.iso_value = lerp(a.iso_value, b.iso_value, t);
-    s.iso_opacity = lerp(a.iso_opacity, b.iso_opacity, t);
-    s.step_alpha = lerp(a.step_alpha, b.step_alpha, t);
-    s.density = lerp(a.density, b.density, t);
+    s.colour.window = [
+        lerp(a.colour.window[0], b.colour.window[0], t),
+        lerp(a.colour.window[1], b.colour.window[1], t),
+    ];
+    s.cut.slab_lo = lerp3(a.cut.slab_lo, b.cut.slab_lo, t);
+    s.cut.slab_hi = lerp3(a.cut.slab_hi, b.cut.slab_hi, t);
+    s.compositing.iso_value = lerp(a.compositing.iso_value, b.compositing.iso_value, t);
+    s.compositing.iso_opacity = lerp(a.compositing.iso_opacity, b.compositing.iso_opacity, t);
+    s.colour.step_alpha = lerp(a.colour.step_alpha, b.colour.step_alpha, t);
+    s.compositing.density = lerp(a.compositing.density, b.compositing.density, t);
     s.background = lerp3(a.background, b.background, t);
-    s.light.color = lerp3(a.light.color, b.light.color, t);
-    s.light.intensity = lerp(a.light.intensity, b.light.intensity, t);
-    if let (Some(da), Some(db)) = (a.light.direction, b.light.direction) {
-        s.light.direction = Some(slerp_direction(da, db, t));
+    s.lighting.light.color = lerp3(a.lighting.light.color, b.lighting.light.color, t);
+    s.lighting.light.intensity = lerp(a.lighting.light.intensity, b.lighting.light.intensity, t);
+    if let (Some(da), Some(db)) = (a.lighting.light.direction, b.lighting.light.direction) {
+        s.lighting.light.direction = Some(slerp_direction(da, db, t));
     }
-    if let (Some(ga), Some(gb)) = (a.gradient_opacity, b.gradient_opacity) {
-        s.gradient_opacity = Some(lerp(ga, gb, t));
+    if let (Some(ga), Some(gb)) = (a.lighting.gradient_opacity, b.lighting.gradient_opacity) {
+        s.lighting.gradient_opacity = Some(lerp(ga, gb, t));
     }
     // A clipping plane in both states turns (normal slerped like the light's direction) and slides (offset
     // linear); otherwise the segment start's.
-    if let (Some(ca), Some(cb)) = (&a.clip_plane, &b.clip_plane) {
+    if let (Some(ca), Some(cb)) = (&a.cut.clip_plane, &b.cut.clip_plane) {
         let normal = slerp_direction(ca.normal(), cb.normal(), t);
         if let Ok(plane) = crate::scene::clip::ClipPlane::new(normal, lerp(ca.offset(), cb.offset(), t)) {
-            s.clip_plane = Some(plane);
+            s.cut.clip_plane = Some(plane);
         }
     }
     s
@@ -205,10 +208,10 @@ mod tests {
     #[test]
     fn path_endpoints_and_keys_are_the_states_exactly() {
         let mut a = orbit_settings(10.0, 20.0, 2.0);
-        a.window = [0.2, 0.9];
+        a.colour.window = [0.2, 0.9];
         let mut b = orbit_settings(100.0, -30.0, 3.0);
-        b.iso_value = 0.7;
-        b.mode = crate::scene::settings::CompositeMode::Isosurface;
+        b.compositing.iso_value = 0.7;
+        b.compositing.mode = crate::scene::settings::CompositeMode::Isosurface;
         let c = orbit_settings(200.0, 60.0, 1.5);
         let keys = [a.clone(), b.clone(), c.clone()];
         let n = 11;
@@ -217,10 +220,16 @@ mod tests {
         assert_eq!(keyframe_frame(&keys, n - 1, n), c);
         // Discrete settings are the segment's start's; continuous ones in between.
         let mid = keyframe_frame(&keys, 2, n);
-        assert_eq!(mid.mode, a.mode);
-        assert!(mid.iso_value > a.iso_value && mid.iso_value < b.iso_value);
-        assert!(mid.window[0] < 0.2 && mid.window[0] > 0.1, "{:?}", mid.window);
-        assert_eq!(keyframe_frame(&keys, 7, n).mode, b.mode);
+        assert_eq!(mid.compositing.mode, a.compositing.mode);
+        assert!(
+            mid.compositing.iso_value > a.compositing.iso_value && mid.compositing.iso_value < b.compositing.iso_value
+        );
+        assert!(
+            mid.colour.window[0] < 0.2 && mid.colour.window[0] > 0.1,
+            "{:?}",
+            mid.colour.window
+        );
+        assert_eq!(keyframe_frame(&keys, 7, n).compositing.mode, b.compositing.mode);
     }
 
     #[test]
@@ -274,12 +283,15 @@ mod tests {
     #[test]
     fn fixed_lights_turn_along_the_great_circle() {
         let mut a = orbit_settings(0.0, 0.0, 2.0);
-        a.light.direction = Some(Vec3::X * 3.0);
+        a.lighting.light.direction = Some(Vec3::X * 3.0);
         let mut b = a.clone();
-        b.light.direction = Some(Vec3::Y);
-        let d = between(&a, &b, 0.5).light.direction.unwrap();
+        b.lighting.light.direction = Some(Vec3::Y);
+        let d = between(&a, &b, 0.5).lighting.light.direction.unwrap();
         assert_near(d, Vec3::new(1.0, 1.0, 0.0).normalize(), 1e-6, "light");
-        b.light.direction = None;
-        assert_eq!(between(&a, &b, 0.5).light.direction, a.light.direction);
+        b.lighting.light.direction = None;
+        assert_eq!(
+            between(&a, &b, 0.5).lighting.light.direction,
+            a.lighting.light.direction
+        );
     }
 }

@@ -28,7 +28,7 @@ fn spec<'a>(
     let to_u8 = |c: f32| (c.clamp(0.0, 1.0) * 255.0).round() as u8;
     ColorbarSpec {
         classification,
-        window: s.window,
+        window: s.colour.window,
         range: volume.range,
         unit: VolumeFacts::of(volume).kind().unit(),
         background: [to_u8(s.background.x), to_u8(s.background.y), to_u8(s.background.z)],

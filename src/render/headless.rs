@@ -120,10 +120,9 @@ impl Headless {
             return Err(GpuError::InvalidSettings("render_share() needs a float target".into()));
         }
         // One ray per pixel: a share's partial colours are composited before anything could stretch them.
-        let s = &RenderSettings {
-            ray_spacing: 1,
-            ..s.clone()
-        };
+        let mut one_ray = s.clone();
+        one_ray.sampling.ray_spacing = 1;
+        let s = &one_ray;
         let bytes = self.draw(gpu, s)?;
         Ok(bytes
             .chunks_exact(4)

@@ -100,7 +100,7 @@ impl LightGrid {
 /// iso-surfaces 32 at and above the lowest opaque surface.
 pub fn extinction_table(s: &RenderSettings, lut: &[[f32; 4]]) -> Vec<f32> {
     let last = (LUT_SIZE - 1) as f32;
-    match s.mode {
+    match s.compositing.mode {
         CompositeMode::Isosurface => {
             let wall = s
                 .isosurfaces()
@@ -118,11 +118,11 @@ pub fn extinction_table(s: &RenderSettings, lut: &[[f32; 4]]) -> Vec<f32> {
             .enumerate()
             .map(|(i, e)| {
                 let v = i as f32 / last;
-                if v < s.window[0] || v > s.window[1] {
+                if v < s.colour.window[0] || v > s.colour.window[1] {
                     return 0.0;
                 }
-                if s.mode == CompositeMode::Density {
-                    return (e[3] * s.density).min(OPAQUE);
+                if s.compositing.mode == CompositeMode::Density {
+                    return (e[3] * s.compositing.density).min(OPAQUE);
                 }
                 let a = f64::from(e[3]).clamp(0.0, 1.0);
                 ((-(1.0 - a).ln()) as f32).min(OPAQUE)
@@ -133,7 +133,7 @@ pub fn extinction_table(s: &RenderSettings, lut: &[[f32; 4]]) -> Vec<f32> {
 
 /// The light the shadow sweep runs from (None without shadows: occlusion needs no direction).
 fn sweep_light(s: &RenderSettings) -> Option<glam::Vec3> {
-    s.light_direction().filter(|_| s.shadows)
+    s.light_direction().filter(|_| s.lighting.shadows)
 }
 
 /// What a light grid was computed for: it is recomputed when any of this changes.
@@ -153,17 +153,17 @@ impl LightKey {
     pub(super) fn of(s: &RenderSettings) -> LightKey {
         LightKey {
             classification: s.classification(),
-            window: s.window,
-            mode: s.mode,
-            density: s.density,
-            surfaces: if s.mode == CompositeMode::Isosurface {
+            window: s.colour.window,
+            mode: s.compositing.mode,
+            density: s.compositing.density,
+            surfaces: if s.compositing.mode == CompositeMode::Isosurface {
                 s.isosurfaces().iter().map(|x| (x.value, x.opacity)).collect()
             } else {
                 Vec::new()
             },
             light: sweep_light(s).map(|d| d.to_array()),
-            shadows: s.shadows,
-            occlusion: s.ambient_occlusion,
+            shadows: s.lighting.shadows,
+            occlusion: s.lighting.ambient_occlusion,
         }
     }
 }
@@ -404,7 +404,7 @@ pub(super) fn light_image(gpu: &Gpu, grid: &LightGrid) -> Result<Image, GpuError
 pub fn grid_for(s: &RenderSettings, v: &VolumeInfo) -> LightGrid {
     let linear = DMat3::from_mat4(v.tex_to_world(s));
     let light = sweep_light(s).map(|d| d.as_dvec3());
-    LightGrid::new(v.dims, linear, v.smallest_voxel(s), light, s.ambient_occlusion)
+    LightGrid::new(v.dims, linear, v.smallest_voxel(s), light, s.lighting.ambient_occlusion)
 }
 
 impl Renderer {

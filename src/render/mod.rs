@@ -85,15 +85,15 @@ impl OccupancyKey {
     fn of(s: &RenderSettings) -> OccupancyKey {
         OccupancyKey {
             classification: s.classification(),
-            window: s.window,
-            mode: s.mode,
-            iso: s.iso_value,
-            skip_empty: s.skip_empty,
-            strides: if s.max_stride > 1 {
+            window: s.colour.window,
+            mode: s.compositing.mode,
+            iso: s.compositing.iso_value,
+            skip_empty: s.sampling.skip_empty,
+            strides: if s.sampling.max_stride > 1 {
                 (
-                    s.max_stride,
-                    s.step_length.to_bits(),
-                    s.density.to_bits(),
+                    s.sampling.max_stride,
+                    s.sampling.step_length.to_bits(),
+                    s.compositing.density.to_bits(),
                     s.stride_depth().to_bits(),
                     s.stride_spread().to_bits(),
                 )
@@ -150,12 +150,12 @@ impl Renderer {
     fn upload_lut(&mut self, s: &RenderSettings, range: [f64; 2]) -> Result<(), GpuError> {
         let classification = s.classification();
         let rule = parts::StepRule::of(s);
-        let lut = bake(&classification, s.window, range);
+        let lut = bake(&classification, s.colour.window, range);
         let rows: Vec<[u32; 4]> = lut.iter().map(|e| e.map(f32::to_bits)).collect();
         self.table.lut.write(bytemuck::cast_slice(&rows))?;
         let integrals = integral_table(&lut, rule.density);
         self.table.integrals.write(bytemuck::cast_slice(&integrals))?;
-        self.table.baked = Some((classification, s.window, range, rule));
+        self.table.baked = Some((classification, s.colour.window, range, rule));
         self.table.entries = lut;
         Ok(())
     }
@@ -361,15 +361,15 @@ impl Renderer {
     /// The march variant frame `s` needs on the loaded volume.
     fn march_key(&self, s: &RenderSettings) -> MarchKey {
         use crate::scene::settings::CompositeMode as M;
-        let setup = match s.ray_setup {
+        let setup = match s.pipeline.ray_setup {
             RaySetup::Faces => Setup::Faces,
-            RaySetup::Analytic if s.compute => Setup::Compute,
+            RaySetup::Analytic if s.pipeline.compute => Setup::Compute,
             RaySetup::Analytic => Setup::Analytic,
         };
         let from_file = self.volume.as_ref().is_some_and(|v| v.info.held > 0);
-        let lighting = Lighting::new(s.gradient_texture && !from_file, s.uses_light_volume());
-        let family = match s.mode {
-            M::Emission | M::Density if s.shading.is_some() || s.gradient_opacity.is_some() => {
+        let lighting = Lighting::new(s.lighting.gradient_texture && !from_file, s.uses_light_volume());
+        let family = match s.compositing.mode {
+            M::Emission | M::Density if s.lighting.shading.is_some() || s.lighting.gradient_opacity.is_some() => {
                 Family::EmissionShaded(lighting)
             }
             M::Emission | M::Density => Family::Emission,
@@ -385,7 +385,7 @@ impl Renderer {
 
     /// Whether [`Renderer::prepare`] has work to do for `s` (callers wait for in-flight frames only then).
     pub fn needs_prepare(&self, s: &RenderSettings) -> bool {
-        let targets_fit = match s.ray_setup {
+        let targets_fit = match s.pipeline.ray_setup {
             RaySetup::Faces => self.positions_fit(s),
             RaySetup::Analytic => self.targets.positions.is_none(),
         };
@@ -417,7 +417,7 @@ impl Renderer {
     fn lut_is_current(&self, s: &RenderSettings) -> bool {
         let range = self.volume_range();
         self.table.baked.as_ref().is_some_and(|(c, w, r, rule)| {
-            *w == s.window && *r == range && *rule == parts::StepRule::of(s) && *c == s.classification()
+            *w == s.colour.window && *r == range && *rule == parts::StepRule::of(s) && *c == s.classification()
         })
     }
 
@@ -456,7 +456,7 @@ impl Renderer {
             self.prepare_light(gpu, s)?;
         }
         spacing::prepare(gpu, &mut self.targets.spaced, self.output_format, s)?;
-        if s.ray_setup == RaySetup::Faces {
+        if s.pipeline.ray_setup == RaySetup::Faces {
             if !self.positions_fit(s) {
                 if let Some(old) = self.targets.positions.take() {
                     old.destroy(gpu);
@@ -501,8 +501,8 @@ impl Renderer {
         let pixels = u64::from(w) * u64::from(h);
         let spaced = if s.spacing() > 1 { 4 * pixels } else { 0 };
         spaced
-            + match s.ray_setup {
-                RaySetup::Faces => position_bytes_per_pixel(s.position_format) * pixels,
+            + match s.pipeline.ray_setup {
+                RaySetup::Faces => position_bytes_per_pixel(s.pipeline.position_format) * pixels,
                 RaySetup::Analytic => 0,
             }
     }

@@ -149,7 +149,8 @@ pub(super) struct StepRule {
 impl StepRule {
     pub fn of(s: &RenderSettings) -> StepRule {
         StepRule {
-            density: (s.mode == crate::scene::settings::CompositeMode::Density).then_some(s.density),
+            density: (s.compositing.mode == crate::scene::settings::CompositeMode::Density)
+                .then_some(s.compositing.density),
         }
     }
 }

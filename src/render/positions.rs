@@ -36,7 +36,7 @@ impl PositionTargets {
         sampler: vk::Sampler,
         set: vk::DescriptorSet,
     ) -> Result<PositionTargets, GpuError> {
-        let format = PositionTargets::vk_format(s.position_format);
+        let format = PositionTargets::vk_format(s.pipeline.position_format);
         let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
         let (width, height) = s.marched_size();
         let entry = Image::new(gpu, ImageDesc::d2(format, width, height, usage), "entry positions")?;
@@ -50,7 +50,7 @@ impl PositionTargets {
         let targets = PositionTargets {
             entry,
             exit,
-            format: s.position_format,
+            format: s.pipeline.position_format,
         };
         targets.write_set(gpu, sampler, set);
         Ok(targets)
@@ -86,7 +86,7 @@ impl PositionTargets {
 
     /// Whether these are the targets `s` needs.
     pub fn fit(&self, s: &RenderSettings) -> bool {
-        self.format == s.position_format
+        self.format == s.pipeline.position_format
             && (self.entry.desc.extent.width, self.entry.desc.extent.height) == s.marched_size()
     }
 

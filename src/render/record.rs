@@ -115,7 +115,7 @@ impl Renderer {
             .get_mut(slot)
             .ok_or(GpuError::Lost("frame slot out of range"))?;
         slot.uniforms.write(bytemuck::bytes_of(&uniforms))?;
-        slot.recorded = Some(s.ray_setup);
+        slot.recorded = Some(s.pipeline.ray_setup);
         let (query_pool, storage_set) = (slot.query_pool, slot.storage_set);
         let (width, height) = s.marched_size();
         let extent = vk::Extent2D { width, height };

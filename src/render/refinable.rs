@@ -107,8 +107,8 @@ mod tests {
         let cells = CellRanges::of(&v);
         let r = Refinable::new(&cells, &v, [16; 3], 2);
         let mut s = RenderSettings::for_volume(8, 8, &v);
-        s.window = [0.5, 1.0];
-        let lut = crate::transfer::function::bake(&s.classification(), s.window, v.range);
+        s.colour.window = [0.5, 1.0];
+        let lut = crate::transfer::function::bake(&s.classification(), s.colour.window, v.range);
         let c = r.classes(&lut, &s);
         // Level 1 (32³ bricks): the block lies in brick (1, 0, 0), in cells (5, 1, 1) that no other brick's region
         // (its box and 2 voxels, rounded out to cells of 8) reaches.
@@ -121,7 +121,7 @@ mod tests {
         assert!(!c.may_refine(0, [0, 0, 0]));
         assert_eq!(c.closed(), 7);
         // Without skipping, nothing counts as empty: every brick may be refined.
-        s.skip_empty = false;
+        s.sampling.skip_empty = false;
         assert_eq!(r.classes(&lut, &s).closed(), 0);
     }
 }

@@ -226,7 +226,7 @@ impl GpuVolume {
                 };
                 self.refinable = Some(super::refinable::Refinable::new(cells, volume, self.pool.brick, top));
             }
-            let lut = crate::transfer::function::bake(&s.classification(), s.window, self.info.range);
+            let lut = crate::transfer::function::bake(&s.classification(), s.colour.window, self.info.range);
             let classes = self.refinable.as_ref()?.classes(&lut, s);
             self.refine_classes = Some((key, classes));
         }

@@ -47,9 +47,9 @@ impl BrickGrid {
     /// - MIP/MinIP/average: the value range overlaps the window;
     /// - isosurface: the brick reaches the iso value (a crossing or a first sample ≥ iso can only lie there).
     pub fn classify(&self, lut: &[[f32; 4]], s: &RenderSettings) -> Vec<u8> {
-        let window = s.window;
-        let absorbing = matches!(s.mode, CompositeMode::Emission | CompositeMode::Density);
-        let density = (s.mode == CompositeMode::Density).then_some(f64::from(s.density));
+        let window = s.colour.window;
+        let absorbing = matches!(s.compositing.mode, CompositeMode::Emission | CompositeMode::Density);
+        let density = (s.compositing.mode == CompositeMode::Density).then_some(f64::from(s.compositing.density));
         let sigma: Vec<f64> = lut.iter().map(|e| extinction(f64::from(e[3]), density)).collect();
         let sigma_max = RangeMax::new(sigma.clone());
         let sigma_min = RangeMax::new(sigma.iter().map(|v| -v).collect());
@@ -60,15 +60,15 @@ impl BrickGrid {
             STRIDES
                 .into_iter()
                 .filter(|&k| {
-                    let length = f64::from(k) * f64::from(s.step_length);
-                    k <= s.max_stride && sigma_b * length <= depth && spread_b * length <= spread
+                    let length = f64::from(k) * f64::from(s.sampling.step_length);
+                    k <= s.sampling.max_stride && sigma_b * length <= depth && spread_b * length <= spread
                 })
                 .max()
                 .unwrap_or(1) as u8
         };
-        let strided = absorbing && s.max_stride > 1;
+        let strided = absorbing && s.sampling.max_stride > 1;
         let last = lut.len().saturating_sub(1) as f32;
-        let empty = if s.skip_empty { 0 } else { 1 };
+        let empty = if s.sampling.skip_empty { 0 } else { 1 };
         self.min
             .iter()
             .zip(&self.max)
@@ -76,7 +76,7 @@ impl BrickGrid {
                 if lo > hi {
                     return empty;
                 }
-                match s.mode {
+                match s.compositing.mode {
                     CompositeMode::Emission | CompositeMode::Density => {
                         // Only values inside the window are classified (the table's entries outside it repeat
                         // its edges for interpolation); values beyond it have no extinction.
@@ -105,7 +105,7 @@ impl BrickGrid {
                         }
                     }
                     CompositeMode::Isosurface => {
-                        if hi >= s.iso_value {
+                        if hi >= s.compositing.iso_value {
                             1
                         } else {
                             empty
@@ -428,34 +428,34 @@ mod tests {
         assert_eq!(occ.iter().filter(|&&o| o > 0).count(), 1, "{occ:?}");
         assert_eq!(occ[2], 1);
         assert!(g.classify(&vec![[0.0; 4]; 4096], &s).iter().all(|&o| o == 0));
-        s.skip_empty = false;
+        s.sampling.skip_empty = false;
         assert!(
             g.classify(&vec![[0.0; 4]; 4096], &s).iter().all(|&o| o == 1),
             "nothing leapt"
         );
-        s.skip_empty = true;
-        s.mode = CompositeMode::Mip;
-        s.window = [0.0, 0.1];
+        s.sampling.skip_empty = true;
+        s.compositing.mode = CompositeMode::Mip;
+        s.colour.window = [0.0, 0.1];
         assert!(
             g.classify(&lut, &s).iter().all(|&o| o == 1),
             "every brick has zeros inside the window"
         );
-        s.mode = CompositeMode::Isosurface;
-        s.window = [0.0, 1.0];
-        s.iso_value = 0.9;
+        s.compositing.mode = CompositeMode::Isosurface;
+        s.colour.window = [0.0, 1.0];
+        s.compositing.iso_value = 0.9;
         assert_eq!(g.classify(&lut, &s).iter().filter(|&&o| o > 0).count(), 1);
         // Strides: opacity 0.01 per voxel is extinction 0.01005; at 0.4-voxel steps four steps carry 0.016 ≤ 0.05.
-        s.mode = CompositeMode::Emission;
-        s.step_length = 0.4;
-        s.max_stride = 4;
+        s.compositing.mode = CompositeMode::Emission;
+        s.sampling.step_length = 0.4;
+        s.sampling.max_stride = 4;
         let faint = vec![[0.2, 0.2, 0.2, 0.01f32]; 4096];
         assert!(g.classify(&faint, &s).iter().all(|&o| o == 4));
-        s.max_stride = 2;
+        s.sampling.max_stride = 2;
         assert!(
             g.classify(&faint, &s).iter().all(|&o| o == 2),
             "no more than the longest stride"
         );
-        s.max_stride = 4;
+        s.sampling.max_stride = 4;
         // Only the spike's brick reaches the opaque entries (extinction 0.69: stride 1); the others stay faint.
         let mut mixed = faint.clone();
         for e in &mut mixed[4000..] {
@@ -467,10 +467,10 @@ mod tests {
         // the bound: stride 1.
         let light = vec![[0.2, 0.2, 0.2, 0.05f32]; 4096];
         assert!(g.classify(&light, &s).iter().all(|&o| o == 2));
-        s.shading = Some(crate::scene::settings::Shading::default());
+        s.lighting.shading = Some(crate::scene::settings::Shading::default());
         assert!(g.classify(&light, &s).iter().all(|&o| o == 1));
-        s.shading = None;
-        s.mode = CompositeMode::Mip;
+        s.lighting.shading = None;
+        s.compositing.mode = CompositeMode::Mip;
         assert!(
             g.classify(&faint, &s).iter().all(|&o| o == 1),
             "projections never stride"

@@ -154,7 +154,7 @@ impl VolumeInfo {
     /// Rule 10's clipping plane of `s` in texture space, as the uniforms carry it.
     pub fn clip_plane(&self, s: &RenderSettings) -> [f32; 4] {
         let world_per_mm = self.geometry.world_per_mm(self.dims);
-        crate::scene::clip::texture_plane_or_all(s.clip_plane.as_ref(), self.tex_to_world(s), world_per_mm)
+        crate::scene::clip::texture_plane_or_all(s.cut.clip_plane.as_ref(), self.tex_to_world(s), world_per_mm)
     }
 
     /// A voxel's step along each index axis in the render world: the columns of `L·diag(1/dims)`, L the linear
@@ -166,18 +166,19 @@ impl VolumeInfo {
 
     /// The march's step in voxels of level 0: `s.step_length` voxels of the finest level shown.
     pub fn step_length(&self, s: &RenderSettings) -> f32 {
-        s.step_length * (1u32 << self.step_level) as f32
+        s.sampling.step_length * (1u32 << self.step_level) as f32
     }
 
     /// `s` as the march takes it on this volume: its step ([`step_length`](Self::step_length)), and no strides where
     /// the step is coarser than the held level's voxel (a skip brick, 8 of those voxels, then holds at most 4
     /// samples: a strided span would be shorter than the lookups it costs).
     pub fn stepped(&self, s: &RenderSettings) -> RenderSettings {
-        RenderSettings {
-            step_length: self.step_length(s),
-            max_stride: if self.step_level > self.held { 1 } else { s.max_stride },
-            ..s.clone()
+        let mut stepped = s.clone();
+        stepped.sampling.step_length = self.step_length(s);
+        if self.step_level > self.held {
+            stepped.sampling.max_stride = 1;
         }
+        stepped
     }
 
     /// The smallest voxel side in world units (rule 2's and rule 9's voxel).
@@ -273,8 +274,8 @@ fn light_dir(s: &RenderSettings) -> [f32; 4] {
 }
 
 fn light_color(s: &RenderSettings) -> [f32; 4] {
-    let c = s.light.color;
-    let rgb = [c.x, c.y, c.z].map(|v| srgb_to_linear(v) * s.light.intensity);
+    let c = s.lighting.light.color;
+    let rgb = [c.x, c.y, c.z].map(|v| srgb_to_linear(v) * s.lighting.light.intensity);
     [rgb[0], rgb[1], rgb[2], 0.0]
 }
 
@@ -282,7 +283,7 @@ fn light_color(s: &RenderSettings) -> [f32; 4] {
 fn light_grid(s: &RenderSettings, v: &VolumeInfo) -> [f32; 4] {
     if s.uses_light_volume() {
         let offset = super::light_volume::grid_for(s, v).read_offset();
-        let bits = u32::from(s.shadows) + 2 * u32::from(s.ambient_occlusion);
+        let bits = u32::from(s.lighting.shadows) + 2 * u32::from(s.lighting.ambient_occlusion);
         v4(offset, bits as f32)
     } else {
         [0.0; 4]
@@ -320,7 +321,7 @@ impl FrameUniforms {
         // The step in voxels of level 0 (the opacity of a segment follows its length in them).
         let step_length = v.step_length(s);
         let h = step_length * v.smallest_voxel(s) as f32;
-        let shading = s.shading.unwrap_or_default();
+        let shading = s.lighting.shading.unwrap_or_default();
         let surfaces = s.isosurfaces();
         let (iso_values, iso_colors) = iso_tables(&surfaces);
         let [part_origin, part_lo, part_hi] = PartInfo::uniforms(v.part, v.dims);
@@ -336,15 +337,15 @@ impl FrameUniforms {
             ray_down: v4(to_tex * (-up * (fan * tan)), 0.0),
             origin_dx: v4(to_tex * (right * (spread * tan * aspect)), 0.0),
             origin_dy: v4(to_tex * (-up * (spread * tan)), 0.0),
-            slab_lo: v4(s.slab_lo.as_dvec3(), 0.0),
-            slab_hi: v4(s.slab_hi.as_dvec3(), 0.0),
+            slab_lo: v4(s.cut.slab_lo.as_dvec3(), 0.0),
+            slab_hi: v4(s.cut.slab_hi.as_dvec3(), 0.0),
             extent: [0.0, 0.0, 0.0, h],
-            value_map: [v.scale_bias.0, v.scale_bias.1, s.window[0], s.window[1]],
+            value_map: [v.scale_bias.0, v.scale_bias.1, s.colour.window[0], s.colour.window[1]],
             alpha: [
-                s.step_alpha,
+                s.colour.step_alpha,
                 step_length,
-                s.early_termination,
-                if s.multiplied_alpha { 1.0 } else { 0.0 },
+                s.compositing.early_termination,
+                if s.colour.multiplied_alpha { 1.0 } else { 0.0 },
             ],
             background: [
                 srgb_to_linear(s.background.x),
@@ -356,29 +357,29 @@ impl FrameUniforms {
                 marched_width as f32,
                 marched_height as f32,
                 max_steps(linear, h),
-                s.count_samples as u32 as f32,
+                s.pipeline.count_samples as u32 as f32,
             ],
             texel: v4(1.0 / dims, 0.0),
             voxel_world: [
-                s.shading_fade * (s.window[1] - s.window[0]),
+                s.lighting.shading_fade * (s.colour.window[1] - s.colour.window[0]),
                 0.0,
                 0.0,
-                s.gradient_opacity.unwrap_or(0.0),
+                s.lighting.gradient_opacity.unwrap_or(0.0),
             ],
             shading: [shading.ambient, shading.diffuse, shading.specular, shading.shininess],
             mode_params: [
-                s.iso_value,
-                s.density,
+                s.compositing.iso_value,
+                s.compositing.density,
                 s.looks_up_bricks() as u32 as f32,
                 surfaces.len().min(4) as f32,
             ],
             brick: v4(DVec3::splat(f64::from(skip::BRICK << v.held)) / dims, 0.0),
             dims: [v.dims[0] as f32, v.dims[1] as f32, v.dims[2] as f32, 0.0],
             flags: [
-                s.mode.index(),
-                s.jitter.is_some() as u32,
-                s.jitter.unwrap_or(0),
-                s.shading.is_some() as u32,
+                s.compositing.mode.index(),
+                s.sampling.jitter.is_some() as u32,
+                s.sampling.jitter.unwrap_or(0),
+                s.lighting.shading.is_some() as u32,
             ],
             iso_values,
             iso_colors,

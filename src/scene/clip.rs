@@ -207,7 +207,7 @@ mod tests {
         assert!(serde_json::from_str::<ClipPlane>(r#"{"offset": 1}"#).is_err());
         // Settings written before planes existed load without one.
         let old: crate::scene::settings::RenderSettings = serde_json::from_str(r#"{"width": 64}"#).unwrap();
-        assert_eq!(old.clip_plane, None);
+        assert_eq!(old.cut.clip_plane, None);
     }
 
     #[test]

@@ -4,6 +4,7 @@
 
 pub mod camera;
 pub mod clip;
+pub mod groups;
 pub mod lighting;
 pub mod quality;
 pub mod settings;

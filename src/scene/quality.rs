@@ -36,10 +36,10 @@ pub const SOFT_EDGE: f32 = 0.02;
 /// across 1/64 of the value range, nothing showing outside the window (so a window edge with values beyond it
 /// counts as a jump to its opacity there).
 pub fn opacity_edge(s: &RenderSettings, range: [f64; 2]) -> f32 {
-    let lut = bake(&s.classification(), s.window, range);
+    let lut = bake(&s.classification(), s.colour.window, range);
     let last = (LUT_SIZE - 1) as f32;
     let alpha = |i: usize| {
-        let shown = (s.window[0]..=s.window[1]).contains(&(i as f32 / last));
+        let shown = (s.colour.window[0]..=s.colour.window[1]).contains(&(i as f32 / last));
         if shown {
             lut[i][3]
         } else {
@@ -128,19 +128,19 @@ impl Quality {
     /// `Converged` is always 1/8 voxel.
     pub fn step_length(self, s: &RenderSettings, range: [f64; 2]) -> f32 {
         let base = self.base_step();
-        let absorbing = matches!(s.mode, CompositeMode::Emission | CompositeMode::Density);
+        let absorbing = matches!(s.compositing.mode, CompositeMode::Emission | CompositeMode::Density);
         // (An invalid window is refused by `RenderSettings::validate`; it must not get as far as the table.)
-        let window_ok = s.window[0] < s.window[1];
+        let window_ok = s.colour.window[0] < s.colour.window[1];
         if self == Quality::Converged || !absorbing || !window_ok {
             return base;
         }
-        let density = (s.mode == CompositeMode::Density).then_some(f64::from(s.density));
-        let lut = bake(&s.classification(), s.window, range);
+        let density = (s.compositing.mode == CompositeMode::Density).then_some(f64::from(s.compositing.density));
+        let lut = bake(&s.classification(), s.colour.window, range);
         let last = (LUT_SIZE - 1) as f32;
         let sigma_max = lut
             .iter()
             .enumerate()
-            .filter(|(i, _)| (s.window[0]..=s.window[1]).contains(&(*i as f32 / last)))
+            .filter(|(i, _)| (s.colour.window[0]..=s.colour.window[1]).contains(&(*i as f32 / last)))
             .map(|(_, e)| extinction(f64::from(e[3]), density))
             .fold(0.0f64, f64::max);
         let (depth, bound) = (sigma_max * f64::from(base), self.segment_depth());
@@ -175,11 +175,11 @@ impl Quality {
     /// density, no gradient opacity, [`opacity_edge`] at most [`SOFT_EDGE`]), which keeps it within its target
     /// (docs/performance.md, Quality levels); the others, and `draft` elsewhere, take every pixel.
     pub fn ray_spacing(self, s: &RenderSettings, range: [f64; 2]) -> u32 {
-        let absorbing = matches!(s.mode, CompositeMode::Emission | CompositeMode::Density);
+        let absorbing = matches!(s.compositing.mode, CompositeMode::Emission | CompositeMode::Density);
         let soft = || {
             absorbing
-                && s.gradient_opacity.is_none()
-                && s.window[0] < s.window[1]
+                && s.lighting.gradient_opacity.is_none()
+                && s.colour.window[0] < s.colour.window[1]
                 && opacity_edge(s, range) <= SOFT_EDGE
         };
         if self == Quality::Draft && soft() {
@@ -191,10 +191,10 @@ impl Quality {
 
     /// Applies the level to `s` (data of value range `range`): its step length, brick strides and ray spacing.
     pub fn apply(self, s: &mut RenderSettings, range: [f64; 2]) {
-        s.step_length = self.step_length(s, range);
-        s.max_stride = self.max_stride();
-        s.stride_tolerance = self.stride_tolerance();
-        s.ray_spacing = self.ray_spacing(s, range);
+        s.sampling.step_length = self.step_length(s, range);
+        s.sampling.max_stride = self.max_stride();
+        s.sampling.stride_tolerance = self.stride_tolerance();
+        s.sampling.ray_spacing = self.ray_spacing(s, range);
     }
 }
 
@@ -206,13 +206,13 @@ pub fn moving_view(still: &RenderSettings, divisor: u32, quality: Option<Quality
     let mut s = still.clone();
     s.width = still.width.div_ceil(divisor).max(1);
     s.height = still.height.div_ceil(divisor).max(1);
-    s.step_length = match quality {
-        Some(_) => s.step_length.max(Quality::Draft.step_length(&s, range)),
-        None => (s.step_length * 2.0).min(64.0),
+    s.sampling.step_length = match quality {
+        Some(_) => s.sampling.step_length.max(Quality::Draft.step_length(&s, range)),
+        None => (s.sampling.step_length * 2.0).min(64.0),
     };
-    s.max_stride = s.max_stride.max(Quality::Draft.max_stride());
-    s.stride_tolerance = s.stride_tolerance.max(Quality::Draft.stride_tolerance());
-    s.ray_spacing = 1;
+    s.sampling.max_stride = s.sampling.max_stride.max(Quality::Draft.max_stride());
+    s.sampling.stride_tolerance = s.sampling.stride_tolerance.max(Quality::Draft.stride_tolerance());
+    s.sampling.ray_spacing = 1;
     s
 }
 
@@ -263,10 +263,10 @@ impl Gradients {
     /// Sets `s.gradient_texture` for a volume of `voxels`: only frames that read gradients (iso-surfaces, and
     /// emission or density with shading or gradient opacity) take the texture, so no other frame pays for making it.
     pub fn apply(self, s: &mut RenderSettings, voxels: u64) {
-        let reads = s.mode == CompositeMode::Isosurface
-            || (matches!(s.mode, CompositeMode::Emission | CompositeMode::Density)
-                && (s.shading.is_some() || s.gradient_opacity.is_some()));
-        s.gradient_texture = reads
+        let reads = s.compositing.mode == CompositeMode::Isosurface
+            || (matches!(s.compositing.mode, CompositeMode::Emission | CompositeMode::Density)
+                && (s.lighting.shading.is_some() || s.lighting.gradient_opacity.is_some()));
+        s.lighting.gradient_texture = reads
             && match self {
                 Gradients::Auto => Gradients::texture_fits(voxels),
                 Gradients::Texture => true,
@@ -288,33 +288,33 @@ mod tests {
         assert!((opacity_edge(&s, range) - 0.1).abs() < 1e-6);
         assert_eq!(Quality::Draft.ray_spacing(&s, range), 1);
         // vtk-helix's ramp from 0 at the window's edge: soft.
-        s.multiplied_alpha = true;
-        s.step_alpha = 0.2;
-        s.window = [0.08, 1.0];
+        s.colour.multiplied_alpha = true;
+        s.colour.step_alpha = 0.2;
+        s.colour.window = [0.08, 1.0];
         assert!(opacity_edge(&s, range) < 0.004, "{}", opacity_edge(&s, range));
         assert_eq!(Quality::Draft.ray_spacing(&s, range), 2);
         for q in [Quality::Fast, Quality::Normal, Quality::Converged] {
             assert_eq!(q.ray_spacing(&s, range), 1, "{q:?}");
         }
         // A window from 0 has no values below it: no edge there.
-        s.multiplied_alpha = false;
-        s.step_alpha = 0.02;
-        s.window = [0.0, 1.0];
+        s.colour.multiplied_alpha = false;
+        s.colour.step_alpha = 0.02;
+        s.colour.window = [0.0, 1.0];
         assert_eq!(opacity_edge(&s, range), 0.0);
         assert_eq!(Quality::Draft.ray_spacing(&s, range), 2);
         // Surfaces and maxima draw sharp edges whatever the table.
-        s.mode = CompositeMode::Mip;
+        s.compositing.mode = CompositeMode::Mip;
         assert_eq!(Quality::Draft.ray_spacing(&s, range), 1);
     }
 
     #[test]
     fn faint_classifications_keep_the_base_step_strong_ones_shorten_it() {
         let mut s = RenderSettings::new(8, 8, Vec3::ONE);
-        s.step_alpha = 0.1;
+        s.colour.step_alpha = 0.1;
         assert_eq!(Quality::Normal.step_length(&s, [0.0, 1.0]), 0.4);
         assert_eq!(Quality::Draft.step_length(&s, [0.0, 1.0]), 3.0);
         // Opacity 0.6 per voxel: extinction 0.916, so 0.5 / 0.916 of a voxel for fast, 0.25 / 0.916 for normal.
-        s.step_alpha = 0.6;
+        s.colour.step_alpha = 0.6;
         let sigma = -(0.4f64).ln();
         let step = Quality::Fast.step_length(&s, [0.0, 1.0]);
         assert!((step - (0.5 / sigma) as f32).abs() < 1e-5, "{step}");
@@ -323,11 +323,11 @@ mod tests {
         let draft = Quality::Draft.step_length(&s, [0.0, 1.0]);
         assert!((draft - (0.75 / sigma) as f32).abs() < 1e-5, "{draft}");
         // Opacity 1: not below a quarter of the base.
-        s.step_alpha = 1.0;
+        s.colour.step_alpha = 1.0;
         assert_eq!(Quality::Fast.step_length(&s, [0.0, 1.0]), 0.25);
         assert_eq!(Quality::Converged.step_length(&s, [0.0, 1.0]), CONVERGED_STEP);
         // Projections keep the base step.
-        s.mode = CompositeMode::Mip;
+        s.compositing.mode = CompositeMode::Mip;
         assert_eq!(Quality::Fast.step_length(&s, [0.0, 1.0]), 1.0);
     }
 
@@ -336,24 +336,24 @@ mod tests {
         let mut s = RenderSettings::new(8, 8, Vec3::ONE);
         let n256 = 256u64 * 256 * 256;
         Gradients::Auto.apply(&mut s, n256);
-        assert!(!s.gradient_texture, "an unshaded frame reads no gradient");
-        s.shading = Some(crate::scene::settings::Shading::default());
+        assert!(!s.lighting.gradient_texture, "an unshaded frame reads no gradient");
+        s.lighting.shading = Some(crate::scene::settings::Shading::default());
         Gradients::Auto.apply(&mut s, n256);
-        assert!(s.gradient_texture);
+        assert!(s.lighting.gradient_texture);
         Gradients::Auto.apply(&mut s, 1024 * 1024 * 512);
-        assert!(!s.gradient_texture, "4 GiB of gradients is over the limit");
+        assert!(!s.lighting.gradient_texture, "4 GiB of gradients is over the limit");
         Gradients::Texture.apply(&mut s, 1024 * 1024 * 512);
-        assert!(s.gradient_texture);
+        assert!(s.lighting.gradient_texture);
         Gradients::Samples.apply(&mut s, 8);
-        assert!(!s.gradient_texture);
-        s.mode = CompositeMode::Mip;
+        assert!(!s.lighting.gradient_texture);
+        s.compositing.mode = CompositeMode::Mip;
         Gradients::Texture.apply(&mut s, 8);
-        assert!(!s.gradient_texture, "MIP reads no gradient");
-        s.mode = CompositeMode::Emission;
-        s.shading = None;
-        s.gradient_opacity = Some(0.1);
+        assert!(!s.lighting.gradient_texture, "MIP reads no gradient");
+        s.compositing.mode = CompositeMode::Emission;
+        s.lighting.shading = None;
+        s.lighting.gradient_opacity = Some(0.1);
         Gradients::Auto.apply(&mut s, 8);
-        assert!(s.gradient_texture, "gradient opacity reads one");
+        assert!(s.lighting.gradient_texture, "gradient opacity reads one");
         for g in Gradients::ALL {
             assert_eq!(Gradients::parse(g.name()), Some(g));
         }

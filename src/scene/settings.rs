@@ -3,9 +3,12 @@
 //! implemented twice: by the GPU passes (`shaders/`) and by the independent CPU reference (`tests/common`).
 
 use crate::scene::camera::{Camera, ViewPreset};
-use crate::scene::lighting::{self, IsoSurface, Light, MAX_ISOSURFACES, NEUTRAL};
-use crate::transfer::function::{Classification, TransferFunction};
-use crate::transfer::Colormap;
+pub use crate::scene::groups::{
+    Colour, Compositing, Cut, Lighting, Pipeline, Sampling, DEFAULT_EARLY_TERMINATION, DEFAULT_STEP_ALPHA,
+    DEFAULT_WINDOW,
+};
+use crate::scene::lighting::IsoSurface;
+use crate::transfer::function::Classification;
 use crate::volume::Volume;
 use glam::Vec3;
 
@@ -257,78 +260,23 @@ pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
     pub camera: Camera,
-    /// The simple (Qt) model's colormap, used when `transfer_function` is None.
-    pub colormap: Colormap,
-    /// Visible value range in normalised units [0,1] (`window[0] < window[1]`).
-    pub window: [f32; 2],
-    /// The simple model's opacity of one voxel-length step.
-    pub step_alpha: f32,
-    /// Step length in voxels (of the smallest voxel side).
-    pub step_length: f32,
-    /// The simple model: opacity = windowed value × step alpha.
-    pub multiplied_alpha: bool,
-    /// A transfer function replaces the simple model when given.
-    pub transfer_function: Option<TransferFunction>,
-    pub mode: CompositeMode,
-    /// Normalised iso value of the isosurface mode's first surface (`--iso`, the viewer's slider).
-    pub iso_value: f32,
-    /// The first surface's material: sRGB, or `None` for the classification's colour at the value.
-    pub iso_color: Option<Vec3>,
-    /// The first surface's opacity in (0,1].
-    pub iso_opacity: f32,
-    /// Further surfaces (at most `MAX_ISOSURFACES` in all): [`RenderSettings::isosurfaces`] is the whole list.
-    pub extra_isosurfaces: Vec<IsoSurface>,
-    /// Rule 5's light.
-    pub light: Light,
-    /// Rule 9's shadows: light attenuated on its way through the volume (lit frames; not MIP/MinIP/average).
-    pub shadows: bool,
-    /// Rule 9's ambient occlusion: the ambient term scaled by how open each point's surroundings are.
-    pub ambient_occlusion: bool,
-    /// Density factor of the density mode.
-    pub density: f32,
-    pub shading: Option<Shading>,
-    /// Gradient-magnitude-modulated opacity: full opacity from this gradient (value per voxel) up.
-    pub gradient_opacity: Option<f32>,
-    /// Rule 5's shading fade (`--shading-fade`): volume lighting reaches full strength where the gradient is this
-    /// fraction of the window's width per voxel, and fades to flat light below (0: off).
-    pub shading_fade: f32,
-    /// Jittered ray start with this seed (stable per seed); None: samples at the step midpoints.
-    pub jitter: Option<u32>,
-    pub early_termination: f32,
-    /// sRGB in [0,1].
-    pub background: Vec3,
-    /// Slab box in texture space; [0,0,0]..[1,1,1] shows everything.
-    pub slab_lo: Vec3,
-    pub slab_hi: Vec3,
-    pub ray_setup: RaySetup,
-    pub position_format: PositionFormat,
-    /// Leap over 8³ bricks that hold nothing visible. Changes which samples are taken, not the image.
-    pub skip_empty: bool,
-    /// Rule 2's brick strides: the longest stride (1, 2 or 4 steps) a brick of faint opacity may take. 1 takes
-    /// every sample; the quality levels set it (`Quality::apply`).
-    pub max_stride: u32,
-    /// Rule 2's tolerance: the stride bounds `D` and `STRIDE_SPREAD` are multiplied by it (1: as rule 2 states
-    /// them). The quality levels set it from their error target (`Quality::apply`).
-    pub stride_tolerance: f32,
-    /// Shade from a precomputed gradient texture (one sample instead of six; 8 bytes per voxel): rule 5's filtered
-    /// grid gradients, smoothed for integer data. `Gradients::Auto` takes it for every frame that reads gradients
-    /// while it stays within 1 GiB.
-    pub gradient_texture: bool,
-    /// March in a compute pass instead of a fullscreen fragment pass (analytic ray setup only; the output image
-    /// must allow storage). The same rays and rules: a measured alternative for lavapipe (docs/performance.md).
-    pub compute: bool,
-    /// Rule 12's ray spacing: one ray per `ray_spacing`² output pixels (1, 2 or 4). The quality levels set it
-    /// (`draft` 2, as VTK's `ImageSampleDistance` while interacting; `Quality::apply`).
-    pub ray_spacing: u32,
     /// Render in voxel index space: the box along the world's axes by its voxel sizes, ignoring the file's
     /// orientation (what volcast showed before it read orientations; `--voxel-axes`).
     pub voxel_axes: bool,
-    /// Rule 10's clipping plane (None: keep everything).
-    pub clip_plane: Option<crate::scene::clip::ClipPlane>,
-    /// Output, instead of each pixel's colour, the number of sample positions its ray visited (rule 2's samples
-    /// actually taken: those that empty-space skipping leaps over, gradient and bisection samples not counted),
-    /// as a 24-bit integer in the R, G, B bytes. For tests and measurement; see [`decode_sample_count`].
-    pub count_samples: bool,
+    /// sRGB in [0,1].
+    pub background: Vec3,
+    #[serde(flatten)]
+    pub colour: Colour,
+    #[serde(flatten)]
+    pub compositing: Compositing,
+    #[serde(flatten)]
+    pub lighting: Lighting,
+    #[serde(flatten)]
+    pub sampling: Sampling,
+    #[serde(flatten)]
+    pub cut: Cut,
+    #[serde(flatten)]
+    pub pipeline: Pipeline,
 }
 
 /// The count a `count_samples` frame stores in an RGBA8 pixel.
@@ -356,10 +304,6 @@ pub fn jitter_offset(x: u32, y: u32, seed: u32) -> f32 {
     (h >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
-pub const DEFAULT_STEP_ALPHA: f32 = 0.1;
-pub const DEFAULT_WINDOW: [f32; 2] = [0.1, 1.0];
-pub const DEFAULT_EARLY_TERMINATION: f32 = 0.99;
-
 impl RenderSettings {
     /// Defaults for a volume with box `extent`: the camera orbits at azimuth 35°, elevation 25° and fits the box.
     pub fn new(width: u32, height: u32, extent: Vec3) -> RenderSettings {
@@ -369,40 +313,14 @@ impl RenderSettings {
             width,
             height,
             camera: Camera::orbit(35.0, 25.0, distance, Vec3::ZERO),
-            colormap: Colormap::CoolWarm,
-            window: DEFAULT_WINDOW,
-            step_alpha: DEFAULT_STEP_ALPHA,
-            step_length: 1.0,
-            multiplied_alpha: false,
-            transfer_function: None,
-            mode: CompositeMode::Emission,
-            iso_value: 0.5,
-            iso_color: Some(NEUTRAL),
-            iso_opacity: 1.0,
-            extra_isosurfaces: Vec::new(),
-            light: Light::default(),
-            shadows: false,
-            ambient_occlusion: false,
-            density: 1.0,
-            shading: None,
-            gradient_opacity: None,
-            shading_fade: 0.0,
-            jitter: Some(0),
-            early_termination: DEFAULT_EARLY_TERMINATION,
-            background: Vec3::ZERO,
-            slab_lo: Vec3::ZERO,
-            slab_hi: Vec3::ONE,
-            ray_setup: RaySetup::Faces,
-            position_format: PositionFormat::Rgba32f,
-            skip_empty: true,
-            max_stride: 1,
-            stride_tolerance: 1.0,
-            gradient_texture: false,
-            compute: false,
-            ray_spacing: 1,
             voxel_axes: false,
-            clip_plane: None,
-            count_samples: false,
+            background: Vec3::ZERO,
+            colour: Colour::default(),
+            compositing: Compositing::default(),
+            lighting: Lighting::default(),
+            sampling: Sampling::default(),
+            cut: Cut::default(),
+            pipeline: Pipeline::default(),
         }
     }
 
@@ -418,58 +336,47 @@ impl RenderSettings {
 
     /// The classification rule 4 bakes: the transfer function if given, else the simple model.
     pub fn classification(&self) -> Classification {
-        match &self.transfer_function {
+        match &self.colour.transfer_function {
             Some(tf) => Classification::Function(tf.clone()),
             None => Classification::Simple {
-                colormap: self.colormap,
-                step_alpha: self.step_alpha,
-                multiplied: self.multiplied_alpha,
+                colormap: self.colour.colormap,
+                step_alpha: self.colour.step_alpha,
+                multiplied: self.colour.multiplied_alpha,
             },
         }
     }
 
-    /// Sets the slab along `axis` (0 = x) to `position ± width / 2`, clamped to [0,1].
-    pub fn set_slab(&mut self, axis: usize, position: f32, width: f32) {
-        self.slab_lo[axis] = (position - width * 0.5).clamp(0.0, 1.0);
-        self.slab_hi[axis] = (position + width * 0.5).clamp(0.0, 1.0);
-    }
-
-    /// Checks the values a user can set; the message names the offending setting.
-    /// Rule 7's iso-surfaces: the first (`iso_value`, `iso_color`, `iso_opacity`) and the extra ones, by value.
+    /// Rule 7's iso-surfaces, by value: [`Compositing::isosurfaces`].
     pub fn isosurfaces(&self) -> Vec<IsoSurface> {
-        let first = IsoSurface {
-            value: self.iso_value,
-            color: self.iso_color,
-            opacity: self.iso_opacity,
-        };
-        lighting::sorted(&[&[first][..], &self.extra_isosurfaces].concat())
+        self.compositing.isosurfaces()
     }
 
     /// An isosurface frame that can see past a surface (several, or a translucent one): a ray may cross a surface
     /// downwards, leaving bricks above it for bricks below every surface, which leaping would miss.
     pub fn layered_isosurfaces(&self) -> bool {
-        self.mode == CompositeMode::Isosurface && (!self.extra_isosurfaces.is_empty() || self.iso_opacity < 1.0)
+        self.compositing.mode == CompositeMode::Isosurface
+            && (!self.compositing.extra_isosurfaces.is_empty() || self.compositing.iso_opacity < 1.0)
     }
 
     /// Whether rule 9's light volume applies: shadows or ambient occlusion on a lit frame (emission or density
     /// with shading, or iso-surfaces). MIP, MinIP and average are never lit.
     pub fn uses_light_volume(&self) -> bool {
-        let lit = match self.mode {
+        let lit = match self.compositing.mode {
             CompositeMode::Isosurface => true,
-            CompositeMode::Emission | CompositeMode::Density => self.shading.is_some(),
+            CompositeMode::Emission | CompositeMode::Density => self.lighting.shading.is_some(),
             _ => false,
         };
-        lit && (self.shadows || self.ambient_occlusion)
+        lit && (self.lighting.shadows || self.lighting.ambient_occlusion)
     }
 
     /// Rule 5's light direction (unit, world, towards the light) as the frame uses it: the light's own, or with
     /// shadows and a headlight the key light (rule 9: up and to the left of the view, following the camera);
     /// `None`: a headlight.
     pub fn light_direction(&self) -> Option<Vec3> {
-        if let Some(d) = self.light.direction {
+        if let Some(d) = self.lighting.light.direction {
             return Some(d.normalize());
         }
-        if !(self.shadows && self.uses_light_volume()) {
+        if !(self.lighting.shadows && self.uses_light_volume()) {
             return None;
         }
         let view = (self.camera.eye - self.camera.target).normalize();
@@ -481,22 +388,22 @@ impl RenderSettings {
     /// Whether the march looks up the brick grid: to leap over empty bricks, or for rule 2's strides. Layered
     /// iso-surfaces march every sample.
     pub fn looks_up_bricks(&self) -> bool {
-        (self.skip_empty || self.max_stride > 1) && !self.layered_isosurfaces()
+        (self.sampling.skip_empty || self.sampling.max_stride > 1) && !self.layered_isosurfaces()
     }
 
     /// Rule 2's depth bound `D` for strided segments, times `stride_tolerance`.
     pub fn stride_depth(&self) -> f64 {
-        let d = if self.shading.is_some() || self.gradient_opacity.is_some() {
+        let d = if self.lighting.shading.is_some() || self.lighting.gradient_opacity.is_some() {
             STRIDE_DEPTH_LIT
         } else {
             STRIDE_DEPTH
         };
-        d * f64::from(self.stride_tolerance)
+        d * f64::from(self.sampling.stride_tolerance)
     }
 
     /// Rule 2's spread bound for strided segments: `STRIDE_SPREAD` times `stride_tolerance`.
     pub fn stride_spread(&self) -> f64 {
-        STRIDE_SPREAD * f64::from(self.stride_tolerance)
+        STRIDE_SPREAD * f64::from(self.sampling.stride_tolerance)
     }
 
     /// The size of the image rules 1–8 make (rule 12): the output's, divided by the ray spacing and rounded up.
@@ -507,10 +414,10 @@ impl RenderSettings {
 
     /// Rule 12's k as frames take it: 1 for a `count_samples` frame, whose counts are not colours to filter.
     pub fn spacing(&self) -> u32 {
-        if self.count_samples {
+        if self.pipeline.count_samples {
             1
         } else {
-            self.ray_spacing.max(1)
+            self.sampling.ray_spacing.max(1)
         }
     }
 
@@ -521,75 +428,12 @@ impl RenderSettings {
                 self.width, self.height
             ));
         }
-        let [lo, hi] = self.window;
-        if !(0.0..=1.0).contains(&lo) || !(0.0..=1.0).contains(&hi) || lo >= hi {
-            return Err(format!("value window {lo},{hi} must satisfy 0 <= TMIN < TMAX <= 1"));
-        }
-        if !(0.0..=1.0).contains(&self.step_alpha) {
-            return Err(format!("step alpha {} must be in [0,1]", self.step_alpha));
-        }
-        if !(0.05..=64.0).contains(&self.step_length) {
-            return Err(format!("step length {} voxels must be in [0.05, 64]", self.step_length));
-        }
-        if !(self.shading_fade.is_finite() && self.shading_fade >= 0.0) {
-            return Err(format!("shading fade {} must be 0 or more", self.shading_fade));
-        }
-        if !(self.stride_tolerance.is_finite() && self.stride_tolerance > 0.0) {
-            return Err(format!("stride tolerance {} must be above 0", self.stride_tolerance));
-        }
-        if !STRIDES.contains(&self.ray_spacing) {
-            return Err(format!("ray spacing {} must be 1, 2 or 4", self.ray_spacing));
-        }
-        if !STRIDES.contains(&self.max_stride) {
-            return Err(format!("max stride {} must be 1, 2 or 4", self.max_stride));
-        }
-        // Above 0: with 0, "stop after the first visible sample" would hinge on whether it is transparent.
-        if !(self.early_termination > 0.0 && self.early_termination <= 1.0) {
-            return Err(format!(
-                "early termination opacity {} must be in (0,1]",
-                self.early_termination
-            ));
-        }
-        for a in 0..3 {
-            if self.slab_lo[a] >= self.slab_hi[a] {
-                return Err(format!(
-                    "slab along {} is empty ({}..{})",
-                    ["x", "y", "z"][a],
-                    self.slab_lo[a],
-                    self.slab_hi[a]
-                ));
-            }
-        }
-        if self.extra_isosurfaces.len() + 1 > MAX_ISOSURFACES {
-            return Err(format!("at most {MAX_ISOSURFACES} iso-surfaces at once"));
-        }
-        for surface in self.isosurfaces() {
-            surface.validate()?;
-        }
-        self.light.validate()?;
-        if !(self.density.is_finite() && self.density >= 0.0) {
-            return Err(format!("density factor {} must be a non-negative number", self.density));
-        }
-        if let Some(r) = self.gradient_opacity {
-            if !(r.is_finite() && r > 0.0) {
-                return Err(format!("gradient opacity reference {r} must be positive"));
-            }
-        }
-        if let Some(sh) = &self.shading {
-            let ok = [sh.ambient, sh.diffuse, sh.specular]
-                .iter()
-                .all(|v| (0.0..=4.0).contains(v))
-                && (1.0..=1000.0).contains(&sh.shininess);
-            if !ok {
-                return Err("shading: ambient, diffuse and specular must be in [0,4], shininess in [1,1000]".into());
-            }
-        }
-        if let Some(tf) = &self.transfer_function {
-            tf.validate().map_err(|e| e.to_string())?;
-        }
-        if self.compute && self.ray_setup != RaySetup::Analytic {
-            return Err("the compute march uses the analytic ray setup (--method compute)".into());
-        }
+        self.colour.validate()?;
+        self.compositing.validate()?;
+        self.lighting.validate()?;
+        self.sampling.validate()?;
+        self.cut.validate()?;
+        self.pipeline.validate()?;
         let c = &self.camera;
         if !(c.eye - c.target).length().is_normal() {
             return Err(format!(

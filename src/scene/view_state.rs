@@ -89,7 +89,7 @@ mod tests {
     #[test]
     fn a_state_round_trips_and_still_reads_as_settings() {
         let mut settings = RenderSettings::new(320, 200, glam::Vec3::ONE);
-        settings.iso_value = 0.3;
+        settings.compositing.iso_value = 0.3;
         let state = ViewState {
             volume: VolumeRef {
                 path: Some("/data/ct.nrrd".into()),

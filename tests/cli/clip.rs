@@ -102,7 +102,7 @@ fn a_view_state_carries_the_plane() {
     let mut settings = RenderSettings::new(SIZE, SIZE, glam::Vec3::ONE);
     settings.camera = Camera::looking_at(glam::Vec3::new(0.0, -2.0, 0.0), glam::Vec3::ZERO);
     settings.camera.ortho = true;
-    settings.clip_plane = Some(ClipPlane::new(glam::Vec3::X, 0.0).unwrap());
+    settings.cut.clip_plane = Some(ClipPlane::new(glam::Vec3::X, 0.0).unwrap());
     let state = ViewState {
         volume: VolumeRef {
             builtin: Some("colormap".into()),

@@ -134,7 +134,7 @@ fn write_state(dir: &Path, name: &str, builtin: &str, azimuth: f32, elevation: f
     let mut settings = RenderSettings::new(SIZE.0, SIZE.1, extent);
     let distance = settings.camera.eye.length();
     settings.camera = Camera::orbit(azimuth, elevation, distance, glam::Vec3::ZERO);
-    settings.window = window;
+    settings.colour.window = window;
     let state = ViewState {
         volume: VolumeRef {
             builtin: Some(builtin.into()),

@@ -49,8 +49,8 @@ fn helix() -> Volume {
 /// 4 steps (which that opacity does not allow: 0.105 extinction × 0.8 > 0.05).
 fn defaults(extent: Vec3) -> RenderSettings {
     let mut s = RenderSettings::new(W, H, extent);
-    s.step_length = 0.4;
-    s.max_stride = 4;
+    s.sampling.step_length = 0.4;
+    s.sampling.max_stride = 4;
     s
 }
 
@@ -76,14 +76,14 @@ fn resolve_quality(s: &mut RenderSettings, args: &[&str], range: [f64; 2]) {
     let quality = value("--quality").map_or(Quality::Normal, |q| Quality::parse(q).expect("a quality"));
     quality.apply(s, range);
     if let Some(step) = value("--step-length") {
-        s.step_length = step.parse().expect("a step length");
-        s.max_stride = 1;
+        s.sampling.step_length = step.parse().expect("a step length");
+        s.sampling.max_stride = 1;
     }
     if let Some(stride) = value("--max-stride") {
-        s.max_stride = stride.parse().expect("a stride");
+        s.sampling.max_stride = stride.parse().expect("a stride");
     }
     if let Some(k) = value("--ray-spacing") {
-        s.ray_spacing = k.parse().expect("a ray spacing");
+        s.sampling.ray_spacing = k.parse().expect("a ray spacing");
     }
 }
 
@@ -100,12 +100,14 @@ fn check_rules(rules: Vec<Rule>) {
         let mut s = defaults(v.extent());
         (r.settings)(&mut s, v.extent());
         // The step each rule states is the one `render` resolves (the quality rule, src/scene/quality.rs).
-        let stated = (s.step_length, s.max_stride, s.ray_spacing);
+        let stated = (s.sampling.step_length, s.sampling.max_stride, s.sampling.ray_spacing);
         resolve_quality(&mut s, r.args, v.range);
-        if (s.step_length - stated.0).abs() > 1e-6 || (s.max_stride, s.ray_spacing) != (stated.1, stated.2) {
+        if (s.sampling.step_length - stated.0).abs() > 1e-6
+            || (s.sampling.max_stride, s.sampling.ray_spacing) != (stated.1, stated.2)
+        {
             failures.push(format!(
                 "{:?}: the quality rule gives step {} (strides up to {}, ray spacing {}), the test states {stated:?}",
-                r.args, s.step_length, s.max_stride, s.ray_spacing
+                r.args, s.sampling.step_length, s.sampling.max_stride, s.sampling.ray_spacing
             ));
         }
         let expected = reference.render_full(&s);
@@ -174,70 +176,74 @@ fn classification_options_take_effect() {
     std::fs::write(&tf_path, tf.to_json()).unwrap();
     // The rules are plain fns: the file's content is rebuilt inside the one that needs it.
     let mut rules = vec![
-        rule(&["--colormap", "viridis"], |s, _| s.colormap = Colormap::Viridis),
-        rule(&["--colormap", "plasma"], |s, _| s.colormap = Colormap::Plasma),
-        rule(&["--colormap", "rainbow"], |s, _| s.colormap = Colormap::Rainbow),
-        rule(&["--colormap", "gnuplot"], |s, _| s.colormap = Colormap::Gnuplot),
-        rule(&["--colormap", "grayscale"], |s, _| s.colormap = Colormap::Grayscale),
-        rule(&["--window", "0.3,0.8"], |s, _| s.window = [0.3, 0.8]),
-        rule(&["--step-alpha", "0.4"], |s, _| s.step_alpha = 0.4),
+        rule(&["--colormap", "viridis"], |s, _| s.colour.colormap = Colormap::Viridis),
+        rule(&["--colormap", "plasma"], |s, _| s.colour.colormap = Colormap::Plasma),
+        rule(&["--colormap", "rainbow"], |s, _| s.colour.colormap = Colormap::Rainbow),
+        rule(&["--colormap", "gnuplot"], |s, _| s.colour.colormap = Colormap::Gnuplot),
+        rule(&["--colormap", "grayscale"], |s, _| {
+            s.colour.colormap = Colormap::Grayscale
+        }),
+        rule(&["--window", "0.3,0.8"], |s, _| s.colour.window = [0.3, 0.8]),
+        rule(&["--step-alpha", "0.4"], |s, _| s.colour.step_alpha = 0.4),
         // A forced step takes every sample.
         rule(&["--step-length", "2.5"], |s, _| {
-            s.step_length = 2.5;
-            s.max_stride = 1;
+            s.sampling.step_length = 2.5;
+            s.sampling.max_stride = 1;
         }),
         // The helix's default opacity (0.1 per voxel) keeps each level's base step.
         rule(&["--quality", "fast"], |s, _| {
-            s.step_length = 1.0;
-            s.max_stride = 2;
+            s.sampling.step_length = 1.0;
+            s.sampling.max_stride = 2;
         }),
         rule(&["--quality", "converged"], |s, _| {
-            s.step_length = 0.125;
-            s.max_stride = 1;
+            s.sampling.step_length = 0.125;
+            s.sampling.max_stride = 1;
         }),
         // The helix's default opacity starts sharply at the window's edge: draft takes every pixel there, and
         // spaces its rays (rule 12) for a ramp from 0.
         rule(&["--quality", "draft"], |s, _| {
-            s.step_length = 3.0;
-            s.max_stride = 2;
-            s.stride_tolerance = 4.0;
+            s.sampling.step_length = 3.0;
+            s.sampling.max_stride = 2;
+            s.sampling.stride_tolerance = 4.0;
         }),
         Rule {
             bounds: SPACED,
             ..rule(&["--quality", "draft", "--multiplied-alpha"], |s, _| {
-                s.step_length = 3.0;
-                s.max_stride = 2;
-                s.stride_tolerance = 4.0;
-                s.multiplied_alpha = true;
-                s.ray_spacing = 2;
+                s.sampling.step_length = 3.0;
+                s.sampling.max_stride = 2;
+                s.sampling.stride_tolerance = 4.0;
+                s.colour.multiplied_alpha = true;
+                s.sampling.ray_spacing = 2;
             })
         },
         Rule {
             bounds: SPACED,
-            ..rule(&["--ray-spacing", "4"], |s, _| s.ray_spacing = 4)
+            ..rule(&["--ray-spacing", "4"], |s, _| s.sampling.ray_spacing = 4)
         },
         // A faint opacity (extinction 0.0202 per voxel) lets every occupied brick stride 4 steps; --max-stride
         // caps it.
-        rule(&["--step-alpha", "0.02"], |s, _| s.step_alpha = 0.02),
+        rule(&["--step-alpha", "0.02"], |s, _| s.colour.step_alpha = 0.02),
         rule(&["--step-alpha", "0.02", "--max-stride", "2"], |s, _| {
-            s.step_alpha = 0.02;
-            s.max_stride = 2;
+            s.colour.step_alpha = 0.02;
+            s.sampling.max_stride = 2;
         }),
         // A strong opacity shortens the step below the normal 0.4: to 0.25 / −ln(1 − 0.6) of a voxel.
         rule(&["--step-alpha", "0.6"], |s, _| {
-            s.step_alpha = 0.6;
-            s.step_length = (0.25 / -(0.4f64).ln()) as f32;
+            s.colour.step_alpha = 0.6;
+            s.sampling.step_length = (0.25 / -(0.4f64).ln()) as f32;
         }),
-        rule(&["--multiplied-alpha"], |s, _| s.multiplied_alpha = true),
+        rule(&["--multiplied-alpha"], |s, _| s.colour.multiplied_alpha = true),
         rule(&["--preset", "mr-default"], |s, _| {
-            s.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
-            s.window = [0.0, 1.0];
+            s.colour.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
+            s.colour.window = [0.0, 1.0];
         }),
         rule(&["--preset", "qt-example", "--window", "0.2,0.9"], |s, _| {
-            s.transfer_function = Some(TransferFunction::preset("qt-example").unwrap());
-            s.window = [0.2, 0.9];
+            s.colour.transfer_function = Some(TransferFunction::preset("qt-example").unwrap());
+            s.colour.window = [0.2, 0.9];
         }),
-        rule(&["--early-termination", "0.6"], |s, _| s.early_termination = 0.6),
+        rule(&["--early-termination", "0.6"], |s, _| {
+            s.compositing.early_termination = 0.6
+        }),
         // Channels off the .5 rounding ties (0.3 × 255 = 76.5 would round either way).
         rule(&["--background", "0.2,0.35,0.45"], |s, _| {
             s.background = Vec3::new(0.2, 0.35, 0.45)
@@ -248,8 +254,8 @@ fn classification_options_take_effect() {
         args: Box::leak(vec!["--tf", tf_arg].into_boxed_slice()),
         settings: |s, _| {
             let path = common::scratch("cli-options").join("tf.json");
-            s.transfer_function = Some(TransferFunction::load(&path).unwrap());
-            s.window = [0.0, 1.0];
+            s.colour.transfer_function = Some(TransferFunction::load(&path).unwrap());
+            s.colour.window = [0.0, 1.0];
         },
         bounds: REFERENCE,
     });
@@ -259,18 +265,20 @@ fn classification_options_take_effect() {
 #[test]
 fn mode_and_shading_options_take_effect() {
     check_rules(vec![
-        rule(&["--mode", "mip"], |s, _| s.mode = CompositeMode::Mip),
-        rule(&["--mode", "minip"], |s, _| s.mode = CompositeMode::MinIp),
-        rule(&["--mode", "average"], |s, _| s.mode = CompositeMode::Average),
+        rule(&["--mode", "mip"], |s, _| s.compositing.mode = CompositeMode::Mip),
+        rule(&["--mode", "minip"], |s, _| s.compositing.mode = CompositeMode::MinIp),
+        rule(&["--mode", "average"], |s, _| {
+            s.compositing.mode = CompositeMode::Average
+        }),
         // Iso-surfaces read gradients: the texture by default.
         rule(&["--mode", "iso"], |s, _| {
-            s.mode = CompositeMode::Isosurface;
-            s.gradient_texture = true;
+            s.compositing.mode = CompositeMode::Isosurface;
+            s.lighting.gradient_texture = true;
         }),
         rule(&["--mode", "iso", "--iso", "0.3"], |s, _| {
-            s.mode = CompositeMode::Isosurface;
-            s.iso_value = 0.3;
-            s.gradient_texture = true;
+            s.compositing.mode = CompositeMode::Isosurface;
+            s.compositing.iso_value = 0.3;
+            s.lighting.gradient_texture = true;
         }),
         rule(
             &[
@@ -284,9 +292,13 @@ fn mode_and_shading_options_take_effect() {
                 "0.7",
             ],
             |s, _| {
-                s.mode = CompositeMode::Isosurface;
-                (s.iso_value, s.iso_color, s.iso_opacity) = (0.6, None, 0.7);
-                s.gradient_texture = true;
+                s.compositing.mode = CompositeMode::Isosurface;
+                (
+                    s.compositing.iso_value,
+                    s.compositing.iso_color,
+                    s.compositing.iso_opacity,
+                ) = (0.6, None, 0.7);
+                s.lighting.gradient_texture = true;
             },
         ),
         rule(
@@ -301,9 +313,9 @@ fn mode_and_shading_options_take_effect() {
                 "0.7",
             ],
             |s, _| {
-                s.mode = CompositeMode::Isosurface;
-                s.iso_color = Some(glam::Vec3::new(0.2, 0.8, 0.4));
-                s.extra_isosurfaces = vec![
+                s.compositing.mode = CompositeMode::Isosurface;
+                s.compositing.iso_color = Some(glam::Vec3::new(0.2, 0.8, 0.4));
+                s.compositing.extra_isosurfaces = vec![
                     volcast::scene::lighting::IsoSurface {
                         value: 0.3,
                         color: Some(glam::Vec3::X),
@@ -314,7 +326,7 @@ fn mode_and_shading_options_take_effect() {
                         ..Default::default()
                     },
                 ];
-                s.gradient_texture = true;
+                s.lighting.gradient_texture = true;
             },
         ),
         // Light options turn shading on.
@@ -328,64 +340,64 @@ fn mode_and_shading_options_take_effect() {
                 "1.5",
             ],
             |s, _| {
-                s.shading = Some(Shading::default());
-                s.light = volcast::scene::lighting::Light {
+                s.lighting.shading = Some(Shading::default());
+                s.lighting.light = volcast::scene::lighting::Light {
                     direction: Some(glam::Vec3::new(1.0, -2.0, 0.5)),
                     color: glam::Vec3::new(1.0, 0.5, 0.2),
                     intensity: 1.5,
                 };
-                s.gradient_texture = true;
+                s.lighting.gradient_texture = true;
             },
         ),
         rule(&["--mode", "iso", "--light", "head"], |s, _| {
-            s.mode = CompositeMode::Isosurface;
-            s.shading = Some(Shading::default());
-            s.gradient_texture = true;
+            s.compositing.mode = CompositeMode::Isosurface;
+            s.lighting.shading = Some(Shading::default());
+            s.lighting.gradient_texture = true;
         }),
         // At one voxel per step and density 1 the density model's opacity a·1·1 equals emission's 1 − (1 − a)¹.
         rule(&["--mode", "density", "--step-length", "2"], |s, _| {
-            s.mode = CompositeMode::Density;
-            s.step_length = 2.0;
-            s.max_stride = 1;
+            s.compositing.mode = CompositeMode::Density;
+            s.sampling.step_length = 2.0;
+            s.sampling.max_stride = 1;
         }),
         rule(&["--mode", "density", "--density", "3"], |s, _| {
-            s.mode = CompositeMode::Density;
-            s.density = 3.0;
+            s.compositing.mode = CompositeMode::Density;
+            s.compositing.density = 3.0;
         }),
         // Shaded and gradient-opacity frames take the gradient texture by default (`--gradients auto`).
         rule(&["--shading"], |s, _| {
-            s.shading = Some(Shading::default());
-            s.gradient_texture = true;
+            s.lighting.shading = Some(Shading::default());
+            s.lighting.gradient_texture = true;
         }),
         rule(&["--shading", "--gradients", "samples"], |s, _| {
-            s.shading = Some(Shading::default())
+            s.lighting.shading = Some(Shading::default())
         }),
         rule(&["--shading", "--lighting", "0.1,0.5,0.8,40"], |s, _| {
-            s.shading = Some(Shading {
+            s.lighting.shading = Some(Shading {
                 ambient: 0.1,
                 diffuse: 0.5,
                 specular: 0.8,
                 shininess: 40.0,
             });
-            s.gradient_texture = true;
+            s.lighting.gradient_texture = true;
         }),
         rule(&["--gradient-opacity", "0.05"], |s, _| {
-            s.gradient_opacity = Some(0.05);
-            s.gradient_texture = true;
+            s.lighting.gradient_opacity = Some(0.05);
+            s.lighting.gradient_texture = true;
         }),
         rule(&["--gradient-opacity", "0.05", "--gradients", "samples"], |s, _| {
-            s.gradient_opacity = Some(0.05)
+            s.lighting.gradient_opacity = Some(0.05)
         }),
         rule(&["--shading", "--gradient-texture"], |s, _| {
-            s.shading = Some(Shading::default());
-            s.gradient_texture = true;
+            s.lighting.shading = Some(Shading::default());
+            s.lighting.gradient_texture = true;
         }),
-        rule(&["--no-jitter"], |s, _| s.jitter = None),
-        rule(&["--jitter-seed", "9"], |s, _| s.jitter = Some(9)),
-        rule(&["--slice", "x:0.4:0.3"], |s, _| s.set_slab(0, 0.4, 0.3)),
+        rule(&["--no-jitter"], |s, _| s.sampling.jitter = None),
+        rule(&["--jitter-seed", "9"], |s, _| s.sampling.jitter = Some(9)),
+        rule(&["--slice", "x:0.4:0.3"], |s, _| s.cut.set_slab(0, 0.4, 0.3)),
         rule(&["--slice", "x:0.4:0.3", "--slice", "z:0.6:0.5"], |s, _| {
-            s.set_slab(0, 0.4, 0.3);
-            s.set_slab(2, 0.6, 0.5);
+            s.cut.set_slab(0, 0.4, 0.3);
+            s.cut.set_slab(2, 0.6, 0.5);
         }),
     ]);
 }
@@ -493,8 +505,8 @@ fn volume_options_take_effect() {
         if args[0] != "--builtin" {
             // A file given no classification option is shown with the automatic transfer function (as the viewer
             // shows it), at the normal quality's step for that function.
-            s.transfer_function = Some(volcast::transfer::auto::auto_for_volume(volume));
-            s.window = [0.0, 1.0];
+            s.colour.transfer_function = Some(volcast::transfer::auto::auto_for_volume(volume));
+            s.colour.window = [0.0, 1.0];
             volcast::scene::quality::Quality::Normal.apply(&mut s, volume.range);
             if !stdout.contains("transfer function 'auto: ") {
                 failures.push(format!(

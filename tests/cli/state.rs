@@ -22,7 +22,7 @@ fn saved() -> ViewState {
     let mut settings = RenderSettings::new(48, 40, extent);
     let distance = settings.camera.eye.length();
     settings.camera = Camera::orbit(10.0, 20.0, distance, Vec3::ZERO);
-    settings.window = [0.2, 1.0];
+    settings.colour.window = [0.2, 1.0];
     ViewState {
         volume: VolumeRef {
             builtin: Some("helix".into()),
@@ -73,18 +73,18 @@ fn options_beside_a_state_override_its_values_and_keep_the_rest() {
         }),
         ("window", vec!["--window", "0.5,1"], {
             let mut v = base.clone();
-            v.settings.window = [0.5, 1.0];
+            v.settings.colour.window = [0.5, 1.0];
             v
         }),
         ("azimuth", vec!["--azimuth", "90"], turned),
         ("colormap", vec!["--colormap", "plasma"], {
             let mut v = base.clone();
-            v.settings.colormap = Colormap::Plasma;
+            v.settings.colour.colormap = Colormap::Plasma;
             v
         }),
         ("mode", vec!["--mode", "mip"], {
             let mut v = base.clone();
-            v.settings.mode = CompositeMode::Mip;
+            v.settings.compositing.mode = CompositeMode::Mip;
             v
         }),
     ];

@@ -46,9 +46,9 @@ pub fn standard_cases(v: &Volume, size: u32) -> Vec<Case> {
             s.camera = Camera::looking_at(Vec3::new(0.0, 0.5 * e.y, 0.0), Vec3::ZERO)
         }),
         with(v, size, "multiplied-viridis", |s| {
-            s.multiplied_alpha = true;
-            s.step_alpha = 0.5;
-            s.colormap = Colormap::Viridis;
+            s.colour.multiplied_alpha = true;
+            s.colour.step_alpha = 0.5;
+            s.colour.colormap = Colormap::Viridis;
         }),
     ]
 }
@@ -56,41 +56,41 @@ pub fn standard_cases(v: &Volume, size: u32) -> Vec<Case> {
 /// Cases that exercise one setting each.
 pub fn settings_cases(v: &Volume, size: u32) -> Vec<Case> {
     vec![
-        with(v, size, "window", |s| s.window = [0.3, 0.7]),
+        with(v, size, "window", |s| s.colour.window = [0.3, 0.7]),
         with(v, size, "window-plasma", |s| {
             // Colour follows the window position, not the value: a window off-centre in the range tells them apart.
-            s.window = [0.15, 0.45];
-            s.colormap = Colormap::Plasma;
+            s.colour.window = [0.15, 0.45];
+            s.colour.colormap = Colormap::Plasma;
         }),
         with(v, size, "slab", |s| {
-            s.set_slab(0, 0.5, 0.4);
-            s.set_slab(2, 0.3, 0.5);
+            s.cut.set_slab(0, 0.5, 0.4);
+            s.cut.set_slab(2, 0.3, 0.5);
         }),
         with(v, size, "slab-inside", |s| {
-            s.set_slab(1, 0.6, 0.3);
+            s.cut.set_slab(1, 0.6, 0.3);
             s.camera = Camera::looking_at(Vec3::new(0.1, 0.0, 0.05), Vec3::new(-0.2, 0.5, 0.0));
         }),
         with(v, size, "half-step", |s| {
-            s.step_length = 0.5;
-            s.colormap = Colormap::Plasma;
+            s.sampling.step_length = 0.5;
+            s.colour.colormap = Colormap::Plasma;
         }),
         with(v, size, "double-step-gnuplot", |s| {
-            s.step_length = 2.0;
-            s.colormap = Colormap::Gnuplot;
+            s.sampling.step_length = 2.0;
+            s.colour.colormap = Colormap::Gnuplot;
         }),
         with(v, size, "no-early-stop-rainbow", |s| {
-            s.early_termination = 1.0;
-            s.step_alpha = 0.05;
-            s.colormap = Colormap::Rainbow;
+            s.compositing.early_termination = 1.0;
+            s.colour.step_alpha = 0.05;
+            s.colour.colormap = Colormap::Rainbow;
         }),
         with(v, size, "early-stop-half", |s| {
-            s.early_termination = 0.5;
-            s.step_alpha = 0.3;
+            s.compositing.early_termination = 0.5;
+            s.colour.step_alpha = 0.3;
         }),
         with(v, size, "background-grayscale", |s| {
             // Channels chosen off the .5 rounding ties (0.3 × 255 = 76.5 would round either way).
             s.background = Vec3::new(0.2, 0.35, 0.45);
-            s.colormap = Colormap::Grayscale;
+            s.colour.colormap = Colormap::Grayscale;
         }),
         with(v, size, "wide-angle-close", |s| {
             s.camera = Camera::orbit(-60.0, -30.0, 1.2, Vec3::ZERO);
@@ -105,8 +105,8 @@ pub fn settings_cases(v: &Volume, size: u32) -> Vec<Case> {
             s.width = size + 37;
             s.height = size - 21;
         }),
-        with(v, size, "no-jitter", |s| s.jitter = None),
-        with(v, size, "jitter-seed-7", |s| s.jitter = Some(7)),
+        with(v, size, "no-jitter", |s| s.sampling.jitter = None),
+        with(v, size, "jitter-seed-7", |s| s.sampling.jitter = Some(7)),
         with(v, size, "orthographic", |s| s.camera.ortho = true),
         with(v, size, "orthographic-wide", |s| {
             s.camera.ortho = true;
@@ -123,21 +123,21 @@ pub fn settings_cases(v: &Volume, size: u32) -> Vec<Case> {
 /// One case per compositing mode, shading and classification option.
 pub fn quality_cases(v: &Volume, size: u32) -> Vec<Case> {
     vec![
-        with(v, size, "mip", |s| s.mode = CompositeMode::Mip),
+        with(v, size, "mip", |s| s.compositing.mode = CompositeMode::Mip),
         with(v, size, "minip", |s| {
-            s.mode = CompositeMode::MinIp;
-            s.window = [0.2, 1.0];
+            s.compositing.mode = CompositeMode::MinIp;
+            s.colour.window = [0.2, 1.0];
         }),
-        with(v, size, "average", |s| s.mode = CompositeMode::Average),
+        with(v, size, "average", |s| s.compositing.mode = CompositeMode::Average),
         with(v, size, "iso", |s| {
-            s.mode = CompositeMode::Isosurface;
-            s.iso_value = 0.4;
+            s.compositing.mode = CompositeMode::Isosurface;
+            s.compositing.iso_value = 0.4;
         }),
         with(v, size, "iso-ortho-phong", |s| {
-            s.mode = CompositeMode::Isosurface;
-            s.iso_value = 0.6;
+            s.compositing.mode = CompositeMode::Isosurface;
+            s.compositing.iso_value = 0.6;
             s.camera.ortho = true;
-            s.shading = Some(Shading {
+            s.lighting.shading = Some(Shading {
                 ambient: 0.1,
                 diffuse: 0.6,
                 specular: 0.6,
@@ -145,36 +145,36 @@ pub fn quality_cases(v: &Volume, size: u32) -> Vec<Case> {
             });
         }),
         with(v, size, "density", |s| {
-            s.mode = CompositeMode::Density;
-            s.density = 2.5;
+            s.compositing.mode = CompositeMode::Density;
+            s.compositing.density = 2.5;
         }),
         with(v, size, "density-half-step", |s| {
-            s.mode = CompositeMode::Density;
-            s.density = 1.5;
-            s.step_length = 0.5;
+            s.compositing.mode = CompositeMode::Density;
+            s.compositing.density = 1.5;
+            s.sampling.step_length = 0.5;
         }),
-        with(v, size, "shaded", |s| s.shading = Some(Shading::default())),
+        with(v, size, "shaded", |s| s.lighting.shading = Some(Shading::default())),
         with(v, size, "shaded-gradient-opacity", |s| {
-            s.shading = Some(Shading::default());
-            s.gradient_opacity = Some(0.05);
-            s.step_alpha = 0.4;
+            s.lighting.shading = Some(Shading::default());
+            s.lighting.gradient_opacity = Some(0.05);
+            s.colour.step_alpha = 0.4;
         }),
         with(v, size, "shaded-fade", |s| {
-            s.shading = Some(Shading::default());
-            s.shading_fade = 0.05;
-            s.window = [0.1, 0.9];
+            s.lighting.shading = Some(Shading::default());
+            s.lighting.shading_fade = 0.05;
+            s.colour.window = [0.1, 0.9];
         }),
         with(v, size, "shaded-double-step", |s| {
-            s.shading = Some(Shading::default());
-            s.step_length = 2.0;
+            s.lighting.shading = Some(Shading::default());
+            s.sampling.step_length = 2.0;
         }),
         with(v, size, "tf-mr-default", |s| {
-            s.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
-            s.window = [0.0, 1.0];
+            s.colour.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
+            s.colour.window = [0.0, 1.0];
         }),
         with(v, size, "tf-qt-example-multiplied-off", |s| {
-            s.transfer_function = Some(TransferFunction::preset("qt-example").unwrap());
-            s.window = [0.0, 1.0];
+            s.colour.transfer_function = Some(TransferFunction::preset("qt-example").unwrap());
+            s.colour.window = [0.0, 1.0];
         }),
     ]
 }

@@ -165,7 +165,7 @@ impl Classifier {
             },
         };
         Classifier {
-            window: s.window.map(f64::from),
+            window: s.colour.window.map(f64::from),
             range,
             model,
         }

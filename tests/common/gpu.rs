@@ -41,7 +41,7 @@ pub fn sample_counts(image: &RgbaImage) -> Vec<u32> {
 /// Renders `s` on the GPU with `count_samples` on.
 pub fn gpu_sample_counts(gpu: &Gpu, headless: &mut Headless, s: &RenderSettings) -> Vec<u32> {
     let mut s = s.clone();
-    s.count_samples = true;
+    s.pipeline.count_samples = true;
     sample_counts(&headless.render(gpu, &s).expect("render").image)
 }
 
@@ -132,8 +132,8 @@ impl Judge {
             let expected = reference.render_full(&case.settings);
             for &(method, compute) in methods {
                 let mut s = case.settings.clone();
-                s.ray_setup = method;
-                s.compute = compute;
+                s.pipeline.ray_setup = method;
+                s.pipeline.compute = compute;
                 let suffix = if compute { "-compute" } else { "" };
                 let label = format!("{}-{}-{:?}{suffix}", volume.name, case.name, method).to_lowercase();
                 let actual = headless.render(gpu, &s).expect("render").image;

@@ -21,7 +21,7 @@ fn extinction(s: &RenderSettings, classifier: &Classifier, wall: f64, v: f64) ->
     if v.is_nan() {
         return 0.0;
     }
-    match s.mode {
+    match s.compositing.mode {
         CompositeMode::Isosurface => {
             if v >= wall {
                 32.0
@@ -29,7 +29,7 @@ fn extinction(s: &RenderSettings, classifier: &Classifier, wall: f64, v: f64) ->
                 0.0
             }
         }
-        CompositeMode::Density => (classifier.at(v).1 * f64::from(s.density)).min(32.0),
+        CompositeMode::Density => (classifier.at(v).1 * f64::from(s.compositing.density)).min(32.0),
         _ => (-(1.0 - classifier.at(v).1.clamp(0.0, 1.0)).ln()).min(32.0),
     }
 }
@@ -46,9 +46,9 @@ fn key_light(s: &RenderSettings) -> DVec3 {
 
 /// Rule 5's light direction as rule 9 resolves it (None: a headlight).
 pub fn light_direction(s: &RenderSettings) -> Option<DVec3> {
-    match s.light.direction {
+    match s.lighting.light.direction {
         Some(d) => Some(d.as_dvec3().normalize()),
-        None if s.shadows && applies(s) => Some(key_light(s)),
+        None if s.lighting.shadows && applies(s) => Some(key_light(s)),
         None => None,
     }
 }
@@ -91,7 +91,7 @@ impl LightGridRef {
             }
         }
         let mut o = vec![1.0; count];
-        if s.ambient_occlusion {
+        if s.lighting.ambient_occlusion {
             for c in cells() {
                 let p = DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
                 let mut sum = 0.0;
@@ -112,7 +112,7 @@ impl LightGridRef {
         }
         let mut t = vec![1.0; count];
         let mut read_offset = DVec3::ZERO;
-        if let (true, Some(light)) = (s.shadows, light_direction(s)) {
+        if let (true, Some(light)) = (s.lighting.shadows, light_direction(s)) {
             // The light in cell units: through texture space (the placement's inverse), scaled by n.
             let d = nf * placement.dir_to_tex(light);
             let a = d.abs();
@@ -226,10 +226,10 @@ impl LightGridRef {
 
 /// Whether rule 9 applies to `s` (written from the rule: lit frames with shadows or occlusion).
 pub fn applies(s: &RenderSettings) -> bool {
-    let lit = match s.mode {
+    let lit = match s.compositing.mode {
         CompositeMode::Isosurface => true,
-        CompositeMode::Emission | CompositeMode::Density => s.shading.is_some(),
+        CompositeMode::Emission | CompositeMode::Density => s.lighting.shading.is_some(),
         _ => false,
     };
-    lit && (s.shadows || s.ambient_occlusion)
+    lit && (s.lighting.shadows || s.lighting.ambient_occlusion)
 }

@@ -64,16 +64,20 @@ impl<'a> Frame<'a> {
         let s = &stepped;
         let placement = volume.placement(s);
         let world_per_mm = placement.world_per_mm();
-        let shading = match s.mode {
-            CompositeMode::Isosurface => Some(s.shading.unwrap_or_default()),
-            _ => s.shading,
+        let shading = match s.compositing.mode {
+            CompositeMode::Isosurface => Some(s.lighting.shading.unwrap_or_default()),
+            _ => s.lighting.shading,
         };
-        let segments = match s.mode {
-            CompositeMode::Emission => Some(Segments::new(volume.classifier(s), s.window.map(f64::from), None)),
+        let segments = match s.compositing.mode {
+            CompositeMode::Emission => Some(Segments::new(
+                volume.classifier(s),
+                s.colour.window.map(f64::from),
+                None,
+            )),
             CompositeMode::Density => Some(Segments::new(
                 volume.classifier(s),
-                s.window.map(f64::from),
-                Some(f64::from(s.density)),
+                s.colour.window.map(f64::from),
+                Some(f64::from(s.compositing.density)),
             )),
             _ => None,
         };
@@ -86,43 +90,53 @@ impl<'a> Frame<'a> {
         let mut frame = Frame {
             volume,
             camera: CameraBasis::new(s),
-            step: f64::from(s.step_length) * placement.voxel_sides().min_element(),
+            step: f64::from(s.sampling.step_length) * placement.voxel_sides().min_element(),
             placement,
             clip: s
+                .cut
                 .clip_plane
                 .map(|p| (p.normal().as_dvec3().normalize(), f64::from(p.offset()) * world_per_mm)),
-            box_lo: s.slab_lo.as_dvec3(),
-            box_hi: s.slab_hi.as_dvec3(),
+            box_lo: s.cut.slab_lo.as_dvec3(),
+            box_hi: s.cut.slab_hi.as_dvec3(),
             classifier: volume.classifier(s),
             segments,
-            window: s.window.map(f64::from),
-            step_length: f64::from(s.step_length),
-            mode: s.mode,
+            window: s.colour.window.map(f64::from),
+            step_length: f64::from(s.sampling.step_length),
+            mode: s.compositing.mode,
             surfaces: {
-                let mut v: Vec<(f64, Option<DVec3>, f64)> = std::iter::once((s.iso_value, s.iso_color, s.iso_opacity))
-                    .chain(s.extra_isosurfaces.iter().map(|x| (x.value, x.color, x.opacity)))
-                    .map(|(value, color, opacity)| {
-                        (
-                            f64::from(value),
-                            color.map(|c| linear(c.as_dvec3())),
-                            f64::from(opacity),
-                        )
-                    })
-                    .collect();
+                let mut v: Vec<(f64, Option<DVec3>, f64)> = std::iter::once((
+                    s.compositing.iso_value,
+                    s.compositing.iso_color,
+                    s.compositing.iso_opacity,
+                ))
+                .chain(
+                    s.compositing
+                        .extra_isosurfaces
+                        .iter()
+                        .map(|x| (x.value, x.color, x.opacity)),
+                )
+                .map(|(value, color, opacity)| {
+                    (
+                        f64::from(value),
+                        color.map(|c| linear(c.as_dvec3())),
+                        f64::from(opacity),
+                    )
+                })
+                .collect();
                 v.sort_by(|a, b| a.0.total_cmp(&b.0));
                 v
             },
-            lamp: Lamp::new(&s.light, super::light::light_direction(s)),
+            lamp: Lamp::new(&s.lighting.light, super::light::light_direction(s)),
             // Made below, from the frame's own classifier and placement.
             light_grid: None,
             shading,
-            gradient_opacity: s.gradient_opacity.map(f64::from),
-            shading_fade: f64::from(s.shading_fade),
-            grid_gradients: s.gradient_texture,
-            jitter: s.jitter,
+            gradient_opacity: s.lighting.gradient_opacity.map(f64::from),
+            shading_fade: f64::from(s.lighting.shading_fade),
+            grid_gradients: s.lighting.gradient_texture,
+            jitter: s.sampling.jitter,
             strides,
             finest: volume.finest_level(),
-            early_termination: f64::from(s.early_termination),
+            early_termination: f64::from(s.compositing.early_termination),
             background: linear(s.background.as_dvec3()),
         };
         if super::light::applies(s) {

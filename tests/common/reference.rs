@@ -353,9 +353,9 @@ impl Reference {
         let mut s = s.clone();
         if let Some((_, cut)) = &self.levels {
             let finest = self.finest_level();
-            s.step_length *= (1u32 << finest) as f32;
+            s.sampling.step_length *= (1u32 << finest) as f32;
             if finest > cut.held {
-                s.max_stride = 1;
+                s.sampling.max_stride = 1;
             }
         }
         s
@@ -363,7 +363,7 @@ impl Reference {
 
     /// Rule 2's step `h` in world units: `step_length` × the smallest voxel side.
     pub fn step_world(&self, s: &RenderSettings) -> f64 {
-        f64::from(s.step_length) * self.placement(s).voxel_sides().min_element()
+        f64::from(s.sampling.step_length) * self.placement(s).voxel_sides().min_element()
     }
 
     fn at(&self, x: usize, y: usize, z: usize) -> f64 {

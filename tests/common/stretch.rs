@@ -8,7 +8,11 @@ use volcast::scene::settings::RenderSettings;
 /// The image size rules 1–8 are applied at: one ray per k² output pixels, k the ray spacing (1 for a frame that
 /// counts samples), each side rounded up.
 pub fn marched(s: &RenderSettings) -> (u32, u32) {
-    let k = if s.count_samples { 1 } else { s.ray_spacing.max(1) };
+    let k = if s.pipeline.count_samples {
+        1
+    } else {
+        s.sampling.ray_spacing.max(1)
+    };
     (s.width.div_ceil(k), s.height.div_ceil(k))
 }
 

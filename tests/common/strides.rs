@@ -69,7 +69,7 @@ impl BrickRanges {
 /// Extinction of the classification at each table entry's value, clamped into the window (the table's entries
 /// beyond it repeat its edges).
 fn extinctions(s: &RenderSettings, segments: &Segments) -> Vec<f64> {
-    let (window, last) = (s.window.map(f64::from), (ENTRIES - 1) as f64);
+    let (window, last) = (s.colour.window.map(f64::from), (ENTRIES - 1) as f64);
     (0..ENTRIES)
         .map(|e| segments.point((e as f64 / last).clamp(window[0], window[1])).1)
         .collect()
@@ -78,7 +78,7 @@ fn extinctions(s: &RenderSettings, segments: &Segments) -> Vec<f64> {
 /// Rule 2's test of emptiness for emission, as a function of a value range: some table entry that the part of the
 /// range inside the window reaches has extinction above 0.
 pub fn visible_emission(s: &RenderSettings, segments: &Segments) -> impl Fn(f64, f64) -> bool {
-    let (sigma, window) = (extinctions(s, segments), s.window.map(f64::from));
+    let (sigma, window) = (extinctions(s, segments), s.colour.window.map(f64::from));
     let last = (ENTRIES - 1) as f64;
     move |lo, hi| {
         let (lo, hi) = (lo.max(window[0]), hi.min(window[1]));
@@ -101,13 +101,14 @@ pub struct Strides {
 impl Strides {
     /// Rule 2's strides for frame `s`, or None where the rule does not apply (every sample is taken).
     pub fn new(ranges: &BrickRanges, dims: [usize; 3], s: &RenderSettings, segments: &Segments) -> Option<Strides> {
-        if !matches!(s.mode, CompositeMode::Emission | CompositeMode::Density) || s.max_stride <= 1 {
+        if !matches!(s.compositing.mode, CompositeMode::Emission | CompositeMode::Density) || s.sampling.max_stride <= 1
+        {
             return None;
         }
-        let window = s.window.map(f64::from);
+        let window = s.colour.window.map(f64::from);
         let last = (ENTRIES - 1) as f64;
         let sigma = extinctions(s, segments);
-        let (step, depth, spread) = (f64::from(s.step_length), s.stride_depth(), s.stride_spread());
+        let (step, depth, spread) = (f64::from(s.sampling.step_length), s.stride_depth(), s.stride_spread());
         let stride = ranges
             .ranges
             .iter()
@@ -136,7 +137,9 @@ impl Strides {
                     .into_iter()
                     .filter(|&k| {
                         let length = f64::from(k) * step;
-                        k <= s.max_stride && sigma_b * length <= depth && (sigma_b - sigma_min) * length <= spread
+                        k <= s.sampling.max_stride
+                            && sigma_b * length <= depth
+                            && (sigma_b - sigma_min) * length <= spread
                     })
                     .max()
                     .map_or(1, u64::from)

@@ -36,18 +36,18 @@ type SetPlane = Box<dyn Fn(&mut RenderSettings)>;
 /// The planes, each in emission, iso-surface and MIP frames.
 fn plane_cases(v: &Volume) -> Vec<Case> {
     let planes: Vec<(&str, SetPlane)> = vec![
-        ("oblique", Box::new(|s| s.clip_plane = oblique_plane())),
-        ("axis-z", Box::new(|s| s.clip_plane = plane([0.0, 0.0, -1.0], 4.0))),
+        ("oblique", Box::new(|s| s.cut.clip_plane = oblique_plane())),
+        ("axis-z", Box::new(|s| s.cut.clip_plane = plane([0.0, 0.0, -1.0], 4.0))),
         (
             "flipped",
-            Box::new(|s| s.clip_plane = oblique_plane().map(ClipPlane::flipped)),
+            Box::new(|s| s.cut.clip_plane = oblique_plane().map(ClipPlane::flipped)),
         ),
         (
             "with-slab",
             Box::new(|s| {
-                s.clip_plane = oblique_plane();
-                s.set_slab(0, 0.45, 0.5);
-                s.set_slab(2, 0.6, 0.7);
+                s.cut.clip_plane = oblique_plane();
+                s.cut.set_slab(0, 0.45, 0.5);
+                s.cut.set_slab(2, 0.6, 0.7);
             }),
         ),
         (
@@ -55,61 +55,61 @@ fn plane_cases(v: &Volume) -> Vec<Case> {
             Box::new(|s| {
                 // The eye inside the volume, on a plane along the view: the plane halves the image.
                 s.camera = Camera::looking_at(Vec3::new(0.1, -0.15, 0.05), Vec3::new(-0.2, 0.3, 0.0));
-                s.clip_plane = plane([0.45, 0.3, 0.0], 0.0);
-                s.jitter = None;
+                s.cut.clip_plane = plane([0.45, 0.3, 0.0], 0.0);
+                s.sampling.jitter = None;
             }),
         ),
         (
             "orthographic-no-skip",
             Box::new(|s| {
                 s.camera.ortho = true;
-                s.skip_empty = false;
-                s.clip_plane = plane([0.2, 1.0, -0.3], 2.0);
+                s.sampling.skip_empty = false;
+                s.cut.clip_plane = plane([0.2, 1.0, -0.3], 2.0);
             }),
         ),
     ];
     let mut cases = Vec::new();
     for (name, set) in &planes {
         cases.push(with(v, SIZE, &format!("{name}-emission"), |s| {
-            s.step_alpha = 0.3;
+            s.colour.step_alpha = 0.3;
             set(s);
         }));
         cases.push(with(v, SIZE, &format!("{name}-iso"), |s| {
-            s.mode = CompositeMode::Isosurface;
-            s.iso_value = 0.4;
+            s.compositing.mode = CompositeMode::Isosurface;
+            s.compositing.iso_value = 0.4;
             set(s);
         }));
         cases.push(with(v, SIZE, &format!("{name}-mip"), |s| {
-            s.mode = CompositeMode::Mip;
+            s.compositing.mode = CompositeMode::Mip;
             set(s);
         }));
     }
     // Layered iso-surfaces (every sample marched, translucent outer surface) and lit frames with rule 9's light
     // grid, which keeps the material the plane removes (it shadows what is kept).
     cases.push(with(v, SIZE, "oblique-iso-layers", |s| {
-        s.mode = CompositeMode::Isosurface;
-        s.iso_value = 0.6;
-        s.iso_opacity = 0.5;
-        s.extra_isosurfaces = vec![volcast::scene::lighting::IsoSurface {
+        s.compositing.mode = CompositeMode::Isosurface;
+        s.compositing.iso_value = 0.6;
+        s.compositing.iso_opacity = 0.5;
+        s.compositing.extra_isosurfaces = vec![volcast::scene::lighting::IsoSurface {
             value: 0.3,
             color: Some(Vec3::new(0.9, 0.5, 0.3)),
             opacity: 0.4,
         }];
-        s.clip_plane = oblique_plane();
+        s.cut.clip_plane = oblique_plane();
     }));
     cases.push(with(v, SIZE, "oblique-shaded-shadows", |s| {
-        s.step_alpha = 0.3;
-        s.shading = Some(Shading::default());
-        (s.shadows, s.ambient_occlusion) = (true, true);
-        s.light = Light::from_angles(-50.0, 35.0);
-        s.clip_plane = oblique_plane();
+        s.colour.step_alpha = 0.3;
+        s.lighting.shading = Some(Shading::default());
+        (s.lighting.shadows, s.lighting.ambient_occlusion) = (true, true);
+        s.lighting.light = Light::from_angles(-50.0, 35.0);
+        s.cut.clip_plane = oblique_plane();
     }));
     cases.push(with(v, SIZE, "oblique-iso-shadows", |s| {
-        s.mode = CompositeMode::Isosurface;
-        s.iso_value = 0.4;
-        (s.shadows, s.ambient_occlusion) = (true, true);
-        s.light = Light::from_angles(30.0, 50.0);
-        s.clip_plane = oblique_plane().map(ClipPlane::flipped);
+        s.compositing.mode = CompositeMode::Isosurface;
+        s.compositing.iso_value = 0.4;
+        (s.lighting.shadows, s.lighting.ambient_occlusion) = (true, true);
+        s.lighting.light = Light::from_angles(30.0, 50.0);
+        s.cut.clip_plane = oblique_plane().map(ClipPlane::flipped);
     }));
     cases
 }
@@ -128,7 +128,7 @@ fn clipped_frames_match_the_reference() {
         let reference = Reference::new(&placed);
         for case in &cases {
             let mut unclipped = case.settings.clone();
-            unclipped.clip_plane = None;
+            unclipped.cut.clip_plane = None;
             let d = diff(&reference.render(&case.settings), &reference.render(&unclipped));
             assert!(
                 d.above(8) > 40,
@@ -168,18 +168,18 @@ fn planes_beyond_the_box_keep_everything_or_nothing() {
             (RaySetup::Analytic, false),
             (RaySetup::Analytic, true),
         ] {
-            let mut s = with(&placed, 64, "beyond", |s| s.mode = mode).settings;
+            let mut s = with(&placed, 64, "beyond", |s| s.compositing.mode = mode).settings;
             // Channels off the .5 rounding ties of 8-bit output.
             s.background = Vec3::new(0.2, 0.35, 0.45);
-            (s.ray_setup, s.compute) = (method, compute);
+            (s.pipeline.ray_setup, s.pipeline.compute) = (method, compute);
             let label = format!("{}-{}-{method:?}-compute-{compute}", placed.name, mode.name());
             let plain = headless.render(&gpu, &s).expect("render").image;
             // The box's half-diagonal is under 60 mm: 1000 mm is beyond it along any normal.
             for normal in [[0.6, -0.5, 0.4], [0.0, 0.0, -1.0]] {
-                s.clip_plane = plane(normal, -1000.0);
+                s.cut.clip_plane = plane(normal, -1000.0);
                 let kept = headless.render(&gpu, &s).expect("render").image;
                 assert!(kept == plain, "{label}: a plane keeping everything changed the image");
-                s.clip_plane = plane(normal, 1000.0);
+                s.cut.clip_plane = plane(normal, 1000.0);
                 let removed = headless.render(&gpu, &s).expect("render").image;
                 let bg = background_pixel(s.background);
                 let left: Vec<_> = removed.pixels().filter(|p| **p != bg).take(4).collect();

@@ -49,11 +49,11 @@ fn empty_space_skipping_takes_fewer_samples_and_keeps_the_image() {
             for method in [RaySetup::Faces, RaySetup::Analytic] {
                 let label = format!("{}-{}-{:?}", v.name, case.name, method).to_lowercase();
                 let mut s = case.settings.clone();
-                s.ray_setup = method;
-                s.skip_empty = false;
+                s.pipeline.ray_setup = method;
+                s.sampling.skip_empty = false;
                 let full = headless.render(&gpu, &s).unwrap().image;
                 let counts_full = gpu_sample_counts(&gpu, &mut headless, &s);
-                s.skip_empty = true;
+                s.sampling.skip_empty = true;
                 let skipped = headless.render(&gpu, &s).unwrap().image;
                 let counts_skipped = gpu_sample_counts(&gpu, &mut headless, &s);
 
@@ -128,36 +128,36 @@ fn brick_strides_follow_the_reference_rule() {
         headless.set_volume(&gpu, v).unwrap();
         let reference = Reference::new(v);
         let strided = |s: &mut RenderSettings| {
-            s.step_length = 0.4;
-            s.max_stride = 4;
+            s.sampling.step_length = 0.4;
+            s.sampling.max_stride = 4;
         };
         let cases = vec![
             with(v, 112, "default", strided),
             with(v, 112, "faint", |s| {
                 strided(s);
-                s.step_alpha = 0.03;
+                s.colour.step_alpha = 0.03;
             }),
             with(v, 112, "faint-lit", |s| {
                 strided(s);
-                s.step_alpha = 0.03;
-                s.shading = Some(Shading::default());
+                s.colour.step_alpha = 0.03;
+                s.lighting.shading = Some(Shading::default());
             }),
             with(v, 112, "mr-default-shaded", |s| {
                 strided(s);
-                s.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
-                s.window = [0.0, 1.0];
-                s.shading = Some(Shading::default());
+                s.colour.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
+                s.colour.window = [0.0, 1.0];
+                s.lighting.shading = Some(Shading::default());
             }),
             with(v, 112, "density", |s| {
                 strided(s);
-                s.mode = CompositeMode::Density;
-                s.step_alpha = 0.02;
+                s.compositing.mode = CompositeMode::Density;
+                s.colour.step_alpha = 0.02;
             }),
             // Draft's tolerance (Quality::stride_tolerance): bounds four times looser, more bricks stride.
             with(v, 112, "faint-tolerant", |s| {
                 strided(s);
-                s.step_alpha = 0.03;
-                s.stride_tolerance = 4.0;
+                s.colour.step_alpha = 0.03;
+                s.sampling.stride_tolerance = 4.0;
             }),
         ];
         let (mut full_samples, mut strided_samples) = (0, 0);
@@ -173,7 +173,10 @@ fn brick_strides_follow_the_reference_rule() {
                 &gpu,
                 &mut headless,
                 &RenderSettings {
-                    skip_empty: false,
+                    sampling: volcast::scene::settings::Sampling {
+                        skip_empty: false,
+                        ..s.sampling.clone()
+                    },
                     ..s.clone()
                 },
             );
@@ -184,12 +187,12 @@ fn brick_strides_follow_the_reference_rule() {
                     "{label}: {off} pixels take other samples than rule 2's strides"
                 ));
             }
-            s.max_stride = 1;
+            s.sampling.max_stride = 1;
             let every = total(&gpu_sample_counts(&gpu, &mut headless, &s));
             (strided_samples, full_samples) = (strided_samples + taken, full_samples + every);
             // What rule 2 gives up is bounded at its own tolerance; a looser one is draft's, whose error the bench
             // measures against its target (docs/performance.md, Quality levels).
-            if s.stride_tolerance == 1.0 {
+            if s.sampling.stride_tolerance == 1.0 {
                 judge.against(
                     "strides",
                     label,
@@ -204,9 +207,9 @@ fn brick_strides_follow_the_reference_rule() {
         // The same classification unlit, then lit: lighting halves the depth bound, so the renderer must classify
         // its bricks again (a kept occupancy would stride as for the unlit frame).
         let mut s = with(v, 112, "faint-lit", |_| {}).settings;
-        (s.step_length, s.max_stride, s.step_alpha) = (0.4, 4, 0.03);
+        (s.sampling.step_length, s.sampling.max_stride, s.colour.step_alpha) = (0.4, 4, 0.03);
         headless.render(&gpu, &s).unwrap();
-        s.shading = Some(Shading::default());
+        s.lighting.shading = Some(Shading::default());
         let lit = headless.render(&gpu, &s).unwrap().image;
         let label = format!("{}-faint-lit-after-unlit", v.name).to_lowercase();
         judge.against("reference", label, &lit, &reference.render_full(&s), &s, REFERENCE);
@@ -249,29 +252,29 @@ fn gradient_texture_matches_the_reference_rule() {
         headless.renderer.enable_gradient_texture(&gpu, v).unwrap();
         let reference = Reference::new(v);
         let mut s = RenderSettings::new(96, 96, v.extent());
-        s.shading = Some(Shading::default());
-        s.step_alpha = 0.3;
+        s.lighting.shading = Some(Shading::default());
+        s.colour.step_alpha = 0.3;
         let central = reference.render_full(&s);
-        s.gradient_texture = true;
+        s.lighting.gradient_texture = true;
         let expected = reference.render_full(&s);
         for method in [RaySetup::Faces, RaySetup::Analytic] {
-            s.ray_setup = method;
+            s.pipeline.ray_setup = method;
             let textured = headless.render(&gpu, &s).unwrap().image;
             let label = format!("{}-gradient-texture-{method:?}", v.name).to_lowercase();
             judge.against("reference", label, &textured, &expected, &s, REFERENCE);
         }
         // Gradient-modulated opacity reads the gradient's length (shading only its direction).
         let mut g = s.clone();
-        g.gradient_opacity = Some(0.08);
-        g.step_alpha = 0.6;
+        g.lighting.gradient_opacity = Some(0.08);
+        g.colour.step_alpha = 0.6;
         let expected = reference.render_full(&g);
         let textured = headless.render(&gpu, &g).unwrap().image;
         let label = format!("{}-gradient-texture-opacity", v.name).to_lowercase();
         judge.against("reference", label, &textured, &expected, &g, REFERENCE);
         // Iso-surface normals from the same texture.
         let mut iso = s.clone();
-        iso.mode = CompositeMode::Isosurface;
-        iso.iso_value = 0.45;
+        iso.compositing.mode = CompositeMode::Isosurface;
+        iso.compositing.iso_value = 0.45;
         let expected_iso = reference.render_full(&iso);
         let textured = headless.render(&gpu, &iso).unwrap().image;
         let label = format!("{}-gradient-texture-iso", v.name).to_lowercase();
@@ -303,19 +306,19 @@ fn jitter_averages_towards_the_finely_sampled_image() {
     let ml = volume::builtin("marschner-lobb", Some(64)).expect("marschner-lobb");
     headless.set_volume(&gpu, &ml).expect("upload");
     let mut coarse = RenderSettings::new(96, 96, ml.extent());
-    coarse.step_length = 3.0;
-    coarse.step_alpha = 0.15;
-    coarse.colormap = Colormap::Viridis;
-    coarse.jitter = None;
+    coarse.sampling.step_length = 3.0;
+    coarse.colour.step_alpha = 0.15;
+    coarse.colour.colormap = Colormap::Viridis;
+    coarse.sampling.jitter = None;
     let mut fine = coarse.clone();
-    fine.step_length = 0.25;
+    fine.sampling.step_length = 0.25;
     let truth = Reference::new(&ml).render(&fine);
     let unjittered = headless.render(&gpu, &coarse).expect("render").image;
     let seeds = 16u32;
     let mut sum = vec![0.0f64; (96 * 96 * 4) as usize];
     for seed in 0..seeds {
         let mut s = coarse.clone();
-        s.jitter = Some(seed);
+        s.sampling.jitter = Some(seed);
         let img = headless.render(&gpu, &s).expect("render").image;
         for (acc, &p) in sum.iter_mut().zip(img.as_raw()) {
             *acc += p as f64;
@@ -354,12 +357,12 @@ fn a_constant_volume_looks_the_same_at_every_step() {
     let reference = Reference::new(&v);
     let mut judge = Judge::default();
     let mut base = RenderSettings::new(64, 64, v.extent());
-    base.step_alpha = 0.15;
+    base.colour.step_alpha = 0.15;
     let mut images = Vec::new();
     for (step, jitter) in [(1.0f32, None), (0.7, Some(3)), (1.3, None), (2.5, Some(7)), (3.7, None)] {
         let mut s = base.clone();
-        s.step_length = step;
-        s.jitter = jitter;
+        s.sampling.step_length = step;
+        s.sampling.jitter = jitter;
         let actual = headless.render(&gpu, &s).expect("render").image;
         let expected = reference.render_full(&s);
         judge.against(
@@ -419,12 +422,12 @@ fn a_quantised_field_shades_like_its_float_original() {
     let mut headless = Headless::new(&gpu).expect("renderer");
     let (float, quantised) = (blobs(96, false), blobs(96, true));
     let mut iso = RenderSettings::new(240, 240, float.extent());
-    iso.mode = CompositeMode::Isosurface;
-    iso.iso_value = 0.3;
+    iso.compositing.mode = CompositeMode::Isosurface;
+    iso.compositing.iso_value = 0.3;
     let mut emission = RenderSettings::new(240, 240, float.extent());
-    emission.shading = Some(Shading::default());
-    emission.window = [0.2, 1.0];
-    emission.step_alpha = 0.3;
+    emission.lighting.shading = Some(Shading::default());
+    emission.colour.window = [0.2, 1.0];
+    emission.colour.step_alpha = 0.3;
     let mut failures = Vec::new();
     for (label, s) in [("iso", iso), ("emission", emission)] {
         let mut images = Vec::new();
@@ -432,7 +435,7 @@ fn a_quantised_field_shades_like_its_float_original() {
             headless.set_volume(&gpu, v).unwrap();
             let mut s = s.clone();
             volcast::scene::quality::Quality::Normal.apply(&mut s, v.range);
-            s.gradient_texture = texture;
+            s.lighting.gradient_texture = texture;
             if texture {
                 headless.renderer.enable_gradient_texture(&gpu, v).unwrap();
             }

@@ -39,7 +39,7 @@ pub(crate) fn helix_held_at_level_1(folder: &str) -> (Volume, Volume) {
 pub(crate) fn view(v: &Volume, azimuth: f32) -> RenderSettings {
     let mut s = RenderSettings::for_volume(96, 96, v);
     s.camera = Camera::orbit(azimuth, 20.0, 1.2, glam::Vec3::ZERO);
-    s.shading = Some(Shading::default());
+    s.lighting.shading = Some(Shading::default());
     s
 }
 
@@ -103,8 +103,8 @@ fn finer_levels_refine_to_the_whole_image() {
     let (helix, held) = helix_held_at_level_1("gpu-finer-whole");
     headless.renderer.brick_side = Some(16);
     let mut s = view(&helix, 30.0);
-    s.skip_empty = false;
-    s.max_stride = 1;
+    s.sampling.skip_empty = false;
+    s.sampling.max_stride = 1;
     let mut level0 = |v: &Volume| {
         headless.set_volume(&gpu, v).expect("upload");
         headless.renderer.start_stream(&gpu, v, 600).expect("stream");
@@ -146,7 +146,7 @@ fn bricks_read_from_the_file_are_skipped_by_their_own_range() {
     assert!(held.finer.is_some());
     let mut s = view(&full, 60.0);
     // Visible only above 180: the held level's sheet (130) is not.
-    s.window = [0.7, 1.0];
+    s.colour.window = [0.7, 1.0];
     for brick in [16, 32] {
         headless.renderer.brick_side = Some(brick);
         headless.set_volume(&gpu, &held).expect("upload");
@@ -191,7 +191,7 @@ fn coarse_cuts_take_no_strides() {
     headless.renderer.brick_side = Some(8);
     headless.set_volume(&gpu, &ml).expect("upload");
     let mut s = RenderSettings::for_volume(96, 96, &ml);
-    (s.step_length, s.max_stride, s.step_alpha) = (0.4, 4, 0.03);
+    (s.sampling.step_length, s.sampling.max_stride, s.colour.step_alpha) = (0.4, 4, 0.03);
     let total = |c: Vec<u32>| c.iter().map(|&n| u64::from(n)).sum::<u64>();
     let mut samples = Vec::new();
     for level in [0, 1] {
@@ -202,7 +202,10 @@ fn coarse_cuts_take_no_strides() {
             &gpu,
             &mut headless,
             &RenderSettings {
-                max_stride: 1,
+                sampling: volcast::scene::settings::Sampling {
+                    max_stride: 1,
+                    ..s.sampling.clone()
+                },
                 ..s.clone()
             },
         ));

@@ -34,8 +34,8 @@ fn judge_cut(judge: &mut Judge, gpu: &Gpu, headless: &mut Headless, v: &Volume, 
     for case in cases {
         for &(setup, compute) in METHODS {
             let mut s = case.settings.clone();
-            s.ray_setup = setup;
-            s.compute = compute;
+            s.pipeline.ray_setup = setup;
+            s.pipeline.compute = compute;
             let actual = headless.render(gpu, &s).expect("render").image;
             let expected = reference.render_full(&s);
             let suffix = if compute { "-compute" } else { "" };
@@ -136,7 +136,7 @@ fn skipping_keeps_what_coarser_levels_show() {
     let flat = bricked(&gpu, &mut headless, &planes, 16);
     let mut cases = standard_cases(&planes, 64);
     for case in &mut cases {
-        case.settings.window = [0.02, 1.0];
+        case.settings.colour.window = [0.02, 1.0];
     }
     judge_cut(
         &mut judge,
@@ -166,7 +166,7 @@ fn the_gradient_texture_follows_the_levels() {
         .into_iter()
         .map(|name| {
             let mut case = gradient_cases(&ml, 64).into_iter().find(|c| c.name == name).unwrap();
-            case.settings.gradient_texture = true;
+            case.settings.lighting.gradient_texture = true;
             case
         })
         .collect();
@@ -191,7 +191,7 @@ fn the_screen_rule_within_a_small_pool() {
     bricked(&gpu, &mut headless, &helix, 16);
     let mut s = RenderSettings::for_volume(48, 48, &helix);
     s.camera.eye = s.camera.target + (s.camera.eye - s.camera.target) * 0.5;
-    s.shading = Some(Shading::default());
+    s.lighting.shading = Some(Shading::default());
     let finest = headless.render(&gpu, &s).unwrap().image;
     let reference = Reference::new(&helix);
     let brick = [16usize; 3];
@@ -298,9 +298,9 @@ fn level_strides_sample_each_brick_at_its_own_voxel() {
     let mut failures = Vec::new();
     for (name, stride, alpha) in [("faint", 4, 0.02), ("strong", 1, 0.4)] {
         let mut s = RenderSettings::for_volume(64, 64, &helix);
-        (s.step_length, s.max_stride, s.step_alpha) = (0.5, stride, alpha);
+        (s.sampling.step_length, s.sampling.max_stride, s.colour.step_alpha) = (0.5, stride, alpha);
         // Every sample counted, as the reference counts them (skipping would leave out the empty bricks').
-        s.skip_empty = false;
+        s.sampling.skip_empty = false;
         headless.renderer.show_cut(&gpu, &helix, &flat).expect("level 0");
         let level0 = gpu_sample_counts(&gpu, &mut headless, &s);
         headless.renderer.show_cut(&gpu, &helix, &mixed).expect("mixed cut");

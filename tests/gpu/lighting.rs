@@ -18,35 +18,35 @@ use volcast::volume::{self, Volume};
 /// (a headlight with shadows), density with occlusion only, and skin over bone with shadows.
 fn frames(v: &Volume, ct: bool) -> Vec<(String, RenderSettings)> {
     let mut base = RenderSettings::for_volume(96, 96, v);
-    base.shading = Some(Shading::default());
+    base.lighting.shading = Some(Shading::default());
     if ct {
-        base.transfer_function = Some(TransferFunction::preset("ct-bone").unwrap());
-        base.window = [0.0, 1.0];
+        base.colour.transfer_function = Some(TransferFunction::preset("ct-bone").unwrap());
+        base.colour.window = [0.0, 1.0];
     } else {
-        base.step_alpha = 0.3;
+        base.colour.step_alpha = 0.3;
     }
     let mut out = Vec::new();
     let mut s = base.clone();
-    (s.shadows, s.ambient_occlusion) = (true, true);
-    s.light = Light::from_angles(-50.0, 35.0);
+    (s.lighting.shadows, s.lighting.ambient_occlusion) = (true, true);
+    s.lighting.light = Light::from_angles(-50.0, 35.0);
     out.push(("emission-shadows-occlusion".to_string(), s.clone()));
-    s.light = Light::default();
+    s.lighting.light = Light::default();
     out.push(("emission-key-light-shadows".to_string(), s.clone()));
     let mut d = base.clone();
-    d.mode = CompositeMode::Density;
-    d.density = 2.0;
-    d.ambient_occlusion = true;
+    d.compositing.mode = CompositeMode::Density;
+    d.compositing.density = 2.0;
+    d.lighting.ambient_occlusion = true;
     out.push(("density-occlusion".to_string(), d));
     let mut iso = base.clone();
-    iso.mode = CompositeMode::Isosurface;
-    iso.iso_value = if ct { 0.45 } else { 0.5 };
-    iso.extra_isosurfaces = vec![IsoSurface {
+    iso.compositing.mode = CompositeMode::Isosurface;
+    iso.compositing.iso_value = if ct { 0.45 } else { 0.5 };
+    iso.compositing.extra_isosurfaces = vec![IsoSurface {
         value: if ct { 0.2 } else { 0.25 },
         color: Some(glam::Vec3::new(0.9, 0.6, 0.5)),
         opacity: 0.35,
     }];
-    (iso.shadows, iso.ambient_occlusion) = (true, true);
-    iso.light = Light::from_angles(30.0, 50.0);
+    (iso.lighting.shadows, iso.lighting.ambient_occlusion) = (true, true);
+    iso.lighting.light = Light::from_angles(30.0, 50.0);
     out.push(("iso-layers-shadows-occlusion".to_string(), iso));
     out
 }
@@ -75,7 +75,7 @@ fn shadows_and_occlusion_match_the_reference() {
             );
             // The light grid must matter: without it the image is clearly different.
             let mut plain = s.clone();
-            (plain.shadows, plain.ambient_occlusion) = (false, false);
+            (plain.lighting.shadows, plain.lighting.ambient_occlusion) = (false, false);
             let d = against_reference(&headless.render(&gpu, &plain).unwrap().image, &expected, s.background);
             eprintln!("{}-{label}: without the light grid {d}", v.name);
             if d.mean < 1.0 {
@@ -87,9 +87,9 @@ fn shadows_and_occlusion_match_the_reference() {
         }
         // MIP is never lit: shadows and occlusion leave it as it was.
         let mut mip = RenderSettings::for_volume(64, 64, v);
-        mip.mode = CompositeMode::Mip;
+        mip.compositing.mode = CompositeMode::Mip;
         let plain = headless.render(&gpu, &mip).unwrap().image;
-        (mip.shadows, mip.ambient_occlusion) = (true, true);
+        (mip.lighting.shadows, mip.lighting.ambient_occlusion) = (true, true);
         assert_eq!(plain, headless.render(&gpu, &mip).unwrap().image, "MIP with shadows");
     }
     close(gpu, headless);

@@ -24,7 +24,7 @@ fn check(volume: &Volume, size: u32, window: [f32; 2]) {
     headless.set_volume(&gpu, volume).expect("upload");
     let reference = Reference::new(volume);
     let mut base = RenderSettings::new(size, size, volume.extent());
-    base.window = window;
+    base.colour.window = window;
     let (family, bounds) =
         if headless.renderer.volume_layout() == Some(VolumeLayout::Texture(ash::vk::Format::R8_UNORM)) {
             ("reference-r8", REFERENCE_R8)
@@ -52,8 +52,8 @@ fn check(volume: &Volume, size: u32, window: [f32; 2]) {
             images,
         );
         let mut cs = view.settings.clone();
-        cs.ray_setup = RaySetup::Analytic;
-        cs.compute = true;
+        cs.pipeline.ray_setup = RaySetup::Analytic;
+        cs.pipeline.compute = true;
         let compute = headless.render(&gpu, &cs).expect("compute march").image;
         // Same rays, same march code, another pipeline stage: at most rounding apart.
         let d = diff(&compute, &c.analytic.image);

@@ -68,10 +68,10 @@ fn bricked_volumes_match_the_reference() {
         cases.extend(gradient_cases(&v, 64));
         // Steps longer than a brick's border: the point before a leap (a segment's start) and a segment's
         // midpoint lie in other bricks than the sample after them.
-        cases.push(with(&v, 64, "step-3", |s| s.step_length = 3.0));
+        cases.push(with(&v, 64, "step-3", |s| s.sampling.step_length = 3.0));
         cases.push(with(&v, 64, "step-3-shaded", |s| {
-            s.step_length = 3.0;
-            s.shading = Some(Shading::default());
+            s.sampling.step_length = 3.0;
+            s.lighting.shading = Some(Shading::default());
         }));
         judge.run_cases(("reference", REFERENCE), &gpu, &mut headless, &v, cases, METHODS);
     }
@@ -89,7 +89,7 @@ fn bricked_volumes_match_the_reference() {
     }
     set_bricked(&gpu, &mut headless, &small, 8);
     let cases = [3.0, 4.0]
-        .map(|step| with(&small, 72, &format!("step-{step}"), |s| s.step_length = step))
+        .map(|step| with(&small, 72, &format!("step-{step}"), |s| s.sampling.step_length = step))
         .to_vec();
     judge.run_cases(("reference", REFERENCE), &gpu, &mut headless, &small, cases, METHODS);
     // The compute march the same way.
@@ -113,10 +113,10 @@ fn the_light_grid_reads_bricked_volumes() {
     set_bricked(&gpu, &mut headless, &helix, 16);
     let reference = Reference::new(&helix);
     let mut s = volcast::scene::settings::RenderSettings::for_volume(80, 80, &helix);
-    s.shading = Some(Shading::default());
-    s.step_alpha = 0.3;
-    (s.shadows, s.ambient_occlusion) = (true, true);
-    s.light = Light::from_angles(-50.0, 35.0);
+    s.lighting.shading = Some(Shading::default());
+    s.colour.step_alpha = 0.3;
+    (s.lighting.shadows, s.lighting.ambient_occlusion) = (true, true);
+    s.lighting.light = Light::from_angles(-50.0, 35.0);
     let actual = headless.render(&gpu, &s).expect("render").image;
     let expected = reference.render_full(&s);
     judge.against(

@@ -50,7 +50,7 @@ fn case(volume: &Volume, label: &str, configure: impl Fn(&mut RenderSettings)) -
 }
 
 fn shaded(mut c: Case, held: bool) -> Case {
-    c.settings.shading = Some(Shading::default());
+    c.settings.lighting.shading = Some(Shading::default());
     c.label += "-shaded";
     c.held = held;
     c
@@ -59,7 +59,7 @@ fn shaded(mut c: Case, held: bool) -> Case {
 /// `c` shaded with rule 5's shading fade, held to the bound.
 fn faded(c: Case) -> Case {
     let mut c = shaded(c, true);
-    c.settings.shading_fade = 0.05;
+    c.settings.lighting.shading_fade = 0.05;
     c.label += "-fade";
     c
 }
@@ -83,9 +83,9 @@ fn cases() -> Vec<Case> {
     if let Some(ct) = raw("raw/cranium_ct_256x256x108_int16.raw", [0.957031, 0.957031, 1.5]) {
         // The bench's ct-head scene.
         let ct_head = |s: &mut RenderSettings| {
-            s.window = [0.33, 0.9];
-            s.colormap = Colormap::Plasma;
-            s.step_alpha = 0.6;
+            s.colour.window = [0.33, 0.9];
+            s.colour.colormap = Colormap::Plasma;
+            s.colour.step_alpha = 0.6;
             let d = Camera::fit_distance(ct.extent().length() * 0.5, s.camera.fov_y_deg);
             s.camera = Camera::orbit(25.0, 10.0, d, Vec3::ZERO);
         };
@@ -95,9 +95,9 @@ fn cases() -> Vec<Case> {
     }
     if let Some(mri) = raw("raw/colin27_t1_181x217x181_uint8.raw", [1.0, 1.0, 1.0]) {
         let mri_brain = |s: &mut RenderSettings| {
-            s.window = [0.2, 1.0];
-            s.colormap = Colormap::Grayscale;
-            s.step_alpha = 0.05;
+            s.colour.window = [0.2, 1.0];
+            s.colour.colormap = Colormap::Grayscale;
+            s.colour.step_alpha = 0.05;
         };
         out.push(case(&mri, "mri-brain", mri_brain));
         out.push(shaded(case(&mri, "mri-brain", mri_brain), true));
@@ -116,17 +116,17 @@ fn the_default_quality_is_within_the_bound_of_the_converged_image() {
         Quality::Normal.apply(&mut normal, range);
         Gradients::Auto.apply(&mut normal, c.volume.voxel_count() as u64);
         assert_eq!(
-            normal.gradient_texture,
-            normal.shading.is_some() || normal.mode == CompositeMode::Isosurface,
+            normal.lighting.gradient_texture,
+            normal.lighting.shading.is_some() || normal.compositing.mode == CompositeMode::Isosurface,
             "{}: the default's gradients",
             c.label
         );
         // The converged image keeps the frame's gradient rule (fidelity::converged): the error is sampling's.
         let mut converged = c.settings.clone();
         Quality::Converged.apply(&mut converged, range);
-        converged.gradient_texture = normal.gradient_texture;
+        converged.lighting.gradient_texture = normal.lighting.gradient_texture;
         headless.set_volume(&gpu, &c.volume).expect("upload");
-        if normal.gradient_texture {
+        if normal.lighting.gradient_texture {
             headless
                 .renderer
                 .enable_gradient_texture(&gpu, &c.volume)
@@ -140,7 +140,7 @@ fn the_default_quality_is_within_the_bound_of_the_converged_image() {
         } else {
             " (measured, not held to the bound)"
         };
-        eprintln!("{} (step {:.3}): {d}{held}", c.label, normal.step_length);
+        eprintln!("{} (step {:.3}): {d}{held}", c.label, normal.sampling.step_length);
         if d.pixels < 100 {
             failures.push(format!("{}: only {} object pixels", c.label, d.pixels));
         }
@@ -162,7 +162,7 @@ fn coarse_steps_are_over_the_bound() {
     let v = volume::builtin("helix", Some(96)).expect("helix");
     let c = case(&v, "helix", |_| {});
     let mut coarse = c.settings.clone();
-    coarse.step_length = 4.0;
+    coarse.sampling.step_length = 4.0;
     let mut converged = c.settings.clone();
     Quality::Converged.apply(&mut converged, v.range);
     headless.set_volume(&gpu, &v).expect("upload");

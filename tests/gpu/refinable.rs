@@ -42,7 +42,7 @@ fn reference_cut(cut: &Cut, held: u32) -> RefCut {
 fn reference_rule(v: &Volume, s: &RenderSettings, cell: usize) -> RefCut {
     let reference = Reference::new(v);
     let level0 = pyramid(v, 0).remove(0);
-    let segments = Segments::new(reference.classifier(s), s.window.map(f64::from), None);
+    let segments = Segments::new(reference.classifier(s), s.colour.window.map(f64::from), None);
     let visible = visible_emission(s, &segments);
     let refine = |l, b| may_refine(&level0, (BRICK, cell), l, b, &visible);
     screen_cut_where([128; 3], BRICK, 3, (&reference.placement(s), s, 1.0), &refine)
@@ -51,7 +51,7 @@ fn reference_rule(v: &Volume, s: &RenderSettings, cell: usize) -> RefCut {
 /// A close view whose background (0) lies outside the window.
 fn close_view(v: &Volume) -> RenderSettings {
     let mut s = view(v, 30.0);
-    s.window = [0.25, 1.0];
+    s.colour.window = [0.25, 1.0];
     s
 }
 
@@ -95,7 +95,10 @@ fn bricks_that_show_nothing_are_not_refined() {
     headless.set_volume(&gpu, &v).expect("upload");
     let s = close_view(&v);
     let everything = RenderSettings {
-        skip_empty: false,
+        sampling: volcast::scene::settings::Sampling {
+            skip_empty: false,
+            ..s.sampling.clone()
+        },
         ..s.clone()
     };
     let free = LevelChoice::Screen {
@@ -151,7 +154,10 @@ fn a_files_bricks_that_show_nothing_are_never_read() {
         .stream_wanted(
             &held,
             &RenderSettings {
-                skip_empty: false,
+                sampling: volcast::scene::settings::Sampling {
+                    skip_empty: false,
+                    ..s.sampling.clone()
+                },
                 ..s.clone()
             },
             1.0,

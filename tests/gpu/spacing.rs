@@ -28,18 +28,18 @@ fn spaced_rays_match_the_reference_stretched() {
     for v in [helix.clone(), mirrored(&helix)] {
         let mut cases: Vec<_> = standard_cases(&v, 77).into_iter().take(4).collect();
         cases.push(with(&v, 77, "draft-viridis", |s| {
-            s.colormap = Colormap::Viridis;
+            s.colour.colormap = Colormap::Viridis;
             Quality::Draft.apply(s, v.range);
         }));
         for case in &mut cases {
             // Odd and not square: 77×53 marches 39×27 (k = 2) or 20×14 (k = 4), neither dividing the output.
             case.settings.height = 53;
-            case.settings.ray_spacing = case.settings.ray_spacing.max(2);
+            case.settings.sampling.ray_spacing = case.settings.sampling.ray_spacing.max(2);
         }
         let mut wider: Vec<_> = cases.iter().take(2).cloned().collect();
         for case in &mut wider {
             case.name = format!("{}-k4", case.name);
-            case.settings.ray_spacing = 4;
+            case.settings.sampling.ray_spacing = 4;
         }
         cases.extend(wider);
         headless.set_volume(&gpu, &v).expect("upload volume");

@@ -31,7 +31,7 @@ fn reference_cut(cut: &Cut) -> RefCut {
 fn view(v: &Volume, azimuth: f32, distance: f32) -> RenderSettings {
     let mut s = RenderSettings::for_volume(48, 48, v);
     s.camera = Camera::orbit(azimuth, 20.0, 2.5 * distance, glam::Vec3::ZERO);
-    s.shading = Some(Shading::default());
+    s.lighting.shading = Some(Shading::default());
     s
 }
 

@@ -65,10 +65,10 @@ fn builtins_match_the_reference() {
         let mask = mask_as(ty);
         let cases = vec![
             with(&mask, 72, "emission", |_| {}),
-            with(&mask, 72, "mip", |s| s.mode = CompositeMode::Mip),
+            with(&mask, 72, "mip", |s| s.compositing.mode = CompositeMode::Mip),
             with(&mask, 72, "minip-low-window", |s| {
-                s.mode = CompositeMode::MinIp;
-                s.window = [0.0, 0.5];
+                s.compositing.mode = CompositeMode::MinIp;
+                s.colour.window = [0.0, 0.5];
             }),
         ];
         run(&mut judge, &gpu, &mut headless, &mask, cases, METHODS);
@@ -188,47 +188,47 @@ fn real_volumes_match_the_reference() {
         let v = formats::load_raw(&path, &opts).expect("load real volume");
         let mut cases = standard_cases(&v, 80);
         if v.name.starts_with("cranium") {
-            cases.push(with(&v, 96, "bone-window", |s| s.window = [0.45, 1.0]));
+            cases.push(with(&v, 96, "bone-window", |s| s.colour.window = [0.45, 1.0]));
             // The presets in Hounsfield units, shaded, on real CT data at its true (non-cubic) aspect.
             for preset in ["ct-bone", "ct-soft-tissue", "ct-lung"] {
                 cases.push(with(&v, 96, &format!("{preset}-shaded"), |s| {
-                    s.transfer_function = Some(TransferFunction::preset(preset).unwrap());
-                    s.window = [0.0, 1.0];
-                    s.shading = Some(Shading::default());
+                    s.colour.transfer_function = Some(TransferFunction::preset(preset).unwrap());
+                    s.colour.window = [0.0, 1.0];
+                    s.lighting.shading = Some(Shading::default());
                 }));
             }
             cases.push(with(&v, 96, "iso-bone", |s| {
-                s.mode = CompositeMode::Isosurface;
-                s.iso_value = 0.45;
+                s.compositing.mode = CompositeMode::Isosurface;
+                s.compositing.iso_value = 0.45;
             }));
             // Rule 7's layers (translucent skin over bone, met in order, also falling out of the head) under rule
             // 5's directional, coloured light.
             cases.push(with(&v, 96, "iso-skin-over-bone-lit", |s| {
-                s.mode = CompositeMode::Isosurface;
-                s.iso_value = 0.45;
-                s.extra_isosurfaces = vec![volcast::scene::lighting::IsoSurface {
+                s.compositing.mode = CompositeMode::Isosurface;
+                s.compositing.iso_value = 0.45;
+                s.compositing.extra_isosurfaces = vec![volcast::scene::lighting::IsoSurface {
                     value: 0.2,
                     color: Some(glam::Vec3::new(0.9, 0.6, 0.5)),
                     opacity: 0.3,
                 }];
-                s.light = volcast::scene::lighting::Light {
+                s.lighting.light = volcast::scene::lighting::Light {
                     direction: Some(glam::Vec3::new(0.6, -0.3, 0.74)),
                     color: glam::Vec3::new(1.0, 0.9, 0.8),
                     intensity: 1.3,
                 };
             }));
             cases.push(with(&v, 96, "ct-bone-directional", |s| {
-                s.transfer_function = Some(TransferFunction::preset("ct-bone").unwrap());
-                s.window = [0.0, 1.0];
-                s.shading = Some(Shading::default());
-                s.light = volcast::scene::lighting::Light::from_angles(-60.0, 40.0);
+                s.colour.transfer_function = Some(TransferFunction::preset("ct-bone").unwrap());
+                s.colour.window = [0.0, 1.0];
+                s.lighting.shading = Some(Shading::default());
+                s.lighting.light = volcast::scene::lighting::Light::from_angles(-60.0, 40.0);
             }));
         }
         if v.name.starts_with("motor") {
             // The fMRI activation map: MIP shows the blobs.
             cases.push(with(&v, 96, "mip-activation", |s| {
-                s.mode = CompositeMode::Mip;
-                s.window = [0.55, 1.0];
+                s.compositing.mode = CompositeMode::Mip;
+                s.colour.window = [0.55, 1.0];
             }));
         }
         run(&mut judge, &gpu, &mut headless, &v, cases, METHODS);
@@ -246,7 +246,9 @@ fn real_volumes_match_the_reference() {
         };
         let v = formats::open(&path, &Default::default()).expect("load a native file");
         let mut cases = standard_cases(&v, 72).into_iter().take(4).collect::<Vec<_>>();
-        cases.push(with(&v, 72, "shaded", |s| s.shading = Some(Shading::default())));
+        cases.push(with(&v, 72, "shaded", |s| {
+            s.lighting.shading = Some(Shading::default())
+        }));
         cases.push(with(&v, 72, "voxel-axes", |s| s.voxel_axes = true));
         run(&mut judge, &gpu, &mut headless, &v, cases, METHODS);
     }

@@ -166,9 +166,9 @@ fn settings(f: impl FnOnce(&mut RenderSettings)) -> RenderSettings {
 #[test]
 fn reference_classification_by_hand() {
     let s = settings(|s| {
-        s.window = [0.2, 0.6];
-        s.colormap = Colormap::Grayscale;
-        s.step_alpha = 0.4;
+        s.colour.window = [0.2, 0.6];
+        s.colour.colormap = Colormap::Grayscale;
+        s.colour.step_alpha = 0.4;
     });
     let k = Classifier::new(&s, [0.0, 1.0]);
     // v = 0.3 sits a quarter into the window: grey 0.25, not 0.3.
@@ -186,9 +186,9 @@ fn reference_classification_by_hand() {
     assert!((k.at(0.6).1 - 0.4).abs() < 1e-7, "the window's edges are inside it");
 
     let s = settings(|s| {
-        s.window = [0.2, 0.6];
-        s.multiplied_alpha = true;
-        s.step_alpha = 0.4;
+        s.colour.window = [0.2, 0.6];
+        s.colour.multiplied_alpha = true;
+        s.colour.step_alpha = 0.4;
     });
     assert!((Classifier::new(&s, [0.0, 1.0]).at(0.5).1 - 0.75 * 0.4).abs() < 1e-7);
 
@@ -202,8 +202,8 @@ fn reference_classification_by_hand() {
         opacity: vec![[100.0, 0.0], [300.0, 0.8]],
     };
     let s = settings(|s| {
-        s.window = [0.0, 1.0];
-        s.transfer_function = Some(tf.clone());
+        s.colour.window = [0.0, 1.0];
+        s.colour.transfer_function = Some(tf.clone());
     });
     let range = [-1000.0, 3000.0];
     let k = Classifier::new(&s, range);
@@ -216,8 +216,8 @@ fn reference_classification_by_hand() {
     assert!((k.at(v(2500.0)).1 - 0.8).abs() < 1e-6);
     // Without colour points, its colormap spans the window.
     let s = settings(|s| {
-        s.window = [0.25, 0.75];
-        s.transfer_function = Some(TransferFunction {
+        s.colour.window = [0.25, 0.75];
+        s.colour.transfer_function = Some(TransferFunction {
             colors: vec![],
             ..tf.clone()
         });
@@ -240,8 +240,8 @@ fn multiplied_alpha_scales_opacity_by_the_windowed_value() {
     let volume = constant_volume();
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, SIZE);
-    s.multiplied_alpha = true;
-    s.window = [0.25, 1.0];
+    s.colour.multiplied_alpha = true;
+    s.colour.window = [0.25, 1.0];
     let c = (0.5 - 0.25) / 0.75;
     let trace = reference.trace(&s, CENTRE, CENTRE);
     // The table is linear in c between neighbouring entries, so the lookup gives c × step alpha up to f32 rounding.
@@ -256,35 +256,35 @@ fn the_library_table_follows_the_reference_definition() {
     for map in Colormap::ALL {
         for multiplied in [false, true] {
             let s = settings(|s| {
-                s.colormap = map;
-                s.multiplied_alpha = multiplied;
-                s.window = [0.15, 0.7];
-                s.step_alpha = 0.35;
+                s.colour.colormap = map;
+                s.colour.multiplied_alpha = multiplied;
+                s.colour.window = [0.15, 0.7];
+                s.colour.step_alpha = 0.35;
             });
             cases.push((format!("{map} multiplied {multiplied}"), s, [0.0, 1.0]));
         }
     }
     for name in PRESET_NAMES {
         let s = settings(|s| {
-            s.transfer_function = Some(TransferFunction::preset(name).unwrap());
-            s.window = [0.0, 1.0];
+            s.colour.transfer_function = Some(TransferFunction::preset(name).unwrap());
+            s.colour.window = [0.0, 1.0];
         });
         cases.push((format!("preset {name}"), s, [-1024.0, 3071.0]));
     }
     for (what, s, range) in cases {
-        let table = tf::bake(&s.classification(), s.window, range);
+        let table = tf::bake(&s.classification(), s.colour.window, range);
         let k = Classifier::new(&s, range);
         // Steps the table cannot follow within one entry: the window's edges and a transfer function's points
         // that jump (qt-example's opacity steps from 0 to 0.1 over 0.0001).
-        let mut edges: Vec<f64> = s.window.map(f64::from).to_vec();
-        if let Some(tf) = &s.transfer_function {
+        let mut edges: Vec<f64> = s.colour.window.map(f64::from).to_vec();
+        if let Some(tf) = &s.colour.transfer_function {
             let to_v = |x: f32| match tf.units {
                 TfUnits::Normalized => f64::from(x),
                 TfUnits::Data => (f64::from(x) - range[0]) / (range[1] - range[0]),
             };
             edges.extend(tf.opacity.iter().map(|p| to_v(p[0])));
         }
-        let [lo, hi] = s.window.map(f64::from);
+        let [lo, hi] = s.colour.window.map(f64::from);
         for i in 0..=10_000 {
             let v = f64::from(i) / 10_000.0;
             // Outside the window nothing is classified (the table repeats the edges there for interpolation).

@@ -29,7 +29,7 @@ fn along_x(v: &Volume) -> RenderSettings {
     let mut s = RenderSettings::new(9, 9, v.extent());
     s.camera = Camera::looking_at(Vec3::new(-2.0, 0.0, 0.0), Vec3::ZERO);
     s.camera.ortho = true;
-    s.jitter = None;
+    s.sampling.jitter = None;
     s
 }
 
@@ -49,9 +49,9 @@ fn a_plane_ends_the_segment_exactly_and_bounds_the_extremum() {
     let ramp = |x_mm: f64| (x_mm + 15.5) / 31.0;
     let keep_low = plane(-Vec3::X, -5.0);
     let mut s = along_x(&v);
-    s.mode = CompositeMode::Mip;
-    s.window = [0.0, 1.0];
-    s.clip_plane = keep_low;
+    s.compositing.mode = CompositeMode::Mip;
+    s.colour.window = [0.0, 1.0];
+    s.cut.clip_plane = keep_low;
     let t = reference.trace(&s, 4, 4);
     let seg = t.segment.expect("a segment");
     assert!((seg.at(seg.t_end).x / world_per_mm - 5.0).abs() < 1e-9, "{seg:?}");
@@ -64,8 +64,8 @@ fn a_plane_ends_the_segment_exactly_and_bounds_the_extremum() {
         ramp(5.0)
     );
 
-    s.clip_plane = keep_low.map(ClipPlane::flipped);
-    s.mode = CompositeMode::MinIp;
+    s.cut.clip_plane = keep_low.map(ClipPlane::flipped);
+    s.compositing.mode = CompositeMode::MinIp;
     let t = reference.trace(&s, 4, 4);
     let seg = t.segment.expect("a segment");
     assert!((seg.at(seg.t_start).x / world_per_mm - 5.0).abs() < 1e-9, "{seg:?}");
@@ -91,11 +91,11 @@ fn iso_surfaces_are_cut_open_by_the_plane_and_capped_by_the_slab() {
     let reference = Reference::new(&v);
     let world_per_mm = 1.0 / 16.0;
     let mut s = along_x(&v);
-    s.mode = CompositeMode::Isosurface;
-    s.iso_value = 0.5;
+    s.compositing.mode = CompositeMode::Isosurface;
+    s.compositing.iso_value = 0.5;
 
     let mut capped = s.clone();
-    capped.set_slab(0, 0.75, 0.5);
+    capped.cut.set_slab(0, 0.75, 0.5);
     let t = reference.trace(&capped, 4, 4);
     let hit = t.hit.expect("the cap") / world_per_mm;
     let start = t.segment.expect("a segment").t_start / world_per_mm;
@@ -104,7 +104,7 @@ fn iso_surfaces_are_cut_open_by_the_plane_and_capped_by_the_slab() {
         "capped at the first sample: {hit} from {start}"
     );
 
-    s.clip_plane = plane(Vec3::X, 0.0);
+    s.cut.clip_plane = plane(Vec3::X, 0.0);
     let t = reference.trace(&s, 4, 4);
     let seg = t.segment.expect("a segment");
     assert!(seg.clipped_start);
@@ -122,15 +122,15 @@ fn planes_beyond_the_box() {
     let v = volume([12, 10, 8], |i, j, k| (i * j + k) as f32);
     let reference = Reference::new(&v);
     let mut s = RenderSettings::new(24, 20, v.extent());
-    s.step_alpha = 0.4;
+    s.colour.step_alpha = 0.4;
     let plain = reference.render(&s);
     for normal in [Vec3::new(0.3, -0.2, 0.9), Vec3::Y] {
-        s.clip_plane = plane(normal, -30.0);
+        s.cut.clip_plane = plane(normal, -30.0);
         assert!(
             reference.render(&s) == plain,
             "{normal}: keeping everything changed the frame"
         );
-        s.clip_plane = plane(normal, 30.0);
+        s.cut.clip_plane = plane(normal, 30.0);
         let bg = background_pixel(s.background);
         assert!(reference.render(&s).pixels().all(|p| *p == bg), "{normal}");
     }

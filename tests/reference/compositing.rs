@@ -60,7 +60,7 @@ fn opacity_correction_keeps_opacity_per_distance() {
     let at_one_voxel = 1.0 - keep().powi(16);
     for step_length in [0.25f32, 0.5, 0.7, 1.0, 1.3, 2.0, 4.0] {
         let mut s = head_on(&volume, SIZE);
-        s.step_length = step_length;
+        s.sampling.step_length = step_length;
         let trace = reference.trace(&s, CENTRE, CENTRE);
         let sl = f64::from(step_length);
         let n = expected_samples(16.0, sl);
@@ -80,10 +80,10 @@ fn early_termination_caps_opacity() {
     let volume = constant_volume();
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, SIZE);
-    s.step_alpha = 0.5;
+    s.colour.step_alpha = 0.5;
     // After sample j (from 1) the ray has crossed j − 0.5 voxels; without termination all 16.
     for (threshold, samples, depth) in [(0.9f32, 4, 3.5), (0.99, 8, 7.5), (0.5, 2, 1.5), (1.0, 16, 16.0)] {
-        s.early_termination = threshold;
+        s.compositing.early_termination = threshold;
         let trace = reference.trace(&s, CENTRE, CENTRE);
         assert_eq!(trace.samples, samples, "termination at {threshold}");
         assert_near("opacity", trace.alpha, 1.0 - 0.5f64.powf(depth), 1e-12);
@@ -98,12 +98,12 @@ fn density_mode_opacity_is_linear_in_density() {
     let volume = constant_volume();
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, SIZE);
-    s.mode = CompositeMode::Density;
+    s.compositing.mode = CompositeMode::Density;
     let a = f64::from(STEP_ALPHA);
     // One voxel, one sample: two half-voxel segments, each of opacity a·d/2.
-    s.set_slab(2, 0.5, 1.0 / 16.0);
+    s.cut.set_slab(2, 0.5, 1.0 / 16.0);
     for density in [0.25f32, 0.5, 1.0, 2.0, 4.0] {
-        s.density = density;
+        s.compositing.density = density;
         let trace = reference.trace(&s, CENTRE, CENTRE);
         assert_eq!(trace.samples, 1);
         let half = a * f64::from(density) * 0.5;
@@ -114,14 +114,14 @@ fn density_mode_opacity_is_linear_in_density() {
             1e-12,
         );
     }
-    s.density = 10.0;
+    s.compositing.density = 10.0;
     let trace = reference.trace(&s, CENTRE, CENTRE);
     assert_eq!(trace.alpha, 1.0, "clamped at 1");
     // The whole ray, at several step lengths: A = 1 − (1 − min(1, a·d·s))^n, not the emission model's correction.
-    s.slab_lo = Vec3::ZERO;
-    s.slab_hi = Vec3::ONE;
+    s.cut.slab_lo = Vec3::ZERO;
+    s.cut.slab_hi = Vec3::ONE;
     for (density, step_length) in [(0.5f32, 1.0f32), (1.0, 0.5), (2.0, 0.7), (2.0, 2.0)] {
-        (s.density, s.step_length) = (density, step_length);
+        (s.compositing.density, s.sampling.step_length) = (density, step_length);
         let sl = f64::from(step_length);
         let n = expected_samples(16.0, sl);
         let keep: f64 = segment_lengths(16.0, sl, 0.5)
@@ -137,8 +137,8 @@ fn density_mode_opacity_is_linear_in_density() {
             1e-12,
         );
     }
-    s.mode = CompositeMode::Emission;
-    (s.density, s.step_length) = (1.0, 0.5);
+    s.compositing.mode = CompositeMode::Emission;
+    (s.compositing.density, s.sampling.step_length) = (1.0, 0.5);
     assert_near(
         "emission differs",
         reference.trace(&s, CENTRE, CENTRE).alpha,
@@ -153,10 +153,10 @@ fn half_white_over_black_is_srgb_188() {
     let volume = constant_volume();
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, SIZE);
-    s.transfer_function = Some(constant_tf([1.0; 3], 0.5));
+    s.colour.transfer_function = Some(constant_tf([1.0; 3], 0.5));
     s.background = Vec3::ZERO;
     // One voxel of the box along the ray: one sample, whose opacity is the table's 0.5.
-    s.set_slab(2, 0.5, 1.0 / 16.0);
+    s.cut.set_slab(2, 0.5, 1.0 / 16.0);
     let trace = reference.trace(&s, CENTRE, CENTRE);
     assert_eq!(trace.samples, 1);
     assert_near("opacity", trace.alpha, 0.5, 1e-12);
@@ -168,7 +168,7 @@ fn half_white_over_black_is_srgb_188() {
     );
 
     // And 50% black over a white background: also half the light, also 188.
-    s.transfer_function = Some(constant_tf([0.0; 3], 0.5));
+    s.colour.transfer_function = Some(constant_tf([0.0; 3], 0.5));
     s.background = Vec3::ONE;
     assert_eq!(
         quantise(reference.trace(&s, CENTRE, CENTRE).output),
@@ -192,21 +192,21 @@ fn mip_minip_and_average_on_a_linear_ramp() {
     let volume = z_ramp();
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, SIZE);
-    s.transfer_function = Some(grey_ramp_tf(0.3));
+    s.colour.transfer_function = Some(grey_ramp_tf(0.3));
     let mut offsets = Vec::new();
     for jitter in [None, Some(0), Some(1), Some(7), Some(12345), Some(u32::MAX)] {
-        s.jitter = jitter;
+        s.sampling.jitter = jitter;
         let offset = jitter.map_or(0.5, |seed| jitter_offset(CENTRE, CENTRE, seed));
         offsets.push(offset);
         for window in [[0.0f32, 1.0], [0.2, 0.8], [0.25, 0.75], [0.3, 0.31]] {
-            s.window = window;
+            s.colour.window = window;
             let [lo, hi] = window.map(f64::from);
             let visible: Vec<f64> = ramp_samples(offset)
                 .into_iter()
                 .filter(|v| (lo..=hi).contains(v))
                 .collect();
             for mode in [CompositeMode::Mip, CompositeMode::MinIp, CompositeMode::Average] {
-                s.mode = mode;
+                s.compositing.mode = mode;
                 let what = format!("{mode:?}, jitter {jitter:?}, window {window:?}");
                 let trace = reference.trace(&s, CENTRE, CENTRE);
                 assert_eq!(trace.offset, offset, "{what}");
@@ -232,14 +232,14 @@ fn mip_minip_and_average_on_a_linear_ramp() {
         }
     }
     // Without jitter: v_k = (15 − k)/16, so MIP 15/16, MinIP 0, mean 7.5/16.
-    s.jitter = None;
-    s.window = [0.0, 1.0];
+    s.sampling.jitter = None;
+    s.colour.window = [0.0, 1.0];
     for (mode, m) in [
         (CompositeMode::Mip, 15.0 / 16.0),
         (CompositeMode::MinIp, 0.0),
         (CompositeMode::Average, 7.5 / 16.0),
     ] {
-        s.mode = mode;
+        s.compositing.mode = mode;
         assert_near(
             &format!("{mode:?}"),
             reference.trace(&s, CENTRE, CENTRE).value.unwrap(),
@@ -252,6 +252,6 @@ fn mip_minip_and_average_on_a_linear_ramp() {
     assert_eq!(offsets.len(), 6, "every seed moves the samples: {offsets:?}");
     // NaN samples are never visible.
     let nan = volume_from(|_, _, _| f32::NAN);
-    s.mode = CompositeMode::Mip;
+    s.compositing.mode = CompositeMode::Mip;
     assert_all_background(&render_reference(&nan, &s), "MIP of NaN");
 }

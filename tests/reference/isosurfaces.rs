@@ -23,15 +23,20 @@ fn isosurface_hits_the_analytic_crossing() {
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, SIZE);
     s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO);
-    s.mode = CompositeMode::Isosurface;
-    s.transfer_function = Some(grey_ramp_tf(0.3));
+    s.compositing.mode = CompositeMode::Isosurface;
+    s.colour.transfer_function = Some(grey_ramp_tf(0.3));
     // The surface coloured by the classification (the default is a light neutral, below).
-    s.iso_color = None;
+    s.compositing.iso_color = None;
     for step_length in [0.5f32, 1.0, 1.7, 3.0] {
         for jitter in [None, Some(3), Some(99)] {
             for iso in [0.1f32, 0.37, 0.5, 0.8] {
                 for window in [[0.0f32, 1.0], [0.95, 1.0]] {
-                    (s.step_length, s.jitter, s.iso_value, s.window) = (step_length, jitter, iso, window);
+                    (
+                        s.sampling.step_length,
+                        s.sampling.jitter,
+                        s.compositing.iso_value,
+                        s.colour.window,
+                    ) = (step_length, jitter, iso, window);
                     let what = format!("iso {iso}, step {step_length}, jitter {jitter:?}, window {window:?}");
                     let h = f64::from(step_length) / 16.0;
                     let trace = reference.trace(&s, CENTRE, CENTRE);
@@ -51,8 +56,8 @@ fn isosurface_hits_the_analytic_crossing() {
         }
     }
     // The default material: a light neutral, whatever the classification says.
-    s.iso_color = Some(volcast::scene::lighting::NEUTRAL);
-    s.iso_value = 0.37;
+    s.compositing.iso_color = Some(volcast::scene::lighting::NEUTRAL);
+    s.compositing.iso_value = 0.37;
     let trace = reference.trace(&s, CENTRE, CENTRE);
     assert_near3(
         "neutral",
@@ -61,24 +66,24 @@ fn isosurface_hits_the_analytic_crossing() {
         1e-6,
     );
     // The first sample already at or above the value: the hit is that sample, exactly.
-    s.iso_value = 0.0;
+    s.compositing.iso_value = 0.0;
     for jitter in [None, Some(5)] {
-        s.jitter = jitter;
+        s.sampling.jitter = jitter;
         let trace = reference.trace(&s, CENTRE, CENTRE);
         assert_eq!(trace.samples, 1);
         assert_near(
             "first sample",
             trace.hit.unwrap(),
-            2.5 + trace.offset * f64::from(s.step_length) / 16.0,
+            2.5 + trace.offset * f64::from(s.sampling.step_length) / 16.0,
             1e-12,
         );
     }
     // Above every value, or NaN everywhere: no hit, the background.
-    (s.iso_value, s.step_length, s.jitter) = (0.95, 1.0, None);
+    (s.compositing.iso_value, s.sampling.step_length, s.sampling.jitter) = (0.95, 1.0, None);
     let trace = reference.trace(&s, CENTRE, CENTRE);
     assert_eq!((trace.hit, trace.samples), (None, 16));
     assert_all_background(&render_reference(&volume, &s), "iso above the data");
-    s.iso_value = 0.0;
+    s.compositing.iso_value = 0.0;
     assert_all_background(&render_reference(&volume_from(|_, _, _| f32::NAN), &s), "iso in NaN");
 }
 
@@ -92,11 +97,15 @@ fn layered_isosurfaces_and_a_directional_light_follow_the_closed_form() {
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, SIZE);
     s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO);
-    s.mode = CompositeMode::Isosurface;
-    s.jitter = None;
+    s.compositing.mode = CompositeMode::Isosurface;
+    s.sampling.jitter = None;
     let red = Vec3::new(1.0, 0.0, 0.0);
-    (s.iso_value, s.iso_color, s.iso_opacity) = (0.6, Some(Vec3::ONE), 1.0);
-    s.extra_isosurfaces = vec![volcast::scene::lighting::IsoSurface {
+    (
+        s.compositing.iso_value,
+        s.compositing.iso_color,
+        s.compositing.iso_opacity,
+    ) = (0.6, Some(Vec3::ONE), 1.0);
+    s.compositing.extra_isosurfaces = vec![volcast::scene::lighting::IsoSurface {
         value: 0.3,
         color: Some(red),
         opacity: 0.4,
@@ -120,7 +129,7 @@ fn layered_isosurfaces_and_a_directional_light_follow_the_closed_form() {
     assert_near3("white in front", trace.color, lit(DVec3::ONE), 1e-6);
     // Made translucent, white lets the rest through: the ray starts inside both (white, the innermost, first),
     // then leaves through white and red again as the values fall.
-    s.iso_opacity = 0.5;
+    s.compositing.iso_opacity = 0.5;
     let trace = reference.trace(&s, CENTRE, CENTRE);
     assert_eq!(trace.composited, 4);
     let (mut c, mut a) = (DVec3::ZERO, 0.0);
@@ -137,11 +146,11 @@ fn layered_isosurfaces_and_a_directional_light_follow_the_closed_form() {
     assert_near("opacity", trace.alpha, a, 1e-7);
     // A directional light at θ = 40° from the normal (the normal faces the eye at −z), coloured and brighter.
     s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, -3.0), Vec3::ZERO);
-    s.extra_isosurfaces.clear();
-    s.iso_opacity = 1.0;
+    s.compositing.extra_isosurfaces.clear();
+    s.compositing.iso_opacity = 1.0;
     let theta = 40f64.to_radians();
     let colour = Vec3::new(1.0, 0.5, 0.25);
-    s.light = volcast::scene::lighting::Light {
+    s.lighting.light = volcast::scene::lighting::Light {
         direction: Some(Vec3::new(theta.sin() as f32, 0.0, -theta.cos() as f32)),
         color: colour,
         intensity: 2.0,
@@ -151,7 +160,7 @@ fn layered_isosurfaces_and_a_directional_light_follow_the_closed_form() {
     let expected = DVec3::ONE * (DVec3::splat(0.2) + 0.7 * theta.cos() * c) + 0.3 * (theta / 2.0).cos().powf(20.0) * c;
     assert_near3("directional light", trace.color, expected, 1e-5);
     // Behind the surface the light leaves only the ambient term.
-    s.light.direction = Some(Vec3::new(0.0, 0.0, 1.0));
+    s.lighting.light.direction = Some(Vec3::new(0.0, 0.0, 1.0));
     let trace = reference.trace(&s, CENTRE, CENTRE);
     assert_near3("back-lit", trace.color, DVec3::splat(0.2), 1e-7);
 }

@@ -30,11 +30,11 @@ fn volume(value: impl Fn(u32, u32, u32) -> f32) -> Volume {
 /// A lit frame with the simple model: opacity `a` per voxel everywhere in the window [0.25, 1].
 fn frame(v: &Volume, a: f32) -> RenderSettings {
     let mut s = RenderSettings::new(8, 8, v.extent());
-    s.shading = Some(Shading::default());
-    s.window = [0.25, 1.0];
-    s.step_alpha = a;
-    (s.shadows, s.ambient_occlusion) = (true, true);
-    s.light = Light {
+    s.lighting.shading = Some(Shading::default());
+    s.colour.window = [0.25, 1.0];
+    s.colour.step_alpha = a;
+    (s.lighting.shadows, s.lighting.ambient_occlusion) = (true, true);
+    s.lighting.light = Light {
         direction: Some(Vec3::Z),
         ..Light::default()
     };
@@ -98,7 +98,7 @@ fn a_slab_casts_its_shadow_below_and_not_above() {
     }
     // A light from the side (+x) leaves the region below the slab lit where no slab lies between.
     let mut side = s.clone();
-    side.light.direction = Some(Vec3::X);
+    side.lighting.light.direction = Some(Vec3::X);
     let g = grid(&v, &side);
     assert!((g.t_cell([8, 8, 3]) - 1.0).abs() < 1e-12);
     assert!(g.t_cell([0, 8, 10]) < 1e-3, "across the whole slab from the side");

@@ -20,7 +20,7 @@ fn slab_restricts_the_segment() {
     let volume = constant_volume();
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, SIZE);
-    s.set_slab(2, 0.25, 0.5);
+    s.cut.set_slab(2, 0.25, 0.5);
     let trace = reference.trace(&s, CENTRE, CENTRE);
     let segment = trace.segment.expect("the slab still holds the centre ray");
     assert_near("segment start at the slab's top", segment.t_start, 3.0, 1e-12);
@@ -30,7 +30,7 @@ fn slab_restricts_the_segment() {
 
     // A slab beside the centre ray leaves it without a segment.
     let mut s = head_on(&volume, SIZE);
-    s.set_slab(0, 0.9, 0.2);
+    s.cut.set_slab(0, 0.9, 0.2);
     let trace = reference.trace(&s, CENTRE, CENTRE);
     assert!(trace.segment.is_none());
     assert_eq!(trace.samples, 0);
@@ -85,7 +85,7 @@ fn image_orientation_follows_the_camera() {
     let volume = volume_from(|x, _, z| if x < N / 2 && z >= N / 2 { 1.0 } else { 0.0 });
     let mut s = RenderSettings::new(33, 33, volume.extent());
     s.camera = Camera::orbit(0.0, 0.0, 3.0, Vec3::ZERO);
-    s.window = [0.25, 1.0];
+    s.colour.window = [0.25, 1.0];
     s.background = BACKGROUND;
     let image = render_reference(&volume, &s);
     let bg = background_pixel();
@@ -111,7 +111,7 @@ fn silhouette_matches_the_camera_projection() {
     let (width, height) = (64u32, 32u32);
     let mut s = head_on(&volume, SIZE);
     (s.width, s.height) = (width, height);
-    s.step_alpha = 0.5;
+    s.colour.step_alpha = 0.5;
     let image = render_reference(&volume, &s);
 
     let clip_from_world = s.camera.projection(width as f32 / height as f32) * s.camera.view();

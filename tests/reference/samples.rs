@@ -18,13 +18,13 @@ use volcast::transfer::function::TransferFunction;
 fn window_excluding_every_value_gives_the_background() {
     let volume = constant_volume();
     let mut s = head_on(&volume, SIZE);
-    s.window = [0.6, 1.0];
+    s.colour.window = [0.6, 1.0];
     assert_all_background(&render_reference(&volume, &s), "window above the value");
-    s.window = [0.0, 0.4];
+    s.colour.window = [0.0, 0.4];
     assert_all_background(&render_reference(&volume, &s), "window below the value");
     // A window whose edge is the value itself still includes it, at full opacity (the rule excludes only v < lo
     // or v > hi).
-    s.window = [0.5, 1.0];
+    s.colour.window = [0.5, 1.0];
     let trace = Reference::new(&volume).trace(&s, CENTRE, CENTRE);
     assert_eq!(trace.composited, 17);
     let a = f64::from(STEP_ALPHA);
@@ -67,11 +67,11 @@ fn jittered_mean_converges_to_the_integral() {
     let volume = volume_with([N; 3], [1.0; 3], [0.0, 16.0], |_, _, z| (15 - z) as f32);
     let reference = Reference::new(&volume);
     let mut s = head_on(&volume, 1);
-    s.transfer_function = Some(TransferFunction {
+    s.colour.transfer_function = Some(TransferFunction {
         opacity: vec![[0.0, 0.0], [1.0, 0.3]],
         ..constant_tf([1.0; 3], 0.0)
     });
-    s.step_length = 1.3;
+    s.sampling.step_length = 1.3;
     let u_end: f64 = 0.3 * 15.0 / 16.0;
     let integral = 16.0 / 0.3 * ((1.0 - u_end) * (1.0 - u_end).ln() + u_end) - 0.5 * (1.0 - u_end).ln();
 
@@ -83,7 +83,7 @@ fn jittered_mean_converges_to_the_integral() {
     let seeds = 1024;
     let (mut sum, mut offset_sum) = (0.0, 0.0);
     for seed in 0..seeds {
-        s.jitter = Some(seed);
+        s.sampling.jitter = Some(seed);
         let trace = reference.trace(&s, 0, 0);
         let o = jitter_offset(0, 0, seed);
         assert_eq!(trace.offset, o);

@@ -71,11 +71,11 @@ pub fn z_ramp() -> Volume {
 pub fn head_on(volume: &Volume, size: u32) -> RenderSettings {
     let mut s = RenderSettings::new(size, size, volume.extent());
     s.camera = Camera::looking_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO);
-    s.window = [0.0, 1.0];
-    s.step_alpha = STEP_ALPHA;
-    s.early_termination = 1.0;
+    s.colour.window = [0.0, 1.0];
+    s.colour.step_alpha = STEP_ALPHA;
+    s.compositing.early_termination = 1.0;
     s.background = BACKGROUND;
-    s.jitter = None;
+    s.sampling.jitter = None;
     s
 }
 

@@ -26,9 +26,9 @@ fn planar_ramp() -> Volume {
 fn planar_view(volume: &Volume, eye: Vec3) -> RenderSettings {
     let mut s = head_on(volume, SIZE);
     s.camera = Camera::looking_at(eye, Vec3::ZERO);
-    s.transfer_function = Some(constant_tf([0.8, 0.5, 0.3], STEP_ALPHA));
+    s.colour.transfer_function = Some(constant_tf([0.8, 0.5, 0.3], STEP_ALPHA));
     for axis in 0..3 {
-        s.set_slab(axis, 0.5, 0.75);
+        s.cut.set_slab(axis, 0.5, 0.75);
     }
     s
 }
@@ -60,19 +60,22 @@ fn shading_on_a_planar_ramp() {
         (Vec3::new(0.0, -3.0, 0.0), -DVec3::Y),
     ] {
         let mut s = planar_view(&volume, eye);
-        s.shading = Some(shading);
+        s.lighting.shading = Some(shading);
         let trace = reference.trace(&s, CENTRE, CENTRE);
         let cos = world_gradient.normalize().dot(view).abs();
         let lit = rgb * (0.1 + 0.6 * cos) + DVec3::splat(0.4 * cos.powi(8));
         let seg = trace.segment.expect("hit");
-        let n = expected_samples(seg.length() / reference.step_world(&s) * f64::from(s.step_length), 1.0);
+        let n = expected_samples(
+            seg.length() / reference.step_world(&s) * f64::from(s.sampling.step_length),
+            1.0,
+        );
         assert!(n >= 8, "{n} samples");
         assert_eq!(trace.samples, n);
         let alpha = 1.0 - keep().powi(n as i32);
         assert_near(&format!("opacity from {eye}"), trace.alpha, alpha, 1e-12);
         assert_near3(&format!("shaded colour from {eye}"), trace.color, lit * alpha, 1e-6);
         // Without `shading` the colour is unlit.
-        s.shading = None;
+        s.lighting.shading = None;
         assert_near3("unlit", reference.trace(&s, CENTRE, CENTRE).color, rgb * alpha, 1e-6);
     }
     // The gradient itself, in value per voxel.
@@ -82,7 +85,7 @@ fn shading_on_a_planar_ramp() {
     // A constant volume has no gradient: the colour is kept.
     let constant = constant_volume();
     let mut s = planar_view(&constant, Vec3::new(0.0, 0.0, 3.0));
-    s.shading = Some(shading);
+    s.lighting.shading = Some(shading);
     let trace = Reference::new(&constant).trace(&s, CENTRE, CENTRE);
     assert_near3("zero gradient keeps rgb", trace.color, rgb * trace.alpha, 1e-6);
     // A NaN among the six samples zeroes the gradient.
@@ -111,8 +114,8 @@ fn gradient_opacity_scales_alpha_by_the_gradient() {
         assert_near("scale", scale, nominal, 1e-6);
         for shading in [None, Some(Shading::default())] {
             let mut s = planar_view(&volume, Vec3::new(0.0, 0.0, 3.0));
-            s.gradient_opacity = Some(r);
-            s.shading = shading;
+            s.lighting.gradient_opacity = Some(r);
+            s.lighting.shading = shading;
             let trace = reference.trace(&s, CENTRE, CENTRE);
             // The extinction is scaled: (1 − a)^scale per voxel, over the segment's 32 voxels per unit.
             let voxels = trace.segment.expect("hit").length() * 32.0;
@@ -128,6 +131,6 @@ fn gradient_opacity_scales_alpha_by_the_gradient() {
     // No gradient, no opacity.
     let constant = constant_volume();
     let mut s = planar_view(&constant, Vec3::new(0.0, 0.0, 3.0));
-    s.gradient_opacity = Some(0.01);
+    s.lighting.gradient_opacity = Some(0.01);
     assert_eq!(Reference::new(&constant).trace(&s, CENTRE, CENTRE).alpha, 0.0);
 }

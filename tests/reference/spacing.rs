@@ -10,11 +10,11 @@ use volcast::scene::settings::RenderSettings;
 fn the_marched_size_rounds_up_and_a_sample_count_is_never_spaced() {
     let mut s = RenderSettings::new(77, 53, glam::Vec3::ONE);
     assert_eq!(marched(&s), (77, 53));
-    s.ray_spacing = 2;
+    s.sampling.ray_spacing = 2;
     assert_eq!(marched(&s), (39, 27));
-    s.ray_spacing = 4;
+    s.sampling.ray_spacing = 4;
     assert_eq!(marched(&s), (20, 14));
-    s.count_samples = true;
+    s.pipeline.count_samples = true;
     assert_eq!(marched(&s), (77, 53));
 }
 

@@ -54,7 +54,7 @@ fn plane_pixels(img: &RgbaImage, r: egui::Rect) -> usize {
 }
 
 fn plane(state: &ViewState) -> ClipPlane {
-    state.settings.clip_plane.expect("a clipping plane")
+    state.settings.cut.clip_plane.expect("a clipping plane")
 }
 
 #[test]
@@ -142,7 +142,7 @@ fn the_clip_plane_is_dragged_flipped_and_drawn_and_f9_records() {
     let worst = f12.worst();
     assert!(worst <= 1, "render --state differs from F12 by up to {worst}/255");
     let mut unclipped = ViewState::from_json(&std::fs::read_to_string(json).unwrap(), "F12's JSON").unwrap();
-    unclipped.settings.clip_plane = None;
+    unclipped.settings.cut.clip_plane = None;
     let unclipped_json = dir.join("unclipped.json");
     std::fs::write(&unclipped_json, unclipped.to_json()).unwrap();
     let whole = render_state(&dir, &unclipped_json);

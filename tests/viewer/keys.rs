@@ -33,8 +33,8 @@ fn shortcuts_keep_working_after_tab_hides_the_panel() {
     // Shortcuts still work with the panel hidden: S shades.
     let (_, shaded) = shot(&["s"]);
     assert_ne!(
-        shaded.shading.is_some(),
-        s0.shading.is_some(),
+        shaded.lighting.shading.is_some(),
+        s0.lighting.shading.is_some(),
         "S after Tab toggles shading"
     );
     // And Tab brings the panel back.
@@ -43,8 +43,8 @@ fn shortcuts_keep_working_after_tab_hides_the_panel() {
     // With the panel back, keys still reach the shortcuts (no text field took the focus).
     let (_, unshaded) = shot(&["s"]);
     assert_eq!(
-        unshaded.shading.is_some(),
-        s0.shading.is_some(),
+        unshaded.lighting.shading.is_some(),
+        s0.lighting.shading.is_some(),
         "S with the panel back"
     );
 

@@ -35,7 +35,7 @@ fn dragging_the_light_gizmo_places_a_directional_light() {
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (shot, before) = read_screenshot(&dir, &saved);
     assert!(
-        before.shading.is_some() && before.light.direction.is_none(),
+        before.lighting.shading.is_some() && before.lighting.light.direction.is_none(),
         "S: shaded under the headlight"
     );
     let (w, h) = shot.dimensions();
@@ -65,7 +65,11 @@ fn dragging_the_light_gizmo_places_a_directional_light() {
     );
     let rotation = OrbitView::from_camera(&after.camera).rotation;
     let expected = light_gizmo::world_direction(Vec2::new(end.x.round(), end.y.round()), c, rotation);
-    let got = after.light.direction.expect("a directional light after the drag");
+    let got = after
+        .lighting
+        .light
+        .direction
+        .expect("a directional light after the drag");
     assert!(
         got.normalize().dot(expected) > 0.995,
         "light {got} where the pointer ended, {expected}"
@@ -83,7 +87,7 @@ fn dragging_the_light_gizmo_places_a_directional_light() {
     type_keys(&x.display, window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (_, reset) = read_screenshot(&dir, &saved);
-    assert!(reset.light.direction.is_none(), "double click: the headlight");
+    assert!(reset.lighting.light.direction.is_none(), "double click: the headlight");
 
     viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);

@@ -29,14 +29,14 @@ fn draft_on_a_soft_classification_shows_its_spaced_rays_as_rendered_headless() {
     type_keys(d, w, &["q", "q", "Tab", "F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (shot, settings) = read_screenshot(&dir, &saved);
-    assert!(settings.multiplied_alpha, "the click turned multiplied alpha on");
+    assert!(settings.colour.multiplied_alpha, "the click turned multiplied alpha on");
     assert_eq!(
-        settings.step_length,
+        settings.sampling.step_length,
         Quality::Draft.step_length(&settings, helix.range),
         "Q twice: normal → fast → draft"
     );
     assert_eq!(
-        settings.ray_spacing, 2,
+        settings.sampling.ray_spacing, 2,
         "draft spaces its rays on a soft classification"
     );
     let (width, height) = shot.dimensions();
@@ -49,7 +49,7 @@ fn draft_on_a_soft_classification_shows_its_spaced_rays_as_rendered_headless() {
     headless.set_volume(&gpu, &helix).unwrap();
     let spaced = headless.render(&gpu, &settings).expect("render").image;
     let mut every_pixel = settings.clone();
-    every_pixel.ray_spacing = 1;
+    every_pixel.sampling.ray_spacing = 1;
     let unspaced = headless.render(&gpu, &every_pixel).expect("render").image;
     common::gpu::close(gpu, headless);
 

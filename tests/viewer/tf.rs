@@ -20,7 +20,12 @@ use volcast::transfer::function::TransferFunction;
 use volcast::viewer::model::tf::to_normalized;
 
 fn tf_of(state: &ViewState) -> TransferFunction {
-    state.settings.transfer_function.clone().expect("a transfer function")
+    state
+        .settings
+        .colour
+        .transfer_function
+        .clone()
+        .expect("a transfer function")
 }
 
 #[test]

@@ -39,7 +39,7 @@ pub(crate) fn volume_only(settings: &RenderSettings, extent: glam::Vec3, view: e
         volcast::viewer::widgets::screen::project(view_proj, (t - glam::Vec3::splat(0.5)) * extent, view)
     });
     assert_eq!(
-        (settings.slab_lo, settings.slab_hi),
+        (settings.cut.slab_lo, settings.cut.slab_hi),
         (glam::Vec3::ZERO, glam::Vec3::ONE),
         "no slab box is drawn"
     );
@@ -210,7 +210,7 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
     // level's step (resolved from the transfer function, as `render --quality fast` resolves it).
     let normal = Quality::Normal.step_length(&settings_panel, helix.range);
     assert_eq!(
-        settings_panel.step_length, normal,
+        settings_panel.sampling.step_length, normal,
         "the viewer's default quality is normal"
     );
     type_keys(&x.display, window, &["q", "F12"]);
@@ -218,15 +218,15 @@ fn viewer_window_shows_the_headless_render_and_survives_resizes() {
     let (_, settings_fast) = read_screenshot(&dir, &saved);
     let fast = Quality::Fast.step_length(&settings_fast, helix.range);
     assert!(fast > normal, "fast {fast} against normal {normal}");
-    assert_eq!(settings_fast.step_length, fast, "Q: normal → fast");
+    assert_eq!(settings_fast.sampling.step_length, fast, "Q: normal → fast");
     // S shades, with gradients from the texture (`render --gradients auto`): the window must show what the
     // headless renderer makes of those settings. S again turns shading off for the rest.
     type_keys(&x.display, window, &["s", "F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (shot_shaded, settings_shaded) = read_screenshot(&dir, &saved);
-    assert!(settings_shaded.shading.is_some(), "S: shading on");
+    assert!(settings_shaded.lighting.shading.is_some(), "S: shading on");
     assert!(
-        settings_shaded.gradient_texture,
+        settings_shaded.lighting.gradient_texture,
         "shaded frames take the gradient texture"
     );
     let mask_shaded = volume_only(&settings_shaded, helix.extent(), view_panel);

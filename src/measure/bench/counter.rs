@@ -231,28 +231,31 @@ impl SampleCounter {
         };
         let u = FrameUniforms::new(s, &info);
         let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
-        let lut = tf::bake(&s.classification(), s.window, self.range);
+        let lut = tf::bake(&s.classification(), s.colour.window, self.range);
         RayFrame {
             eye: v3(u.eye_tex),
             forward: v3(u.ray_forward),
             right: v3(u.ray_right),
             down: v3(u.ray_down),
             near: s.camera.near,
-            slab_lo: s.slab_lo,
-            slab_hi: s.slab_hi,
+            slab_lo: s.cut.slab_lo,
+            slab_hi: s.cut.slab_hi,
             to_world: Mat3::from_mat4(Mat4::from_cols_array(&u.tex_to_world)),
             h: u.extent[3],
             max_steps: u.viewport[2] as u64,
             viewport: [s.marched_size().0 as f32, s.marched_size().1 as f32],
-            window: s.window,
+            window: s.colour.window,
             classes: s.looks_up_bricks().then(|| self.bricks.classify(&lut, s)),
-            integrals: preintegrate::integral_table(&lut, (s.mode == CompositeMode::Density).then_some(s.density)),
-            step_length: s.step_length,
-            mode: s.mode,
+            integrals: preintegrate::integral_table(
+                &lut,
+                (s.compositing.mode == CompositeMode::Density).then_some(s.compositing.density),
+            ),
+            step_length: s.sampling.step_length,
+            mode: s.compositing.mode,
             surfaces: s.isosurfaces().iter().map(|x| (x.value, x.opacity)).collect(),
-            gradients: s.shading.is_some() || s.gradient_opacity.is_some(),
-            jitter: s.jitter,
-            early_termination: s.early_termination,
+            gradients: s.lighting.shading.is_some() || s.lighting.gradient_opacity.is_some(),
+            jitter: s.sampling.jitter,
+            early_termination: s.compositing.early_termination,
         }
     }
 
@@ -391,31 +394,31 @@ mod tests {
         let v = volume::builtin("box", Some(64)).unwrap();
         let mut s = RenderSettings::new(1, 1, v.extent());
         s.camera = Camera::orbit(0.0, 0.0, 3.0, Vec3::ZERO);
-        s.step_alpha = 0.0;
-        s.skip_empty = false;
+        s.colour.step_alpha = 0.0;
+        s.sampling.skip_empty = false;
         let counter = SampleCounter::new(&v);
         let c = counter.count(&s);
         assert_eq!(c.segment_per_pixel, 64.0);
         assert_eq!(c.taken_per_pixel, 66.0, "nothing is opaque, so no ray ends early");
-        s.skip_empty = true;
+        s.sampling.skip_empty = true;
         let c = counter.count(&s);
         assert_eq!(c.segment_per_pixel, 64.0);
         assert_eq!(
             c.taken_per_pixel, 2.0,
             "nothing is visible: the start and the first sample (its segment), then a leap over every brick"
         );
-        s.step_alpha = 1.0;
-        s.window = [0.0, 1.0];
+        s.colour.step_alpha = 1.0;
+        s.colour.window = [0.0, 1.0];
         let c = counter.count(&s);
         assert_eq!(c.taken_per_pixel, 2.0, "an opaque first segment ends the ray");
         // A faint constant box at 0.5-voxel steps: 128 samples, every fourth taken where bricks stride 4
         // (extinction 0.0202 × 0.5 × 4 ≤ 0.05, no spread), plus the ray's start and end.
-        s.step_alpha = 0.02;
-        s.step_length = 0.5;
-        s.max_stride = 4;
+        s.colour.step_alpha = 0.02;
+        s.sampling.step_length = 0.5;
+        s.sampling.max_stride = 4;
         let c = counter.count(&s);
         assert_eq!((c.segment_per_pixel, c.taken_per_pixel), (128.0, 34.0));
-        s.max_stride = 1;
+        s.sampling.max_stride = 1;
         assert_eq!(counter.count(&s).taken_per_pixel, 130.0);
     }
 }

@@ -278,7 +278,7 @@ impl Bench<'_> {
         let (gpu, name) = (self.gpu, loaded.scene.name);
         shading.apply(&mut s);
         self.opts.gradients.apply(&mut s, loaded.volume.voxel_count() as u64);
-        if s.gradient_texture {
+        if s.lighting.gradient_texture {
             self.headless.renderer.enable_gradient_texture(gpu, &loaded.volume)?;
         }
         (self.log)(&format!(
@@ -310,11 +310,9 @@ impl Bench<'_> {
     /// The frames timed against one converged image: `s` at each `--quality`, or at the `--step-length` forced.
     fn variants(&self, s: &RenderSettings, range: [f64; 2]) -> Vec<(String, RenderSettings)> {
         if let Some(step) = self.opts.step_length {
-            let forced = RenderSettings {
-                step_length: step,
-                max_stride: 1,
-                ..s.clone()
-            };
+            let mut forced = s.clone();
+            forced.sampling.step_length = step;
+            forced.sampling.max_stride = 1;
             return vec![(format!("step {step}"), forced)];
         }
         let apply = |q: Quality| {
@@ -422,8 +420,8 @@ impl Bench<'_> {
             fraction_of_raw: loaded.raw_rate.map(|r| effective / r),
             gpu_allocated_bytes: allocated,
             load: load_average(),
-            step_length: s.step_length,
-            max_stride: s.max_stride,
+            step_length: s.sampling.step_length,
+            max_stride: s.sampling.max_stride,
             light_grid_ms: reference.light_grid_ms,
             error: Fidelity::of(
                 &frames.last.ok_or(GpuError::Lost("no frames timed"))?,

@@ -342,11 +342,11 @@ impl Method {
     }
 
     pub(super) fn apply(self, s: &mut RenderSettings) {
-        s.ray_setup = match self {
+        s.pipeline.ray_setup = match self {
             Method::Faces => RaySetup::Faces,
             Method::Analytic | Method::Compute => RaySetup::Analytic,
         };
-        s.compute = self == Method::Compute;
+        s.pipeline.compute = self == Method::Compute;
     }
 }
 

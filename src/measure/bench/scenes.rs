@@ -44,11 +44,11 @@ impl Shading {
     pub const ALL: [Shading; 3] = [Shading::Off, Shading::On, Shading::Shadows];
 
     pub fn apply(self, s: &mut RenderSettings) {
-        s.shading = match self {
+        s.lighting.shading = match self {
             Shading::Off => None,
             Shading::On | Shading::Shadows => Some(settings::Shading::default()),
         };
-        (s.shadows, s.ambient_occlusion) = (self == Shading::Shadows, self == Shading::Shadows);
+        (s.lighting.shadows, s.lighting.ambient_occlusion) = (self == Shading::Shadows, self == Shading::Shadows);
     }
 
     pub fn name(self) -> &'static str {
@@ -98,8 +98,8 @@ pub fn scenes() -> Vec<Scene> {
                 size: None,
             },
             configure: |s, _| {
-                s.window = [0.0, 1.0];
-                s.step_alpha = 0.02;
+                s.colour.window = [0.0, 1.0];
+                s.colour.step_alpha = 0.02;
             },
             sizes: FULL_SIZES,
             shadings: SHADINGS,
@@ -113,10 +113,10 @@ pub fn scenes() -> Vec<Scene> {
                 spacing: [0.957031, 0.957031, 1.5],
             },
             configure: |s, v| {
-                s.window = [0.33, 0.9];
-                s.colormap = Colormap::Plasma;
-                s.step_alpha = 0.6;
-                s.shading_fade = 0.05;
+                s.colour.window = [0.33, 0.9];
+                s.colour.colormap = Colormap::Plasma;
+                s.colour.step_alpha = 0.6;
+                s.lighting.shading_fade = 0.05;
                 let d = Camera::fit_distance(v.extent().length() * 0.5, s.camera.fov_y_deg);
                 s.camera = Camera::orbit(25.0, 10.0, d, Vec3::ZERO);
             },
@@ -131,9 +131,9 @@ pub fn scenes() -> Vec<Scene> {
                 spacing: [1.0, 1.0, 1.0],
             },
             configure: |s, _| {
-                s.window = [0.2, 1.0];
-                s.colormap = Colormap::Grayscale;
-                s.step_alpha = 0.05;
+                s.colour.window = [0.2, 1.0];
+                s.colour.colormap = Colormap::Grayscale;
+                s.colour.step_alpha = 0.05;
             },
             sizes: FULL_SIZES,
             shadings: SHADINGS,
@@ -176,10 +176,10 @@ pub fn quick_scenes() -> Vec<Scene> {
 ///   `ResetCamera` fits the sphere around the *points'* bounding box ((dims − 1)·spacing) at its default 30° view
 ///   angle; `Zoom(1.45)` then narrows the angle to 30°/1.45.
 pub fn configure_vtk_helix(s: &mut RenderSettings, v: &Volume) {
-    s.colormap = Colormap::Viridis;
-    s.window = [0.08, 1.0];
-    s.multiplied_alpha = true;
-    s.step_alpha = 0.2;
+    s.colour.colormap = Colormap::Viridis;
+    s.colour.window = [0.08, 1.0];
+    s.colour.multiplied_alpha = true;
+    s.colour.step_alpha = 0.2;
     s.background = Vec3::ZERO;
     let spacing = v.spacing();
     let world_per_unit = v.extent().x / (v.dims[0] as f32 * spacing[0]);

@@ -141,7 +141,7 @@ impl Running {
         // After a preview, the volume replaces it in the view the user has: the camera and clipping plane, and the
         // transfer function if they changed it (else the volume's own automatic one, from its full histogram).
         let after_preview = self.loader.preview_tf.is_some();
-        let edited = self.loader.preview_edited(&self.model.look.transfer_function);
+        let edited = self.loader.preview_edited(&self.model.look.colour.transfer_function);
         let before = after_preview.then(|| Snapshot::of(&self.model));
         let from_file = from_file && !edited;
         let installed = self.install((volume, histogram), from_file);
@@ -157,8 +157,11 @@ impl Running {
         if let Some(mut view) = before {
             if !edited {
                 let look = &self.model.look;
-                (view.transfer_function, view.window, view.colormap) =
-                    (look.transfer_function.clone(), look.window, look.colormap);
+                (view.transfer_function, view.window, view.colormap) = (
+                    look.colour.transfer_function.clone(),
+                    look.colour.window,
+                    look.colour.colormap,
+                );
             }
             view.restore(&mut self.model);
         }
@@ -202,7 +205,7 @@ impl Running {
             eprintln!("could not show a preview of {label}: {e}");
             return Ok(());
         }
-        self.loader.preview_tf = Some(self.model.look.transfer_function.clone());
+        self.loader.preview_tf = Some(self.model.look.colour.transfer_function.clone());
         let note = note.unwrap_or_default();
         eprintln!("previewing {label}: {note}");
         self.model.messages.status = Some(format!("refining {label}: {note}"));
@@ -246,8 +249,8 @@ fn initial_model(opts: &ViewerOptions) -> Model {
     model.recent = crate::viewer::model::recent::RecentFiles::from_env();
     if let Some(tf) = &opts.transfer_function {
         // Locked, so that loading the volume does not replace it with the automatic one.
-        model.look.transfer_function = Some(tf.clone());
-        model.look.window = [0.0, 1.0];
+        model.look.colour.transfer_function = Some(tf.clone());
+        model.look.colour.window = [0.0, 1.0];
         model.tf_editor.locked = true;
     }
     model

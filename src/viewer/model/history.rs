@@ -29,20 +29,20 @@ pub struct Snapshot {
 impl Snapshot {
     pub fn of(model: &Model) -> Snapshot {
         Snapshot {
-            transfer_function: model.look.transfer_function.clone(),
-            colormap: model.look.colormap,
-            window: model.look.window,
-            clip_plane: model.look.clip_plane,
+            transfer_function: model.look.colour.transfer_function.clone(),
+            colormap: model.look.colour.colormap,
+            window: model.look.colour.window,
+            clip_plane: model.look.cut.clip_plane,
             orbit: model.camera.orbit,
         }
     }
 
     /// Puts this state back into `model`, stopping any fly-to (it would carry the camera off again).
     pub fn restore(self, model: &mut Model) {
-        model.look.transfer_function = self.transfer_function;
-        model.look.colormap = self.colormap;
-        model.look.window = self.window;
-        model.look.clip_plane = self.clip_plane;
+        model.look.colour.transfer_function = self.transfer_function;
+        model.look.colour.colormap = self.colormap;
+        model.look.colour.window = self.window;
+        model.look.cut.clip_plane = self.clip_plane;
         model.camera.orbit = self.orbit;
         model.camera.animation = None;
     }
@@ -220,10 +220,10 @@ mod tests {
     fn a_snapshot_restores_the_transfer_function_plane_and_camera() {
         let mut model = Model::new(Vec3::ONE, "x".into());
         let before = Snapshot::of(&model);
-        model.look.transfer_function = TransferFunction::preset("ct-bone").ok();
-        model.look.clip_plane = ClipPlane::through(Vec3::X, Vec3::ZERO).ok();
+        model.look.colour.transfer_function = TransferFunction::preset("ct-bone").ok();
+        model.look.cut.clip_plane = ClipPlane::through(Vec3::X, Vec3::ZERO).ok();
         model.camera.orbit.turn(0.5);
-        model.look.window = [0.2, 0.8];
+        model.look.colour.window = [0.2, 0.8];
         assert_ne!(Snapshot::of(&model), before);
         before.clone().restore(&mut model);
         assert_eq!(Snapshot::of(&model), before);

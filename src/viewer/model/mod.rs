@@ -277,8 +277,8 @@ impl Model {
     /// window) resets to the simple model unless locked; slicing stays.
     pub fn set_volume(&mut self, extent: Vec3, geometry: Geometry, dims: [u32; 3], label: String) {
         if !self.tf_editor.locked {
-            self.look.transfer_function = None;
-            self.look.window = crate::scene::settings::DEFAULT_WINDOW;
+            self.look.colour.transfer_function = None;
+            self.look.colour.window = crate::scene::settings::DEFAULT_WINDOW;
         }
         self.volume.extent = extent;
         self.geometry = geometry;
@@ -307,8 +307,8 @@ impl Model {
         self.volume.unit = self.tf_editor.unit().unwrap_or_default().to_string();
         if !self.tf_editor.locked && from_file {
             if let Some(tf) = self.tf_editor.auto() {
-                self.look.transfer_function = Some(tf);
-                self.look.window = [0.0, 1.0];
+                self.look.colour.transfer_function = Some(tf);
+                self.look.colour.window = [0.0, 1.0];
             }
         }
         self.time = TimeControl::new(v.timesteps(), v.shown_step());
@@ -398,15 +398,15 @@ mod tests {
         // A CT's Hounsfield-unit function left a newly loaded MRI invisible.
         let mut model = Model::new(Vec3::ONE, "x".into());
         let g = Geometry::from_spacing([1.0; 3]);
-        model.look.transfer_function = crate::transfer::function::TransferFunction::preset("ct-bone").ok();
-        model.look.window = [0.0, 1.0];
+        model.look.colour.transfer_function = crate::transfer::function::TransferFunction::preset("ct-bone").ok();
+        model.look.colour.window = [0.0, 1.0];
         model.set_volume(Vec3::ONE, g, [10, 10, 10], "mri".into());
-        assert!(model.look.transfer_function.is_none());
-        assert_eq!(model.look.window, crate::scene::settings::DEFAULT_WINDOW);
-        model.look.transfer_function = crate::transfer::function::TransferFunction::preset("ct-bone").ok();
+        assert!(model.look.colour.transfer_function.is_none());
+        assert_eq!(model.look.colour.window, crate::scene::settings::DEFAULT_WINDOW);
+        model.look.colour.transfer_function = crate::transfer::function::TransferFunction::preset("ct-bone").ok();
         model.tf_editor.locked = true;
         model.set_volume(Vec3::ONE, g, [10, 10, 10], "ct".into());
-        assert!(model.look.transfer_function.is_some(), "locked: kept");
+        assert!(model.look.colour.transfer_function.is_some(), "locked: kept");
     }
 
     #[test]
@@ -444,12 +444,12 @@ mod tests {
         assert!(Arc::ptr_eq(&model.volume.histogram, &histogram));
         assert_eq!((model.time.steps, model.slices.generation), (1, 1));
         assert!(
-            model.look.transfer_function.is_none(),
+            model.look.colour.transfer_function.is_none(),
             "a built-in keeps the simple model"
         );
         model.show_volume(&v, histogram, true);
         assert!(
-            model.look.transfer_function.is_some(),
+            model.look.colour.transfer_function.is_some(),
             "a file's volume gets the automatic function"
         );
         assert_eq!(

@@ -36,7 +36,7 @@ impl Model {
         self.camera.animation = None;
         self.camera.auto_rotate = false;
         for axis in 0..3 {
-            let (lo, hi) = (s.slab_lo[axis], s.slab_hi[axis]);
+            let (lo, hi) = (s.cut.slab_lo[axis], s.cut.slab_hi[axis]);
             self.slabs[axis] = ((lo + hi) / 2.0, hi - lo);
         }
         match &state.viewer {
@@ -72,7 +72,7 @@ mod tests {
         a.slices.crosshair = DVec3::new(3.0, 4.5, 6.0);
         a.sampling.quality = Some(crate::scene::quality::Quality::Fast);
         a.camera.orbit.turn(0.7);
-        a.look.mode = crate::scene::settings::CompositeMode::Mip;
+        a.look.compositing.mode = crate::scene::settings::CompositeMode::Mip;
         let settings = a.render_settings(200, 100);
         let saved = ViewState {
             volume: VolumeRef::default(),
@@ -88,21 +88,21 @@ mod tests {
         assert!(restored.camera.eye.distance(settings.camera.eye) < 1e-5);
         assert!(restored.camera.up.distance(settings.camera.up) < 1e-5);
         assert!(
-            restored.slab_lo.distance(settings.slab_lo) < 1e-6 && restored.slab_hi.distance(settings.slab_hi) < 1e-6
+            restored.cut.slab_lo.distance(settings.cut.slab_lo) < 1e-6
+                && restored.cut.slab_hi.distance(settings.cut.slab_hi) < 1e-6
         );
-        (restored.camera, restored.slab_lo, restored.slab_hi) = (settings.camera, settings.slab_lo, settings.slab_hi);
+        (restored.camera, restored.cut.slab_lo, restored.cut.slab_hi) =
+            (settings.camera, settings.cut.slab_lo, settings.cut.slab_hi);
         assert_eq!(restored, settings);
         assert_eq!(b.session(), a.session());
         // A plain view state keeps its own step.
-        let plain: RenderSettings = RenderSettings {
-            step_length: 0.37,
-            ..settings
-        };
+        let mut plain: RenderSettings = settings;
+        plain.sampling.step_length = 0.37;
         b.restore(&ViewState {
             volume: VolumeRef::default(),
             settings: plain,
             viewer: None,
         });
-        assert_eq!(b.render_settings(200, 100).step_length, 0.37);
+        assert_eq!(b.render_settings(200, 100).sampling.step_length, 0.37);
     }
 }

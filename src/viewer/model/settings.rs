@@ -13,16 +13,16 @@ impl Model {
         s.height = height.max(1);
         s.camera = self.view_camera(s.width as f32, s.height as f32);
         for (axis, &(pos, width)) in self.slabs.iter().enumerate() {
-            s.set_slab(axis, pos, width);
+            s.cut.set_slab(axis, pos, width);
             // A slab thinner than the slider's resolution would be empty: keep a sliver.
-            if s.slab_hi[axis] <= s.slab_lo[axis] {
-                s.slab_hi[axis] = (s.slab_lo[axis] + 1e-3).min(1.0);
-                s.slab_lo[axis] = s.slab_hi[axis] - 1e-3;
+            if s.cut.slab_hi[axis] <= s.cut.slab_lo[axis] {
+                s.cut.slab_hi[axis] = (s.cut.slab_lo[axis] + 1e-3).min(1.0);
+                s.cut.slab_lo[axis] = s.cut.slab_hi[axis] - 1e-3;
             }
         }
-        if s.window[0] >= s.window[1] {
-            s.window[1] = (s.window[0] + 1e-3).min(1.0);
-            s.window[0] = s.window[1] - 1e-3;
+        if s.colour.window[0] >= s.colour.window[1] {
+            s.colour.window[1] = (s.colour.window[0] + 1e-3).min(1.0);
+            s.colour.window[0] = s.colour.window[1] - 1e-3;
         }
         if let Some(q) = self.sampling.quality {
             q.apply(&mut s, self.volume.range);
@@ -93,10 +93,10 @@ mod tests {
         let mut model = Model::new(Vec3::ONE, "x".into());
         model.slabs[0] = (0.25, 0.3);
         model.slabs[2] = (0.9, 0.0);
-        model.look.window = [0.6, 0.6];
+        model.look.colour.window = [0.6, 0.6];
         let s = model.render_settings(10, 10);
-        assert!((s.slab_lo.x - 0.1).abs() < 1e-6 && (s.slab_hi.x - 0.4).abs() < 1e-6);
-        assert!(s.slab_hi.z > s.slab_lo.z, "zero width keeps a sliver");
+        assert!((s.cut.slab_lo.x - 0.1).abs() < 1e-6 && (s.cut.slab_hi.x - 0.4).abs() < 1e-6);
+        assert!(s.cut.slab_hi.z > s.cut.slab_lo.z, "zero width keeps a sliver");
         s.validate().expect("always valid");
     }
 
@@ -110,35 +110,42 @@ mod tests {
             model.sampling.quality = Some(q);
             Quality::apply(q, &mut cli, model.volume.range);
             assert_eq!(
-                model.frame_settings(401, 300, false).step_length,
-                cli.step_length,
+                model.frame_settings(401, 300, false).sampling.step_length,
+                cli.sampling.step_length,
                 "{q:?}"
             );
-            let moving = model.frame_settings(401, 300, true).step_length;
-            assert_eq!(moving, cli.step_length.max(3.0), "{q:?} while moving: draft's 3 voxels");
+            let moving = model.frame_settings(401, 300, true).sampling.step_length;
+            assert_eq!(
+                moving,
+                cli.sampling.step_length.max(3.0),
+                "{q:?} while moving: draft's 3 voxels"
+            );
         }
         // Strong opacity shortens every level's step, the draft's while moving too (to a quarter at most).
-        model.look.step_alpha = 1.0;
+        model.look.colour.step_alpha = 1.0;
         model.sampling.quality = Some(Quality::Normal);
-        let moving = model.frame_settings(401, 300, true).step_length;
+        let moving = model.frame_settings(401, 300, true).sampling.step_length;
         assert!((0.75..3.0).contains(&moving), "{moving}");
-        assert!(model.frame_settings(401, 300, false).step_length < 0.4);
+        assert!(model.frame_settings(401, 300, false).sampling.step_length < 0.4);
         // Q walks down the levels and wraps; a custom step keeps the slider's.
         assert_eq!(next_lower(Some(Quality::Normal)), Quality::Fast);
         assert_eq!(next_lower(Some(Quality::Draft)), Quality::Converged);
         assert_eq!(next_lower(None), Quality::Normal);
         model.sampling.quality = None;
-        model.look.step_length = 0.7;
-        assert_eq!(model.frame_settings(401, 300, false).step_length, 0.7);
-        assert_eq!(plain.step_length, Quality::Normal.step_length(&plain, [0.0, 1.0]));
+        model.look.sampling.step_length = 0.7;
+        assert_eq!(model.frame_settings(401, 300, false).sampling.step_length, 0.7);
+        assert_eq!(
+            plain.sampling.step_length,
+            Quality::Normal.step_length(&plain, [0.0, 1.0])
+        );
         // Shaded frames take the gradient texture where the viewer kept the volume for it.
-        model.look.shading = Some(crate::scene::settings::Shading::default());
-        assert!(!model.render_settings(8, 8).gradient_texture);
+        model.look.lighting.shading = Some(crate::scene::settings::Shading::default());
+        assert!(!model.render_settings(8, 8).lighting.gradient_texture);
         model.sampling.gradient_texture = true;
-        assert!(model.render_settings(8, 8).gradient_texture);
-        model.look.shading = None;
+        assert!(model.render_settings(8, 8).lighting.gradient_texture);
+        model.look.lighting.shading = None;
         assert!(
-            !model.render_settings(8, 8).gradient_texture,
+            !model.render_settings(8, 8).lighting.gradient_texture,
             "unshaded frames read no gradient"
         );
     }
@@ -148,10 +155,13 @@ mod tests {
         let mut model = Model::new(Vec3::ONE, "x".into());
         model.sampling.quality = None;
         let still = model.frame_settings(401, 300, false);
-        assert_eq!((still.width, still.height, still.step_length), (401, 300, 1.0));
+        assert_eq!((still.width, still.height, still.sampling.step_length), (401, 300, 1.0));
         model.stats.full_frame_ms = Some(40.0);
         let moving = model.frame_settings(401, 300, true);
-        assert_eq!((moving.width, moving.height, moving.step_length), (201, 150, 2.0));
+        assert_eq!(
+            (moving.width, moving.height, moving.sampling.step_length),
+            (201, 150, 2.0)
+        );
         model.stats.full_frame_ms = Some(400.0);
         assert_eq!(model.lod_divisor(), 5, "slow frames shrink more");
         model.stats.full_frame_ms = Some(10_000.0);

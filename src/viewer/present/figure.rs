@@ -23,7 +23,7 @@ impl Presenter {
         let mut render = || -> Result<image::RgbaImage, GpuError> {
             headless.renderer.place_volume(gpu, volume, budgets)?;
             headless.renderer.refine(gpu, volume, s)?;
-            if s.gradient_texture {
+            if s.lighting.gradient_texture {
                 headless.renderer.enable_gradient_texture(gpu, volume)?;
             }
             Ok(headless.render(gpu, s)?.image)

@@ -55,7 +55,7 @@ mod tests {
         smaller.width -= 1;
         assert!(view.stale(&smaller), "a reduced-detail frame");
         let mut window = s.clone();
-        window.window[0] += 0.01;
+        window.colour.window[0] += 0.01;
         assert!(view.stale(&window), "the value window");
 
         view.changed();

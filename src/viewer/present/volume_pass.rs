@@ -174,7 +174,7 @@ impl VolumePass {
             .as_ref()
             .is_some_and(|v| (v.desc.extent.width, v.desc.extent.height) == (settings.width, settings.height));
         // The gradient texture on the first frame that reads gradients (the volume was kept for it).
-        if settings.gradient_texture && self.renderer.as_ref().is_some_and(|r| !r.has_gradient_texture()) {
+        if settings.lighting.gradient_texture && self.renderer.as_ref().is_some_and(|r| !r.has_gradient_texture()) {
             let volume = kept.ok_or(GpuError::Lost("no volume kept for gradients"))?;
             wait_idle(gpu)?;
             self.content.changed();

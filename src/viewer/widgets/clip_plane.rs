@@ -33,7 +33,7 @@ pub struct ClipHandles {
 
 /// The widget for `model`'s plane in the 3D view `rect`; None without a plane.
 pub fn handles(model: &Model, rect: egui::Rect) -> Option<ClipHandles> {
-    let plane = model.look.clip_plane?;
+    let plane = model.look.cut.clip_plane?;
     let wpm = model.geometry.world_per_mm(model.dims) as f32;
     let n = plane.normal();
     let corners = box_corners(model.tex_to_world(), Vec3::ZERO, Vec3::ONE).map(|c| c.as_dvec3());
@@ -124,9 +124,9 @@ pub fn clip_widget(ui: &egui::Ui, model: &mut Model, rect: egui::Rect, response:
     }
     let delta = response.drag_delta();
     let delta = Vec2::new(delta.x, delta.y);
-    if let (Some(grab), Some(plane)) = (model.interaction.clip_grab, model.look.clip_plane) {
+    if let (Some(grab), Some(plane)) = (model.interaction.clip_grab, model.look.cut.clip_plane) {
         if delta != Vec2::ZERO {
-            model.look.clip_plane = Some(match grab {
+            model.look.cut.clip_plane = Some(match grab {
                 ClipGrab::Slide => slid(model, &h, plane, delta, rect),
                 ClipGrab::Turn => turned(model, &h, plane, delta),
             });
@@ -199,7 +199,7 @@ mod tests {
                 .dot(s.camera.orbit.camera().target - s.camera.orbit.camera().eye)
                 > 0.99
         );
-        s.look.clip_plane = Some(plane);
+        s.look.cut.clip_plane = Some(plane);
         let h = handles(&s, rect()).unwrap();
         assert!(h.centre.length() < 1e-5, "{}", h.centre);
         assert!(h.outline.len() >= 4);
@@ -212,7 +212,7 @@ mod tests {
         // A plane seen edge on: its normal along the camera's right.
         let right = s.camera.orbit.rotation * Vec3::X;
         let plane = ClipPlane::new(right, 0.0).unwrap();
-        s.look.clip_plane = Some(plane);
+        s.look.cut.clip_plane = Some(plane);
         let h = handles(&s, rect()).unwrap();
         let (a, b) = (h.handle.unwrap(), h.tip.unwrap());
         assert!(b.x > a.x + 12.0, "the arrow points right on screen");
@@ -239,7 +239,7 @@ mod tests {
 
         // Facing away, a drag up turns the plane like the back of a ball: the normal's far end goes down.
         let away = facing_away(&s);
-        s.look.clip_plane = Some(away);
+        s.look.cut.clip_plane = Some(away);
         let h = handles(&s, rect()).unwrap();
         let up = turned(&s, &h, away, Vec2::new(0.0, -RING * 0.5));
         assert!((up.normal().angle_between(away.normal()) - 0.5).abs() < 1e-4);
@@ -250,7 +250,7 @@ mod tests {
     fn the_slices_get_the_same_plane() {
         let mut s = model();
         let plane = ClipPlane::new(Vec3::new(0.3, -1.0, 0.4), 7.0).unwrap();
-        s.look.clip_plane = Some(plane);
+        s.look.cut.clip_plane = Some(plane);
         let mm = crate::scene::slice::mm_from_index(&s.geometry, s.look.voxel_axes);
         let (point, normal) = plane_in_slices(&s, &plane, mm);
         // The geometry's millimetres relative to the box's centre: the plane's own frame.

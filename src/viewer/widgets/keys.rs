@@ -226,18 +226,18 @@ fn act(shortcut: Shortcut, model: &mut Model, actions: &mut Vec<UiAction>) {
         Shortcut::SliceViews => model.slices.shown = !model.slices.shown,
         Shortcut::Play => model.time.toggle_play(),
         Shortcut::ClipPlane => {
-            model.look.clip_plane = match model.look.clip_plane {
+            model.look.cut.clip_plane = match model.look.cut.clip_plane {
                 Some(_) => None,
                 None => Some(clip_plane::facing_away(model)),
             }
         }
-        Shortcut::FlipClipPlane => model.look.clip_plane = model.look.clip_plane.map(|p| p.flipped()),
+        Shortcut::FlipClipPlane => model.look.cut.clip_plane = model.look.cut.clip_plane.map(|p| p.flipped()),
         Shortcut::Record => actions.push(UiAction::ToggleRecording),
         Shortcut::RecordAsShown => actions.push(UiAction::ToggleRecordingAsShown),
         Shortcut::Quality => model.sampling.quality = Some(next_lower(model.sampling.quality)),
         Shortcut::SaveSession => actions.push(UiAction::SaveSession),
         Shortcut::Shading => {
-            model.look.shading = match model.look.shading {
+            model.look.lighting.shading = match model.look.lighting.shading {
                 Some(_) => None,
                 None => Some(Shading::default()),
             }

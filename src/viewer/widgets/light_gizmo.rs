@@ -45,8 +45,9 @@ pub fn disc_position(d: Vec3, center: Vec2, rotation: Quat) -> (Vec2, bool) {
 /// Whether a frame of `model` is lit (the gizmo is shown and takes input only then).
 pub fn shown(model: &Model) -> bool {
     let look = &model.look;
-    look.mode == CompositeMode::Isosurface
-        || (look.shading.is_some() && matches!(look.mode, CompositeMode::Emission | CompositeMode::Density))
+    look.compositing.mode == CompositeMode::Isosurface
+        || (look.lighting.shading.is_some()
+            && matches!(look.compositing.mode, CompositeMode::Emission | CompositeMode::Density))
 }
 
 /// Draws the gizmo over the view `rect` and handles its input: returns true while a drag on it moves the light
@@ -61,12 +62,13 @@ pub fn light_gizmo(ui: &egui::Ui, model: &mut Model, rect: egui::Rect, response:
     let mut dragging = false;
     if response.dragged_by(egui::PointerButton::Primary) && pressed_on_disc {
         if let Some(p) = response.interact_pointer_pos() {
-            model.look.light.direction = Some(world_direction(Vec2::new(p.x, p.y), c, model.camera.orbit.rotation));
+            model.look.lighting.light.direction =
+                Some(world_direction(Vec2::new(p.x, p.y), c, model.camera.orbit.rotation));
             dragging = true;
         }
     }
     if clicks::double_clicked(response) && response.interact_pointer_pos().is_some_and(on_disc) {
-        model.look.light.direction = None;
+        model.look.lighting.light.direction = None;
     }
     let painter = ui.painter_at(rect);
     let centre = Pos2::new(c.x, c.y);
@@ -77,7 +79,7 @@ pub fn light_gizmo(ui: &egui::Ui, model: &mut Model, rect: egui::Rect, response:
         Stroke::new(1.0, Color32::from_gray(150)),
     );
     let sun = Color32::from_rgb(255, 210, 80);
-    match model.look.light.direction {
+    match model.look.lighting.light.direction {
         Some(d) => {
             let (p, front) = disc_position(d, c, model.camera.orbit.rotation);
             let p = Pos2::new(p.x, p.y);

@@ -100,8 +100,8 @@ fn paint_boxes(painter: &egui::Painter, model: &Model, rect: egui::Rect) {
         }
     };
     draw_box(Vec3::ZERO, Vec3::ONE, Color32::from_gray(160));
-    if s.slab_lo != Vec3::ZERO || s.slab_hi != Vec3::ONE {
-        draw_box(s.slab_lo, s.slab_hi, Color32::from_rgb(255, 200, 60));
+    if s.cut.slab_lo != Vec3::ZERO || s.cut.slab_hi != Vec3::ONE {
+        draw_box(s.cut.slab_lo, s.cut.slab_hi, Color32::from_rgb(255, 200, 60));
     }
     if model.slices.shown {
         // The slice views' crosshair: a short segment along each world axis, in its view's colour.
@@ -131,7 +131,7 @@ fn paint_colorbar(painter: &egui::Painter, model: &Model, rect: egui::Rect) {
         painter,
         bar,
         &model.look.classification(),
-        model.look.window,
+        model.look.colour.window,
         model.volume.range,
         unit,
     );

@@ -156,8 +156,8 @@ fn paint_cuts(painter: &egui::Painter, model: &Model, slice: &ShownSlice) {
         }
     }
     let s = model.render_settings(1, 1);
-    if s.slab_lo != glam::Vec3::ZERO || s.slab_hi != glam::Vec3::ONE {
-        let outline = frame.section(&slab_corners_mm(mm, model.dims, s.slab_lo, s.slab_hi));
+    if s.cut.slab_lo != glam::Vec3::ZERO || s.cut.slab_hi != glam::Vec3::ONE {
+        let outline = frame.section(&slab_corners_mm(mm, model.dims, s.cut.slab_lo, s.cut.slab_hi));
         if outline.len() >= 3 {
             let points: Vec<Pos2> = outline.iter().map(|&p| slice.to_screen(p)).collect();
             painter.add(egui::Shape::closed_line(
@@ -166,7 +166,7 @@ fn paint_cuts(painter: &egui::Painter, model: &Model, slice: &ShownSlice) {
             ));
         }
     }
-    if let Some(plane) = model.look.clip_plane {
+    if let Some(plane) = model.look.cut.clip_plane {
         let (point, normal) = clip_plane::plane_in_slices(model, &plane, mm);
         if let Some((a, b)) = frame.line_of_plane(point, normal) {
             painter.line_segment(

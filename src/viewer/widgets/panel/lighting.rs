@@ -33,40 +33,40 @@ pub fn lighting_section(ui: &mut egui::Ui, look: &mut RenderSettings) {
     egui::CollapsingHeader::new("Lighting")
         .default_open(false)
         .show(ui, |ui| {
-            let lit = look.mode == CompositeMode::Isosurface || look.shading.is_some();
+            let lit = look.compositing.mode == CompositeMode::Isosurface || look.lighting.shading.is_some();
             if !lit {
                 ui.label("Turn on gradient shading (S) or the iso-surface mode to light the volume.");
             }
-            let mut directional = look.light.direction.is_some();
+            let mut directional = look.lighting.light.direction.is_some();
             if ui
                 .checkbox(&mut directional, "directional light (drag the sun disc in the view)")
                 .changed()
             {
-                look.light.direction =
+                look.lighting.light.direction =
                     directional.then(|| Light::from_angles(-45.0, 35.0).direction.unwrap_or(Vec3::Z));
             }
-            if let Some(d) = look.light.direction {
+            if let Some(d) = look.lighting.light.direction {
                 let (mut az, mut el) = angles(d);
                 let a = ui.add(egui::Slider::new(&mut az, -180.0..=180.0).text("light azimuth°"));
                 let e = ui.add(egui::Slider::new(&mut el, -90.0..=90.0).text("light elevation°"));
                 if a.changed() || e.changed() {
-                    look.light.direction = Light::from_angles(az, el).direction;
+                    look.lighting.light.direction = Light::from_angles(az, el).direction;
                 }
             }
             ui.horizontal(|ui| {
-                color_edit(ui, &mut look.light.color);
-                ui.add(egui::Slider::new(&mut look.light.intensity, 0.0..=4.0).text("intensity"));
+                color_edit(ui, &mut look.lighting.light.color);
+                ui.add(egui::Slider::new(&mut look.lighting.light.intensity, 0.0..=4.0).text("intensity"));
             });
-            let projection = look.mode.is_projection();
+            let projection = look.compositing.mode.is_projection();
             ui.add_enabled_ui(!projection, |ui| {
-                ui.checkbox(&mut look.shadows, "shadows")
+                ui.checkbox(&mut look.lighting.shadows, "shadows")
                     .on_hover_text("Light attenuated through the volume; a headlight casts them from a key light");
-                ui.checkbox(&mut look.ambient_occlusion, "ambient occlusion");
+                ui.checkbox(&mut look.lighting.ambient_occlusion, "ambient occlusion");
             });
             if projection {
                 ui.label("MIP, MinIP and average are not lit: no shadows or occlusion.");
             }
-            if look.mode == CompositeMode::Isosurface {
+            if look.compositing.mode == CompositeMode::Isosurface {
                 ui.separator();
                 iso_surfaces(ui, look);
             }
@@ -76,10 +76,10 @@ pub fn lighting_section(ui: &mut egui::Ui, look: &mut RenderSettings) {
 /// The first surface's material and the extra layers.
 fn iso_surfaces(ui: &mut egui::Ui, look: &mut RenderSettings) {
     ui.label("Iso-surfaces (composited in the order a ray meets them)");
-    ui.horizontal(|ui| material_edit(ui, &mut look.iso_color));
-    ui.add(egui::Slider::new(&mut look.iso_opacity, 0.01..=1.0).text("opacity"));
+    ui.horizontal(|ui| material_edit(ui, &mut look.compositing.iso_color));
+    ui.add(egui::Slider::new(&mut look.compositing.iso_opacity, 0.01..=1.0).text("opacity"));
     let mut remove = None;
-    for (i, extra) in look.extra_isosurfaces.iter_mut().enumerate() {
+    for (i, extra) in look.compositing.extra_isosurfaces.iter_mut().enumerate() {
         ui.separator();
         ui.add(egui::Slider::new(&mut extra.value, 0.0..=1.0).text(format!("surface {} value", i + 2)));
         ui.horizontal(|ui| {
@@ -91,12 +91,12 @@ fn iso_surfaces(ui: &mut egui::Ui, look: &mut RenderSettings) {
         ui.add(egui::Slider::new(&mut extra.opacity, 0.01..=1.0).text("opacity"));
     }
     if let Some(i) = remove {
-        look.extra_isosurfaces.remove(i);
+        look.compositing.extra_isosurfaces.remove(i);
     }
-    if look.extra_isosurfaces.len() + 1 < MAX_ISOSURFACES && ui.button("add a surface").clicked() {
+    if look.compositing.extra_isosurfaces.len() + 1 < MAX_ISOSURFACES && ui.button("add a surface").clicked() {
         // A translucent layer below the first: skin over bone.
-        look.extra_isosurfaces.push(IsoSurface {
-            value: (look.iso_value * 0.5).clamp(0.0, 1.0),
+        look.compositing.extra_isosurfaces.push(IsoSurface {
+            value: (look.compositing.iso_value * 0.5).clamp(0.0, 1.0),
             color: Some(Vec3::new(0.9, 0.65, 0.55)),
             opacity: 0.3,
         });

@@ -30,11 +30,11 @@ pub fn slicing_section(ui: &mut egui::Ui, model: &mut Model) {
 
 /// The arbitrary clipping plane: on/off, offset, flip, face the camera (dragged in the 3D view).
 fn clip_plane_controls(ui: &mut egui::Ui, model: &mut Model) {
-    let mut on = model.look.clip_plane.is_some();
+    let mut on = model.look.cut.clip_plane.is_some();
     if ui.checkbox(&mut on, "clip plane (C)").changed() {
-        model.look.clip_plane = on.then(|| clip_plane::facing_away(model));
+        model.look.cut.clip_plane = on.then(|| clip_plane::facing_away(model));
     }
-    let Some(plane) = model.look.clip_plane else {
+    let Some(plane) = model.look.cut.clip_plane else {
         return;
     };
     let reach = clip_plane::half_diagonal_mm(model);
@@ -43,15 +43,15 @@ fn clip_plane_controls(ui: &mut egui::Ui, model: &mut Model) {
         .add(egui::Slider::new(&mut offset, -reach..=reach).text("offset (mm)"))
         .changed()
     {
-        model.look.clip_plane = plane.with_offset(offset).ok().or(Some(plane));
+        model.look.cut.clip_plane = plane.with_offset(offset).ok().or(Some(plane));
     }
     ui.horizontal(|ui| {
         if ui.button("Flip (F)").clicked() {
-            model.look.clip_plane = Some(plane.flipped());
+            model.look.cut.clip_plane = Some(plane.flipped());
         }
         if ui.button("Face the camera").clicked() {
             let forward = model.camera.orbit.camera().forward();
-            model.look.clip_plane = ClipPlane::through(forward, plane.point()).ok().or(Some(plane));
+            model.look.cut.clip_plane = ClipPlane::through(forward, plane.point()).ok().or(Some(plane));
         }
     });
     let n = plane.normal();

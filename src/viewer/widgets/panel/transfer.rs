@@ -44,8 +44,8 @@ pub fn transfer_function_section(ui: &mut egui::Ui, model: &mut Model) {
             let look = &mut model.look;
             tf_editor::presets::panel(
                 ui,
-                &mut look.transfer_function,
-                &mut look.window,
+                &mut look.colour.transfer_function,
+                &mut look.colour.window,
                 model.volume.range,
                 &model.volume.histogram,
                 &mut model.tf_editor,
@@ -53,22 +53,22 @@ pub fn transfer_function_section(ui: &mut egui::Ui, model: &mut Model) {
             ui.checkbox(&mut model.tf_editor.locked, "keep when another volume loads");
             let look = &mut model.look;
             ui.label("Visible value range");
-            ui.add(egui::Slider::new(&mut look.window[0], 0.0..=1.0).text("min"));
-            ui.add(egui::Slider::new(&mut look.window[1], 0.0..=1.0).text("max"));
-            if look.window[0] > look.window[1] {
-                look.window.swap(0, 1);
+            ui.add(egui::Slider::new(&mut look.colour.window[0], 0.0..=1.0).text("min"));
+            ui.add(egui::Slider::new(&mut look.colour.window[1], 0.0..=1.0).text("max"));
+            if look.colour.window[0] > look.colour.window[1] {
+                look.colour.window.swap(0, 1);
             }
-            if look.transfer_function.is_none() {
-                colormap_strip(ui, look.colormap, look.window);
+            if look.colour.transfer_function.is_none() {
+                colormap_strip(ui, look.colour.colormap, look.colour.window);
                 egui::ComboBox::from_label("Colormap")
-                    .selected_text(look.colormap.name())
+                    .selected_text(look.colour.colormap.name())
                     .show_ui(ui, |ui| {
                         for c in Colormap::ALL {
-                            ui.selectable_value(&mut look.colormap, c, c.name());
+                            ui.selectable_value(&mut look.colour.colormap, c, c.name());
                         }
                     });
-                ui.add(egui::Slider::new(&mut look.step_alpha, 0.0..=1.0).text("step alpha"));
-                let multiplied = ui.checkbox(&mut look.multiplied_alpha, "multiplied alpha");
+                ui.add(egui::Slider::new(&mut look.colour.step_alpha, 0.0..=1.0).text("step alpha"));
+                let multiplied = ui.checkbox(&mut look.colour.multiplied_alpha, "multiplied alpha");
                 rects::log("multiplied-alpha", multiplied.rect);
             }
             let name = |q: Option<Quality>| q.map_or("custom step", Quality::name);
@@ -81,7 +81,7 @@ pub fn transfer_function_section(ui: &mut egui::Ui, model: &mut Model) {
                 });
             ui.add_enabled(
                 model.sampling.quality.is_none(),
-                egui::Slider::new(&mut model.look.step_length, 0.1..=4.0)
+                egui::Slider::new(&mut model.look.sampling.step_length, 0.1..=4.0)
                     .logarithmic(true)
                     .text("step (voxels)"),
             );

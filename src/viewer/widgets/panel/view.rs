@@ -37,14 +37,22 @@ pub fn view_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<UiAc
         }
         ui.horizontal(|ui| {
             ui.label("ray setup");
-            ui.selectable_value(&mut model.look.ray_setup, RaySetup::Faces, "faces");
-            ui.selectable_value(&mut model.look.ray_setup, RaySetup::Analytic, "analytic");
+            ui.selectable_value(&mut model.look.pipeline.ray_setup, RaySetup::Faces, "faces");
+            ui.selectable_value(&mut model.look.pipeline.ray_setup, RaySetup::Analytic, "analytic");
         });
-        if model.look.ray_setup == RaySetup::Faces {
+        if model.look.pipeline.ray_setup == RaySetup::Faces {
             ui.horizontal(|ui| {
                 ui.label("positions");
-                ui.selectable_value(&mut model.look.position_format, PositionFormat::Rgba32f, "rgba32f");
-                ui.selectable_value(&mut model.look.position_format, PositionFormat::Rgba16f, "rgba16f");
+                ui.selectable_value(
+                    &mut model.look.pipeline.position_format,
+                    PositionFormat::Rgba32f,
+                    "rgba32f",
+                );
+                ui.selectable_value(
+                    &mut model.look.pipeline.position_format,
+                    PositionFormat::Rgba16f,
+                    "rgba16f",
+                );
             });
         }
         ui.horizontal(|ui| {
