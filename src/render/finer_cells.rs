@@ -4,6 +4,7 @@
 //! parts of a file's brick as finely as the held level's own grid allows, where one range for the whole brick kept
 //! every cell of a brick with anything in it (1024³ at a close view: 4.6 s a frame against 1.8 s in memory).
 
+use crate::pyramid::bricks::{from_level0, to_level0};
 use crate::volume::cells::Element;
 use crate::volume::VoxelData;
 
@@ -60,10 +61,10 @@ fn cells_of<T: Element>(
     level: u32,
     cell: u32,
 ) -> BoxCells<Option<(f64, f64)>> {
-    let first = [0, 1, 2].map(|a| (ilo[a] << level) / cell);
-    let last = [0, 1, 2].map(|a| ((ihi[a] << level) - 1) / cell);
+    let first = [0, 1, 2].map(|a| to_level0(ilo[a], level) / cell);
+    let last = [0, 1, 2].map(|a| (to_level0(ihi[a], level) - 1) / cell);
     let count = [0, 1, 2].map(|a| last[a] + 1 - first[a]);
-    let side = cell >> level;
+    let side = from_level0(cell, level);
     let mut ranges = Vec::with_capacity(count.iter().product::<u32>() as usize);
     for cz in first[2]..=last[2] {
         for cy in first[1]..=last[1] {

@@ -10,7 +10,7 @@
 //! - Within a bound on the bricks (the pool's slots), refinement goes by need (voxel / pixel, largest first; ties to
 //!   the coarser brick, then the lower index), and a brick whose children do not fit stays as it is.
 
-use crate::pyramid::bricks::{children, covering, grid_at};
+use crate::pyramid::bricks::{children, covering, grid_at, level0_bricks};
 use glam::{DMat4, DVec3};
 use std::collections::BinaryHeap;
 
@@ -166,10 +166,10 @@ pub fn screen_cut(
     let mut cut = Cut::uniform(grid0, top);
     for (l, b) in shown {
         // Every level-0 brick under (l, b).
-        let lo = b.map(|v| v << l);
-        for z in lo[2]..((b[2] + 1) << l).min(grid0[2]) {
-            for y in lo[1]..((b[1] + 1) << l).min(grid0[1]) {
-                for x in lo[0]..((b[0] + 1) << l).min(grid0[0]) {
+        let (lo, hi) = level0_bricks(b, l, grid0);
+        for z in lo[2]..hi[2] {
+            for y in lo[1]..hi[1] {
+                for x in lo[0]..hi[0] {
                     cut.level[(x + grid0[0] * (y + grid0[1] * z)) as usize] = l;
                 }
             }
@@ -216,7 +216,7 @@ pub fn cut_ranges(
                             // A level finer than the one held, read from the file: its brick's own voxels in
                             // and around this skip brick (any value if it was never read).
                             let r = finer
-                                .get(&(l, [x, y, z].map(|v| v >> l)))
+                                .get(&(l, covering([x, y, z], l)))
                                 .and_then(|cells| cells.at(at))
                                 .unwrap_or((0.0, 1.0));
                             range = (range.0.min(r.0), range.1.max(r.1));
@@ -224,7 +224,7 @@ pub fn cut_ranges(
                         };
                         let g = &grids[l.min(grids.len() - 1)];
                         let [cx, cy, cz] = g.bricks.map(|b| b as usize);
-                        let [x, y, z] = at.map(|v| (v >> l) as usize);
+                        let [x, y, z] = covering(at, l as u32).map(|v| v as usize);
                         let c = x.min(cx - 1) + cx * (y.min(cy - 1) + cy * z.min(cz - 1));
                         range = (range.0.min(g.min[c]), range.1.max(g.max[c]));
                     }

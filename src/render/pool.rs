@@ -410,7 +410,7 @@ mod tests {
             let r = p.resident[slot as usize].unwrap();
             assert_eq!(
                 (r.level, r.brick),
-                (l, cut.brick_of(i).map(|b| b >> l)),
+                (l, crate::pyramid::bricks::covering(cut.brick_of(i), l)),
                 "level-0 brick {i}"
             );
         }

@@ -8,7 +8,7 @@
 //! trilinear sample of the brick, or of any brick below it, reads.
 
 use super::skip::BrickGrid;
-use crate::pyramid::bricks::grid_at;
+use crate::pyramid::bricks::{grid_at, to_level0};
 use crate::scene::settings::RenderSettings;
 use crate::volume::cells::CellRanges;
 use crate::volume::Volume;
@@ -37,13 +37,14 @@ impl Refinable {
             .map(|l| {
                 let grid = grid_at(dims, brick, l);
                 let [gx, gy, gz] = grid.map(|g| g as usize);
-                let side = brick.map(|b| b << l);
+                let side = brick.map(|b| to_level0(b, l));
+                let apron = to_level0(1, l);
                 let ranges: Vec<(f32, f32)> = (0..gx * gy * gz)
                     .into_par_iter()
                     .map(|k| {
                         let b = [k % gx, k / gx % gy, k / (gx * gy)].map(|v| v as u32);
-                        let lo = [0, 1, 2].map(|a| (b[a] * side[a]).saturating_sub(1 << l));
-                        let hi = [0, 1, 2].map(|a| (b[a] + 1) * side[a] + (1 << l));
+                        let lo = [0, 1, 2].map(|a| (b[a] * side[a]).saturating_sub(apron));
+                        let hi = [0, 1, 2].map(|a| (b[a] + 1) * side[a] + apron);
                         volume.normalize_range(cells.over(lo, hi))
                     })
                     .collect();

@@ -135,7 +135,7 @@ impl PyramidCache {
     /// level `level` of `place` (cells of 8 voxels of that level); `None` if absent or not what they must be.
     fn cells(stamp: &Path, place: &InPlace, level: u32) -> Option<CellRanges> {
         let path = PyramidCache::cells_path(stamp);
-        let cell = CellRanges::SIDE << level;
+        let cell = crate::pyramid::bricks::to_level0(CellRanges::SIDE, level);
         // The length is known before anything is read: a foreign or truncated file allocates nothing.
         if std::fs::metadata(&path).ok()?.len() != CellRanges::byte_len(place.dims, cell) {
             return None;

@@ -5,6 +5,7 @@
 
 use super::level0::Level0;
 use crate::convert::source::Source;
+use crate::pyramid::bricks::{from_level0, to_level0};
 use crate::pyramid::budget::show;
 use crate::pyramid::geometry::{level_dims, level_geometry};
 use crate::pyramid::reduce::mean_to_level_into;
@@ -32,7 +33,7 @@ fn level_step<T: Sample + Element>(
     let full = source.dims();
     let out = level_dims(full, level);
     let slice = out[0] as usize * out[1] as usize;
-    let span = 1u32 << level;
+    let span = to_level0(1, level);
     let slice0_bytes = u64::from(full[0]) * u64::from(full[1]) * std::mem::size_of::<T>() as u64;
     let slab_bytes = slice0_bytes * u64::from(span);
     check_slab(source, level, slab_bytes, host_budget)?;
@@ -50,7 +51,7 @@ fn level_step<T: Sample + Element>(
     };
     // Level 0's value range, from the voxels read: the level stands in for level 0 and normalises as it does.
     let range = std::sync::Mutex::new(None::<[f64; 2]>);
-    let cell = CellRanges::SIDE << level;
+    let cell = to_level0(CellRanges::SIDE, level);
     let reduce = |slab: &[T], n: u32, into: &mut [T]| -> Vec<Option<(f64, f64)>> {
         let (cells, found) = slab_ranges(slab, [full[0], full[1], n], cell);
         if let (Some([a, b]), Ok(mut r)) = (found, range.lock()) {
@@ -61,7 +62,7 @@ fn level_step<T: Sample + Element>(
         cells
     };
     let mut cells = CellRanges::unseen(full, cell);
-    let cells_per_layer = (cell >> level) as usize;
+    let cells_per_layer = from_level0(cell, level) as usize;
     // A stream's batch of slabs, their memory reused from batch to batch.
     let mut slabs: Vec<(Vec<T>, u32)> = Vec::new();
     for first in (0..out[2] as usize).step_by(step) {
@@ -112,7 +113,7 @@ fn check_slab(source: &Source, level: u32, slab_bytes: u64, host_budget: u64) ->
         problem: format!(
             "reading pyramid level {level} takes {} slices of {}x{} at once ({}), more than half the host budget ({}) \
              allows; raise --host-budget",
-            1u32 << level,
+            to_level0(1, level),
             full[0],
             full[1],
             show(slab_bytes),

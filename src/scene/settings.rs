@@ -4,114 +4,13 @@
 
 use crate::scene::camera::{Camera, ViewPreset};
 pub use crate::scene::groups::{
-    Colour, Compositing, Cut, Lighting, Pipeline, Sampling, DEFAULT_EARLY_TERMINATION, DEFAULT_STEP_ALPHA,
-    DEFAULT_WINDOW,
+    Colour, CompositeMode, Compositing, Cut, Lighting, Pipeline, PositionFormat, RaySetup, Sampling, Shading,
+    DEFAULT_EARLY_TERMINATION, DEFAULT_STEP_ALPHA, DEFAULT_WINDOW, STRIDES,
 };
 use crate::scene::lighting::IsoSurface;
 use crate::transfer::function::Classification;
 use crate::volume::Volume;
 use glam::Vec3;
-
-/// How each pixel's ray segment through the box is found.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum RaySetup {
-    /// The XNA article's method: front faces into an entry-position target, back faces into an exit-position
-    /// target, then a march pass reads both.
-    #[default]
-    Faces,
-    /// Analytic ray/box intersection in the march pass's fragment shader.
-    Analytic,
-}
-
-/// Format of the entry/exit position targets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum PositionFormat {
-    /// 16 bytes/pixel/target. Exact to float precision: the default, so the image matches the reference.
-    #[default]
-    Rgba32f,
-    /// 8 bytes/pixel/target. 11-bit mantissa: positions near 1.0 are quantised to 1/2048 of the box.
-    Rgba16f,
-}
-
-/// How samples along a ray combine into a pixel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum CompositeMode {
-    /// Emission–absorption, front to back (the default).
-    #[default]
-    Emission,
-    /// Maximum intensity projection.
-    Mip,
-    /// Minimum intensity projection.
-    MinIp,
-    /// Mean of the visible samples.
-    Average,
-    /// First crossing of `iso_value`, refined by bisection and shaded.
-    Isosurface,
-    /// The OSG article's density-factor model: opacity `a × density × step`, linear (not exponential).
-    Density,
-}
-
-impl CompositeMode {
-    pub const ALL: [CompositeMode; 6] = [
-        CompositeMode::Emission,
-        CompositeMode::Mip,
-        CompositeMode::MinIp,
-        CompositeMode::Average,
-        CompositeMode::Isosurface,
-        CompositeMode::Density,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            CompositeMode::Emission => "emission",
-            CompositeMode::Mip => "mip",
-            CompositeMode::MinIp => "minip",
-            CompositeMode::Average => "average",
-            CompositeMode::Isosurface => "iso",
-            CompositeMode::Density => "density",
-        }
-    }
-
-    pub fn parse(s: &str) -> Option<CompositeMode> {
-        CompositeMode::ALL
-            .into_iter()
-            .find(|m| m.name() == s.trim().to_ascii_lowercase())
-    }
-
-    /// MIP, MinIP and average: projections of values, never lit (no shading, shadows or occlusion).
-    pub fn is_projection(self) -> bool {
-        matches!(self, CompositeMode::Mip | CompositeMode::MinIp | CompositeMode::Average)
-    }
-
-    /// The index the shader switches on (`frame.mode.x`).
-    pub fn index(self) -> u32 {
-        CompositeMode::ALL.iter().position(|m| *m == self).unwrap_or(0) as u32
-    }
-}
-
-/// Blinn–Phong with a headlight.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Shading {
-    pub ambient: f32,
-    pub diffuse: f32,
-    pub specular: f32,
-    pub shininess: f32,
-}
-
-impl Default for Shading {
-    /// VTK's defaults as used by ../shared/tools/vtk_bench.py.
-    fn default() -> Shading {
-        Shading {
-            ambient: 0.2,
-            diffuse: 0.7,
-            specular: 0.3,
-            shininess: 20.0,
-        }
-    }
-}
 
 /// Rule 2's most optical depth one strided segment may carry (e^−0.05 ≈ 95% transmitted): strides lengthen
 /// segments only where the classification is faint.
@@ -133,9 +32,6 @@ pub const STRIDE_SPREAD: f64 = 0.01;
 /// Rule 9's key light, used for shadows under a headlight: towards the eye, offset this much (per unit of the
 /// view vector) up and to the left: about 40° off the view axis.
 pub const KEY_LIGHT_OFFSET: f32 = 0.6;
-
-/// The strides rule 2 allows.
-pub const STRIDES: [u32; 3] = [1, 2, 4];
 
 /// Everything that decides a frame's pixels.
 ///

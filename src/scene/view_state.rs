@@ -110,4 +110,81 @@ mod tests {
         assert_eq!(plain, settings);
         assert!(ViewState::from_json("{", "bad.json").unwrap_err().contains("bad.json"));
     }
+
+    /// `RenderSettings`'s fields before they were grouped (602609e): a state file's keys, which must not change.
+    const KEYS_BEFORE_THE_GROUPS: [&str; 37] = [
+        "width",
+        "height",
+        "camera",
+        "colormap",
+        "window",
+        "step_alpha",
+        "step_length",
+        "multiplied_alpha",
+        "transfer_function",
+        "mode",
+        "iso_value",
+        "iso_color",
+        "iso_opacity",
+        "extra_isosurfaces",
+        "light",
+        "shadows",
+        "ambient_occlusion",
+        "density",
+        "shading",
+        "gradient_opacity",
+        "shading_fade",
+        "jitter",
+        "early_termination",
+        "background",
+        "slab_lo",
+        "slab_hi",
+        "ray_setup",
+        "position_format",
+        "skip_empty",
+        "max_stride",
+        "stride_tolerance",
+        "gradient_texture",
+        "compute",
+        "ray_spacing",
+        "voxel_axes",
+        "clip_plane",
+        "count_samples",
+    ];
+
+    #[test]
+    fn a_state_keeps_the_flat_keys_it_had_before_the_settings_were_grouped() {
+        let json = serde_json::to_value(RenderSettings::default()).unwrap();
+        let mut keys: Vec<&str> = json.as_object().unwrap().keys().map(String::as_str).collect();
+        let mut before = KEYS_BEFORE_THE_GROUPS.to_vec();
+        keys.sort_unstable();
+        before.sort_unstable();
+        assert_eq!(keys, before);
+    }
+
+    #[test]
+    fn a_state_written_before_the_groups_reads_into_them() {
+        // Part of a state as 602609e wrote it: one value of each part, the others left to their defaults.
+        let old = r#"{"volume": {"builtin": "helix"}, "width": 64, "height": 48, "colormap": "plasma",
+            "window": [0.25, 0.75], "mode": "isosurface", "iso_value": 0.4, "shadows": true, "shading_fade": 0.5,
+            "step_length": 0.5, "max_stride": 4, "slab_lo": [0.0, 0.1, 0.0], "ray_setup": "analytic",
+            "compute": true, "voxel_axes": true, "background": [1.0, 1.0, 1.0]}"#;
+        let s = ViewState::from_json(old, "old.json").unwrap().settings;
+        let mut want = RenderSettings::new(64, 48, glam::Vec3::ONE);
+        want.camera = s.camera;
+        want.colour.colormap = crate::transfer::Colormap::Plasma;
+        want.colour.window = [0.25, 0.75];
+        want.compositing.mode = crate::scene::settings::CompositeMode::Isosurface;
+        want.compositing.iso_value = 0.4;
+        want.lighting.shadows = true;
+        want.lighting.shading_fade = 0.5;
+        want.sampling.step_length = 0.5;
+        want.sampling.max_stride = 4;
+        want.cut.slab_lo = glam::Vec3::new(0.0, 0.1, 0.0);
+        want.pipeline.ray_setup = crate::scene::settings::RaySetup::Analytic;
+        want.pipeline.compute = true;
+        want.voxel_axes = true;
+        want.background = glam::Vec3::ONE;
+        assert_eq!(s, want);
+    }
 }
