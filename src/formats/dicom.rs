@@ -321,6 +321,37 @@ pub(crate) fn load(path: &Path, series: Option<&str>, progress: &mut Progress) -
     Ok(v)
 }
 
+/// The folder and series that one DICOM file stands for: as in Slicer and every DICOM viewer, opening one slice of
+/// a series opens the whole series, with the folder's other series listed beside it. `None` for a folder, a file that
+/// is not DICOM or holds several frames (a volume of its own), and a file alone in its series in its folder.
+pub fn series_of_file(path: &Path) -> Option<(PathBuf, String)> {
+    let series_uid = |f: &Path| -> Option<(String, u32)> {
+        if !format::read_prefix(f, 132).is_ok_and(|p| is_dicom(&p)) {
+            return None;
+        }
+        let label = format::file_label(f);
+        let s = open_dicom(f, true).ok().and_then(|o| slice_info(&o, 0, &label).ok())?;
+        Some((s.series, s.frames))
+    };
+    if path.is_dir() {
+        return None;
+    }
+    let (uid, frames) = series_uid(path)?;
+    if frames > 1 || uid.is_empty() {
+        return None;
+    }
+    let folder = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let files = list_folder(folder, &format::file_label(folder)).ok()?;
+    let sibling = files
+        .iter()
+        .filter(|f| f.file_name() != path.file_name())
+        .any(|f| series_uid(f).is_some_and(|(u, _)| u == uid));
+    sibling.then(|| (folder.to_path_buf(), uid))
+}
+
 /// The visible files of a folder, sorted by name; at most [`MAX_FILES`].
 fn list_folder(path: &Path, label: &str) -> Result<Vec<PathBuf>, VolumeError> {
     let io = |source| VolumeError::Io {

@@ -8,7 +8,7 @@ pub(crate) use crate::volume::clip;
 use crate::volume::{check_dims, check_spacing, Geometry, Scaling, Volume, VolumeError, VoxelData, VoxelType};
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 /// Text headers must end within this many bytes: no real header is near it, and it bounds what a hostile file can
 /// make us read before the data starts.
@@ -247,39 +247,32 @@ pub(crate) fn volume_name(path: &Path) -> String {
         .to_string()
 }
 
-/// Resolves a detached data file named in a header. It must be a relative path that stays inside the header's
-/// folder, also after following symbolic links.
+/// Resolves a detached data file named in a header as the NRRD and MetaImage specifications, ITK and pynrrd do: an
+/// absolute path as it is, a relative one from the header's folder, symbolic links followed. It must exist and be a
+/// regular file (not a device or a pipe, which could be endless); the error names the path tried.
 pub(crate) fn resolve_data_file(header_path: &Path, name: &str) -> Result<PathBuf, VolumeError> {
     let file = file_label(header_path);
-    let escape = || VolumeError::PathEscape {
+    let folder = header_path.parent().unwrap_or(Path::new(""));
+    let tried = if Path::new(name).is_absolute() {
+        PathBuf::from(name)
+    } else {
+        folder.join(name)
+    };
+    let missing = |source| VolumeError::DataFile {
         file: file.clone(),
         data_file: clip(name),
-    };
-    let relative = Path::new(name);
-    if name.is_empty()
-        || !relative
-            .components()
-            .all(|c| matches!(c, Component::Normal(_) | Component::CurDir))
-    {
-        return Err(escape());
-    }
-    let folder = header_path.parent().unwrap_or(Path::new("."));
-    let folder = if folder.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        folder
-    };
-    let joined = folder.join(relative);
-    let io = |source, path: &Path| VolumeError::Io {
-        path: path.to_path_buf(),
+        tried: std::path::absolute(&tried).unwrap_or_else(|_| tried.clone()),
         source,
     };
-    let real_folder = folder.canonicalize().map_err(|e| io(e, folder))?;
-    let real = joined.canonicalize().map_err(|e| io(e, &joined))?;
-    if !real.starts_with(&real_folder) {
-        return Err(escape());
+    if name.is_empty() {
+        return Err(missing(std::io::ErrorKind::NotFound.into()));
     }
-    Ok(real)
+    // Follows links: a link to a regular file is read; a link to a device, a folder or nothing is refused.
+    let meta = std::fs::metadata(&tried).map_err(missing)?;
+    if !meta.is_file() {
+        return Err(VolumeError::NotAFile { path: tried });
+    }
+    Ok(tried)
 }
 
 /// Where the voxel bytes come from.
@@ -520,24 +513,44 @@ mod tests {
     use super::*;
 
     #[test]
-    fn data_file_must_stay_in_the_header_folder() {
+    fn data_files_are_found_as_itk_finds_them() {
         let dir = std::env::temp_dir().join(format!("volcast-resolve-{}", std::process::id()));
         std::fs::create_dir_all(dir.join("sub")).unwrap();
         std::fs::write(dir.join("data.raw"), b"x").unwrap();
         std::fs::write(dir.join("sub/data.raw"), b"x").unwrap();
-        let header = dir.join("h.nhdr");
-        assert!(resolve_data_file(&header, "data.raw").is_ok());
-        assert!(resolve_data_file(&header, "./sub/data.raw").is_ok());
-        for bad in ["../data.raw", "sub/../../x", "/etc/passwd", "", "../../etc/passwd"] {
-            let err = resolve_data_file(&header, bad).unwrap_err();
-            assert!(matches!(err, VolumeError::PathEscape { .. }), "{bad}: {err}");
-        }
+        let header = dir.join("sub/h.nhdr");
+        // Relative from the header's folder, `..` included; absolute as given.
+        assert_eq!(
+            resolve_data_file(&header, "data.raw").unwrap(),
+            dir.join("sub/data.raw")
+        );
+        assert_eq!(
+            resolve_data_file(&header, "../data.raw").unwrap(),
+            dir.join("sub/../data.raw")
+        );
+        let absolute = dir.join("data.raw");
+        assert_eq!(
+            resolve_data_file(&header, absolute.to_str().unwrap()).unwrap(),
+            absolute
+        );
+        // Missing: the message names the path tried, absolute.
+        let e = resolve_data_file(&header, "nothere.raw").unwrap_err().to_string();
+        assert!(e.contains(&format!("{}", dir.join("sub/nothere.raw").display())), "{e}");
+        assert!(resolve_data_file(&header, "").is_err());
+        // Not a regular file: a folder, or a device reached through a link.
+        assert!(matches!(
+            resolve_data_file(&header, "..").unwrap_err(),
+            VolumeError::NotAFile { .. }
+        ));
         #[cfg(unix)]
         {
-            let _ = std::fs::remove_file(dir.join("link.raw"));
-            std::os::unix::fs::symlink("/etc/passwd", dir.join("link.raw")).unwrap();
-            let err = resolve_data_file(&header, "link.raw").unwrap_err();
-            assert!(matches!(err, VolumeError::PathEscape { .. }), "{err}");
+            let _ = std::fs::remove_file(dir.join("sub/link.raw"));
+            std::os::unix::fs::symlink("../data.raw", dir.join("sub/link.raw")).unwrap();
+            assert!(resolve_data_file(&header, "link.raw").is_ok());
+            let _ = std::fs::remove_file(dir.join("sub/zero.raw"));
+            std::os::unix::fs::symlink("/dev/zero", dir.join("sub/zero.raw")).unwrap();
+            let e = resolve_data_file(&header, "zero.raw").unwrap_err();
+            assert!(matches!(e, VolumeError::NotAFile { .. }), "{e}");
         }
         let _ = std::fs::remove_dir_all(&dir);
     }

@@ -2,7 +2,7 @@
 //! `NAME_WxHxD_TYPE.raw`.
 
 use super::decode::{self, DecodeError, Endian, Progress};
-use crate::volume::{check_dims, check_spacing, Volume, VolumeError, VoxelType};
+use crate::volume::{check_dims, check_spacing, MissingLayout, Volume, VolumeError, VoxelType};
 use std::fs::File;
 use std::path::Path;
 
@@ -131,9 +131,9 @@ pub(crate) fn layout(
         (Some(d), Some(t)) => (d, t),
         (d, t) => {
             let missing = match (d, t) {
-                (None, None) => "dimensions and voxel type",
-                (None, _) => "dimensions",
-                _ => "voxel type",
+                (None, None) => MissingLayout::Both,
+                (None, _) => MissingLayout::Dims,
+                _ => MissingLayout::VoxelType,
             };
             return Err(VolumeError::MissingLayout {
                 file: file_name.to_string(),
@@ -485,7 +485,7 @@ mod tests {
         let err = load_raw(&path, &opts).unwrap_err();
         assert!(
             err.to_string()
-                .starts_with("cannot tell the voxel type of volume2.raw: pass --dims"),
+                .starts_with("cannot tell the voxel type of volume2.raw: --dims is given but --type is missing; pass --type T, one of uint8"),
             "{err}"
         );
         let opts = RawOptions {
@@ -495,7 +495,7 @@ mod tests {
         let err = load_raw(&path, &opts).unwrap_err();
         assert!(
             err.to_string()
-                .starts_with("cannot tell the dimensions of volume2.raw: pass --dims"),
+                .starts_with("cannot tell the dimensions of volume2.raw: --type is given but --dims is missing"),
             "{err}"
         );
 

@@ -62,8 +62,29 @@ impl Keep {
     }
 }
 
-/// [`open`], leaving the cache write to the caller (the viewer shows the volume first).
+/// [`open`], leaving the cache write to the caller (the viewer shows the volume first). One slice of a DICOM
+/// series opens its whole series, that slice's series chosen unless `opts.series` names one
+/// ([`series_of_file`](crate::formats::dicom::series_of_file)).
 pub fn open_deferred(
+    path: &Path,
+    opts: &OpenOptions,
+    budgets: Budgets,
+    cache: Option<&PyramidCache>,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Opened, VolumeError> {
+    match crate::formats::dicom::series_of_file(path) {
+        Some((folder, uid)) => {
+            let opts = OpenOptions {
+                series: opts.series.clone().or(Some(uid)),
+                ..opts.clone()
+            };
+            open_path(&folder, &opts, budgets, cache, progress)
+        }
+        None => open_path(path, opts, budgets, cache, progress),
+    }
+}
+
+fn open_path(
     path: &Path,
     opts: &OpenOptions,
     budgets: Budgets,

@@ -47,8 +47,8 @@ pub enum VolumeError {
     },
     #[error("voxel data of kind {data} cannot hold source type {source_type}")]
     TypeMismatch { source_type: VoxelType, data: &'static str },
-    #[error("cannot tell the {missing} of {file}: pass --dims W H D --type T or name the file NAME_WxHxD_TYPE.raw")]
-    MissingLayout { file: String, missing: &'static str },
+    #[error("cannot tell the {} of {file}: {}", missing.what(), missing.remedy())]
+    MissingLayout { file: String, missing: MissingLayout },
     #[error("cannot read {}: {source}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
     #[error("{} is not a regular file", path.display())]
@@ -110,11 +110,13 @@ pub enum VolumeError {
         dims: [u32; 3],
         voxel_type: VoxelType,
     },
-    #[error(
-        "{file}: data file '{data_file}' is outside the header's folder; volcast only reads data files in the \
-         header's folder or below it"
-    )]
-    PathEscape { file: String, data_file: String },
+    #[error("{file}: its data file '{data_file}' cannot be read at {}: {source}", tried.display())]
+    DataFile {
+        file: String,
+        data_file: String,
+        tried: PathBuf,
+        source: std::io::Error,
+    },
     #[error(
         "{} exceeds the maximum dimension {max_dim} and downsampling is off (--no-downsample); \
          raise --max-dim or allow downsampling",
@@ -138,5 +140,37 @@ pub(crate) fn clip(text: &str) -> String {
         t.chars().take(40).collect::<String>() + "..."
     } else {
         t.to_string()
+    }
+}
+
+/// What a raw file's layout lacks after `--dims`, `--type` and its name are read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MissingLayout {
+    Both,
+    Dims,
+    VoxelType,
+}
+
+impl MissingLayout {
+    fn what(self) -> &'static str {
+        match self {
+            MissingLayout::Both => "dimensions and voxel type",
+            MissingLayout::Dims => "dimensions",
+            MissingLayout::VoxelType => "voxel type",
+        }
+    }
+
+    /// Names only what is missing: a user who gave `--dims` is told that `--type` is missing, not asked again.
+    fn remedy(self) -> String {
+        match self {
+            MissingLayout::Both => "pass --dims W H D --type T or name the file NAME_WxHxD_TYPE.raw".into(),
+            MissingLayout::Dims => "--type is given but --dims is missing; pass --dims W H D".into(),
+            MissingLayout::VoxelType => {
+                format!(
+                    "--dims is given but --type is missing; pass --type T, one of {}",
+                    type_list()
+                )
+            }
+        }
     }
 }

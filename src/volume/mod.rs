@@ -25,7 +25,7 @@ pub(crate) mod voxel;
 pub use builtin::{builtin, BUILTIN_NAMES};
 pub use contents::{ArrayInfo, ChannelInfo, SeriesInfo};
 pub(crate) use error::clip;
-pub use error::VolumeError;
+pub use error::{MissingLayout, VolumeError};
 pub use time::TimeSteps;
 pub(crate) use voxel::stored_offset;
 use voxel::{compute_range, compute_range_of, stored_value};

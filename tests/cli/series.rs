@@ -86,3 +86,29 @@ fn render_says_which_series_it_loaded() {
     );
     assert!(out.exists());
 }
+
+/// One file of a series opens the whole series, as in Slicer: that file's series (901 holds slices 1–4), with the
+/// folder's others listed; `--series` still picks another. A file alone in its series, or a multi-frame file, is
+/// what it is.
+#[test]
+fn one_file_opens_its_series() {
+    let Some(dir) = folder("cli-series-one-file") else {
+        return;
+    };
+    let file = format!("{dir}/slice_002.dcm");
+    let o = volcast(&["info", &file]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("dims:      256 x 256 x 4"), "{text}");
+    assert!(text.contains("loaded series 901"), "{text}");
+    let o = volcast(&["info", "--series", "903", &file]);
+    assert!(stdout(&o).contains("dims:      256 x 256 x 2"), "{}", stdout(&o));
+    let j2k = format!("{}/tests/data/dicom/i16_j2k/03.dcm", env!("CARGO_MANIFEST_DIR"));
+    assert!(stdout(&volcast(&["info", &j2k])).contains("dims:      16 x 12 x 6"));
+    let frames = format!(
+        "{}/tests/data/dicom/multiframe_ct_native.dcm",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let alone = stdout(&volcast(&["info", &frames]));
+    assert!(alone.contains("name:      multiframe_ct_native"), "{alone}");
+}
