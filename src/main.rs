@@ -18,7 +18,8 @@ use volcast::scene::quality::Quality;
     propagate_version = true
 )]
 struct Cli {
-    /// Without a subcommand: `volcast view --builtin helix`.
+    /// Without a subcommand: `volcast view --builtin helix`; `volcast FILE [OPTIONS]` is `volcast view FILE
+    /// [OPTIONS]`.
     #[command(subcommand)]
     command: Option<Command>,
 }
@@ -27,7 +28,7 @@ struct Cli {
 enum Command {
     /// Open the desktop viewer (the default without a subcommand).
     View(Box<ViewArgs>),
-    /// Render a volume to a PNG file without a window.
+    /// Render a volume to a PNG, JPEG or TIFF file without a window.
     Render(Box<RenderArgs>),
     /// Print a volume's dimensions, type, spacing, value range, placement in space and memory needs.
     Info(Box<InfoArgs>),
@@ -56,10 +57,30 @@ fn given(matches: &clap::ArgMatches, name: &str, volume: &VolumeArgs) -> cli::fr
     given
 }
 
+/// `volcast FILE …` as `volcast view FILE …`: where the first argument names no subcommand and is a file or folder
+/// that exists, or reads as a path (a `/` or an extension; a misspelled subcommand has neither, and keeps clap's
+/// "did you mean"). A subcommand wins over a file of the same name.
+fn view_by_default(mut args: Vec<std::ffi::OsString>) -> Vec<std::ffi::OsString> {
+    let command = Cli::command();
+    let Some(first) = args.get(1).and_then(|a| a.to_str()) else {
+        return args;
+    };
+    let subcommand = first == "help"
+        || command
+            .get_subcommands()
+            .any(|c| c.get_name() == first || c.get_all_aliases().any(|a| a == first));
+    let path = std::path::Path::new(first);
+    let a_path = path.exists() || first.contains('/') || path.extension().is_some();
+    if !first.starts_with('-') && !subcommand && a_path {
+        args.insert(1, "view".into());
+    }
+    args
+}
+
 fn main() -> ExitCode {
     // Usage errors exit 64 (sysexits' EX_USAGE), not clap's 2: 2 says "no usable Vulkan".
     let parsed = Cli::command()
-        .try_get_matches()
+        .try_get_matches_from(view_by_default(std::env::args_os().collect()))
         .and_then(|m| Cli::from_arg_matches(&m).map(|cli| (cli, m)));
     let (mut cli, matches) = match parsed {
         Ok(parsed) => parsed,

@@ -135,7 +135,7 @@ fn frame(
         *shown = None;
     }
     if args.frame.given.has("output") {
-        volcast::render::png::save(&image, &args.output).map_err(anyhow::Error::msg)?;
+        volcast::render::save::save(&image, &args.output).map_err(anyhow::Error::msg)?;
     }
     Ok((image, (timings, memory)))
 }

@@ -8,15 +8,17 @@ use clap::Args;
 
 #[derive(Args, Clone, Copy, Debug, Default)]
 pub struct BudgetArgs {
-    /// Host memory the voxels may take, like 6G or 512M (default: a quarter of the machine's memory). A larger
-    /// volume is shown at the finest pyramid level that fits, read level by level from files whose voxels lie on
-    /// disk.
+    /// Host memory the voxels may take, like 6G or 512M (default: a quarter of the machine's)
+    ///
+    /// A larger volume is shown at the finest pyramid level that fits, read level by level from files whose voxels
+    /// lie on disk.
     #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
     pub host_budget: Option<u64>,
-    /// Device memory the volume may take, upload included, like 1G (default: the device's largest heap). Over it,
-    /// `render` streams the volume brick by brick through a pool of half of it, each brick at the level its size on
-    /// screen asks; the viewer and movies show the finest pyramid level that fits.
-    #[arg(long, value_name = "SIZE", value_parser = parse_bytes)]
+    /// Device memory the volume may take, like 1G (default: the device's largest heap)
+    ///
+    /// The upload included. Over it, `render` streams the volume brick by brick through a pool of half of it, each
+    /// brick at the level its size on screen asks; the viewer and movies show the finest pyramid level that fits.
+    #[arg(long, value_name = "SIZE", value_parser = parse_bytes, hide_short_help = true)]
     pub gpu_budget: Option<u64>,
 }
 

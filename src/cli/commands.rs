@@ -90,7 +90,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
                 let diff = crate::measure::image_diff::amplified_diff(&c.faces.image, &c.analytic.image, 10);
                 let save = |suffix: &str, img: &image::RgbaImage| -> Result<()> {
                     let path = args.out.join(format!("{}-{suffix}.png", view.name));
-                    crate::render::png::save(img, &path).map_err(anyhow::Error::msg)
+                    crate::render::save::save(img, &path).map_err(anyhow::Error::msg)
                 };
                 save("faces", &c.faces.image)?;
                 save("analytic", &c.analytic.image)?;

@@ -100,6 +100,19 @@ pub fn parse_slice(s: &str) -> Result<(usize, f32, f32), String> {
     Ok((axis, pos, width))
 }
 
+/// " (did you mean 'NAME'?)" for the name in `names` nearest a misspelled `s`, as clap suggests flags: Jaro
+/// similarity above 0.7 (clap's threshold), else nothing.
+pub fn did_you_mean(s: &str, names: &[&str]) -> String {
+    let s = s.trim().to_ascii_lowercase();
+    names
+        .iter()
+        .map(|n| (strsim::jaro(&s, n), n))
+        .filter(|(score, _)| *score > 0.7)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, n)| format!(" (did you mean '{n}'?)"))
+        .unwrap_or_default()
+}
+
 /// `parse(s)`, or an error listing the names of `all` (`what` says what the value is).
 fn parse_named<T: Copy>(
     s: &str,
@@ -110,7 +123,11 @@ fn parse_named<T: Copy>(
 ) -> Result<T, String> {
     parse(s).ok_or_else(|| {
         let names: Vec<&str> = all.iter().map(|&v| name(v)).collect();
-        format!("unknown {what} '{s}'; choose one of {}", names.join(", "))
+        format!(
+            "unknown {what} '{s}'{}; choose one of {}",
+            did_you_mean(s, &names),
+            names.join(", ")
+        )
     })
 }
 
@@ -172,9 +189,11 @@ pub fn parse_preset(s: &str) -> Result<String, String> {
     if name == "auto" || crate::transfer::function::PRESET_NAMES.contains(&name) {
         Ok(name.to_string())
     } else {
+        let names = crate::transfer::function::PRESET_NAMES;
         Err(format!(
-            "unknown preset '{name}'; choose one of {}, auto",
-            crate::transfer::function::PRESET_NAMES.join(", ")
+            "unknown preset '{name}'{}; choose one of {}, auto",
+            did_you_mean(name, &[names, &["auto"][..]].concat()),
+            names.join(", ")
         ))
     }
 }
@@ -182,8 +201,11 @@ pub fn parse_preset(s: &str) -> Result<String, String> {
 /// `--builtin`: a built-in volume's name.
 pub fn parse_builtin(s: &str) -> Result<String, String> {
     let names = crate::volume::BUILTIN_NAMES;
-    names
-        .contains(&s.trim())
-        .then(|| s.trim().to_string())
-        .ok_or_else(|| format!("unknown built-in volume '{s}'; choose one of {}", names.join(", ")))
+    names.contains(&s.trim()).then(|| s.trim().to_string()).ok_or_else(|| {
+        format!(
+            "unknown built-in volume '{s}'{}; choose one of {}",
+            did_you_mean(s, names),
+            names.join(", ")
+        )
+    })
 }

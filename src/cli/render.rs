@@ -332,7 +332,8 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     if args.turntable.is_some() || !args.keyframes.is_empty() {
         return movie(args);
     }
-    crate::render::png::check_name(&args.output).map_err(anyhow::Error::msg)?;
+    // Exit 64 before anything is rendered: a name volcast cannot write, or a folder that does not exist.
+    crate::render::save::check_name(&args.output).map_err(super::UsageError)?;
     let t_device = Instant::now();
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
@@ -367,7 +368,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             if args.colorbar {
                 frame.image = crate::render::figure::with_colorbar(&frame.image, &s, &volume);
             }
-            crate::render::png::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
+            crate::render::save::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
             println!(
                 "rendered {} ({}x{}x{} {}, spacing {}x{}x{}) at {}x{} with {} ray setup on {} -> {}",
                 volume.name,

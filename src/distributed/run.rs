@@ -64,7 +64,7 @@ fn say(line: String) {
 fn rank_render(world: &SimpleCommunicator, args: &RenderArgs) -> Result<()> {
     refuse_unsupported(args)?;
     // An output name rank 0 could not write is refused before any rank reads or renders.
-    crate::render::png::check_name(&args.output).map_err(anyhow::Error::msg)?;
+    crate::render::save::check_name(&args.output).map_err(anyhow::Error::msg)?;
     let (rank, size) = (world.rank() as usize, world.size() as usize);
     let t_read = Instant::now();
     let (source, dims, geometry) = Source::open(&args.volume)?;
@@ -297,7 +297,7 @@ fn write_image(
     if args.colorbar {
         image = crate::render::figure::with_colorbar(&image, s, whole);
     }
-    crate::render::png::save(&image, &args.output).map_err(anyhow::Error::msg)?;
+    crate::render::save::save(&image, &args.output).map_err(anyhow::Error::msg)?;
     println!(
         "rendered {} ({}x{}x{} {}) at {}x{} with {} ray setup on {} ranks ({}) -> {}",
         whole.name,

@@ -167,7 +167,7 @@ pub fn record(
                 headless.renderer.enable_gradient_texture(gpu, volume)?;
             }
             let frame = headless.render(gpu, &s)?;
-            crate::render::png::save(&frame.image, png).map_err(MovieError::Write)?;
+            crate::render::save::save(&frame.image, png).map_err(MovieError::Write)?;
             written += 1;
             gif.push(&frame.image)?;
             if !progress(k + 1) && k + 1 < n {

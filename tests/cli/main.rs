@@ -12,6 +12,7 @@ mod bricks;
 mod clip;
 mod colorbar;
 mod convert;
+mod help;
 mod info_notes;
 mod movie;
 mod options;

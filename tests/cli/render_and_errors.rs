@@ -173,13 +173,37 @@ fn bad_volumes_give_clear_errors() {
         "huge_3000x3000x3000_uint16.raw is 16 bytes but 3000x3000x3000 uint16 needs 54000000000",
     );
     assert_usage_error(&["info", "--builtin", "teapot"], "helix");
-    assert_fails_with(&["render"], "no volume given");
+    // No volume at all is the command line's fault: exit 64, for info as for render.
+    assert_usage_error(&["render"], "no volume given");
+    assert_usage_error(&["info"], "no volume given");
+    // --dims without --type says that --type is missing, and does not ask for the dims again.
+    let untyped = scratch("cli").join("untyped.raw");
+    std::fs::write(&untyped, vec![0u8; 8]).unwrap();
+    let o = volcast(&["info", untyped.to_str().unwrap(), "--dims", "2", "2", "2"]);
+    let err = stderr(&o);
+    assert!(
+        err.contains("--dims is given but --type is missing; pass --type T, one of uint8"),
+        "{err}"
+    );
+    assert!(!err.contains("pass --dims"), "{err}");
 }
 
 #[test]
 fn bad_settings_give_clear_errors() {
     assert_usage_error(&tiny_render(&["--window", "0.8,0.2"]), "window");
     assert_usage_error(&tiny_render(&["--colormap", "jet"]), "viridis");
+    // A misspelled value gets the nearest name, as clap does for a misspelled flag.
+    for (extra, needle) in [
+        (
+            &["--colormap", "viridsi"][..],
+            "unknown colormap 'viridsi' (did you mean 'viridis'?)",
+        ),
+        (&["--mode", "emision"], "(did you mean 'emission'?)"),
+        (&["--preset", "ct-bnoe"], "(did you mean 'ct-bone'?)"),
+        (&["--quality", "draf"], "(did you mean 'draft'?)"),
+    ] {
+        assert_usage_error(&tiny_render(extra), needle);
+    }
     assert_usage_error(&tiny_render(&["--step-length", "0"]), "step length");
     assert_usage_error(&tiny_render(&["--size", "0x10"]), "image size");
     // One message per condition.
@@ -231,19 +255,23 @@ fn bad_settings_give_clear_errors() {
     assert_fails_with(&["view", "--tf", "/nonexistent/tf.json"], "/nonexistent/tf.json");
 }
 
-/// A render that fails writes nothing: a name volcast cannot write is refused before rendering, and no empty file
-/// is left behind (a `.jpg` name used to leave one).
+/// A render that fails writes nothing: a name volcast cannot write, or a folder that does not exist, is refused
+/// with exit 64 before rendering, and no empty file is left behind.
 #[test]
 fn a_failed_render_leaves_no_file() {
-    for name in ["failed.jpg", "failed"] {
+    for name in ["failed.gif", "failed"] {
         let out = scratch("cli").join(name);
         let _ = std::fs::remove_file(&out);
-        assert_fails_with(
+        assert_usage_error(
             &tiny_render(&["-o", out.to_str().unwrap()]),
-            "volcast writes PNG images",
+            "volcast writes PNG, JPEG and TIFF images",
         );
         assert!(!out.exists(), "{name} was left behind");
     }
+    assert_usage_error(
+        &tiny_render(&["-o", "/nonexistent/dir/x.png"]),
+        "the folder /nonexistent/dir does not exist",
+    );
     let out = scratch("cli").join("failed-size.png");
     let _ = std::fs::remove_file(&out);
     assert_usage_error(
@@ -251,6 +279,41 @@ fn a_failed_render_leaves_no_file() {
         "image size",
     );
     assert!(!out.exists());
+}
+
+/// `-o` names the format: a JPEG or TIFF holds the same picture as the PNG (JPEG within its loss).
+#[test]
+fn jpeg_and_tiff_by_extension() {
+    let dir = scratch("cli-formats");
+    let png = dir.join("f.png");
+    assert!(volcast(&tiny_render(&["-o", png.to_str().unwrap()])).status.success());
+    let want = image::open(&png).unwrap().to_rgb8();
+    for name in ["f.jpg", "f.TIFF"] {
+        let out = dir.join(name);
+        let o = volcast(&tiny_render(&["-o", out.to_str().unwrap()]));
+        assert!(o.status.success(), "{name}: {}", stderr(&o));
+        let bytes = std::fs::read(&out).unwrap();
+        let got: Vec<u8> = if name.ends_with(".jpg") {
+            assert!(bytes.starts_with(&[0xff, 0xd8, 0xff]), "{name} is not a JPEG");
+            let mut d = jpeg_decoder::Decoder::new(&bytes[..]);
+            d.decode().unwrap()
+        } else {
+            let mut d = tiff::decoder::Decoder::new(std::io::Cursor::new(bytes)).unwrap();
+            let tiff::decoder::DecodingResult::U8(rgba) = d.read_image().unwrap() else {
+                panic!("{name}: not 8-bit")
+            };
+            rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect()
+        };
+        assert_eq!(got.len(), want.as_raw().len(), "{name}");
+        let worst = got
+            .iter()
+            .zip(want.as_raw())
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap();
+        let limit = if name.ends_with(".jpg") { 40 } else { 0 };
+        assert!(worst <= limit, "{name}: differs from the PNG by up to {worst}");
+    }
 }
 
 /// Shadows and occlusion asked of a projection render it unlit, with a note saying so.
@@ -266,6 +329,31 @@ fn shadows_in_mip_render_with_a_note() {
     ]));
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("mip is not lit"), "{}", stderr(&o));
+}
+
+/// `volcast FILE` is `volcast view FILE` (tested through X in tests/viewer/panel.rs); a subcommand's name wins over
+/// a file of that name, and a misspelled subcommand keeps clap's suggestion rather than becoming a file to open.
+#[test]
+fn subcommands_win_over_file_names() {
+    let dir = scratch("cli-subcommand-names");
+    std::fs::write(dir.join("info"), b"a file named like a subcommand").unwrap();
+    let o = common::volcast_command()
+        .current_dir(&dir)
+        .args(["info", "--builtin", "helix", "--builtin-size", "8"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("8 x 8 x 8"),
+        "info ran, not the viewer"
+    );
+    let o = common::volcast(&["rendr", "--builtin", "helix"]);
+    assert_eq!(o.status.code(), Some(64));
+    assert!(
+        stderr(&o).contains("similar subcommand exists: 'render'"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]

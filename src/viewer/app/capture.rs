@@ -155,7 +155,7 @@ fn save_screenshot(path: &Path, pixels: Vec<u8>, state: &ViewState, step: Option
     let settings = &state.settings;
     let img = image::RgbaImage::from_raw(settings.width, settings.height, pixels)
         .ok_or_else(|| ViewerError::Other("screenshot size mismatch".into()))?;
-    crate::render::png::save(&img, path).map_err(ViewerError::Other)?;
+    crate::render::save::save(&img, path).map_err(ViewerError::Other)?;
     // The view state: the settings (still readable as plain `RenderSettings`), the volume's origin and the
     // viewer's own state, so that `volcast render --state` renders this view again and `view --state` restores it.
     write_session(&path.with_extension("json"), state).map_err(ViewerError::Other)?;

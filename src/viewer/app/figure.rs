@@ -44,7 +44,7 @@ impl Running {
             image
         };
         let path: PathBuf = self.capture.new_name("png");
-        crate::render::png::save(&image, &path)?;
+        crate::render::save::save(&image, &path)?;
         write_session(&path.with_extension("json"), &self.view_state(&s))?;
         Ok(format!("{} ({}x{})", path.display(), image.width(), image.height()))
     }
