@@ -199,13 +199,17 @@ pub struct Viewer {
 impl Viewer {
     /// Starts `volcast view VOLUME... --validate --size 900x600 --script SCRIPT` in `dir` on `display`.
     pub fn start(display: &str, dir: &Path, volume: &[&str], script: &str) -> Viewer {
+        Viewer::launch(display, dir, &[&["view"], volume].concat(), script)
+    }
+
+    /// As [`Viewer::start`], with `args` in place of `view VOLUME...` (`volcast FILE` names no subcommand).
+    pub fn launch(display: &str, dir: &Path, args: &[&str], script: &str) -> Viewer {
         let runtime = dir.join("xdg");
         std::fs::create_dir_all(&runtime).expect("XDG_RUNTIME_DIR");
         let mut child = super::volcast_command()
             // Held open by the test: the end of stdin ends a script's `hold`.
             .stdin(Stdio::piped())
-            .arg("view")
-            .args(volume)
+            .args(args)
             .args(["--validate", "--size", "900x600", "--script", script])
             // F12 writes its screenshot into the working directory.
             .current_dir(dir)

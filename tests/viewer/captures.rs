@@ -33,12 +33,11 @@ fn window_name(display: &str, window: &str) -> String {
         .to_string()
 }
 
+/// The file name in a "saved screenshot PATH" line. PATH is absolute: a relative one does not say where it is.
 fn saved_name(line: &str) -> String {
-    line.split_once("saved screenshot ")
-        .expect("a saved line")
-        .1
-        .trim()
-        .to_string()
+    let path = Path::new(line.split_once("saved screenshot ").expect("a saved line").1.trim());
+    assert!(path.is_absolute(), "{line}: the path is absolute");
+    path.file_name().expect("a file name").to_string_lossy().into_owned()
 }
 
 /// Pixels within `tolerance` of `rgb` in every channel.
@@ -81,7 +80,9 @@ fn captures_have_readable_names_and_the_title_names_the_volume() {
     std::thread::sleep(Duration::from_millis(500));
     type_keys(&x.display, window, &["F9"]);
     viewer.wait_for("saved recording ", Duration::from_secs(60));
-    let gif = started.split_once("recording ").unwrap().1.trim();
+    let gif = Path::new(started.split_once("recording ").unwrap().1.trim());
+    assert!(gif.is_absolute(), "{started}: the path is absolute");
+    let gif = gif.file_name().unwrap().to_str().unwrap();
     assert!(
         readable_stem(gif, "gif").is_some(),
         "{gif} is not volcast-<date>_<time>.gif"

@@ -41,10 +41,15 @@ pub(crate) fn export(viewer: &mut Viewer, display: &str, window: &str, dir: &std
         .unwrap()
         .trim()
         .to_string();
-    assert!(name.starts_with("volcast-20") && name.ends_with(".png"), "{line}");
-    image::open(dir.join(&name))
-        .unwrap_or_else(|e| panic!("{name}: {e}"))
-        .to_rgba8()
+    // The path is absolute, so the message says where the figure is.
+    let path = std::path::Path::new(&name);
+    let file = path.file_name().unwrap().to_string_lossy();
+    assert!(
+        path.is_absolute() && dir.join(&*file).exists(),
+        "{line}: in the working folder, named absolutely"
+    );
+    assert!(file.starts_with("volcast-20") && file.ends_with(".png"), "{line}");
+    image::open(path).unwrap_or_else(|e| panic!("{name}: {e}")).to_rgba8()
 }
 
 /// Scrolls the panel until the "Export figure" section is in view and still.

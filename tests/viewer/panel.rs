@@ -73,8 +73,9 @@ fn error_coloured_pixels(image: &image::RgbaImage, rect: egui::Rect) -> usize {
         .count()
 }
 
-/// `volcast view BAD_FILE`: the window opens (on the empty scene) and shows the load's error under the path field,
-/// which names the file, as a load from the panel does; closing it exits 0. (It used to flash and exit 1.)
+/// `volcast BAD_FILE`, no subcommand: the viewer opens (on the empty scene) and shows the load's error under the
+/// path field, which names the file, as a load from the panel does; closing it exits 0. (It used to flash and exit
+/// 1, and `volcast FILE` without `view` was refused.)
 #[test]
 fn a_bad_file_on_the_command_line_opens_the_viewer_with_its_error() {
     let Some((x, dir)) = x_session("viewer-panel-bad-file") else {
@@ -84,13 +85,22 @@ fn a_bad_file_on_the_command_line_opens_the_viewer_with_its_error() {
     let bad = dir.join("broken.nii");
     std::fs::write(&bad, b"not a NIfTI header at all").expect("write the bad file");
     let script = format!("frames:3;{HOLD};exit");
-    let mut viewer = Viewer::start(&x.display, &dir, &[bad.to_str().expect("UTF-8")], &script);
+    let mut viewer = Viewer::launch(&x.display, &dir, &[bad.to_str().expect("UTF-8")], &script);
     let said = viewer.wait_for("could not load ", Duration::from_secs(180));
     assert!(said.contains("broken.nii"), "{said}");
     viewer.wait_for("script: Hold", Duration::from_secs(60));
     let window = &viewer.window(&x.display);
     let (d, w) = (x.display.as_str(), window.as_str());
     let error = scroll_to(&mut viewer, d, w, "load-error");
+    // The reason first, the file named once.
+    let text = viewer
+        .stderr
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix("ui label load-error "))
+        .expect("its text");
+    assert_eq!(text.matches("broken.nii").count(), 1, "{text}");
+    assert!(!text.starts_with('/') && !text.starts_with("broken.nii"), "{text}");
     let field = viewer.ui_rect("load-path");
     assert!(
         error.top() >= field.bottom(),

@@ -44,3 +44,26 @@ fn the_chooser_lists_the_series_and_loads_the_one_clicked() {
     assert!(picked.ends_with("mixed (series 901)"), "{picked}");
     viewer.finish_clean();
 }
+
+/// A file of a series given alone (as Open…, a drop or `volcast FILE` give it) loads its whole series, and the panel
+/// lists the folder's others. Slice 2 belongs to series 901 (4 slices), not the largest.
+#[test]
+fn one_file_of_a_series_loads_the_series() {
+    let Some((x, dir)) = x_session("viewer-series-one-file") else {
+        return;
+    };
+    let Some(folder) = dicom_series::make(&dir.join("mixed")) else {
+        common::skip("no shared DICOM series (../shared/data/native/brain_pd_mr)");
+        return;
+    };
+    let file = folder.join("slice_002.dcm").to_string_lossy().into_owned();
+    let script = format!("frames:3;{HOLD};exit");
+    let mut viewer = Viewer::launch(&x.display, &dir, &[&file], &script);
+    viewer.wait_for("loaded ", Duration::from_secs(180));
+    let holds = viewer.wait_for("holds ", Duration::from_secs(10));
+    assert!(holds.ends_with("256x256x4 voxels"), "{holds}");
+    viewer.wait_for("script: Hold", Duration::from_secs(60));
+    let combo = settled_rect(&mut viewer, "series-combo");
+    assert!(combo.width() > 0.0, "the panel lists the folder's series");
+    viewer.finish_clean();
+}

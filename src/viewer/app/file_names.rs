@@ -8,8 +8,10 @@ use std::path::{Path, PathBuf};
 pub type DateTime = [i32; 6];
 
 /// `volcast-<local date and time>.<ext>` (or `-2`, `-3`… before the extension), the first name `taken` refuses.
+/// The path is absolute, so "saved …" says where the file is, whatever the working folder.
 pub(super) fn capture_path(ext: &str, taken: impl Fn(&Path) -> bool) -> PathBuf {
-    unique_path(&stem(local_now()), ext, taken)
+    let path = unique_path(&stem(local_now()), ext, taken);
+    std::path::absolute(&path).unwrap_or(path)
 }
 
 /// `volcast-YYYY-MM-DD_HH-MM-SS`: sorts by time, and has no `:` (which some file systems refuse).

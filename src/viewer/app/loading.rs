@@ -345,7 +345,10 @@ impl Loader {
                     model.volume.label = "no volume: open one below".into();
                 }
                 eprintln!("could not load {}: {e}", loading.label);
-                messages.error = Some(format!("{}: {e}", loading.label));
+                messages.error = Some(crate::viewer::model::files::load_error_text(
+                    &loading.label,
+                    &e.to_string(),
+                ));
                 self.loading = None;
                 messages.loading = None;
             }

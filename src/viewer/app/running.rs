@@ -144,6 +144,7 @@ impl Running {
         let edited = self.loader.preview_edited(&self.model.look.colour.transfer_function);
         let before = after_preview.then(|| Snapshot::of(&self.model));
         let from_file = from_file && !edited;
+        let dims = volume.dims;
         let installed = self.install((volume, histogram), from_file);
         // Logged too: a load from the panel or a drop has no other trace outside the window.
         if let Err(e) = installed {
@@ -166,6 +167,7 @@ impl Running {
             view.restore(&mut self.model);
         }
         eprintln!("loaded {label}");
+        eprintln!("holds {}x{}x{} voxels", dims[0], dims[1], dims[2]);
         self.model.messages.status = Some(format!("loaded {label}"));
         if let Some(level) = level {
             eprintln!("showing {level}");

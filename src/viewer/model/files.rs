@@ -99,6 +99,24 @@ impl FileFields {
 
 /// The panel's dims/type/scale describe raw files; other formats carry their own (and the scale would override
 /// their spacing), so they get none.
+/// A load's error as the panel shows it: the reason first and the file named once. A reader's error starts with
+/// the file's name ("broken.nii: reason"); that prefix gives way to the path loaded, at the end, unless the reason
+/// names the file itself.
+pub fn load_error_text(label: &str, error: &str) -> String {
+    let name = Path::new(label)
+        .file_name()
+        .map_or_else(|| label.to_string(), |n| n.to_string_lossy().into_owned());
+    let reason = error
+        .split_once(": ")
+        .filter(|(head, _)| !head.contains(' ') && head.ends_with(name.as_str()))
+        .map_or(error, |(_, rest)| rest);
+    if reason.contains(name.as_str()) {
+        reason.to_string()
+    } else {
+        format!("{reason} ({label})")
+    }
+}
+
 pub fn raw_only(path: &Path, opts: RawOptions) -> RawOptions {
     match crate::formats::detect_format(path) {
         Ok(crate::formats::Format::Raw) | Err(_) => opts,
@@ -126,6 +144,22 @@ pub fn is_session_file(path: &Path) -> bool {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_load_error_gives_its_reason_first_and_names_the_file_once() {
+        let label = "/data/scans/broken.nii";
+        assert_eq!(
+            load_error_text(label, "broken.nii: not a NIfTI header"),
+            "not a NIfTI header (/data/scans/broken.nii)"
+        );
+        assert_eq!(
+            load_error_text(label, "/data/scans/broken.nii: too short"),
+            "too short (/data/scans/broken.nii)"
+        );
+        // A reason that names the file itself keeps it, and gets no second mention.
+        let own = "cannot read /data/scans/broken.nii: No such file or directory (os error 2)";
+        assert_eq!(load_error_text(label, own), own);
+    }
+
     use super::*;
 
     #[test]

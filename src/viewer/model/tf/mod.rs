@@ -96,7 +96,8 @@ pub fn save_tf(tf: &TransferFunction, path: &str) -> Result<String, String> {
         return Err("enter a file name to save to".into());
     }
     std::fs::write(path, tf.to_json()).map_err(|e| format!("cannot write {path}: {e}"))?;
-    Ok(format!("saved {path}"))
+    let shown = std::path::absolute(path).map_or_else(|_| path.to_string(), |p| p.display().to_string());
+    Ok(format!("saved {shown}"))
 }
 
 /// Reads a transfer function from `path` (validated; the error names the file and the problem).

@@ -86,7 +86,7 @@ pub fn volume_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<Ui
             ui.add(egui::ProgressBar::new(*progress).show_percentage());
         }
         if let Some(error) = messages_about(ui, &model.messages, Topic::Volume) {
-            rects::log("load-error", error.rect);
+            rects::log_labelled("load-error", error.rect, model.messages.error.as_deref());
         }
         ui.weak("or drop a file on the window");
     });
