@@ -31,7 +31,8 @@ pub const SERIES: [MadeSeries; 3] = [
     MadeSeries {
         number: 903,
         uid: "1.2.826.0.1.3680043.10.999.903",
-        description: "volcast test small",
+        // As long as a DICOM LO may be (64): the panel must cut it short, not widen.
+        description: "volcast test small, T2 FLAIR axial 3 mm post-contrast, corrected",
         slices: 11..=12,
     },
 ];

@@ -29,6 +29,18 @@ fn the_chooser_lists_the_series_and_loads_the_one_clicked() {
     let (d, w) = (x.display.as_str(), window.as_str());
 
     let combo = settled_rect(&mut viewer, "series-combo");
+    // Series 903's description is 64 characters: the box cuts it short within the panel, and the transfer
+    // function's editor below keeps its place inside the panel too (it was pushed past the window's edge).
+    let panel = volcast::viewer::widgets::layout::PANEL_WIDTH;
+    assert!(
+        combo.right() <= panel,
+        "the series box {combo:?} runs past the panel ({panel})"
+    );
+    let plot = settled_rect(&mut viewer, "tf-plot");
+    assert!(
+        plot.right() <= panel,
+        "the transfer function editor {plot:?} runs past the panel ({panel})"
+    );
     pointer(d, w, combo.center());
     button(d, "click", "1");
     // Items in the series' number order: 901 (4 slices), 902 (6), 903 (2).

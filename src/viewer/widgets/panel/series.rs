@@ -33,23 +33,28 @@ pub fn series_chooser(ui: &mut egui::Ui, model: &Model, actions: &mut Vec<UiActi
         format!("{number}: {description}, {} slices", s.slices)
     };
     let loaded = series.iter().find(|s| s.loaded);
-    ui.horizontal(|ui| {
-        ui.label(format!("series ({} in the folder):", series.len()));
-        let combo = egui::ComboBox::from_id_salt("dicom series")
-            .selected_text(loaded.map(short).unwrap_or_default())
-            .width(ui.available_width().min(230.0))
-            .show_ui(ui, |ui| {
-                for (i, s) in series.iter().enumerate() {
-                    let item = ui.selectable_label(s.loaded, short(s)).on_hover_text(s.line());
-                    if let Some(name) = ITEM_NAMES.get(i) {
-                        rects::log(name, item.rect);
-                    }
-                    let busy = model.messages.loading.is_some();
-                    if item.clicked() && !s.loaded && !busy {
-                        actions.push(UiAction::LoadSeries(s.selector(series)));
-                    }
+    // The label on its own line and the box as wide as the panel, its text cut short (whole on hover): a long
+    // description must never widen the panel past the window.
+    ui.label(format!("series ({} in the folder):", series.len()));
+    let combo = egui::ComboBox::from_id_salt("dicom series")
+        .selected_text(loaded.map(short).unwrap_or_default())
+        .width(ui.available_width())
+        .truncate()
+        .show_ui(ui, |ui| {
+            for (i, s) in series.iter().enumerate() {
+                let item = ui.selectable_label(s.loaded, short(s)).on_hover_text(s.line());
+                if let Some(name) = ITEM_NAMES.get(i) {
+                    rects::log(name, item.rect);
                 }
-            });
-        rects::log("series-combo", combo.response.rect);
-    });
+                let busy = model.messages.loading.is_some();
+                if item.clicked() && !s.loaded && !busy {
+                    actions.push(UiAction::LoadSeries(s.selector(series)));
+                }
+            }
+        });
+    let combo = match loaded {
+        Some(s) => combo.response.on_hover_text(s.line()),
+        None => combo.response,
+    };
+    rects::log("series-combo", combo.rect);
 }
