@@ -40,6 +40,20 @@ pub enum DataKind {
 }
 
 impl DataKind {
+    /// The presets that suit data of this kind, as the viewer offers them: the CT presets (in Hounsfield units,
+    /// which nothing else has) for CT only, the MR one for the rest, and the generic ones always.
+    pub fn presets(self) -> Vec<&'static str> {
+        let other = match self {
+            DataKind::Ct => "mr-",
+            DataKind::Other => "ct-",
+        };
+        crate::transfer::function::PRESET_NAMES
+            .iter()
+            .copied()
+            .filter(|name| !name.starts_with(other))
+            .collect()
+    }
+
     /// The unit of the values, for axis and colour-bar labels.
     pub fn unit(self) -> Option<&'static str> {
         match self {
@@ -272,6 +286,15 @@ pub fn auto_for_volume(volume: &Volume) -> TransferFunction {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn presets_follow_the_kind_of_data() {
+        assert_eq!(
+            DataKind::Ct.presets(),
+            ["ct-bone", "ct-soft-tissue", "ct-lung", "qt-example"]
+        );
+        assert_eq!(DataKind::Other.presets(), ["mr-default", "qt-example"]);
+    }
+
     use super::*;
     use crate::volume::VoxelData;
 

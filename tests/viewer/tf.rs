@@ -155,3 +155,36 @@ fn the_editor_adds_moves_deletes_saves_and_loads_points() {
     viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The preset menu offers the presets of the volume's kind, clicked open through X: Hounsfield-unit windows for a
+/// CT and never the MR one; for an MRI (a NIfTI whose values are not HU) the MR one and never a CT window. The
+/// generic qt-example is offered to both.
+#[test]
+fn the_preset_menu_offers_the_presets_of_the_volume_s_kind() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let cases = [
+        (data.join("dicom/enhanced_ct_native.dcm"), "ct-bone", "mr-default"),
+        (data.join("nibabel/example_nifti2.nii.gz"), "mr-default", "ct-bone"),
+    ];
+    for (i, (file, offered, never)) in cases.iter().enumerate() {
+        let Some((x, dir)) = x_session(&format!("viewer-tf-presets-{i}")) else {
+            return;
+        };
+        let (mut viewer, window) = Viewer::held(&x.display, &dir, &[file.to_str().unwrap()]);
+        let (d, w) = (x.display.as_str(), window.as_str());
+        let menu = common::ui_wait::settled_rect(&mut viewer, "tf-preset");
+        pointer(d, w, menu.center());
+        button(d, "click", "1");
+        common::ui_wait::settled_rect(&mut viewer, "tf-preset-0");
+        let names: Vec<String> = viewer
+            .stderr
+            .lines()
+            .filter_map(|l| l.strip_prefix("ui label tf-preset-"))
+            .filter_map(|l| l.split_once(' ').map(|(_, name)| name.to_string()))
+            .collect();
+        assert!(names.iter().any(|n| n == offered), "{}: {names:?}", file.display());
+        assert!(names.iter().any(|n| n == "qt-example"), "{}: {names:?}", file.display());
+        assert!(!names.iter().any(|n| n == never), "{}: {names:?}", file.display());
+        viewer.finish_clean();
+    }
+}

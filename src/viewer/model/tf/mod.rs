@@ -38,6 +38,14 @@ impl TfEditorState {
         self.volume.as_ref().and_then(|(f, _)| f.kind().unit())
     }
 
+    /// The presets the menu offers: those of the shown volume's kind (all before a volume).
+    pub fn presets(&self) -> Vec<&'static str> {
+        match &self.volume {
+            Some((f, _)) => f.kind().presets(),
+            None => crate::transfer::function::PRESET_NAMES.to_vec(),
+        }
+    }
+
     /// The automatic transfer function for the shown volume.
     pub fn auto(&self) -> Option<TransferFunction> {
         self.volume.as_ref().map(|(f, h)| auto_transfer_function(f, h))

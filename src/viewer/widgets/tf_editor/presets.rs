@@ -3,10 +3,19 @@
 //! and JSON save/load with a path field (errors beside the buttons).
 
 use super::editor_with_unit;
-use crate::transfer::function::{TransferFunction, PRESET_NAMES};
+use crate::transfer::function::TransferFunction;
 use crate::transfer::Colormap;
 use crate::viewer::model::tf::{load_tf, save_tf, TfEditorState};
 use crate::viewer::widgets::rects;
+
+/// Names the preset items' rectangles and labels are logged under (`VOLCAST_UI_RECTS`), for tests.
+const PRESET_ITEMS: [&str; 5] = [
+    "tf-preset-0",
+    "tf-preset-1",
+    "tf-preset-2",
+    "tf-preset-3",
+    "tf-preset-4",
+];
 
 /// The name the menu shows for the automatic choice.
 pub const AUTO: &str = "auto (by modality)";
@@ -62,7 +71,7 @@ fn preset_menu(
         .as_ref()
         .map(|t| t.name.clone())
         .unwrap_or_else(|| "simple (Qt)".into());
-    egui::ComboBox::from_label("preset")
+    let menu = egui::ComboBox::from_label("preset")
         .selected_text(&current)
         .show_ui(ui, |ui| {
             if ui
@@ -85,14 +94,18 @@ fn preset_menu(
                 *window = [0.0, 1.0];
                 changed = true;
             }
-            for name in PRESET_NAMES {
-                if ui.selectable_label(current == *name, *name).clicked() {
+            // The presets of the volume's kind: no Hounsfield-unit window on an MRI.
+            for (i, name) in state.presets().into_iter().enumerate() {
+                let item = ui.selectable_label(current == name, name);
+                rects::log_labelled(PRESET_ITEMS[i.min(PRESET_ITEMS.len() - 1)], item.rect, Some(name));
+                if item.clicked() {
                     *transfer_function = TransferFunction::preset(name).ok();
                     *window = [0.0, 1.0];
                     changed = true;
                 }
             }
         });
+    rects::log("tf-preset", menu.response.rect);
     changed
 }
 
