@@ -270,7 +270,11 @@ fn headers(path: &Path, series: Option<&str>) -> Result<Headers, VolumeError> {
             "{skipped} file(s) in the folder are not DICOM images and were skipped"
         ));
     }
-    let (slices, listed) = series::choose(slices, series, &label)?;
+    let (slices, mut listed) = series::choose(slices, series, &label)?;
+    // A folder lists its series (one included, for its description and modality); one file has none to list.
+    if !path.is_dir() {
+        listed.clear();
+    }
     notes.extend(series::note(&listed));
     Ok(Headers {
         files,

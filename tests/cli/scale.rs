@@ -428,3 +428,28 @@ fn render_no_cache(raw: &str, dir: &Path) -> (String, ()) {
     ]);
     (stderr(&o), ())
 }
+
+/// The host budget counts every time step of a 4-D file: series_u8.mha is 7 steps of 6x5x4 uint8 (120 bytes each,
+/// 840 in all). Under a budget of 500 bytes one step would fit, but the steps together do not, so it shows pyramid
+/// level 1 and says why; under 1000 bytes it shows full resolution.
+#[test]
+fn the_host_budget_counts_every_time_step() {
+    let file = format!("{}/tests/data/time/series_u8.mha", env!("CARGO_MANIFEST_DIR"));
+    let info = |budget: &str| {
+        let o = common::volcast(&["info", &file, "--host-budget", budget]);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        common::stdout(&o)
+    };
+    let tight = info("500");
+    assert!(tight.contains("dims:      3 x 3 x 2"), "{tight}");
+    assert!(tight.contains("timesteps: 7"), "{tight}");
+    assert!(
+        tight.contains("needs 840 bytes of memory and the host budget is 500 bytes"),
+        "{tight}"
+    );
+    let roomy = info("1000");
+    assert!(
+        roomy.contains("dims:      6 x 5 x 4") && roomy.contains("timesteps: 7"),
+        "{roomy}"
+    );
+}

@@ -104,7 +104,13 @@ fn one_file_opens_its_series() {
     let o = volcast(&["info", "--series", "903", &file]);
     assert!(stdout(&o).contains("dims:      256 x 256 x 2"), "{}", stdout(&o));
     let j2k = format!("{}/tests/data/dicom/i16_j2k/03.dcm", env!("CARGO_MANIFEST_DIR"));
-    assert!(stdout(&volcast(&["info", &j2k])).contains("dims:      16 x 12 x 6"));
+    let one = stdout(&volcast(&["info", &j2k]));
+    assert!(one.contains("dims:      16 x 12 x 6"), "{one}");
+    // A folder of one series lists it too: its description and modality.
+    assert!(
+        one.contains("series:    -: (no description), CT, 6 slices of 16 x 12"),
+        "{one}"
+    );
     let frames = format!(
         "{}/tests/data/dicom/multiframe_ct_native.dcm",
         env!("CARGO_MANIFEST_DIR")

@@ -59,8 +59,10 @@ pub(super) fn choose(
                 .unwrap_or(0)
         }
     };
+    // One series is listed too (`info` shows its description and modality), loaded, with no note.
     if series.len() < 2 {
-        return Ok((slices, Vec::new()));
+        series.iter_mut().for_each(|s| s.loaded = true);
+        return Ok((slices, series));
     }
     series[chosen].loaded = true;
     let uid = series[chosen].uid.clone();
@@ -70,6 +72,9 @@ pub(super) fn choose(
 
 /// Which series was loaded and that others exist; none for a folder of one series.
 pub(super) fn note(series: &[SeriesInfo]) -> Option<String> {
+    if series.len() < 2 {
+        return None;
+    }
     let loaded = series.iter().find(|s| s.loaded)?;
     let description = if loaded.description.is_empty() {
         String::new()
@@ -130,9 +135,10 @@ mod tests {
     }
 
     #[test]
-    fn one_series_makes_no_list_and_no_note() {
+    fn one_series_is_listed_as_loaded_with_no_note() {
         let (kept, list) = choose(vec![slice("1", Some(1)), slice("1", Some(1))], None, "x").unwrap();
-        assert_eq!((kept.len(), list.len()), (2, 0));
+        assert_eq!((kept.len(), list.len()), (2, 1));
+        assert!(list[0].loaded && list[0].slices == 2);
         assert!(note(&list).is_none());
         assert!(choose(vec![slice("1", Some(1))], Some("1"), "x").is_ok());
     }

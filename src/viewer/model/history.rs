@@ -228,4 +228,54 @@ mod tests {
         before.clone().restore(&mut model);
         assert_eq!(Snapshot::of(&model), before);
     }
+
+    /// What the user sees of each recorded setting, read from the model itself (not a snapshot, which could drop a
+    /// field both ways): the transfer function, colour map, value window, clipping plane and camera.
+    fn shown(
+        m: &Model,
+    ) -> (
+        Option<TransferFunction>,
+        Colormap,
+        [f32; 2],
+        Option<ClipPlane>,
+        OrbitView,
+    ) {
+        let c = &m.look.colour;
+        (
+            c.transfer_function.clone(),
+            c.colormap,
+            c.window,
+            m.look.cut.clip_plane,
+            m.camera.orbit,
+        )
+    }
+
+    #[test]
+    fn undo_and_redo_restore_each_recorded_setting_on_its_own() {
+        type Edit = fn(&mut Model);
+        let edits: [(&str, Edit); 5] = [
+            ("transfer function", |m| {
+                m.look.colour.transfer_function = TransferFunction::preset("ct-bone").ok()
+            }),
+            ("colour map", |m| m.look.colour.colormap = Colormap::Viridis),
+            ("value window", |m| m.look.colour.window = [0.3, 0.7]),
+            ("clipping plane", |m| {
+                m.look.cut.clip_plane = ClipPlane::through(Vec3::Y, Vec3::ZERO).ok()
+            }),
+            ("camera", |m| m.camera.orbit.turn(0.7)),
+        ];
+        for (name, edit) in edits {
+            let mut model = Model::new(Vec3::ONE, "x".into());
+            model.observe_history(false);
+            let before = shown(&model);
+            edit(&mut model);
+            let after = shown(&model);
+            assert_ne!(after, before, "{name}: the edit changes what is shown");
+            model.observe_history(false);
+            assert!(model.undo(), "{name}: the edit is a step");
+            assert_eq!(shown(&model), before, "{name}: undo restores it");
+            assert!(model.redo(), "{name}: and it can be redone");
+            assert_eq!(shown(&model), after, "{name}: redo restores the edit");
+        }
+    }
 }
