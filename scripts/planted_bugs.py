@@ -434,6 +434,12 @@ def scratch_copy(commit):
     subprocess.run(["tar", "-x", "-C", str(tree)], input=archive, check=True)
     with open(tree / "Cargo.toml", "a") as f:
         f.write(PLANTED_PROFILE)
+    # The tests' pinned Python (`bash .ci/python-env` made it in the checkout): with CI=true a test that needs it
+    # fails rather than skips, so the scratch tree uses the checkout's.
+    venv = ROOT / ".venv-tests"
+    if not venv.exists():
+        raise SystemExit(f"{venv} is missing: run `bash .ci/python-env` first")
+    (tree / ".venv-tests").symlink_to(venv)
     shared = SCRATCH / "shared"
     if not shared.exists() and (ROOT.parent / "shared").exists():
         shared.symlink_to(ROOT.parent / "shared")
