@@ -325,23 +325,30 @@ pub(crate) fn load(path: &Path, series: Option<&str>, progress: &mut Progress) -
     Ok(v)
 }
 
+/// The largest file [`series_of_file`] reads to learn its series: a 4096² slice of 32-bit pixels is 64 MiB.
+const MAX_SLICE_FILE: u64 = 64 << 20;
+
+/// The header of `f` as one slice, if it is a DICOM Part 10 file (DICM at byte 128) that reads as one.
+fn slice_header(f: &Path) -> Option<Slice> {
+    if !format::read_prefix(f, 132).is_ok_and(|p| is_dicom(&p)) {
+        return None;
+    }
+    let obj = open_dicom(f, true).ok()?;
+    slice_info(&obj, 0, &format::file_label(f)).ok()
+}
+
 /// The folder and series that one DICOM file stands for: as in Slicer and every DICOM viewer, opening one slice of
 /// a series opens the whole series, with the folder's other series listed beside it. `None` for a folder, a file that
 /// is not DICOM or holds several frames (a volume of its own), and a file alone in its series in its folder.
 pub fn series_of_file(path: &Path) -> Option<(PathBuf, String)> {
-    let series_uid = |f: &Path| -> Option<(String, u32)> {
-        if !format::read_prefix(f, 132).is_ok_and(|p| is_dicom(&p)) {
-            return None;
-        }
-        let label = format::file_label(f);
-        let s = open_dicom(f, true).ok().and_then(|o| slice_info(&o, 0, &label).ok())?;
-        Some((s.series, s.frames))
-    };
-    if path.is_dir() {
+    // A file larger than any one slice is a multi-frame volume: not read whole just to find that out.
+    let slice_sized = std::fs::metadata(path).is_ok_and(|m| m.is_file() && m.len() <= MAX_SLICE_FILE);
+    if !slice_sized {
         return None;
     }
-    let (uid, frames) = series_uid(path)?;
-    if frames > 1 || uid.is_empty() {
+    let own = slice_header(path)?;
+    let uid = own.series;
+    if own.frames > 1 || uid.is_empty() {
         return None;
     }
     let folder = path
@@ -352,7 +359,7 @@ pub fn series_of_file(path: &Path) -> Option<(PathBuf, String)> {
     let sibling = files
         .iter()
         .filter(|f| f.file_name() != path.file_name())
-        .any(|f| series_uid(f).is_some_and(|(u, _)| u == uid));
+        .any(|f| slice_header(f).is_some_and(|s| s.series == uid));
     sibling.then(|| (folder.to_path_buf(), uid))
 }
 

@@ -381,6 +381,16 @@ pub fn read_state(path: &Path) -> ViewState {
     ViewState::from_json(&text, &path.display().to_string()).expect("a view state")
 }
 
+/// The transfer function a saved view holds (it must hold one).
+pub fn tf_of(state: &ViewState) -> volcast::transfer::function::TransferFunction {
+    state
+        .settings
+        .colour
+        .transfer_function
+        .clone()
+        .expect("a transfer function")
+}
+
 /// A series' step that the "saved screenshot NAME (time step N)" line names.
 pub fn screenshot_step(saved_line: &str) -> Option<u32> {
     let rest = saved_line.split_once(" (time step ")?.1;

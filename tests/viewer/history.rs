@@ -5,22 +5,11 @@
 
 use crate::common;
 
-use common::x11::{button, drag, pointer, type_keys, x_session, Viewer};
+use common::x11::{button, drag, pointer, tf_of, type_keys, x_session, Viewer};
 use std::path::Path;
 use std::time::Duration;
 use volcast::scene::camera::Camera;
-use volcast::scene::view_state::ViewState;
-use volcast::transfer::function::TransferFunction;
 use volcast::viewer::model::tf::to_normalized;
-
-fn tf_of(state: &ViewState) -> TransferFunction {
-    state
-        .settings
-        .colour
-        .transfer_function
-        .clone()
-        .expect("a transfer function")
-}
 
 fn same_camera(a: &Camera, b: &Camera) -> bool {
     a.eye.distance(b.eye) < 1e-4 && a.up.distance(b.up) < 1e-4 && a.target.distance(b.target) < 1e-4

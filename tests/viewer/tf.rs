@@ -12,21 +12,11 @@
 
 use crate::common;
 
-use common::x11::{button, drag, pointer, x_client, x_session, Rerendered, Viewer};
+use common::x11::{button, drag, pointer, tf_of, x_client, x_session, Rerendered, Viewer};
 use std::path::Path;
 use std::time::Duration;
-use volcast::scene::view_state::ViewState;
 use volcast::transfer::function::TransferFunction;
 use volcast::viewer::model::tf::to_normalized;
-
-fn tf_of(state: &ViewState) -> TransferFunction {
-    state
-        .settings
-        .colour
-        .transfer_function
-        .clone()
-        .expect("a transfer function")
-}
 
 #[test]
 fn the_editor_adds_moves_deletes_saves_and_loads_points() {

@@ -218,14 +218,7 @@ pub(crate) fn claimed_bound(path: &Path) -> Option<([u32; 3], VoxelType)> {
         return None;
     }
     let files = super::list_folder(path, &format::file_label(path)).ok()?;
-    let first = files.iter().find_map(|f| {
-        let prefix = format::read_prefix(f, 132).ok()?;
-        if !super::is_dicom(&prefix) {
-            return None;
-        }
-        let obj = super::open_dicom(f, true).ok()?;
-        super::slice::slice_info(&obj, 0, &format::file_label(f)).ok()
-    })?;
+    let first = files.iter().find_map(|f| super::slice_header(f))?;
     let depth = u32::try_from(files.len() as u64 * u64::from(first.frames)).ok()?;
     Some((
         [first.columns, first.rows, depth],
