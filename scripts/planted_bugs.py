@@ -8,8 +8,8 @@ that no test catches is a *survivor*: a hole in the proof. A run writes its tabl
 docs/testing.md, "Planted bugs", states the rules.
 
 Runs by hand, not in CI. Each bug rebuilds the crate incrementally (profile `planted`, which the script adds to the
-scratch copy: release code, incremental) and runs the suite until the first test binary that fails, the viewer's X
-tests only for bugs in the viewer. The whole table takes hours on 2 cores, so a run records each verdict as it goes
+scratch copy: release code, incremental) and runs the test binaries one by one, cheapest first (ORDER), until the
+first that fails, the viewer's X tests only for bugs in the viewer. The whole table takes hours on 2 cores, so a run records each verdict as it goes
 and can be resumed, on the same commit, in a later session:
 
     python3 scripts/planted_bugs.py               # every bug on HEAD; writes target/planted-bugs.md
@@ -369,7 +369,7 @@ BUGS = [
        "(Some((_, true)), Some(_)) => since(now),")]),
 ]
 
-# The Python module's rules (python/): run against its pytest suite (test_command).
+# The Python module's rules (python/): run against its pytest suite (test_commands).
 BUGS += [
     ("array-axes-reversed", "an array of shape (z, y, x) is taken as x, y, z dims (numpy's order not reversed)",
      [("python/src/volume.rs", "let dims = [too_big(shape[2])?, too_big(shape[1])?, too_big(shape[0])?];",
@@ -383,7 +383,7 @@ BUGS += [
 ]
 
 # Sort-last rendering over MPI (src/distributed, rule 11 in src/render/part.rs and march.glsl): run against
-# tests/mpi under mpirun (test_command), with the feature `mpi`.
+# tests/mpi under mpirun (test_commands), with the feature `mpi`.
 BUGS += [
     ("kd-order-reversed", "the shares are composited back to front (the k-d tree's sides swapped)",
      [("src/distributed/decompose.rs", "let (first, second) = if below_first { (below, above) } else { (above, below) };",
@@ -455,24 +455,43 @@ def python_env(tree, env):
     return venv
 
 
-def test_command(edits, tree=None, env=None):
-    """The tests a bug is run against: all of them, except the viewer's X tests (about five of the suite's six
-    minutes) where the bug lies outside the viewer. Those compare the window with `render --state`, which draws
-    through the same renderer, so a bug in the renderer, a reader or the transfer function shows in both alike.
-    A bug in the Python module (python/) is run against its pytest suite, the module built from the scratch tree."""
+# The order the suite's binaries run in for a bug, cheapest first: each `cargo test --test B` builds only the library
+# and B, so a bug the unit tests catch links no other binary, and one `reference` catches never waits on `gpu`.
+ORDER = ["--lib", "--bins", "house", "reference", "formats", "cli", "gpu"]
+
+
+def test_commands(edits, tree=None, env=None):
+    """The commands a bug is run against, in turn until one fails: every test binary, except the viewer's X tests
+    (about half the suite's run) where the bug lies outside the viewer. Those compare the window with `render
+    --state`, which draws through the same renderer, so a bug in the renderer, a reader or the transfer function
+    shows in both alike. A bug in the Python module (python/) is run against its pytest suite, the module built from
+    the scratch tree."""
     if all(rel.startswith("python/") for rel, _, _ in edits):
         venv = python_env(tree, env)
-        return ["bash", "-c", f"cargo build --profile planted 2>&1 && {venv}/bin/pip install -q ./python 2>&1 && "
-                f"{venv}/bin/python -m pytest -q -rf python/tests 2>&1"]
+        return [["bash", "-c", f"cargo build --profile planted 2>&1 && {venv}/bin/pip install -q ./python 2>&1 && "
+                 f"{venv}/bin/python -m pytest -q -rf python/tests 2>&1"]]
     cmd = ["cargo", "test", "--profile", "planted"]
     # Rule 11's bugs: in the MPI code, or a march edit that drops an ownership test (owned()).
     if all(rel.startswith(("src/distributed/", "src/render/part.rs")) for rel, _, _ in edits) or any(
             "owned(" in text and "owned(" not in new for _, text, new in edits):
-        return cmd + ["--features", "mpi", "--test", "mpi"]
+        return [cmd + ["--features", "mpi", "--test", "mpi"]]
+    binaries = sorted(p.parent.name for p in (ROOT / "tests").glob("*/main.rs") if p.parent.name not in ("viewer", "mpi"))
+    order = [b for b in ORDER if b.startswith("--") or b in binaries] + [b for b in binaries if b not in ORDER]
     if any(rel.startswith(("src/viewer/", "tests/viewer/")) for rel, _, _ in edits):
-        return cmd
-    binaries = sorted(p.parent.name for p in (ROOT / "tests").glob("*/main.rs") if p.parent.name != "viewer")
-    return cmd + ["--lib", "--bins"] + [a for b in binaries for a in ("--test", b)]
+        order.append("viewer")
+    return [cmd + ([b] if b.startswith("--") else ["--test", b]) for b in order]
+
+
+def run_until_failure(commands, tree, env, log):
+    """Runs `commands` in turn, stopping at the first that fails; the output of all that ran, as one."""
+    outs = []
+    for cmd in commands:
+        out = run(cmd, tree, env)
+        outs.append(out)
+        if out.returncode != 0:
+            break
+    log.write_text("".join(o.stdout for o in outs))
+    return subprocess.CompletedProcess(commands, outs[-1].returncode, "".join(o.stdout for o in outs))
 
 
 def failing_tests(output):
@@ -605,7 +624,7 @@ def main():
             verdict = f"does not apply ({e})"
         else:
             start = time.time()
-            out = run(test_command(edits, tree, env), tree, env, logs / f"{name}.log")
+            out = run_until_failure(test_commands(edits, tree, env), tree, env, logs / f"{name}.log")
             restore(tree, originals)
             verdict = verdict_of(out)
             print(f"{name}: {verdict} ({time.time() - start:.0f} s)", flush=True)
