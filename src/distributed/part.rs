@@ -166,6 +166,7 @@ pub fn header(part: &Volume, whole_dims: [u32; 3], geometry: Geometry) -> Volume
         channels: part.channels.clone(),
         finer: None,
         cells: None,
+        source_voxels: part.source_voxels,
     }
 }
 

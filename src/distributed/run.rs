@@ -183,6 +183,7 @@ fn viewer(s: &RenderSettings, whole: &Volume) -> Viewer {
         held: 0,
         step_level: 0,
         part: None,
+        source_voxels: whole.source_voxels as f32,
     };
     let u = FrameUniforms::new(s, &info);
     let d = whole.dims.map(f64::from);

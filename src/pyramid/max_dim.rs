@@ -11,7 +11,8 @@ use crate::volume::{Volume, VoxelData};
 /// stays NaN). Adds a note saying what happened. `max_dim` of 0 is treated as 1.
 pub fn downsample_to(mut volume: Volume, max_dim: u32) -> Volume {
     let max_dim = max_dim.max(1);
-    let original = volume.dims;
+    let (original, source, source_voxels) = (volume.dims, volume.geometry, volume.source_voxels);
+    let ranges = (volume.range, volume.stored_range);
     while volume.dims.iter().any(|&d| d > max_dim) {
         let over = volume.dims.map(|d| d > max_dim);
         volume = halve_axes(volume, over);
@@ -22,6 +23,10 @@ pub fn downsample_to(mut volume: Volume, max_dim: u32) -> Volume {
         volume.notes.push(format!(
             "downsampled from {a}x{b}x{c} to {x}x{y}x{z} (2x box filter) to fit the maximum dimension {max_dim}"
         ));
+        // A stand-in shows its source's look: the same optical depth, and values normalised by the source's range
+        // (as a level read under a budget is), so the window does not move as the means narrow it.
+        volume = volume.stand_in_for(&source, source_voxels);
+        (volume.range, volume.stored_range) = ranges;
     }
     volume
 }

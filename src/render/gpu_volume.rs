@@ -420,6 +420,7 @@ impl GpuVolume {
                 held: 0,
                 step_level: 0,
                 part: None,
+                source_voxels: volume.source_voxels as f32,
             },
             cut: Cut::uniform(pool.grid, 0),
             pool,

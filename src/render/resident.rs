@@ -196,6 +196,7 @@ impl GpuVolume {
         if let Some(f) = &volume.finer {
             // The pool's level 0 is the file's; the volume is its level `held`.
             (self.info.dims, self.info.geometry) = (f.dims(), f.geometry());
+            self.info.source_voxels = 1.0;
         }
         self.info.held = held;
         self.info.step_level = step_level(&self.cut);

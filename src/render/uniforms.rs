@@ -84,6 +84,9 @@ pub struct VolumeInfo {
     /// Where this is one rank's share of a volume rendered over MPI (rule 11): `dims` and `geometry` are then the
     /// whole volume's, and the texture holds only the part.
     pub part: Option<PartInfo>,
+    /// How many of its source's voxels one voxel of level 0 spans ([`crate::volume::Volume::source_voxels`]): a
+    /// segment's opacity counts the source's voxels it crosses, so a stand-in keeps the source's optical depth.
+    pub source_voxels: f32,
 }
 
 /// One rank's share of a volume (rule 11, src/distributed): its texture holds the whole volume's voxels
@@ -171,10 +174,12 @@ impl VolumeInfo {
 
     /// `s` as the march takes it on this volume: its step ([`step_length`](Self::step_length)), and no strides where
     /// the step is coarser than the held level's voxel (a skip brick, 8 of those voxels, then holds at most 4
-    /// samples: a strided span would be shorter than the lookups it costs).
+    /// samples: a strided span would be shorter than the lookups it costs). A stand-in's segments cross
+    /// `source_voxels` times as many of its source's voxels, so rule 2's stride bounds are that much tighter.
     pub fn stepped(&self, s: &RenderSettings) -> RenderSettings {
         let mut stepped = s.clone();
         stepped.sampling.step_length = self.step_length(s);
+        stepped.sampling.stride_tolerance /= self.source_voxels;
         if self.step_level > self.held {
             stepped.sampling.max_stride = 1;
         }
@@ -318,7 +323,7 @@ impl FrameUniforms {
         let eye_tex = model.inverse().transform_point3(cam.eye.as_dvec3());
         let dims = DVec3::from_array(v.dims.map(f64::from));
         let index_to_world = v.index_to_world(s);
-        // The step in voxels of level 0 (the opacity of a segment follows its length in them).
+        // The step in voxels of level 0; the opacity of a segment follows its length in voxels of the source.
         let step_length = v.step_length(s);
         let h = step_length * v.smallest_voxel(s) as f32;
         let shading = s.lighting.shading.unwrap_or_default();
@@ -343,7 +348,7 @@ impl FrameUniforms {
             value_map: [v.scale_bias.0, v.scale_bias.1, s.colour.window[0], s.colour.window[1]],
             alpha: [
                 s.colour.step_alpha,
-                step_length,
+                step_length * v.source_voxels,
                 s.compositing.early_termination,
                 if s.colour.multiplied_alpha { 1.0 } else { 0.0 },
             ],

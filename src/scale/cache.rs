@@ -263,7 +263,7 @@ impl PyramidCache {
         v.notes = vec![format!(
             "a preview from the pyramid cache ({x}x{y}x{z}) while the level is read"
         )];
-        Some(v)
+        Some(v.stand_in_for(&place.geometry, 1.0))
     }
 
     /// Keeps `v`, level `level` of `place`, in the cache, and gives it back; the error says why it could not (the

@@ -292,8 +292,9 @@ fn start_level0(
 
 /// `v`, level `level` of `place`, with its finer levels in the file ([`finer::Finer`]) where they can be read by
 /// box, or in `kept`, a decoded file's level 0 kept in the pyramid cache (`level0::in_place`), and `v` is that level
-/// as read (not reduced further by `--max-dim`).
-fn with_finer(mut v: Volume, place: &InPlace, kept: Option<&InPlace>, level: u32) -> Result<Volume, VolumeError> {
+/// as read (not reduced further by `--max-dim`). Either way `v` stands in for the file's own voxels (rule 6).
+fn with_finer(v: Volume, place: &InPlace, kept: Option<&InPlace>, level: u32) -> Result<Volume, VolumeError> {
+    let mut v = v.stand_in_for(&place.geometry, 1.0);
     if v.dims == level_dims(place.dims, level) {
         let finer = match kept {
             Some(k) => finer::Finer::of_kept(k, level)?,
@@ -462,6 +463,7 @@ pub fn fit(v: Volume, budgets: &Budgets, no_downsample: bool) -> Result<Volume, 
     let shown = v.shown_step();
     let (format, modality) = (v.format.clone(), v.modality.clone());
     let (arrays, series, channels) = (v.arrays.clone(), v.series.clone(), v.channels.clone());
+    let (geometry, source_voxels) = (v.geometry, v.source_voxels);
     let source = Source::Loaded(Box::new(v));
     let mut out = read::read_level(&source, level.level, budgets.host, notes, &mut |_| {})?;
     drop(source);
@@ -471,7 +473,7 @@ pub fn fit(v: Volume, budgets: &Budgets, no_downsample: bool) -> Result<Volume, 
     out.series = series;
     out.channels = channels;
     out.show_step(shown)?;
-    Ok(out)
+    Ok(out.stand_in_for(&geometry, source_voxels))
 }
 
 /// What the unit tests of this room share.

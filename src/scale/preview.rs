@@ -70,7 +70,7 @@ pub fn strided(place: &InPlace, k: u32) -> Result<Volume, VolumeError> {
     if !place.scaling.is_identity() {
         v = v.with_scaling(place.scaling)?;
     }
-    let mut v = super::described(v, place);
+    let mut v = super::described(v, place).stand_in_for(&place.geometry, 1.0);
     let ([x, y, z], [w, h, d]) = (out, place.dims);
     v.notes.push(format!(
         "a preview of 1 voxel in {k} per axis ({x}x{y}x{z} of {w}x{h}x{d}) while the file is read"

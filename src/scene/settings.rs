@@ -103,7 +103,10 @@ pub const KEY_LIGHT_OFFSET: f32 = 0.6;
 ///    extinction-weighted mean `c̄ = ∫σ·rgb dv / ∫σ dv`. Its opacity: emission `α = 1 − e^(−σ̄·s)`, density
 ///    `α = min(1, σ̄·s)`. A segment with a NaN end adds nothing. A constant value thus gives rule 4's opacity
 ///    corrected to the segment's length, `1 − (1 − a)^s`. The GPU integrates the 4096-entry table and uses its
-///    slope where |v_b − v_a| is under one entry (`preintegrate`).
+///    slope where |v_b − v_a| is under one entry (`preintegrate`). **Stand-ins:** `s` counts voxels of the
+///    volume's *source* (`Volume::source_voxels` = k for a preview of every k-th voxel, a coarser level read
+///    under a budget or `--max-dim`; 1 for a file's own voxels), so a stand-in keeps its source's optical depth;
+///    rule 2's stride bounds `D` and `STRIDE_SPREAD·t` are divided by k to hold for that length.
 /// 7. **Compositing.** Emission/density, front to back, segment by segment: `C += (1 − A)·α·c̄`, `A += (1 − A)·α`;
 ///    stop once `A ≥ early_termination`. MIP/MinIP/average: m = max/min/mean of the visible samples' v; none: background;
 ///    else `C` = the colour of m, `A = 1`. Isosurface: the surfaces ([`RenderSettings::isosurfaces`], by value;

@@ -53,6 +53,11 @@ impl Geometry {
         [l.x_axis.length(), l.y_axis.length(), l.z_axis.length()]
     }
 
+    /// The shortest voxel side (rule 2's voxel, in millimetres).
+    pub fn smallest_side(&self) -> f64 {
+        self.spacing().into_iter().fold(f64::INFINITY, f64::min)
+    }
+
     /// The same directions and origin with voxels of `spacing` (a user's override of the file's voxel size).
     pub fn with_spacing(&self, spacing: [f64; 3]) -> Geometry {
         let old = self.spacing();

@@ -75,6 +75,11 @@ pub struct Volume {
     /// pass, or kept beside the level in the pyramid cache): which bricks finer than this level can show anything
     /// is known before they are read. `None` otherwise (a volume that is its own level 0 has them in its voxels).
     pub cells: Option<std::sync::Arc<cells::CellRanges>>,
+    /// How many of its source's voxels one of its voxels spans, along the shortest side: 1 for a file's own voxels;
+    /// k for a stand-in (a preview of every k-th voxel, a coarser level read in the file's place). A transfer
+    /// function's opacity is per voxel of the source, so a stand-in keeps the source's optical depth (rule 6) and
+    /// the picture only sharpens as finer data arrive ([`Volume::stand_in_for`]).
+    pub source_voxels: f64,
 }
 
 /// The levels below the one a volume holds, where they stay in its file (`scale::finer::Finer`): the pool reads
@@ -138,6 +143,7 @@ impl Volume {
             channels: Vec::new(),
             finer: None,
             cells: None,
+            source_voxels: 1.0,
         })
     }
 
@@ -166,6 +172,13 @@ impl Volume {
         }
         self.geometry = geometry;
         Ok(self)
+    }
+
+    /// Marks this a stand-in for the volume `source` places (its file's level 0, or a volume itself standing in for
+    /// one `source_voxels` times finer): [`Volume::source_voxels`] from the two shortest voxel sides.
+    pub fn stand_in_for(mut self, source: &Geometry, source_voxels: f64) -> Volume {
+        self.source_voxels = source_voxels * self.geometry.smallest_side() / source.smallest_side();
+        self
     }
 
     /// Sets the rescale and the scaled range. A slope of 0 or a non-finite slope or intercept is refused.

@@ -101,7 +101,8 @@ impl<'a> Frame<'a> {
             classifier: volume.classifier(s),
             segments,
             window: s.colour.window.map(f64::from),
-            step_length: f64::from(s.sampling.step_length),
+            // A segment's opacity counts the source's voxels it crosses (rule 6: a stand-in keeps its optical depth).
+            step_length: f64::from(s.sampling.step_length) * volume.source_voxels,
             mode: s.compositing.mode,
             surfaces: {
                 let mut v: Vec<(f64, Option<DVec3>, f64)> = std::iter::once((

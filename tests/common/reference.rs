@@ -237,6 +237,9 @@ pub struct Reference {
     pub(crate) brick_ranges: std::sync::OnceLock<BrickRanges>,
     /// The pyramid's levels 1.. and the level shown per brick (levels.rs); None: level 0 everywhere.
     levels: Option<(Vec<Reference>, Cut)>,
+    /// How many voxels of its source one voxel spans (1, or k for a stand-in): a segment's opacity counts the
+    /// source's voxels it crosses, so a stand-in keeps the source's optical depth (rule 6).
+    pub(crate) source_voxels: f64,
 }
 
 impl Reference {
@@ -269,6 +272,7 @@ impl Reference {
             grid_gradients: std::sync::OnceLock::new(),
             brick_ranges: std::sync::OnceLock::new(),
             levels: None,
+            source_voxels: volume.source_voxels,
         }
     }
 
@@ -309,6 +313,7 @@ impl Reference {
             grid_gradients: std::sync::OnceLock::new(),
             brick_ranges: std::sync::OnceLock::new(),
             levels: None,
+            source_voxels: self.source_voxels,
         }
     }
 
@@ -348,7 +353,7 @@ impl Reference {
 
     /// The settings the march takes: a cut of the pyramid is marched at `step_length` voxels of the finest level it
     /// shows (render/resident.rs `step_level`, `VolumeInfo::stepped`), without strides where that level is coarser
-    /// than the one held.
+    /// than the one held; a stand-in's stride bounds tightened by its `source_voxels`.
     pub(crate) fn stepped(&self, s: &RenderSettings) -> RenderSettings {
         let mut s = s.clone();
         if let Some((_, cut)) = &self.levels {
@@ -358,6 +363,9 @@ impl Reference {
                 s.sampling.max_stride = 1;
             }
         }
+        // A stand-in's segment crosses `source_voxels` times as many of its source's voxels: rule 2's stride bounds
+        // hold for that optical length.
+        s.sampling.stride_tolerance /= self.source_voxels as f32;
         s
     }
 

@@ -17,6 +17,7 @@ mod pool;
 mod quality;
 mod refinable;
 mod spacing;
+mod stand_in;
 mod stream;
 mod validation_canary;
 mod vs_reference;

@@ -256,7 +256,14 @@ fn assemble(
     }
     v.format = "OME-Zarr".into();
     v.notes = notes;
+    // A coarser level stands in for level 0, the store's own voxels (rule 6).
+    v.source_voxels = min_side(place::xyz(ms, &ms.levels[k]).0) / min_side(place::xyz(ms, &ms.levels[0]).0);
     Ok(v)
+}
+
+/// The shortest of three voxel sides (absolute).
+fn min_side(spacing: [f64; 3]) -> f64 {
+    spacing.iter().fold(f64::INFINITY, |m, s| m.min(s.abs()))
 }
 
 /// OME-Zarr names axes but no patient frame: say which stored axes x, y, z are.

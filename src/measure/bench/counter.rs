@@ -228,6 +228,7 @@ impl SampleCounter {
             held: 0,
             step_level: 0,
             part: None,
+            source_voxels: 1.0,
         };
         let u = FrameUniforms::new(s, &info);
         let v3 = |a: [f32; 4]| Vec3::new(a[0], a[1], a[2]);
