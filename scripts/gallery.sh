@@ -25,3 +25,23 @@ $v "$ct" "${common[@]}" --mode mip --window 0.3,1 --colormap grayscale -o $out/c
 $v "$ct" "${common[@]}" --mode density --preset ct-bone --density 3 -o $out/ct-density.png
 $v ../shared/data/raw/motor_zmap_53x63x46_float32.raw --spacing 3 3 3 --mode mip --window 0.55,1 \
   --colormap plasma --elevation 90 --size 256x256 -o $out/fmri-mip.png
+# What each shared volume opens with, no options given (docs/rendering.md, Auto): one strip of five.
+d=../shared/data/native
+defaults=("$d/colin27_t1/ch2.nii.gz" "$d/brain_pd_mr" "$ct --spacing 0.957031 0.957031 1.5" \
+  "$d/motor_zmap/image_10426.nii.gz" "$d/dwi_b0_ascm/ascm_out_test.nii.gz")
+tiles=()
+for i in "${!defaults[@]}"; do
+  # shellcheck disable=SC2086 # the CT's entry carries its spacing as separate words
+  $v ${defaults[$i]} --size 200x200 -o "$out/default-$i.png"
+  tiles+=("$out/default-$i.png")
+done
+"${VOLCAST_TEST_PYTHON:-.venv-tests/bin/python}" - "$out/defaults.png" "${tiles[@]}" <<'PY'
+import sys
+from PIL import Image
+tiles = [Image.open(p).convert("RGB") for p in sys.argv[2:]]
+strip = Image.new("RGB", (sum(t.width for t in tiles), tiles[0].height))
+for i, t in enumerate(tiles):
+    strip.paste(t, (i * t.width, 0))
+strip.save(sys.argv[1], optimize=True)
+PY
+rm -f "${tiles[@]}"

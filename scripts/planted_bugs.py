@@ -367,6 +367,23 @@ BUGS = [
      "is timed after that frame: no double click",
      [("src/viewer/app/clock.rs", "(Some((_, true)), Some(began)) => since(began) + 1e-3,",
        "(Some((_, true)), Some(_)) => since(now),")]),
+    ("stand-in-depth-dropped", "a stand-in (a preview, a level under a budget, --max-dim) takes its opacity per voxel "
+     "of its own: a fraction of the volume's optical depth",
+     [("src/render/uniforms.rs", "step_length * v.source_voxels,", "step_length,")]),
+    ("scale-bar-full-fov", "the scale bar takes the whole field of view for the half angle: bars twice too short",
+     [("src/render/scale_bar.rs", "let half = (f64::from(c.fov_y_deg) / 2.0).to_radians().tan();",
+       "let half = f64::from(c.fov_y_deg).to_radians().tan();")]),
+    ("measurement-in-voxels", "a saved measurement's ends are voxel indices, not world millimetres",
+     [("src/viewer/model/measurements.rs", "let (start, end) = (affine.transform_point3(a), affine.transform_point3(b));",
+       "let (start, end) = (a, b);")]),
+    ("four-up-views-touch", "the four-up views touch: one view's edge label reads as a pair with the next one's",
+     [("src/viewer/widgets/layout.rs", "pub const SEPARATOR: f32 = 4.0;", "pub const SEPARATOR: f32 = 0.0;")]),
+    ("mr-default-translucent", "the MR auto transfer function tops out at a fog's opacity",
+     [("src/transfer/auto.rs", "[0.5, 0.3, 0.7], [1.0, 0.375, 0.9]];", "[0.5, 0.03, 0.7], [1.0, 0.08, 0.9]];")]),
+    ("spacing-printed-long", "spacing prints every digit of its f32 rounding (0.85937506)",
+     [("src/volume/geometry.rs", "    (0..=12)\n        .map(|p| format!(\"{x:.p$}\"))", "    (12..=12)\n        .map(|p| format!(\"{x:.p$}\"))")]),
+    ("stand-in-range-narrowed", "a volume reduced by --max-dim normalises by its means' narrower range: the window moves",
+     [("src/pyramid/max_dim.rs", "(volume.range, volume.stored_range) = ranges;", "let _ = ranges;")]),
 ]
 
 # The Python module's rules (python/): run against its pytest suite (test_commands).

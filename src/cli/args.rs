@@ -306,6 +306,12 @@ pub struct RenderArgs {
     /// its width.
     #[arg(long, help_heading = "Output")]
     pub colorbar: bool,
+    /// Draw a scale bar (mm, or µm under 1 mm) at the bottom left
+    ///
+    /// A round length at the depth of the camera's target (the point the view orbits): exact there, and at every
+    /// depth with --ortho.
+    #[arg(long, help_heading = "Output")]
+    pub scale_bar: bool,
     /// Frames to time with --timings (the median is reported; default 5); with --keyframes, the movie's frame
     /// count (2 to 3600).
     #[arg(long, hide_short_help = true, help_heading = "Output")]

@@ -163,7 +163,8 @@ pub fn make_resident(
     Ok(())
 }
 
-/// The frame of `s` (placed and made resident), with the colour bar where `--colorbar` asks for it.
+/// The frame of `s` (placed and made resident), with the colour bar and scale bar where `--colorbar` and
+/// `--scale-bar` ask for them.
 pub fn image(
     gpu: &Gpu,
     headless: &mut Headless,
@@ -172,11 +173,8 @@ pub fn image(
     s: &RenderSettings,
 ) -> Result<image::RgbaImage> {
     let frame = headless.render(gpu, s)?;
-    Ok(if args.colorbar {
-        crate::render::figure::with_colorbar(&frame.image, s, volume)
-    } else {
-        frame.image
-    })
+    let figure = crate::render::figure::annotated;
+    Ok(figure(frame.image, s, volume, args.colorbar, args.scale_bar))
 }
 
 /// What a movie shows: its volume where the options read one (none where `volume` is given), and its plan.
@@ -365,20 +363,17 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             } else {
                 String::new()
             };
-            if args.colorbar {
-                frame.image = crate::render::figure::with_colorbar(&frame.image, &s, &volume);
-            }
+            let figure = crate::render::figure::annotated;
+            frame.image = figure(frame.image, &s, &volume, args.colorbar, args.scale_bar);
             crate::render::save::save(&frame.image, &args.output).map_err(anyhow::Error::msg)?;
+            let [sx, sy, sz] = volume.geometry.spacing().map(crate::volume::geometry::shortest);
             println!(
-                "rendered {} ({}x{}x{} {}, spacing {}x{}x{}) at {}x{} with {} ray setup on {} -> {}",
+                "rendered {} ({}x{}x{} {}, spacing {sx}x{sy}x{sz}) at {}x{} with {} ray setup on {} -> {}",
                 volume.name,
                 volume.dims[0],
                 volume.dims[1],
                 volume.dims[2],
                 volume.source_type,
-                volume.spacing()[0],
-                volume.spacing()[1],
-                volume.spacing()[2],
                 s.width,
                 s.height,
                 match (s.pipeline.ray_setup, s.pipeline.compute) {

@@ -1,5 +1,5 @@
-//! Figures: a render with the colour bar of its classification beside it, as `volcast render --colorbar` writes
-//! and the viewer's "Export figure" saves.
+//! Figures: a render with the colour bar of its classification beside it and a scale bar on it, as `volcast
+//! render --colorbar --scale-bar` writes and the viewer's "Export figure" saves.
 
 use crate::scene::settings::RenderSettings;
 use crate::transfer::auto::VolumeFacts;
@@ -11,6 +11,26 @@ use image::RgbaImage;
 pub fn with_colorbar(image: &RgbaImage, s: &RenderSettings, volume: &Volume) -> RgbaImage {
     let classification = s.classification();
     append_colorbar(image, &spec(&classification, s, volume))
+}
+
+/// `image`, a render of `s` of `volume`, with the scale bar drawn on it and the colour bar appended where asked.
+pub fn annotated(image: RgbaImage, s: &RenderSettings, volume: &Volume, colorbar: bool, scale_bar: bool) -> RgbaImage {
+    let image = if scale_bar {
+        with_scale_bar(image, s, volume)
+    } else {
+        image
+    };
+    if colorbar {
+        with_colorbar(&image, s, volume)
+    } else {
+        image
+    }
+}
+
+/// Draws the scale bar of `s` onto `image`, a render of `volume` (`render/scale_bar.rs`).
+pub fn with_scale_bar(mut image: RgbaImage, s: &RenderSettings, volume: &Volume) -> RgbaImage {
+    crate::render::scale_bar::draw(&mut image, s, volume.geometry.world_per_mm(volume.dims));
+    image
 }
 
 /// The width of the colour bar that [`with_colorbar`] appends to an image `height` pixels high (it does not

@@ -102,8 +102,8 @@ impl Info {
                 ),
             );
         }
-        let s = v.spacing();
-        out.line("spacing", format!("{} x {} x {}", s[0], s[1], s[2]));
+        let [x, y, z] = self.spacing.map(crate::volume::geometry::shortest);
+        out.line("spacing", format!("{x} x {y} x {z}"));
         let e = v.extent();
         let size = [0, 1, 2].map(|i| f64::from(self.dims[i]) * self.spacing[i]);
         out.line(

@@ -22,6 +22,7 @@ mod record;
 pub mod refinable;
 mod resident;
 pub mod save;
+pub mod scale_bar;
 pub mod skip;
 mod spacing;
 pub mod stream;

@@ -11,22 +11,28 @@
 //!
 //! Everything else: a histogram of the values (any bin count) without its background, the voxels at or below
 //! FSL BET's threshold `p2 + 0.1·(p98 − p2)` (the percentiles over all voxels; MR background is noise near the
-//! minimum). Over the rest the opacity rises linearly from 0 at its 55th percentile to [`RAMP_ALPHA`] at its
-//! 99th, constant above; the colour goes from dark grey to white over the same span. Grey because MR intensities
-//! carry no physical scale a colormap would suggest (napari and Slicer open MR in grey too), and the ramp starts
-//! near the median so the bulk of the tissue stays translucent: the brighter half (white matter on T1, grey
-//! matter and fluid on PD/T2) gives the picture, the rest adds faint context.
+//! minimum), or up to the most common value where a quarter of the voxels hold it above that threshold (a
+//! statistical map's zeros). Over the span from that threshold to the 99th percentile of the rest, opacity and grey follow
+//! [`MR_SHAPE`], the shape of 3D Slicer's MR-Default preset (its points 20, 40, 120 and 220 at 0, 10, 50 and 100%
+//! of the span; opacity 0, 0.15, 0.3, 0.375), rising to [`MR_TOP`] at the range's top. Slicer's points are fixed
+//! values for one scanner's range; placed by percentiles they fit any MR, microscopy or simulation range. The
+//! head's surface shows as Slicer shows it, where the translucent ramp this replaced (0.08 at the 99th
+//! percentile) showed a grey fog. Grey because MR intensities carry no physical scale a colormap would suggest
+//! (napari and Slicer's slice views open MR in grey too).
 
 use crate::transfer::function::{TfUnits, TransferFunction};
 use crate::transfer::Colormap;
 use crate::volume::{Volume, VoxelType};
 
-/// Opacity per voxel-length step at the ramp's top. Low, because in a whole-head MR the scalp is as bright as
-/// the brain (a 1-D function cannot tell them apart): at 0.25 the scalp hid the brain of the real T1 and PD
-/// heads; at 0.08 the head is translucent and the brain's vessels and white matter show through (docs/rendering.md, Auto).
+/// Opacity per voxel-length step of an OME-Zarr channel's ramp at the top of its window (many channels add up).
 pub const RAMP_ALPHA: f32 = 0.08;
-/// Percentiles of the non-background values where the ramp starts and ends.
-pub const RAMP_PERCENTILES: [f64; 2] = [0.55, 0.99];
+/// The MR look, as [fraction of the span from the background's end to the 99th percentile, opacity per
+/// voxel-length step, grey]: Slicer's MR-Default opacities in grey.
+pub const MR_SHAPE: [[f32; 3]; 4] = [[0.0, 0.0, 0.2], [0.1, 0.15, 0.4], [0.5, 0.3, 0.7], [1.0, 0.375, 0.9]];
+/// Opacity and grey at the top of the range, above the span (Slicer's 0.5 at 1024).
+pub const MR_TOP: [f32; 2] = [0.5, 1.0];
+/// Percentile of the non-background values where the span ends.
+pub const SPAN_PERCENTILE: f64 = 0.99;
 /// The preset CT volumes get.
 pub const CT_PRESET: &str = "ct-bone";
 
@@ -215,13 +221,25 @@ pub fn percentile(histogram: &[u64], from: usize, p: f64) -> f64 {
     1.0
 }
 
-/// The first bin above the background: FSL BET's threshold `p2 + 0.1·(p98 − p2)` over all voxels.
+/// The first bin above the background: FSL BET's threshold `p2 + 0.1·(p98 − p2)` over all voxels, or past the
+/// most common bin where that holds a quarter of the voxels above the threshold (a statistical map's 0 outside
+/// the brain, in the middle of its range: the map then shows its positive values, as FSLeyes and MRIcroGL show
+/// an overlay).
 pub fn background_end(histogram: &[u64]) -> usize {
     let p2 = percentile(histogram, 0, 0.02);
     let p98 = percentile(histogram, 0, 0.98);
     let t = p2 + 0.1 * (p98 - p2);
-    let bin = (t * histogram.len() as f64).ceil() as usize;
-    bin.min(histogram.len().saturating_sub(1))
+    let last = histogram.len().saturating_sub(1);
+    let bin = ((t * histogram.len() as f64).ceil() as usize).min(last);
+    let total: u64 = histogram.iter().sum();
+    match histogram
+        .iter()
+        .enumerate()
+        .max_by_key(|&(i, &n)| (n, std::cmp::Reverse(i)))
+    {
+        Some((mode, &n)) if mode >= bin && n.saturating_mul(4) >= total && total > 0 => (mode + 1).min(last),
+        _ => bin,
+    }
 }
 
 /// The transfer function a volume with `facts` and value `histogram` (normalised values, any bin count) opens
@@ -239,26 +257,38 @@ pub fn auto_transfer_function(facts: &VolumeFacts, histogram: &[u64]) -> Transfe
         return channel_ramp(window, color);
     }
     let from = background_end(histogram);
-    let lo = percentile(histogram, from, RAMP_PERCENTILES[0]);
-    let hi = percentile(histogram, from, RAMP_PERCENTILES[1]);
+    let lo = from as f64 / histogram.len().max(1) as f64;
+    let hi = percentile(histogram, from, SPAN_PERCENTILE);
     ramp(facts, [lo, hi])
 }
 
-/// Grey ramp between normalised `lo` and `hi`, written in data units.
+/// [`MR_SHAPE`] over the span from normalised `lo` to `hi`, then [`MR_TOP`] at the range's top, in data units.
 fn ramp(facts: &VolumeFacts, [lo, hi]: [f64; 2]) -> TransferFunction {
     let [min, max] = facts.range;
     let to_data = |u: f64| (min + u.clamp(0.0, 1.0) * (max - min)) as f32;
     let (mut a, mut b) = (to_data(lo), to_data(hi));
     if b <= a {
-        // A volume of (nearly) one value: a ramp over its whole range still shows it.
+        // A volume of (nearly) one value: the shape over its whole range still shows it.
         (a, b) = (min as f32, max as f32);
+    }
+    let mut colors: Vec<[f32; 4]> = Vec::with_capacity(MR_SHAPE.len() + 1);
+    let mut opacity: Vec<[f32; 2]> = Vec::with_capacity(MR_SHAPE.len() + 1);
+    for [f, alpha, grey] in MR_SHAPE {
+        let x = a + f * (b - a);
+        colors.push([x, grey, grey, grey]);
+        opacity.push([x, alpha]);
+    }
+    if (max as f32) > b {
+        let [alpha, grey] = MR_TOP;
+        colors.push([max as f32, grey, grey, grey]);
+        opacity.push([max as f32, alpha]);
     }
     TransferFunction {
         name: "auto: percentile ramp".into(),
         units: TfUnits::Data,
-        colors: vec![[a, 0.3, 0.3, 0.3], [b, 1.0, 1.0, 1.0]],
+        colors,
         colormap: Colormap::Grayscale,
-        opacity: vec![[a, 0.0], [b, RAMP_ALPHA]],
+        opacity,
     }
 }
 
@@ -366,7 +396,7 @@ mod tests {
     }
 
     #[test]
-    fn synthetic_mr_gets_a_ramp_over_its_foreground() {
+    fn synthetic_mr_gets_the_mr_shape_over_its_foreground() {
         // 60% background noise in the lowest 5% of the range, tissue spread evenly over 0.3..0.7, a few bright
         // voxels at 0.95.
         let mut h = vec![0u64; 100];
@@ -381,13 +411,39 @@ mod tests {
         let tf = auto_transfer_function(&f, &h);
         tf.validate().unwrap();
         assert_eq!(tf.units, TfUnits::Data);
-        let (lo, hi) = (tf.opacity[0][0], tf.opacity[1][0]);
-        // Foreground: 3800 tissue + 200 bright; p55 = 2200 counts in = 0.3 + 2200/95/100.
-        assert!((lo - (300.0 + 2200.0 / 95.0 * 10.0)).abs() < 1.0, "{lo}");
-        // p99 = 3960 counts: inside the bright bin (at 95..96 of 100): 0.95 + 160/200/100.
-        assert!((hi - 958.0).abs() < 1.0, "{hi}");
-        assert_eq!(tf.opacity[1][1], RAMP_ALPHA);
-        assert_eq!(tf.opacity[0][1], 0.0);
+        // Background: p2 = 200/1200 of bin 0, p98 = the end of bin 69; t = 0.00167 + 0.1 * (0.7 - 0.00167) lies in
+        // bin 7, so the span starts at bin 8 (80). p99 = 3960 counts of the foreground's 4000: inside the bright
+        // bin, 0.95 + 160/200/100 (958).
+        let (a, b) = (80.0, 958.0);
+        let want: Vec<[f32; 2]> = MR_SHAPE
+            .iter()
+            .map(|&[f, alpha, _]| [a + f * (b - a), alpha])
+            .chain([[1000.0, MR_TOP[0]]])
+            .collect();
+        assert_eq!(tf.opacity.len(), want.len());
+        for (got, want) in tf.opacity.iter().zip(&want) {
+            assert!(
+                (got[0] - want[0]).abs() < 1.0 && got[1] == want[1],
+                "{got:?} against {want:?}"
+            );
+        }
+        assert_eq!(tf.colors[0][1..], [0.2, 0.2, 0.2]);
+        assert_eq!(tf.colors[4], [1000.0, 1.0, 1.0, 1.0]);
+    }
+
+    #[test]
+    fn a_statistical_map_shows_what_lies_above_its_background_of_zeros() {
+        // 70% zeros in the middle of the range (bin 50 of 100), the rest spread over both signs.
+        let mut h = vec![10u64; 100];
+        h[50] = 2310;
+        assert_eq!(background_end(&h), 51, "past the zeros");
+        // An MR's background of noise near the minimum stays the threshold's.
+        let mut mr = vec![0u64; 100];
+        mr[0] = 6000;
+        for c in mr.iter_mut().take(70).skip(30) {
+            *c = 100;
+        }
+        assert_eq!(background_end(&mr), 7, "p2 + 0.1·(p98 − p2) = 0.0003 + 0.068: bin 7");
     }
 
     #[test]

@@ -7,7 +7,7 @@
 
 mod font;
 
-pub use font::{text_width, GLYPH_HEIGHT};
+pub use font::{for_each_pixel as for_each_text_pixel, text_width, GLYPH_HEIGHT};
 
 use crate::transfer::function::{bake, linear_to_srgb, lookup, Classification};
 use image::{Rgba, RgbaImage};

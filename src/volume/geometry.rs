@@ -348,6 +348,15 @@ pub fn direction_label(v: DVec3) -> char {
     }
 }
 
+/// `x` with the fewest decimals that keep it within a millionth of itself: a header's 0.859375 mm that the
+/// placement's f32 arithmetic made 0.85937506 prints as 0.859375, and 7.0005236 as 7.00052.
+pub fn shortest(x: f64) -> String {
+    (0..=12)
+        .map(|p| format!("{x:.p$}"))
+        .find(|t| t.parse::<f64>().is_ok_and(|r| (r - x).abs() <= 1e-6 * x.abs()))
+        .unwrap_or_else(|| x.to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -467,6 +476,22 @@ mod tests {
     impl MaxAll for DMat4 {
         fn max_element_all(&self) -> f64 {
             self.to_cols_array().iter().fold(0.0, |m, v| m.max(*v))
+        }
+    }
+
+    #[test]
+    fn spacing_prints_its_shortest_form_within_a_millionth() {
+        let cases = [
+            (f64::from(0.859_375_06f32), "0.859375"),
+            (7.000_523_6, "7.00052"),
+            (1.0, "1"),
+            (0.5, "0.5"),
+            (2.0 / 3.0, "0.666667"),
+            (1234.5, "1234.5"),
+            (0.0, "0"),
+        ];
+        for (x, want) in cases {
+            assert_eq!(super::shortest(x), want, "{x}");
         }
     }
 }

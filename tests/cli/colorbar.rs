@@ -1,6 +1,6 @@
 //! `volcast render --colorbar` and `--preset auto` end to end: the image grows by a strip at the right that is
 //! exactly the library's colour bar for the classification in use (data-unit ticks, "HU" for CT), and the
-//! rendered pixels stay as they were.
+//! rendered pixels stay as they were; `--scale-bar` draws a bar of a round length at the camera target's depth.
 
 use crate::common;
 
@@ -111,4 +111,50 @@ fn colorbar_of_the_simple_model_follows_the_window_and_background() {
             assert_eq!(out.get_pixel(64 + x, y), want.get_pixel(x, y), "strip pixel ({x}, {y})");
         }
     }
+}
+
+/// `--scale-bar`: a bar at the bottom left as long as a round length at the camera target's depth, measured here
+/// from the camera alone: the tiny CT is 8 mm across (1 mm voxels; the box's longest side is 1 world unit), seen
+/// orthographically from 2 units at 30°, so a 240-pixel-high view spans 2·2·tan(15°) units = 8.57 mm. The bar
+/// takes at most a fifth of the 320-pixel width (64 px = 2.29 mm): 2 mm. Everything else is the render's.
+#[test]
+fn scale_bar_measures_round_millimetres_at_the_target() {
+    let ct = tiny_ct();
+    let ct = ct.to_str().unwrap();
+    let dir = scratch("cli-colorbar");
+    let view = [
+        "render",
+        ct,
+        "--ortho",
+        "--distance",
+        "2",
+        "--fov",
+        "30",
+        "--size",
+        "320x240",
+        "--validate",
+    ];
+    let shot = |extra: &[&str], name: &str| {
+        let out = dir.join(name);
+        common::volcast_ok(&[&view[..], extra, &["-o", out.to_str().unwrap()]].concat());
+        image::open(&out).expect("read the PNG").to_rgba8()
+    };
+    let (plain, barred) = (shot(&[], "plain-view.png"), shot(&["--scale-bar"], "scale-bar.png"));
+    let px_per_mm = 240.0 / (2.0 * 2.0 * 15f64.to_radians().tan()) / 8.0;
+    let want = (2.0 * px_per_mm).round() as u32;
+    // The bar: 2 rows ending 6 pixels above the bottom, from 6 pixels in.
+    let white = |x: u32, y: u32| barred.get_pixel(x, y).0[..3] == [255, 255, 255];
+    let run = (6..320).take_while(|&x| white(x, 233)).count() as u32;
+    assert_eq!(run, want, "a 2 mm bar at {px_per_mm:.3} px/mm");
+    assert!(white(6, 232) && !white(6, 234));
+    let changed: Vec<(u32, u32)> = (0..240)
+        .flat_map(|y| (0..320).map(move |x| (x, y)))
+        .filter(|&(x, y)| plain.get_pixel(x, y) != barred.get_pixel(x, y))
+        .collect();
+    let label = changed.iter().filter(|&&(_, y)| y < 232).count();
+    assert!(label > 20, "a label above the bar ({label} pixels)");
+    assert!(
+        changed.iter().all(|&(x, y)| x < 6 + want && (221..234).contains(&y)),
+        "only the bar and its label change the render"
+    );
 }

@@ -1,6 +1,7 @@
 //! "Export figure" through real X input (xdotool under Xvfb): typed into the panel's width and height fields,
 //! the figure is the session's view rendered offscreen at that size — at the view's own size without the colour
-//! bar it is F12's screenshot, and at 1600×1000 with the bar it is exactly 1600×1000 with the bar at its right.
+//! bar and the scale bar (on by default, switched off) it is F12's screenshot, and at 1600×1000 with both it is
+//! exactly 1600×1000 with the colour bar at its right and the scale bar at its bottom left.
 
 use crate::common;
 
@@ -24,6 +25,14 @@ pub(crate) fn toggle_colorbar(viewer: &mut Viewer, display: &str, window: &str, 
     pointer(display, window, viewer.ui_rect("export-colorbar").center());
     button(display, "click", "1");
     let said = viewer.wait_for("export figure: colour bar ", Duration::from_secs(30));
+    assert!(said.ends_with(state), "{said}");
+}
+
+/// Clicks the scale bar's checkbox and waits for the viewer to say it is `state` ("on" or "off").
+pub(crate) fn toggle_scale_bar(viewer: &mut Viewer, display: &str, window: &str, state: &str) {
+    pointer(display, window, viewer.ui_rect("export-scale-bar").center());
+    button(display, "click", "1");
+    let said = viewer.wait_for("export figure: scale bar ", Duration::from_secs(30));
     assert!(said.ends_with(state), "{said}");
 }
 
@@ -81,6 +90,8 @@ fn export_figure_renders_the_view_at_the_typed_size_with_the_colour_bar() {
     type_into(&mut viewer, &x.display, window, "export-width", &w.to_string());
     type_into(&mut viewer, &x.display, window, "export-height", &h.to_string());
     toggle_colorbar(&mut viewer, &x.display, window, "off");
+    // The scale bar is on until switched off.
+    toggle_scale_bar(&mut viewer, &x.display, window, "off");
     let same = export(&mut viewer, &x.display, window, &dir);
     assert_eq!(same.dimensions(), (w, h));
     let worst = worst_channel_diff(&same, &shot);
@@ -90,8 +101,15 @@ fn export_figure_renders_the_view_at_the_typed_size_with_the_colour_bar() {
     type_into(&mut viewer, &x.display, window, "export-width", "1600");
     type_into(&mut viewer, &x.display, window, "export-height", "1000");
     toggle_colorbar(&mut viewer, &x.display, window, "on");
+    toggle_scale_bar(&mut viewer, &x.display, window, "on");
     let figure = export(&mut viewer, &x.display, window, &dir);
     assert_eq!(figure.dimensions(), (1600, 1000));
+    // The scale bar: white, 6 rows ending 18 pixels above the bottom, from 18 pixels in (render/scale_bar.rs at
+    // 1000 pixels high), at most a fifth of the render's width.
+    let white = |x_: u32, y: u32| figure.get_pixel(x_, y).0[..3] == [255, 255, 255];
+    let run = (18..1600).take_while(|&x_| white(x_, 980)).count();
+    assert!((20..=1300 / 5).contains(&run), "a scale bar {run} pixels long");
+    assert!(white(18, 976) && !white(18, 973) && !white(18, 982));
     let ink = |x0: u32, x1: u32| {
         (x0..x1)
             .flat_map(|x_| (0..1000).map(move |y| (x_, y)))

@@ -216,14 +216,15 @@ fn viewer_streams_a_file_over_the_gpu_budget_and_refines_again_after_a_drag() {
         d1.max <= 1.0,
         "after the drag the view differs from the headless render streamed within 40 MiB: {d1}"
     );
-    // "Export figure" at the view's size without the colour bar streams its own copy within the same budget,
+    // "Export figure" at the view's size without the colour bar and the scale bar streams its own copy within the same budget,
     // refined for that view: it is the view.
-    use super::export::{export, scroll_to_export, toggle_colorbar, type_into};
+    use super::export::{export, scroll_to_export, toggle_colorbar, toggle_scale_bar, type_into};
     let (w, h) = second.dimensions();
     scroll_to_export(&mut viewer, d, &window);
     type_into(&mut viewer, d, &window, "export-width", &w.to_string());
     type_into(&mut viewer, d, &window, "export-height", &h.to_string());
     toggle_colorbar(&mut viewer, d, &window, "off");
+    toggle_scale_bar(&mut viewer, d, &window, "off");
     let figure = export(&mut viewer, d, &window, &dir);
     let d2 = diff(&figure, &second);
     assert!(

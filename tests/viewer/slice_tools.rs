@@ -3,7 +3,8 @@
 //!   and "auto" brings back the window the CT opened with;
 //! - with the ruler tool on (M), two clicks in the axial view measure the distance between them in world
 //!   millimetres (the length the viewer logs equals the one computed here from the volume's affine) and leave
-//!   the crosshair where it was; a right click clears the ruler.
+//!   the crosshair where it was; a right click clears the ruler;
+//! - the panel's "Save CSV" writes the measurement with its ends in world millimetres.
 //!
 //! Validation reports 0 messages.
 
@@ -110,6 +111,34 @@ fn window_level_presets_and_the_ruler_in_the_slice_views() {
     // A right click clears it.
     button(d, "click", "3");
     viewer.wait_for("ruler: cleared", Duration::from_secs(30));
+
+    // The panel's Slicing section saves the measurement (it outlives the line on screen) as CSV: the view, its ends
+    // in world millimetres (RAS), its length.
+    let save = super::panel::scroll_to(&mut viewer, d, w, "measurements-csv");
+    super::panel::click(d, w, save.center());
+    let saved = viewer.wait_for("saved measurements ", Duration::from_secs(30));
+    let path = saved.trim().trim_start_matches("saved measurements ");
+    let csv = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows.len(), 2, "{csv}");
+    assert_eq!(rows[0], "view,r1_mm,a1_mm,s1_mm,r2_mm,a2_mm,s2_mm,length_mm");
+    let fields: Vec<&str> = rows[1].split(',').collect();
+    assert_eq!(fields[0], "axial");
+    let number = |i: usize| fields[i].parse::<f64>().unwrap_or_else(|_| panic!("{}", rows[1]));
+    let (start, end) = (world(a), world(b));
+    for axis in 0..3 {
+        assert!(
+            (number(1 + axis) - start[axis]).abs() < 1e-3,
+            "start {} against {start}",
+            rows[1]
+        );
+        assert!(
+            (number(4 + axis) - end[axis]).abs() < 1e-3,
+            "end {} against {end}",
+            rows[1]
+        );
+    }
+    assert!((number(7) - mm).abs() < 1e-3, "length {} against {mm}", rows[1]);
 
     viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);

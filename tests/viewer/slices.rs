@@ -2,8 +2,8 @@
 //! (`tests/data/world/nifti_coronal.nii.gz`): a click in the axial view moves the shared crosshair to the patient
 //! point under the pointer (the other two views follow), the wheel steps the axial slice one voxel superior, a
 //! right drag in the sagittal view changes window and level, Ctrl+S writes the session, and a second viewer
-//! started with `--state` on it shows the same view (F12 equal to 1/255) with the same crosshair. Validation
-//! reports 0 messages in both.
+//! started with `--state` on it shows the same view (F12 equal to 1/255) with the same crosshair. Grey bars part
+//! the views and each slice view is framed in its colour. Validation reports 0 messages in both.
 
 use crate::common;
 
@@ -14,6 +14,7 @@ use std::path::Path;
 use std::time::Duration;
 use volcast::scene::slice::SliceView;
 use volcast::viewer::model::Model;
+use volcast::viewer::widgets::layout::SEPARATOR_COLOR;
 use volcast::viewer::widgets::slice_view;
 
 const SIZE: (f32, f32) = (900.0, 600.0);
@@ -26,6 +27,23 @@ fn region(img: &RgbaImage, r: egui::Rect) -> Vec<u8> {
         }
     }
     out
+}
+
+/// Issue 60: the axial view's right-edge "L" and the 3D view's left-edge "R" read as one "L R". Now grey bars lie
+/// between the views and each slice view is framed in its colour (axial red), as Slicer marks its views.
+fn views_are_framed_and_apart(window: &RgbaImage, [axial, three_d, sagittal]: [egui::Rect; 3]) {
+    let at = |x: f32, y: f32| window.get_pixel(x as u32, y as u32).0;
+    let grey = |p: [u8; 4]| p[..3].iter().all(|c| c.abs_diff(SEPARATOR_COLOR.r()) <= 8);
+    let y = axial.center().y + 17.0;
+    let bar = at((axial.right() + three_d.left()) / 2.0, y);
+    assert!(grey(bar), "between the axial and 3D views: {bar:?}");
+    let bar = at(axial.center().x, (axial.bottom() + sagittal.top()) / 2.0);
+    assert!(grey(bar), "between the axial and sagittal views: {bar:?}");
+    let frame = at(axial.right() - 0.5, y);
+    assert!(
+        frame[0] > 180 && frame[1] < 140 && frame[2] < 140,
+        "the axial view's right edge: {frame:?}"
+    );
 }
 
 #[test]
@@ -48,7 +66,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     type_keys(&x.display, window, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (shot, _) = common::x11::read_screenshot(&dir, &saved);
-    let [axial_rect, _, sagittal_rect, coronal_rect] = four_up_rects(SIZE, shot.width());
+    let [axial_rect, three_d_rect, sagittal_rect, coronal_rect] = four_up_rects(SIZE, shot.width());
 
     // The viewer's state for the same volume, to say where a click lands in patient space.
     let mut state = Model::new(volume.extent(), "phantom".into());
@@ -59,6 +77,7 @@ fn slice_views_follow_the_crosshair_and_sessions_restore() {
     let click = shown.lerp_inside(egui::vec2(0.3, 0.65));
 
     let window_before = capture(&x.display, window);
+    views_are_framed_and_apart(&window_before, [axial_rect, three_d_rect, sagittal_rect]);
     pointer(&x.display, window, click);
     button(&x.display, "click", "1");
     let moved = viewer.save_session(&x.display, window, &dir);

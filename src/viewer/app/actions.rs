@@ -26,6 +26,7 @@ impl Running {
                 }
                 UiAction::OpenSession(path) => self.open_session(&path),
                 UiAction::OpenDialog => self.loader.open_dialog(),
+                UiAction::SaveMeasurements(format) => super::capture::save_measurements(&mut self.model, format),
             }
         }
     }

@@ -6,7 +6,8 @@
 use super::file_names;
 use super::recording::Recorder;
 use crate::scene::view_state::ViewState;
-use crate::viewer::model::Messages;
+use crate::viewer::model::measurements::{self, Format};
+use crate::viewer::model::{Messages, Model};
 use crate::viewer::present::{Pixels, Wanted};
 use crate::viewer::session::write_session;
 use crate::viewer::ViewerError;
@@ -135,6 +136,22 @@ pub(super) fn screenshot(
     match saved {
         Ok(()) => messages.status = Some(format!("saved {}", path.display())),
         Err(e) => messages.error = Some(format!("screenshot: {e}")),
+    }
+}
+
+/// Writes the ruler's measurements into the working folder (`volcast-<date and time>.csv` or `.json`), saying in
+/// the model's messages where or why not.
+pub(super) fn save_measurements(model: &mut Model, format: Format) {
+    let path = file_names::capture_path(format.extension(), |p| p.exists());
+    let name = model.volume.label.split(" — ").next().unwrap_or_default().to_string();
+    let text = measurements::write(format, &name, model.anatomical(), &model.slices.ruler.measured);
+    let messages = &mut model.messages;
+    match std::fs::write(&path, text) {
+        Ok(()) => {
+            eprintln!("saved measurements {}", path.display());
+            messages.status = Some(format!("saved {}", path.display()));
+        }
+        Err(e) => messages.error = Some(format!("cannot write {}: {e}", path.display())),
     }
 }
 

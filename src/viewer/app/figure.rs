@@ -1,9 +1,9 @@
 //! "Export figure" carried out: the view state's render at the typed size, the colour bar fitted inside that
-//! width when asked, saved as `volcast-<date>_<time>.png` with its view state beside it (so `volcast render
+//! width and the scale bar drawn on it when asked, saved as `volcast-<date>_<time>.png` with its view state beside it (so `volcast render
 //! --state` renders it again); where it went, or why not, shows under the button.
 
 use super::running::Running;
-use crate::render::figure::{colorbar_width, with_colorbar};
+use crate::render::figure::{annotated, colorbar_width};
 use crate::viewer::session::write_session;
 use std::path::PathBuf;
 
@@ -38,11 +38,7 @@ impl Running {
             .presenter
             .render_offscreen(volume, &s, &self.loader.limits().budgets)
             .map_err(|e| e.to_string())?;
-        let image = if bar > 0 {
-            with_colorbar(&image, &s, volume)
-        } else {
-            image
-        };
+        let image = annotated(image, &s, volume, bar > 0, export.scale_bar);
         let path: PathBuf = self.capture.new_name("png");
         crate::render::save::save(&image, &path)?;
         write_session(&path.with_extension("json"), &self.view_state(&s))?;

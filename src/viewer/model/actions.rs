@@ -28,6 +28,8 @@ pub enum UiAction {
     ExportFigure,
     /// Show the platform's file dialog (off the render thread).
     OpenDialog,
+    /// Write the ruler's measurements into the working folder.
+    SaveMeasurements(super::measurements::Format),
 }
 
 impl UiAction {
@@ -38,6 +40,7 @@ impl UiAction {
             UiAction::LoadFile(..) | UiAction::LoadBuiltin(_) | UiAction::OpenDialog => Some(Topic::Volume),
             UiAction::SaveSession | UiAction::OpenSession(_) => Some(Topic::Session),
             UiAction::Screenshot | UiAction::ToggleRecording => Some(Topic::Capture),
+            UiAction::SaveMeasurements(_) => Some(Topic::Measurements),
             _ => None,
         }
     }

@@ -1,5 +1,5 @@
 //! The "Export figure" section's state: the size typed for a figure rendered offscreen from the session (any size
-//! up to the device's limit, unlike F12's view-sized screenshot), whether it carries the colour bar, and what
+//! up to the device's limit, unlike F12's view-sized screenshot), whether it carries the colour bar and the scale bar, and what
 //! became of the last one.
 
 /// What the export fields hold, as typed.
@@ -8,6 +8,8 @@ pub struct FigureExport {
     pub width: String,
     pub height: String,
     pub colorbar: bool,
+    /// A scale bar at the bottom left (`render/scale_bar.rs`): on unless switched off.
+    pub scale_bar: bool,
     /// The last export: the file written, or why not.
     pub last: Option<Result<String, String>>,
 }
@@ -18,6 +20,7 @@ impl Default for FigureExport {
             width: "1920".into(),
             height: "1080".into(),
             colorbar: true,
+            scale_bar: true,
             last: None,
         }
     }

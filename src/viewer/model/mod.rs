@@ -13,6 +13,7 @@ pub mod export;
 pub mod files;
 pub mod framing;
 pub mod history;
+pub mod measurements;
 pub mod orbit;
 pub mod recent;
 pub mod session;
@@ -149,6 +150,8 @@ pub enum Topic {
     Session,
     /// Screenshots and recordings (the View section, under their buttons).
     Capture,
+    /// The ruler's measurements (the Slicing section, under their buttons).
+    Measurements,
 }
 
 /// A volume streamed through a pool: its slots, and how far the view has refined towards the level each brick
@@ -293,9 +296,10 @@ impl Model {
     /// the user locked theirs; the built-ins (synthetic, no modality) keep the simple model.
     pub fn show_volume(&mut self, v: &Volume, histogram: Arc<[u64]>, from_file: bool) {
         let spacing = v.spacing();
+        let [sx, sy, sz] = v.geometry.spacing().map(crate::volume::geometry::shortest);
         let label = format!(
-            "{} — {}×{}×{} {}, spacing {}×{}×{}",
-            v.name, v.dims[0], v.dims[1], v.dims[2], v.source_type, spacing[0], spacing[1], spacing[2]
+            "{} — {}×{}×{} {}, spacing {sx}×{sy}×{sz}",
+            v.name, v.dims[0], v.dims[1], v.dims[2], v.source_type
         );
         self.set_volume(v.extent(), v.geometry, v.dims, label);
         self.files.describe_raw(v.dims, v.source_type, spacing);

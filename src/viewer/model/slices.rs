@@ -34,11 +34,13 @@ pub struct SliceViews {
 
 /// The ruler (3D Slicer's line markup): with the tool on (M), a left click in a slice view places one end and the
 /// next click the other; the length is in millimetres of the world (the volume's spacing and affine).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Ruler {
     /// Left clicks in the slice views place ruler ends instead of moving the crosshair.
     pub active: bool,
     pub line: Option<RulerLine>,
+    /// Every line finished on this volume, to save as CSV or JSON (the panel's Measurements).
+    pub measured: Vec<super::measurements::Measurement>,
 }
 
 /// A ruler line in one slice view, its ends in continuous voxel index coordinates (as the crosshair: it stays
@@ -126,6 +128,7 @@ impl SliceViews {
         self.wl = Some(percentile_window(histogram, range));
         self.probe = None;
         self.ruler.line = None;
+        self.ruler.measured.clear();
         self.generation += 1;
     }
 

@@ -12,9 +12,15 @@ use crate::volume::Volume;
 /// the cursor.
 pub const PANEL_WIDTH: f32 = 270.0;
 
-/// The quadrants of the central area: (axial, 3D, sagittal, coronal), a thin gap between.
+/// The width of the grey bars between the four-up views (points): each view's edge labels then read as its own, not
+/// as a pair with the next view's ("L | R", not "L R").
+pub const SEPARATOR: f32 = 4.0;
+/// The bars' colour.
+pub const SEPARATOR_COLOR: egui::Color32 = egui::Color32::from_gray(72);
+
+/// The quadrants of the central area: (axial, 3D, sagittal, coronal), a [`SEPARATOR`] between.
 pub fn four_up(rect: egui::Rect) -> [egui::Rect; 4] {
-    let gap = 2.0;
+    let gap = SEPARATOR;
     let mid = rect.center();
     let (l, r) = (rect.left()..=mid.x - gap / 2.0, mid.x + gap / 2.0..=rect.right());
     let (t, b) = (rect.top()..=mid.y - gap / 2.0, mid.y + gap / 2.0..=rect.bottom());
@@ -62,7 +68,15 @@ fn view_area(ui: &mut egui::Ui, model: &mut Model, volume: Option<&Volume>, imag
         overlay::view_overlay(ui, model);
         return;
     }
-    let [axial, three_d, sagittal, coronal] = four_up(ui.max_rect());
+    let area = ui.max_rect();
+    let [axial, three_d, sagittal, coronal] = four_up(area);
+    let bars = [
+        egui::Rect::from_x_y_ranges(axial.right()..=three_d.left(), area.y_range()),
+        egui::Rect::from_x_y_ranges(area.x_range(), axial.bottom()..=sagittal.top()),
+    ];
+    for bar in bars {
+        ui.painter().rect_filled(bar, 0.0, SEPARATOR_COLOR);
+    }
     for (view, rect) in [
         (SliceView::Axial, axial),
         (SliceView::Sagittal, sagittal),
@@ -85,7 +99,8 @@ mod tests {
         let [axial, three_d, sagittal, coronal] = four_up(r);
         assert_eq!(axial.left_top(), r.left_top());
         assert_eq!(coronal.right_bottom(), r.right_bottom());
-        assert!(three_d.left() > axial.right() && sagittal.top() > axial.bottom());
+        assert_eq!(three_d.left() - axial.right(), SEPARATOR);
+        assert_eq!(sagittal.top() - axial.bottom(), SEPARATOR);
         assert!((axial.width() - three_d.width()).abs() < 1e-3);
     }
 }

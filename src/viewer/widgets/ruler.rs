@@ -1,8 +1,9 @@
 //! The ruler in a slice view (3D Slicer's line markup): with the tool on (M, or the view's "ruler" button) a left
 //! click places one end and the next the other; the line is drawn with its length in world millimetres. A right
 //! click (or Esc) clears it. A finished ruler's length also goes to stderr (`ruler: 12.345 mm (Axial)`), where a
-//! user can copy it and the tests read it.
+//! user can copy it and the tests read it, and the line joins the measurements the panel saves.
 
+use crate::viewer::model::measurements::Measurement;
 use crate::viewer::model::Model;
 use crate::viewer::widgets::shown_slice::ShownSlice;
 use egui::{Color32, Pos2, Stroke};
@@ -24,6 +25,9 @@ pub fn take_input(model: &mut Model, slice: &ShownSlice, response: &egui::Respon
             if let Some(line) = model.slices.ruler.place(slice.frame.view, at) {
                 let mm = line.length_mm(slice.mm).unwrap_or_default();
                 eprintln!("ruler: {mm:.3} mm ({})", slice.frame.view.name(model.anatomical()));
+                let (anatomical, affine) = (model.anatomical(), model.geometry.affine);
+                let measured = Measurement::new(line.view, anatomical, affine, line.start, at);
+                model.slices.ruler.measured.push(measured);
             }
         }
     }

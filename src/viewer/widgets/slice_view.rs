@@ -71,6 +71,9 @@ pub fn slice_view(
     };
     paint_cuts(&painter, model, &slice);
     paint_labels(&painter, rect, model, view, mm.transform_point3(model.slices.crosshair));
+    // Framed in its colour, as Slicer marks its views: which view a label or a click belongs to is never in doubt.
+    let frame_stroke = Stroke::new(1.0, marks::view_color(view));
+    painter.rect_stroke(rect, 0.0, frame_stroke, egui::StrokeKind::Inside);
 
     let response = ui.interact(
         rect,

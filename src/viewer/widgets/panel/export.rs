@@ -31,6 +31,14 @@ pub fn export_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<Ui
                     if export.colorbar { "on" } else { "off" }
                 );
             }
+            let scale_bar = ui
+                .checkbox(&mut export.scale_bar, "scale bar")
+                .on_hover_text("a round length in mm (µm under 1 mm) at the depth of the point the view orbits");
+            rects::log("export-scale-bar", scale_bar.rect);
+            if scale_bar.changed() {
+                let on = if export.scale_bar { "on" } else { "off" };
+                eprintln!("export figure: scale bar {on}");
+            }
             let button = ui.button("Export");
             rects::log("export-button", button.rect);
             if button.clicked() {

@@ -37,7 +37,7 @@ pub fn settings_panel(ui: &mut egui::Ui, model: &mut Model) -> Vec<UiAction> {
     transfer::transfer_function_section(ui, model);
     rendering::rendering_section(ui, model);
     lighting::lighting_section(ui, &mut model.look);
-    slicing::slicing_section(ui, model);
+    slicing::slicing_section(ui, model, &mut actions);
     view::view_section(ui, model, &mut actions);
     export::export_section(ui, model, &mut actions);
     volume::volume_section(ui, model, &mut actions);

@@ -1,12 +1,15 @@
-//! The panel's Slicing section: the axis slabs and the clipping plane (which is dragged in the 3D view).
+//! The panel's Slicing section: the axis slabs, the clipping plane (which is dragged in the 3D view) and the ruler's
+//! measurements.
 
 use crate::scene::clip::ClipPlane;
-use crate::viewer::model::Model;
-use crate::viewer::widgets::clip_plane;
+use crate::viewer::model::actions::UiAction;
+use crate::viewer::model::measurements::Format;
+use crate::viewer::model::{Model, Topic};
+use crate::viewer::widgets::{clip_plane, rects};
 use crate::volume::geometry::index_axis_names;
 
-/// The axis slabs.
-pub fn slicing_section(ui: &mut egui::Ui, model: &mut Model) {
+/// The axis slabs, the clipping plane and the measurements.
+pub fn slicing_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<UiAction>) {
     egui::CollapsingHeader::new("Slicing")
         .default_open(true)
         .show(ui, |ui| {
@@ -25,7 +28,39 @@ pub fn slicing_section(ui: &mut egui::Ui, model: &mut Model) {
             }
             ui.separator();
             clip_plane_controls(ui, model);
+            ui.separator();
+            measurements(ui, model, actions);
         });
+}
+
+/// The ruler's measurements on this volume (the last few listed), saved as CSV or JSON with their ends in world
+/// millimetres, or cleared.
+fn measurements(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<UiAction>) {
+    let measured = &model.slices.ruler.measured;
+    ui.label(format!("measurements: {} (ruler: M in a slice view)", measured.len()));
+    let first = measured.len().saturating_sub(4);
+    for (i, m) in measured.iter().enumerate().skip(first) {
+        ui.weak(format!("{}. {:.1} mm ({})", i + 1, m.length_mm, m.view));
+    }
+    ui.add_enabled_ui(!measured.is_empty(), |ui| {
+        ui.horizontal(|ui| {
+            let formats = [
+                (Format::Csv, "Save CSV", "measurements-csv"),
+                (Format::Json, "Save JSON", "measurements-json"),
+            ];
+            for (format, text, name) in formats {
+                let button = ui.button(text);
+                rects::log(name, button.rect);
+                if button.clicked() {
+                    actions.push(UiAction::SaveMeasurements(format));
+                }
+            }
+            if ui.button("Clear").clicked() {
+                model.slices.ruler.measured.clear();
+            }
+        });
+    });
+    super::messages_about(ui, &model.messages, Topic::Measurements);
 }
 
 /// The arbitrary clipping plane: on/off, offset, flip, face the camera (dragged in the 3D view).
