@@ -429,6 +429,16 @@ mod tests {
         }
         assert_eq!(tf.colors[0][1..], [0.2, 0.2, 0.2]);
         assert_eq!(tf.colors[4], [1000.0, 1.0, 1.0, 1.0]);
+        // Slicer's look, not a fog: tissue at the span's middle takes 0.3 per voxel, so ten voxels of it hide what
+        // lies behind (97%); the translucent ramp this replaced let 55% through.
+        let mid = tf.opacity[2];
+        let through = (1.0 - f64::from(mid[1])).powi(10);
+        assert!(
+            through < 0.05,
+            "{:.0}% through ten voxels at {}",
+            through * 100.0,
+            mid[0]
+        );
     }
 
     #[test]
