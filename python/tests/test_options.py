@@ -25,6 +25,7 @@ SAMPLES = {
     "gradient_texture": True, "step_alpha": 0.05, "quality": "fast", "step_length": 0.7, "multiplied_alpha": True,
     "early_termination": 0.9, "background": (0.1, 0.1, 0.2), "slice": ("x", 0.5, 0.4), "clip_plane": (0, 0, 1, 0),
     "positions": "rgba16f", "output": "OUT", "method": "compute", "timings": True, "memory": True, "colorbar": True,
+    "scale_bar": True,
     "frames": 2, "state": None, "level": 0, "turntable": None, "keyframes": None, "fps": None,
 }
 # Read-a-file options (the walk's volume is built in) and the state file: test_the_file_options_apply_to_a_path;

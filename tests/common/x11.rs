@@ -301,8 +301,13 @@ impl Viewer {
     /// Saves the session (Ctrl+S into `dir`, the viewer's working directory) and reads it back.
     pub fn save_session(&mut self, display: &str, window: &str, dir: &Path) -> ViewState {
         type_keys(display, window, &["ctrl+s"]);
-        self.wait_for("saved session ", Duration::from_secs(60));
-        read_state(&dir.join("volcast-session.json"))
+        let line = self.wait_for("saved session ", Duration::from_secs(60));
+        // Named by its absolute path (issue 60: "saved" messages gave relative ones).
+        let named = line.trim().trim_start_matches("saved session ");
+        let path = dir.join("volcast-session.json");
+        let same = std::fs::canonicalize(named).ok() == std::fs::canonicalize(&path).ok();
+        assert!(Path::new(named).is_absolute() && same, "{line}");
+        read_state(&path)
     }
 
     /// Reads the stderr lines that have arrived so far, without waiting.

@@ -155,8 +155,10 @@ pub(super) fn save_measurements(model: &mut Model, format: Format) {
     }
 }
 
-/// Writes the session file, saying in `messages` where or why not.
+/// Writes the session file, saying in `messages` where (by its absolute path, whatever the working folder) or why
+/// not.
 pub(super) fn save_session(path: &Path, state: &ViewState, messages: &mut Messages) {
+    let path = &std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
     match write_session(path, state) {
         Ok(()) => {
             eprintln!("saved session {}", path.display());
