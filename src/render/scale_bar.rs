@@ -1,8 +1,8 @@
 //! The scale bar of a figure (`render --scale-bar`, the viewer's "Export figure"): a bar at the bottom left whose
 //! length is a round number of millimetres (or micrometres, under 1 mm) at the depth of the camera's target, the
 //! point the view orbits. In an orthographic view that holds at every depth; in a perspective view nearer things
-//! look larger, so the label says where it holds only by the bar's place in the docs (3D Slicer shows its 3D
-//! ruler only in orthographic views; ParaView and napari draw theirs at the focal point, as here).
+//! look larger, and the bar holds at the target only (3D Slicer shows its 3D ruler only in orthographic views;
+//! ParaView and napari draw theirs at the focal point, as here).
 //!
 //! The view is `2·d·tan(fov/2)` world units high at the target's distance `d` (perspective and orthographic
 //! alike, `Camera`), and the world is the volume's millimetres times `world_per_mm` (its longest side is 1).
@@ -78,16 +78,21 @@ mod tests {
     use crate::scene::camera::Camera;
     use glam::Vec3;
 
-    #[test]
-    fn a_view_two_units_high_at_the_target_shows_height_over_two_pixels_per_unit() {
+    /// 400×300 from 1 unit at 90°: tan(45°) = 1, so the view is 2 units high at the target.
+    fn unit_view() -> RenderSettings {
         let mut s = RenderSettings::new(400, 300, Vec3::ONE);
-        // tan(45°) = 1: the view is 2·d high at the target, d = 1.
         s.camera = Camera {
             eye: Vec3::new(0.0, 0.0, 1.0),
             target: Vec3::ZERO,
             fov_y_deg: 90.0,
             ..s.camera
         };
+        s
+    }
+
+    #[test]
+    fn a_view_two_units_high_at_the_target_shows_height_over_two_pixels_per_unit() {
+        let mut s = unit_view();
         let per_mm = pixels_per_mm(&s, 0.01, 300);
         assert!((per_mm - 150.0 * 0.01).abs() < 1e-9, "{per_mm}");
         s.camera.ortho = true;
@@ -115,13 +120,7 @@ mod tests {
 
     #[test]
     fn the_bar_is_drawn_at_the_bottom_left_at_its_length() {
-        let mut s = RenderSettings::new(400, 300, Vec3::ONE);
-        s.camera = Camera {
-            eye: Vec3::new(0.0, 0.0, 1.0),
-            target: Vec3::ZERO,
-            fov_y_deg: 90.0,
-            ..s.camera
-        };
+        let s = unit_view();
         let mut image = RgbaImage::from_pixel(400, 300, Rgba([0, 0, 0, 255]));
         // 1.5 px per mm, room for 80 px: a 50 mm bar, 75 px long, 2 px thick, 6 px in from the edges.
         assert_eq!(draw(&mut image, &s, 0.01), Some(50.0));
