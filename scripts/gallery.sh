@@ -25,6 +25,10 @@ $v "$ct" "${common[@]}" --mode mip --window 0.3,1 --colormap grayscale -o $out/c
 $v "$ct" "${common[@]}" --mode density --preset ct-bone --density 3 -o $out/ct-density.png
 $v ../shared/data/raw/motor_zmap_53x63x46_float32.raw --spacing 3 3 3 --mode mip --window 0.55,1 \
   --colormap plasma --elevation 90 --size 256x256 -o $out/fmri-mip.png
+# Layers (docs/layers.md): the T1 with the motor z-map at |z| >= 3 and the AAL precentral and postcentral gyri.
+$v "$brain" --overlay ../shared/data/native/motor_zmap/image_10426.nii.gz --threshold 3 \
+  --labels ../shared/data/native/aal_labels/aal.nii.gz --label-ids 1,2,57,58 --view superior \
+  --clip-plane 0,0,-1,-38 --size 400x400 -o $out/layers-t1-zmap-aal.png
 # What each shared volume opens with, no options given (docs/rendering.md, Auto): one strip of five.
 d=../shared/data/native
 defaults=("$d/colin27_t1/ch2.nii.gz" "$d/brain_pd_mr" "$ct --spacing 0.957031 0.957031 1.5" \

@@ -382,6 +382,27 @@ BUGS = [
      [("src/transfer/auto.rs", "[0.5, 0.3, 0.7], [1.0, 0.375, 0.9]];", "[0.5, 0.03, 0.7], [1.0, 0.08, 0.9]];")]),
     ("spacing-printed-long", "spacing prints every digit of its f32 rounding (0.85937506)",
      [("src/volume/geometry.rs", "    (0..=12)\n        .map(|p| format!(\"{x:.p$}\"))", "    (12..=12)\n        .map(|p| format!(\"{x:.p$}\"))")]),
+    ("label-sampled-linearly", "a label map's dense ids are interpolated between neighbours along x, as a linear filter would",
+     [("shaders/layers.glsl", "    uint id = texelFetch(usampler3D(layer_labels, linear_smp), v, 0).r;",
+       "    ivec3 w = clamp(ivec3(floor(x)), ivec3(0), ivec3(L.dims.xyz) - 1);\n"
+       "    w.z += int(L.dims.w);\n"
+       "    uint id = uint(mix(float(texelFetch(usampler3D(layer_labels, linear_smp), w, 0).r),\n"
+       "                       float(texelFetch(usampler3D(layer_labels, linear_smp), w + ivec3(1, 0, 0), 0).r),\n"
+       "                       fract(x.x)) + 0.5);")]),
+    ("layer-other-affine", "a layer is placed with the base volume's affine instead of its own",
+     [("src/render/layers.rs", "let to_index = p.geometry.affine.inverse() * base.affine * tex_to_index;",
+       "let to_index = base.affine.inverse() * base.affine * tex_to_index;")]),
+    ("layers-blended-whole", "layers are composited along the ray on their own and blended whole over the base, "
+     "as napari and neuroglancer do: depth is lost",
+     [("shaders/march.glsl", "            c = mix_layers(c, ray.a + ray.dir * t);",
+       "            vec4 l = mix_layers(vec4(0.0), ray.a + ray.dir * t);\n"
+       "            composite(lcolor, lopacity, l.rgb, l.a);"),
+      ("shaders/march.glsl", "vec4 march_emission(WalkRay ray, vec3 light) {\n    vec3 color = vec3(0.0);",
+       "vec4 march_emission(WalkRay ray, vec3 light) {\n    vec3 lcolor = vec3(0.0);\n    float lopacity = 0.0;\n"
+       "    vec3 color = vec3(0.0);"),
+      ("shaders/march.glsl", "    return share_or_finish(color, opacity, taken);\n}\n#endif",
+       "    color = lcolor + (1.0 - lopacity) * color;\n    opacity = lopacity + (1.0 - lopacity) * opacity;\n"
+       "    return share_or_finish(color, opacity, taken);\n}\n#endif")]),
     ("stand-in-range-narrowed", "a volume reduced by --max-dim normalises by its means' narrower range: the window moves",
      [("src/pyramid/max_dim.rs", "(volume.range, volume.stored_range) = ranges;", "let _ = ranges;")]),
 ]

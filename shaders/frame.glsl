@@ -21,7 +21,7 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 background;      // rgb: linear light
     vec4 viewport;        // x, y: target size in pixels; z: most samples a ray may take; w: 1 = output samples taken
     vec4 texel;           // xyz: 1 / dims (one voxel in texture space)
-    vec4 voxel_world;     // x: rule 5's shading fade width (0: off); w: gradient-opacity reference (0: off)
+    vec4 voxel_world;     // x: rule 5's shading fade width (0: off); y, z: rule 13's overlays and label maps; w: gradient-opacity reference (0: off)
     vec4 shading;         // ambient, diffuse, specular, shininess
     vec4 mode_params;     // x: iso value; y: density factor; z: 1 = look up bricks (skip, stride); w: iso-surfaces
     uvec4 flags;          // x: composite mode (CompositeMode::index); y: jitter on; z: jitter seed; w: shading on

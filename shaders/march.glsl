@@ -17,6 +17,9 @@
 #define WALK_SEGMENTS false
 #endif
 #include "walk.glsl"
+#if defined(LAYERS)
+#include "layers.glsl"
+#endif
 
 const uint MODE_EMISSION = 0u;
 const uint MODE_MIP = 1u;
@@ -289,6 +292,10 @@ vec4 march_emission(WalkRay ray, vec3 light) {
         vec4 c = segment_to(ray, w.brick, t, light, density_model, t_prev, v_prev, i_prev);
         // Rule 11: a segment belongs to the rank owning its end.
         if (step == WALK_SAMPLE && owned(ray.a + ray.dir * t)) {
+#if defined(LAYERS)
+            // Rule 13: the layers at this sample mix into its segment.
+            c = mix_layers(c, ray.a + ray.dir * t);
+#endif
             taken += 1u;
             composite(color, opacity, c.rgb, c.a);
         }

@@ -106,6 +106,10 @@ fn frame(
     } = dev;
     let reduced = shown.as_ref().and_then(|s| s.reduced.as_ref());
     let volume_shown = reduced.unwrap_or(&volume);
+    // Rule 13's layers, as `volcast render` reads them (none: the layers of an earlier call are dropped).
+    let mut s = s;
+    volcast::cli::layers::check(&args.layers, &s)?;
+    args.layers.load()?.show(gpu, headless, volume_shown, &mut s)?;
     steps::make_resident(gpu, headless, args, volume_shown, &s)?;
     let image = steps::image(gpu, headless, args, volume_shown, &s)?;
     let timings = if args.timings {

@@ -25,7 +25,9 @@ SAMPLES = {
     "gradient_texture": True, "step_alpha": 0.05, "quality": "fast", "step_length": 0.7, "multiplied_alpha": True,
     "early_termination": 0.9, "background": (0.1, 0.1, 0.2), "slice": ("x", 0.5, 0.4), "clip_plane": (0, 0, 1, 0),
     "positions": "rgba16f", "output": "OUT", "method": "compute", "timings": True, "memory": True, "colorbar": True,
-    "scale_bar": True,
+    "scale_bar": True, "overlay": ["OVERLAY"], "threshold": 0.5, "overlay_opacity": 0.4,
+    "overlay_colormap": "viridis", "labels": ["LABELS"], "label_table": "TABLE", "label_ids": [1],
+    "label_opacity": 0.3,
     "frames": 2, "state": None, "level": 0, "turntable": None, "keyframes": None, "fps": None,
 }
 # Read-a-file options (the walk's volume is built in) and the state file: test_the_file_options_apply_to_a_path;
@@ -50,6 +52,18 @@ def value(name, tmp_path):
     if v == "TF":
         path = tmp_path / "tf.json"
         path.write_text(volcast.TransferFunction.preset("qt-example").to_json())
+        return str(path)
+    if v == ["OVERLAY"]:
+        path = tmp_path / "ov_8x8x8_float32.raw"
+        np.linspace(-1, 1, 512, dtype=np.float32).tofile(path)
+        return [str(path)]
+    if v == ["LABELS"]:
+        path = tmp_path / "lab_8x8x8_uint8.raw"
+        (np.arange(512) % 3).astype(np.uint8).tofile(path)
+        return [str(path)]
+    if v == "TABLE":
+        path = tmp_path / "lab.ctbl"
+        path.write_text("1 one 255 0 0 255\n2 two 0 255 0 255\n")
         return str(path)
     if v in ("SAVE", "OUT"):
         return str(tmp_path / ("saved.json" if v == "SAVE" else "out.png"))

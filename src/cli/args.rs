@@ -287,6 +287,8 @@ pub struct RenderArgs {
     pub gpu: GpuArgs,
     #[command(flatten)]
     pub frame: FrameArgs,
+    #[command(flatten)]
+    pub layers: super::layers::LayerArgs,
     /// The image to write: PNG, JPEG or TIFF by its extension
     #[arg(short, long, default_value = "volcast.png", help_heading = "Output")]
     pub output: PathBuf,

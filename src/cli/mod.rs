@@ -5,6 +5,7 @@ pub mod budgets;
 pub mod commands;
 pub mod convert;
 pub mod frame;
+pub mod layers;
 pub mod parse;
 pub mod render;
 pub mod settings;

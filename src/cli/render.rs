@@ -341,7 +341,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         let t_load = Instant::now();
         let loaded = render_view(args);
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
-        let (mut volume, s) = match loaded {
+        let loaded = loaded.and_then(|(v, s)| {
+            super::layers::check(&args.layers, &s)?;
+            Ok((v, s, args.layers.load()?))
+        });
+        let (mut volume, mut s, layers) = match loaded {
             Ok(v) => v,
             Err(e) => {
                 headless.destroy(gpu);
@@ -353,6 +357,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             if let Some(reduced) = place(gpu, &mut headless, args, &volume)? {
                 volume = reduced;
             }
+            layers.show(gpu, &mut headless, &volume, &mut s)?;
             make_resident(gpu, &mut headless, args, &volume, &s)?;
             let upload_ms = t_upload.elapsed().as_secs_f64() * 1e3;
             let t0 = Instant::now();

@@ -8,6 +8,7 @@ mod decode;
 pub(crate) mod dicom;
 mod format;
 pub mod in_place;
+pub mod label_table;
 mod metaimage;
 pub(crate) mod nifti;
 mod nrrd;

@@ -100,6 +100,7 @@ impl Renderer {
             },
             targets: Default::default(),
             volume: None,
+            layers: None,
             texel_policy: gpu.texel_policy,
             brick_side: gpu.brick_side,
             light_ms: None,
@@ -136,6 +137,8 @@ impl Renderer {
             let slot = frame_slot(gpu, set, storage_set)?;
             self.slots.push(slot);
         }
+        self.layers = Some(super::layers::GpuLayers::new(gpu, &[])?);
+        self.write_layer_set(gpu);
         let initial = RenderSettings::default();
         self.upload_lut(&initial, [0.0, 1.0])?;
         Ok(())
@@ -163,6 +166,11 @@ impl Renderer {
                 (D::UNIFORM_BUFFER, frag),
                 (D::SAMPLED_IMAGE, frag),
                 // The brick pool's page table (render/pool.rs).
+                (D::SAMPLED_IMAGE, frag),
+                // Rule 13's layers (render/layers.rs): overlay values, label ids, their table (uniform) and colours.
+                (D::SAMPLED_IMAGE, frag),
+                (D::SAMPLED_IMAGE, frag),
+                (D::UNIFORM_BUFFER, frag),
                 (D::SAMPLED_IMAGE, frag),
             ],
         )?;
@@ -226,8 +234,8 @@ impl Renderer {
         let n = slots as u32;
         let size = |ty, descriptor_count| vk::DescriptorPoolSize { ty, descriptor_count };
         let sizes = [
-            size(D::UNIFORM_BUFFER, n + 1),
-            size(D::SAMPLED_IMAGE, 9),
+            size(D::UNIFORM_BUFFER, n + 2),
+            size(D::SAMPLED_IMAGE, 12),
             size(D::SAMPLER, 2),
             size(D::STORAGE_IMAGE, n + 1),
             size(D::STORAGE_BUFFER, 2),

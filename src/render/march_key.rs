@@ -74,10 +74,13 @@ pub enum Family {
     Projection,
     /// Iso-surfaces (always shaded).
     Isosurface(Lighting),
+    /// Emission or density with layers mixed in at each sample (rule 13): unshaded (None) or shaded with
+    /// gradients of six samples or the gradient texture (no light grid).
+    Layers(Option<Lighting>),
 }
 
 impl Family {
-    pub const ALL: [Family; 10] = [
+    pub const ALL: [Family; 13] = [
         Family::Emission,
         Family::EmissionShaded(Lighting::ALL[0]),
         Family::EmissionShaded(Lighting::ALL[1]),
@@ -88,12 +91,16 @@ impl Family {
         Family::Isosurface(Lighting::ALL[1]),
         Family::Isosurface(Lighting::ALL[2]),
         Family::Isosurface(Lighting::ALL[3]),
+        Family::Layers(None),
+        Family::Layers(Some(Lighting::ALL[0])),
+        Family::Layers(Some(Lighting::ALL[1])),
     ];
 
     /// Where its gradients and light come from (None: it takes no gradients).
     pub fn lighting(self) -> Option<Lighting> {
         match self {
             Family::EmissionShaded(l) | Family::Isosurface(l) => Some(l),
+            Family::Layers(l) => l,
             Family::Emission | Family::Projection => None,
         }
     }
@@ -104,6 +111,8 @@ impl Family {
             Family::EmissionShaded(_) => vec!["FAMILY_EMISSION", "SHADED"],
             Family::Projection => vec!["FAMILY_PROJECTION"],
             Family::Isosurface(_) => vec!["FAMILY_ISOSURFACE"],
+            Family::Layers(None) => vec!["FAMILY_EMISSION", "LAYERS"],
+            Family::Layers(Some(_)) => vec!["FAMILY_EMISSION", "SHADED", "LAYERS"],
         };
         family
             .into_iter()
@@ -117,6 +126,8 @@ impl Family {
             Family::EmissionShaded(_) => "ea_shaded",
             Family::Projection => "proj",
             Family::Isosurface(_) => "iso",
+            Family::Layers(None) => "layers",
+            Family::Layers(Some(_)) => "layers_shaded",
         };
         format!("{family}{}", self.lighting().map_or(String::new(), Lighting::suffix))
     }

@@ -10,6 +10,7 @@ pub mod gradients;
 pub mod headless;
 pub mod info;
 mod init;
+pub mod layers;
 pub mod levels;
 pub mod light_volume;
 pub mod march_key;
@@ -124,6 +125,8 @@ pub struct Renderer {
     table: parts::Table,
     targets: parts::Targets,
     volume: Option<GpuVolume>,
+    /// Rule 13's layers (one-voxel stand-ins when there are none, so their bindings are always valid).
+    layers: Option<layers::GpuLayers>,
     /// How the next `set_volume` stores voxels (see [`TexelPolicy`]); starts as the GPU's option.
     pub texel_policy: TexelPolicy,
     /// The brick side volumes are cut into (render/pool.rs; None: one brick where it fits).
@@ -369,7 +372,11 @@ impl Renderer {
         };
         let from_file = self.volume.as_ref().is_some_and(|v| v.info.held > 0);
         let lighting = Lighting::new(s.lighting.gradient_texture && !from_file, s.uses_light_volume());
+        let shaded = s.lighting.shading.is_some() || s.lighting.gradient_opacity.is_some();
         let family = match s.compositing.mode {
+            M::Emission | M::Density if !s.layers.is_empty() => {
+                Family::Layers(shaded.then_some(Lighting::new(lighting.gradient_texture, false)))
+            }
             M::Emission | M::Density if s.lighting.shading.is_some() || s.lighting.gradient_opacity.is_some() => {
                 Family::EmissionShaded(lighting)
             }
@@ -396,6 +403,7 @@ impl Renderer {
             || !self.occupancy_is_current(s)
             || self.pipelines.march[self.march_key(s).index()] == vk::Pipeline::null()
             || !self.light_is_current(s)
+            || !self.layers_are_current(s)
     }
 
     fn occupancy_is_current(&self, s: &RenderSettings) -> bool {
@@ -425,6 +433,7 @@ impl Renderer {
     /// Creates (or re-creates) what `settings` needs that depends on more than the frame: colormap, targets.
     /// Must be called while no submitted frame is in flight.
     pub fn prepare(&mut self, gpu: &Gpu, s: &RenderSettings) -> Result<(), GpuError> {
+        self.prepare_layers(gpu, s)?;
         let key = self.march_key(s);
         let reads_gradients = key.family.lighting().is_some_and(|l| l.gradient_texture);
         if reads_gradients && self.volume.as_ref().is_some_and(|v| v.gradient.is_none()) {
@@ -521,6 +530,9 @@ impl Renderer {
         self.targets.destroy(gpu);
         if let Some(v) = self.volume.take() {
             v.destroy(gpu);
+        }
+        if let Some(l) = self.layers.take() {
+            l.destroy(gpu);
         }
         // SAFETY: as above; the sets it holds are not used again.
         unsafe { d.destroy_descriptor_pool(self.descriptors.pool, None) };

@@ -1,6 +1,7 @@
 //! The frame's uniform block and what it is computed from: the volume's GPU facts and the render settings.
 
 use super::skip;
+use crate::scene::layers::LayerKind;
 use crate::scene::lighting::IsoSurface;
 use crate::scene::settings::RenderSettings;
 use crate::transfer::function::srgb_to_linear;
@@ -367,8 +368,8 @@ impl FrameUniforms {
             texel: v4(1.0 / dims, 0.0),
             voxel_world: [
                 s.lighting.shading_fade * (s.colour.window[1] - s.colour.window[0]),
-                0.0,
-                0.0,
+                s.layers.iter().filter(|l| l.kind == LayerKind::Overlay).count() as f32,
+                s.layers.iter().filter(|l| l.kind == LayerKind::Labels).count() as f32,
                 s.lighting.gradient_opacity.unwrap_or(0.0),
             ],
             shading: [shading.ambient, shading.diffuse, shading.specular, shading.shininess],

@@ -5,6 +5,7 @@
 pub mod camera;
 pub mod clip;
 pub mod groups;
+pub mod layers;
 pub mod lighting;
 pub mod quality;
 pub mod settings;

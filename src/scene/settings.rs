@@ -7,6 +7,7 @@ pub use crate::scene::groups::{
     Colour, CompositeMode, Compositing, Cut, Lighting, Pipeline, PositionFormat, RaySetup, Sampling, Shading,
     DEFAULT_EARLY_TERMINATION, DEFAULT_STEP_ALPHA, DEFAULT_WINDOW, STRIDES,
 };
+use crate::scene::layers::LayerStyle;
 use crate::scene::lighting::IsoSurface;
 use crate::transfer::function::Classification;
 use crate::volume::Volume;
@@ -153,6 +154,8 @@ pub const KEY_LIGHT_OFFSET: f32 = 0.6;
 ///     `width/height`). Output pixel (x, y) is that image filtered bilinearly at `((x + 0.5)·w_k/width,
 ///     (y + 0.5)·h_k/height)`, its pixel centres at i + 0.5 and its edge repeated beyond them, in the 8-bit values
 ///     rule 8 stores: vkCmdBlitImage's linear filter. k = 1 is rules 1–8 alone.
+/// 13. **Layers**: further volumes on their own grids, mixed into the base's segments at each sample; the rule is
+///     written out in [`crate::scene::layers`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct RenderSettings {
@@ -176,6 +179,9 @@ pub struct RenderSettings {
     pub cut: Cut,
     #[serde(flatten)]
     pub pipeline: Pipeline,
+    /// How each layer the renderer holds looks, in its order (rule 13, `scene::layers`); empty: the base alone.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub layers: Vec<LayerStyle>,
 }
 
 /// The count a `count_samples` frame stores in an RGBA8 pixel.
@@ -220,6 +226,7 @@ impl RenderSettings {
             sampling: Sampling::default(),
             cut: Cut::default(),
             pipeline: Pipeline::default(),
+            layers: Vec::new(),
         }
     }
 
@@ -287,7 +294,9 @@ impl RenderSettings {
     /// Whether the march looks up the brick grid: to leap over empty bricks, or for rule 2's strides. Layered
     /// iso-surfaces march every sample.
     pub fn looks_up_bricks(&self) -> bool {
-        (self.sampling.skip_empty || self.sampling.max_stride > 1) && !self.layered_isosurfaces()
+        (self.sampling.skip_empty || self.sampling.max_stride > 1)
+            && !self.layered_isosurfaces()
+            && self.layers.is_empty()
     }
 
     /// Rule 2's depth bound `D` for strided segments, times `stride_tolerance`.

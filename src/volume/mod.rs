@@ -18,6 +18,7 @@ mod contents;
 mod error;
 pub mod geometry;
 pub mod huge_pages;
+pub mod labels;
 pub(crate) mod limits;
 pub(crate) mod time;
 pub(crate) mod voxel;
@@ -223,6 +224,11 @@ impl Volume {
     /// Panics if (x, y, z) is outside `dims`, like slice indexing.
     pub fn value(&self, x: u32, y: u32, z: u32) -> f64 {
         self.scaling.apply(self.stored(x, y, z))
+    }
+
+    /// [`Volume::value`] of the voxel at index `i` (x fastest, then y, then z).
+    pub fn value_at_index(&self, i: usize) -> f64 {
+        self.scaling.apply(stored_value(self.source_type, &self.data, i))
     }
 
     /// Value in source units before scaling (int16/int8 un-biased).

@@ -14,6 +14,7 @@ mod colorbar;
 mod convert;
 mod help;
 mod info_notes;
+mod layers;
 mod movie;
 mod options;
 mod render_and_errors;

@@ -3,6 +3,7 @@
 //! isosurface with its bisection), in f64. `Reference` (reference.rs) holds the volume it samples.
 
 use super::classify::{encode, jitter_offset, linear, Classifier};
+use super::layers::mix;
 use super::rays::{ray_segment, CameraBasis};
 use super::reference::{shade, Lamp, PixelTrace, Placement, Reference, Segment};
 use super::segments::Segments;
@@ -48,6 +49,9 @@ pub(crate) struct Frame<'a> {
     /// The finest level a cut shows (rule 2's level strides).
     finest: u32,
     early_termination: f64,
+    /// Rule 13's layer styles and the world's scale.
+    layers: Vec<volcast::scene::layers::LayerStyle>,
+    world_per_mm: f64,
     /// Linear light.
     background: DVec3,
 }
@@ -81,7 +85,8 @@ impl<'a> Frame<'a> {
             )),
             _ => None,
         };
-        let strides = segments.as_ref().and_then(|segments| {
+        // Rule 13: a layered frame takes every sample.
+        let strides = segments.as_ref().filter(|_| s.layers.is_empty()).and_then(|segments| {
             let ranges = volume
                 .brick_ranges
                 .get_or_init(|| BrickRanges::new(&volume.values, volume.dims));
@@ -138,6 +143,8 @@ impl<'a> Frame<'a> {
             strides,
             finest: volume.finest_level(),
             early_termination: f64::from(s.compositing.early_termination),
+            layers: s.layers.clone(),
+            world_per_mm,
             background: linear(s.background.as_dvec3()),
         };
         if super::light::applies(s) {
@@ -257,7 +264,6 @@ impl<'a> Frame<'a> {
     /// Rules 5–7 for emission–absorption and the density model: the ray is composited segment by segment
     /// between consecutive points — its start, the samples, its end — each segment pre-integrated (segments.rs).
     fn absorb(&self, segment: &Segment, trace: &mut PixelTrace) -> Composite {
-        let segments = self.segments.as_ref().expect("segments for emission and density");
         let (mut color, mut alpha) = (DVec3::ZERO, 0.0f64);
         let light = -segment.dir;
         let (mut t_prev, mut v_prev) = (0.0, self.volume.sample(self.tex_at(segment, 0.0)));
@@ -285,12 +291,51 @@ impl<'a> Frame<'a> {
             let v = self.volume.sample(tex);
             let (vp, t_mid_prev, length) = (v_prev, t_prev, (t - t_prev) / self.step * self.step_length);
             (t_prev, v_prev) = (t, v);
+            let mut seg = self.base_segment(segment, (vp, v), (t_mid_prev, t), length, light);
+            if is_sample && !self.layers.is_empty() {
+                let mm = self.volume.mm_at(tex);
+                let base = seg.unwrap_or((DVec3::ZERO, 0.0));
+                let mixed = mix(
+                    base,
+                    &self.volume.layers,
+                    &self.layers,
+                    mm,
+                    self.step,
+                    self.world_per_mm,
+                );
+                seg = seg.or((mixed.1 > 0.0).then_some(mixed)).map(|_| mixed);
+            }
+            let Some((rgb, a_step)) = seg else { continue };
+            color += (1.0 - alpha) * a_step * rgb;
+            alpha += (1.0 - alpha) * a_step;
+            trace.composited += 1;
+            if alpha >= self.early_termination {
+                trace.terminated_early = true;
+                break;
+            }
+        }
+        Composite { color, alpha }
+    }
+
+    /// Rules 5 and 6: the segment between values `vp` and `v` at distances `ts`, `length` voxels long: its colour
+    /// and opacity (None where an end is NaN or it is transparent).
+    fn base_segment(
+        &self,
+        segment: &Segment,
+        (vp, v): (f64, f64),
+        ts: (f64, f64),
+        length: f64,
+        light: DVec3,
+    ) -> Option<(DVec3, f64)> {
+        let segments = self.segments.as_ref().expect("segments for emission and density");
+        let (t_mid_prev, t) = ts;
+        {
             if v.is_nan() || vp.is_nan() {
-                continue;
+                return None;
             }
             let (mut sigma, mut rgb) = segments.mean(vp, v);
             if sigma <= 0.0 {
-                continue;
+                return None;
             }
             if self.shading.is_some() || self.gradient_opacity.is_some() {
                 let grad = self.gradient(self.tex_at(segment, 0.5 * (t + t_mid_prev)));
@@ -307,15 +352,8 @@ impl<'a> Frame<'a> {
                 CompositeMode::Density => (sigma * length).min(1.0),
                 _ => 1.0 - (-sigma * length).exp(),
             };
-            color += (1.0 - alpha) * a_step * rgb;
-            alpha += (1.0 - alpha) * a_step;
-            trace.composited += 1;
-            if alpha >= self.early_termination {
-                trace.terminated_early = true;
-                break;
-            }
+            Some((rgb, a_step))
         }
-        Composite { color, alpha }
     }
 
     /// Rule 7 for MIP, MinIP and average: the colour of the max/min/mean of the visible samples.

@@ -11,6 +11,7 @@ pub mod classify;
 pub mod compare;
 pub mod dicom_series;
 pub mod gpu;
+pub mod layers;
 pub mod levels;
 pub mod light;
 pub mod march;

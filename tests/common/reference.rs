@@ -240,6 +240,8 @@ pub struct Reference {
     /// How many voxels of its source one voxel spans (1, or k for a stand-in): a segment's opacity counts the
     /// source's voxels it crosses, so a stand-in keeps the source's optical depth (rule 6).
     pub(crate) source_voxels: f64,
+    /// Rule 13's layers, styled by `RenderSettings::layers` in this order.
+    pub(crate) layers: Vec<super::layers::RefLayer>,
 }
 
 impl Reference {
@@ -273,6 +275,7 @@ impl Reference {
             brick_ranges: std::sync::OnceLock::new(),
             levels: None,
             source_voxels: volume.source_voxels,
+            layers: Vec::new(),
         }
     }
 
@@ -314,6 +317,7 @@ impl Reference {
             brick_ranges: std::sync::OnceLock::new(),
             levels: None,
             source_voxels: self.source_voxels,
+            layers: Vec::new(),
         }
     }
 
@@ -344,6 +348,17 @@ impl Reference {
         self.levels
             .as_ref()
             .map_or(1, |(_, cut)| 1 << (cut.level_at(tex, self.dims) - finest))
+    }
+
+    /// This reference with `layers` (rule 13), which frames style by `RenderSettings::layers` in this order.
+    pub fn with_layers(mut self, layers: Vec<super::layers::RefLayer>) -> Reference {
+        self.layers = layers;
+        self
+    }
+
+    /// The millimetre point of texture point `tex` (rule 13's layers are placed from it).
+    pub(crate) fn mm_at(&self, tex: DVec3) -> DVec3 {
+        super::layers::base_mm(self.affine, self.dims, tex)
     }
 
     /// Where the box is for `s`: the rule-1 placement of the texture-space box in the world.

@@ -10,6 +10,7 @@ pub mod common;
 mod clip;
 mod features;
 mod finer;
+mod layers;
 mod levels;
 mod lighting;
 mod methods_agree;

@@ -1,0 +1,115 @@
+// Rule 13's layers (src/scene/layers.rs states the rule; src/render/layers.rs fills these bindings): further
+// volumes on their own grids, sampled at each sample of the base's march and mixed into its segment there.
+// Overlays (f32, data units) and label maps (dense ids) are stacked along z in one texture per kind.
+layout(set = 1, binding = 9) uniform texture3D layer_values;
+layout(set = 1, binding = 10) uniform utexture3D layer_labels;
+struct LayerParams {
+    mat4 to_index;   // the base's texture space -> the layer's voxel index (centres at integers)
+    vec4 dims;       // xyz: the layer's size in voxels; w: its first slice in its kind's texture
+    vec4 look;       // y, z: an overlay's window (data units); w: its threshold
+    vec4 more;       // x: its smallest voxel side (world); y: its first colour; z: its opacity; w: 0 window test,
+                     // 1 v >= threshold, 2 |v| >= threshold
+};
+// How many there are: frame.voxel_world.y overlays, then .z label maps. A uniform buffer: on lavapipe a storage buffer's loads loop over the
+// lanes (render/layers.rs MAX_LAYERS).
+layout(std140, set = 1, binding = 11) uniform Layers {
+    LayerParams p[16];
+} layers;
+// Per overlay 256 entries over its window (linear rgb); per label map one per dense id (linear rgb, opacity);
+// 4096 to a row (render/layers.rs COLOUR_ROW).
+layout(set = 1, binding = 12) uniform texture2D layer_colours;
+
+vec4 layer_colour(uint i) {
+    return texelFetch(sampler2D(layer_colours, linear_smp), ivec2(i & 4095u, i >> 12u), 0);
+}
+
+float layer_texel(ivec3 i) {
+    return texelFetch(sampler3D(layer_values, linear_smp), i, 0).r;
+}
+
+// An overlay's value at voxel index x: trilinear, clamped to the edge within its own slices, with f32 weights (a
+// filtered fetch's weights may have 8 bits, and a threshold on the value would move with them).
+float layer_value(LayerParams L, vec3 x) {
+    ivec3 n = ivec3(L.dims.xyz);
+    vec3 c = clamp(x, vec3(0.0), L.dims.xyz - 1.0);
+    ivec3 i0 = min(ivec3(floor(c)), max(n - 2, ivec3(0)));
+    vec3 f = c - vec3(i0);
+    ivec3 i1 = min(i0 + 1, n - 1);
+    int z = int(L.dims.w);
+    i0.z += z;
+    i1.z += z;
+    vec4 lo = vec4(layer_texel(i0), layer_texel(ivec3(i1.x, i0.y, i0.z)), layer_texel(ivec3(i0.x, i1.y, i0.z)),
+                   layer_texel(ivec3(i1.x, i1.y, i0.z)));
+    vec4 hi = vec4(layer_texel(ivec3(i0.x, i0.y, i1.z)), layer_texel(ivec3(i1.x, i0.y, i1.z)),
+                   layer_texel(ivec3(i0.x, i1.y, i1.z)), layer_texel(i1));
+    vec4 zz = mix(lo, hi, f.z);
+    vec2 yy = mix(zz.xy, zz.zw, f.y);
+    return mix(yy.x, yy.y, f.x);
+}
+
+// Where point p (base texture space) lies in layer L: its voxel index x; false outside its box.
+bool layer_index(LayerParams L, vec3 p, out vec3 x) {
+    x = (L.to_index * vec4(p, 1.0)).xyz;
+    return all(greaterThanEqual(x, vec3(-0.5))) && all(lessThanEqual(x, L.dims.xyz - 0.5));
+}
+
+// The opacity a (per voxel of layer L's own grid) over one march step: 1 - (1 - a)^(h / d).
+float layer_alpha(LayerParams L, float a) {
+    return a <= 0.0 ? 0.0 : 1.0 - pow(max(1.0 - a, 0.0), frame.extent.w / L.more.x);
+}
+
+// Overlay L at p: colour (linear) and opacity over the step; nothing outside its box or where it is not shown.
+vec4 overlay_sample(LayerParams L, vec3 p) {
+    vec3 x;
+    if (!layer_index(L, p, x)) {
+        return vec4(0.0);
+    }
+    float v = layer_value(L, x);
+    float m = L.more.w > 1.5 ? abs(v) : v;
+    bool shown = L.more.w > 0.5 ? m >= L.look.w : (v >= L.look.y && v <= L.look.z);
+    if (isnan(v) || !shown) {
+        return vec4(0.0);
+    }
+    float c = clamp((v - L.look.y) / (L.look.z - L.look.y), 0.0, 1.0) * 255.0;
+    int i0 = min(int(c), 254);
+    uint first = uint(L.more.y);
+    vec3 rgb = mix(layer_colour(first + uint(i0)).rgb, layer_colour(first + uint(i0) + 1u).rgb, c - float(i0));
+    return vec4(rgb, layer_alpha(L, L.more.z));
+}
+
+// Label map L at p: the nearest voxel's id (never interpolated), its colour and opacity over the step.
+vec4 labels_sample(LayerParams L, vec3 p) {
+    vec3 x;
+    if (!layer_index(L, p, x)) {
+        return vec4(0.0);
+    }
+    ivec3 v = clamp(ivec3(floor(x + 0.5)), ivec3(0), ivec3(L.dims.xyz) - 1);
+    v.z += int(L.dims.w);
+    uint id = texelFetch(usampler3D(layer_labels, linear_smp), v, 0).r;
+    vec4 c = layer_colour(uint(L.more.y) + id);
+    return vec4(c.rgb, layer_alpha(L, c.a * L.more.z));
+}
+
+// Rule 13's mix at a sample: the base's segment and every layer's step as one, alpha = 1 - prod(1 - alpha_i),
+// colour = sum(alpha_i c_i) / sum(alpha_i). The overlays come first in the table, then the label maps
+// (frame.voxel_world.y and .z of each): a loop per kind, since lavapipe runs both sides of a branch that samples.
+vec4 mix_layers(vec4 base, vec3 p) {
+    float keep = 1.0 - base.a;
+    vec3 sum = base.a * base.rgb;
+    float weight = base.a;
+    uint overlays = uint(frame.voxel_world.y);
+    uint all_layers = overlays + uint(frame.voxel_world.z);
+    for (uint i = 0u; i < overlays; i++) {
+        vec4 l = overlay_sample(layers.p[i], p);
+        keep *= 1.0 - l.a;
+        sum += l.a * l.rgb;
+        weight += l.a;
+    }
+    for (uint i = overlays; i < all_layers; i++) {
+        vec4 l = labels_sample(layers.p[i], p);
+        keep *= 1.0 - l.a;
+        sum += l.a * l.rgb;
+        weight += l.a;
+    }
+    return weight > 0.0 ? vec4(sum / weight, 1.0 - keep) : vec4(0.0);
+}

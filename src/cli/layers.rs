@@ -1,0 +1,213 @@
+//! `--overlay`, `--labels` and their looks: the layers a render shows with its volume (rule 13,
+//! `scene::layers`), read from their files, their label tables found, and handed to the renderer.
+
+use crate::formats::{label_table, open, OpenOptions};
+use crate::render::headless::Headless;
+use crate::render::layers::LayerInput;
+use crate::scene::layers::LayerStyle;
+use crate::scene::settings::RenderSettings;
+use crate::transfer::colormap::Colormap;
+use crate::volume::labels::{LabelMap, LabelTable};
+use crate::volume::Volume;
+use anyhow::{bail, Context, Result};
+use glam::DVec3;
+use std::path::PathBuf;
+
+/// Further volumes shown in depth with the first, each on its own grid.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct LayerArgs {
+    /// A further volume composited in depth with the first (repeatable): an fMRI map, a second modality
+    ///
+    /// Placed by its own affine in the first volume's world (no resampling); a signed map (values both sides of
+    /// 0) gets the diverging cool-warm colormap centred on 0.
+    #[arg(long, value_name = "FILE", help_heading = "Layers")]
+    pub overlay: Vec<PathBuf>,
+    /// Show the overlays where value ≥ T, or |value| ≥ T for a signed one, in the overlay's own units
+    #[arg(long, value_name = "T", help_heading = "Layers")]
+    pub threshold: Option<f64>,
+    /// The overlays' opacity per voxel of their own grid (default 0.6)
+    #[arg(long, value_name = "A", help_heading = "Layers")]
+    pub overlay_opacity: Option<f32>,
+    /// The overlays' colormap (default: cool-warm for signed maps, plasma for others)
+    #[arg(long, value_name = "NAME", value_parser = super::parse::parse_colormap, help_heading = "Layers")]
+    pub overlay_colormap: Option<Colormap>,
+    /// A label map (an atlas, a segmentation) composited in depth with the volume (repeatable)
+    ///
+    /// Integer ids, sampled at the nearest voxel and coloured per id: by the label table beside it (NAME.txt with
+    /// mricron's NAME.lut, NAME.ctbl, NAME.label) or --label-table, else a distinct default colour per id.
+    #[arg(long, value_name = "FILE", help_heading = "Layers")]
+    pub labels: Vec<PathBuf>,
+    /// The label maps' table: FreeSurfer/Slicer colour table, ITK-SNAP label description or mricron .txt (+ .lut)
+    #[arg(long, value_name = "FILE", help_heading = "Layers")]
+    pub label_table: Option<PathBuf>,
+    /// Show only these label ids, comma-separated (default: every id)
+    #[arg(long, value_name = "IDS", value_delimiter = ',', help_heading = "Layers")]
+    pub label_ids: Vec<u32>,
+    /// The label maps' opacity per voxel of their own grid (default 0.5)
+    #[arg(long, value_name = "A", help_heading = "Layers")]
+    pub label_opacity: Option<f32>,
+}
+
+/// The layers read from their files, in order: the overlays, then the label maps.
+pub struct Layers {
+    pub volumes: Vec<Volume>,
+    /// Per layer: a label map's dense ids and the sRGB colour of each.
+    pub labels: Vec<Option<(LabelMap, Vec<[u8; 4]>)>>,
+    pub styles: Vec<LayerStyle>,
+}
+
+impl LayerArgs {
+    pub fn any(&self) -> bool {
+        !self.overlay.is_empty() || !self.labels.is_empty()
+    }
+
+    /// Reads every layer; warnings (a table naming ids the map lacks, duplicate ids) go to stderr.
+    pub fn load(&self) -> Result<Layers> {
+        let mut layers = Layers {
+            volumes: Vec::new(),
+            labels: Vec::new(),
+            styles: Vec::new(),
+        };
+        for path in &self.overlay {
+            let v = open(path, &OpenOptions::default())?;
+            let mut style = LayerStyle::overlay(v.range, self.threshold);
+            style.opacity = self.overlay_opacity.unwrap_or(style.opacity);
+            style.colormap = self.overlay_colormap.unwrap_or(style.colormap);
+            style.check().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            layers.volumes.push(v);
+            layers.labels.push(None);
+            layers.styles.push(style);
+        }
+        for path in &self.labels {
+            let v = open(path, &OpenOptions::default())?;
+            let map = LabelMap::of(&v).with_context(|| format!("{} is not a label map", path.display()))?;
+            let table = self.table_for(path, &map)?;
+            let rgba = map.ids.iter().map(|&id| self.colour(&table, id)).collect();
+            let mut style = LayerStyle::labels();
+            style.opacity = self.label_opacity.unwrap_or(style.opacity);
+            style.check().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            layers.volumes.push(v);
+            layers.labels.push(Some((map, rgba)));
+            layers.styles.push(style);
+        }
+        Ok(layers)
+    }
+
+    /// An id's colour: the table's, hidden where --label-ids leaves it out.
+    fn colour(&self, table: &LabelTable, id: u32) -> [u8; 4] {
+        let mut c = table.rgba(id);
+        if !self.label_ids.is_empty() && !self.label_ids.contains(&id) {
+            c[3] = 0;
+        }
+        c
+    }
+
+    /// The table for the label map at `path`: --label-table, else the one beside it, else none.
+    fn table_for(&self, path: &std::path::Path, map: &LabelMap) -> Result<LabelTable> {
+        let Some(file) = self.label_table.clone().or_else(|| label_table::beside(path)) else {
+            return Ok(LabelTable::default());
+        };
+        let (table, warnings) = label_table::read(&file)?;
+        for w in warnings {
+            eprintln!("warning: {w}");
+        }
+        let missing: Vec<u32> = table
+            .entries
+            .iter()
+            .map(|e| e.id)
+            .filter(|&id| id != 0 && map.dense(id).is_none())
+            .collect();
+        if !missing.is_empty() {
+            let shown: Vec<String> = missing.iter().take(5).map(u32::to_string).collect();
+            eprintln!(
+                "warning: {} names {} id(s) that {} does not hold ({}{})",
+                file.display(),
+                missing.len(),
+                path.display(),
+                shown.join(", "),
+                if missing.len() > 5 { ", …" } else { "" }
+            );
+        }
+        eprintln!(
+            "labels: {} ids in {}, named by {}",
+            map.ids.len() - 1,
+            path.display(),
+            file.display()
+        );
+        Ok(table)
+    }
+}
+
+impl Layers {
+    /// Hands the layers to the renderer and styles `s` with them; says where a layer lies outside `base`'s box.
+    pub fn show(
+        &self,
+        gpu: &crate::gpu::Gpu,
+        headless: &mut Headless,
+        base: &Volume,
+        s: &mut RenderSettings,
+    ) -> Result<()> {
+        for v in &self.volumes {
+            if let Some(note) = overlap_note(base, v) {
+                eprintln!("note: {note}");
+            }
+        }
+        let inputs: Vec<LayerInput> = self
+            .volumes
+            .iter()
+            .zip(&self.labels)
+            .map(|(volume, labels)| LayerInput {
+                volume,
+                labels: labels.as_ref().map(|(m, c)| (m, c.clone())),
+            })
+            .collect();
+        headless.renderer.set_layers(gpu, &inputs)?;
+        s.layers = self.styles.clone();
+        Ok(())
+    }
+}
+
+/// Refuses options that layers do not mix with, before anything is read.
+pub fn check(args: &LayerArgs, s: &RenderSettings) -> Result<()> {
+    use crate::scene::settings::CompositeMode as M;
+    if args.any() && !matches!(s.compositing.mode, M::Emission | M::Density) {
+        bail!(super::UsageError(format!(
+            "--overlay and --labels are composited in depth in the emission and density modes; --mode {} shows one \
+             volume",
+            s.compositing.mode.name()
+        )));
+    }
+    Ok(())
+}
+
+/// A note where `layer` does not lie wholly inside `base`'s box in world space: the march runs through the base's
+/// box, so only the part inside it is drawn.
+fn overlap_note(base: &Volume, layer: &Volume) -> Option<String> {
+    let to_base = base.geometry.affine.inverse() * layer.geometry.affine;
+    let [w, h, d] = layer.dims.map(|n| f64::from(n) - 0.5);
+    let corners = [-0.5, w].into_iter().flat_map(|x| {
+        [-0.5, h]
+            .into_iter()
+            .flat_map(move |y| [-0.5, d].into_iter().map(move |z| DVec3::new(x, y, z)))
+    });
+    let idx: Vec<DVec3> = corners.map(|c| to_base.transform_point3(c)).collect();
+    let hi = DVec3::from_array(base.dims.map(|n| f64::from(n) - 0.5));
+    let lo = DVec3::splat(-0.5);
+    let (min, max) = idx.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), p| {
+        (a.min(*p), b.max(*p))
+    });
+    let tol = 0.51;
+    if min.cmpgt(hi).any() || max.cmplt(lo).any() {
+        Some(format!(
+            "{} does not overlap {} in world space (millimetres by their affines): nothing of it is drawn",
+            layer.name, base.name
+        ))
+    } else if min.cmplt(lo - tol).any() || max.cmpgt(hi + tol).any() {
+        Some(format!(
+            "{} reaches beyond {}'s box: the march runs through that box, so only the part inside it is drawn",
+            layer.name, base.name
+        ))
+    } else {
+        None
+    }
+}

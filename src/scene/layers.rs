@@ -1,0 +1,149 @@
+//! Layers: further volumes shown with the base volume in the one march, each on its own grid and placement, and
+//! each with its own look. The renderer holds their voxels (`Renderer::set_layers`); a frame's
+//! [`RenderSettings::layers`](super::settings::RenderSettings) says how each looks, in the same order.
+//!
+//! **Rule 13, layers** (the shaders, `shaders/layers.glsl`, and the CPU reference, `tests/common/layers.rs`,
+//! follow it):
+//! - **Placement.** A layer's voxel index at a point is its own affine's inverse of the point's millimetres (the
+//!   base's affine of the base's index): no layer is resampled onto another's grid. A point outside the layer's
+//!   box (index < −½ or > dim − ½ on an axis) shows nothing of the layer.
+//! - **Overlays** are sampled trilinearly (rule 3, clamped to the edge inside the box) in data units. A value v is
+//!   shown where it is finite and, with a threshold T, `v ≥ T` (or `|v| ≥ T` for a signed overlay), else where
+//!   it lies in the window [lo, hi]. It takes the colormap's colour at `clamp((v − lo)/(hi − lo), 0, 1)` (sRGB,
+//!   decoded to linear light) and the layer's `opacity`.
+//! - **Label maps** are sampled at the nearest voxel (`floor(index + ½)`), never interpolated across ids. Id 0
+//!   shows nothing; any other id takes its table colour (or `labels::default_colour`), with the table's opacity
+//!   times the layer's `opacity`; hidden ids show nothing.
+//! - **Opacity** `a` is per voxel of the layer's own grid: over a march step of h world units it is
+//!   `α = 1 − (1 − a)^(h/d)`, d the layer's smallest voxel side in world units.
+//! - **Mixing at a step.** At each sample (rule 2's points, not the ray's end), the base's segment (rule 6: colour
+//!   c₀, opacity α₀) and each layer's (cᵢ, αᵢ) make one: `α = 1 − Π(1 − αᵢ)`, `c = Σαᵢcᵢ / Σαᵢ` (nothing where
+//!   Σαᵢ = 0), composited by rule 7. So depth order is right by construction: what is nearer on the ray is
+//!   composited first, whichever volume holds it. The base alone (no layer shown there) is rule 6 unchanged.
+//! - **No skipping or strides** (rule 2) in a layered frame: the base's empty bricks may hold a layer's content.
+//! - Layers mix in emission and density modes; other modes refuse layers.
+
+use crate::transfer::colormap::Colormap;
+use crate::transfer::function::srgb_to_linear;
+
+/// What a layer's voxels are.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LayerKind {
+    /// A continuous map (an fMRI statistic, a second modality, a channel), sampled trilinearly.
+    #[default]
+    Overlay,
+    /// Integer ids, sampled at the nearest voxel, coloured per id.
+    Labels,
+}
+
+/// How one layer looks (rule 13).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct LayerStyle {
+    pub kind: LayerKind,
+    /// Overlays: the values (data units) the colormap spans.
+    pub window: [f64; 2],
+    /// Overlays: shown where `v ≥ threshold` (`|v|` when `signed`); None: where v is in the window.
+    pub threshold: Option<f64>,
+    pub signed: bool,
+    pub colormap: Colormap,
+    /// Opacity per voxel of the layer's own grid.
+    pub opacity: f32,
+    pub visible: bool,
+}
+
+impl Default for LayerStyle {
+    fn default() -> LayerStyle {
+        LayerStyle {
+            kind: LayerKind::Overlay,
+            window: [0.0, 1.0],
+            threshold: None,
+            signed: false,
+            colormap: Colormap::Plasma,
+            opacity: 0.5,
+            visible: true,
+        }
+    }
+}
+
+/// Entries of an overlay's colour table (`overlay_table`).
+pub const OVERLAY_ENTRIES: usize = 256;
+
+impl LayerStyle {
+    /// An overlay of values in `range` (data units): a signed map (values both sides of 0) gets a window
+    /// symmetric about 0 and the diverging cool-warm map, so 0 is its middle; others the range and plasma.
+    pub fn overlay(range: [f64; 2], threshold: Option<f64>) -> LayerStyle {
+        let signed = range[0] < 0.0 && range[1] > 0.0;
+        let m = range[0].abs().max(range[1].abs());
+        LayerStyle {
+            window: if signed {
+                [-m, m]
+            } else {
+                [threshold.unwrap_or(range[0]).min(range[1]), range[1]]
+            },
+            threshold,
+            signed,
+            colormap: if signed { Colormap::CoolWarm } else { Colormap::Plasma },
+            opacity: 0.6,
+            ..LayerStyle::default()
+        }
+    }
+
+    /// A label map's look: its table's colours at half opacity per voxel.
+    pub fn labels() -> LayerStyle {
+        LayerStyle {
+            kind: LayerKind::Labels,
+            opacity: 0.5,
+            ..LayerStyle::default()
+        }
+    }
+
+    /// The overlay's colours at positions `i/(N − 1)` of its window, in linear light, with its opacity: the
+    /// table the GPU interpolates linearly (the reference evaluates the colormap itself).
+    pub fn overlay_table(&self) -> Vec<[f32; 4]> {
+        (0..OVERLAY_ENTRIES)
+            .map(|i| {
+                let c = i as f64 / (OVERLAY_ENTRIES - 1) as f64;
+                let [r, g, b] = self.colormap.srgb(c).map(|x| srgb_to_linear(x as f32));
+                [r, g, b, self.opacity]
+            })
+            .collect()
+    }
+
+    /// A check of the values a user gave: a message naming the bad one.
+    pub fn check(&self) -> Result<(), String> {
+        if !(0.0..=1.0).contains(&self.opacity) {
+            return Err(format!("layer opacity {} is outside 0..1", self.opacity));
+        }
+        let ordered = self.window[0] < self.window[1];
+        if self.kind == LayerKind::Overlay && (!ordered || self.window.iter().any(|w| !w.is_finite())) {
+            return Err(format!(
+                "overlay window {:?} must be two finite values, low < high",
+                self.window
+            ));
+        }
+        if self.threshold.is_some_and(|t| !t.is_finite()) {
+            return Err("the overlay threshold must be finite".into());
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_signed_map_is_centred_on_zero_and_a_positive_one_starts_at_its_threshold() {
+        let z = LayerStyle::overlay([-7.9, 6.0], Some(3.0));
+        assert!(z.signed);
+        assert_eq!(z.window, [-7.9, 7.9]);
+        assert_eq!(z.colormap, Colormap::CoolWarm);
+        let p = LayerStyle::overlay([0.0, 10.0], Some(2.0));
+        assert!(!p.signed);
+        assert_eq!(p.window, [2.0, 10.0]);
+        assert_eq!(p.overlay_table().len(), OVERLAY_ENTRIES);
+        assert!(LayerStyle { opacity: 2.0, ..p }.check().is_err());
+    }
+}

@@ -1,0 +1,90 @@
+//! `--overlay`, `--threshold` and `--labels` as a user writes them, on the real MNI data in ../shared: the T1 with the
+//! motor z-map at |z| ≥ 3 and the AAL atlas (its mricron table found beside it), and the refusals of bad layers.
+
+use crate::common::{scratch, shared_data, stderr, stdout, volcast, volcast_ok};
+
+#[test]
+fn t1_with_a_thresholded_z_map_and_atlas_regions_renders_in_depth() {
+    let (Some(t1), Some(z), Some(aal)) = (
+        shared_data("native/colin27_t1/ch2.nii.gz"),
+        shared_data("native/motor_zmap/image_10426.nii.gz"),
+        shared_data("native/aal_labels/aal.nii.gz"),
+    ) else {
+        return;
+    };
+    let dir = scratch("layers-cli");
+    let out = dir.join("fig.png");
+    let (t1, z, aal, out_s) = (
+        t1.to_str().unwrap(),
+        z.to_str().unwrap(),
+        aal.to_str().unwrap(),
+        out.to_str().unwrap(),
+    );
+    let cut = ["--view", "superior", "--clip-plane", "0,0,-1,-38", "--size", "256x256"];
+    let mut args = vec![
+        "render",
+        t1,
+        "--overlay",
+        z,
+        "--threshold",
+        "3",
+        "--labels",
+        aal,
+        "--label-ids",
+        "1,2",
+    ];
+    args.extend(cut);
+    args.extend(["-o", out_s]);
+    let o = volcast_ok(&args);
+    let err = stderr(&o);
+    assert!(err.contains("labels: 116 ids") && err.contains("aal.nii.txt"), "{err}");
+    let image = image::open(&out).expect("the figure").to_rgba8();
+    // The z-map's positive (warm) and negative (cool) blobs both show over the grey brain.
+    let (warm, cool) = warm_and_cool(&image);
+    assert!(warm > 60 && cool > 15, "warm {warm} px, cool {cool} px: {}", stdout(&o));
+    // The T1 alone at the same view has (next to) neither.
+    let alone = dir.join("alone.png");
+    let mut args = vec!["render", t1];
+    args.extend(cut);
+    args.extend(["-o", alone.to_str().unwrap()]);
+    volcast_ok(&args);
+    let image = image::open(&alone).expect("the T1").to_rgba8();
+    let (warm, cool) = warm_and_cool(&image);
+    assert!(warm < 5 && cool < 5, "the T1 alone: warm {warm} px, cool {cool} px");
+}
+
+/// Pixels clearly red (the z-map's positive end) and clearly blue (its negative end).
+fn warm_and_cool(image: &image::RgbaImage) -> (usize, usize) {
+    let warm = image.pixels().filter(|p| p[0] > p[2] + 60 && p[0] > p[1] + 40).count();
+    let cool = image.pixels().filter(|p| p[2] > p[0] + 60 && p[2] > p[1] + 40).count();
+    (warm, cool)
+}
+
+#[test]
+fn bad_layers_are_refused_naming_the_file() {
+    let Some(t1) = shared_data("native/colin27_t1/ch2.nii.gz") else {
+        return;
+    };
+    let Some(z) = shared_data("native/motor_zmap/image_10426.nii.gz") else {
+        return;
+    };
+    let dir = scratch("layers-bad");
+    let out = dir.join("x.png");
+    let (t1, z, out) = (t1.to_str().unwrap(), z.to_str().unwrap(), out.to_str().unwrap());
+    // A map of floats is not a label map.
+    let o = volcast(&["render", t1, "--labels", z, "-o", out]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("image_10426.nii.gz is not a label map") && err.contains("not integer"),
+        "{err}"
+    );
+    // Layers do not mix with a MIP.
+    let o = volcast(&["render", t1, "--overlay", z, "--mode", "mip", "-o", out]);
+    assert_eq!(o.status.code(), Some(64), "{}", stderr(&o));
+    assert!(stderr(&o).contains("emission and density"), "{}", stderr(&o));
+    // A label id below zero.
+    let neg = dir.write("neg_4x4x4_int16.raw", &[0xffu8; 128]);
+    let o = volcast(&["render", t1, "--labels", neg.to_str().unwrap(), "-o", out]);
+    assert!(stderr(&o).contains("negative id -1"), "{}", stderr(&o));
+}

@@ -1,0 +1,146 @@
+//! The reference's rule 13 (`volcast::scene::layers`), written from the rule: each layer placed by its own
+//! affine, overlays sampled trilinearly in data units and classified by the colormap's control points, label maps
+//! at the nearest voxel, opacity per layer voxel corrected to the step, and the mix at a sample. Nothing here
+//! reads the GPU's tables.
+
+use super::classify::{colormap_srgb, linear};
+use glam::{DMat4, DVec3};
+use volcast::scene::layers::{LayerKind, LayerStyle};
+use volcast::volume::Volume;
+
+/// One layer as the reference holds it.
+pub struct RefLayer {
+    dims: [usize; 3],
+    /// Overlays: values in data units; label maps: ids.
+    values: Vec<f64>,
+    /// Millimetres to the layer's voxel index.
+    from_mm: DMat4,
+    smallest_mm: f64,
+    /// Label maps: the sRGB colour and opacity (0–255) of an id.
+    colours: Option<Box<dyn Fn(u32) -> [u8; 4] + Send + Sync>>,
+}
+
+impl RefLayer {
+    pub fn overlay(volume: &Volume) -> RefLayer {
+        RefLayer::of(volume, None)
+    }
+
+    /// A label map whose id i looks like `colours(i)`.
+    pub fn labels(volume: &Volume, colours: impl Fn(u32) -> [u8; 4] + Send + Sync + 'static) -> RefLayer {
+        RefLayer::of(volume, Some(Box::new(colours)))
+    }
+
+    fn of(volume: &Volume, colours: Option<Box<dyn Fn(u32) -> [u8; 4] + Send + Sync>>) -> RefLayer {
+        let [nx, ny, nz] = volume.dims;
+        let mut values = Vec::with_capacity(volume.voxel_count());
+        for z in 0..nz {
+            for y in 0..ny {
+                for x in 0..nx {
+                    values.push(volume.value(x, y, z));
+                }
+            }
+        }
+        let a = volume.geometry.affine;
+        let sides = [a.x_axis, a.y_axis, a.z_axis].map(|c| c.truncate().length());
+        RefLayer {
+            dims: volume.dims.map(|d| d as usize),
+            values,
+            from_mm: a.inverse(),
+            smallest_mm: sides.into_iter().fold(f64::INFINITY, f64::min),
+            colours,
+        }
+    }
+
+    fn at(&self, x: usize, y: usize, z: usize) -> f64 {
+        self.values[x + self.dims[0] * (y + self.dims[1] * z)]
+    }
+
+    /// Trilinear at voxel index `i` (centres at integers), clamped to the edge.
+    fn trilinear(&self, i: DVec3) -> f64 {
+        let mut lo = [0usize; 3];
+        let mut f = [0f64; 3];
+        for a in 0..3 {
+            let c = i[a].clamp(0.0, (self.dims[a] - 1) as f64);
+            lo[a] = (c.floor() as usize).min(self.dims[a].saturating_sub(2));
+            f[a] = c - lo[a] as f64;
+        }
+        let hi = [0, 1, 2].map(|a| (lo[a] + 1).min(self.dims[a] - 1));
+        let mut v = 0.0;
+        for (cz, wz) in [(lo[2], 1.0 - f[2]), (hi[2], f[2])] {
+            for (cy, wy) in [(lo[1], 1.0 - f[1]), (hi[1], f[1])] {
+                for (cx, wx) in [(lo[0], 1.0 - f[0]), (hi[0], f[0])] {
+                    let w = wx * wy * wz;
+                    if w != 0.0 {
+                        v += w * self.at(cx, cy, cz);
+                    }
+                }
+            }
+        }
+        v
+    }
+
+    /// Rule 13's look at millimetre point `mm`: linear colour and opacity per layer voxel (None: nothing shown).
+    fn look(&self, mm: DVec3, style: &LayerStyle) -> Option<(DVec3, f64)> {
+        let i = self.from_mm.transform_point3(mm);
+        let n = DVec3::new(self.dims[0] as f64, self.dims[1] as f64, self.dims[2] as f64);
+        if i.cmplt(DVec3::splat(-0.5)).any() || i.cmpgt(n - 0.5).any() {
+            return None;
+        }
+        let opacity = if style.visible { f64::from(style.opacity) } else { 0.0 };
+        if style.kind == LayerKind::Labels {
+            let v = (i + 0.5).floor().clamp(DVec3::ZERO, n - 1.0);
+            let id = self.at(v.x as usize, v.y as usize, v.z as usize) as u32;
+            if id == 0 {
+                return None;
+            }
+            let c = self.colours.as_ref().map_or([0; 4], |f| f(id));
+            let rgb = linear(DVec3::new(f64::from(c[0]), f64::from(c[1]), f64::from(c[2])) / 255.0);
+            return Some((rgb, f64::from(c[3]) / 255.0 * opacity));
+        }
+        let v = self.trilinear(i);
+        let [lo, hi] = style.window;
+        let shown = match style.threshold {
+            Some(t) if style.signed => v.abs() >= t,
+            Some(t) => v >= t,
+            None => v >= lo && v <= hi,
+        };
+        if v.is_nan() || !shown {
+            return None;
+        }
+        let c = ((v - lo) / (hi - lo)).clamp(0.0, 1.0);
+        Some((linear(colormap_srgb(style.colormap, c)), opacity))
+    }
+}
+
+/// Rule 13's mix at a sample: the base's segment `(rgb, alpha)` and each layer's step at millimetre point `mm`,
+/// for a march step of `step` world units (`world_per_mm` world units per millimetre).
+pub fn mix(
+    base: (DVec3, f64),
+    layers: &[RefLayer],
+    styles: &[LayerStyle],
+    mm: DVec3,
+    step: f64,
+    world_per_mm: f64,
+) -> (DVec3, f64) {
+    let (mut keep, mut sum, mut weight) = (1.0 - base.1, base.1 * base.0, base.1);
+    for (layer, style) in layers.iter().zip(styles) {
+        let Some((rgb, a)) = layer.look(mm, style) else {
+            continue;
+        };
+        let alpha = 1.0 - (1.0 - a).max(0.0).powf(step / (layer.smallest_mm * world_per_mm));
+        keep *= 1.0 - alpha;
+        sum += alpha * rgb;
+        weight += alpha;
+    }
+    if weight > 0.0 {
+        (sum / weight, 1.0 - keep)
+    } else {
+        (DVec3::ZERO, 0.0)
+    }
+}
+
+/// The base's texture point `tex` in millimetres (its affine of its voxel index).
+pub fn base_mm(affine: DMat4, dims: [usize; 3], tex: DVec3) -> DVec3 {
+    let n = DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64);
+    affine.transform_point3(tex * n - 0.5)
+}

@@ -1,0 +1,213 @@
+//! Rule 13's layers against the CPU reference under validation: depth order whichever volume holds the nearer
+//! thing, overlays on their own (coarser, shifted) grid, and a sparse-id label map sampled at the nearest voxel.
+
+use crate::common;
+
+use common::bounds::REFERENCE;
+use common::gpu::{finish, validated_gpu, Judge};
+use common::layers::RefLayer;
+use common::reference::Reference;
+use glam::{DMat4, DVec3, Vec3};
+use volcast::gpu::Gpu;
+use volcast::render::headless::Headless;
+use volcast::render::layers::LayerInput;
+use volcast::scene::camera::Camera;
+use volcast::scene::layers::LayerStyle;
+use volcast::scene::settings::RenderSettings;
+use volcast::transfer::Colormap;
+use volcast::volume::geometry::Geometry;
+use volcast::volume::labels::{LabelMap, LabelTable};
+use volcast::volume::{Volume, VoxelData, VoxelType};
+
+/// A volume's values by position.
+type Field = Box<dyn Fn(DVec3) -> f32>;
+
+/// The base's side (voxels of 1 mm) and a layer's (voxels of 2 mm over the same box, shifted by a quarter voxel).
+const BASE: u32 = 32;
+const LAYER: u32 = 16;
+
+/// A volume of `side`³ voxels of `mm` whose voxel centres start at `origin` mm, valued `f(p)` at the point p
+/// of the base's box in [−½, ½]³ (the base's voxel centres span it).
+fn volume(name: &str, side: u32, mm: f64, origin: f64, f: impl Fn(DVec3) -> f32) -> Volume {
+    let mut data = Vec::with_capacity((side * side * side) as usize);
+    let extent = f64::from(BASE);
+    for z in 0..side {
+        for y in 0..side {
+            for x in 0..side {
+                let centre = DVec3::new(f64::from(x), f64::from(y), f64::from(z)) * mm + origin;
+                data.push(f((centre + 0.5) / extent - 0.5));
+            }
+        }
+    }
+    let v = Volume::new(name, [side; 3], [mm as f32; 3], VoxelType::F32, VoxelData::F32(data)).expect("volume");
+    let affine = DMat4::from_translation(DVec3::splat(origin)) * DMat4::from_scale(DVec3::splat(mm));
+    v.with_geometry(Geometry {
+        affine,
+        anatomical: false,
+    })
+    .expect("placed")
+}
+
+/// 1 within `core` of 0, falling linearly to 0 at `core + soft` (smooth enough that half a millimetre of the
+/// position targets' rounding changes a point-sampled layer's colour by little).
+fn soft(d: f64, core: f64, soft: f64) -> f32 {
+    (1.0 - (d.abs() - core) / soft).clamp(0.0, 1.0) as f32
+}
+
+/// An opaque slab across the view, nearer the eye (`front`) or farther, about 0.12 thick.
+fn slab(eye: DVec3, front: bool) -> impl Fn(DVec3) -> f32 {
+    let at = if front { 0.25 } else { -0.25 };
+    move |p| soft(p.dot(eye) - at, 0.03, 0.06)
+}
+
+/// A ball at the centre, radius about 0.15.
+fn ball(p: DVec3) -> f32 {
+    soft(p.length(), 0.1, 0.1)
+}
+
+/// The view straight along an axis, with the base in white (grayscale at 1), opaque per voxel.
+fn view(base: &Volume) -> RenderSettings {
+    let mut s = RenderSettings::for_volume(64, 64, base);
+    s.camera = Camera::orbit(0.0, 0.0, 2.2, Vec3::ZERO);
+    s.colour.colormap = Colormap::Grayscale;
+    s.colour.window = [0.5, 1.0];
+    s.colour.step_alpha = 0.95;
+    s.colour.transfer_function = None;
+    s.lighting.shading = None;
+    s.background = Vec3::ZERO;
+    s
+}
+
+/// An overlay shown yellow (plasma's top) where it is at least 0.5, opaque per voxel.
+fn yellow() -> LayerStyle {
+    LayerStyle {
+        window: [0.0, 0.5],
+        threshold: Some(0.5),
+        colormap: Colormap::Plasma,
+        opacity: 0.95,
+        ..LayerStyle::default()
+    }
+}
+
+fn render_layered(
+    gpu: &Gpu,
+    headless: &mut Headless,
+    base: &Volume,
+    inputs: &[LayerInput],
+    s: &RenderSettings,
+) -> image::RgbaImage {
+    headless.set_volume(gpu, base).expect("upload");
+    headless.renderer.set_layers(gpu, inputs).expect("layers");
+    headless.render(gpu, s).expect("render").image
+}
+
+/// The centre pixel: grey (the base's colour: blue as strong as red) or yellow (the overlay's: little blue).
+fn centre_is_white(image: &image::RgbaImage) -> bool {
+    let p = image.get_pixel(32, 32);
+    assert!(p[0] > 80, "the centre shows something: {p:?}");
+    2 * u32::from(p[2]) > u32::from(p[0])
+}
+
+#[test]
+fn what_is_nearer_hides_what_is_behind_whichever_volume_holds_it() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut judge = Judge::default();
+    let probe = volume("probe", BASE, 1.0, 0.0, |_| 0.0);
+    let eye = view(&probe).camera.eye.as_dvec3().normalize();
+    for front in [true, false] {
+        for slab_is_base in [true, false] {
+            let (base_f, layer_f): (Field, Field) = if slab_is_base {
+                (Box::new(slab(eye, front)), Box::new(ball))
+            } else {
+                (Box::new(ball), Box::new(slab(eye, front)))
+            };
+            let base = volume("base", BASE, 1.0, 0.0, base_f);
+            // The layer on its own grid: 2 mm voxels, shifted so its box matches the base's.
+            let layer = volume("layer", LAYER, 2.0, 0.5, layer_f);
+            let mut s = view(&base);
+            s.layers = vec![yellow()];
+            let inputs = [LayerInput {
+                volume: &layer,
+                labels: None,
+            }];
+            let actual = render_layered(&gpu, &mut headless, &base, &inputs, &s);
+            let reference = Reference::new(&base).with_layers(vec![RefLayer::overlay(&layer)]);
+            let label = format!(
+                "slab-{}-in-{}",
+                if front { "front" } else { "behind" },
+                if slab_is_base { "base" } else { "layer" }
+            );
+            judge.against(
+                "layers",
+                label.clone(),
+                &actual,
+                &reference.render_full(&s),
+                &s,
+                REFERENCE,
+            );
+            // The slab in front hides the ball; behind, the ball shows. White is the base's colour.
+            let shows_slab = front;
+            assert_eq!(centre_is_white(&actual), shows_slab == slab_is_base, "{label}");
+        }
+    }
+    finish(gpu, headless, judge);
+}
+
+#[test]
+fn a_signed_overlay_and_sparse_labels_on_their_own_grids_match_the_reference() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut judge = Judge::default();
+    // A faint base, a signed overlay on a shifted 2 mm grid, and a label map of 4 mm voxels with sparse ids.
+    let base = volume("base", BASE, 1.0, 0.0, |p| (0.3 - p.length()).max(0.0) as f32);
+    let z = volume("z", LAYER, 2.0, 1.5, |p| {
+        (8.0 * (p.x * 9.0).sin() * (0.4 - p.length()).max(0.0)) as f32
+    });
+    let ids = volume("ids", 8, 4.0, 1.5, |p| {
+        if p.y > 0.1 {
+            70_000.0
+        } else if p.x > 0.0 && p.z > -0.2 {
+            5.0
+        } else {
+            0.0
+        }
+    });
+    let map = LabelMap::of(&ids).expect("labels");
+    assert_eq!(map.ids, [0, 5, 70_000]);
+    let table = LabelTable::default();
+    let rgba: Vec<[u8; 4]> = map.ids.iter().map(|&id| table.rgba(id)).collect();
+    let mut s = view(&base);
+    s.colour.step_alpha = 0.2;
+    s.colour.window = [0.05, 1.0];
+    s.camera = Camera::orbit(30.0, 20.0, 2.2, Vec3::ZERO);
+    let mut zs = LayerStyle::overlay([-8.0, 8.0], Some(0.6));
+    zs.opacity = 0.4;
+    let mut ls = LayerStyle::labels();
+    ls.opacity = 0.3;
+    s.layers = vec![zs, ls];
+    let inputs = [
+        LayerInput {
+            volume: &z,
+            labels: None,
+        },
+        LayerInput {
+            volume: &ids,
+            labels: Some((&map, rgba)),
+        },
+    ];
+    let actual = render_layered(&gpu, &mut headless, &base, &inputs, &s);
+    let reference = Reference::new(&base).with_layers(vec![
+        RefLayer::overlay(&z),
+        RefLayer::labels(&ids, move |id| table.rgba(id)),
+    ]);
+    judge.against(
+        "layers",
+        "signed-and-labels".into(),
+        &actual,
+        &reference.render_full(&s),
+        &s,
+        REFERENCE,
+    );
+    finish(gpu, headless, judge);
+}
