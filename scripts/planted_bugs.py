@@ -392,6 +392,8 @@ BUGS = [
     ("layer-other-affine", "a layer is placed with the base volume's affine instead of its own",
      [("src/render/layers.rs", "let to_index = p.geometry.affine.inverse() * base.affine * tex_to_index;",
        "let to_index = base.affine.inverse() * base.affine * tex_to_index;")]),
+    ("layer-bricks-unmarked", "a layered frame leaps over the base's empty bricks even where a layer shows something",
+     [("src/render/layer_bricks.rs", "levels[i as usize] = 1;", "levels[i as usize] = levels[i as usize].max(0);")]),
     ("layers-blended-whole", "layers are composited along the ray on their own and blended whole over the base, "
      "as napari and neuroglancer do: depth is lost",
      [("shaders/march.glsl", "            c = mix_layers(c, ray.a + ray.dir * t);",

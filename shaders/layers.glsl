@@ -23,28 +23,12 @@ vec4 layer_colour(uint i) {
     return texelFetch(sampler2D(layer_colours, linear_smp), ivec2(i & 4095u, i >> 12u), 0);
 }
 
-float layer_texel(ivec3 i) {
-    return texelFetch(sampler3D(layer_values, linear_smp), i, 0).r;
-}
-
-// An overlay's value at voxel index x: trilinear, clamped to the edge within its own slices, with f32 weights (a
-// filtered fetch's weights may have 8 bits, and a threshold on the value would move with them).
+// An overlay's value at voxel index x: trilinear (one filtered fetch), clamped to the edge within its own slices.
 float layer_value(LayerParams L, vec3 x) {
-    ivec3 n = ivec3(L.dims.xyz);
-    vec3 c = clamp(x, vec3(0.0), L.dims.xyz - 1.0);
-    ivec3 i0 = min(ivec3(floor(c)), max(n - 2, ivec3(0)));
-    vec3 f = c - vec3(i0);
-    ivec3 i1 = min(i0 + 1, n - 1);
-    int z = int(L.dims.w);
-    i0.z += z;
-    i1.z += z;
-    vec4 lo = vec4(layer_texel(i0), layer_texel(ivec3(i1.x, i0.y, i0.z)), layer_texel(ivec3(i0.x, i1.y, i0.z)),
-                   layer_texel(ivec3(i1.x, i1.y, i0.z)));
-    vec4 hi = vec4(layer_texel(ivec3(i0.x, i0.y, i1.z)), layer_texel(ivec3(i1.x, i0.y, i1.z)),
-                   layer_texel(ivec3(i0.x, i1.y, i1.z)), layer_texel(i1));
-    vec4 zz = mix(lo, hi, f.z);
-    vec2 yy = mix(zz.xy, zz.zw, f.y);
-    return mix(yy.x, yy.y, f.x);
+    vec3 u = clamp(x, vec3(0.0), L.dims.xyz - 1.0) + 0.5;
+    u.z += L.dims.w;
+    vec3 size = vec3(textureSize(sampler3D(layer_values, linear_smp), 0));
+    return textureLod(sampler3D(layer_values, linear_smp), u / size, 0.0).r;
 }
 
 // Where point p (base texture space) lies in layer L: its voxel index x; false outside its box.

@@ -4,6 +4,7 @@
 //! resampled: a layer costs its own voxels (4 bytes each) and no more.
 
 use super::gpu_volume::{image_3d, upload_3d};
+use super::layer_bricks::Summary;
 use crate::gpu::resources::{Buffer, Image, ImageDesc};
 use crate::gpu::upload::upload_image;
 use crate::gpu::{Gpu, GpuError};
@@ -51,6 +52,8 @@ pub(super) struct GpuLayers {
     /// where a storage buffer's loads loop over them.
     pub colours: Image,
     placed: Vec<Placed>,
+    /// Where each layer may show something (empty-space skipping in layered frames).
+    summaries: Vec<Summary>,
     /// The table and colours last written, with what they were written for.
     written: Option<(Vec<LayerStyle>, [u32; 3], Geometry)>,
 }
@@ -136,12 +139,28 @@ impl GpuLayers {
                 params,
                 colours,
                 placed,
+                summaries: inputs.iter().map(summary).collect(),
                 written: None,
             }),
             (result, made) => {
                 made.destroy(gpu);
                 Err(result.err().unwrap_or(GpuError::Lost("layer resources")))
             }
+        }
+    }
+
+    /// Marks the base's skip bricks (`levels`, a grid of `bricks` of `brick` base voxels; the base `dims` placed
+    /// by `geometry`) where a layer styled by `styles` may show something (layer_bricks.rs).
+    pub(super) fn mark(
+        &self,
+        styles: &[LayerStyle],
+        levels: &mut [u8],
+        bricks: [u32; 3],
+        brick: u32,
+        base: (&Geometry, [u32; 3]),
+    ) {
+        for (summary, style) in self.summaries.iter().zip(styles) {
+            summary.mark(style, levels, bricks, brick, base);
         }
     }
 
@@ -323,6 +342,14 @@ fn fill_slab<T>(out: &mut [T], size: [u32; 3], p: &Placed, at: impl Fn(usize) ->
                 out[row + x] = at(x + w * (y + h * z));
             }
         }
+    }
+}
+
+/// A layer's summary for empty-space skipping.
+fn summary(input: &LayerInput) -> Summary {
+    match &input.labels {
+        Some((map, rgba)) => Summary::labels(input.volume, map, rgba),
+        None => Summary::overlay(input.volume),
     }
 }
 

@@ -10,6 +10,7 @@ pub mod gradients;
 pub mod headless;
 pub mod info;
 mod init;
+mod layer_bricks;
 pub mod layers;
 pub mod levels;
 pub mod light_volume;
@@ -78,6 +79,8 @@ struct OccupancyKey {
     mode: crate::scene::settings::CompositeMode,
     iso: f32,
     skip_empty: bool,
+    /// Rule 13's layers: a layered frame skips only where they show nothing too.
+    layers: Vec<crate::scene::layers::LayerStyle>,
     /// Rule 2's strides: the longest stride (1 where strides do not apply), the step, the density factor, the
     /// depth bound (which shading changes) and the spread bound (both scaled by the tolerance).
     strides: (u32, u32, u32, u64, u64),
@@ -91,7 +94,8 @@ impl OccupancyKey {
             mode: s.compositing.mode,
             iso: s.compositing.iso_value,
             skip_empty: s.sampling.skip_empty,
-            strides: if s.sampling.max_stride > 1 {
+            layers: s.layers.clone(),
+            strides: if s.sampling.max_stride > 1 && s.layers.is_empty() {
                 (
                     s.sampling.max_stride,
                     s.sampling.step_length.to_bits(),
@@ -452,12 +456,18 @@ impl Renderer {
             if let Some(vol) = &mut self.volume {
                 // Strides follow the step the march takes (the finest level shown), and none is taken where a
                 // skip brick holds fewer than 8 of its samples.
-                let stepped = vol.info.stepped(s);
+                let mut stepped = vol.info.stepped(s);
+                if !s.layers.is_empty() {
+                    // Rule 13: every sample of a layered frame is taken where it is not leapt over.
+                    stepped.sampling.max_stride = 1;
+                }
+                let (dims, geometry, brick) = (vol.info.dims, vol.info.geometry, skip::BRICK << vol.info.held);
                 let grid = vol.skip_grid();
-                let (occupancy, depth) = (
-                    skip::encode_reach(&grid.classify(&self.table.entries, &stepped), grid.bricks),
-                    grid.bricks[2],
-                );
+                let mut levels = grid.classify(&self.table.entries, &stepped);
+                if let (Some(layers), false) = (&self.layers, s.layers.is_empty()) {
+                    layers.mark(&s.layers, &mut levels, grid.bricks, brick, (&geometry, dims));
+                }
+                let (occupancy, depth) = (skip::encode_reach(&levels, grid.bricks), grid.bricks[2]);
                 upload_3d(gpu, &mut vol.occupancy, &occupancy, depth)?;
                 vol.occupancy_key = Some(OccupancyKey::of(s));
             }

@@ -20,7 +20,9 @@
 //!   c₀, opacity α₀) and each layer's (cᵢ, αᵢ) make one: `α = 1 − Π(1 − αᵢ)`, `c = Σαᵢcᵢ / Σαᵢ` (nothing where
 //!   Σαᵢ = 0), composited by rule 7. So depth order is right by construction: what is nearer on the ray is
 //!   composited first, whichever volume holds it. The base alone (no layer shown there) is rule 6 unchanged.
-//! - **No skipping or strides** (rule 2) in a layered frame: the base's empty bricks may hold a layer's content.
+//! - **No strides** (rule 2) in a layered frame: every sample is taken (a layer is point-sampled at each). Empty-space
+//!   skipping leaps only over bricks where neither the base nor any layer can show anything, which changes no
+//!   pixel (`render/layer_bricks.rs`).
 //! - Layers mix in emission and density modes; other modes refuse layers.
 
 use crate::transfer::colormap::Colormap;
