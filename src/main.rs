@@ -32,6 +32,8 @@ enum Command {
     Render(Box<RenderArgs>),
     /// Print a volume's dimensions, type, spacing, value range, placement in space and memory needs.
     Info(Box<InfoArgs>),
+    /// Per label of a label map: voxels, volume in mm³, and the mean, min and max of the volume under it.
+    Stats(Box<volcast::cli::stats::StatsArgs>),
     /// Render built-in viewpoints with both ray setups and measure how they differ and what each costs.
     Compare(Box<CompareArgs>),
     /// Time a fixed set of scenes and the raw 3D-texture sample rate (docs/performance.md).
@@ -143,6 +145,7 @@ fn main() -> ExitCode {
         Some(Command::Compare(a)) => compare(a),
         Some(Command::Bench(a)) => bench(a),
         Some(Command::Info(a)) => info(a),
+        Some(Command::Stats(a)) => volcast::cli::stats::stats(a),
         Some(Command::Convert(a)) => cli::convert::convert(a),
         Some(Command::Cache(a)) => cli::commands::cache(a),
         Some(Command::Devices) => devices(),

@@ -69,7 +69,7 @@ pub struct VolumeArgs {
     ///
     /// The series to load from a DICOM folder holding several: its SeriesNumber or SeriesInstanceUID (default: the
     /// one with the most slices, or the series of the file given); `volcast info FOLDER` lists them.
-    #[arg(long, value_name = "N|UID")]
+    #[arg(long, value_name = "N|UID", hide_short_help = true)]
     pub series: Option<String>,
     /// The channel to load from an OME-Zarr image with a `c` axis, from 0 (default 0); `volcast info STORE`
     /// lists them.
@@ -78,7 +78,7 @@ pub struct VolumeArgs {
     /// The time step of a 4-D series to show, from 0 (default 0)
     ///
     /// The value range stays the whole series'.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", hide_short_help = true)]
     pub time: Option<u32>,
 }
 

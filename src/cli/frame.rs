@@ -219,7 +219,7 @@ pub struct SamplingArgs {
     /// Step length in voxels, overriding the quality's
     ///
     /// Opacity is corrected for it, and every sample is taken.
-    #[arg(long)]
+    #[arg(long, hide_short_help = true)]
     pub step_length: Option<f32>,
     /// Longest brick stride (1, 2 or 4): faint bricks take every second or fourth sample (emission and density;
     /// default: the quality's, 1 with --step-length).

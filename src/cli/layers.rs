@@ -11,7 +11,7 @@ use crate::volume::labels::{LabelMap, LabelTable};
 use crate::volume::Volume;
 use anyhow::{bail, Context, Result};
 use glam::DVec3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Further volumes shown in depth with the first, each on its own grid.
 #[derive(clap::Args, Clone, Debug, Default)]
@@ -26,10 +26,10 @@ pub struct LayerArgs {
     #[arg(long, value_name = "T", help_heading = "Layers")]
     pub threshold: Option<f64>,
     /// The overlays' opacity per voxel of their own grid (default 0.6)
-    #[arg(long, value_name = "A", help_heading = "Layers")]
+    #[arg(long, value_name = "A", help_heading = "Layers", hide_short_help = true)]
     pub overlay_opacity: Option<f32>,
     /// The overlays' colormap (default: cool-warm for signed maps, plasma for others)
-    #[arg(long, value_name = "NAME", value_parser = super::parse::parse_colormap, help_heading = "Layers")]
+    #[arg(long, value_name = "NAME", value_parser = super::parse::parse_colormap, help_heading = "Layers", hide_short_help = true)]
     pub overlay_colormap: Option<Colormap>,
     /// A label map (an atlas, a segmentation) composited in depth with the volume (repeatable)
     ///
@@ -38,13 +38,19 @@ pub struct LayerArgs {
     #[arg(long, value_name = "FILE", help_heading = "Layers")]
     pub labels: Vec<PathBuf>,
     /// The label maps' table: FreeSurfer/Slicer colour table, ITK-SNAP label description or mricron .txt (+ .lut)
-    #[arg(long, value_name = "FILE", help_heading = "Layers")]
+    #[arg(long, value_name = "FILE", help_heading = "Layers", hide_short_help = true)]
     pub label_table: Option<PathBuf>,
     /// Show only these label ids, comma-separated (default: every id)
-    #[arg(long, value_name = "IDS", value_delimiter = ',', help_heading = "Layers")]
+    #[arg(
+        long,
+        value_name = "IDS",
+        value_delimiter = ',',
+        help_heading = "Layers",
+        hide_short_help = true
+    )]
     pub label_ids: Vec<u32>,
     /// The label maps' opacity per voxel of their own grid (default 0.5)
-    #[arg(long, value_name = "A", help_heading = "Layers")]
+    #[arg(long, value_name = "A", help_heading = "Layers", hide_short_help = true)]
     pub label_opacity: Option<f32>,
 }
 
@@ -79,9 +85,7 @@ impl LayerArgs {
             layers.styles.push(style);
         }
         for path in &self.labels {
-            let v = open(path, &OpenOptions::default())?;
-            let map = LabelMap::of(&v).with_context(|| format!("{} is not a label map", path.display()))?;
-            let table = self.table_for(path, &map)?;
+            let (v, map, table) = read_labels(path, self.label_table.as_deref())?;
             let rgba = map.ids.iter().map(|&id| self.colour(&table, id)).collect();
             let mut style = LayerStyle::labels();
             style.opacity = self.label_opacity.unwrap_or(style.opacity);
@@ -100,41 +104,6 @@ impl LayerArgs {
             c[3] = 0;
         }
         c
-    }
-
-    /// The table for the label map at `path`: --label-table, else the one beside it, else none.
-    fn table_for(&self, path: &std::path::Path, map: &LabelMap) -> Result<LabelTable> {
-        let Some(file) = self.label_table.clone().or_else(|| label_table::beside(path)) else {
-            return Ok(LabelTable::default());
-        };
-        let (table, warnings) = label_table::read(&file)?;
-        for w in warnings {
-            eprintln!("warning: {w}");
-        }
-        let missing: Vec<u32> = table
-            .entries
-            .iter()
-            .map(|e| e.id)
-            .filter(|&id| id != 0 && map.dense(id).is_none())
-            .collect();
-        if !missing.is_empty() {
-            let shown: Vec<String> = missing.iter().take(5).map(u32::to_string).collect();
-            eprintln!(
-                "warning: {} names {} id(s) that {} does not hold ({}{})",
-                file.display(),
-                missing.len(),
-                path.display(),
-                shown.join(", "),
-                if missing.len() > 5 { ", …" } else { "" }
-            );
-        }
-        eprintln!(
-            "labels: {} ids in {}, named by {}",
-            map.ids.len() - 1,
-            path.display(),
-            file.display()
-        );
-        Ok(table)
     }
 }
 
@@ -165,6 +134,44 @@ impl Layers {
         s.layers = self.styles.clone();
         Ok(())
     }
+}
+
+/// The label map at `path`, its ids made dense, and its table: `table` if given, else the one beside it, else
+/// none. Warnings (a table naming ids the map lacks, duplicate ids) go to stderr.
+pub fn read_labels(path: &Path, table: Option<&Path>) -> Result<(Volume, LabelMap, LabelTable)> {
+    let v = open(path, &OpenOptions::default())?;
+    let map = LabelMap::of(&v).with_context(|| format!("{} is not a label map", path.display()))?;
+    let Some(file) = table.map(Path::to_path_buf).or_else(|| label_table::beside(path)) else {
+        return Ok((v, map, LabelTable::default()));
+    };
+    let (table, warnings) = label_table::read(&file)?;
+    for w in warnings {
+        eprintln!("warning: {w}");
+    }
+    let missing: Vec<u32> = table
+        .entries
+        .iter()
+        .map(|e| e.id)
+        .filter(|&id| id != 0 && map.dense(id).is_none())
+        .collect();
+    if !missing.is_empty() {
+        let shown: Vec<String> = missing.iter().take(5).map(u32::to_string).collect();
+        eprintln!(
+            "warning: {} names {} id(s) that {} does not hold ({}{})",
+            file.display(),
+            missing.len(),
+            path.display(),
+            shown.join(", "),
+            if missing.len() > 5 { ", …" } else { "" }
+        );
+    }
+    eprintln!(
+        "labels: {} ids in {}, named by {}",
+        map.ids.len() - 1,
+        path.display(),
+        file.display()
+    );
+    Ok((v, map, table))
 }
 
 /// Refuses options that layers do not mix with, before anything is read.

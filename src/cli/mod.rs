@@ -9,6 +9,7 @@ pub mod layers;
 pub mod parse;
 pub mod render;
 pub mod settings;
+pub mod stats;
 
 use anyhow::{bail, Result};
 

@@ -18,6 +18,7 @@ mod contents;
 mod error;
 pub mod geometry;
 pub mod huge_pages;
+pub mod label_stats;
 pub mod labels;
 pub(crate) mod limits;
 pub(crate) mod time;

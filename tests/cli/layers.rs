@@ -88,3 +88,51 @@ fn bad_layers_are_refused_naming_the_file() {
     let o = volcast(&["render", t1, "--labels", neg.to_str().unwrap(), "-o", out]);
     assert!(stderr(&o).contains("negative id -1"), "{}", stderr(&o));
 }
+
+#[test]
+fn stats_gives_each_atlas_region_its_voxels_volume_and_the_t1_under_it() {
+    let (Some(t1), Some(aal)) = (
+        shared_data("native/colin27_t1/ch2.nii.gz"),
+        shared_data("native/aal_labels/aal.nii.gz"),
+    ) else {
+        return;
+    };
+    let o = volcast(&[
+        "stats",
+        t1.to_str().unwrap(),
+        "--labels",
+        aal.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("JSON");
+    let rows = rows.as_array().expect("rows");
+    assert_eq!(rows.len(), 116);
+    // Independently: the atlas lies on the T1's grid, so the T1 under a label is its voxels there.
+    let open = |p: &std::path::Path| volcast::formats::open(p, &Default::default()).expect("open");
+    let (t1v, aalv) = (open(&t1), open(&aal));
+    assert_eq!(t1v.geometry.affine, aalv.geometry.affine);
+    let [w, h, d] = aalv.dims;
+    let (mut n, mut sum, mut max) = (0u64, 0.0, f64::MIN);
+    for z in 0..d {
+        for y in 0..h {
+            for x in 0..w {
+                if aalv.value(x, y, z) == 1.0 {
+                    let v = t1v.value(x, y, z);
+                    (n, sum, max) = (n + 1, sum + v, max.max(v));
+                }
+            }
+        }
+    }
+    let row = &rows[0];
+    assert_eq!(row["id"], 1);
+    assert_eq!(row["name"], "Precentral_L");
+    assert_eq!(row["voxels"].as_u64(), Some(n));
+    assert_eq!(row["volume_mm3"].as_f64(), Some(n as f64), "1 mm voxels");
+    let under = &row["under"][0];
+    assert!(
+        (under["mean"].as_f64().unwrap() - sum / n as f64).abs() < 1e-9,
+        "{under}"
+    );
+    assert_eq!(under["max"].as_f64(), Some(max));
+}
