@@ -89,7 +89,9 @@ fn frame(
     dev: &mut Device,
     args: &RenderArgs,
     held: Option<(u64, Arc<Volume>)>,
+    held_layers: Vec<(Arc<Volume>, bool)>,
 ) -> anyhow::Result<(image::RgbaImage, Report)> {
+    use volcast::scene::settings::CompositeMode as M;
     let (id, volume, s) = match held {
         Some((id, v)) => {
             let s = steps::view_settings(args, &v)?;
@@ -106,10 +108,22 @@ fn frame(
     } = dev;
     let reduced = shown.as_ref().and_then(|s| s.reduced.as_ref());
     let volume_shown = reduced.unwrap_or(&volume);
-    // Rule 13's layers, as `volcast render` reads them (none: the layers of an earlier call are dropped).
+    // Rule 13's layers, as `volcast render` reads them, and the arrays given (none: the layers of an earlier call
+    // are dropped).
     let mut s = s;
+    if !held_layers.is_empty() && !matches!(s.compositing.mode, M::Emission | M::Density) {
+        anyhow::bail!(UsageError(
+            "overlay= and labels= are composited in the emission and density modes".into()
+        ));
+    }
     volcast::cli::layers::check(&args.layers, &s)?;
-    args.layers.load()?.show(gpu, headless, volume_shown, &mut s)?;
+    let held_layers = held_layers
+        .into_iter()
+        .map(|(v, labels)| (v.as_ref().clone(), labels))
+        .collect();
+    args.layers
+        .load_with(held_layers)?
+        .show(gpu, headless, volume_shown, &mut s)?;
     steps::make_resident(gpu, headless, args, volume_shown, &s)?;
     let image = steps::image(gpu, headless, args, volume_shown, &s)?;
     let timings = if args.timings {
@@ -148,15 +162,18 @@ fn frame(
 /// as an (H, W, 4) uint8 array of RGBA (sRGB, straight alpha) with what `--timings` and `--memory` asked for, and
 /// writes it to `--output` where that is given.
 #[pyfunction]
-#[pyo3(signature = (volume, argv, tf_json=None))]
+#[pyo3(signature = (volume, argv, tf_json=None, layers=Vec::new()))]
 pub fn render<'py>(
     py: Python<'py>,
     volume: Option<PyRef<'_, PyVolume>>,
     argv: Vec<String>,
     tf_json: Option<String>,
+    layers: Vec<(PyRef<'_, PyVolume>, bool)>,
 ) -> PyResult<(Bound<'py, PyArray3<u8>>, Report)> {
     let (args, held) = prepared(volume.as_deref(), argv, tf_json)?;
-    let rx = crate::device::submit(move |slot| frame(slot.device(&args.gpu)?, &args, held))?;
+    // Layers the caller holds: each an overlay or (true) a label map.
+    let held_layers: Vec<(Arc<Volume>, bool)> = layers.iter().map(|(v, l)| (v.inner.clone(), *l)).collect();
+    let rx = crate::device::submit(move |slot| frame(slot.device(&args.gpu)?, &args, held, held_layers))?;
     let (image, report) = wait(py, rx, None)?.map_err(|e| to_py(e, While::Rendering))?;
     let (w, h) = image.dimensions();
     let pixels = Array3::from_shape_vec((h as usize, w as usize, 4), image.into_raw())

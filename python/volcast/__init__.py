@@ -51,6 +51,34 @@ def _camera(options_: Dict[str, Any]) -> None:
     options_.update(camera)
 
 
+def _held_layers(options_: Dict[str, Any], placement: Dict[str, Any]) -> list:
+    """The layers of ``overlay=`` and ``labels=`` held in memory, as (native volume, is labels); their paths stay
+    in ``options_``. An array is placed like the volume (its ``spacing=``, ``origin=`` or ``affine=``); a Volume, a
+    nibabel or SimpleITK image by its own placement."""
+    held = []
+    for key, labels in (("overlay", False), ("labels", True)):
+        items = options_.get(key)
+        if items is None:
+            continue
+        if not isinstance(items, (list, tuple)):
+            items = [items]
+        paths = []
+        for item in items:
+            if isinstance(item, (str, os.PathLike)):
+                paths.append(os.fspath(item))
+                continue
+            array_like = isinstance(item, np.ndarray) or (
+                not isinstance(item, Volume) and type(item).__module__.split(".")[0] not in ("nibabel", "SimpleITK")
+            )
+            volume, _ = as_source(item, **(placement if array_like else {}))
+            held.append((volume._native, labels))
+        if paths:
+            options_[key] = paths
+        else:
+            del options_[key]
+    return held
+
+
 def _command(source: Any, placement: Dict[str, Any], command: str, options_: Dict[str, Any]):
     """The native volume (or None), the argument list and the transfer function's JSON of a call."""
     _camera(options_)
@@ -91,12 +119,16 @@ def render(
     ``azimuth=30`` (or ``camera={"azimuth": 30, "elevation": 10}``), ``view="left"``, ``preset="ct-bone"`` or ``tf=TransferFunction(...)``, ``mode="mip"``,
     ``window=(0.1, 1)``, ``shading=True``, ``quality="draft"``, ``clip_plane=(0, 0, 1, 0)``, ``output="f.png"``
     (also writes the PNG), ... ``timings=True`` adds ``frame.timings``, the medians (ms) of ``frames=`` more frames
-    (wall, GPU, per pass); ``memory=True`` adds ``frame.memory``, the command line's memory line. The device is made once per process and reused; a volume rendered again is not
+    (wall, GPU, per pass); ``memory=True`` adds ``frame.memory``, the command line's memory line. ``overlay=[...]``
+    and ``labels=[...]`` add layers composited in depth (docs/layers.md): paths, or arrays placed like ``volume``
+    (or a ``Volume``, a nibabel or SimpleITK image, placed by their own affine). The device is made once per process and reused; a volume rendered again is not
     uploaded again. Raises ``ValueError`` for a bad option or array, ``OSError`` for a file it cannot read,
     ``RuntimeError`` where there is no Vulkan device (saying what to install).
     """
+    placement = {k: v for k, v in dict(spacing=spacing, affine=affine, origin=origin).items() if v is not None}
+    layers = _held_layers(options, placement)
     native, argv, tf_json = _command(volume, dict(spacing=spacing, affine=affine, origin=origin), "render", options)
-    pixels, (timings, memory) = _volcast.render(native, argv, tf_json)
+    pixels, (timings, memory) = _volcast.render(native, argv, tf_json, layers)
     frame = pixels.view(Image)
     if timings:
         frame.timings = dict(timings)

@@ -69,32 +69,62 @@ impl LayerArgs {
 
     /// Reads every layer; warnings (a table naming ids the map lacks, duplicate ids) go to stderr.
     pub fn load(&self) -> Result<Layers> {
+        self.load_with(Vec::new())
+    }
+
+    /// The layers of the files named, and `held` (volumes the caller holds, each an overlay or, with `true`, a
+    /// label map), in order: the overlays' files, the overlays held, the label maps' files, the label maps held.
+    pub fn load_with(&self, held: Vec<(Volume, bool)>) -> Result<Layers> {
         let mut layers = Layers {
             volumes: Vec::new(),
             labels: Vec::new(),
             styles: Vec::new(),
         };
+        let (held_labels, held_overlays): (Vec<_>, Vec<_>) = held.into_iter().partition(|(_, labels)| *labels);
         for path in &self.overlay {
             let v = open(path, &OpenOptions::default())?;
-            let mut style = LayerStyle::overlay(v.range, self.threshold);
-            style.opacity = self.overlay_opacity.unwrap_or(style.opacity);
-            style.colormap = self.overlay_colormap.unwrap_or(style.colormap);
-            style.check().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-            layers.volumes.push(v);
-            layers.labels.push(None);
-            layers.styles.push(style);
+            self.add_overlay(&mut layers, v, &path.display().to_string())?;
+        }
+        for (v, _) in held_overlays {
+            let name = v.name.clone();
+            self.add_overlay(&mut layers, v, &name)?;
         }
         for path in &self.labels {
             let (v, map, table) = read_labels(path, self.label_table.as_deref())?;
-            let rgba = map.ids.iter().map(|&id| self.colour(&table, id)).collect();
-            let mut style = LayerStyle::labels();
-            style.opacity = self.label_opacity.unwrap_or(style.opacity);
-            style.check().map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-            layers.volumes.push(v);
-            layers.labels.push(Some((map, rgba)));
-            layers.styles.push(style);
+            self.add_labels(&mut layers, v, map, &table, &path.display().to_string())?;
+        }
+        for (v, _) in held_labels {
+            let map = LabelMap::of(&v).with_context(|| format!("{} is not a label map", v.name))?;
+            let table = match &self.label_table {
+                Some(file) => label_table::read(file)?.0,
+                None => LabelTable::default(),
+            };
+            let name = v.name.clone();
+            self.add_labels(&mut layers, v, map, &table, &name)?;
         }
         Ok(layers)
+    }
+
+    fn add_overlay(&self, layers: &mut Layers, v: Volume, name: &str) -> Result<()> {
+        let mut style = LayerStyle::overlay(v.range, self.threshold);
+        style.opacity = self.overlay_opacity.unwrap_or(style.opacity);
+        style.colormap = self.overlay_colormap.unwrap_or(style.colormap);
+        style.check().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        layers.volumes.push(v);
+        layers.labels.push(None);
+        layers.styles.push(style);
+        Ok(())
+    }
+
+    fn add_labels(&self, layers: &mut Layers, v: Volume, map: LabelMap, table: &LabelTable, name: &str) -> Result<()> {
+        let rgba = map.ids.iter().map(|&id| self.colour(table, id)).collect();
+        let mut style = LayerStyle::labels();
+        style.opacity = self.label_opacity.unwrap_or(style.opacity);
+        style.check().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        layers.volumes.push(v);
+        layers.labels.push(Some((map, rgba)));
+        layers.styles.push(style);
+        Ok(())
     }
 
     /// An id's colour: the table's, hidden where --label-ids leaves it out.
