@@ -394,6 +394,9 @@ BUGS = [
        "let to_index = base.affine.inverse() * base.affine * tex_to_index;")]),
     ("layer-bricks-unmarked", "a layered frame leaps over the base's empty bricks even where a layer shows something",
      [("src/render/layer_bricks.rs", "levels[i as usize] = 1;", "levels[i as usize] = levels[i as usize].max(0);")]),
+    ("nrrd-list-axis-as-time", "a NRRD's leading list axis (a Slicer segmentation's layers) is read as steps stored one "
+     "after another",
+     [("src/formats/format.rs", "let mut steps = if self.interleaved {", "let mut steps = if !self.interleaved {")]),
     ("layers-blended-whole", "layers are composited along the ray on their own and blended whole over the base, "
      "as napari and neuroglancer do: depth is lost",
      [("shaders/march.glsl", "            c = mix_layers(c, ray.a + ray.dir * t);",

@@ -90,8 +90,9 @@ impl LayerArgs {
             self.add_overlay(&mut layers, v, &name)?;
         }
         for path in &self.labels {
-            let (v, map, table) = read_labels(path, self.label_table.as_deref())?;
-            self.add_labels(&mut layers, v, map, &table, &path.display().to_string())?;
+            for (v, map, table) in read_labels(path, self.label_table.as_deref())? {
+                self.add_labels(&mut layers, v, map, &table, &path.display().to_string())?;
+            }
         }
         for (v, _) in held_labels {
             let map = LabelMap::of(&v).with_context(|| format!("{} is not a label map", v.name))?;
@@ -166,18 +167,58 @@ impl Layers {
     }
 }
 
+/// A label map's layer: its volume, its ids made dense, and its table.
+pub type LabelLayer = (Volume, LabelMap, LabelTable);
+
 /// The label map at `path`, its ids made dense, and its table: `table` if given, else the one beside it, else
-/// none. Warnings (a table naming ids the map lacks, duplicate ids) go to stderr.
-pub fn read_labels(path: &Path, table: Option<&Path>) -> Result<(Volume, LabelMap, LabelTable)> {
-    let v = open(path, &OpenOptions::default())?;
-    let map = LabelMap::of(&v).with_context(|| format!("{} is not a label map", path.display()))?;
+/// none. A 3D Slicer segmentation (`.seg.nrrd`) gives one label map per layer (overlapping segments lie in
+/// separate layers), named and coloured by its segments. Warnings (a table naming ids the map lacks, duplicate
+/// ids) go to stderr.
+pub fn read_labels(path: &Path, table: Option<&Path>) -> Result<Vec<LabelLayer>> {
+    let mut v = open(path, &OpenOptions::default())?;
+    if table.is_none() {
+        if let Some(segments) = label_table::seg_nrrd(path)? {
+            let mut layers = Vec::new();
+            for t in 0..v.timesteps() {
+                v.show_step(t)?;
+                let mut step = v.clone();
+                step.time = Default::default();
+                let map = label_map(&step, path)?;
+                let table = label_table::layer_table(&segments, t);
+                eprintln!(
+                    "labels: layer {t} of {}: {} segment(s)",
+                    path.display(),
+                    table.entries.len()
+                );
+                layers.push((step, map, table));
+            }
+            return Ok(layers);
+        }
+    }
+    let map = label_map(&v, path)?;
     let Some(file) = table.map(Path::to_path_buf).or_else(|| label_table::beside(path)) else {
-        return Ok((v, map, LabelTable::default()));
+        return Ok(vec![(v, map, LabelTable::default())]);
     };
     let (table, warnings) = label_table::read(&file)?;
     for w in warnings {
         eprintln!("warning: {w}");
     }
+    warn_missing(&table, &map, &file, path);
+    eprintln!(
+        "labels: {} ids in {}, named by {}",
+        map.ids.len() - 1,
+        path.display(),
+        file.display()
+    );
+    Ok(vec![(v, map, table)])
+}
+
+fn label_map(v: &Volume, path: &Path) -> Result<LabelMap> {
+    LabelMap::of(v).with_context(|| format!("{} is not a label map", path.display()))
+}
+
+/// Warns where `table` (read from `file`) names ids the map at `path` lacks.
+fn warn_missing(table: &LabelTable, map: &LabelMap, file: &Path, path: &Path) {
     let missing: Vec<u32> = table
         .entries
         .iter()
@@ -195,13 +236,6 @@ pub fn read_labels(path: &Path, table: Option<&Path>) -> Result<(Volume, LabelMa
             if missing.len() > 5 { ", …" } else { "" }
         );
     }
-    eprintln!(
-        "labels: {} ids in {}, named by {}",
-        map.ids.len() - 1,
-        path.display(),
-        file.display()
-    );
-    Ok((v, map, table))
 }
 
 /// Refuses options that layers do not mix with, before anything is read.

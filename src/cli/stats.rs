@@ -29,7 +29,7 @@ pub struct StatsArgs {
 
 pub fn stats(args: &StatsArgs) -> Result<()> {
     let base = args.volume.load()?;
-    let (labels, map, table) = read_labels(&args.labels, args.label_table.as_deref())?;
+    let label_layers = read_labels(&args.labels, args.label_table.as_deref())?;
     let overlays: Vec<Volume> = args
         .overlay
         .iter()
@@ -39,7 +39,11 @@ pub fn stats(args: &StatsArgs) -> Result<()> {
         .chain(&overlays)
         .map(|v| (v.name.as_str(), v))
         .collect();
-    let rows = label_stats(&labels, &map, &table, &others);
+    // A segmentation's layers one after another: every segment a row.
+    let rows: Vec<LabelRow> = label_layers
+        .iter()
+        .flat_map(|(labels, map, table)| label_stats(labels, map, table, &others))
+        .collect();
     if args.json {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     } else {

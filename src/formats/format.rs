@@ -67,6 +67,9 @@ pub struct Header {
     pub arrays: Vec<crate::volume::ArrayInfo>,
     /// Time steps stored one after another (the slowest, fourth axis of a 4-D file); 1 for a 3-D volume.
     pub timesteps: u32,
+    /// The steps are stored interleaved, step fastest (a NRRD whose first axis is a list, as a Slicer segmentation
+    /// with overlapping segments stores its layers).
+    pub interleaved: bool,
 }
 
 impl Header {
@@ -85,6 +88,7 @@ impl Header {
             notes: Vec::new(),
             arrays: Vec::new(),
             timesteps: 1,
+            interleaved: false,
         }
     }
 
@@ -120,7 +124,12 @@ impl Header {
     pub fn into_volume(self, name: String, data: VoxelData) -> Result<Volume, VolumeError> {
         let spacing = self.spacing.map(|s| s.abs() as f32);
         let geometry = self.placement();
-        let mut steps = data.split_steps(self.timesteps.max(1) as usize).into_iter();
+        let mut steps = if self.interleaved {
+            data.deinterleave(self.timesteps.max(1) as usize)
+        } else {
+            data.split_steps(self.timesteps.max(1) as usize)
+        }
+        .into_iter();
         let first = steps.next().expect("at least one step");
         let mut v = Volume::new(name, self.dims, spacing, self.voxel_type, first)?
             .with_time_steps(steps.collect())?

@@ -139,6 +139,74 @@ fn itk_snap_row(line: &str, quote: usize) -> Result<LabelEntry, &'static str> {
     })
 }
 
+/// The segments a 3D Slicer segmentation (`.seg.nrrd`) names in its header (`SegmentN_Name`, `_Color` in 0–1,
+/// `_LabelValue`, `_Layer`): per segment, its layer and its entry; None where the file names no segment.
+pub fn seg_nrrd(path: &Path) -> Result<Option<Vec<(u32, LabelEntry)>>, TableError> {
+    use std::io::Read;
+    let io = |source| TableError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    // The header is text up to the first blank line; 1 MiB holds thousands of segments.
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .map_err(io)?
+        .take(1 << 20)
+        .read_to_end(&mut head)
+        .map_err(io)?;
+    let text = String::from_utf8_lossy(&head);
+    let header = text.split("\n\n").next().unwrap_or("");
+    let field = |n: usize, key: &str| {
+        let prefix = format!("Segment{n}_{key}:=");
+        header.lines().find_map(|l| l.strip_prefix(&prefix).map(str::trim))
+    };
+    let mut segments = Vec::new();
+    for n in 0.. {
+        let Some(value) = field(n, "LabelValue") else { break };
+        let bad = |why| TableError::Row {
+            path: path.to_path_buf(),
+            line: 0,
+            text: format!("Segment{n}"),
+            why,
+        };
+        let id: u32 = value.parse().map_err(|_| bad("its LabelValue is not an id"))?;
+        let layer: u32 = field(n, "Layer")
+            .unwrap_or("0")
+            .parse()
+            .map_err(|_| bad("its Layer is not a number"))?;
+        let colour: Vec<f64> = field(n, "Color")
+            .unwrap_or("")
+            .split_whitespace()
+            .filter_map(|c| c.parse().ok())
+            .collect();
+        let rgb = match colour[..] {
+            [r, g, b] => [r, g, b].map(|c: f64| (c.clamp(0.0, 1.0) * 255.0).round() as u8),
+            _ => crate::volume::labels::default_colour(id),
+        };
+        let name = field(n, "Name").unwrap_or("").to_string();
+        segments.push((
+            layer,
+            LabelEntry {
+                id,
+                name,
+                rgba: [rgb[0], rgb[1], rgb[2], 255],
+            },
+        ));
+    }
+    Ok((!segments.is_empty()).then_some(segments))
+}
+
+/// The table of one layer of a segmentation's segments.
+pub fn layer_table(segments: &[(u32, LabelEntry)], layer: u32) -> LabelTable {
+    let mut entries: Vec<LabelEntry> = segments
+        .iter()
+        .filter(|(l, _)| *l == layer)
+        .map(|(_, e)| e.clone())
+        .collect();
+    entries.sort_by_key(|e| e.id);
+    LabelTable { entries }
+}
+
 /// mricron's `.lut` beside `atlas.nii.txt`: `atlas.nii.lut`.
 fn lut_beside(path: &Path) -> Option<PathBuf> {
     let lut = path.with_extension("lut");

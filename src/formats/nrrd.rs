@@ -66,11 +66,16 @@ pub(crate) fn parse(bytes: &[u8], file: &str) -> Result<Header, VolumeError> {
             sizes.len()
         )));
     }
-    h.dims = format::dims_from(file, "sizes", sizes)?;
-    // The fourth (slowest) axis is time or a list of volumes: every step is loaded.
+    // A 4-D file's non-spatial axis: the fourth (slowest), time or a list of volumes; or the first, where its kind
+    // says so (a list, as a Slicer segmentation stores overlapping layers), its components interleaved. Every step
+    // is loaded.
+    let first = dimension == 4 && f.kinds.first().is_some_and(|k| !spatial_kind(k));
+    h.dims = format::dims_from(file, "sizes", if first { &sizes[1..] } else { sizes })?;
     if dimension == 4 {
-        h.timesteps = sizes[3].max(1) as u32;
+        h.timesteps = sizes[if first { 0 } else { 3 }].max(1) as u32;
+        h.interleaved = first;
     }
+    f.skip_first_axis = first;
     h.voxel_type = f.voxel_type.ok_or_else(|| err("no 'type' field".into()))?;
     h.encoding = f.encoding.ok_or_else(|| err("no 'encoding' field".into()))?;
     let spacing = f.place(file, dimension as usize, &mut h)?;
@@ -113,6 +118,10 @@ struct Fields {
     line_skip: u64,
     /// None for `byte skip: -1` (the data end the file).
     byte_skip: Option<u64>,
+    /// Each axis's kind (`domain`, `space`, `list`, ...).
+    kinds: Vec<String>,
+    /// The first axis is not spatial: placement is read from the others.
+    skip_first_axis: bool,
 }
 
 impl Default for Fields {
@@ -128,6 +137,8 @@ impl Default for Fields {
             data_file: None,
             line_skip: 0,
             byte_skip: Some(0),
+            kinds: Vec::new(),
+            skip_first_axis: false,
         }
     }
 }
@@ -186,10 +197,10 @@ impl Fields {
                     n => Some(u64::try_from(n).map_err(|_| err(format!("byte skip {n} must be -1 or at least 0")))?),
                 }
             }
-            "space dimension" | "kinds" | "centerings" | "labels" | "units" | "space units" | "content" | "min"
-            | "max" | "old min" | "oldmin" | "old max" | "oldmax" | "block size" | "blocksize"
-            | "measurement frame" | "sample units" | "axis mins" | "axismins" | "axis maxs" | "axismaxs"
-            | "thicknesses" | "number" => {}
+            "kinds" => self.kinds = value.split_whitespace().map(str::to_ascii_lowercase).collect(),
+            "space dimension" | "centerings" | "labels" | "units" | "space units" | "content" | "min" | "max"
+            | "old min" | "oldmin" | "old max" | "oldmax" | "block size" | "blocksize" | "measurement frame"
+            | "sample units" | "axis mins" | "axismins" | "axis maxs" | "axismaxs" | "thicknesses" | "number" => {}
             other => h.notes.push(format!("NRRD field '{}' ignored", clip(other))),
         }
         Ok(())
@@ -209,7 +220,7 @@ impl Fields {
             // Columns of the voxel-to-space matrix; a non-spatial axis ("none") keeps a unit step along its own
             // axis.
             let mut columns = [DVec3::X, DVec3::Y, DVec3::Z];
-            for (i, d) in dirs.iter().take(3).enumerate() {
+            for (i, d) in dirs.iter().skip(usize::from(self.skip_first_axis)).take(3).enumerate() {
                 if let Some(v) = d {
                     columns[i] = DVec3::from_array(*v);
                     spacing[i] = columns[i].length();
@@ -233,7 +244,7 @@ impl Fields {
                     s.len()
                 )));
             }
-            for (i, v) in s.iter().take(3).enumerate() {
+            for (i, v) in s.iter().skip(usize::from(self.skip_first_axis)).take(3).enumerate() {
                 // NaN marks a non-spatial axis in NRRD.
                 if !v.is_nan() {
                     spacing[i] = *v;
@@ -247,6 +258,12 @@ impl Fields {
         }
         Ok(spacing)
     }
+}
+
+/// Whether an axis of this NRRD kind is spatial (or time): `domain`, `space`, `time`; `???` and `none` count as
+/// such, as readers take an axis of unknown kind.
+fn spatial_kind(kind: &str) -> bool {
+    matches!(kind, "domain" | "space" | "time" | "???" | "none")
 }
 
 fn encoding_of(file: &str, value: &str) -> Result<Encoding, VolumeError> {

@@ -55,6 +55,21 @@ pub(crate) fn check_series_memory(file: &str, steps: u32, step_bytes: u64) -> Re
 
 impl VoxelData {
     /// Cuts `steps` consecutive equal parts (the slowest axis of a 4-D file) into one `VoxelData` each.
+    /// The data of `steps` components stored interleaved (component fastest, as a NRRD whose first axis is a
+    /// list: a Slicer segmentation's layers), one `VoxelData` per component.
+    pub(crate) fn deinterleave(self, steps: usize) -> Vec<VoxelData> {
+        fn part<T: Copy>(v: &[T], steps: usize, wrap: fn(Vec<T>) -> VoxelData) -> Vec<VoxelData> {
+            (0..steps)
+                .map(|c| wrap(v.iter().skip(c).step_by(steps).copied().collect()))
+                .collect()
+        }
+        match self {
+            VoxelData::U8(v) => part(&v, steps.max(1), VoxelData::U8),
+            VoxelData::U16(v) => part(&v, steps.max(1), VoxelData::U16),
+            VoxelData::F32(v) => part(&v, steps.max(1), VoxelData::F32),
+        }
+    }
+
     pub(crate) fn split_steps(self, steps: usize) -> Vec<VoxelData> {
         fn cut<T: Clone>(mut v: Vec<T>, steps: usize, wrap: fn(Vec<T>) -> VoxelData) -> Vec<VoxelData> {
             let each = v.len() / steps.max(1);

@@ -136,3 +136,55 @@ fn stats_gives_each_atlas_region_its_voxels_volume_and_the_t1_under_it() {
     );
     assert_eq!(under["max"].as_f64(), Some(max));
 }
+
+#[test]
+fn a_slicer_segmentation_shows_every_segment_even_where_they_overlap() {
+    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/seg");
+    let overlap = data.join("overlap.seg.nrrd");
+    let o = volcast(&[
+        "stats",
+        data.join("two.seg.nrrd").to_str().unwrap(),
+        "--labels",
+        overlap.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("JSON");
+    let got: Vec<(String, u64, u64)> = rows
+        .as_array()
+        .expect("rows")
+        .iter()
+        .map(|r| {
+            (
+                r["name"].as_str().unwrap().to_string(),
+                r["id"].as_u64().unwrap(),
+                r["voxels"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    let want = [("liver", 1, 216), ("tumour", 2, 36), ("core", 1, 8)].map(|(n, i, v)| (n.to_string(), i, v));
+    assert_eq!(got, want, "slicerio's masks (tests/data/seg/make.py)");
+    // Under them, the two-segment file (the same grid): the liver reads 1, the tumour 2, the core (in the liver) 1.
+    let means: Vec<f64> = rows
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["under"][0]["mean"].as_f64().unwrap())
+        .collect();
+    assert_eq!(means, [1.0, 2.0, 1.0]);
+    // Both layers of the file are rendered.
+    let dir = scratch("layers-seg");
+    let out = dir.join("seg.png");
+    let o = volcast_ok(&[
+        "render",
+        data.join("two.seg.nrrd").to_str().unwrap(),
+        "--labels",
+        overlap.to_str().unwrap(),
+        "--size",
+        "64x64",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(err.contains("layer 0 of") && err.contains("layer 1 of"), "{err}");
+}
