@@ -294,9 +294,7 @@ impl RenderSettings {
     /// Whether the march looks up the brick grid: to leap over empty bricks, or for rule 2's strides. Layered
     /// iso-surfaces march every sample.
     pub fn looks_up_bricks(&self) -> bool {
-        (self.sampling.skip_empty || self.sampling.max_stride > 1)
-            && !self.layered_isosurfaces()
-            && self.layers.is_empty()
+        (self.sampling.skip_empty || self.sampling.max_stride > 1) && !self.layered_isosurfaces()
     }
 
     /// Rule 2's depth bound `D` for strided segments, times `stride_tolerance`.
