@@ -75,6 +75,9 @@ fn view(base: &Volume) -> RenderSettings {
     s.colour.transfer_function = None;
     s.lighting.shading = None;
     s.background = Vec3::ZERO;
+    // Rays go on through what is opaque, so a march that put a layer over the base whole, after its own march,
+    // would show the layer behind the slab rather than stop at it.
+    s.compositing.early_termination = 1.0;
     s
 }
 
