@@ -94,14 +94,15 @@ impl LayerArgs {
                 self.add_labels(&mut layers, v, map, &table, &path.display().to_string())?;
             }
         }
+        // The arrays' table: --label-table, read once for all of them.
+        let held_table = match (&self.label_table, held_labels.is_empty()) {
+            (Some(file), false) => label_table::read(file)?.0,
+            _ => LabelTable::default(),
+        };
         for (v, _) in held_labels {
             let map = LabelMap::of(&v).with_context(|| format!("{} is not a label map", v.name))?;
-            let table = match &self.label_table {
-                Some(file) => label_table::read(file)?.0,
-                None => LabelTable::default(),
-            };
             let name = v.name.clone();
-            self.add_labels(&mut layers, v, map, &table, &name)?;
+            self.add_labels(&mut layers, v, map, &held_table, &name)?;
         }
         Ok(layers)
     }

@@ -371,9 +371,8 @@ fn params(p: &Placed, style: &LayerStyle, dims: [u32; 3], base: &Geometry, world
     let mut e = [0f32; 28];
     e[..16].copy_from_slice(&to_index.as_mat4().to_cols_array());
     e[16..20].copy_from_slice(&[p.dims[0] as f32, p.dims[1] as f32, p.dims[2] as f32, p.z0 as f32]);
-    let kind = if p.kind == LayerKind::Labels { 1.0 } else { 0.0 };
     let threshold = style.threshold.unwrap_or(0.0) as f32;
-    e[20..24].copy_from_slice(&[kind, style.window[0] as f32, style.window[1] as f32, threshold]);
+    e[20..24].copy_from_slice(&[0.0, style.window[0] as f32, style.window[1] as f32, threshold]);
     let test = match style.threshold {
         None => 0.0,
         Some(_) if style.signed => 2.0,

@@ -32,15 +32,9 @@ impl LabelMap {
     /// The ids of `volume`, which must hold non-negative integers no larger than [`MAX_LABEL_ID`].
     pub fn of(volume: &Volume) -> Result<LabelMap, LabelError> {
         let name = volume.name.clone();
-        let [w, h, d] = volume.dims;
-        let mut raw = Vec::with_capacity(volume.voxel_count());
-        for z in 0..d {
-            for y in 0..h {
-                for x in 0..w {
-                    raw.push(label_id(volume.value(x, y, z), &name, volume.source_type)?);
-                }
-            }
-        }
+        let raw = (0..volume.voxel_count())
+            .map(|i| label_id(volume.value_at_index(i), &name, volume.source_type))
+            .collect::<Result<Vec<u32>, _>>()?;
         let mut ids = raw.clone();
         ids.push(0);
         ids.sort_unstable();
