@@ -394,6 +394,9 @@ BUGS = [
        "let to_index = base.affine.inverse() * base.affine * tex_to_index;")]),
     ("layer-bricks-unmarked", "a layered frame leaps over the base's empty bricks even where a layer shows something",
      [("src/render/layer_bricks.rs", "levels[i as usize] = 1;", "levels[i as usize] = levels[i as usize].max(0);")]),
+    ("layer-strides-kept", "a base brick where a layer shows something keeps the base's stride, so the layer is "
+     "sampled at every fourth step",
+     [("src/render/layer_bricks.rs", "levels[i as usize] = 1;", "levels[i as usize] = levels[i as usize].max(1);")]),
     ("nrrd-list-axis-as-time", "a NRRD's leading list axis (a Slicer segmentation's layers) is read as steps stored one "
      "after another",
      [("src/formats/format.rs", "let mut steps = if self.interleaved {", "let mut steps = if !self.interleaved {")]),

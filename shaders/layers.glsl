@@ -7,15 +7,17 @@ struct LayerParams {
     mat4 to_index;   // the base's texture space -> the layer's voxel index (centres at integers)
     vec4 dims;       // xyz: the layer's size in voxels; w: its first slice in its kind's texture
     vec4 look;       // y, z: an overlay's window (data units); w: its threshold
-    vec4 more;       // x: its smallest voxel side (world); y: its first colour; z: its opacity; w: 0 window test,
-                     // 1 v >= threshold, 2 |v| >= threshold
+    vec4 more;       // x: 1 / its smallest voxel side (world); y: its first colour; z: an overlay's log2(1 - opacity);
+                     // w: 0 window test, 1 v >= threshold, 2 |v| >= threshold
+    vec4 texel;      // xyz: 1 / the size of its kind's texture
 };
 // How many there are: frame.voxel_world.y overlays, then .z label maps. A uniform buffer: on lavapipe a storage buffer's loads loop over the
 // lanes (render/layers.rs MAX_LAYERS).
 layout(std140, set = 1, binding = 11) uniform Layers {
     LayerParams p[16];
 } layers;
-// Per overlay 256 entries over its window (linear rgb); per label map one per dense id (linear rgb, opacity);
+// Per overlay 256 entries over its window (linear rgb); per label map one per dense id (linear rgb and
+// log2(1 - opacity), the layer's opacity included);
 // 4096 to a row (render/layers.rs COLOUR_ROW).
 layout(set = 1, binding = 12) uniform texture2D layer_colours;
 
@@ -27,8 +29,7 @@ vec4 layer_colour(uint i) {
 float layer_value(LayerParams L, vec3 x) {
     vec3 u = clamp(x, vec3(0.0), L.dims.xyz - 1.0) + 0.5;
     u.z += L.dims.w;
-    vec3 size = vec3(textureSize(sampler3D(layer_values, linear_smp), 0));
-    return textureLod(sampler3D(layer_values, linear_smp), u / size, 0.0).r;
+    return textureLod(sampler3D(layer_values, linear_smp), u * L.texel.xyz, 0.0).r;
 }
 
 // Where point p (base texture space) lies in layer L: its voxel index x; false outside its box.
@@ -37,9 +38,10 @@ bool layer_index(LayerParams L, vec3 p, out vec3 x) {
     return all(greaterThanEqual(x, vec3(-0.5))) && all(lessThanEqual(x, L.dims.xyz - 0.5));
 }
 
-// The opacity a (per voxel of layer L's own grid) over one march step: 1 - (1 - a)^(h / d).
-float layer_alpha(LayerParams L, float a) {
-    return a <= 0.0 ? 0.0 : 1.0 - pow(max(1.0 - a, 0.0), frame.extent.w / L.more.x);
+// The opacity a (per voxel of layer L's own grid, given as k = log2(1 - a)) over one march step:
+// 1 - (1 - a)^(h / d) = 1 - 2^(k h / d).
+float layer_alpha(LayerParams L, float k) {
+    return 1.0 - exp2(k * frame.extent.w * L.more.x);
 }
 
 // Overlay L at p: colour (linear) and opacity over the step; nothing outside its box or where it is not shown.
@@ -71,29 +73,39 @@ vec4 labels_sample(LayerParams L, vec3 p) {
     v.z += int(L.dims.w);
     uint id = texelFetch(usampler3D(layer_labels, linear_smp), v, 0).r;
     vec4 c = layer_colour(uint(L.more.y) + id);
-    return vec4(c.rgb, layer_alpha(L, c.a * L.more.z));
+    return vec4(c.rgb, layer_alpha(L, c.a));
 }
 
 // Rule 13's mix at a sample: the base's segment and every layer's step as one, alpha = 1 - prod(1 - alpha_i),
 // colour = sum(alpha_i c_i) / sum(alpha_i). The overlays come first in the table, then the label maps
-// (frame.voxel_world.y and .z of each): a loop per kind, since lavapipe runs both sides of a branch that samples.
+// (frame.voxel_world.y and .z of each). A variant compiles only the loops of the kinds its frame has
+// (LAYER_OVERLAYS, LAYER_LABELS), each tested at its end: lavapipe runs a loop's body once more than it is taken,
+// masked, where the test comes first, and runs a loop of no turns once.
 vec4 mix_layers(vec4 base, vec3 p) {
     float keep = 1.0 - base.a;
     vec3 sum = base.a * base.rgb;
     float weight = base.a;
     uint overlays = uint(frame.voxel_world.y);
-    uint all_layers = overlays + uint(frame.voxel_world.z);
-    for (uint i = 0u; i < overlays; i++) {
+#if defined(LAYER_OVERLAYS)
+    uint i = 0u;
+    do {
         vec4 l = overlay_sample(layers.p[i], p);
         keep *= 1.0 - l.a;
         sum += l.a * l.rgb;
         weight += l.a;
-    }
-    for (uint i = overlays; i < all_layers; i++) {
-        vec4 l = labels_sample(layers.p[i], p);
+        i++;
+    } while (i < overlays);
+#endif
+#if defined(LAYER_LABELS)
+    uint all_layers = overlays + uint(frame.voxel_world.z);
+    uint j = overlays;
+    do {
+        vec4 l = labels_sample(layers.p[j], p);
         keep *= 1.0 - l.a;
         sum += l.a * l.rgb;
         weight += l.a;
-    }
+        j++;
+    } while (j < all_layers);
+#endif
     return weight > 0.0 ? vec4(sum / weight, 1.0 - keep) : vec4(0.0);
 }

@@ -1,6 +1,6 @@
-//! Empty-space skipping in layered frames (rules 2 and 13): which of the base's skip bricks a layer may show
-//! something in. A layered frame leaps only over bricks empty for the base *and* every layer, and takes every
-//! sample elsewhere (no strides: a layer is point-sampled at each one), so the picture is the one without skipping.
+//! Empty-space skipping and strides in layered frames (rules 2 and 13): which of the base's skip bricks a layer may
+//! show something in. Those bricks take every sample (a layer is point-sampled at each) and are never leapt over;
+//! elsewhere the base's own classes hold, since no layer shows anything there.
 //!
 //! Each layer is summarised once, in blocks of [`BLOCK`]³ of its own voxels: an overlay's value range over every
 //! voxel a sample in the block can read (the block and a one-voxel apron), a label map's whether any id there is

@@ -20,8 +20,8 @@ use gpu_allocator::MemoryLocation;
 /// The most layers one frame mixes.
 pub const MAX_LAYERS: usize = 16;
 
-/// Bytes of one layer's entry in the table: `mat4 to_index; vec4 dims, look, more` (shaders/layers.glsl).
-const PARAMS_BYTES: usize = 112;
+/// Bytes of one layer's entry in the table: `mat4 to_index; vec4 dims, look, more, texel` (shaders/layers.glsl).
+const PARAMS_BYTES: usize = 128;
 
 /// One layer to upload: its volume (placement, and values for an overlay) and, for a label map, its dense ids
 /// with the sRGB colour and opacity (0–255) of each dense index.
@@ -52,6 +52,8 @@ pub(super) struct GpuLayers {
     /// where a storage buffer's loads loop over them.
     pub colours: Image,
     placed: Vec<Placed>,
+    /// The size of each kind's texture (overlays, label maps).
+    sizes: [[u32; 3]; 2],
     /// Where each layer may show something (empty-space skipping in layered frames).
     summaries: Vec<Summary>,
     /// The table and colours last written, with what they were written for.
@@ -139,6 +141,7 @@ impl GpuLayers {
                 params,
                 colours,
                 placed,
+                sizes: [values_dims, labels_dims],
                 summaries: inputs.iter().map(summary).collect(),
                 written: None,
             }),
@@ -208,12 +211,19 @@ impl GpuLayers {
             )));
         }
         for (i, (p, style)) in self.placed.iter().zip(styles).enumerate() {
-            let entry = params(p, style, dims, geometry, world_per_mm);
+            let size = self.sizes[p.kind as usize];
+            let entry = params(p, style, (dims, geometry, world_per_mm), size);
             table[i * PARAMS_BYTES / 4..][..PARAMS_BYTES / 4].copy_from_slice(&entry.map(f32::to_bits));
             let c0 = p.colour0 as usize;
             match p.kind {
                 LayerKind::Overlay => colours[c0..c0 + OVERLAY_ENTRIES].copy_from_slice(&style.overlay_table()),
-                LayerKind::Labels => colours[c0..c0 + p.label_colours.len()].copy_from_slice(&p.label_colours),
+                LayerKind::Labels => {
+                    let opacity = layer_opacity(style);
+                    let out = &mut colours[c0..c0 + p.label_colours.len()];
+                    for (o, &[r, g, b, a]) in out.iter_mut().zip(&p.label_colours) {
+                        *o = [r, g, b, log_clear(a * opacity)];
+                    }
+                }
             }
         }
         self.params.write(bytemuck::cast_slice(&table))?;
@@ -362,13 +372,34 @@ fn colour_size(count: u32) -> (u32, u32) {
     (count.min(COLOUR_ROW), count.div_ceil(COLOUR_ROW))
 }
 
+/// A layer's opacity in a frame: none where it is hidden.
+fn layer_opacity(style: &LayerStyle) -> f32 {
+    if style.visible {
+        style.opacity
+    } else {
+        0.0
+    }
+}
+
+/// `log2(1 − a)`, how the shader takes an opacity `a` (rule 13's step correction is then one `exp2`), kept finite.
+fn log_clear(a: f32) -> f32 {
+    (1.0 - a.clamp(0.0, 1.0)).max(1e-30).log2()
+}
+
 /// A layer's table entry (shaders/layers.glsl `LayerParams`): base texture space to the layer's voxel index, its
-/// size and first slice, its look, and its voxel in world units, first colour, opacity and visibility test.
-fn params(p: &Placed, style: &LayerStyle, dims: [u32; 3], base: &Geometry, world_per_mm: f64) -> [f32; 28] {
+/// size and first slice, its look, the reciprocal of its voxel in world units, its first colour, opacity and
+/// visibility test, and the reciprocal of its kind's texture `size`; over the base of `dims` voxels placed by
+/// `base` (`world_per_mm` world units to the millimetre).
+fn params(
+    p: &Placed,
+    style: &LayerStyle,
+    (dims, base, world_per_mm): ([u32; 3], &Geometry, f64),
+    size: [u32; 3],
+) -> [f32; 32] {
     let n = DVec3::from_array(dims.map(f64::from));
     let tex_to_index = DMat4::from_translation(DVec3::splat(-0.5)) * DMat4::from_scale(n);
     let to_index = p.geometry.affine.inverse() * base.affine * tex_to_index;
-    let mut e = [0f32; 28];
+    let mut e = [0f32; 32];
     e[..16].copy_from_slice(&to_index.as_mat4().to_cols_array());
     e[16..20].copy_from_slice(&[p.dims[0] as f32, p.dims[1] as f32, p.dims[2] as f32, p.z0 as f32]);
     let threshold = style.threshold.unwrap_or(0.0) as f32;
@@ -379,8 +410,9 @@ fn params(p: &Placed, style: &LayerStyle, dims: [u32; 3], base: &Geometry, world
         Some(_) => 1.0,
     };
     let voxel_world = (p.geometry.smallest_side() * world_per_mm) as f32;
-    let opacity = if style.visible { style.opacity } else { 0.0 };
-    e[24..28].copy_from_slice(&[voxel_world, p.colour0 as f32, opacity, test]);
+    let opacity = log_clear(layer_opacity(style));
+    e[24..28].copy_from_slice(&[1.0 / voxel_world, p.colour0 as f32, opacity, test]);
+    e[28..31].copy_from_slice(&size.map(|n| 1.0 / n as f32));
     e
 }
 

@@ -74,13 +74,51 @@ pub enum Family {
     Projection,
     /// Iso-surfaces (always shaded).
     Isosurface(Lighting),
-    /// Emission or density with layers mixed in at each sample (rule 13): unshaded (None) or shaded with
-    /// gradients of six samples or the gradient texture (no light grid).
-    Layers(Option<Lighting>),
+    /// Emission or density with layers of these kinds mixed in at each sample (rule 13): unshaded (None) or
+    /// shaded with gradients of six samples or the gradient texture (no light grid).
+    Layers(LayerKinds, Option<Lighting>),
+}
+
+/// The kinds of layer a layered frame mixes: its march has a loop for each kind it holds, and none for the other
+/// (lavapipe runs a loop's body at least once, even when no layer of its kind is held).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LayerKinds {
+    Overlays,
+    Labels,
+    Both,
+}
+
+impl LayerKinds {
+    pub const ALL: [LayerKinds; 3] = [LayerKinds::Overlays, LayerKinds::Labels, LayerKinds::Both];
+
+    /// The kinds of `overlays` overlays and `labels` label maps (at least one of either).
+    pub fn of(overlays: usize, labels: usize) -> LayerKinds {
+        match (overlays > 0, labels > 0) {
+            (true, false) => LayerKinds::Overlays,
+            (false, true) => LayerKinds::Labels,
+            _ => LayerKinds::Both,
+        }
+    }
+
+    fn defines(self) -> &'static [&'static str] {
+        match self {
+            LayerKinds::Overlays => &["LAYER_OVERLAYS"],
+            LayerKinds::Labels => &["LAYER_LABELS"],
+            LayerKinds::Both => &["LAYER_OVERLAYS", "LAYER_LABELS"],
+        }
+    }
+
+    fn suffix(self) -> &'static str {
+        match self {
+            LayerKinds::Overlays => "o",
+            LayerKinds::Labels => "l",
+            LayerKinds::Both => "ol",
+        }
+    }
 }
 
 impl Family {
-    pub const ALL: [Family; 13] = [
+    pub const ALL: [Family; 19] = [
         Family::Emission,
         Family::EmissionShaded(Lighting::ALL[0]),
         Family::EmissionShaded(Lighting::ALL[1]),
@@ -91,16 +129,22 @@ impl Family {
         Family::Isosurface(Lighting::ALL[1]),
         Family::Isosurface(Lighting::ALL[2]),
         Family::Isosurface(Lighting::ALL[3]),
-        Family::Layers(None),
-        Family::Layers(Some(Lighting::ALL[0])),
-        Family::Layers(Some(Lighting::ALL[1])),
+        Family::Layers(LayerKinds::ALL[0], None),
+        Family::Layers(LayerKinds::ALL[0], Some(Lighting::ALL[0])),
+        Family::Layers(LayerKinds::ALL[0], Some(Lighting::ALL[1])),
+        Family::Layers(LayerKinds::ALL[1], None),
+        Family::Layers(LayerKinds::ALL[1], Some(Lighting::ALL[0])),
+        Family::Layers(LayerKinds::ALL[1], Some(Lighting::ALL[1])),
+        Family::Layers(LayerKinds::ALL[2], None),
+        Family::Layers(LayerKinds::ALL[2], Some(Lighting::ALL[0])),
+        Family::Layers(LayerKinds::ALL[2], Some(Lighting::ALL[1])),
     ];
 
     /// Where its gradients and light come from (None: it takes no gradients).
     pub fn lighting(self) -> Option<Lighting> {
         match self {
             Family::EmissionShaded(l) | Family::Isosurface(l) => Some(l),
-            Family::Layers(l) => l,
+            Family::Layers(_, l) => l,
             Family::Emission | Family::Projection => None,
         }
     }
@@ -111,8 +155,8 @@ impl Family {
             Family::EmissionShaded(_) => vec!["FAMILY_EMISSION", "SHADED"],
             Family::Projection => vec!["FAMILY_PROJECTION"],
             Family::Isosurface(_) => vec!["FAMILY_ISOSURFACE"],
-            Family::Layers(None) => vec!["FAMILY_EMISSION", "LAYERS"],
-            Family::Layers(Some(_)) => vec!["FAMILY_EMISSION", "SHADED", "LAYERS"],
+            Family::Layers(kinds, None) => [&["FAMILY_EMISSION", "LAYERS"][..], kinds.defines()].concat(),
+            Family::Layers(kinds, Some(_)) => [&["FAMILY_EMISSION", "SHADED", "LAYERS"][..], kinds.defines()].concat(),
         };
         family
             .into_iter()
@@ -122,12 +166,12 @@ impl Family {
 
     fn suffix(self) -> String {
         let family = match self {
-            Family::Emission => "ea",
-            Family::EmissionShaded(_) => "ea_shaded",
-            Family::Projection => "proj",
-            Family::Isosurface(_) => "iso",
-            Family::Layers(None) => "layers",
-            Family::Layers(Some(_)) => "layers_shaded",
+            Family::Emission => "ea".to_string(),
+            Family::EmissionShaded(_) => "ea_shaded".to_string(),
+            Family::Projection => "proj".to_string(),
+            Family::Isosurface(_) => "iso".to_string(),
+            Family::Layers(kinds, None) => format!("layers_{}", kinds.suffix()),
+            Family::Layers(kinds, Some(_)) => format!("layers_{}_shaded", kinds.suffix()),
         };
         format!("{family}{}", self.lighting().map_or(String::new(), Lighting::suffix))
     }

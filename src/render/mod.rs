@@ -47,7 +47,7 @@ use crate::transfer::function::{bake, Classification};
 use crate::transfer::preintegrate::integral_table;
 use crate::volume::Volume;
 use ash::vk;
-use march_key::{Family, Lighting, MarchKey, Sampling, Setup};
+use march_key::{Family, LayerKinds, Lighting, MarchKey, Sampling, Setup};
 pub use positions::position_bytes_per_pixel;
 use positions::PositionTargets;
 
@@ -95,7 +95,7 @@ impl OccupancyKey {
             iso: s.compositing.iso_value,
             skip_empty: s.sampling.skip_empty,
             layers: s.layers.clone(),
-            strides: if s.sampling.max_stride > 1 && s.layers.is_empty() {
+            strides: if s.sampling.max_stride > 1 {
                 (
                     s.sampling.max_stride,
                     s.sampling.step_length.to_bits(),
@@ -379,7 +379,13 @@ impl Renderer {
         let shaded = s.lighting.shading.is_some() || s.lighting.gradient_opacity.is_some();
         let family = match s.compositing.mode {
             M::Emission | M::Density if !s.layers.is_empty() => {
-                Family::Layers(shaded.then_some(Lighting::new(lighting.gradient_texture, false)))
+                let labels = s
+                    .layers
+                    .iter()
+                    .filter(|l| l.kind == crate::scene::layers::LayerKind::Labels)
+                    .count();
+                let kinds = LayerKinds::of(s.layers.len() - labels, labels);
+                Family::Layers(kinds, shaded.then_some(Lighting::new(lighting.gradient_texture, false)))
             }
             M::Emission | M::Density if s.lighting.shading.is_some() || s.lighting.gradient_opacity.is_some() => {
                 Family::EmissionShaded(lighting)
@@ -456,14 +462,11 @@ impl Renderer {
             if let Some(vol) = &mut self.volume {
                 // Strides follow the step the march takes (the finest level shown), and none is taken where a
                 // skip brick holds fewer than 8 of its samples.
-                let mut stepped = vol.info.stepped(s);
-                if !s.layers.is_empty() {
-                    // Rule 13: every sample of a layered frame is taken where it is not leapt over.
-                    stepped.sampling.max_stride = 1;
-                }
+                let stepped = vol.info.stepped(s);
                 let (dims, geometry, brick) = (vol.info.dims, vol.info.geometry, skip::BRICK << vol.info.held);
                 let grid = vol.skip_grid();
                 let mut levels = grid.classify(&self.table.entries, &stepped);
+                // Rule 13: where a layer may show something, every sample is taken.
                 if let (Some(layers), false) = (&self.layers, s.layers.is_empty()) {
                     layers.mark(&s.layers, &mut levels, grid.bricks, brick, (&geometry, dims));
                 }

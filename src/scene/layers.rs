@@ -20,9 +20,12 @@
 //!   c₀, opacity α₀) and each layer's (cᵢ, αᵢ) make one: `α = 1 − Π(1 − αᵢ)`, `c = Σαᵢcᵢ / Σαᵢ` (nothing where
 //!   Σαᵢ = 0), composited by rule 7. So depth order is right by construction: what is nearer on the ray is
 //!   composited first, whichever volume holds it. The base alone (no layer shown there) is rule 6 unchanged.
-//! - **No strides** (rule 2) in a layered frame: every sample is taken (a layer is point-sampled at each). Empty-space
-//!   skipping leaps only over bricks where neither the base nor any layer can show anything, which changes no
-//!   pixel (`render/layer_bricks.rs`).
+//! - **Strides and skipping** (rule 2) near a layer: each layer is cut into blocks of 4³ of its voxels; a block
+//!   *may show* where a label there (its voxels and a one-voxel apron) is shown, or an overlay's value range there
+//!   meets its threshold (`max ≥ T`, `max |v| ≥ T` signed) or window. The base's bricks that the box of such a block
+//!   (index `4b − 1` to `min(4b + 4, dim)` per axis, mapped by its corners into the base's index space) touches take
+//!   every sample and are never empty; elsewhere rule 2 holds as for the base alone, since no layer shows anything
+//!   there (`render/layer_bricks.rs`).
 //! - Layers mix in emission and density modes; other modes refuse layers.
 
 use crate::transfer::colormap::Colormap;

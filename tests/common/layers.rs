@@ -112,6 +112,70 @@ impl RefLayer {
     }
 }
 
+/// Rule 13's blocks for strides and skipping: 4³ of a layer's voxels.
+const BLOCK: usize = 4;
+
+impl RefLayer {
+    /// Rule 13's strides near a layer: per block that may show something (a shown label, or an overlay value range
+    /// meeting the threshold or window, over the block's voxels and a one-voxel apron), the 8 corners in
+    /// millimetres of its box `4b − 1 … min(4b + 4, dim)` of index space.
+    pub fn showing_boxes_mm(&self, style: &LayerStyle) -> Vec<[DVec3; 8]> {
+        if !style.visible || style.opacity <= 0.0 {
+            return Vec::new();
+        }
+        let to_mm = self.from_mm.inverse();
+        let blocks = self.dims.map(|d| d.div_ceil(BLOCK));
+        let mut boxes = Vec::new();
+        for bz in 0..blocks[2] {
+            for by in 0..blocks[1] {
+                for bx in 0..blocks[0] {
+                    let b = [bx, by, bz];
+                    let reach =
+                        |a: usize| (b[a] * BLOCK).saturating_sub(1)..=((b[a] + 1) * BLOCK).min(self.dims[a] - 1);
+                    let mut values = Vec::new();
+                    for z in reach(2) {
+                        for y in reach(1) {
+                            for x in reach(0) {
+                                values.push(self.at(x, y, z));
+                            }
+                        }
+                    }
+                    if !self.block_may_show(&values, style) {
+                        continue;
+                    }
+                    let lo = DVec3::from_array(b.map(|k| (k * BLOCK) as f64 - 1.0));
+                    let n = DVec3::from_array(self.dims.map(|d| d as f64));
+                    let hi = (lo + (BLOCK + 1) as f64).min(n);
+                    boxes.push(std::array::from_fn(|c| {
+                        let pick = |bit: usize, a: usize| if c & bit == 0 { lo[a] } else { hi[a] };
+                        to_mm.transform_point3(DVec3::new(pick(1, 0), pick(2, 1), pick(4, 2)))
+                    }));
+                }
+            }
+        }
+        boxes
+    }
+
+    fn block_may_show(&self, values: &[f64], style: &LayerStyle) -> bool {
+        if style.kind == LayerKind::Labels {
+            return values
+                .iter()
+                .any(|&id| id != 0.0 && self.colours.as_ref().is_some_and(|f| f(id as u32)[3] > 0));
+        }
+        let finite: Vec<f64> = values.iter().copied().filter(|v| !v.is_nan()).collect();
+        let (lo, hi) = finite
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        let top = finite.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        match style.threshold {
+            _ if finite.is_empty() => false,
+            Some(t) if style.signed => top >= t,
+            Some(t) => hi >= t,
+            None => hi >= f64::from(style.window[0]) && lo <= f64::from(style.window[1]),
+        }
+    }
+}
+
 /// Rule 13's mix at a sample: the base's segment `(rgb, alpha)` and each layer's step at millimetre point `mm`,
 /// for a march step of `step` world units (`world_per_mm` world units per millimetre).
 pub fn mix(

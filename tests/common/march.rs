@@ -85,13 +85,20 @@ impl<'a> Frame<'a> {
             )),
             _ => None,
         };
-        // Rule 13: a layered frame takes every sample.
-        let strides = segments.as_ref().filter(|_| s.layers.is_empty()).and_then(|segments| {
+        let mut strides = segments.as_ref().and_then(|segments| {
             let ranges = volume
                 .brick_ranges
                 .get_or_init(|| BrickRanges::new(&volume.values, volume.dims));
             Strides::new(ranges, volume.dims, s, segments)
         });
+        // Rule 13: every sample is taken where a layer may show something.
+        if let Some(strides) = &mut strides {
+            for (layer, style) in volume.layers.iter().zip(&s.layers) {
+                for corners in layer.showing_boxes_mm(style) {
+                    strides.take_every_sample(&corners.map(|mm| volume.mm_to_index(mm)));
+                }
+            }
+        }
         let mut frame = Frame {
             volume,
             camera: CameraBasis::new(s),

@@ -357,6 +357,11 @@ impl Reference {
     }
 
     /// The millimetre point of texture point `tex` (rule 13's layers are placed from it).
+    /// Millimetres to the base's voxel index (centres at integers).
+    pub(crate) fn mm_to_index(&self, mm: DVec3) -> DVec3 {
+        self.affine.inverse().transform_point3(mm)
+    }
+
     pub(crate) fn mm_at(&self, tex: DVec3) -> DVec3 {
         super::layers::base_mm(self.affine, self.dims, tex)
     }

@@ -152,6 +152,31 @@ impl Strides {
         })
     }
 
+    /// Rule 13: every brick that the box with corners `corners` (base voxel index, centres at integers) touches
+    /// takes every sample.
+    pub fn take_every_sample(&mut self, corners: &[DVec3; 8]) {
+        let (lo, hi) = corners
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), &p| {
+                (a.min(p), b.max(p))
+            });
+        let brick = |v: f64| ((v + 0.5) / BRICK as f64).floor();
+        if (0..3).any(|a| brick(lo[a]) > (self.bricks[a] - 1) as f64 || brick(hi[a]) < 0.0) {
+            return;
+        }
+        let span = |a: usize| {
+            let last = (self.bricks[a] - 1) as f64;
+            (brick(lo[a]).max(0.0) as usize)..=(brick(hi[a]).min(last) as usize)
+        };
+        for z in span(2) {
+            for y in span(1) {
+                for x in span(0) {
+                    self.stride[x + self.bricks[0] * (y + self.bricks[1] * z)] = 1;
+                }
+            }
+        }
+    }
+
     /// The stride of the brick holding texture point `tex` (1 in empty bricks, whose samples add nothing).
     pub fn at(&self, tex: DVec3) -> u64 {
         let brick = |a: usize| {

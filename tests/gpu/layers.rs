@@ -162,15 +162,20 @@ fn a_signed_overlay_and_sparse_labels_on_their_own_grids_match_the_reference() {
     let gpu = validated_gpu();
     let mut headless = Headless::new(&gpu).expect("renderer");
     let mut judge = Judge::default();
-    // A faint base, a signed overlay on a shifted 2 mm grid, and a label map of 4 mm voxels with sparse ids.
-    let base = volume("base", BASE, 1.0, 0.0, |p| (0.3 - p.length()).max(0.0) as f32);
+    // A faint base, a signed overlay on a shifted 2 mm grid and a label map with sparse ids on another, both over
+    // a part of the base only: where they show nothing, the base keeps its strides.
+    let base = volume("base", BASE, 1.0, 0.0, |p| soft(p.abs().max_element(), 0.3, 0.05));
     let z = volume("z", LAYER, 2.0, 1.5, |p| {
-        (8.0 * (p.x * 9.0).sin() * (0.4 - p.length()).max(0.0)) as f32
+        if p.x > 0.1 {
+            (8.0 * (p.y * 9.0).sin() * (0.45 - p.length()).max(0.0)) as f32
+        } else {
+            0.0
+        }
     });
-    let ids = volume("ids", 8, 4.0, 1.5, |p| {
-        if p.y > 0.1 {
+    let ids = volume("ids", LAYER, 2.0, 0.75, |p| {
+        if p.y > 0.3 {
             70_000.0
-        } else if p.x > 0.0 && p.z > -0.2 {
+        } else if p.x > 0.35 && p.z > 0.2 {
             5.0
         } else {
             0.0
@@ -181,9 +186,11 @@ fn a_signed_overlay_and_sparse_labels_on_their_own_grids_match_the_reference() {
     let table = LabelTable::default();
     let rgba: Vec<[u8; 4]> = map.ids.iter().map(|&id| table.rgba(id)).collect();
     let mut s = view(&base);
-    s.colour.step_alpha = 0.2;
+    s.colour.step_alpha = 0.03;
     s.colour.window = [0.05, 1.0];
     s.camera = Camera::orbit(30.0, 20.0, 2.2, Vec3::ZERO);
+    // Rule 2's strides in the faint base, and every sample where a layer may show something (rule 13).
+    (s.sampling.step_length, s.sampling.max_stride) = (0.4, 4);
     let mut zs = LayerStyle::overlay([-8.0, 8.0], Some(0.6));
     zs.opacity = 0.4;
     let mut ls = LayerStyle::labels();
@@ -204,13 +211,13 @@ fn a_signed_overlay_and_sparse_labels_on_their_own_grids_match_the_reference() {
         RefLayer::overlay(&z),
         RefLayer::labels(&ids, move |id| table.rgba(id)),
     ]);
-    judge.against(
-        "layers",
-        "signed-and-labels".into(),
-        &actual,
-        &reference.render_full(&s),
-        &s,
-        REFERENCE,
-    );
+    let expected = reference.render_full(&s);
+    // The strides are in play: fewer samples than with every one taken.
+    let mut every = s.clone();
+    every.sampling.max_stride = 1;
+    let (strided, all) = (expected.stats.samples, reference.render_full(&every).stats.samples);
+    assert!(strided < all, "the base takes strides: {strided} of {all} samples");
+    eprintln!("strides take {strided} of {all} samples");
+    judge.against("layers", "signed-and-labels".into(), &actual, &expected, &s, REFERENCE);
     finish(gpu, headless, judge);
 }
