@@ -11,6 +11,7 @@
 //! - each configuration's error against the same scene rendered converged ([`crate::measure::fidelity`]).
 
 mod counter;
+mod layered;
 mod report;
 mod sample_only;
 mod scenes;
@@ -61,6 +62,13 @@ fn load_scene_volume(scene: &Scene, opts: &BenchOptions) -> Result<Result<Volume
                 ..Default::default()
             };
             Ok(Ok(formats::load_raw(&path, &raw)?))
+        }
+        Source::Native { file } => {
+            let path = layered::native_path(&opts.data_dir, file);
+            if !path.is_file() {
+                return Ok(Err(format!("{} not found", path.display())));
+            }
+            Ok(Ok(Volume::open(&path)?))
         }
         Source::VtkHelix => match &opts.vtk_raw {
             Some(path) => {
@@ -205,9 +213,11 @@ struct TimedFrames {
 impl Bench<'_> {
     /// Every size × shading × method of `scene`; a scene whose file is missing is logged and listed as skipped.
     fn scene(&mut self, scene: &Scene) -> Result<(), BenchError> {
-        let volume = match load_scene_volume(scene, self.opts)? {
-            Ok(v) => v,
-            Err(reason) => {
+        let loaded = load_scene_volume(scene, self.opts)?;
+        let layers = layered::load(scene.layers, &self.opts.data_dir)?;
+        let (volume, layers) = match (loaded, layers) {
+            (Ok(v), Ok(l)) => (v, l),
+            (Err(reason), _) | (_, Err(reason)) => {
                 (self.log)(&format!("{}: skipped: {reason}", scene.name));
                 self.report.skipped.push(Skipped {
                     scene: scene.name.into(),
@@ -217,6 +227,7 @@ impl Bench<'_> {
             }
         };
         self.headless.set_volume(self.gpu, &volume)?;
+        layers.upload(self.gpu, &mut self.headless.renderer)?;
         let loaded = self.loaded(scene, volume);
         let opts = self.opts;
         let sizes = scene
@@ -227,6 +238,7 @@ impl Bench<'_> {
         for size in sizes {
             let mut base = RenderSettings::new(size, size, loaded.volume.extent());
             (scene.configure)(&mut base, &loaded.volume);
+            base.layers = layers.styles.clone();
             let shadings = scene
                 .shadings
                 .iter()

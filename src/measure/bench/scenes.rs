@@ -1,6 +1,7 @@
 //! The bench's scene table: which volumes, transfer functions, cameras, sizes and shadings are timed, and the
 //! `vtk-helix` scene that matches `../shared/tools/vtk_bench.py`.
 
+use super::layered::{BenchLayer, AAL, ALONE, OVER_T1, T1, ZMAP};
 use crate::scene::camera::Camera;
 use crate::scene::settings::{self, RenderSettings};
 use crate::transfer::Colormap;
@@ -18,6 +19,10 @@ pub enum Source {
     DataFile {
         file: &'static str,
         spacing: [f32; 3],
+    },
+    /// A file in the `native/` folder beside the data folder, opened with its placement (layered scenes).
+    Native {
+        file: &'static str,
     },
     /// `../shared/tools/make_volume.py`'s helix: the file given with `--vtk-raw`, else the same field generated
     /// here by [`vtk_helix_volume`] (a port of the script; see there for how close it is).
@@ -71,6 +76,8 @@ pub struct Scene {
     pub configure: fn(&mut RenderSettings, &Volume),
     pub sizes: &'static [u32],
     pub shadings: &'static [Shading],
+    /// Rule 13's layers over the volume (layered.rs).
+    pub layers: &'static [BenchLayer],
 }
 
 const FULL_SIZES: &[u32] = &[512, 1024];
@@ -88,6 +95,7 @@ pub fn scenes() -> Vec<Scene> {
             configure: |_, _| {},
             sizes: FULL_SIZES,
             shadings: LIT_SHADINGS,
+            layers: &[],
         },
         Scene {
             name: "dense",
@@ -103,6 +111,7 @@ pub fn scenes() -> Vec<Scene> {
             },
             sizes: FULL_SIZES,
             shadings: SHADINGS,
+            layers: &[],
         },
         Scene {
             name: "ct-head",
@@ -122,6 +131,7 @@ pub fn scenes() -> Vec<Scene> {
             },
             sizes: FULL_SIZES,
             shadings: LIT_SHADINGS,
+            layers: &[],
         },
         Scene {
             name: "mri-brain",
@@ -137,6 +147,7 @@ pub fn scenes() -> Vec<Scene> {
             },
             sizes: FULL_SIZES,
             shadings: SHADINGS,
+            layers: &[],
         },
         Scene {
             name: "vtk-helix",
@@ -146,8 +157,39 @@ pub fn scenes() -> Vec<Scene> {
             configure: configure_vtk_helix,
             sizes: FULL_SIZES,
             shadings: SHADINGS,
+            layers: &[],
         },
+        layered(ALONE, "the colin27 T1 NIfTI alone, as the layered scenes show it", &[]),
+        layered(
+            OVER_T1[0],
+            "the T1 with the motor z-map (3 mm) over it, |z| ≥ 3",
+            &[ZMAP],
+        ),
+        layered(
+            OVER_T1[1],
+            "the T1 with the AAL atlas (1 mm, 116 labels) over it",
+            &[AAL],
+        ),
+        layered(OVER_T1[2], "the T1 with the z-map and the AAL atlas", &[ZMAP, AAL]),
     ]
+}
+
+/// A layered scene (rule 13) at 512², unshaded: the T1 as `mri-brain` shows it, with `layers`; its ratio to
+/// `mri-t1` in one run is a layer's cost.
+fn layered(name: &'static str, about: &'static str, layers: &'static [BenchLayer]) -> Scene {
+    Scene {
+        name,
+        about,
+        source: Source::Native { file: T1 },
+        configure: |s, _| {
+            s.colour.window = [0.2, 1.0];
+            s.colour.colormap = Colormap::Grayscale;
+            s.colour.step_alpha = 0.05;
+        },
+        sizes: &[512],
+        shadings: &[Shading::Off],
+        layers,
+    }
 }
 
 /// `--quick` (CI smoke mode): a tiny helix, both ray setups, a few seconds in all.
@@ -162,6 +204,7 @@ pub fn quick_scenes() -> Vec<Scene> {
         configure: |_, _| {},
         sizes: &[64],
         shadings: SHADINGS,
+        layers: &[],
     }]
 }
 
