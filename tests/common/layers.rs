@@ -171,7 +171,7 @@ impl RefLayer {
             _ if finite.is_empty() => false,
             Some(t) if style.signed => top >= t,
             Some(t) => hi >= t,
-            None => hi >= f64::from(style.window[0]) && lo <= f64::from(style.window[1]),
+            None => hi >= style.window[0] && lo <= style.window[1],
         }
     }
 }
