@@ -58,8 +58,8 @@ BUGS = [
     ("jitter-hash", "the shader's jitter hash uses another constant than the rule",
      [("shaders/march.glsl", "seed * 26699u", "seed * 26701u")]),
     ("early-termination-ignored", "rays never stop early",
-     [("shaders/march.glsl", "        if (opacity >= frame.alpha.z) {\n            break;\n        }\n    }\n    // The last segment",
-       "        if (opacity >= 1.0) {\n            break;\n        }\n    }\n    // The last segment")]),
+     [("shaders/march.glsl", "        if (opacity >= frame.alpha.z) {\n            done = true;",
+       "        if (opacity >= 1.0) {\n            done = true;")]),
     ("density-step-ignored", "the density model forgets the segment length",
      [("src/transfer/preintegrate.rs", "(sigma * steps).min(1.0)", "sigma.min(1.0)"),
       ("shaders/march.glsl", "min(1.0, sigma * seg_steps)", "min(1.0, sigma)")]),
@@ -402,15 +402,23 @@ BUGS = [
      [("src/formats/format.rs", "let mut steps = if self.interleaved {", "let mut steps = if !self.interleaved {")]),
     ("layers-blended-whole", "layers are composited along the ray on their own and blended whole over the base, "
      "as napari and neuroglancer do: depth is lost",
-     [("shaders/march.glsl", "            c = mix_layers(c, ray.a + ray.dir * t);",
-       "            vec4 l = mix_layers(vec4(0.0), ray.a + ray.dir * t);\n"
-       "            composite(lcolor, lopacity, l.rgb, l.a);"),
-      ("shaders/march.glsl", "vec4 march_emission(WalkRay ray, vec3 light) {\n    vec3 color = vec3(0.0);",
-       "vec4 march_emission(WalkRay ray, vec3 light) {\n    vec3 lcolor = vec3(0.0);\n    float lopacity = 0.0;\n"
-       "    vec3 color = vec3(0.0);"),
-      ("shaders/march.glsl", "    return share_or_finish(color, opacity, taken);\n}\n#endif",
-       "    color = lcolor + (1.0 - lopacity) * color;\n    opacity = lopacity + (1.0 - lopacity) * opacity;\n"
-       "    return share_or_finish(color, opacity, taken);\n}\n#endif")]),
+     [("shaders/march.glsl", "                c = mix_layers(c, ray.a + ray.dir * t);",
+       "                vec4 l = mix_layers(vec4(0.0), ray.a + ray.dir * t);\n"
+       "                composite(lcolor, lopacity, l.rgb, l.a);"),
+      ("shaders/march.glsl", "    Walk w = walk;\n    for (;;) {",
+       "    Walk w = walk;\n    vec3 lcolor = m.lcolor;\n    float lopacity = m.lopacity;\n    for (;;) {"),
+      ("shaders/march.glsl", "    m = Absorb(color, opacity, t_prev, v_prev, i_prev, taken);",
+       "    m = Absorb(color, opacity, t_prev, v_prev, i_prev, taken, lcolor, lopacity);"),
+      ("shaders/march.glsl", "    uint taken;\n};", "    uint taken;\n    vec3 lcolor;\n    float lopacity;\n};"),
+      ("shaders/march.glsl", "v0, i0, 0u);", "v0, i0, 0u, vec3(0.0), 0.0);"),
+      ("shaders/march.glsl", "    return share_or_finish(m.color, m.opacity, m.taken);\n}\n#endif",
+       "    m.color = m.lcolor + (1.0 - m.lopacity) * m.color;\n"
+       "    m.opacity = m.lopacity + (1.0 - m.lopacity) * m.opacity;\n"
+       "    return share_or_finish(m.color, m.opacity, m.taken);\n}\n#endif")]),
+    ("layer-span-short", "a ray mixes the layers only up to where it enters their span's box, not across it: layers "
+     "vanish",
+     [("shaders/layers.glsl", "    float t_out = min(min(far.x, far.y), far.z);",
+       "    float t_out = max(max(near.x, near.y), near.z);")]),
     ("stand-in-range-narrowed", "a volume reduced by --max-dim normalises by its means' narrower range: the window moves",
      [("src/pyramid/max_dim.rs", "(volume.range, volume.stored_range) = ranges;", "let _ = ranges;")]),
 ]

@@ -14,6 +14,8 @@ struct LayerParams {
 // How many there are: frame.voxel_world.y overlays, then .z label maps. A uniform buffer: on lavapipe a storage buffer's loads loop over the
 // lanes (render/layers.rs MAX_LAYERS).
 layout(std140, set = 1, binding = 11) uniform Layers {
+    vec4 span_lo;   // xyz: the box (base texture space) outside which no layer shows anything; w: 1, or 0 where
+    vec4 span_hi;   // none shows anything anywhere (render/layers.rs GpuLayers::span)
     LayerParams p[16];
 } layers;
 // Per overlay 256 entries over its window (linear rgb); per label map one per dense id (linear rgb and
@@ -74,6 +76,19 @@ vec4 labels_sample(LayerParams L, vec3 p) {
     uint id = texelFetch(usampler3D(layer_labels, linear_smp), v, 0).r;
     vec4 c = layer_colour(uint(L.more.y) + id);
     return vec4(c.rgb, layer_alpha(L, c.a));
+}
+
+// Where ray r may meet something a layer shows: [t_in, t_out) of its path through the span box, or nothing
+// (both past any ray's end). The march mixes layers only there (march.glsl march_emission).
+vec2 layer_span(WalkRay r) {
+    vec3 t0 = (layers.span_lo.xyz - r.a) * r.inv_dir;
+    vec3 t1 = (layers.span_hi.xyz - r.a) * r.inv_dir;
+    vec3 near = min(t0, t1);
+    vec3 far = max(t0, t1);
+    float t_in = max(max(near.x, near.y), near.z);
+    float t_out = min(min(far.x, far.y), far.z);
+    bool meets = layers.span_lo.w > 0.5 && t_in <= t_out;
+    return meets ? vec2(t_in, t_out) : vec2(3.0e38);
 }
 
 // Rule 13's mix at a sample: the base's segment and every layer's step as one, alpha = 1 - prod(1 - alpha_i),

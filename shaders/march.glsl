@@ -266,51 +266,105 @@ vec4 segment_to(WalkRay ray, Brick b, float t, vec3 light, bool density_model, i
     return c;
 }
 
-// Emission-absorption and the density-factor model, pre-integrated (rule 6): the ray from its start to its end is
-// composited segment by segment between consecutive points: the start, the samples, the end.
-vec4 march_emission(WalkRay ray, vec3 light) {
-    vec3 color = vec3(0.0);
-    float opacity = 0.0;
+// What the emission march carries from point to point: the composite so far, the segment's start (rule 6: the
+// ray's start, then each point taken) and the samples composited.
+struct Absorb {
+    vec3 color;
+    float opacity;
+    float t_prev;
+    float v_prev;
+    vec4 i_prev;
+    uint taken;
+};
+
+// The march's points before `t_stop`, each segment composited; with `with_layers` (a constant at each call, so a
+// loop holds the layers' code or not at all), rule 13's layers mixed in at each sample. True where the ray is
+// done (its end or early termination); false at the first point at or past t_stop, which the walk yields again.
+bool absorb_until(WalkRay ray, inout Walk walk, inout Absorb m, vec3 light, float t_stop, bool with_layers) {
     bool density_model = frame.flags.x == MODE_DENSITY;
-    // The segment's start (rule 6): the ray's start, then each point taken.
-    float t_prev = 0.0;
-    float v_prev = sample_value(ray.a);
-    vec4 unused;
-    vec4 i_prev = integral_at(v_prev, unused);
-    uint taken = 0u;
-    Walk w = walk_start();
+    bool done = false;
+    // Plain locals for the loop: naga 30's SPIR-V writer panics on a struct's fields passed as inout arguments.
+    vec3 color = m.color;
+    float opacity = m.opacity;
+    float t_prev = m.t_prev;
+    float v_prev = m.v_prev;
+    vec4 i_prev = m.i_prev;
+    uint taken = m.taken;
+    Walk w = walk;
     for (;;) {
+        Walk before = w;
         float t;
         int step = walk_step(ray, w, t);
         if (step == WALK_END) {
+            done = true;
             break;
         }
         if (step != WALK_SAMPLE && step != WALK_RESAMPLE) {
             continue;
+        }
+        if (t >= t_stop) {
+            w = before;
+            break;
         }
         // A resample only starts the next segment: the segment to it is not composited.
         vec4 c = segment_to(ray, w.brick, t, light, density_model, t_prev, v_prev, i_prev);
         // Rule 11: a segment belongs to the rank owning its end.
         if (step == WALK_SAMPLE && owned(ray.a + ray.dir * t)) {
 #if defined(LAYERS)
-            // Rule 13: the layers at this sample mix into its segment.
-            c = mix_layers(c, ray.a + ray.dir * t);
+            if (with_layers) {
+                // Rule 13: the layers at this sample mix into its segment.
+                c = mix_layers(c, ray.a + ray.dir * t);
+            }
 #endif
             taken += 1u;
             composite(color, opacity, c.rgb, c.a);
         }
         if (opacity >= frame.alpha.z) {
+            done = true;
             break;
         }
     }
+    m = Absorb(color, opacity, t_prev, v_prev, i_prev, taken);
+    walk = w;
+    return done;
+}
+
+// Emission-absorption and the density-factor model, pre-integrated (rule 6): the ray from its start to its end is
+// composited segment by segment between consecutive points: the start, the samples, the end. With layers, only
+// the part of the ray that meets their span runs their code (lavapipe runs a loop's code for every lane).
+vec4 march_emission(WalkRay ray, vec3 light) {
+    float v0 = sample_value(ray.a);
+    vec4 unused;
+    vec4 i0 = integral_at(v0, unused);
+    Absorb m = Absorb(vec3(0.0), 0.0, 0.0, v0, i0, 0u);
+    Walk w = walk_start();
+    float ALL = 3.0e38;
+#if defined(LAYERS)
+    vec2 span = layer_span(ray);
+    if (!absorb_until(ray, w, m, light, span.x, false)) {
+        if (!absorb_until(ray, w, m, light, span.y, true)) {
+            absorb_until(ray, w, m, light, ALL, false);
+        }
+    }
+#else
+    absorb_until(ray, w, m, light, ALL, false);
+#endif
     // The last segment, from the last point to the ray's end, where the march got there through bricks that hold
     // something (not by early termination; past a leap everything left is invisible).
     vec3 end = ray.a + ray.dir * ray.len;
-    if (w.reached_end && w.walked && opacity < frame.alpha.z && owned(end)) {
+    if (w.reached_end && w.walked && m.opacity < frame.alpha.z && owned(end)) {
+        bool density_model = frame.flags.x == MODE_DENSITY;
+        float t_prev = m.t_prev;
+        float v_prev = m.v_prev;
+        vec4 i_prev = m.i_prev;
         vec4 c = segment_to(ray, brick_at(end), ray.len, light, density_model, t_prev, v_prev, i_prev);
+        vec3 color = m.color;
+        float opacity = m.opacity;
         composite(color, opacity, c.rgb, c.a);
+        m.color = color;
+        m.opacity = opacity;
     }
-    return share_or_finish(color, opacity, taken);
+    return share_or_finish(m.color, m.opacity, m.taken);
 }
 #endif
 

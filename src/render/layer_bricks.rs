@@ -70,19 +70,36 @@ impl Summary {
         brick: u32,
         base: (&Geometry, [u32; 3]),
     ) {
-        if !style.visible || style.opacity <= 0.0 {
-            return;
+        for (a, b) in self.boxes_in_base(style, base.0) {
+            mark_box(levels, bricks, brick, (a, b));
         }
-        let to_base = base.0.affine.inverse() * self.geometry.affine;
-        for (b, bz, by, bx) in self.block_indices() {
-            if !self.may_show(b, style) {
-                continue;
-            }
-            // The block's voxels and a one-voxel apron, as boxes of the layer's index space.
-            let lo = DVec3::new(bx as f64, by as f64, bz as f64) * f64::from(BLOCK) - 1.0;
-            let hi = (lo + f64::from(BLOCK) + 1.0).min(DVec3::from_array(self.dims.map(f64::from)));
-            mark_box(levels, bricks, brick, to_base, (lo, hi));
-        }
+    }
+
+    /// The box in the base's texture space (the base `dims` voxels placed by `base`) holding every point where
+    /// this layer, styled `style`, may show something; None where it shows nothing.
+    pub(super) fn bounds(&self, style: &LayerStyle, base: (&Geometry, [u32; 3])) -> Option<(DVec3, DVec3)> {
+        let n = DVec3::from_array(base.1.map(f64::from));
+        self.boxes_in_base(style, base.0)
+            .map(|(a, b)| ((a + 0.5) / n, (b + 0.5) / n))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+    }
+
+    /// Per block that may show something, the box in the base's voxel index space (through `base`'s placement)
+    /// around the box of the block's voxels and a one-voxel apron: every point whose sample reads one of them.
+    fn boxes_in_base<'a>(
+        &'a self,
+        style: &'a LayerStyle,
+        base: &Geometry,
+    ) -> impl Iterator<Item = (DVec3, DVec3)> + 'a {
+        let shown = style.visible && style.opacity > 0.0;
+        let to_base = base.affine.inverse() * self.geometry.affine;
+        self.block_indices()
+            .filter(move |&(b, ..)| shown && self.may_show(b, style))
+            .map(move |(_, bz, by, bx)| {
+                let lo = DVec3::new(bx as f64, by as f64, bz as f64) * f64::from(BLOCK) - 1.0;
+                let hi = (lo + f64::from(BLOCK) + 1.0).min(DVec3::from_array(self.dims.map(f64::from)));
+                box_through(to_base, (lo, hi))
+            })
     }
 
     fn may_show(&self, b: usize, style: &LayerStyle) -> bool {
@@ -175,9 +192,8 @@ impl Generic<bool> {
     }
 }
 
-/// Marks the base bricks touched by the box [lo, hi] of a layer's index space (through `to_base` into the base's
-/// index space, where voxel centres are integers and brick k holds voxels k·brick … (k + 1)·brick − 1).
-fn mark_box(levels: &mut [u8], bricks: [u32; 3], brick: u32, to_base: DMat4, (lo, hi): (DVec3, DVec3)) {
+/// The box around the image of the box [lo, hi] through `to`.
+fn box_through(to: DMat4, (lo, hi): (DVec3, DVec3)) -> (DVec3, DVec3) {
     let corners = (0..8).map(|c| {
         DVec3::new(
             if c & 1 == 0 { lo.x } else { hi.x },
@@ -186,9 +202,15 @@ fn mark_box(levels: &mut [u8], bricks: [u32; 3], brick: u32, to_base: DMat4, (lo
         )
     });
     let (mut a, mut b) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for p in corners.map(|c| to_base.transform_point3(c)) {
+    for p in corners.map(|c| to.transform_point3(c)) {
         (a, b) = (a.min(p), b.max(p));
     }
+    (a, b)
+}
+
+/// Marks the base bricks touched by the box [a, b] of the base's index space (voxel centres are integers, and
+/// brick k holds voxels k·brick … (k + 1)·brick − 1).
+fn mark_box(levels: &mut [u8], bricks: [u32; 3], brick: u32, (a, b): (DVec3, DVec3)) {
     let range = |axis: usize| {
         let n = i64::from(bricks[axis]);
         let first = ((a[axis] + 0.5) / f64::from(brick)).floor() as i64;

@@ -23,6 +23,9 @@ pub const MAX_LAYERS: usize = 16;
 /// Bytes of one layer's entry in the table: `mat4 to_index; vec4 dims, look, more, texel` (shaders/layers.glsl).
 const PARAMS_BYTES: usize = 128;
 
+/// Bytes of the table's header, before the entries: `vec4 span_lo, span_hi` (shaders/layers.glsl `layer_span`).
+const HEADER_BYTES: usize = 32;
+
 /// One layer to upload: its volume (placement, and values for an overlay) and, for a label map, its dense ids
 /// with the sRGB colour and opacity (0–255) of each dense index.
 pub struct LayerInput<'a> {
@@ -106,7 +109,7 @@ impl GpuLayers {
                     }
                 },
             )?);
-            let params_bytes = (MAX_LAYERS * PARAMS_BYTES) as u64;
+            let params_bytes = (HEADER_BYTES + MAX_LAYERS * PARAMS_BYTES) as u64;
             made.params = Some(Buffer::new(
                 gpu,
                 params_bytes,
@@ -194,7 +197,8 @@ impl GpuLayers {
                 self.placed.len()
             )));
         }
-        let mut table = vec![0u32; MAX_LAYERS * PARAMS_BYTES / 4];
+        let mut table = vec![0u32; (HEADER_BYTES + MAX_LAYERS * PARAMS_BYTES) / 4];
+        table[..HEADER_BYTES / 4].copy_from_slice(&self.span(styles, dims, geometry).map(f32::to_bits));
         let (w, h) = colour_size(self.colour_count() as u32);
         let mut colours = vec![[0f32; 4]; (w * h) as usize];
         let world_per_mm = geometry.world_per_mm(dims);
@@ -213,7 +217,8 @@ impl GpuLayers {
         for (i, (p, style)) in self.placed.iter().zip(styles).enumerate() {
             let size = self.sizes[p.kind as usize];
             let entry = params(p, style, (dims, geometry, world_per_mm), size);
-            table[i * PARAMS_BYTES / 4..][..PARAMS_BYTES / 4].copy_from_slice(&entry.map(f32::to_bits));
+            table[(HEADER_BYTES + i * PARAMS_BYTES) / 4..][..PARAMS_BYTES / 4]
+                .copy_from_slice(&entry.map(f32::to_bits));
             let c0 = p.colour0 as usize;
             match p.kind {
                 LayerKind::Overlay => colours[c0..c0 + OVERLAY_ENTRIES].copy_from_slice(&style.overlay_table()),
@@ -230,6 +235,24 @@ impl GpuLayers {
         upload_image(gpu, &mut self.colours, bytemuck::cast_slice(&colours))?;
         self.written = Some((styles.to_vec(), dims, *geometry));
         Ok(())
+    }
+
+    /// The table's header: the box in the base's texture space outside which no layer shows anything (rule 13),
+    /// widened a little against rounding, with w 1; or w 0 where none shows anything (shaders/layers.glsl
+    /// `layer_span`: a ray mixes layers only across this box).
+    fn span(&self, styles: &[LayerStyle], dims: [u32; 3], geometry: &Geometry) -> [f32; 8] {
+        let boxes = self
+            .summaries
+            .iter()
+            .zip(styles)
+            .filter_map(|(m, s)| m.bounds(s, (geometry, dims)));
+        match boxes.reduce(|(a, b), (c, d)| (a.min(c), b.max(d))) {
+            Some((lo, hi)) => {
+                let (lo, hi) = ((lo - 1e-4).as_vec3(), (hi + 1e-4).as_vec3());
+                [lo.x, lo.y, lo.z, 1.0, hi.x, hi.y, hi.z, 1.0]
+            }
+            None => [0.0; 8],
+        }
     }
 
     fn colour_count(&self) -> usize {
