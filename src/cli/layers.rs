@@ -148,6 +148,14 @@ impl Layers {
         base: &Volume,
         s: &mut RenderSettings,
     ) -> Result<()> {
+        self.upload(gpu, headless, base)?;
+        s.layers = self.styles.clone();
+        Ok(())
+    }
+
+    /// Gives the renderer these layers over `base` (a note where one reaches beyond its box); frames style them
+    /// with `styles`.
+    pub fn upload(&self, gpu: &crate::gpu::Gpu, headless: &mut Headless, base: &Volume) -> Result<()> {
         for v in &self.volumes {
             if let Some(note) = overlap_note(base, v) {
                 eprintln!("note: {note}");
@@ -163,7 +171,6 @@ impl Layers {
             })
             .collect();
         headless.renderer.set_layers(gpu, &inputs)?;
-        s.layers = self.styles.clone();
         Ok(())
     }
 }

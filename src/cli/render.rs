@@ -220,8 +220,13 @@ pub fn record_movie(
     progress: &mut dyn FnMut(u32) -> bool,
 ) -> Result<String> {
     let files = crate::movie::MovieFiles::new(&args.output, plan.frame_count())?;
+    super::layers::check(&args.layers, plan.first())?;
+    let layers = args.layers.load()?;
     let reduced = place(gpu, headless, args, volume)?;
     let volume = reduced.as_ref().unwrap_or(volume);
+    // Rule 13's layers in every frame (none where no --overlay or --labels was given).
+    layers.upload(gpu, headless, volume)?;
+    let plan = &plan.clone().with_layers(&layers.styles);
     if let Some(st) = headless.renderer.stream() {
         let gpu_budget = args
             .volume

@@ -56,6 +56,7 @@ pub fn check_frames(n: u32, min: u32, option: &str) -> Result<(), MovieError> {
 }
 
 /// What a movie's frames are.
+#[derive(Clone)]
 pub enum Plan {
     /// `frames` frames turning `base` once around the vertical axis ([`path::turntable_frame`]).
     Turntable { base: Box<RenderSettings>, frames: u32 },
@@ -67,6 +68,23 @@ impl Plan {
     pub fn frame_count(&self) -> u32 {
         match self {
             Plan::Turntable { frames, .. } | Plan::Keyframes { frames, .. } => *frames,
+        }
+    }
+
+    /// The same movie with rule 13's layers styled `styles` in every frame (the renderer holds them).
+    pub fn with_layers(mut self, styles: &[crate::scene::layers::LayerStyle]) -> Plan {
+        match &mut self {
+            Plan::Turntable { base, .. } => base.layers = styles.to_vec(),
+            Plan::Keyframes { keys, .. } => keys.iter_mut().for_each(|k| k.layers = styles.to_vec()),
+        }
+        self
+    }
+
+    /// The first frame's settings.
+    pub fn first(&self) -> &RenderSettings {
+        match self {
+            Plan::Turntable { base, .. } => base,
+            Plan::Keyframes { keys, .. } => &keys[0],
         }
     }
 

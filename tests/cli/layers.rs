@@ -42,6 +42,21 @@ fn t1_with_a_thresholded_z_map_and_atlas_regions_renders_in_depth() {
     // The z-map's positive (warm) and negative (cool) blobs both show over the grey brain.
     let (warm, cool) = warm_and_cool(&image);
     assert!(warm > 60 && cool > 15, "warm {warm} px, cool {cool} px: {}", stdout(&o));
+    // A movie shows the layers too: the turntable's first frame is the figure.
+    let spin = dir.join("spin.png");
+    let movie: Vec<&str> = args[..args.len() - 2]
+        .iter()
+        .copied()
+        .chain(["--turntable", "2", "-o", spin.to_str().unwrap()])
+        .collect();
+    volcast_ok(&movie);
+    let first = image::open(dir.join("spin-0000.png"))
+        .expect("the movie's first frame")
+        .to_rgba8();
+    assert!(
+        first == image,
+        "the turntable's first frame differs from the still figure"
+    );
     // The T1 alone at the same view has (next to) neither.
     let alone = dir.join("alone.png");
     let mut args = vec!["render", t1];
