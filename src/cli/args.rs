@@ -463,6 +463,8 @@ pub struct CompareArgs {
     pub gpu: GpuArgs,
     #[command(flatten)]
     pub frame: FrameArgs,
+    #[command(flatten)]
+    pub layers: super::layers::LayerArgs,
     /// Folder for the images and the tables (created if missing).
     #[arg(long, default_value = "cmp", help_heading = "Options")]
     pub out: PathBuf,

@@ -70,7 +70,11 @@ pub fn view_source(args: &ViewArgs, source: Option<VolumeSource>) -> Result<()> 
 
 pub fn compare(args: &CompareArgs) -> Result<()> {
     let volume = args.volume.load()?;
-    let base = args.frame.settings(&volume)?;
+    let mut base = args.frame.settings(&volume)?;
+    // Rule 13's layers in every view, for both ray setups.
+    super::layers::check(&args.layers, &base)?;
+    let layers = args.layers.load()?;
+    base.layers = layers.styles.clone();
     let mut views = compare::builtin_views(&base, volume.extent());
     if args.frame.camera.eye.is_some() {
         views.push(compare::View {
@@ -84,6 +88,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         let mut headless = Headless::new(gpu)?;
         let result = (|| -> Result<Vec<compare::Row>> {
             headless.set_volume(gpu, &volume)?;
+            layers.upload(gpu, &mut headless, &volume)?;
             let mut rows = Vec::new();
             for view in &views {
                 let c = compare::compare_view(gpu, &mut headless, view, args.frames)?;

@@ -68,6 +68,44 @@ fn t1_with_a_thresholded_z_map_and_atlas_regions_renders_in_depth() {
     assert!(warm < 5 && cool < 5, "the T1 alone: warm {warm} px, cool {cool} px");
 }
 
+/// `compare` marches the layers in both ray setups, which agree.
+#[test]
+fn compare_shows_the_layers_in_both_ray_setups() {
+    let (Some(t1), Some(z)) = (
+        shared_data("native/colin27_t1/ch2.nii.gz"),
+        shared_data("native/motor_zmap/image_10426.nii.gz"),
+    ) else {
+        return;
+    };
+    let dir = scratch("layers-compare");
+    let o = volcast_ok(&[
+        "compare",
+        t1.to_str().unwrap(),
+        "--overlay",
+        z.to_str().unwrap(),
+        "--threshold",
+        "3",
+        "--clip-plane",
+        "0,0,-1,-38",
+        "--size",
+        "128x128",
+        "--frames",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let out = stdout(&o);
+    assert!(!out.contains("differ beyond the bound"), "{out}");
+    // Seen from above (the view axis-z), the blobs above the cut show in both setups.
+    for method in ["faces", "analytic"] {
+        let image = image::open(dir.join(format!("axis-z-{method}.png")))
+            .expect("the view")
+            .to_rgba8();
+        let (warm, cool) = warm_and_cool(&image);
+        assert!(warm + cool > 20, "{method}: warm {warm} px, cool {cool} px");
+    }
+}
+
 /// Pixels clearly red (the z-map's positive end) and clearly blue (its negative end).
 fn warm_and_cool(image: &image::RgbaImage) -> (usize, usize) {
     let warm = image.pixels().filter(|p| p[0] > p[2] + 60 && p[0] > p[1] + 40).count();
