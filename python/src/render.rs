@@ -91,7 +91,6 @@ fn frame(
     held: Option<(u64, Arc<Volume>)>,
     held_layers: Vec<(Arc<Volume>, bool)>,
 ) -> anyhow::Result<(image::RgbaImage, Report)> {
-    use volcast::scene::settings::CompositeMode as M;
     let (id, volume, s) = match held {
         Some((id, v)) => {
             let s = steps::view_settings(args, &v)?;
@@ -111,12 +110,7 @@ fn frame(
     // Rule 13's layers, as `volcast render` reads them, and the arrays given (none: the layers of an earlier call
     // are dropped).
     let mut s = s;
-    if !held_layers.is_empty() && !matches!(s.compositing.mode, M::Emission | M::Density) {
-        anyhow::bail!(UsageError(
-            "overlay= and labels= are composited in the emission and density modes".into()
-        ));
-    }
-    volcast::cli::layers::check(&args.layers, &s)?;
+    volcast::cli::layers::check(args.layers.any() || !held_layers.is_empty(), &s)?;
     let held_layers = held_layers
         .into_iter()
         .map(|(v, labels)| (v.as_ref().clone(), labels))
@@ -185,14 +179,17 @@ pub fn render<'py>(
 /// GIF) of `volume` or of the volume they name; returns the summary line the command prints. Ctrl+C stops it after
 /// the frame being drawn, and removes what it wrote.
 #[pyfunction]
-#[pyo3(signature = (volume, argv, tf_json=None))]
+#[pyo3(signature = (volume, argv, tf_json=None, layers=Vec::new()))]
 pub fn movie(
     py: Python<'_>,
     volume: Option<PyRef<'_, PyVolume>>,
     argv: Vec<String>,
     tf_json: Option<String>,
+    layers: Vec<(PyRef<'_, PyVolume>, bool)>,
 ) -> PyResult<String> {
     let (args, held) = prepared(volume.as_deref(), argv, tf_json)?;
+    // Layers the caller holds, in every frame: each an overlay or (true) a label map.
+    let held_layers: Vec<(Volume, bool)> = layers.iter().map(|(v, l)| (v.inner.as_ref().clone(), *l)).collect();
     if args.turntable.is_none() && args.keyframes.is_empty() {
         return Err(pyo3::exceptions::PyValueError::new_err(
             "a movie needs turntable=N or keyframes=[...]",
@@ -210,7 +207,14 @@ pub fn movie(
             (None, None) => anyhow::bail!("the movie's volume was not read"),
         };
         let mut progress = |_: u32| !stopping.load(Ordering::Relaxed);
-        steps::record_movie(&dev.gpu, &mut dev.headless, &args, volume, &plan, &mut progress)
+        steps::record_movie(
+            &dev.gpu,
+            &mut dev.headless,
+            (&args, held_layers),
+            volume,
+            &plan,
+            &mut progress,
+        )
     })?;
     wait(py, rx, Some(&stop))?.map_err(|e| to_py(e, While::Rendering))
 }

@@ -40,3 +40,17 @@ def test_array_layers_match_the_command_line(tmp_path, cli):
     # A path and an array are the same layer.
     by_path = volcast.render(base, overlay=[str(ov)], labels=[labels], **options)
     assert np.array_equal(np.asarray(by_path), expected)
+
+
+def test_a_movie_shows_array_layers(tmp_path):
+    base = ball((24, 24, 24), (12, 12, 12), 9) * 0.3
+    overlay = ball((24, 24, 24), (12, 8, 14), 4) * 5.0
+    labels = (ball((24, 24, 24), (10, 16, 10), 3) > 0.5).astype(np.uint8) * 7
+    options = dict(size=(64, 48), threshold=1.0)
+    layers = dict(overlay=[overlay], labels=[labels])
+    gif = volcast.movie(base, tmp_path / "spin.png", turntable=2, **layers, **options)
+    assert gif.name == "spin.gif"
+    first = np.asarray(PILImage.open(tmp_path / "spin-0000.png").convert("RGBA"))
+    # The movie's first frame is the still with the same layers, not the base alone.
+    assert np.array_equal(first, np.asarray(volcast.render(base, **layers, **options)))
+    assert not np.array_equal(first, np.asarray(volcast.render(base, **options)))

@@ -159,8 +159,9 @@ def movie(
         held = None if volume is None else _to_volume(volume, placement)
         return _keyframed(held, output, keyframes, options)
     options.update(output=output, turntable=turntable, keyframes=keyframes)
+    layers = _held_layers(options, {k: v for k, v in placement.items() if v is not None})
     native, argv, tf_json = _command(volume, placement, "render", options)
-    _volcast.movie(native, argv, tf_json)
+    _volcast.movie(native, argv, tf_json, layers)
     out = pathlib.Path(output)
     return out.with_name(out.stem + ".gif")
 

@@ -72,7 +72,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let volume = args.volume.load()?;
     let mut base = args.frame.settings(&volume)?;
     // Rule 13's layers in every view, for both ray setups.
-    super::layers::check(&args.layers, &base)?;
+    super::layers::check(args.layers.any(), &base)?;
     let layers = args.layers.load()?;
     base.layers = layers.styles.clone();
     let mut views = compare::builtin_views(&base, volume.extent());

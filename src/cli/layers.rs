@@ -246,10 +246,11 @@ fn warn_missing(table: &LabelTable, map: &LabelMap, file: &Path, path: &Path) {
     }
 }
 
-/// Refuses options that layers do not mix with, before anything is read.
-pub fn check(args: &LayerArgs, s: &RenderSettings) -> Result<()> {
+/// Refuses options that layers do not mix with, before anything is read: `any`, whether there are layers (files
+/// named in `LayerArgs`, or volumes a caller holds).
+pub fn check(any: bool, s: &RenderSettings) -> Result<()> {
     use crate::scene::settings::CompositeMode as M;
-    if args.any() && !matches!(s.compositing.mode, M::Emission | M::Density) {
+    if any && !matches!(s.compositing.mode, M::Emission | M::Density) {
         bail!(super::UsageError(format!(
             "--overlay and --labels are composited in depth in the emission and density modes; --mode {} shows one \
              volume",

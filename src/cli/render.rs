@@ -209,19 +209,20 @@ pub fn movie_plan(args: &RenderArgs, volume: Option<&Volume>) -> Result<(Option<
     Ok((volume, Plan::Keyframes { keys, frames }))
 }
 
-/// Records the movie of `plan` with `volume` on `headless` (placed here), saying on stderr when it is streamed;
-/// `progress` hears each frame and stops the movie by returning false. Returns the files' summary.
+/// Records the movie of `plan` with `volume` on `headless` (placed here), with the layers of `args` and `held`
+/// (volumes the caller holds, each an overlay or, with `true`, a label map) in every frame, saying on stderr when
+/// it is streamed; `progress` hears each frame and stops the movie by returning false. Returns the files' summary.
 pub fn record_movie(
     gpu: &Gpu,
     headless: &mut Headless,
-    args: &RenderArgs,
+    (args, held): (&RenderArgs, Vec<(Volume, bool)>),
     volume: &Volume,
     plan: &crate::movie::Plan,
     progress: &mut dyn FnMut(u32) -> bool,
 ) -> Result<String> {
     let files = crate::movie::MovieFiles::new(&args.output, plan.frame_count())?;
-    super::layers::check(&args.layers, plan.first())?;
-    let layers = args.layers.load()?;
+    super::layers::check(args.layers.any() || !held.is_empty(), plan.first())?;
+    let layers = args.layers.load_with(held)?;
     let reduced = place(gpu, headless, args, volume)?;
     let volume = reduced.as_ref().unwrap_or(volume);
     // Rule 13's layers in every frame (none where no --overlay or --labels was given).
@@ -256,7 +257,7 @@ fn movie(args: &RenderArgs) -> Result<()> {
     with_gpu(&args.gpu, |gpu| {
         let mut headless = Headless::new(gpu)?;
         let mut progress = crate::movie::Progress::stderr(label, plan.frame_count());
-        let done = record_movie(gpu, &mut headless, args, &volume, &plan, &mut |k| {
+        let done = record_movie(gpu, &mut headless, (args, Vec::new()), &volume, &plan, &mut |k| {
             progress.update(k);
             true
         });
@@ -347,7 +348,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         let loaded = render_view(args);
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
         let loaded = loaded.and_then(|(v, s)| {
-            super::layers::check(&args.layers, &s)?;
+            super::layers::check(args.layers.any(), &s)?;
             Ok((v, s, args.layers.load()?))
         });
         let (mut volume, mut s, layers) = match loaded {
