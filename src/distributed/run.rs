@@ -117,6 +117,11 @@ fn refuse_unsupported(args: &RenderArgs) -> Result<()> {
     if args.level.is_some() {
         return refuse("--level (every rank renders level 0 of its part)");
     }
+    if args.layers.any() {
+        return refuse(
+            "a layer (--overlay, --labels: each rank would need its part of every layer; render layers on one process)",
+        );
+    }
     Ok(())
 }
 

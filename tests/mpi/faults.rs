@@ -31,6 +31,22 @@ fn shadows_are_refused_with_the_reason() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// Layers are refused before anything is read, naming the options: no rank renders half of them.
+#[test]
+fn layers_are_refused_with_the_reason() {
+    let dir = scratch("layers");
+    let mut args = ct_head();
+    args.extend(["--overlay".to_string(), args[0].clone()]);
+    let o = mpirun(2, &args, &dir.join("x.png"));
+    let t = text(&o);
+    assert!(
+        !o.status.success() && t.contains("--overlay, --labels") && t.contains("one process"),
+        "{t}"
+    );
+    assert!(!dir.join("x.png").exists());
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn more_ranks_than_bricks_are_refused() {
     let dir = scratch("tiny");
