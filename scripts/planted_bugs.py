@@ -402,8 +402,8 @@ BUGS = [
      [("src/formats/format.rs", "let mut steps = if self.interleaved {", "let mut steps = if !self.interleaved {")]),
     ("layers-blended-whole", "layers are composited along the ray on their own and blended whole over the base, "
      "as napari and neuroglancer do: depth is lost",
-     [("shaders/march.glsl", "                c = mix_layers(c, ray.a + ray.dir * t);",
-       "                vec4 l = mix_layers(vec4(0.0), ray.a + ray.dir * t);\n"
+     [("shaders/march.glsl", "                c = mix_layers(c, ray.a + ray.dir * t, 1.0 - opacity);",
+       "                vec4 l = mix_layers(vec4(0.0), ray.a + ray.dir * t, 1.0 - opacity);\n"
        "                composite(lcolor, lopacity, l.rgb, l.a);"),
       ("shaders/march.glsl", "    Walk w = walk;\n    for (;;) {",
        "    Walk w = walk;\n    vec3 lcolor = m.lcolor;\n    float lopacity = m.lopacity;\n    for (;;) {"),
@@ -419,6 +419,13 @@ BUGS = [
      "vanish",
      [("shaders/layers.glsl", "    float t_out = min(min(far.x, far.y), far.z);",
        "    float t_out = max(max(near.x, near.y), near.z);")]),
+    ("layer-blend-unattenuated", "an overlay blended by maximum or addition shows through what lies in front of it: "
+     "its light is not dimmed by the ray's transmittance",
+     [("shaders/march.glsl", "c = mix_layers(c, ray.a + ray.dir * t, 1.0 - opacity);",
+       "c = mix_layers(c, ray.a + ray.dir * t, 1.0);")]),
+    ("layer-add-absorbs", "an overlay blended by addition is composited in depth too: it absorbs what lies behind it",
+     [("shaders/layers.glsl", "        if (gathered(i, l, front)) {\n            l = vec4(0.0);\n        }",
+       "        gathered(i, l, front);")]),
     ("stand-in-range-narrowed", "a volume reduced by --max-dim normalises by its means' narrower range: the window moves",
      [("src/pyramid/max_dim.rs", "(volume.range, volume.stored_range) = ranges;", "let _ = ranges;")]),
 ]

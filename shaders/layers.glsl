@@ -6,7 +6,7 @@ layout(set = 1, binding = 10) uniform utexture3D layer_labels;
 struct LayerParams {
     mat4 to_index;   // the base's texture space -> the layer's voxel index (centres at integers)
     vec4 dims;       // xyz: the layer's size in voxels; w: its first slice in its kind's texture
-    vec4 look;       // y, z: an overlay's window (data units); w: its threshold
+    vec4 look;       // x: an overlay's blend (0 composite, 1 max, 2 add); y, z: its window (data units); w: its threshold
     vec4 more;       // x: 1 / its smallest voxel side (world); y: its first colour; z: an overlay's log2(1 - opacity);
                      // w: 0 window test, 1 v >= threshold, 2 |v| >= threshold
     vec4 texel;      // xyz: 1 / the size of its kind's texture
@@ -91,12 +91,53 @@ vec2 layer_span(WalkRay r) {
     return meets ? vec2(t_in, t_out) : vec2(3.0e38);
 }
 
-// Rule 13's mix at a sample: the base's segment and every layer's step as one, alpha = 1 - prod(1 - alpha_i),
-// colour = sum(alpha_i c_i) / sum(alpha_i). The overlays come first in the table, then the label maps
+#if defined(LAYER_BLENDS)
+// Rule 13's other blends, gathered along the ray and added to its colour at its end (layers_glow): the light of
+// the overlays blended by addition, and per overlay blended by maximum its largest light so far.
+vec3 layer_added;
+vec3 layer_peak[16];
+
+void start_glow() {
+    layer_added = vec3(0.0);
+    for (int i = 0; i < 16; i++) {
+        layer_peak[i] = vec3(0.0);
+    }
+}
+
+// Overlay i's step l at a sample behind transmittance `front`: false where it is composited in depth; else its
+// light is gathered by its blend.
+bool gathered(uint i, vec4 l, float front) {
+    float blend = layers.p[i].look.x;
+    if (blend < 0.5) {
+        return false;
+    }
+    if (blend > 1.5) {
+        layer_added += front * l.a * l.rgb;
+    } else {
+        // Its opacity per voxel, not per step: a maximum does not grow with the number of samples.
+        float a = l.a > 0.0 ? 1.0 - exp2(layers.p[i].more.z) : 0.0;
+        layer_peak[i] = max(layer_peak[i], front * a * l.rgb);
+    }
+    return true;
+}
+
+// What the blends gathered along the ray: the added light and every overlay's maximum.
+vec3 layers_glow() {
+    vec3 glow = layer_added;
+    for (int i = 0; i < 16; i++) {
+        glow += layer_peak[i];
+    }
+    return glow;
+}
+#endif
+
+// Rule 13's mix at a sample behind transmittance `front`: the base's segment and every layer's step composited in
+// depth as one, alpha = 1 - prod(1 - alpha_i), colour = sum(alpha_i c_i) / sum(alpha_i); the overlays blended
+// otherwise are gathered (LAYER_BLENDS). The overlays come first in the table, then the label maps
 // (frame.voxel_world.y and .z of each). A variant compiles only the loops of the kinds its frame has
 // (LAYER_OVERLAYS, LAYER_LABELS), each tested at its end: lavapipe runs a loop's body once more than it is taken,
 // masked, where the test comes first, and runs a loop of no turns once.
-vec4 mix_layers(vec4 base, vec3 p) {
+vec4 mix_layers(vec4 base, vec3 p, float front) {
     float keep = 1.0 - base.a;
     vec3 sum = base.a * base.rgb;
     float weight = base.a;
@@ -105,6 +146,11 @@ vec4 mix_layers(vec4 base, vec3 p) {
     uint i = 0u;
     do {
         vec4 l = overlay_sample(layers.p[i], p);
+#if defined(LAYER_BLENDS)
+        if (gathered(i, l, front)) {
+            l = vec4(0.0);
+        }
+#endif
         keep *= 1.0 - l.a;
         sum += l.a * l.rgb;
         weight += l.a;

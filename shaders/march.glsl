@@ -313,7 +313,7 @@ bool absorb_until(WalkRay ray, inout Walk walk, inout Absorb m, vec3 light, floa
 #if defined(LAYERS)
             if (with_layers) {
                 // Rule 13: the layers at this sample mix into its segment.
-                c = mix_layers(c, ray.a + ray.dir * t);
+                c = mix_layers(c, ray.a + ray.dir * t, 1.0 - opacity);
             }
 #endif
             taken += 1u;
@@ -339,6 +339,9 @@ vec4 march_emission(WalkRay ray, vec3 light) {
     Absorb m = Absorb(vec3(0.0), 0.0, 0.0, v0, i0, 0u);
     Walk w = walk_start();
     float ALL = 3.0e38;
+#if defined(LAYER_BLENDS)
+    start_glow();
+#endif
 #if defined(LAYERS)
     vec2 span = layer_span(ray);
     if (!absorb_until(ray, w, m, light, span.x, false)) {
@@ -364,6 +367,10 @@ vec4 march_emission(WalkRay ray, vec3 light) {
         m.color = color;
         m.opacity = opacity;
     }
+#if defined(LAYER_BLENDS)
+    // Rule 13: the light the other blends gathered, added at the ray's end.
+    m.color += layers_glow();
+#endif
     return share_or_finish(m.color, m.opacity, m.taken);
 }
 #endif

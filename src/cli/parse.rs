@@ -177,6 +177,12 @@ pub fn parse_mode(s: &str) -> Result<crate::scene::settings::CompositeMode, Stri
     )
 }
 
+/// `--overlay-blend`: how overlays meet the rest (rule 13).
+pub fn parse_blend(s: &str) -> Result<crate::scene::layers::Blend, String> {
+    use crate::scene::layers::Blend;
+    parse_named(s, Blend::parse, &Blend::ALL, Blend::name, "blend")
+}
+
 /// `--view`: a side of the patient.
 pub fn parse_view(s: &str) -> Result<crate::scene::camera::ViewPreset, String> {
     use crate::scene::camera::ViewPreset;

@@ -8,7 +8,7 @@ use super::layer_bricks::Summary;
 use crate::gpu::resources::{Buffer, Image, ImageDesc};
 use crate::gpu::upload::upload_image;
 use crate::gpu::{Gpu, GpuError};
-use crate::scene::layers::{LayerKind, LayerStyle, OVERLAY_ENTRIES};
+use crate::scene::layers::{Blend, LayerKind, LayerStyle, OVERLAY_ENTRIES};
 use crate::scene::settings::RenderSettings;
 use crate::transfer::function::srgb_to_linear;
 use crate::volume::labels::LabelMap;
@@ -426,7 +426,12 @@ fn params(
     e[..16].copy_from_slice(&to_index.as_mat4().to_cols_array());
     e[16..20].copy_from_slice(&[p.dims[0] as f32, p.dims[1] as f32, p.dims[2] as f32, p.z0 as f32]);
     let threshold = style.threshold.unwrap_or(0.0) as f32;
-    e[20..24].copy_from_slice(&[0.0, style.window[0] as f32, style.window[1] as f32, threshold]);
+    let blend = match style.blend {
+        Blend::Composite => 0.0,
+        Blend::Max => 1.0,
+        Blend::Add => 2.0,
+    };
+    e[20..24].copy_from_slice(&[blend, style.window[0] as f32, style.window[1] as f32, threshold]);
     let test = match style.threshold {
         None => 0.0,
         Some(_) if style.signed => 2.0,

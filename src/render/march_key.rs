@@ -80,23 +80,37 @@ pub enum Family {
 }
 
 /// The kinds of layer a layered frame mixes: its march has a loop for each kind it holds, and none for the other
-/// (lavapipe runs a loop's body at least once, even when no layer of its kind is held).
+/// (lavapipe runs a loop's body at least once, even when no layer of its kind is held); and the code of rule 13's
+/// other blends only where an overlay takes one (lavapipe runs both sides of a branch).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LayerKinds {
     Overlays,
     Labels,
     Both,
+    /// Overlays, one at least blended by maximum or addition.
+    OverlaysBlended,
+    /// Both kinds, an overlay at least blended by maximum or addition.
+    BothBlended,
 }
 
 impl LayerKinds {
-    pub const ALL: [LayerKinds; 3] = [LayerKinds::Overlays, LayerKinds::Labels, LayerKinds::Both];
+    pub const ALL: [LayerKinds; 5] = [
+        LayerKinds::Overlays,
+        LayerKinds::Labels,
+        LayerKinds::Both,
+        LayerKinds::OverlaysBlended,
+        LayerKinds::BothBlended,
+    ];
 
-    /// The kinds of `overlays` overlays and `labels` label maps (at least one of either).
-    pub fn of(overlays: usize, labels: usize) -> LayerKinds {
-        match (overlays > 0, labels > 0) {
-            (true, false) => LayerKinds::Overlays,
-            (false, true) => LayerKinds::Labels,
-            _ => LayerKinds::Both,
+    /// The kinds of `overlays` overlays and `labels` label maps (at least one of either), `blended` where an
+    /// overlay takes a blend other than compositing.
+    pub fn of(overlays: usize, labels: usize, blended: bool) -> LayerKinds {
+        match (overlays > 0, labels > 0, blended) {
+            (true, false, false) => LayerKinds::Overlays,
+            (true, false, true) => LayerKinds::OverlaysBlended,
+            (false, true, _) => LayerKinds::Labels,
+            (_, _, false) => LayerKinds::Both,
+            (_, _, true) => LayerKinds::BothBlended,
         }
     }
 
@@ -105,6 +119,8 @@ impl LayerKinds {
             LayerKinds::Overlays => &["LAYER_OVERLAYS"],
             LayerKinds::Labels => &["LAYER_LABELS"],
             LayerKinds::Both => &["LAYER_OVERLAYS", "LAYER_LABELS"],
+            LayerKinds::OverlaysBlended => &["LAYER_OVERLAYS", "LAYER_BLENDS"],
+            LayerKinds::BothBlended => &["LAYER_OVERLAYS", "LAYER_LABELS", "LAYER_BLENDS"],
         }
     }
 
@@ -113,12 +129,14 @@ impl LayerKinds {
             LayerKinds::Overlays => "o",
             LayerKinds::Labels => "l",
             LayerKinds::Both => "ol",
+            LayerKinds::OverlaysBlended => "ob",
+            LayerKinds::BothBlended => "olb",
         }
     }
 }
 
 impl Family {
-    pub const ALL: [Family; 19] = [
+    pub const ALL: [Family; 25] = [
         Family::Emission,
         Family::EmissionShaded(Lighting::ALL[0]),
         Family::EmissionShaded(Lighting::ALL[1]),
@@ -138,6 +156,12 @@ impl Family {
         Family::Layers(LayerKinds::ALL[2], None),
         Family::Layers(LayerKinds::ALL[2], Some(Lighting::ALL[0])),
         Family::Layers(LayerKinds::ALL[2], Some(Lighting::ALL[1])),
+        Family::Layers(LayerKinds::ALL[3], None),
+        Family::Layers(LayerKinds::ALL[3], Some(Lighting::ALL[0])),
+        Family::Layers(LayerKinds::ALL[3], Some(Lighting::ALL[1])),
+        Family::Layers(LayerKinds::ALL[4], None),
+        Family::Layers(LayerKinds::ALL[4], Some(Lighting::ALL[0])),
+        Family::Layers(LayerKinds::ALL[4], Some(Lighting::ALL[1])),
     ];
 
     /// Where its gradients and light come from (None: it takes no gradients).

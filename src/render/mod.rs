@@ -379,12 +379,10 @@ impl Renderer {
         let shaded = s.lighting.shading.is_some() || s.lighting.gradient_opacity.is_some();
         let family = match s.compositing.mode {
             M::Emission | M::Density if !s.layers.is_empty() => {
-                let labels = s
-                    .layers
-                    .iter()
-                    .filter(|l| l.kind == crate::scene::layers::LayerKind::Labels)
-                    .count();
-                let kinds = LayerKinds::of(s.layers.len() - labels, labels);
+                use crate::scene::layers::{Blend, LayerKind};
+                let labels = s.layers.iter().filter(|l| l.kind == LayerKind::Labels).count();
+                let blended = s.layers.iter().any(|l| l.blend != Blend::Composite);
+                let kinds = LayerKinds::of(s.layers.len() - labels, labels, blended);
                 Family::Layers(kinds, shaded.then_some(Lighting::new(lighting.gradient_texture, false)))
             }
             M::Emission | M::Density if s.lighting.shading.is_some() || s.lighting.gradient_opacity.is_some() => {

@@ -9,8 +9,8 @@
 //!   box (index < −½ or > dim − ½ on an axis) shows nothing of the layer.
 //! - **Overlays** are sampled trilinearly (rule 3, clamped to the edge inside the box) in data units. A value v is
 //!   shown where it is finite and, with a threshold T, `v ≥ T` (or `|v| ≥ T` for a signed overlay), else where
-//!   it lies in the window [lo, hi]. It takes the colormap's colour at `clamp((v − lo)/(hi − lo), 0, 1)` (sRGB,
-//!   decoded to linear light) and the layer's `opacity`.
+//!   it lies in the window [lo, hi]. It takes the colour at `clamp((v − lo)/(hi − lo), 0, 1)` of the colormap, or
+//!   of its tint's ramp from black (sRGB, decoded to linear light), and the layer's `opacity`.
 //! - **Label maps** are sampled at the nearest voxel (`floor(index + ½)`), never interpolated across ids. Id 0
 //!   shows nothing; any other id takes its table colour (or `labels::default_colour`), with the table's opacity
 //!   times the layer's `opacity`; hidden ids show nothing.
@@ -26,6 +26,12 @@
 //!   (index `4b − 1` to `min(4b + 4, dim)` per axis, mapped by its corners into the base's index space) touches take
 //!   every sample and are never empty; elsewhere rule 2 holds as for the base alone, since no layer shows anything
 //!   there (`render/layer_bricks.rs`).
+//! - **Blends.** An overlay's `blend` says how it meets the rest (`Blend`); label maps always mix in depth. At each
+//!   sample, with T the ray's transmittance before it (1 − the opacity composited so far) and (cᵢ, αᵢ) the layer's
+//!   step as above: `Composite` mixes in as above; `Add` adds `T·αᵢ·cᵢ` to the ray's colour and nothing to its
+//!   opacity (light without absorption, as fluorescence); `Max` keeps, per colour channel, the largest
+//!   `T·a·cᵢ` over the ray's samples (a its opacity per voxel, so no step length enters: a projection, dimmed by
+//!   what lies in front). At the ray's end the added light and every maximum are added to its colour.
 //! - Layers mix in emission and density modes; other modes refuse layers.
 
 use crate::transfer::colormap::Colormap;
@@ -42,6 +48,35 @@ pub enum LayerKind {
     Labels,
 }
 
+/// How an overlay meets the volume and the other layers along a ray (rule 13).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Blend {
+    /// Composited in depth with the rest, sample by sample: what is nearer hides what is behind.
+    #[default]
+    Composite,
+    /// Its largest light along the ray (per colour channel), dimmed by what lies in front: a projection.
+    Max,
+    /// Light without absorption, added along the ray and dimmed by what lies in front: fluorescence.
+    Add,
+}
+
+impl Blend {
+    pub const ALL: [Blend; 3] = [Blend::Composite, Blend::Max, Blend::Add];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Blend::Composite => "composite",
+            Blend::Max => "max",
+            Blend::Add => "add",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Blend> {
+        Blend::ALL.into_iter().find(|b| b.name() == s)
+    }
+}
+
 /// How one layer looks (rule 13).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
@@ -53,9 +88,14 @@ pub struct LayerStyle {
     pub threshold: Option<f64>,
     pub signed: bool,
     pub colormap: Colormap,
+    /// Overlays: in place of the colormap, a ramp from black to this sRGB colour over the window (a channel's own
+    /// colour, as napari and OMERO show channels).
+    pub tint: Option<[u8; 3]>,
     /// Opacity per voxel of the layer's own grid.
     pub opacity: f32,
     pub visible: bool,
+    /// Overlays: how it meets the rest along the ray.
+    pub blend: Blend,
 }
 
 impl Default for LayerStyle {
@@ -66,8 +106,10 @@ impl Default for LayerStyle {
             threshold: None,
             signed: false,
             colormap: Colormap::Plasma,
+            tint: None,
             opacity: 0.5,
             visible: true,
+            blend: Blend::Composite,
         }
     }
 }
@@ -110,10 +152,18 @@ impl LayerStyle {
         (0..OVERLAY_ENTRIES)
             .map(|i| {
                 let c = i as f64 / (OVERLAY_ENTRIES - 1) as f64;
-                let [r, g, b] = self.colormap.srgb(c).map(|x| srgb_to_linear(x as f32));
+                let [r, g, b] = self.srgb(c).map(|x| srgb_to_linear(x as f32));
                 [r, g, b, self.opacity]
             })
             .collect()
+    }
+
+    /// The sRGB colour at position `c` (0–1) of the window: the tint's ramp, else the colormap.
+    pub fn srgb(&self, c: f64) -> [f64; 3] {
+        match self.tint {
+            Some(t) => t.map(|x| f64::from(x) / 255.0 * c),
+            None => self.colormap.srgb(c),
+        }
     }
 
     /// A check of the values a user gave: a message naming the bad one.
@@ -127,6 +177,9 @@ impl LayerStyle {
                 "overlay window {:?} must be two finite values, low < high",
                 self.window
             ));
+        }
+        if self.kind == LayerKind::Labels && self.blend != Blend::Composite {
+            return Err("label maps are composited in depth; only overlays take another blend".into());
         }
         if self.threshold.is_some_and(|t| !t.is_finite()) {
             return Err("the overlay threshold must be finite".into());

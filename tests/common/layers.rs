@@ -5,7 +5,7 @@
 
 use super::classify::{colormap_srgb, linear};
 use glam::{DMat4, DVec3};
-use volcast::scene::layers::{LayerKind, LayerStyle};
+use volcast::scene::layers::{Blend, LayerKind, LayerStyle};
 use volcast::volume::Volume;
 
 /// One layer as the reference holds it.
@@ -108,7 +108,11 @@ impl RefLayer {
             return None;
         }
         let c = ((v - lo) / (hi - lo)).clamp(0.0, 1.0);
-        Some((linear(colormap_srgb(style.colormap, c)), opacity))
+        let srgb = match style.tint {
+            Some([r, g, b]) => DVec3::new(f64::from(r), f64::from(g), f64::from(b)) / 255.0 * c,
+            None => colormap_srgb(style.colormap, c),
+        };
+        Some((linear(srgb), opacity))
     }
 }
 
@@ -176,8 +180,14 @@ impl RefLayer {
     }
 }
 
-/// Rule 13's mix at a sample: the base's segment `(rgb, alpha)` and each layer's step at millimetre point `mm`,
-/// for a march step of `step` world units (`world_per_mm` world units per millimetre).
+/// Rule 13's opacity `a` per voxel of `layer`'s grid over a march step of `step` world units.
+fn step_alpha(a: f64, layer: &RefLayer, step: f64, world_per_mm: f64) -> f64 {
+    1.0 - (1.0 - a).max(0.0).powf(step / (layer.smallest_mm * world_per_mm))
+}
+
+/// Rule 13's mix at a sample: the base's segment `(rgb, alpha)` and each layer's step at millimetre point `mm`
+/// that is composited in depth, for a march step of `step` world units (`world_per_mm` world units per
+/// millimetre).
 pub fn mix(
     base: (DVec3, f64),
     layers: &[RefLayer],
@@ -188,10 +198,10 @@ pub fn mix(
 ) -> (DVec3, f64) {
     let (mut keep, mut sum, mut weight) = (1.0 - base.1, base.1 * base.0, base.1);
     for (layer, style) in layers.iter().zip(styles) {
-        let Some((rgb, a)) = layer.look(mm, style) else {
+        let Some((rgb, a)) = layer.look(mm, style).filter(|_| style.blend == Blend::Composite) else {
             continue;
         };
-        let alpha = 1.0 - (1.0 - a).max(0.0).powf(step / (layer.smallest_mm * world_per_mm));
+        let alpha = step_alpha(a, layer, step, world_per_mm);
         keep *= 1.0 - alpha;
         sum += alpha * rgb;
         weight += alpha;
@@ -200,6 +210,40 @@ pub fn mix(
         (sum / weight, 1.0 - keep)
     } else {
         (DVec3::ZERO, 0.0)
+    }
+}
+
+/// Rule 13's other blends along one ray: the light added, and each layer's largest light.
+pub struct Glow {
+    added: DVec3,
+    peaks: Vec<DVec3>,
+}
+
+impl Glow {
+    pub fn new(layers: usize) -> Glow {
+        Glow {
+            added: DVec3::ZERO,
+            peaks: vec![DVec3::ZERO; layers],
+        }
+    }
+
+    /// The steps at `mm` of the layers blended by addition or maximum, seen through transmittance `front`.
+    pub fn gather(&mut self, layers: &[RefLayer], styles: &[LayerStyle], mm: DVec3, step: (f64, f64), front: f64) {
+        for (i, (layer, style)) in layers.iter().zip(styles).enumerate() {
+            let Some((rgb, a)) = layer.look(mm, style) else {
+                continue;
+            };
+            match style.blend {
+                Blend::Composite => {}
+                Blend::Add => self.added += front * step_alpha(a, layer, step.0, step.1) * rgb,
+                Blend::Max => self.peaks[i] = self.peaks[i].max(front * a * rgb),
+            }
+        }
+    }
+
+    /// What is added to the ray's colour at its end.
+    pub fn total(&self) -> DVec3 {
+        self.peaks.iter().fold(self.added, |sum, &p| sum + p)
     }
 }
 

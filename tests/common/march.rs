@@ -3,7 +3,7 @@
 //! isosurface with its bisection), in f64. `Reference` (reference.rs) holds the volume it samples.
 
 use super::classify::{encode, jitter_offset, linear, Classifier};
-use super::layers::mix;
+use super::layers::{mix, Glow};
 use super::rays::{ray_segment, CameraBasis};
 use super::reference::{shade, Lamp, PixelTrace, Placement, Reference, Segment};
 use super::segments::Segments;
@@ -286,6 +286,7 @@ impl<'a> Frame<'a> {
             })
             .map(|(_, t)| t)
             .collect();
+        let mut glow = Glow::new(self.layers.len());
         let ends = samples
             .iter()
             .map(|&t| (t, true))
@@ -301,6 +302,8 @@ impl<'a> Frame<'a> {
             let mut seg = self.base_segment(segment, (vp, v), (t_mid_prev, t), length, light);
             if is_sample && !self.layers.is_empty() {
                 let mm = self.volume.mm_at(tex);
+                let step = (self.step, self.world_per_mm);
+                glow.gather(&self.volume.layers, &self.layers, mm, step, 1.0 - alpha);
                 let base = seg.unwrap_or((DVec3::ZERO, 0.0));
                 let mixed = mix(
                     base,
@@ -321,6 +324,8 @@ impl<'a> Frame<'a> {
                 break;
             }
         }
+        // Rule 13: the other blends' light, added at the ray's end.
+        color += glow.total();
         Composite { color, alpha }
     }
 

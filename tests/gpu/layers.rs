@@ -12,7 +12,7 @@ use volcast::gpu::Gpu;
 use volcast::render::headless::Headless;
 use volcast::render::layers::LayerInput;
 use volcast::scene::camera::Camera;
-use volcast::scene::layers::LayerStyle;
+use volcast::scene::layers::{Blend, LayerStyle};
 use volcast::scene::settings::RenderSettings;
 use volcast::transfer::Colormap;
 use volcast::volume::geometry::Geometry;
@@ -90,6 +90,10 @@ fn yellow() -> LayerStyle {
         opacity: 0.95,
         ..LayerStyle::default()
     }
+}
+
+fn overlay_input(volume: &Volume) -> LayerInput<'_> {
+    LayerInput { volume, labels: None }
 }
 
 fn render_layered(
@@ -219,5 +223,111 @@ fn a_signed_overlay_and_sparse_labels_on_their_own_grids_match_the_reference() {
     assert!(strided < all, "the base takes strides: {strided} of {all} samples");
     eprintln!("strides take {strided} of {all} samples");
     judge.against("layers", "signed-and-labels".into(), &actual, &expected, &s, REFERENCE);
+    finish(gpu, headless, judge);
+}
+
+/// Rule 13's other blends: an overlay blended by addition and one by maximum, each on its own grid, match the
+/// reference; neither absorbs (every pixel is at least the base's alone), and the maximum of a ball behind an
+/// opaque slab is hidden by it, as depth demands.
+#[test]
+fn overlays_blended_by_maximum_and_addition_match_the_reference_and_absorb_nothing() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut judge = Judge::default();
+    let base = volume("base", BASE, 1.0, 0.0, |p| soft(p.abs().max_element(), 0.3, 0.05));
+    let shifted = |dx: f64| move |p: DVec3| 4.0 * ball(p - DVec3::new(dx, 0.0, 0.0));
+    let added = volume("added", LAYER, 2.0, 1.5, shifted(0.12));
+    let peak = volume("peak", LAYER, 2.0, 0.75, shifted(-0.12));
+    let mut s = view(&base);
+    (s.colour.step_alpha, s.colour.window) = (0.03, [0.05, 1.0]);
+    s.camera = Camera::orbit(30.0, 20.0, 2.2, Vec3::ZERO);
+    let blended = |blend, opacity, colormap| LayerStyle {
+        blend,
+        opacity,
+        colormap,
+        ..LayerStyle::overlay([0.0, 4.0], Some(0.5))
+    };
+    s.layers = vec![
+        LayerStyle {
+            tint: Some([40, 255, 90]),
+            ..blended(Blend::Add, 0.15, Colormap::Viridis)
+        },
+        blended(Blend::Max, 0.8, Colormap::Plasma),
+    ];
+    let actual = render_layered(
+        &gpu,
+        &mut headless,
+        &base,
+        &[overlay_input(&added), overlay_input(&peak)],
+        &s,
+    );
+    let reference = Reference::new(&base).with_layers(vec![RefLayer::overlay(&added), RefLayer::overlay(&peak)]);
+    judge.against(
+        "layers",
+        "add-and-max".into(),
+        &actual,
+        &reference.render_full(&s),
+        &s,
+        REFERENCE,
+    );
+    let alone = headless
+        .render(
+            &gpu,
+            &RenderSettings {
+                layers: Vec::new(),
+                ..s.clone()
+            },
+        )
+        .expect("render")
+        .image;
+    let lit = actual
+        .pixels()
+        .zip(alone.pixels())
+        .filter(|(a, b)| a[1] > b[1] + 8)
+        .count();
+    assert!(lit > 100, "the blended balls show: {lit} pixels brighter");
+    for (a, b) in actual.pixels().zip(alone.pixels()) {
+        assert!(
+            (0..3).all(|c| u16::from(a[c]) + 1 >= u16::from(b[c])),
+            "a blend absorbed: {a:?} under {b:?} alone"
+        );
+    }
+    // Depth: an opaque slab in front hides the maximum of the ball behind it; behind it, the ball shows.
+    let eye = view(&base).camera.eye.as_dvec3().normalize();
+    for front in [true, false] {
+        let slab_base = volume("slab", BASE, 1.0, 0.0, slab(eye, front));
+        let ball_layer = volume("ball", LAYER, 2.0, 0.5, |p| 4.0 * ball(p));
+        // A red slab (cool-warm's top: little green), so that the ball's yellow light added over it shows.
+        let mut s = view(&slab_base);
+        s.colour.colormap = Colormap::CoolWarm;
+        s.layers = vec![blended(Blend::Max, 0.95, Colormap::Plasma)];
+        let actual = render_layered(&gpu, &mut headless, &slab_base, &[overlay_input(&ball_layer)], &s);
+        let reference = Reference::new(&slab_base).with_layers(vec![RefLayer::overlay(&ball_layer)]);
+        let label = format!("max-{}-slab", if front { "behind" } else { "before" });
+        judge.against(
+            "layers",
+            label.clone(),
+            &actual,
+            &reference.render_full(&s),
+            &s,
+            REFERENCE,
+        );
+        let alone = headless
+            .render(
+                &gpu,
+                &RenderSettings {
+                    layers: Vec::new(),
+                    ..s.clone()
+                },
+            )
+            .expect("render")
+            .image;
+        let (a, b) = (actual.get_pixel(32, 32), alone.get_pixel(32, 32));
+        let brighter = i32::from(a[1]) - i32::from(b[1]);
+        assert!(
+            if front { brighter <= 12 } else { brighter >= 40 },
+            "{label}: {a:?} over {b:?} alone"
+        );
+    }
     finish(gpu, headless, judge);
 }
