@@ -115,8 +115,9 @@ fn frame(
         .into_iter()
         .map(|(v, labels)| (v.as_ref().clone(), labels))
         .collect();
+    let channels = args.layers.channels_of(&volume, |k| args.volume.channel(k))?;
     args.layers
-        .load_with(held_layers)?
+        .load_all(channels, held_layers)?
         .show(gpu, headless, volume_shown, &mut s)?;
     steps::make_resident(gpu, headless, args, volume_shown, &s)?;
     let image = steps::image(gpu, headless, args, volume_shown, &s)?;

@@ -26,13 +26,13 @@ SAMPLES = {
     "early_termination": 0.9, "background": (0.1, 0.1, 0.2), "slice": ("x", 0.5, 0.4), "clip_plane": (0, 0, 1, 0),
     "positions": "rgba16f", "output": "OUT", "method": "compute", "timings": True, "memory": True, "colorbar": True,
     "scale_bar": True, "overlay": ["OVERLAY"], "threshold": 0.5, "overlay_opacity": 0.4,
-    "overlay_colormap": "viridis", "labels": ["LABELS"], "label_table": "TABLE", "label_ids": [1],
-    "label_opacity": 0.3,
+    "overlay_colormap": "viridis", "overlay_blend": "add", "labels": ["LABELS"], "label_table": "TABLE", "label_ids": [1],
+    "label_opacity": 0.3, "channels": "all",
     "frames": 2, "state": None, "level": 0, "turntable": None, "keyframes": None, "fps": None,
 }
 # Read-a-file options (the walk's volume is built in) and the state file: test_the_file_options_apply_to_a_path;
 # the movie's options: test_the_movie_options_are_keywords.
-NOT_HERE = {"dims", "type", "endian", "header_bytes", "array", "series", "channel", "validate", "state",
+NOT_HERE = {"dims", "type", "endian", "header_bytes", "array", "series", "channel", "channels", "validate", "state",
             "turntable", "keyframes", "fps"}
 # Options that conflict with another sample, rendered in a call of their own.
 ALONE = {"eye", "view_dir", "view", "preset", "tf", "save_tf", "gradient_texture", "max_dim", "no_downsample",
@@ -145,6 +145,8 @@ def test_the_file_options_apply_to_a_path(tmp_path, data):
     assert np.array_equal(ours, volcast.render(little, size=24))
     multi = data / "vtk" / "legacy_multi_binary.vtk"
     assert not np.array_equal(volcast.render(multi, size=24), volcast.render(multi, array="density", size=24))
+    store = data / "zarr" / "napari_czyx.zarr"
+    assert not np.array_equal(volcast.render(store, size=24), volcast.render(store, channels="all", size=24))
     state = tmp_path / "state.json"
     state.write_text(volcast.view_state(little, azimuth=70, size=24, mode="mip"))
     assert np.array_equal(volcast.render(little, state=state), volcast.render(little, azimuth=70, size=24, mode="mip"))

@@ -134,6 +134,14 @@ impl VolumeArgs {
         Ok(v)
     }
 
+    /// Channel `k` of this file, read as the volume is (the same choice of level), its notes left out: a layer of
+    /// `--channels`.
+    pub fn channel(&self, k: u32) -> Result<Volume> {
+        let mut a = self.clone();
+        a.channel = Some(k);
+        a.load_without_notes()
+    }
+
     /// The volume, its notes left to the caller: `info` prints them with the rest, so saying them on stderr too
     /// showed each twice.
     pub fn load_without_notes(&self) -> Result<Volume> {

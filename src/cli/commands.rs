@@ -73,7 +73,8 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
     let mut base = args.frame.settings(&volume)?;
     // Rule 13's layers in every view, for both ray setups.
     super::layers::check(args.layers.any(), &base)?;
-    let layers = args.layers.load()?;
+    let channels = args.layers.channels_of(&volume, |k| args.volume.channel(k))?;
+    let layers = args.layers.load_all(channels, Vec::new())?;
     base.layers = layers.styles.clone();
     let mut views = compare::builtin_views(&base, volume.extent());
     if args.frame.camera.eye.is_some() {

@@ -4,7 +4,7 @@
 use crate::formats::{label_table, open, OpenOptions};
 use crate::render::headless::Headless;
 use crate::render::layers::LayerInput;
-use crate::scene::layers::LayerStyle;
+use crate::scene::layers::{Blend, LayerStyle};
 use crate::scene::settings::RenderSettings;
 use crate::transfer::colormap::Colormap;
 use crate::volume::labels::{LabelMap, LabelTable};
@@ -31,6 +31,17 @@ pub struct LayerArgs {
     /// The overlays' colormap (default: cool-warm for signed maps, plasma for others)
     #[arg(long, value_name = "NAME", value_parser = super::parse::parse_colormap, help_heading = "Layers", hide_short_help = true)]
     pub overlay_colormap: Option<Colormap>,
+    /// How the overlays meet the rest: composite (in depth, default), max (each one's brightest along the ray) or
+    /// add (light without absorption, as fluorescence); max and add are dimmed by what lies in front
+    #[arg(long, value_name = "BLEND", value_parser = super::parse::parse_blend, help_heading = "Layers", hide_short_help = true)]
+    pub overlay_blend: Option<Blend>,
+    /// Further channels of the volume's file as overlays: `all`, or their numbers (e.g. 1,2)
+    ///
+    /// Each channel of an OME-Zarr image with a `c` axis is read as the volume is (the same level) and shown in its
+    /// omero colour, a ramp from black over its window, blended by maximum (--overlay-blend) at full opacity
+    /// (--overlay-opacity); `volcast info STORE` lists them. The volume itself shows --channel (default 0).
+    #[arg(long, value_name = "all|N,..", value_delimiter = ',', help_heading = "Layers")]
+    pub channels: Vec<String>,
     /// A label map (an atlas, a segmentation) composited in depth with the volume (repeatable)
     ///
     /// Integer ids, sampled at the nearest voxel and coloured per id: by the label table beside it (NAME.txt with
@@ -64,7 +75,39 @@ pub struct Layers {
 
 impl LayerArgs {
     pub fn any(&self) -> bool {
-        !self.overlay.is_empty() || !self.labels.is_empty()
+        !self.overlay.is_empty() || !self.labels.is_empty() || !self.channels.is_empty()
+    }
+
+    /// The channels `--channels` names of `base`'s file (not the one `base` shows), each read by `open(channel)`.
+    pub fn channels_of(&self, base: &Volume, open: impl Fn(u32) -> Result<Volume>) -> Result<Vec<Volume>> {
+        if self.channels.is_empty() {
+            return Ok(Vec::new());
+        }
+        let count = base.channels.len() as u32;
+        if count == 0 {
+            bail!(
+                "{}: --channels needs a file with channels (an OME-Zarr image with a c axis); this one has one",
+                base.name
+            );
+        }
+        let shown = base.channels.iter().position(|c| c.loaded).unwrap_or(0) as u32;
+        let wanted: Vec<u32> = if self.channels.iter().any(|c| c.trim() == "all") {
+            (0..count).collect()
+        } else {
+            let number = |c: &String| {
+                c.trim()
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|&k| k < count)
+                    .with_context(|| format!("{}: --channels {c}: the channels are 0 to {}", base.name, count - 1))
+            };
+            self.channels.iter().map(number).collect::<Result<_>>()?
+        };
+        let mut volumes = Vec::new();
+        for k in wanted.into_iter().filter(|&k| k != shown) {
+            volumes.push(open(k)?);
+        }
+        Ok(volumes)
     }
 
     /// Reads every layer; warnings (a table naming ids the map lacks, duplicate ids) go to stderr.
@@ -75,6 +118,11 @@ impl LayerArgs {
     /// The layers of the files named, and `held` (volumes the caller holds, each an overlay or, with `true`, a
     /// label map), in order: the overlays' files, the overlays held, the label maps' files, the label maps held.
     pub fn load_with(&self, held: Vec<(Volume, bool)>) -> Result<Layers> {
+        self.load_all(Vec::new(), held)
+    }
+
+    /// [`LayerArgs::load_with`] with `channels` (from [`LayerArgs::channels_of`]) after the overlays' files.
+    pub fn load_all(&self, channels: Vec<Volume>, held: Vec<(Volume, bool)>) -> Result<Layers> {
         let mut layers = Layers {
             volumes: Vec::new(),
             labels: Vec::new(),
@@ -84,6 +132,9 @@ impl LayerArgs {
         for path in &self.overlay {
             let v = open(path, &OpenOptions::default())?;
             self.add_overlay(&mut layers, v, &path.display().to_string())?;
+        }
+        for v in channels {
+            self.add_channel(&mut layers, v)?;
         }
         for (v, _) in held_overlays {
             let name = v.name.clone();
@@ -111,6 +162,33 @@ impl LayerArgs {
         let mut style = LayerStyle::overlay(v.range, self.threshold);
         style.opacity = self.overlay_opacity.unwrap_or(style.opacity);
         style.colormap = self.overlay_colormap.unwrap_or(style.colormap);
+        style.blend = self.overlay_blend.unwrap_or(style.blend);
+        style.check().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        layers.volumes.push(v);
+        layers.labels.push(None);
+        layers.styles.push(style);
+        Ok(())
+    }
+
+    /// A channel: its omero colour as a ramp over its window (shown from the window's start), by maximum at full
+    /// opacity unless told otherwise.
+    fn add_channel(&self, layers: &mut Layers, v: Volume) -> Result<()> {
+        let display = v.channels.iter().find(|c| c.loaded).map(|c| (c.window, c.color));
+        let (window, tint) = match display {
+            Some((w, c)) if w[0] < w[1] => (w, c),
+            Some((_, c)) => (v.range, c),
+            None => (v.range, [255, 255, 255]),
+        };
+        let style = LayerStyle {
+            window,
+            threshold: Some(self.threshold.unwrap_or(window[0])),
+            tint: self.overlay_colormap.is_none().then_some(tint),
+            colormap: self.overlay_colormap.unwrap_or(Colormap::Grayscale),
+            blend: self.overlay_blend.unwrap_or(Blend::Max),
+            opacity: self.overlay_opacity.unwrap_or(1.0),
+            ..LayerStyle::default()
+        };
+        let name = v.name.clone();
         style.check().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
         layers.volumes.push(v);
         layers.labels.push(None);

@@ -222,7 +222,8 @@ pub fn record_movie(
 ) -> Result<String> {
     let files = crate::movie::MovieFiles::new(&args.output, plan.frame_count())?;
     super::layers::check(args.layers.any() || !held.is_empty(), plan.first())?;
-    let layers = args.layers.load_with(held)?;
+    let channels = args.layers.channels_of(volume, |k| args.volume.channel(k))?;
+    let layers = args.layers.load_all(channels, held)?;
     let reduced = place(gpu, headless, args, volume)?;
     let volume = reduced.as_ref().unwrap_or(volume);
     // Rule 13's layers in every frame (none where no --overlay or --labels was given).
@@ -349,7 +350,9 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
         let loaded = loaded.and_then(|(v, s)| {
             super::layers::check(args.layers.any(), &s)?;
-            Ok((v, s, args.layers.load()?))
+            let channels = args.layers.channels_of(&v, |k| args.volume.channel(k))?;
+            let layers = args.layers.load_all(channels, Vec::new())?;
+            Ok((v, s, layers))
         });
         let (mut volume, mut s, layers) = match loaded {
             Ok(v) => v,

@@ -147,3 +147,61 @@ fn convert_round_trip_keeps_the_affine_and_frame() {
         assert_eq!(back["value_range"], source["value_range"]);
     }
 }
+
+/// `--channels` shows a store's other channels over the one `--channel` shows, each in its omero colour: DAPI
+/// (blue) over GFP (green) adds blue, and GFP over DAPI adds green; a channel the store lacks, or a file without
+/// channels, is refused naming the file.
+#[test]
+fn every_channel_shows_in_its_own_colour() {
+    let dir = common::scratch("cli-zarr-channels");
+    let path = store("sharded_tczyx.zarr");
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec!["render", &path, "--size", "96x96", "-o", out.to_str().unwrap()];
+        args.extend(extra);
+        volcast_ok(&args);
+        let image = image::open(&out).unwrap().to_rgba8();
+        [0, 1, 2].map(|c| image.pixels().map(|p| u64::from(p[c])).sum::<u64>())
+    };
+    let dapi = render("dapi.png", &[]);
+    let with_gfp = render("dapi-gfp.png", &["--channels", "all"]);
+    let gfp = render("gfp.png", &["--channel", "1"]);
+    let with_dapi = render("gfp-dapi.png", &["--channel", "1", "--channels", "0"]);
+    assert!(dapi[2] > 2 * dapi[1] + 1000, "DAPI alone is blue: {dapi:?}");
+    assert!(
+        with_gfp[1] > dapi[1] + 50_000,
+        "GFP adds green: {with_gfp:?} over {dapi:?}"
+    );
+    assert!(gfp[1] > 2 * gfp[2] + 1000, "GFP alone is green: {gfp:?}");
+    assert!(
+        with_dapi[2] > gfp[2] + 50_000,
+        "DAPI adds blue: {with_dapi:?} over {gfp:?}"
+    );
+    let o = volcast(&[
+        "render",
+        &path,
+        "--channels",
+        "2",
+        "-o",
+        dir.join("x.png").to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("sharded_tczyx") && e.contains("the channels are 0 to 1"),
+        "{e}"
+    );
+    let o = volcast(&[
+        "render",
+        &store("v05.zarr"),
+        "--channels",
+        "all",
+        "-o",
+        dir.join("x.png").to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert!(
+        !o.status.success() && e.contains("--channels needs a file with channels"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
