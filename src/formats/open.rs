@@ -58,7 +58,8 @@ pub struct OpenOptions {
     /// The series to load from a DICOM folder holding several: a SeriesNumber or SeriesInstanceUID (`None`: the
     /// largest).
     pub series: Option<String>,
-    /// The channel to load from an OME-Zarr image with a `c` axis (`None`: channel 0).
+    /// The channel to load from an OME-Zarr image with a `c` axis, an ImageJ hyperstack or an OME-TIFF (`None`:
+    /// channel 0).
     pub channel: Option<u32>,
 }
 
@@ -247,7 +248,7 @@ fn open_unnamed(
         Format::Nifti => nifti::load(path, &mut progress)?,
         Format::MetaImage => metaimage::load(path, &mut progress)?,
         Format::Dicom => dicom::load(path, opts.series.as_deref(), &mut progress)?,
-        Format::Tiff => tiff_stack::load(path, &mut progress)?,
+        Format::Tiff => tiff_stack::load(path, opts.channel, &mut progress)?,
         Format::OmeZarr => {
             let zarr_opts = zarr::ZarrOptions {
                 channel: opts.channel,

@@ -7,7 +7,7 @@
 
 use super::decode::{try_vec, DecodeError, Progress};
 use super::format::{self, header_error};
-use crate::volume::{check_dims, Volume, VolumeError, VoxelData, VoxelType, MAX_DIM};
+use crate::volume::{check_dims, ChannelInfo, Volume, VolumeError, VoxelData, VoxelType, MAX_DIM};
 use ::tiff::decoder::ifd::Value;
 use ::tiff::decoder::{Decoder, DecodingResult, Limits};
 use ::tiff::tags::Tag;
@@ -377,7 +377,44 @@ fn finish(
     })?;
     v.format = "TIFF".into();
     v.notes = layout.notes;
+    v.channels = (0..layout.channels)
+        .map(|k| ChannelInfo {
+            name: format!("channel {k}"),
+            // No display range in the file: the window is the data's (an empty one says so).
+            window: [0.0, 0.0],
+            color: IMAGEJ_COLOURS[k % IMAGEJ_COLOURS.len()],
+            loaded: k == layout.channel,
+        })
+        .filter(|_| layout.channels > 1)
+        .collect();
     Ok(v)
+}
+
+/// The colours ImageJ gives a composite image's channels, in order: red, green, blue, grey, cyan, magenta, yellow.
+const IMAGEJ_COLOURS: [[u8; 3]; 7] = [
+    [255, 0, 0],
+    [0, 255, 0],
+    [0, 0, 255],
+    [255, 255, 255],
+    [0, 255, 255],
+    [255, 0, 255],
+    [255, 255, 0],
+];
+
+/// Refuses a channel the layout does not have, naming the file.
+fn check_channel(file: &str, layout: &Layout) -> Result<(), VolumeError> {
+    if layout.channel < layout.channels {
+        return Ok(());
+    }
+    Err(header_error(
+        file,
+        format!(
+            "channel {} does not exist: the file has {} channel(s), 0 to {}",
+            layout.channel,
+            layout.channels,
+            layout.channels - 1
+        ),
+    ))
 }
 
 /// The kept pages' voxel count, checked against the limits before anything is allocated.
@@ -405,10 +442,11 @@ fn load_reader<R: Read + Seek>(
     len: u64,
     file: &str,
     name: String,
-    progress: &mut Progress,
+    (channel, progress): (Option<u32>, &mut Progress),
 ) -> Result<Volume, VolumeError> {
     let (mut dec, pages, meta) = walk_pages(reader, file, len, false)?;
-    let layout = layout(&meta, pages.len());
+    let layout = layout(&meta, pages.len(), channel);
+    check_channel(file, &layout)?;
     let (first, dims, count) = plan(file, &pages, &layout.slices)?;
     let slice = first.width as usize * first.height as usize;
     let mut data = empty_data(first.voxel_type, count, dims)?;
@@ -430,7 +468,7 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
         bytes.len() as u64,
         "tiff",
         "tiff".into(),
-        &mut Progress::none(),
+        (None, &mut Progress::none()),
     )
 }
 
@@ -509,13 +547,14 @@ pub(crate) fn folder_files(path: &Path) -> Result<Vec<PathBuf>, VolumeError> {
     Ok(files)
 }
 
-/// Loads a multi-page TIFF file, or a folder of single-page TIFFs (one slice each, in natural name order).
-pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, VolumeError> {
+/// Loads a multi-page TIFF file (`channel` of a hyperstack or an OME-TIFF, default 0), or a folder of single-page
+/// TIFFs (one slice each, in natural name order).
+pub(crate) fn load(path: &Path, channel: Option<u32>, progress: &mut Progress) -> Result<Volume, VolumeError> {
     let label = format::file_label(path);
     let name = format::volume_name(path);
     if !path.is_dir() {
         let (reader, len) = open_file(path)?;
-        return load_reader(reader, len, &label, name, progress);
+        return load_reader(reader, len, &label, name, (channel, progress));
     }
     let files = folder_files(path)?;
     if files.is_empty() {
@@ -536,7 +575,8 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
     for (f, page) in files.iter().zip(&pages) {
         check_same(&label, &pages[0], page, &format::file_label(f))?;
     }
-    let mut layout = layout(&meta, 1);
+    let mut layout = layout(&meta, 1, channel);
+    check_channel(&label, &layout)?;
     layout.slices = (0..files.len()).collect();
     let (first, dims, count) = plan(&label, &pages, &layout.slices)?;
     let slice = first.width as usize * first.height as usize;

@@ -157,10 +157,14 @@ impl Info {
             let [r, g, b] = c.color;
             out.line(
                 if i == 0 { "channels" } else { "" },
-                format!(
-                    "{i}: {}, window {} .. {}, colour #{r:02X}{g:02X}{b:02X}{loaded}",
-                    c.name, c.window[0], c.window[1]
-                ),
+                match c.window {
+                    // An empty window: the file gives none (a TIFF's channels).
+                    [lo, hi] if lo < hi => format!(
+                        "{i}: {}, window {lo} .. {hi}, colour #{r:02X}{g:02X}{b:02X}{loaded}",
+                        c.name
+                    ),
+                    _ => format!("{i}: {}, colour #{r:02X}{g:02X}{b:02X}{loaded}", c.name),
+                },
             );
         }
         for note in &self.notes {

@@ -79,7 +79,8 @@ pub struct VolumeFacts {
     pub integer: bool,
     /// The modality the file names, upper case ("CT", "MR"), if any.
     pub modality: Option<String>,
-    /// The display window (data units) and colour the file gives the loaded channel (OME-Zarr omero), if any.
+    /// The display window (data units) and colour of the loaded channel (OME-Zarr omero; a TIFF's by ImageJ's
+    /// order over the data's range), if it is one of several.
     pub display: Option<([f64; 2], [u8; 3])>,
 }
 
@@ -92,7 +93,11 @@ impl VolumeFacts {
             range: volume.range,
             integer: integer_type && integer_scale,
             modality: volume.modality.as_ref().map(|m| m.trim().to_ascii_uppercase()),
-            display: volume.channels.iter().find(|c| c.loaded).map(|c| (c.window, c.color)),
+            // A channel without a window of its own (a TIFF's) spans the data's range.
+            display: volume.channels.iter().find(|c| c.loaded).map(|c| {
+                let own = c.window[0] < c.window[1];
+                (if own { c.window } else { volume.range }, c.color)
+            }),
         }
     }
 

@@ -92,8 +92,35 @@ fn tifffile_oracles_load_with_their_values_and_spacing() {
 
 #[test]
 fn hyperstacks_folders_and_rgb() {
+    // tifffile's ImageJ hyperstack (make.py): page (z, c) holds ((2z + c)·63 + 9y + x) mod 251; channel 0 is
+    // loaded, another by its number, and the channels are listed in ImageJ's colours.
     let v = Volume::open(&data("hyperstack.tif")).unwrap();
-    assert!(v.notes.iter().any(|n| n.contains("first channel")), "{:?}", v.notes);
+    assert!(
+        v.notes.iter().any(|n| n.contains("channel 0 of the first frame")),
+        "{:?}",
+        v.notes
+    );
+    assert_eq!(
+        (v.value(0, 0, 1), v.channels.len(), v.channels[1].color),
+        (126.0, 2, [0, 255, 0])
+    );
+    let second = |channel| volcast::formats::OpenOptions {
+        channel: Some(channel),
+        ..Default::default()
+    };
+    let v = volcast::formats::open(&data("hyperstack.tif"), &second(1)).unwrap();
+    assert_eq!(
+        (v.value(0, 0, 1), v.value(2, 1, 2)),
+        (189.0, ((5 * 63 + 9 + 2) % 251) as f64)
+    );
+    assert!(v.channels[1].loaded && !v.channels[0].loaded);
+    let e = volcast::formats::open(&data("hyperstack.tif"), &second(2))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("hyperstack.tif") && e.contains("channel 2 does not exist"),
+        "{e}"
+    );
     let v = Volume::open(&data("stack")).unwrap();
     assert_eq!(v.dims, [9, 7, 12]);
     // z1 .. z12 in natural order: slice z holds 10·(z+1) + x + 9y.

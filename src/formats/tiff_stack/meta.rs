@@ -108,17 +108,23 @@ pub(super) struct Layout {
     pub(super) slices: Vec<usize>,
     pub(super) spacing: [f64; 3],
     pub(super) notes: Vec<String>,
+    /// The channels of a hyperstack or an OME-TIFF (1 for others), and the one `slices` holds.
+    pub(super) channels: usize,
+    pub(super) channel: usize,
 }
 
 pub(super) fn positive(text: &str) -> Option<f64> {
     text.trim().parse::<f64>().ok().filter(|v| v.is_finite() && *v > 0.0)
 }
 
-pub(super) fn layout(meta: &Metadata, pages: usize) -> Layout {
+/// The layout of `pages` pages, the slices those of `channel` (default 0).
+pub(super) fn layout(meta: &Metadata, pages: usize, channel: Option<u32>) -> Layout {
     let mut l = Layout {
         slices: (0..pages).collect(),
         spacing: [1.0; 3],
         notes: Vec::new(),
+        channels: 1,
+        channel: channel.unwrap_or(0) as usize,
     };
     let description = meta.description.as_deref().unwrap_or("");
     let mut imagej = ImageJSpacing::default();
@@ -159,10 +165,12 @@ impl Layout {
         if c > 1 || t > 1 {
             if c.checked_mul(z).and_then(|n| n.checked_mul(t)) == Some(pages) {
                 // ImageJ's page order is channel fastest, then slice, then frame.
-                self.slices = (0..z).map(|i| i * c).collect();
+                let k = self.channel;
+                self.slices = (0..z).map(|i| i * c + k).collect();
+                self.channels = c;
                 self.notes.push(format!(
-                    "ImageJ hyperstack of {c} channel(s) × {z} slices × {t} frame(s): the first channel of the first \
-                     frame is loaded"
+                    "ImageJ hyperstack of {c} channel(s) × {z} slices × {t} frame(s): channel {k} of the first frame is \
+                     loaded"
                 ));
             } else {
                 self.notes.push(format!(
@@ -191,18 +199,24 @@ impl Layout {
         );
         let order = xml_attr(pixels, "DimensionOrder").unwrap_or("XYZCT");
         if (c > 1 || t > 1) && z.checked_mul(c).and_then(|n| n.checked_mul(t)) == Some(pages) {
-            let mut stride = 1;
+            // Each axis's page stride: the product of the sizes of the axes before it in the order.
+            let (mut strides, mut next) = ([0usize; 3], 1);
             for axis in order.chars().skip(2) {
-                match axis {
-                    'Z' => break,
-                    'C' => stride *= c,
-                    'T' => stride *= t,
-                    _ => {}
-                }
+                let (i, n) = match axis {
+                    'Z' => (0, z),
+                    'C' => (1, c),
+                    'T' => (2, t),
+                    _ => continue,
+                };
+                strides[i] = next;
+                next *= n;
             }
-            self.slices = (0..z).map(|i| i * stride).collect();
+            let k = self.channel;
+            self.slices = (0..z).map(|i| i * strides[0] + k * strides[1]).collect();
+            self.channels = c;
             self.notes.push(format!(
-                "OME-TIFF of {c} channel(s) × {z} slices × {t} time point(s): the first channel and time point are loaded"
+                "OME-TIFF of {c} channel(s) × {z} slices × {t} time point(s): channel {k} of the first time point is \
+                 loaded"
             ));
         } else if c > 1 || t > 1 {
             self.notes.push(format!(
@@ -291,7 +305,7 @@ mod tests {
             y_resolution: Some(2.0),
             resolution_unit: Some(1),
         };
-        let l = layout(&meta, 5);
+        let l = layout(&meta, 5, None);
         assert_eq!(l.slices, [0, 1, 2, 3, 4]);
         let want = [0.25e-3, 0.5e-3, 2.5e-3];
         for (got, want) in l.spacing.iter().zip(want) {
@@ -302,8 +316,9 @@ mod tests {
             description: Some("ImageJ=1.11a\nimages=12\nchannels=2\nslices=3\nframes=2\nhyperstack=true\n".into()),
             ..Metadata::default()
         };
-        let l = layout(&meta, 12);
+        let l = layout(&meta, 12, None);
         assert_eq!(l.slices, [0, 2, 4]);
+        assert_eq!((layout(&meta, 12, Some(1)).slices, l.channels), (vec![1, 3, 5], 2));
         assert_eq!(l.spacing, [1.0; 3]);
         // No unit, no ImageJ: spacing 1 whatever the resolution.
         let meta = Metadata {
@@ -311,13 +326,13 @@ mod tests {
             y_resolution: Some(72.0),
             ..Metadata::default()
         };
-        assert_eq!(layout(&meta, 3).spacing, [1.0; 3]);
+        assert_eq!(layout(&meta, 3, None).spacing, [1.0; 3]);
         // Inches: 72 dpi, z taken equal to x.
         let meta = Metadata {
             resolution_unit: Some(2),
             ..meta
         };
-        let s = layout(&meta, 3).spacing;
+        let s = layout(&meta, 3, None).spacing;
         assert!((s[0] - 25.4 / 72.0).abs() < 1e-12 && s[2] == s[0], "{s:?}");
     }
 
@@ -328,8 +343,9 @@ mod tests {
             description: Some(xml.into()),
             ..Metadata::default()
         };
-        let l = layout(&meta, 10);
+        let l = layout(&meta, 10, None);
         assert_eq!(l.slices, [0, 2, 4, 6, 8]);
+        assert_eq!(layout(&meta, 10, Some(1)).slices, [1, 3, 5, 7, 9]);
         assert_eq!(l.spacing, [0.5e-3, 0.25e-3, 2.0]);
     }
 }

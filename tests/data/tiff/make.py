@@ -45,7 +45,7 @@ def write_all():
     w(path("i32.tif"), ramp(np.int32, -100000, 7))
     w(path("u32.tif"), ramp(np.uint32, 70001))
     w(path("f64.tif"), ramp(np.float64, 0.125, -1.0))
-    # An ImageJ hyperstack: 3 slices x 2 channels; volcast loads channel 0.
+    # An ImageJ hyperstack: 3 slices x 2 channels; volcast loads channel 0, or another by --channel.
     hyper = (np.arange(3 * 2 * Y * X).reshape(1, 3, 2, Y, X) % 251).astype(np.uint8)
     w(path("hyperstack.tif"), hyper, imagej=True, metadata={"axes": "TZCYX"})
     # OME-TIFF with physical sizes in micrometres.
