@@ -70,6 +70,7 @@ fn load_scene_volume(scene: &Scene, opts: &BenchOptions) -> Result<Result<Volume
             }
             Ok(Ok(Volume::open(&path)?))
         }
+        Source::Channel => Ok(Ok(layered::channel_volume(0))),
         Source::VtkHelix => match &opts.vtk_raw {
             Some(path) => {
                 let raw = RawOptions {

@@ -1,7 +1,7 @@
 //! The bench's scene table: which volumes, transfer functions, cameras, sizes and shadings are timed, and the
 //! `vtk-helix` scene that matches `../shared/tools/vtk_bench.py`.
 
-use super::layered::{BenchLayer, AAL, ALONE, OVER_T1, T1, ZMAP};
+use super::layered::{BenchLayer, LayerFrom, AAL, ALONE, FOUR_CHANNELS, ONE_CHANNEL, OVER_T1, T1, ZMAP};
 use crate::scene::camera::Camera;
 use crate::scene::settings::{self, RenderSettings};
 use crate::transfer::Colormap;
@@ -24,6 +24,8 @@ pub enum Source {
     Native {
         file: &'static str,
     },
+    /// Generated fluorescence channel 0 (`layered::channel_volume`).
+    Channel,
     /// `../shared/tools/make_volume.py`'s helix: the file given with `--vtk-raw`, else the same field generated
     /// here by [`vtk_helix_volume`] (a port of the script; see there for how close it is).
     VtkHelix,
@@ -171,7 +173,45 @@ pub fn scenes() -> Vec<Scene> {
             &[AAL],
         ),
         layered(OVER_T1[2], "the T1 with the z-map and the AAL atlas", &[ZMAP, AAL]),
+        channels(
+            ONE_CHANNEL,
+            "a 256³ channel of 48 balls (generated), as a fluorescence channel",
+            &[],
+        ),
+        channels(
+            FOUR_CHANNELS,
+            "the channel with three more of their own balls over it, by maximum (--channels all)",
+            &[CHANNEL_1, CHANNEL_2, CHANNEL_3],
+        ),
     ]
+}
+
+const fn channel(k: u32) -> BenchLayer {
+    BenchLayer {
+        from: LayerFrom::Channel(k),
+        labels: false,
+        threshold: None,
+    }
+}
+const CHANNEL_1: BenchLayer = channel(1);
+const CHANNEL_2: BenchLayer = channel(2);
+const CHANNEL_3: BenchLayer = channel(3);
+
+/// A channel scene at 512², unshaded: generated channel 0 in red with `layers` (channels) over it.
+fn channels(name: &'static str, about: &'static str, layers: &'static [BenchLayer]) -> Scene {
+    Scene {
+        name,
+        about,
+        source: Source::Channel,
+        configure: |s, _| {
+            s.colour.window = [0.1, 1.0];
+            s.colour.colormap = Colormap::Grayscale;
+            s.colour.step_alpha = 0.3;
+        },
+        sizes: &[512],
+        shadings: &[Shading::Off],
+        layers,
+    }
 }
 
 /// A layered scene (rule 13) at 512², unshaded: the T1 as `mri-brain` shows it, with `layers`; its ratio to
