@@ -96,6 +96,15 @@ fn overlay_input(volume: &Volume) -> LayerInput<'_> {
     LayerInput { volume, labels: None }
 }
 
+/// The frame of `s` without its layers (the renderer keeps them).
+fn base_alone(gpu: &Gpu, headless: &mut Headless, s: &RenderSettings) -> image::RgbaImage {
+    let alone = RenderSettings {
+        layers: Vec::new(),
+        ..s.clone()
+    };
+    headless.render(gpu, &alone).expect("render").image
+}
+
 fn render_layered(
     gpu: &Gpu,
     headless: &mut Headless,
@@ -270,16 +279,7 @@ fn overlays_blended_by_maximum_and_addition_match_the_reference_and_absorb_nothi
         &s,
         REFERENCE,
     );
-    let alone = headless
-        .render(
-            &gpu,
-            &RenderSettings {
-                layers: Vec::new(),
-                ..s.clone()
-            },
-        )
-        .expect("render")
-        .image;
+    let alone = base_alone(&gpu, &mut headless, &s);
     let lit = actual
         .pixels()
         .zip(alone.pixels())
@@ -312,16 +312,7 @@ fn overlays_blended_by_maximum_and_addition_match_the_reference_and_absorb_nothi
             &s,
             REFERENCE,
         );
-        let alone = headless
-            .render(
-                &gpu,
-                &RenderSettings {
-                    layers: Vec::new(),
-                    ..s.clone()
-                },
-            )
-            .expect("render")
-            .image;
+        let alone = base_alone(&gpu, &mut headless, &s);
         let (a, b) = (actual.get_pixel(32, 32), alone.get_pixel(32, 32));
         let brighter = i32::from(a[1]) - i32::from(b[1]);
         assert!(

@@ -197,7 +197,7 @@ const CHANNEL_1: BenchLayer = channel(1);
 const CHANNEL_2: BenchLayer = channel(2);
 const CHANNEL_3: BenchLayer = channel(3);
 
-/// A channel scene at 512², unshaded: generated channel 0 in red with `layers` (channels) over it.
+/// A channel scene at 512², unshaded: generated channel 0 in grey with `layers` (channels) over it.
 fn channels(name: &'static str, about: &'static str, layers: &'static [BenchLayer]) -> Scene {
     Scene {
         name,
