@@ -110,13 +110,14 @@ fn frame(
     // Rule 13's layers, as `volcast render` reads them, and the arrays given (none: the layers of an earlier call
     // are dropped).
     let mut s = s;
-    volcast::cli::layers::check(args.layers.any() || !held_layers.is_empty(), &s)?;
+    let layer_args = steps::layer_args(args, &mut s)?;
+    volcast::cli::layers::check(layer_args.any() || !held_layers.is_empty(), &s)?;
     let held_layers = held_layers
         .into_iter()
         .map(|(v, labels)| (v.as_ref().clone(), labels))
         .collect();
-    let channels = args.layers.channels_of(&volume, |k| args.volume.channel(k))?;
-    args.layers
+    let channels = layer_args.channels_of(&volume, |k| args.volume.channel(k))?;
+    layer_args
         .load_all(channels, held_layers)?
         .show(gpu, headless, volume_shown, &mut s)?;
     steps::make_resident(gpu, headless, args, volume_shown, &s)?;
@@ -251,14 +252,22 @@ pub fn view_state(
 ) -> PyResult<String> {
     let (args, held) = prepared(volume.as_deref(), argv, tf_json)?;
     let state = crate::wait::on_thread(py, move || -> anyhow::Result<String> {
-        let (spacing, settings) = match &held {
-            Some((_, v)) => (v.spacing(), steps::view_settings(&args, v)?),
-            None => steps::render_view(&args).map(|(v, s)| (v.spacing(), s))?,
+        let (volume, mut settings) = match held {
+            Some((_, v)) => {
+                let s = steps::view_settings(&args, &v)?;
+                (v, s)
+            }
+            None => steps::render_view(&args).map(|(v, s)| (Arc::new(v), s))?,
         };
+        // The layers' files and looks, which `--state` shows again.
+        let layer_args = steps::layer_args(&args, &mut settings)?;
+        let channels = layer_args.channels_of(&volume, |k| args.volume.channel(k))?;
+        settings.layers = layer_args.load_all(channels, Vec::new())?.looks(&settings.layers);
         let state = volcast::scene::view_state::ViewState {
-            volume: volume_ref(&args, spacing),
+            volume: volume_ref(&args, volume.spacing()),
             settings,
             viewer: None,
+            layer_files: layer_args.files(),
         };
         Ok(state.to_json())
     })?;

@@ -6,6 +6,7 @@ use crate::render::headless::Headless;
 use crate::render::layers::LayerInput;
 use crate::scene::layers::{Blend, LayerStyle};
 use crate::scene::settings::RenderSettings;
+use crate::scene::view_state::LayerFiles;
 use crate::transfer::colormap::Colormap;
 use crate::volume::labels::{LabelMap, LabelTable};
 use crate::volume::Volume;
@@ -76,6 +77,41 @@ pub struct Layers {
 impl LayerArgs {
     pub fn any(&self) -> bool {
         !self.overlay.is_empty() || !self.labels.is_empty() || !self.channels.is_empty()
+    }
+
+    /// These arguments with a saved view's layer files where none are given here; true where they are the view's.
+    pub fn or_from(&self, files: &LayerFiles) -> (LayerArgs, bool) {
+        if self.any() || files.is_empty() {
+            return (self.clone(), false);
+        }
+        let mut a = self.clone();
+        a.overlay = files.overlays.clone();
+        a.labels = files.labels.clone();
+        a.label_table = a.label_table.or(files.label_table.clone());
+        a.label_ids = files.label_ids.clone();
+        a.channels = files.channels.clone();
+        (a, true)
+    }
+
+    /// The files these arguments name, absolute: what a saved view records.
+    pub fn files(&self) -> LayerFiles {
+        let absolute = |p: &PathBuf| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
+        LayerFiles {
+            overlays: self.overlay.iter().map(absolute).collect(),
+            labels: self.labels.iter().map(absolute).collect(),
+            label_table: self.label_table.as_ref().map(absolute),
+            label_ids: self.label_ids.clone(),
+            channels: self.channels.clone(),
+        }
+    }
+
+    /// Whether a layer's look is given here: then a saved view's looks give way to these.
+    pub fn styled(&self) -> bool {
+        self.threshold.is_some()
+            || self.overlay_opacity.is_some()
+            || self.overlay_colormap.is_some()
+            || self.overlay_blend.is_some()
+            || self.label_opacity.is_some()
     }
 
     /// The channels `--channels` names of `base`'s file (not the one `base` shows), each read by `open(channel)`.
@@ -227,8 +263,19 @@ impl Layers {
         s: &mut RenderSettings,
     ) -> Result<()> {
         self.upload(gpu, headless, base)?;
-        s.layers = self.styles.clone();
+        s.layers = self.looks(&s.layers);
         Ok(())
+    }
+
+    /// The looks frames give these layers: `saved` (a saved view's, for its own layers) where it styles layers of the
+    /// same kinds, else their own.
+    pub fn looks(&self, saved: &[LayerStyle]) -> Vec<LayerStyle> {
+        let fits = saved.len() == self.styles.len() && saved.iter().zip(&self.styles).all(|(a, b)| a.kind == b.kind);
+        if fits {
+            saved.to_vec()
+        } else {
+            self.styles.clone()
+        }
     }
 
     /// Gives the renderer these layers over `base` (a note where one reaches beyond its box); frames style them

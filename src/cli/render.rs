@@ -67,6 +67,17 @@ impl FrameTimes {
     }
 }
 
+/// The layers `render` shows: the options', or where they name none the saved view's (`--state`), whose looks
+/// `s` then keeps; other looks in `s` are dropped, for the layers' own.
+pub fn layer_args(args: &RenderArgs, s: &mut RenderSettings) -> Result<super::layers::LayerArgs> {
+    let files = read_state(args)?.map(|st| st.layer_files).unwrap_or_default();
+    let (layers, saved) = args.layers.or_from(&files);
+    if !saved || layers.styled() {
+        s.layers.clear();
+    }
+    Ok(layers)
+}
+
 /// The saved view `--state` names, if any.
 fn read_state(args: &RenderArgs) -> Result<Option<crate::scene::view_state::ViewState>> {
     let Some(path) = &args.state else {
@@ -221,14 +232,16 @@ pub fn record_movie(
     progress: &mut dyn FnMut(u32) -> bool,
 ) -> Result<String> {
     let files = crate::movie::MovieFiles::new(&args.output, plan.frame_count())?;
-    super::layers::check(args.layers.any() || !held.is_empty(), plan.first())?;
-    let channels = args.layers.channels_of(volume, |k| args.volume.channel(k))?;
-    let layers = args.layers.load_all(channels, held)?;
+    let mut first = plan.first().clone();
+    let layer_args = layer_args(args, &mut first)?;
+    super::layers::check(layer_args.any() || !held.is_empty(), plan.first())?;
+    let channels = layer_args.channels_of(volume, |k| args.volume.channel(k))?;
+    let layers = layer_args.load_all(channels, held)?;
     let reduced = place(gpu, headless, args, volume)?;
     let volume = reduced.as_ref().unwrap_or(volume);
     // Rule 13's layers in every frame (none where no --overlay or --labels was given).
     layers.upload(gpu, headless, volume)?;
-    let plan = &plan.clone().with_layers(&layers.styles);
+    let plan = &plan.clone().with_layers(&layers.looks(&first.layers));
     if let Some(st) = headless.renderer.stream() {
         let gpu_budget = args
             .volume
@@ -348,10 +361,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         let t_load = Instant::now();
         let loaded = render_view(args);
         let load_ms = t_load.elapsed().as_secs_f64() * 1e3;
-        let loaded = loaded.and_then(|(v, s)| {
-            super::layers::check(args.layers.any(), &s)?;
-            let channels = args.layers.channels_of(&v, |k| args.volume.channel(k))?;
-            let layers = args.layers.load_all(channels, Vec::new())?;
+        let loaded = loaded.and_then(|(v, mut s)| {
+            let layer_args = layer_args(args, &mut s)?;
+            super::layers::check(layer_args.any(), &s)?;
+            let channels = layer_args.channels_of(&v, |k| args.volume.channel(k))?;
+            let layers = layer_args.load_all(channels, Vec::new())?;
             Ok((v, s, layers))
         });
         let (mut volume, mut s, layers) = match loaded {

@@ -85,6 +85,7 @@ mod tests {
             },
             settings: RenderSettings::new(size.0, size.1, glam::Vec3::ONE),
             viewer: None,
+            layer_files: Default::default(),
         };
         let path = dir.join(name);
         std::fs::write(&path, state.to_json()).unwrap();

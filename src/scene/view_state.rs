@@ -26,6 +26,26 @@ pub struct VolumeRef {
     pub channel: Option<u32>,
 }
 
+/// The files of the layers a view shows (rule 13), as `render` names them; their looks are the settings' `layers`,
+/// in the order they load: the overlays, the channels, the label maps.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct LayerFiles {
+    /// Absolute, as the volume's path.
+    pub overlays: Vec<PathBuf>,
+    pub labels: Vec<PathBuf>,
+    pub label_table: Option<PathBuf>,
+    pub label_ids: Vec<u32>,
+    /// `--channels`: `all` or numbers.
+    pub channels: Vec<String>,
+}
+
+impl LayerFiles {
+    pub fn is_empty(&self) -> bool {
+        self.overlays.is_empty() && self.labels.is_empty() && self.channels.is_empty()
+    }
+}
+
 /// What the viewer shows beyond the rendered view, for a session to restore it (`render` ignores it).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
@@ -69,6 +89,9 @@ pub struct ViewState {
     pub settings: RenderSettings,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub viewer: Option<ViewerSession>,
+    /// The layers' files (none: the volume alone); `settings.layers` holds their looks.
+    #[serde(default, skip_serializing_if = "LayerFiles::is_empty")]
+    pub layer_files: LayerFiles,
 }
 
 impl ViewState {
@@ -103,6 +126,10 @@ mod tests {
                 crosshair: [1.5, 2.0, 3.25],
                 ..ViewerSession::default()
             }),
+            layer_files: LayerFiles {
+                overlays: vec!["/data/zmap.nii.gz".into()],
+                ..LayerFiles::default()
+            },
         };
         let json = state.to_json();
         assert_eq!(ViewState::from_json(&json, "x.json").unwrap(), state);

@@ -112,6 +112,7 @@ fn a_view_state_carries_the_plane() {
         },
         settings,
         viewer: None,
+        layer_files: Default::default(),
     };
     let json = state.to_json();
     assert!(json.contains("\"clip_plane\""), "{json}");

@@ -143,6 +143,7 @@ fn write_state(dir: &Path, name: &str, builtin: &str, azimuth: f32, elevation: f
         },
         settings,
         viewer: None,
+        layer_files: Default::default(),
     };
     let path = dir.join(name);
     std::fs::write(&path, state.to_json()).expect("write a state");

@@ -31,6 +31,7 @@ fn saved() -> ViewState {
         },
         settings,
         viewer: None,
+        layer_files: Default::default(),
     }
 }
 

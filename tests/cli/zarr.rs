@@ -94,6 +94,7 @@ fn a_state_keeps_the_channel() {
         },
         settings: volcast::scene::settings::RenderSettings::new(48, 40, extent),
         viewer: None,
+        layer_files: Default::default(),
     };
     let write = |name: &str, state: &volcast::scene::view_state::ViewState| {
         let file = dir.join(name);

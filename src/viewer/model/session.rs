@@ -78,6 +78,7 @@ mod tests {
             volume: VolumeRef::default(),
             settings: settings.clone(),
             viewer: Some(a.session()),
+            layer_files: Default::default(),
         };
         let json = saved.to_json();
         let mut b = Model::new(glam::Vec3::ONE, "b".into());
@@ -102,6 +103,7 @@ mod tests {
             volume: VolumeRef::default(),
             settings: plain,
             viewer: None,
+            layer_files: Default::default(),
         });
         assert_eq!(b.render_settings(200, 100).sampling.step_length, 0.37);
     }
