@@ -71,8 +71,8 @@ pub struct VolumeArgs {
     /// one with the most slices, or the series of the file given); `volcast info FOLDER` lists them.
     #[arg(long, value_name = "N|UID", hide_short_help = true)]
     pub series: Option<String>,
-    /// The channel to load from an OME-Zarr image with a `c` axis, an ImageJ hyperstack or an OME-TIFF, from 0
-    /// (default 0); `volcast info FILE` lists them.
+    /// The channel to load from an OME-Zarr image with a `c` axis, an ImageJ hyperstack, an OME-TIFF or a 5-D NIfTI,
+    /// from 0 (default 0); `volcast info FILE` lists them.
     #[arg(long, value_name = "N", hide_short_help = true)]
     pub channel: Option<u32>,
     /// The time step of a 4-D series to show, from 0 (default 0)

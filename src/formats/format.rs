@@ -67,6 +67,9 @@ pub struct Header {
     pub arrays: Vec<crate::volume::ArrayInfo>,
     /// Time steps stored one after another (the slowest, fourth axis of a 4-D file); 1 for a 3-D volume.
     pub timesteps: u32,
+    /// Volumes along a fifth axis (NIfTI `dim[5]`: channels) and the one read; 1 and 0 for other files.
+    pub channels: u32,
+    pub channel: u32,
     /// The steps are stored interleaved, step fastest (a NRRD whose first axis is a list, as a Slicer segmentation
     /// with overlapping segments stores its layers).
     pub interleaved: bool,
@@ -88,6 +91,8 @@ impl Header {
             notes: Vec::new(),
             arrays: Vec::new(),
             timesteps: 1,
+            channels: 1,
+            channel: 0,
             interleaved: false,
         }
     }
@@ -138,6 +143,7 @@ impl Header {
         v.format = self.format.to_string();
         v.notes = self.notes;
         v.arrays = self.arrays;
+        v.channels = crate::volume::ChannelInfo::numbered(self.channels as usize, self.channel as usize);
         Ok(v)
     }
 }

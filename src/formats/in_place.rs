@@ -90,6 +90,7 @@ pub fn in_place(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, Volu
                 return Ok(None);
             }
             let mut h = nifti::parse_file(&prefix, &file)?;
+            nifti::pick_channel(&mut h, opts.channel, &file)?;
             if let DataLocation::Detached { skip, .. } = h.location {
                 // A .hdr/.img pair, as the loader reads it.
                 let img = path.with_extension("img");
@@ -194,6 +195,7 @@ pub fn compressed(path: &Path, opts: &OpenOptions) -> Result<Option<InPlace>, Vo
                 return Ok(None);
             }
             let mut h = nifti::parse_file(&gzip_prefix(path, 544)?, &file)?;
+            nifti::pick_channel(&mut h, opts.channel, &file)?;
             let DataLocation::Inline(Some(vox_offset)) = h.location else {
                 return Ok(None);
             };

@@ -113,12 +113,12 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
         return load_gzip(
             &mut &bytes[..],
             bytes.len() as u64,
-            "nifti".into(),
+            ("nifti".into(), None),
             file,
             &mut Progress::none(),
         );
     }
-    let header = parse_header(bytes)?;
+    let mut header = parse_header(bytes)?;
     if header.location != DataLocation::Inline(Some(header_offset(&header))) {
         return Err(header_error(
             file,
@@ -128,6 +128,7 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
             ),
         ));
     }
+    pick_channel(&mut header, None, file)?;
     format::load(
         header,
         "nifti".into(),
@@ -135,6 +136,44 @@ pub fn from_bytes(bytes: &[u8]) -> Result<Volume, VolumeError> {
         Source::Bytes(bytes),
         &mut Progress::none(),
     )
+}
+
+/// Moves `h`'s voxels to channel `channel` (default 0) along `dim[5]`: the volumes before it (each its time steps)
+/// are skipped. A channel the file lacks is refused, naming the file.
+pub(crate) fn pick_channel(h: &mut Header, channel: Option<u32>, file: &str) -> Result<(), VolumeError> {
+    let k = channel.unwrap_or(0);
+    if k >= h.channels {
+        return Err(header_error(
+            file,
+            format!(
+                "channel {k} does not exist: the file has {} channel(s) along dim[5]",
+                h.channels
+            ),
+        ));
+    }
+    let step = crate::volume::check_dims(h.dims)?;
+    let too_far = || header_error(file, format!("channel {k} lies beyond what a file can hold"));
+    let shift = [u64::from(h.timesteps.max(1)), h.voxel_type.size() as u64, u64::from(k)]
+        .into_iter()
+        .try_fold(step, u64::checked_mul)
+        .ok_or_else(too_far)?;
+    let moved = |o: u64| o.checked_add(shift).ok_or_else(too_far);
+    h.location = match &h.location {
+        DataLocation::Inline(Some(o)) => DataLocation::Inline(Some(moved(*o)?)),
+        DataLocation::Detached { name, skip: Some(o) } => DataLocation::Detached {
+            name: name.clone(),
+            skip: Some(moved(*o)?),
+        },
+        other => other.clone(),
+    };
+    h.channel = k;
+    if h.channels > 1 {
+        h.notes.push(format!(
+            "channel {k} of {} along dim[5]; choose another with --channel",
+            h.channels
+        ));
+    }
+    Ok(())
 }
 
 fn header_offset(h: &Header) -> u64 {
@@ -149,7 +188,7 @@ fn header_offset(h: &Header) -> u64 {
 fn load_gzip(
     reader: &mut dyn Read,
     compressed_len: u64,
-    name: String,
+    (name, channel): (String, Option<u32>),
     file: &str,
     progress: &mut Progress,
 ) -> Result<Volume, VolumeError> {
@@ -171,6 +210,7 @@ fn load_gzip(
         .read_to_end(&mut head)
         .map_err(corrupt)?;
     let mut header = parse_file(&head, file)?;
+    pick_channel(&mut header, channel, file)?;
     let offset = header_offset(&header);
     if offset == u64::MAX {
         return Err(header_error(
@@ -222,7 +262,8 @@ fn load_gzip(
     header.into_volume(name, data)
 }
 
-pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, VolumeError> {
+/// Loads a NIfTI or Analyze file, channel `channel` (default 0) of one with a fifth axis.
+pub(crate) fn load(path: &Path, channel: Option<u32>, progress: &mut Progress) -> Result<Volume, VolumeError> {
     let file = format::file_label(path);
     let prefix = format::read_prefix(path, nifti2::HEADER_SIZE)?;
     let name = format::volume_name(path);
@@ -233,9 +274,10 @@ pub(crate) fn load(path: &Path, progress: &mut Progress) -> Result<Volume, Volum
         };
         let len = std::fs::metadata(path).map_err(io)?.len();
         let mut f = File::open(path).map_err(io)?;
-        return load_gzip(&mut f, len, name, &file, progress);
+        return load_gzip(&mut f, len, (name, channel), &file, progress);
     }
     let mut header = parse_file(&prefix, &file)?;
+    pick_channel(&mut header, channel, &file)?;
     let mut data_file = file;
     if let DataLocation::Detached { skip, .. } = header.location {
         // A .hdr/.img pair: the voxels are in the .img beside the header, which the errors from here on name (the
@@ -322,7 +364,7 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn four_d_loads_every_step_and_five_d_the_first_group() {
+    fn four_d_loads_every_step_and_five_d_its_first_channel() {
         let data: Vec<u8> = (0..16).collect();
         let mut v = from_bytes(&nifti_bytes(&[4, 2, 2, 1, 4], 2, [1.0; 3], (0.0, 0.0), false, &data)).unwrap();
         assert_eq!((v.dims, v.timesteps()), ([2, 2, 1], 4));
@@ -333,9 +375,24 @@ pub(crate) mod tests {
         let v = from_bytes(&nifti_bytes(&[5, 2, 2, 1, 4, 2], 2, [1.0; 3], (0.0, 0.0), false, &data)).unwrap();
         assert_eq!((v.timesteps(), v.stored_range), (4, [0.0, 15.0]));
         assert!(
+            v.notes.iter().any(|n| n.contains("channel 0 of 2 along dim[5]")) && v.channels.len() == 2,
+            "{:?}",
+            v.notes
+        );
+        // A sixth axis: its first group only.
+        let v = from_bytes(&nifti_bytes(
+            &[6, 2, 2, 1, 4, 1, 2],
+            2,
+            [1.0; 3],
+            (0.0, 0.0),
+            false,
+            &data,
+        ))
+        .unwrap();
+        assert!(
             v.notes
                 .iter()
-                .any(|n| n.contains("only the first of 2 groups along dim[5..5]")),
+                .any(|n| n.contains("only the first of 2 groups along dim[6..6]")),
             "{:?}",
             v.notes
         );

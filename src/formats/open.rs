@@ -58,8 +58,8 @@ pub struct OpenOptions {
     /// The series to load from a DICOM folder holding several: a SeriesNumber or SeriesInstanceUID (`None`: the
     /// largest).
     pub series: Option<String>,
-    /// The channel to load from an OME-Zarr image with a `c` axis, an ImageJ hyperstack or an OME-TIFF (`None`:
-    /// channel 0).
+    /// The channel to load from an OME-Zarr image with a `c` axis, an ImageJ hyperstack, an OME-TIFF or a NIfTI's
+    /// `dim[5]` (`None`: channel 0).
     pub channel: Option<u32>,
 }
 
@@ -245,7 +245,7 @@ fn open_unnamed(
         Format::Vtk => vtk::load(path, opts.array.as_deref(), &mut progress)?,
         Format::Vti => vtk::vti::load(path, opts.array.as_deref(), &mut progress)?,
         Format::Nrrd => nrrd::load(path, &mut progress)?,
-        Format::Nifti => nifti::load(path, &mut progress)?,
+        Format::Nifti => nifti::load(path, opts.channel, &mut progress)?,
         Format::MetaImage => metaimage::load(path, &mut progress)?,
         Format::Dicom => dicom::load(path, opts.series.as_deref(), &mut progress)?,
         Format::Tiff => tiff_stack::load(path, opts.channel, &mut progress)?,

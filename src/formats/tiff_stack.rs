@@ -377,29 +377,9 @@ fn finish(
     })?;
     v.format = "TIFF".into();
     v.notes = layout.notes;
-    v.channels = (0..layout.channels)
-        .map(|k| ChannelInfo {
-            name: format!("channel {k}"),
-            // No display range in the file: the window is the data's (an empty one says so).
-            window: [0.0, 0.0],
-            color: IMAGEJ_COLOURS[k % IMAGEJ_COLOURS.len()],
-            loaded: k == layout.channel,
-        })
-        .filter(|_| layout.channels > 1)
-        .collect();
+    v.channels = ChannelInfo::numbered(layout.channels, layout.channel);
     Ok(v)
 }
-
-/// The colours ImageJ gives a composite image's channels, in order: red, green, blue, grey, cyan, magenta, yellow.
-const IMAGEJ_COLOURS: [[u8; 3]; 7] = [
-    [255, 0, 0],
-    [0, 255, 0],
-    [0, 0, 255],
-    [255, 255, 255],
-    [0, 255, 255],
-    [255, 0, 255],
-    [255, 255, 0],
-];
 
 /// Refuses a channel the layout does not have, naming the file.
 fn check_channel(file: &str, layout: &Layout) -> Result<(), VolumeError> {

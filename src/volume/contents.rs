@@ -60,6 +60,36 @@ impl SeriesInfo {
     }
 }
 
+/// The colours ImageJ gives a composite image's channels, in order: red, green, blue, grey, cyan, magenta, yellow;
+/// volcast gives them to the channels of files that name none (TIFF, NIfTI).
+pub const CHANNEL_COLOURS: [[u8; 3]; 7] = [
+    [255, 0, 0],
+    [0, 255, 0],
+    [0, 0, 255],
+    [255, 255, 255],
+    [0, 255, 255],
+    [255, 0, 255],
+    [255, 255, 0],
+];
+
+impl ChannelInfo {
+    /// The channels `0..count` of a file that names none, `loaded` marked: no window of their own (an empty one: the
+    /// data's range stands for it) and [`CHANNEL_COLOURS`]; none for a file of one channel.
+    pub fn numbered(count: usize, loaded: usize) -> Vec<ChannelInfo> {
+        if count < 2 {
+            return Vec::new();
+        }
+        (0..count)
+            .map(|k| ChannelInfo {
+                name: format!("channel {k}"),
+                window: [0.0, 0.0],
+                color: CHANNEL_COLOURS[k % CHANNEL_COLOURS.len()],
+                loaded: k == loaded,
+            })
+            .collect()
+    }
+}
+
 /// A channel's display settings from `omero`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ChannelInfo {

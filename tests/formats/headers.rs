@@ -286,3 +286,29 @@ fn hostile_analyze_headers_are_refused_clearly() {
     let e = err(&dir.write("lonely.hdr", &hdr));
     assert!(e.contains("lonely.img"), "{e}");
 }
+
+/// A 5-D NIfTI as nibabel writes a multi-channel image (make_channels.py): channel 0 opens by default, another by
+/// `--channel`, the three are listed, and a fourth is refused naming the file.
+#[test]
+fn nifti_channels_along_dim5_open_one_by_one() {
+    let path = data("channels_5d.nii.gz");
+    let channel = |c| OpenOptions {
+        channel: Some(c),
+        ..OpenOptions::default()
+    };
+    let v = open(&path).unwrap();
+    assert_eq!((v.dims, v.value(1, 2, 3), v.channels.len()), ([6, 5, 4], 103.0, 3));
+    assert!(
+        v.channels[0].loaded && v.notes.iter().any(|n| n.contains("channel 0 of 3")),
+        "{:?}",
+        v.notes
+    );
+    let v = formats::open(&path, &channel(2)).unwrap();
+    assert_eq!((v.value(1, 2, 3), v.value(5, 4, 0)), (303.0, 229.0));
+    assert!(v.channels[2].loaded);
+    let e = formats::open(&path, &channel(3)).unwrap_err().to_string();
+    assert!(
+        e.contains("channels_5d.nii.gz") && e.contains("channel 3 does not exist"),
+        "{e}"
+    );
+}

@@ -126,6 +126,10 @@ pub(super) fn build(f: &Fields, endian: Endian, file: &str) -> Result<Header, Vo
     Ok(h)
 }
 
+/// The most channels along `dim[5]` that are listed and can be chosen; a larger axis is read as before, its first
+/// volume only.
+const MAX_CHANNELS: i64 = 256;
+
 /// Sets the header's dimensions and time steps from `dim`.
 fn read_size(f: &Fields, file: &str, h: &mut Header) -> Result<(), VolumeError> {
     let ndim = f.dim[0];
@@ -140,11 +144,17 @@ fn read_size(f: &Fields, file: &str, h: &mut Header) -> Result<(), VolumeError> 
     // dim[4] is time: every step is loaded. Higher axes (dim[5..7]) are not: the first of them.
     h.timesteps = dim.get(3).map_or(1, |&t| t.max(1) as u32);
     // dims_from bounds each by u32::MAX, so three of them can overflow an i64.
-    let extra = dim.iter().skip(4).fold(1i64, |a, &d| a.saturating_mul(d));
+    // dim[5] holds channels (one is read: nifti::pick_channel), up to MAX_CHANNELS; higher axes only their first.
+    let channels = dim.get(4).map_or(1, |&c| c.max(1));
+    let listed = channels <= MAX_CHANNELS;
+    h.channels = if listed { channels as u32 } else { 1 };
+    let skip = if listed { 5 } else { 4 };
+    let extra = dim.iter().skip(skip).fold(1i64, |a, &d| a.saturating_mul(d));
     if extra > 1 {
         h.notes.push(format!(
-            "{ndim}-D {}: only the first of {extra} groups along dim[5..{ndim}] is loaded",
-            f.format
+            "{ndim}-D {}: only the first of {extra} groups along dim[{}..{ndim}] is loaded",
+            f.format,
+            skip + 1
         ));
     }
     Ok(())
