@@ -41,7 +41,13 @@ pub struct LayerArgs {
     /// Each channel of an OME-Zarr image with a `c` axis is read as the volume is (the same level) and shown in its
     /// omero colour, a ramp from black over its window, blended by maximum (--overlay-blend) at full opacity
     /// (--overlay-opacity); `volcast info STORE` lists them. The volume itself shows --channel (default 0).
-    #[arg(long, value_name = "all|N,..", value_delimiter = ',', help_heading = "Layers")]
+    #[arg(
+        long,
+        value_name = "all|N,..",
+        value_delimiter = ',',
+        help_heading = "Layers",
+        hide_short_help = true
+    )]
     pub channels: Vec<String>,
     /// A label map (an atlas, a segmentation) composited in depth with the volume (repeatable)
     ///
