@@ -119,6 +119,7 @@ fn main() -> ExitCode {
                 channel: None,
                 time: None,
             },
+            layers: Default::default(),
             gpu: GpuArgs {
                 validate: false,
                 device: None,

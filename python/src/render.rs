@@ -117,9 +117,8 @@ fn frame(
         .map(|(v, labels)| (v.as_ref().clone(), labels))
         .collect();
     let channels = layer_args.channels_of(&volume, |k| args.volume.channel(k))?;
-    layer_args
-        .load_all(channels, held_layers)?
-        .show(gpu, headless, volume_shown, &mut s)?;
+    let layers = layer_args.load_all(channels, held_layers)?;
+    volcast::cli::layers::show(&layers, gpu, headless, volume_shown, &mut s)?;
     steps::make_resident(gpu, headless, args, volume_shown, &s)?;
     let image = steps::image(gpu, headless, args, volume_shown, &s)?;
     let timings = if args.timings {

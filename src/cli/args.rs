@@ -364,6 +364,8 @@ pub struct ViewArgs {
     #[command(flatten)]
     pub volume: VolumeArgs,
     #[command(flatten)]
+    pub layers: super::layers::LayerArgs,
+    #[command(flatten)]
     pub gpu: GpuArgs,
     /// Initial window size WxH.
     #[arg(long, default_value = "1280x800", value_parser = parse_size, help_heading = "Options")]

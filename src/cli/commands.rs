@@ -6,6 +6,7 @@ use crate::gpu::GpuError;
 use crate::measure::compare;
 use crate::render::headless::Headless;
 use crate::scene::quality::Quality;
+use crate::scene::view_state::ViewState;
 use crate::transfer::function::TransferFunction;
 use crate::viewer::{self, ViewerOptions, VolumeSource};
 use anyhow::{bail, Context, Result};
@@ -13,6 +14,26 @@ use std::path::PathBuf;
 
 pub fn view(args: &ViewArgs) -> Result<()> {
     view_source(args, None)
+}
+
+/// The layers `args` name, else those of the session restored (with its looks), read before the window opens
+/// (`--channels` reads the volume's file here to list them).
+fn view_layers(args: &ViewArgs, restore: Option<&ViewState>) -> Result<crate::scene::layer_set::Layers> {
+    let (layer_args, saved) = match restore {
+        Some(state) => args.layers.or_from(&state.layer_files),
+        None => (args.layers.clone(), false),
+    };
+    let channels = if layer_args.channels.is_empty() {
+        Vec::new()
+    } else {
+        let base = args.volume.load_without_notes()?;
+        layer_args.channels_of(&base, |k| args.volume.channel(k))?
+    };
+    let mut layers = layer_args.load_all(channels, Vec::new())?;
+    if let Some(state) = restore.filter(|_| saved && !args.layers.styled()) {
+        layers.styles = layers.looks(&state.settings.layers);
+    }
+    Ok(layers)
 }
 
 /// The viewer on `source` where one is given (the Python module's volumes), else on what `args` name.
@@ -39,6 +60,7 @@ pub fn view_source(args: &ViewArgs, source: Option<VolumeSource>) -> Result<()> 
         (None, Some(path)) => Some(TransferFunction::load(path)?),
         (None, None) => None,
     };
+    let layers = view_layers(args, restore.as_ref())?;
     let opts = ViewerOptions {
         source,
         series: args.volume.series.clone(),
@@ -56,6 +78,8 @@ pub fn view_source(args: &ViewArgs, source: Option<VolumeSource>) -> Result<()> 
         slices: args.slices,
         restore,
         transfer_function,
+        layers,
+        layer_looks: args.layers.looks(),
     };
     let log = viewer::run(opts)?;
     if args.gpu.options().validation {
@@ -89,7 +113,7 @@ pub fn compare(args: &CompareArgs) -> Result<()> {
         let mut headless = Headless::new(gpu)?;
         let result = (|| -> Result<Vec<compare::Row>> {
             headless.set_volume(gpu, &volume)?;
-            layers.upload(gpu, &mut headless, &volume)?;
+            super::layers::upload(&layers, gpu, &mut headless, &volume)?;
             let mut rows = Vec::new();
             for view in &views {
                 let c = compare::compare_view(gpu, &mut headless, view, args.frames)?;

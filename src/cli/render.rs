@@ -240,7 +240,7 @@ pub fn record_movie(
     let reduced = place(gpu, headless, args, volume)?;
     let volume = reduced.as_ref().unwrap_or(volume);
     // Rule 13's layers in every frame (none where no --overlay or --labels was given).
-    layers.upload(gpu, headless, volume)?;
+    super::layers::upload(&layers, gpu, headless, volume)?;
     let plan = &plan.clone().with_layers(&layers.looks(&first.layers));
     if let Some(st) = headless.renderer.stream() {
         let gpu_budget = args
@@ -380,7 +380,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             if let Some(reduced) = place(gpu, &mut headless, args, &volume)? {
                 volume = reduced;
             }
-            layers.show(gpu, &mut headless, &volume, &mut s)?;
+            super::layers::show(&layers, gpu, &mut headless, &volume, &mut s)?;
             make_resident(gpu, &mut headless, args, &volume, &s)?;
             let upload_ms = t_upload.elapsed().as_secs_f64() * 1e3;
             let t0 = Instant::now();

@@ -456,6 +456,20 @@ impl super::Renderer {
         Ok(())
     }
 
+    /// Holds `layers` (read from their files, `scene::layer_set`) as the frames' layers, as `set_layers`.
+    pub fn show_layers(&mut self, gpu: &Gpu, layers: &crate::scene::layer_set::Layers) -> Result<(), GpuError> {
+        let inputs: Vec<LayerInput> = layers
+            .volumes
+            .iter()
+            .zip(&layers.labels)
+            .map(|(volume, labels)| LayerInput {
+                volume,
+                labels: labels.as_ref().map(|(m, c)| (m, c.clone())),
+            })
+            .collect();
+        self.set_layers(gpu, &inputs)
+    }
+
     /// How many layers the renderer holds.
     pub fn layer_count(&self) -> usize {
         self.layers.as_ref().map_or(0, GpuLayers::count)

@@ -166,6 +166,22 @@ impl LayerStyle {
         }
     }
 
+    /// Whether an overlay shows value `v` (rule 13): finite, and over its threshold (`|v|` for a signed one), else
+    /// in its window.
+    pub fn shows(&self, v: f64) -> bool {
+        v.is_finite()
+            && match (self.threshold, self.signed) {
+                (Some(t), true) => v.abs() >= t,
+                (Some(t), false) => v >= t,
+                (None, _) => v >= self.window[0] && v <= self.window[1],
+            }
+    }
+
+    /// Where `v` lies in the window (0–1, clamped): the position of its colour.
+    pub fn position(&self, v: f64) -> f64 {
+        ((v - self.window[0]) / (self.window[1] - self.window[0])).clamp(0.0, 1.0)
+    }
+
     /// A check of the values a user gave: a message naming the bad one.
     pub fn check(&self) -> Result<(), String> {
         if !(0.0..=1.0).contains(&self.opacity) {

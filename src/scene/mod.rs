@@ -5,9 +5,11 @@
 pub mod camera;
 pub mod clip;
 pub mod groups;
+pub mod layer_set;
 pub mod layers;
 pub mod lighting;
 pub mod quality;
 pub mod settings;
 pub mod slice;
+pub mod slice_layers;
 pub mod view_state;

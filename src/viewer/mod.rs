@@ -73,6 +73,10 @@ pub struct ViewerOptions {
     pub restore: Option<crate::scene::view_state::ViewState>,
     /// A transfer function to open with, locked (`--preset`, `--tf`); None: the one chosen by modality.
     pub transfer_function: Option<crate::transfer::function::TransferFunction>,
+    /// The layers to show with the volume (`--overlay`, `--labels`, `--channels`), read before the window opens.
+    pub layers: crate::scene::layer_set::Layers,
+    /// How layers added in the panel look (the command line's look options).
+    pub layer_looks: crate::scene::layer_set::Looks,
 }
 
 /// Opens the viewer and runs until the window closes. Returns the validation log for the caller to report.

@@ -15,6 +15,7 @@ mod history;
 mod idle;
 mod keys;
 mod large;
+mod layers;
 mod lighting;
 mod panel;
 mod recent;

@@ -27,7 +27,16 @@ impl Running {
                 UiAction::OpenSession(path) => self.open_session(&path),
                 UiAction::OpenDialog => self.loader.open_dialog(),
                 UiAction::SaveMeasurements(format) => super::capture::save_measurements(&mut self.model, format),
+                UiAction::AddLayer(path, kind) => self.layers_or_report(|r| r.add_layer(&path, kind)),
+                UiAction::RemoveLayer(i) => self.layers_or_report(|r| r.remove_layer(i)),
             }
+        }
+    }
+
+    /// A change to the layers; where the device fails, its error goes under the Layers section.
+    fn layers_or_report(&mut self, change: impl FnOnce(&mut Running) -> Result<(), crate::viewer::ViewerError>) {
+        if let Err(e) = change(self) {
+            self.model.messages.error = Some(e.to_string());
         }
     }
 

@@ -10,6 +10,7 @@ use super::script::{Command, Next, Seen};
 use super::Flow;
 use crate::scene::settings::RenderSettings;
 use crate::viewer::model::actions::UiAction;
+use crate::viewer::model::slices::{SliceData, SliceSource};
 use crate::viewer::present::{view_pixels, Drawn, Frame, Readback};
 use crate::viewer::ViewerError;
 use ash::vk;
@@ -82,10 +83,13 @@ impl Running {
     /// The UI pass (it may change what this frame shows), then what it asked for.
     fn ui(&mut self, tick: &Tick) -> Result<GuiPass, ViewerError> {
         let textures = &mut self.presenter.slice_textures;
-        let mut images = |ctx: &egui::Context, image: &_, volume: Option<&_>| textures.texture(ctx, image, volume);
-        let mut pass = self
-            .gui
-            .run(&self.window, &mut self.model, self.shown.for_slices(), &mut images);
+        let mut images =
+            |ctx: &egui::Context, image: &_, source: Option<SliceSource<'_>>| textures.texture(ctx, image, source);
+        let data = SliceData {
+            volume: self.shown.for_slices(),
+            layers: &self.shown.layers,
+        };
+        let mut pass = self.gui.run(&self.window, &mut self.model, data, &mut images);
         self.pacing.repaint_after(tick.now, pass.repaint_delay);
         self.apply(std::mem::take(&mut pass.actions));
         self.shown.show_wanted_step(&mut self.presenter, &mut self.model)?;

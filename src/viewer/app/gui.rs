@@ -4,13 +4,13 @@
 use super::clock::FrameClock;
 use super::input::{drag_cut, take_tab_presses};
 use crate::viewer::model::actions::UiAction;
+use crate::viewer::model::slices::SliceData;
 use crate::viewer::model::Model;
 use crate::viewer::present::EguiFrame;
 use crate::viewer::widgets::keys;
 use crate::viewer::widgets::layout::frame_ui;
 use crate::viewer::widgets::rects;
 use crate::viewer::widgets::slice_view::SliceImages;
-use crate::volume::Volume;
 use std::time::{Duration, Instant};
 use winit::event::WindowEvent;
 use winit::window::Window;
@@ -80,12 +80,12 @@ impl Gui {
     }
 
     /// One frame's UI over `model`: the window's input since the last frame (less what a drag needs a new frame
-    /// for), the widgets, and what they painted. `volume` and `images` are the slice views'.
+    /// for), the widgets, and what they painted. `data` and `images` are the slice views'.
     pub(super) fn run(
         &mut self,
         window: &Window,
         model: &mut Model,
-        volume: Option<&Volume>,
+        data: SliceData,
         images: &mut SliceImages<'_>,
     ) -> GuiPass {
         let mut raw_input = self.winit.take_egui_input(window);
@@ -104,7 +104,7 @@ impl Gui {
         let tabs = take_tab_presses(&mut raw_input);
         let mut actions = Vec::new();
         let mut full = self.ctx.run_ui(raw_input, |ui| {
-            actions = frame_ui(ui, model, tabs, volume, images);
+            actions = frame_ui(ui, model, tabs, data, images);
         });
         // FullOutput implements Drop, so its parts are taken rather than moved out.
         let platform_output = std::mem::take(&mut full.platform_output);

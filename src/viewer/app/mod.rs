@@ -11,6 +11,7 @@ mod file_names;
 mod frame;
 mod gui;
 pub mod input;
+mod layers;
 mod loading;
 mod pacing;
 mod recording;
@@ -75,7 +76,8 @@ impl ApplicationHandler for App {
         if self.running.is_some() {
             return;
         }
-        match Running::new(event_loop, &self.opts, self.waker.clone()) {
+        let layers = std::mem::take(&mut self.opts.layers);
+        match Running::new(event_loop, &self.opts, layers, self.waker.clone()) {
             Ok(r) => {
                 self.log = Some(r.presenter.validation_log());
                 r.window.request_redraw();

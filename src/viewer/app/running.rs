@@ -28,12 +28,15 @@ pub(super) struct Running {
     pub(super) capture: Capture,
     pub(super) script: Option<Script>,
     pub(super) pacing: Pacing,
+    /// How layers added in the panel look.
+    pub(super) layer_looks: crate::scene::layer_set::Looks,
 }
 
 impl Running {
     pub(super) fn new(
         event_loop: &ActiveEventLoop,
         opts: &ViewerOptions,
+        layers: crate::scene::layer_set::Layers,
         waker: EventLoopProxy<()>,
     ) -> Result<Running, ViewerError> {
         let attributes = Window::default_attributes()
@@ -62,9 +65,10 @@ impl Running {
             capture: Capture::default(),
             script: (!opts.script.is_empty()).then(|| Script::new(&opts.script, waker)),
             pacing: Pacing::new(),
+            layer_looks: opts.layer_looks.clone(),
         };
         // On error `r` is torn down properly before the error is returned.
-        match r.show_first_volume(opts) {
+        match r.set_layers(layers).and_then(|()| r.show_first_volume(opts)) {
             Ok(()) => Ok(r),
             Err(e) => {
                 r.destroy();

@@ -20,7 +20,7 @@ impl Running {
             volume,
             settings: settings.clone(),
             viewer: Some(self.model.session()),
-            layer_files: Default::default(),
+            layer_files: self.shown.layers.files(),
         }
     }
 

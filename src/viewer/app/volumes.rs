@@ -19,6 +19,8 @@ pub(super) struct Shown {
     kept: Option<Volume>,
     /// Where the shown volume came from (for sessions and screenshots' view states).
     pub(super) source: Option<VolumeSource>,
+    /// The layers shown with it (their voxels; the model holds their looks).
+    pub(super) layers: crate::scene::layer_set::Layers,
 }
 
 impl Shown {

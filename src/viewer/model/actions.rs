@@ -30,6 +30,10 @@ pub enum UiAction {
     OpenDialog,
     /// Write the ruler's measurements into the working folder.
     SaveMeasurements(super::measurements::Format),
+    /// Read a file as a layer of this kind and show it with the volume.
+    AddLayer(PathBuf, crate::scene::layers::LayerKind),
+    /// Stop showing layer `i`.
+    RemoveLayer(usize),
 }
 
 impl UiAction {
@@ -41,6 +45,7 @@ impl UiAction {
             UiAction::SaveSession | UiAction::OpenSession(_) => Some(Topic::Session),
             UiAction::Screenshot | UiAction::ToggleRecording => Some(Topic::Capture),
             UiAction::SaveMeasurements(_) => Some(Topic::Measurements),
+            UiAction::AddLayer(..) | UiAction::RemoveLayer(_) => Some(Topic::Layers),
             _ => None,
         }
     }

@@ -13,6 +13,7 @@ pub mod export;
 pub mod files;
 pub mod framing;
 pub mod history;
+pub mod layers;
 pub mod measurements;
 pub mod orbit;
 pub mod recent;
@@ -55,6 +56,8 @@ pub struct Model {
     pub tf_editor: TfEditorState,
     /// The three slice views (four-up layout), their crosshair and window/level.
     pub slices: SliceViews,
+    /// The layers shown with the volume (their looks; the app holds their voxels).
+    pub layers: layers::LayerList,
     /// A series' step slider and playback.
     pub time: TimeControl,
     pub display: Display,
@@ -152,6 +155,8 @@ pub enum Topic {
     Capture,
     /// The ruler's measurements (the Slicing section, under their buttons).
     Measurements,
+    /// Adding and removing layers (the Layers section).
+    Layers,
 }
 
 /// A volume streamed through a pool: its slots, and how far the view has refined towards the level each brick
@@ -231,6 +236,7 @@ impl Model {
             },
             tf_editor: TfEditorState::default(),
             slices: SliceViews::default(),
+            layers: layers::LayerList::default(),
             time: TimeControl::new(1, 0),
             display: Display {
                 panel_visible: true,

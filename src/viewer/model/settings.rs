@@ -33,6 +33,7 @@ impl Model {
             Gradients::Samples
         };
         gradients.apply(&mut s, self.dims.iter().map(|&d| u64::from(d)).product());
+        s.layers = self.layers.frame_styles(&s);
         s
     }
 

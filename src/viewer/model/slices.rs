@@ -107,6 +107,23 @@ pub struct SliceImage {
     pub mm_from_index: DMat4,
     pub wl: WindowLevel,
     pub voxel_axes: bool,
+    /// [`LayerList::generation`](super::layers::LayerList) when it was made: the layers drawn over it.
+    pub layers: u64,
+}
+
+/// What the slice views show: the volume (none while loading) and the layers over it.
+#[derive(Clone, Copy)]
+pub struct SliceData<'a> {
+    pub volume: Option<&'a crate::volume::Volume>,
+    pub layers: &'a crate::scene::layer_set::Layers,
+}
+
+/// What one slice image is resampled from: the volume, and the layers with their looks.
+#[derive(Clone, Copy)]
+pub struct SliceSource<'a> {
+    pub volume: &'a crate::volume::Volume,
+    pub layers: &'a crate::scene::layer_set::Layers,
+    pub styles: &'a [crate::scene::layers::LayerStyle],
 }
 
 impl SliceImage {

@@ -151,6 +151,11 @@ impl Presenter {
         self.pass.set_volume(&self.gpu, volume, budgets)
     }
 
+    /// Shows `layers` with the volume, in place of those before.
+    pub fn set_layers(&mut self, layers: &crate::scene::layer_set::Layers) -> Result<(), GpuError> {
+        self.pass.set_layers(&self.gpu, layers)
+    }
+
     /// One step of a streamed volume (`kept`, the one shown) towards the cut the still view `s` wants, one level
     /// coarser while `moving`: its progress, and whether it reached that cut just now. `None`: shown whole.
     pub fn refine(

@@ -3,27 +3,29 @@
 //! texture changes.
 
 use crate::scene::slice;
-use crate::viewer::model::slices::SliceImage;
-use crate::volume::Volume;
+use crate::scene::slice_layers;
+use crate::viewer::model::slices::{SliceImage, SliceSource};
 
 /// Each view's texture and what it shows.
 #[derive(Default)]
 pub struct SliceTextures([Option<(SliceImage, egui::TextureHandle)>; 3]);
 
 impl SliceTextures {
-    /// The texture showing `image`, made again from `volume` when it shows something else; without a volume, the
-    /// last one made (if any).
+    /// The texture showing `image`, made again from `source` (the volume, with its layers over it) when it shows
+    /// something else; without a source, the last one made (if any).
     pub fn texture(
         &mut self,
         ctx: &egui::Context,
         image: &SliceImage,
-        volume: Option<&Volume>,
+        source: Option<SliceSource>,
     ) -> Option<egui::TextureId> {
         let slot = image.slot();
         let cached = &mut self.0[slot];
-        if let Some(volume) = volume.filter(|_| cached.as_ref().is_none_or(|(shown, _)| shown != image)) {
+        if let Some(source) = source.filter(|_| cached.as_ref().is_none_or(|(shown, _)| shown != image)) {
             let frame = &image.frame;
-            let rgba = slice::render(volume, image.mm_from_index, frame, image.wl);
+            let mut rgba = slice::render(source.volume, image.mm_from_index, frame, image.wl);
+            let (base, mm) = (&source.volume.geometry, image.mm_from_index);
+            slice_layers::paint(&mut rgba, base, mm, frame, source.layers, source.styles);
             let pixels = egui::ColorImage::from_rgba_unmultiplied([frame.width as usize, frame.height as usize], &rgba);
             match cached {
                 Some((shown, texture)) => {

@@ -86,6 +86,13 @@ impl VolumePass {
         Ok(placed)
     }
 
+    /// Shows `layers` with the volume (waiting for in-flight frames: the layers' bindings are rewritten).
+    pub(super) fn set_layers(&mut self, gpu: &Gpu, layers: &crate::scene::layer_set::Layers) -> Result<(), GpuError> {
+        wait_idle(gpu)?;
+        self.content.changed();
+        self.renderer()?.show_layers(gpu, layers)
+    }
+
     /// One step of a streamed volume towards the cut the still view `s` wants (one level coarser while `moving`),
     /// unless that cut is resident already: how far it has come, and whether it reached the cut just now. `None`
     /// for a volume shown whole. `volume` is the one given to `set_volume`.

@@ -3,10 +3,10 @@
 
 use crate::scene::slice::SliceView;
 use crate::viewer::model::actions::UiAction;
+use crate::viewer::model::slices::SliceData;
 use crate::viewer::model::Model;
 use crate::viewer::widgets::slice_view::{self, SliceImages};
 use crate::viewer::widgets::{keys, overlay, panel};
-use crate::volume::Volume;
 
 /// The settings panel's width (points). Fixed: a panel that grew with a long status line moved the views under
 /// the cursor.
@@ -31,13 +31,13 @@ pub fn four_up(rect: egui::Rect) -> [egui::Rect; 4] {
 }
 
 /// The UI of one frame over `ui` (the whole window). `tab_presses`: how many times Tab was pressed (the app takes
-/// Tab from egui); `volume`: what the slice views show, `images` their textures. Returns what the app must do
+/// Tab from egui); `data`: what the slice views show, `images` their textures. Returns what the app must do
 /// beyond editing `model`.
 pub fn frame_ui(
     ui: &mut egui::Ui,
     model: &mut Model,
     tab_presses: usize,
-    volume: Option<&Volume>,
+    data: SliceData,
     images: &mut SliceImages<'_>,
 ) -> Vec<UiAction> {
     if tab_presses % 2 == 1 {
@@ -56,14 +56,14 @@ pub fn frame_ui(
                 egui::ScrollArea::vertical().show(ui, |ui| actions.extend(panel::settings_panel(ui, model)));
             });
     }
-    egui::CentralPanel::no_frame().show(ui, |ui| view_area(ui, model, volume, images));
+    egui::CentralPanel::no_frame().show(ui, |ui| view_area(ui, model, data, images));
     overlay::shortcut_overlay(ui.ctx(), model);
     model.observe_history(keys::gesture_under_way(ui.ctx(), model));
     actions
 }
 
 /// The 3D view, or four-up: axial top left, 3D top right, sagittal bottom left, coronal bottom right.
-fn view_area(ui: &mut egui::Ui, model: &mut Model, volume: Option<&Volume>, images: &mut SliceImages<'_>) {
+fn view_area(ui: &mut egui::Ui, model: &mut Model, data: SliceData, images: &mut SliceImages<'_>) {
     if !model.slices.shown {
         overlay::view_overlay(ui, model);
         return;
@@ -82,7 +82,7 @@ fn view_area(ui: &mut egui::Ui, model: &mut Model, volume: Option<&Volume>, imag
         (SliceView::Sagittal, sagittal),
         (SliceView::Coronal, coronal),
     ] {
-        slice_view::slice_view(ui, rect, model, view, volume, images);
+        slice_view::slice_view(ui, rect, model, view, data, images);
     }
     let mut view_ui = ui.new_child(egui::UiBuilder::new().max_rect(three_d));
     overlay::view_overlay(&mut view_ui, model);

@@ -6,8 +6,11 @@
 //! The images are resampled on the CPU from the volume the app keeps (`slice::render`) by whoever keeps their
 //! textures ([`SliceImages`]), only when what they show ([`SliceImage`]) changed.
 
+use crate::scene::layer_set::Layers;
 use crate::scene::slice::{self, SliceFrame, SliceView, WindowLevel};
-use crate::viewer::model::slices::{self as slice_state, PresetFit, Probe, SliceImage, CT_PRESETS};
+use crate::viewer::model::slices::{
+    self as slice_state, PresetFit, Probe, SliceData, SliceImage, SliceSource, CT_PRESETS,
+};
 use crate::viewer::model::Model;
 use crate::viewer::widgets::shown_slice::ShownSlice;
 use crate::viewer::widgets::{clip_plane, marks, rects, ruler};
@@ -17,7 +20,7 @@ use glam::{DMat4, DVec3};
 
 /// Where a slice view's image comes from: the texture showing a [`SliceImage`], made again from `volume` only
 /// when the image changed; with no volume to resample, the last one made (if any).
-pub type SliceImages<'a> = dyn FnMut(&egui::Context, &SliceImage, Option<&Volume>) -> Option<egui::TextureId> + 'a;
+pub type SliceImages<'a> = dyn FnMut(&egui::Context, &SliceImage, Option<SliceSource>) -> Option<egui::TextureId> + 'a;
 
 /// Where a slice view's image is drawn in its rect: as large as fits, centred, square pixels.
 pub fn image_rect(frame: &SliceFrame, rect: egui::Rect) -> egui::Rect {
@@ -35,13 +38,13 @@ pub fn frame_of(model: &Model, view: SliceView, rect: egui::Rect, pixels_per_poi
 }
 
 /// One slice view in `rect`: its image, the crosshair, slab and clip plane over it, the probe, and its input.
-/// `volume` is what the image is resampled from and the probe reads.
+/// `data` is what the image is resampled from and the probe reads.
 pub fn slice_view(
     ui: &mut egui::Ui,
     rect: egui::Rect,
     model: &mut Model,
     view: SliceView,
-    volume: Option<&Volume>,
+    data: SliceData,
     images: &mut SliceImages<'_>,
 ) {
     let painter = ui.painter_at(rect);
@@ -55,11 +58,18 @@ pub fn slice_view(
         mm_from_index: mm,
         wl,
         voxel_axes: model.look.voxel_axes,
+        layers: model.layers.generation,
     };
     // Only the volume the model describes: never resample another one's grid.
-    let volume = volume.filter(|v| v.dims == model.dims);
+    let volume = data.volume.filter(|v| v.dims == model.dims);
     let shown = image_rect(&frame, rect);
-    if let Some(texture) = images(ui.ctx(), &image, volume) {
+    let styles = model.layers.styles();
+    let source = volume.map(|volume| SliceSource {
+        volume,
+        layers: data.layers,
+        styles: &styles,
+    });
+    if let Some(texture) = images(ui.ctx(), &image, source) {
         let uv = egui::Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
         painter.image(texture, shown, uv, Color32::WHITE);
     }
@@ -82,7 +92,14 @@ pub fn slice_view(
     );
     let ruler_took = ruler::take_input(model, &slice, &response);
     take_input(ui, model, &slice, wl, &response, ruler_took);
-    probe(&painter, rect, model, &slice, volume, &response);
+    probe(
+        &painter,
+        rect,
+        model,
+        &slice,
+        volume.map(|v| (v, data.layers)),
+        &response,
+    );
     ruler::paint(&painter, model, &slice, response.hover_pos());
     tools(ui, rect, model, view);
 }
@@ -223,17 +240,18 @@ fn take_input(
     }
 }
 
-/// The value under the pointer: kept in the model while it hovers this view, written at its bottom left.
+/// The value under the pointer: kept in the model while it hovers this view, written at its bottom left, with each
+/// layer's value (a label map's id and name) above it.
 fn probe(
     painter: &egui::Painter,
     rect: egui::Rect,
     model: &mut Model,
     shown: &ShownSlice,
-    volume: Option<&Volume>,
+    data: Option<(&Volume, &Layers)>,
     response: &egui::Response,
 ) {
     let view = shown.frame.view;
-    if let (Some(pos), Some(volume)) = (response.hover_pos(), volume) {
+    if let (Some(pos), Some((volume, _))) = (response.hover_pos(), data) {
         let w = shown.world_at(pos);
         model.slices.probe = slice::voxel_at(model.dims, shown.mm.inverse(), w).map(|voxel| Probe {
             view,
@@ -244,17 +262,19 @@ fn probe(
     } else if model.slices.probe.is_some_and(|p| p.view == view) {
         model.slices.probe = None;
     }
-    if let Some(p) = model.slices.probe.filter(|p| p.view == view) {
-        let text = probe_text(&p, model.anatomical(), &model.volume.unit);
-        let at = Pos2::new(rect.left() + 6.0, rect.bottom() - 6.0);
-        painter.text(
-            at,
-            egui::Align2::LEFT_BOTTOM,
-            text,
-            egui::FontId::monospace(11.0),
-            Color32::WHITE,
-        );
-    }
+    let Some(p) = model.slices.probe.filter(|p| p.view == view) else {
+        return;
+    };
+    let mut lines = match data {
+        Some((volume, layers)) => crate::scene::slice_layers::values_at(&volume.geometry, shown.mm, p.world, layers),
+        None => Vec::new(),
+    };
+    lines.push(probe_text(&p, model.anatomical(), &model.volume.unit));
+    let text = lines.join("\n");
+    let at = Pos2::new(rect.left() + 6.0, rect.bottom() - 6.0);
+    let font = egui::FontId::monospace(11.0);
+    let drawn = painter.text(at, egui::Align2::LEFT_BOTTOM, &text, font, Color32::WHITE);
+    rects::log_labelled("probe", drawn, Some(&text.replace('\n', " | ")));
 }
 
 fn smallest_spacing(mm: DMat4) -> f64 {

@@ -3,6 +3,7 @@
 
 pub mod chooser;
 pub mod export;
+pub mod layers;
 pub mod lighting;
 pub mod recent;
 pub mod rendering;
@@ -41,6 +42,7 @@ pub fn settings_panel(ui: &mut egui::Ui, model: &mut Model) -> Vec<UiAction> {
     view::view_section(ui, model, &mut actions);
     export::export_section(ui, model, &mut actions);
     volume::volume_section(ui, model, &mut actions);
+    layers::layers_section(ui, model, &mut actions);
     session_section(ui, model, &mut actions);
     performance_section(ui, model);
     actions
