@@ -12,18 +12,18 @@ mkdir -p $out
 # Lighting (docs/rendering.md, Lighting): shadows and ambient occlusion, layered iso-surfaces, the terracing fix.
 $v "$ct" "${common[@]}" --preset ct-bone --shadows --ambient-occlusion -o $out/ct-bone-shadows-ao.png
 $v "$ct" "${common[@]}" --preset ct-bone --shading -o $out/ct-bone-shaded.png
-$v "$ct" "${common[@]}" --mode iso --iso 0.45 --surface 0.2,0.95,0.72,0.62,0.3 --shadows --ambient-occlusion \
+$v "$ct" "${common[@]}" --mode iso --iso 45% --surface 20%,0.95,0.72,0.62,0.3 --shadows --ambient-occlusion \
   -o $out/ct-skin-over-bone.png
-$v "$brain" --mode iso --iso 0.45 --surface 0.12,0.95,0.75,0.65,0.35 --slice z:0.35:0.7 --azimuth 0 \
+$v "$brain" --mode iso --iso 45% --surface 12%,0.95,0.75,0.65,0.35 --slice z:0.35:0.7 --azimuth 0 \
   --elevation 40 --light -1,1,1 --distance 2.0 --size 256x256 -o $out/brain-skin-over-cortex.png
-$v "$brain" --mode iso --iso 0.35 --gradients samples --distance 2.0 --size 256x256 -o $out/brain-iso-central-differences.png
-$v "$brain" --mode iso --iso 0.35 --distance 2.0 --size 256x256 -o $out/brain-iso-filtered.png
+$v "$brain" --mode iso --iso 35% --gradients samples --distance 2.0 --size 256x256 -o $out/brain-iso-central-differences.png
+$v "$brain" --mode iso --iso 35% --distance 2.0 --size 256x256 -o $out/brain-iso-filtered.png
 # Transfer functions and modes.
 $v "$ct" "${common[@]}" --preset ct-soft-tissue --shading -o $out/ct-soft-tissue-shaded.png
 $v "$ct" "${common[@]}" --preset ct-lung -o $out/ct-lung.png
-$v "$ct" "${common[@]}" --mode mip --window 0.3,1 --colormap grayscale -o $out/ct-mip.png
+$v "$ct" "${common[@]}" --mode mip --window 30%,100% --colormap grayscale -o $out/ct-mip.png
 $v "$ct" "${common[@]}" --mode density --preset ct-bone --density 3 -o $out/ct-density.png
-$v ../shared/data/raw/motor_zmap_53x63x46_float32.raw --spacing 3 3 3 --mode mip --window 0.55,1 \
+$v ../shared/data/raw/motor_zmap_53x63x46_float32.raw --spacing 3 3 3 --mode mip --window 55%,100% \
   --colormap plasma --elevation 90 --size 256x256 -o $out/fmri-mip.png
 # Layers (docs/layers.md): the T1 with the motor z-map at |z| >= 3 and the AAL precentral and postcentral gyri.
 $v "$brain" --overlay ../shared/data/native/motor_zmap/image_10426.nii.gz --threshold 3 \

@@ -25,10 +25,10 @@ r() { local name=$1; shift; "$bin" render --size "${SIZE:-256x256}" "$@" -o "$ou
 # The bench scenes (src/measure/bench/scenes.rs) in render's terms, under each ray setup and shading.
 declare -A scene=(
   [helix]="--builtin helix"
-  [dense]="--builtin colormap --window 0,1 --step-alpha 0.02"
-  [ct-head]="$ct ${ctspacing[*]} --window 0.33,0.9 --colormap plasma --step-alpha 0.6 --azimuth 25 --elevation 10"
-  [mri-brain]="$mri --window 0.2,1 --colormap grayscale --step-alpha 0.05"
-  [vtk-helix]="--builtin helix --colormap viridis --window 0.08,1 --multiplied-alpha --step-alpha 0.2 --azimuth 215 --elevation 25"
+  [dense]="--builtin colormap --window 0%,100% --step-alpha 0.02"
+  [ct-head]="$ct ${ctspacing[*]} --window 33%,90% --colormap plasma --step-alpha 0.6 --azimuth 25 --elevation 10"
+  [mri-brain]="$mri --window 20%,100% --colormap grayscale --step-alpha 0.05"
+  [vtk-helix]="--builtin helix --colormap viridis --window 8%,100% --multiplied-alpha --step-alpha 0.2 --azimuth 215 --elevation 25"
 )
 for name in "${!scene[@]}"; do
   for method in faces analytic compute; do
@@ -50,8 +50,8 @@ for mode in emission mip minip average iso density; do
   r "ct-$mode" "$ct" "${ctspacing[@]}" --mode $mode --preset ct-bone
   r "helix-$mode" --builtin helix --mode $mode --method analytic
 done
-r ct-iso-shaded "$ct" "${ctspacing[@]}" --mode iso --iso 0.45 --surface 0.2,0.95,0.72,0.62,0.3 --shading
-r ct-iso-samples "$ct" "${ctspacing[@]}" --mode iso --iso 0.45 --gradients samples --shading
+r ct-iso-shaded "$ct" "${ctspacing[@]}" --mode iso --iso 45% --surface 20%,0.95,0.72,0.62,0.3 --shading
+r ct-iso-samples "$ct" "${ctspacing[@]}" --mode iso --iso 45% --gradients samples --shading
 r ct-density-shadows "$ct" "${ctspacing[@]}" --mode density --preset ct-bone --density 3 --shadows
 r helix-gradient-opacity --builtin helix --gradient-opacity 0.05 --shading
 r helix-no-jitter --builtin helix --no-jitter --ortho
@@ -63,16 +63,16 @@ r lobb --builtin marschner-lobb --mode iso --shading
 # Texture layouts.
 for t in native float corners; do
   r "ct-texture-$t" "$ct" "${ctspacing[@]}" --preset ct-soft-tissue --shading --texture $t
-  r "mri-texture-$t" "$mri" --window 0.2,1 --texture $t --method compute
+  r "mri-texture-$t" "$mri" --window 20%,100% --texture $t --method compute
 done
 
 # Clipping, slabs, world space, the gallery.
 r ct-clip "$ct" "${ctspacing[@]}" --preset ct-bone --clip-plane 0,1,0,10 --colorbar
-r brain-slab "$brain" --mode iso --iso 0.45 --surface 0.12,0.95,0.75,0.65,0.35 --slice z:0.35:0.7 --azimuth 0 \
+r brain-slab "$brain" --mode iso --iso 45% --surface 12%,0.95,0.75,0.65,0.35 --slice z:0.35:0.7 --azimuth 0 \
   --elevation 40 --light -1,1,1 --distance 2.0
 r brain-view-left "$brain" --view left --preset auto
-r brain-shadows "$brain" --mode iso --iso 0.35 --shadows --ambient-occlusion
-r fmri-mip "$fmri" --spacing 3 3 3 --mode mip --window 0.55,1 --colormap plasma --elevation 90
+r brain-shadows "$brain" --mode iso --iso 35% --shadows --ambient-occlusion
+r fmri-mip "$fmri" --spacing 3 3 3 --mode mip --window 55%,100% --colormap plasma --elevation 90
 r ct-lung "$ct" "${ctspacing[@]}" --preset ct-lung --azimuth 25 --elevation 10 --distance 1.85
 SIZE=512x512 r ct-512 "$ct" "${ctspacing[@]}" --preset ct-bone
 echo "$(find "$out" -name '*.png' | wc -l) images in $out"

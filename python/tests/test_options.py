@@ -16,7 +16,7 @@ SAMPLES = {
     "no_cache": True, "no_downsample": True, "array": None, "series": None, "channel": None, "time": 0,
     "validate": None, "device": "0", "texture": "float", "brick_size": 8,
     "size": (24, 16), "azimuth": -30, "elevation": 10, "distance": 2.5, "eye": (1, -2, 1), "look_at": (0, 0, 0.1),
-    "view_dir": (0, 1, 0), "view": "left", "voxel_axes": True, "fov": 40, "colormap": "viridis", "window": (0.1, 0.8),
+    "view_dir": (0, 1, 0), "view": "left", "voxel_axes": True, "fov": 40, "colormap": "viridis", "window": ("10%", "80%"),
     "preset": "qt-example", "tf": "TF", "save_tf": "SAVE", "mode": "average", "iso": 0.3, "iso_color": (1, 0.5, 0),
     "iso_opacity": 0.7, "surface": [(0.2, 0.9, 0.6, 0.5, 0.3)], "light": (1, 1, 0), "light_color": (1, 0.9, 0.8),
     "light_intensity": 1.2, "shadows": True, "ambient_occlusion": True, "density": 2, "shading": True,
@@ -111,7 +111,7 @@ def test_values_follow_the_command_lines_forms():
 
 def test_a_keyframed_movie_of_dicts_passes_through_its_keys(tmp_path):
     a = np.random.default_rng(8).integers(0, 255, (20, 24, 28), dtype=np.uint8)
-    keys = [{"azimuth": 0}, {"azimuth": 90, "window": (0.3, 1)}, {"azimuth": 180}]
+    keys = [{"azimuth": 0}, {"azimuth": 90, "window": ("30%", "100%")}, {"azimuth": 180}]
     gif = volcast.movie(a, tmp_path / "path.png", keyframes=keys, frames=5, size=32, preset="qt-example")
     assert gif == tmp_path / "path.gif" and gif.exists()
     from PIL import Image as PILImage

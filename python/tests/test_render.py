@@ -31,11 +31,11 @@ def cli_render(cli, tmp_path, array, argv):
 CASES = [
     ("uint8", {}, []),
     ("int16", {"mode": "mip", "size": (96, 64)}, ["--mode", "mip", "--size", "96x64"]),
-    ("float32", {"shading": True, "azimuth": -40.0, "window": (0.2, 0.9)},
-     ["--shading", "--azimuth=-40", "--window", "0.2,0.9"]),
+    ("float32", {"shading": True, "azimuth": -40.0, "window": ("20%", "90%")},
+     ["--shading", "--azimuth=-40", "--window", "20%,90%"]),
     ("uint16", {"preset": "mr-default", "clip_plane": (0, 0.6, 0.8, 0.1), "quality": "draft"},
      ["--preset", "mr-default", "--clip-plane", "0,0.6,0.8,0.1", "--quality", "draft"]),
-    ("float64", {"mode": "iso", "iso": 0.4, "method": "analytic"}, ["--mode", "iso", "--iso", "0.4", "--method", "analytic"]),
+    ("float64", {"mode": "iso", "iso": "40%", "method": "analytic"}, ["--mode", "iso", "--iso", "40%", "--method", "analytic"]),
 ]
 
 

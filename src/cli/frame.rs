@@ -3,13 +3,14 @@
 //! `RenderSettings` is in `settings.rs`.
 
 use super::parse::{
-    parse_clip_plane, parse_colormap, parse_gradients, parse_iso_color, parse_light, parse_mode, parse_pair,
+    parse_clip_plane, parse_colormap, parse_data_value, parse_gradients, parse_iso_color, parse_light, parse_mode,
     parse_preset, parse_quality, parse_shading, parse_size, parse_slice, parse_surface, parse_vec3, parse_view,
-    IsoColor, LightDirection,
+    parse_window, IsoColor, LightDirection,
 };
 use crate::scene::camera::ViewPreset;
 use crate::scene::quality::{Gradients, Quality};
 use crate::scene::settings::CompositeMode;
+use crate::scene::values::DataValue;
 use crate::transfer::Colormap;
 use clap::parser::ValueSource;
 use clap::{ArgMatches, Args};
@@ -102,12 +103,12 @@ pub struct ColourArgs {
     /// --multiplied-alpha is given; a built-in volume gets cool-warm.
     #[arg(long, default_value = "cool-warm", hide_default_value = true, value_parser = parse_colormap)]
     pub colormap: Colormap,
-    /// Visible value range TMIN,TMAX in [0,1] of the data's range
+    /// Visible values LO,HI in the data's units (HU for a CT), or percentages of its range (10%,100%)
     ///
-    /// Values outside are transparent. Default: 0,1 with a transfer function (a file's automatic one included),
-    /// else 0.1,1.
-    #[arg(long, value_parser = parse_pair)]
-    pub window: Option<(f32, f32)>,
+    /// Values outside are transparent. Default: the whole range with a transfer function (a file's automatic one
+    /// included), else 10%,100%.
+    #[arg(long, value_name = "LO,HI", value_parser = parse_window, allow_hyphen_values = true)]
+    pub window: Option<(DataValue, DataValue)>,
     /// A transfer-function preset, or auto (by modality)
     ///
     /// ct-bone, ct-soft-tissue, ct-lung, mr-default, qt-example, or auto (by modality: CT gets ct-bone, anything
@@ -140,9 +141,9 @@ pub struct CompositingArgs {
     /// Compositing: emission, mip, minip, average, iso, density.
     #[arg(long, default_value = "emission", value_parser = parse_mode)]
     pub mode: CompositeMode,
-    /// Iso value for --mode iso, in [0,1] of the data range.
-    #[arg(long, default_value_t = 0.5)]
-    pub iso: f32,
+    /// Iso value for --mode iso, in the data's units or a percentage of its range (default 50%).
+    #[arg(long, default_value = "50%", value_parser = parse_data_value, allow_hyphen_values = true)]
+    pub iso: DataValue,
     /// The iso-surface's colour R,G,B in [0,1] (sRGB), or "colormap" for the colour the colormap or transfer
     /// function gives its value (default: a light neutral).
     #[arg(long, value_parser = parse_iso_color, hide_short_help = true)]
@@ -152,9 +153,9 @@ pub struct CompositingArgs {
     pub iso_opacity: f32,
     /// A further iso-surface VALUE[,R,G,B][,OPACITY] or VALUE,colormap[,OPACITY] (repeatable, 4 surfaces in all);
     /// surfaces are composited in the order a ray meets them. E.g. translucent skin over bone:
-    /// --mode iso --iso 0.45 --surface 0.2,0.9,0.6,0.5,0.3.
-    #[arg(long = "surface", value_parser = parse_surface, hide_short_help = true)]
-    pub surfaces: Vec<crate::scene::lighting::IsoSurface>,
+    /// --mode iso --iso 45% --surface 20%,0.9,0.6,0.5,0.3 (VALUE as --iso takes it).
+    #[arg(long = "surface", value_parser = parse_surface, allow_hyphen_values = true, hide_short_help = true)]
+    pub surfaces: Vec<(DataValue, crate::scene::lighting::IsoSurface)>,
     /// Density factor for --mode density (the OSG article's model).
     #[arg(long, default_value_t = 1.0, hide_short_help = true)]
     pub density: f32,

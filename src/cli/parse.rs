@@ -2,6 +2,7 @@
 //! values; their error texts are what a malformed value prints.
 
 use crate::scene::quality::{Gradients, Quality};
+use crate::scene::values::DataValue;
 use glam::Vec3;
 
 /// A memory size for --host-budget and --gpu-budget (`pyramid::budget::parse_size`).
@@ -47,8 +48,17 @@ pub fn parse_iso_color(s: &str) -> Result<IsoColor, String> {
     parse_floats(s, 3, "R,G,B or colormap").map(|v| IsoColor::Rgb(Vec3::new(v[0], v[1], v[2])))
 }
 
-pub fn parse_surface(s: &str) -> Result<crate::scene::lighting::IsoSurface, String> {
-    crate::scene::lighting::IsoSurface::parse(s)
+/// `--surface VALUE,...`: the value in data units or a percentage (placed in the range once the volume is read),
+/// and the rest of the surface.
+pub fn parse_surface(s: &str) -> Result<(DataValue, crate::scene::lighting::IsoSurface), String> {
+    let (value, rest) = s.split_once(',').map_or((s, None), |(v, r)| (v, Some(r)));
+    let value = DataValue::parse(value).map_err(|e| format!("surface '{s}': {e}"))?;
+    let surface = crate::scene::lighting::IsoSurface::parse(&match rest {
+        Some(r) => format!("0,{r}"),
+        None => "0".into(),
+    })
+    .map_err(|e| e.replacen("'0,", &format!("'{}", s.split(',').next().unwrap_or("")), 1))?;
+    Ok((value, surface))
 }
 
 /// `--light`: a headlight (None) or a direction towards the light.
@@ -64,6 +74,20 @@ pub fn parse_light(s: &str) -> Result<LightDirection, String> {
 
 pub fn parse_pair(s: &str) -> Result<(f32, f32), String> {
     parse_floats(s, 2, "TMIN,TMAX").map(|v| (v[0], v[1]))
+}
+
+/// `--window LO,HI`: two values in data units or percentages of the range.
+pub fn parse_window(s: &str) -> Result<(DataValue, DataValue), String> {
+    match s.split(',').map(DataValue::parse).collect::<Result<Vec<_>, _>>()?[..] {
+        [lo, hi] => Ok((lo, hi)),
+        _ => Err(format!(
+            "'{s}' must be two values LO,HI (data units, or percentages such as 10%,90%)"
+        )),
+    }
+}
+
+pub fn parse_data_value(s: &str) -> Result<DataValue, String> {
+    DataValue::parse(s)
 }
 
 pub fn parse_shading(s: &str) -> Result<crate::scene::settings::Shading, String> {

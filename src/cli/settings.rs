@@ -9,8 +9,10 @@ use super::frame::{
 use super::parse::IsoColor;
 use super::UsageError;
 use crate::scene::camera::Camera;
+use crate::scene::lighting::IsoSurface;
 use crate::scene::quality::{Gradients, Quality};
 use crate::scene::settings::{PositionFormat, RenderSettings, DEFAULT_WINDOW};
+use crate::scene::values::{fraction_note, DataValue};
 use crate::transfer::function::TransferFunction;
 use crate::volume::Volume;
 use anyhow::{bail, Context, Result};
@@ -88,7 +90,7 @@ impl FrameArgs {
         self.output.apply(s, &wants);
         self.camera.apply(s, volume, &wants)?;
         self.colour.apply(s, volume, &wants)?;
-        self.compositing.apply(s, &wants);
+        self.compositing.apply(s, volume, &wants);
         self.lighting.apply(s, &wants);
         self.cut.apply(s, &wants);
         // The quality's step depends on the classification, so it is resolved last, from valid settings.
@@ -200,7 +202,12 @@ impl ColourArgs {
             s.colour.transfer_function = tf;
         }
         s.colour.window = match (self.window, scope) {
-            (Some(w), _) => [w.0, w.1],
+            (Some((lo, hi)), _) => {
+                if let Some(note) = fraction_note("--window", &[lo, hi], volume.range) {
+                    eprintln!("note: {note}");
+                }
+                [lo.fraction(volume.range), hi.fraction(volume.range)]
+            }
             _ if new_function => [0.0, 1.0],
             (None, Scope::Whole) => DEFAULT_WINDOW,
             (None, Scope::Overrides) if to_colormap && !new_function => DEFAULT_WINDOW,
@@ -230,12 +237,15 @@ impl ColourArgs {
 }
 
 impl CompositingArgs {
-    fn apply(&self, s: &mut RenderSettings, wants: &Wants) {
+    fn apply(&self, s: &mut RenderSettings, volume: &Volume, wants: &Wants) {
         if wants.id("mode") {
             s.compositing.mode = self.mode;
         }
         if wants.id("iso") {
-            s.compositing.iso_value = self.iso;
+            if let Some(note) = fraction_note("--iso", &[self.iso], volume.range) {
+                eprintln!("note: {note}");
+            }
+            s.compositing.iso_value = self.iso.fraction(volume.range);
         }
         if wants.id("iso_color") {
             match self.iso_color {
@@ -248,7 +258,11 @@ impl CompositingArgs {
             s.compositing.iso_opacity = self.iso_opacity;
         }
         if wants.id("surfaces") {
-            s.compositing.extra_isosurfaces = self.surfaces.clone();
+            let placed = |(v, surface): &(DataValue, IsoSurface)| IsoSurface {
+                value: v.fraction(volume.range),
+                ..surface.clone()
+            };
+            s.compositing.extra_isosurfaces = self.surfaces.iter().map(placed).collect();
         }
         if wants.id("density") {
             s.compositing.density = self.density;

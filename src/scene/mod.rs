@@ -12,4 +12,5 @@ pub mod quality;
 pub mod settings;
 pub mod slice;
 pub mod slice_layers;
+pub mod values;
 pub mod view_state;

@@ -85,7 +85,7 @@ fn colorbar_of_the_simple_model_follows_the_window_and_background() {
             "--colormap",
             "viridis",
             "--window",
-            "0.2,0.8",
+            "20%,80%",
             "--background",
             "1,1,1",
             "--colorbar",

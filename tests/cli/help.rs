@@ -73,7 +73,11 @@ fn render_help_is_grouped_short_and_true() {
     }
     assert!(long.contains("OME-Zarr") && long.contains("DICOM") && long.contains("NIfTI"));
     let [lo, hi] = DEFAULT_WINDOW;
-    assert!(long.contains(&format!("else {lo},{hi}")), "--window's default");
+    let percent = |f: f32| (f * 100.0).round();
+    assert!(
+        long.contains(&format!("else {}%,{}%", percent(lo), percent(hi))),
+        "--window's default"
+    );
     assert!(
         long.contains(&format!("[default: {DEFAULT_STEP_ALPHA}]")),
         "--step-alpha's default"

@@ -22,4 +22,5 @@ mod scale;
 mod series;
 mod state;
 mod tools;
+mod units;
 mod zarr;

@@ -183,7 +183,7 @@ fn classification_options_take_effect() {
         rule(&["--colormap", "grayscale"], |s, _| {
             s.colour.colormap = Colormap::Grayscale
         }),
-        rule(&["--window", "0.3,0.8"], |s, _| s.colour.window = [0.3, 0.8]),
+        rule(&["--window", "30%,80%"], |s, _| s.colour.window = [0.3, 0.8]),
         rule(&["--step-alpha", "0.4"], |s, _| s.colour.step_alpha = 0.4),
         // A forced step takes every sample.
         rule(&["--step-length", "2.5"], |s, _| {
@@ -237,7 +237,7 @@ fn classification_options_take_effect() {
             s.colour.transfer_function = Some(TransferFunction::preset("mr-default").unwrap());
             s.colour.window = [0.0, 1.0];
         }),
-        rule(&["--preset", "qt-example", "--window", "0.2,0.9"], |s, _| {
+        rule(&["--preset", "qt-example", "--window", "20%,90%"], |s, _| {
             s.colour.transfer_function = Some(TransferFunction::preset("qt-example").unwrap());
             s.colour.window = [0.2, 0.9];
         }),
@@ -275,7 +275,7 @@ fn mode_and_shading_options_take_effect() {
             s.compositing.mode = CompositeMode::Isosurface;
             s.lighting.gradient_texture = true;
         }),
-        rule(&["--mode", "iso", "--iso", "0.3"], |s, _| {
+        rule(&["--mode", "iso", "--iso", "30%"], |s, _| {
             s.compositing.mode = CompositeMode::Isosurface;
             s.compositing.iso_value = 0.3;
             s.lighting.gradient_texture = true;
@@ -285,7 +285,7 @@ fn mode_and_shading_options_take_effect() {
                 "--mode",
                 "iso",
                 "--iso",
-                "0.6",
+                "60%",
                 "--iso-color",
                 "colormap",
                 "--iso-opacity",
@@ -308,9 +308,9 @@ fn mode_and_shading_options_take_effect() {
                 "--iso-color",
                 "0.2,0.8,0.4",
                 "--surface",
-                "0.3,1,0,0,0.4",
+                "30%,1,0,0,0.4",
                 "--surface",
-                "0.7",
+                "70%",
             ],
             |s, _| {
                 s.compositing.mode = CompositeMode::Isosurface;

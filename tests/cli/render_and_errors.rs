@@ -190,7 +190,7 @@ fn bad_volumes_give_clear_errors() {
 
 #[test]
 fn bad_settings_give_clear_errors() {
-    assert_usage_error(&tiny_render(&["--window", "0.8,0.2"]), "window");
+    assert_usage_error(&tiny_render(&["--window", "80%,20%"]), "window");
     assert_usage_error(&tiny_render(&["--colormap", "jet"]), "viridis");
     // A misspelled value gets the nearest name, as clap does for a misspelled flag.
     for (extra, needle) in [

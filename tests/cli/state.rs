@@ -72,7 +72,7 @@ fn options_beside_a_state_override_its_values_and_keep_the_rest() {
             (v.settings.width, v.settings.height) = (96, 80);
             v
         }),
-        ("window", vec!["--window", "0.5,1"], {
+        ("window", vec!["--window", "50%,100%"], {
             let mut v = base.clone();
             v.settings.colour.window = [0.5, 1.0];
             v

@@ -88,7 +88,7 @@ fn a_mirrored_placement_in_an_orthographic_view_from_below() {
             "--azimuth",
             "120",
             "--window",
-            "0.1,0.95",
+            "10%,95%",
         ],
         &[8],
     );

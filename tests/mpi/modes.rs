@@ -19,7 +19,7 @@ fn iso_surfaces_shaded() {
     same_image(
         "iso",
         ct_head(),
-        &["--mode", "iso", "--iso", "0.45", "--shading", "--azimuth", "150"],
+        &["--mode", "iso", "--iso", "45%", "--shading", "--azimuth", "150"],
         &[4],
     );
 }
@@ -32,7 +32,7 @@ fn maximum_and_minimum_intensity_projections() {
         &["--mode", "mip", "--azimuth", "80", "--elevation", "10"],
         &[4],
     );
-    same_image("minip", ct_head(), &["--mode", "minip", "--window", "0.2,0.9"], &[2]);
+    same_image("minip", ct_head(), &["--mode", "minip", "--window", "20%,90%"], &[2]);
 }
 
 #[test]

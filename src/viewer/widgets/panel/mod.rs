@@ -48,6 +48,26 @@ pub fn settings_panel(ui: &mut egui::Ui, model: &mut Model) -> Vec<UiAction> {
     actions
 }
 
+/// `slider` over a place in the data's range (0–1, as the renderer takes it) showing and taking the value in the
+/// data's units (HU for a CT), or a percentage typed as one (`40%`).
+pub fn in_data_units(slider: egui::Slider<'_>, range: [f64; 2]) -> egui::Slider<'_> {
+    let span = range[1] - range[0];
+    let decimals = if span >= 100.0 {
+        0
+    } else if span >= 1.0 {
+        2
+    } else {
+        4
+    };
+    slider
+        .custom_formatter(move |f, _| format!("{:.*}", decimals, range[0] + f * span))
+        .custom_parser(move |text| {
+            crate::scene::values::DataValue::parse(text)
+                .ok()
+                .map(|v| f64::from(v.fraction(range)))
+        })
+}
+
 /// The last error and status line if they are about `topic`: shown beside the controls of the action that
 /// caused them, so that nothing above those controls changes height (the panel used to show them at its top, and
 /// every message moved the whole panel under the pointer).

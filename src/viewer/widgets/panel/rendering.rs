@@ -20,7 +20,8 @@ pub fn rendering_section(ui: &mut egui::Ui, model: &mut Model) {
                 });
             match look.compositing.mode {
                 CompositeMode::Isosurface => {
-                    ui.add(egui::Slider::new(&mut look.compositing.iso_value, 0.0..=1.0).text("iso value"));
+                    let iso = egui::Slider::new(&mut look.compositing.iso_value, 0.0..=1.0).text("iso value");
+                    ui.add(super::in_data_units(iso, model.volume.range));
                 }
                 CompositeMode::Density => {
                     ui.add(egui::Slider::new(&mut look.compositing.density, 0.0..=20.0).text("density factor"));

@@ -52,9 +52,12 @@ pub fn transfer_function_section(ui: &mut egui::Ui, model: &mut Model) {
             );
             ui.checkbox(&mut model.tf_editor.locked, "keep when another volume loads");
             let look = &mut model.look;
-            ui.label("Visible value range");
-            ui.add(egui::Slider::new(&mut look.colour.window[0], 0.0..=1.0).text("min"));
-            ui.add(egui::Slider::new(&mut look.colour.window[1], 0.0..=1.0).text("max"));
+            ui.label("Visible values");
+            let range = model.volume.range;
+            let min = egui::Slider::new(&mut look.colour.window[0], 0.0..=1.0).text("min");
+            ui.add(super::in_data_units(min, range));
+            let max = egui::Slider::new(&mut look.colour.window[1], 0.0..=1.0).text("max");
+            ui.add(super::in_data_units(max, range));
             if look.colour.window[0] > look.colour.window[1] {
                 look.colour.window.swap(0, 1);
             }
