@@ -260,7 +260,7 @@ impl CompositingArgs {
         if wants.id("surfaces") {
             let placed = |(v, surface): &(DataValue, IsoSurface)| IsoSurface {
                 value: v.fraction(volume.range),
-                ..surface.clone()
+                ..*surface
             };
             s.compositing.extra_isosurfaces = self.surfaces.iter().map(placed).collect();
         }
