@@ -40,6 +40,19 @@ pub fn layers_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<Ui
         add_row(ui, model, actions);
         messages_about(ui, &model.messages, Topic::Layers);
     });
+    settle_after_change(ui.ctx(), model.layers.entries.len());
+}
+
+/// Two more frames after the list changed length: the panel's scroll area clamps its offset to the new height a
+/// frame later, and without them it moved only at the next input (under the pointer of whoever clicks next).
+fn settle_after_change(ctx: &egui::Context, count: usize) {
+    let id = egui::Id::new("layer list length");
+    let (seen, frames) = ctx.data(|d| d.get_temp::<(usize, u8)>(id)).unwrap_or((count, 0));
+    let frames = if seen == count { frames.saturating_sub(1) } else { 2 };
+    if frames > 0 {
+        ctx.request_repaint();
+    }
+    ctx.data_mut(|d| d.insert_temp(id, (count, frames)));
 }
 
 /// Layer `i`'s controls; whether its look changed.
