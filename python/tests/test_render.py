@@ -96,5 +96,5 @@ def test_the_widget_renders_as_its_sliders_move():
     azimuth.value = 90.0
     assert picture.value != first
     second = picture.value
-    window.value = (0.6, 1.0)
+    window.value = (60.0, 100.0)
     assert picture.value != second

@@ -117,7 +117,7 @@ def render(
     ``Volume.from_array``), a ``Volume``, a path, a nibabel or SimpleITK image, or a zarr or dask array; or None with
     ``builtin="helix"``. Every other keyword is an option of ``volcast render``: ``size=(640, 480)``,
     ``azimuth=30`` (or ``camera={"azimuth": 30, "elevation": 10}``), ``view="left"``, ``preset="ct-bone"`` or ``tf=TransferFunction(...)``, ``mode="mip"``,
-    ``window=(0.1, 1)``, ``shading=True``, ``quality="draft"``, ``clip_plane=(0, 0, 1, 0)``, ``output="f.png"``
+    ``window=("10%", "100%")`` (or data units, ``(-100, 300)``), ``shading=True``, ``quality="draft"``, ``clip_plane=(0, 0, 1, 0)``, ``output="f.png"``
     (also writes the PNG), ... ``timings=True`` adds ``frame.timings``, the medians (ms) of ``frames=`` more frames
     (wall, GPU, per pass); ``memory=True`` adds ``frame.memory``, the command line's memory line. ``overlay=[...]``
     and ``labels=[...]`` add layers composited in depth (docs/layers.md): paths, or arrays placed like ``volume``
@@ -151,7 +151,7 @@ def movie(
     """Writes a turntable (``turntable=N`` frames once around) or a keyframed movie (``keyframes=[...]`` and
     ``frames=N``) as ``volcast render --turntable`` does: ``NAME-0000.png`` … beside ``output`` (NAME.png) and a
     looping ``NAME.gif`` (``fps=``), which is returned. A keyframe is a view-state file (the viewer's F12, or
-    ``view_state``) or a dict of options (``{"azimuth": 90, "window": (0.2, 1)}``) over the other keywords.
+    ``view_state``) or a dict of options (``{"azimuth": 90, "window": ("20%", "100%")}``) over the other keywords.
     Other keywords as ``render``. Ctrl+C stops it and removes what it wrote."""
     placement = dict(spacing=spacing, affine=affine, origin=origin)
     if keyframes and any(isinstance(k, dict) for k in keyframes):

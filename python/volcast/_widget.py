@@ -13,13 +13,15 @@ def make_widget(scene: Any) -> Any:
     from ._image import png_bytes
 
     options = scene.options
-    window = options.get("window") or (0.0, 1.0)
     azimuth = w.FloatSlider(value=float(options.get("azimuth", 35.0)), min=-180, max=180, step=5, description="azimuth")
-    win = w.FloatRangeSlider(value=tuple(window), min=0.0, max=1.0, step=0.01, description="window")
+    # The window as percentages of the data's range (a bare number would be in the data's units).
+    win = w.FloatRangeSlider(value=_percentages(options.get("window")), min=0.0, max=100.0, step=1.0,
+                             description="window %")
     picture = w.Image(format="png")
 
     def update(*_: Any) -> None:
-        frame = scene.render(azimuth=azimuth.value, window=tuple(win.value))
+        lo, hi = win.value
+        frame = scene.render(azimuth=azimuth.value, window=(f"{lo:g}%", f"{hi:g}%"))
         picture.value = png_bytes(frame)
 
     azimuth.observe(update, names="value")
@@ -28,3 +30,12 @@ def make_widget(scene: Any) -> Any:
     box = w.VBox([picture, azimuth, win])
     box.update = update
     return box
+
+
+def _percentages(window: Any) -> tuple:
+    """The slider's start: a window given as percentages ("10%", "90%"), else the whole range."""
+    try:
+        lo, hi = (float(str(v).rstrip("%")) for v in window if str(v).endswith("%"))
+        return (lo, hi)
+    except (TypeError, ValueError):
+        return (0.0, 100.0)
