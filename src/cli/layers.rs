@@ -39,9 +39,10 @@ pub struct LayerArgs {
     pub overlay_blend: Option<Blend>,
     /// Further channels of the volume's file as overlays: `all`, or their numbers (e.g. 1,2)
     ///
-    /// Each channel of an OME-Zarr image with a `c` axis is read as the volume is (the same level) and shown in its
-    /// omero colour, a ramp from black over its window, blended by maximum (--overlay-blend) at full opacity
-    /// (--overlay-opacity); `volcast info STORE` lists them. The volume itself shows --channel (default 0).
+    /// Each channel of an OME-Zarr image with a `c` axis, an ImageJ or OME-TIFF hyperstack, or a 5-D NIfTI is read
+    /// as the volume is (the same level) and shown in its colour (omero's, else ImageJ's), a ramp from black over
+    /// its window (else its range), blended by maximum (--overlay-blend) at full opacity (--overlay-opacity);
+    /// `volcast info FILE` lists them. The volume itself shows --channel (default 0).
     #[arg(
         long,
         value_name = "all|N,..",

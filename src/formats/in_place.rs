@@ -45,6 +45,8 @@ pub struct InPlace {
     pub arrays: Vec<crate::volume::ArrayInfo>,
     /// The modality a DICOM file names ("CT", "MR"), as its loader gives it to the volume.
     pub modality: Option<String>,
+    /// The file's channels (a 5-D NIfTI's `dim[5]`), the one read marked; empty for a file of one.
+    pub channels: Vec<crate::volume::ChannelInfo>,
 }
 
 /// A compressed stream's kind, and the inflated bytes before the voxels (a `.nii.gz`'s header and extensions).
@@ -144,6 +146,7 @@ fn series_of(path: &Path, s: PlacedSeries) -> InPlace {
         slices: Some(std::sync::Arc::new(s.reader)),
         arrays: Vec::new(),
         modality: s.modality,
+        channels: Vec::new(),
     };
     if let Some(offset) = s.plain_at {
         // The frames lie in the file as a raw volume's voxels do: read by box like one (`InPlace::by_box`).
@@ -375,6 +378,7 @@ fn header_in_place_unchecked(
         inflate: None,
         blocks: None,
         slices: None,
+        channels: crate::volume::ChannelInfo::numbered(header.channels as usize, header.channel as usize),
         arrays: header.arrays,
         modality: None,
     }
@@ -410,5 +414,6 @@ fn raw_in_place(path: &Path, opts: &OpenOptions) -> Result<InPlace, VolumeError>
         slices: None,
         arrays: Vec::new(),
         modality: None,
+        channels: Vec::new(),
     })
 }

@@ -163,6 +163,7 @@ fn described(mut v: Volume, place: &InPlace) -> Volume {
     v.format = place.format.to_string();
     v.arrays = place.arrays.clone();
     v.modality = place.modality.clone();
+    v.channels = place.channels.clone();
     if let Some(s) = &place.slices {
         v.series = s.series.clone();
     }

@@ -124,15 +124,12 @@ impl Layers {
             Some((_, c)) => (v.range, c),
             None => (v.range, [255, 255, 255]),
         };
-        let style = LayerStyle {
-            window,
-            threshold: Some(looks.threshold.unwrap_or(window[0])),
-            tint: looks.overlay_colormap.is_none().then_some(tint),
-            colormap: looks.overlay_colormap.unwrap_or(Colormap::Grayscale),
-            blend: looks.overlay_blend.unwrap_or(Blend::Max),
-            opacity: looks.overlay_opacity.unwrap_or(1.0),
-            ..LayerStyle::default()
-        };
+        let mut style = LayerStyle::channel(window, tint, looks.threshold.unwrap_or(window[0]));
+        if let Some(colormap) = looks.overlay_colormap {
+            (style.tint, style.colormap) = (None, colormap);
+        }
+        style.blend = looks.overlay_blend.unwrap_or(style.blend);
+        style.opacity = looks.overlay_opacity.unwrap_or(style.opacity);
         let name = v.name.clone();
         style.check().map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
         self.insert(v, None, LabelTable::default(), &name, style);

@@ -137,6 +137,20 @@ impl LayerStyle {
         }
     }
 
+    /// A channel's look, as napari and OMERO show channels: a ramp from black to `tint` (sRGB) over `window`,
+    /// shown from `threshold`, blended by maximum at full opacity.
+    pub fn channel(window: [f64; 2], tint: [u8; 3], threshold: f64) -> LayerStyle {
+        LayerStyle {
+            window,
+            threshold: Some(threshold),
+            tint: Some(tint),
+            colormap: Colormap::Grayscale,
+            blend: Blend::Max,
+            opacity: 1.0,
+            ..LayerStyle::default()
+        }
+    }
+
     /// A label map's look: its table's colours at half opacity per voxel.
     pub fn labels() -> LayerStyle {
         LayerStyle {

@@ -25,7 +25,7 @@ pub(crate) mod time;
 pub(crate) mod voxel;
 
 pub use builtin::{builtin, BUILTIN_NAMES};
-pub use contents::{ArrayInfo, ChannelInfo, SeriesInfo};
+pub use contents::{ArrayInfo, ChannelInfo, SeriesInfo, CHANNEL_COLOURS};
 pub(crate) use error::clip;
 pub use error::{MissingLayout, VolumeError};
 pub use time::TimeSteps;

@@ -311,4 +311,10 @@ fn nifti_channels_along_dim5_open_one_by_one() {
         e.contains("channels_5d.nii.gz") && e.contains("channel 3 does not exist"),
         "{e}"
     );
+    // Read in place (a file over the host budget, decoded as a stream into its level), it lists them too.
+    let place = formats::in_place::compressed(&path, &channel(2))
+        .unwrap()
+        .expect("a gzip stream");
+    let listed: Vec<bool> = place.channels.iter().map(|c| c.loaded).collect();
+    assert_eq!(listed, [false, false, true]);
 }

@@ -6,8 +6,9 @@ use super::BenchError;
 use crate::gpu::Gpu;
 use crate::render::layers::LayerInput;
 use crate::render::Renderer;
-use crate::scene::layers::{Blend, LayerStyle};
+use crate::scene::layers::LayerStyle;
 use crate::volume::labels::{LabelMap, LabelTable};
+use crate::volume::CHANNEL_COLOURS;
 use crate::volume::{Volume, VoxelData, VoxelType};
 use std::path::{Path, PathBuf};
 
@@ -147,17 +148,11 @@ pub fn channel_volume(k: u32) -> Volume {
     .expect("a 256³ volume")
 }
 
-/// Channel k's look as `--channels` gives it: a ramp to ImageJ's colour k over its range, by maximum.
+/// Channel k's look as `--channels` gives it (`LayerStyle::channel`): a ramp to ImageJ's colour k over its range,
+/// shown from a tenth of it.
 fn channel_style(k: u32, range: [f64; 2]) -> LayerStyle {
-    const COLOURS: [[u8; 3]; 3] = [[0, 255, 0], [255, 0, 255], [0, 255, 255]];
-    LayerStyle {
-        window: range,
-        threshold: Some(range[1] * 0.1),
-        tint: Some(COLOURS[k as usize % COLOURS.len()]),
-        blend: Blend::Max,
-        opacity: 1.0,
-        ..LayerStyle::default()
-    }
+    let tint = CHANNEL_COLOURS[(k as usize + 1) % CHANNEL_COLOURS.len()];
+    LayerStyle::channel(range, tint, range[1] * 0.1)
 }
 
 impl Loaded {
