@@ -14,6 +14,7 @@ and can be resumed, on the same commit, in a later session:
 
     python3 scripts/planted_bugs.py               # every bug on HEAD; writes target/planted-bugs.md
     python3 scripts/planted_bugs.py --record R.tsv --commit 602609e   # resumable: skips the bugs R.tsv has
+    python3 scripts/planted_bugs.py --record R.tsv --hints OLD.tsv   # runs first what caught each bug in OLD.tsv
     python3 scripts/planted_bugs.py --list        # the bugs, without running
     python3 scripts/planted_bugs.py --check       # that every bug still applies to the working tree (seconds, no build)
     python3 scripts/planted_bugs.py --only srgb-twice --only no-opacity-correction
@@ -530,7 +531,7 @@ def python_env(tree, env):
 ORDER = ["--lib", "--bins", "house", "reference", "formats", "cli", "gpu"]
 
 
-def test_commands(edits, tree=None, env=None):
+def test_commands(edits, tree=None, env=None, hinted=()):
     """The commands a bug is run against, in turn until one fails: every test binary, except the viewer's X tests
     (about half the suite's run) where the bug lies outside the viewer. Those compare the window with `render
     --state`, which draws through the same renderer, so a bug in the renderer, a reader or the transfer function
@@ -549,7 +550,21 @@ def test_commands(edits, tree=None, env=None):
     order = [b for b in ORDER if b.startswith("--") or b in binaries] + [b for b in binaries if b not in ORDER]
     if any(rel.startswith(("src/viewer/", "tests/viewer/")) for rel, _, _ in edits):
         order.append("viewer")
+    first = [b for b in hinted if b in order]
+    order = first + [b for b in order if b not in first]
     return [cmd + ([b] if b.startswith("--") else ["--test", b]) for b in order]
+
+
+def hinted_binaries(verdict):
+    """The test binaries an earlier verdict names (`caught by `gpu::x``...), as ORDER writes them: a bug is run
+    against those first, so that one caught before costs one binary's build and run rather than the suite's."""
+    names = re.findall(r"`([A-Za-z0-9_]+)::", verdict)
+    seen = []
+    for n in names:
+        b = {"unittests": "--lib", "src": "--bins"}.get(n, n)
+        if b not in seen:
+            seen.append(b)
+    return seen
 
 
 def run_until_failure(commands, tree, env, log):
@@ -620,6 +635,12 @@ def read_record(path, commit):
     return {n: (w, v) for n, w, v in (line.split("\t") for line in lines[1:] if line)}
 
 
+def read_hints(path):
+    """{bug: verdict} from a record of any commit."""
+    rows = (line.split("\t") for line in path.read_text().splitlines()[1:] if line)
+    return {r[0]: r[2] for r in rows if len(r) == 3}
+
+
 def plant(tree, edits):
     """Applies `edits` to `tree`; returns the files' original texts, or raises ValueError (nothing left changed)."""
     originals = {}
@@ -660,6 +681,8 @@ def main():
     ap.add_argument("--check", action="store_true",
                     help="check that every bug's texts occur exactly once in the working tree, build nothing")
     ap.add_argument("--commit", default="HEAD", help="the commit to plant the bugs in (default HEAD)")
+    ap.add_argument("--hints", type=Path,
+                    help="an earlier record (any commit): each bug first runs the binaries that caught it there")
     ap.add_argument("--record", type=Path,
                     help="a TSV that each verdict is appended to as it comes; bugs it already has are skipped")
     args = ap.parse_args()
@@ -687,6 +710,7 @@ def main():
         return 2
 
     rows = dict(done)
+    hints = read_hints(args.hints) if args.hints else {}
     for name, what, edits in bugs:
         try:
             originals = plant(tree, edits)
@@ -694,7 +718,7 @@ def main():
             verdict = f"does not apply ({e})"
         else:
             start = time.time()
-            out = run_until_failure(test_commands(edits, tree, env), tree, env, logs / f"{name}.log")
+            out = run_until_failure(test_commands(edits, tree, env, hinted_binaries(hints.get(name, ""))), tree, env, logs / f"{name}.log")
             restore(tree, originals)
             verdict = verdict_of(out)
             print(f"{name}: {verdict} ({time.time() - start:.0f} s)", flush=True)
