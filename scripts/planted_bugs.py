@@ -403,8 +403,8 @@ BUGS = [
      [("src/formats/format.rs", "let mut steps = if self.interleaved {", "let mut steps = if !self.interleaved {")]),
     ("layers-blended-whole", "layers are composited along the ray on their own and blended whole over the base, "
      "as napari and neuroglancer do: depth is lost",
-     [("shaders/march.glsl", "                c = mix_layers(c, ray.a + ray.dir * t, 1.0 - opacity);",
-       "                vec4 l = mix_layers(vec4(0.0), ray.a + ray.dir * t, 1.0 - opacity);\n"
+     [("shaders/march.glsl", "                c = mix_layers(c, ray.a + ray.dir * t, 1.0 - opacity, light);",
+       "                vec4 l = mix_layers(vec4(0.0), ray.a + ray.dir * t, 1.0 - opacity, light);\n"
        "                composite(lcolor, lopacity, l.rgb, l.a);"),
       ("shaders/march.glsl", "    Walk w = walk;\n    for (;;) {",
        "    Walk w = walk;\n    vec3 lcolor = m.lcolor;\n    float lopacity = m.lopacity;\n    for (;;) {"),
@@ -422,8 +422,8 @@ BUGS = [
        "    float t_out = max(max(near.x, near.y), near.z);")]),
     ("layer-blend-unattenuated", "an overlay blended by maximum or addition shows through what lies in front of it: "
      "its light is not dimmed by the ray's transmittance",
-     [("shaders/march.glsl", "c = mix_layers(c, ray.a + ray.dir * t, 1.0 - opacity);",
-       "c = mix_layers(c, ray.a + ray.dir * t, 1.0);")]),
+     [("shaders/march.glsl", "c = mix_layers(c, ray.a + ray.dir * t, 1.0 - opacity, light);",
+       "c = mix_layers(c, ray.a + ray.dir * t, 1.0, light);")]),
     ("layer-add-absorbs", "an overlay blended by addition is composited in depth too: it absorbs what lies behind it",
      [("shaders/layers.glsl", "        if (gathered(i, l, front)) {\n            l = vec4(0.0);\n        }",
        "        gathered(i, l, front);")]),
@@ -433,6 +433,14 @@ BUGS = [
     ("slice-labels-unoutlined", "the slice views fill labels at their opacity but draw no outline on their edges",
      [("src/scene/slice_layers.rs", "let a = if edge { table } else { table * opacity };",
        "let a = if edge && false { table } else { table * opacity };")]),
+    ("label-normals-faceted", "a label's normal is the nearest corner's difference (facets per voxel), not interpolated over the cell",
+     [("shaders/layers.glsl", "    vec3 f = c - lo;\n    ivec3 a = ivec3(lo);\n    ivec3 b = min(a + 1, ivec3(top));",
+       "    vec3 f = round(c - lo);\n    ivec3 a = ivec3(lo);\n    ivec3 b = min(a + 1, ivec3(top));")]),
+    ("labels-unlit", "label maps are not lit where shading is on",
+     [("shaders/layers.glsl", "rgb = shade(rgb, label_gradient(L, x, id), light, p, 1.0);", "rgb = rgb;")]),
+    ("label-normals-cell-only", "the reference's label normal is the cell's own difference (a staircase), not the corners' central differences",
+     [("tests/common/layers.rs", "g[a] += w * (holds(up) - holds(down)) / 2.0;",
+       "g[a] += w * (holds([up[0].min(lo[0] as i64 + 1), up[1].min(lo[1] as i64 + 1), up[2].min(lo[2] as i64 + 1)]) - holds([down[0].max(lo[0] as i64), down[1].max(lo[1] as i64), down[2].max(lo[2] as i64)]));")]),
     ("units-taken-as-fractions", "a value typed in the data's units is taken as a fraction of the range (the old meaning)",
      [("src/scene/values.rs", "DataValue::Units(v) if range[1] > range[0] => ((v - range[0]) / (range[1] - range[0])) as f32,",
        "DataValue::Units(v) if range[1] > range[0] => v as f32,")]),

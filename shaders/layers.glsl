@@ -65,8 +65,54 @@ vec4 overlay_sample(LayerParams L, vec3 p) {
     return vec4(rgb, layer_alpha(L, L.more.z));
 }
 
-// Label map L at p: the nearest voxel's id (never interpolated), its colour and opacity over the step.
-vec4 labels_sample(LayerParams L, vec3 p) {
+#if defined(SHADED)
+// 1 where voxel v of label map L (clamped to its edge) holds `id`, else 0.
+float holds(LayerParams L, ivec3 v, uint id) {
+    ivec3 u = clamp(v, ivec3(0), ivec3(L.dims.xyz) - 1);
+    u.z += int(L.dims.w);
+    return texelFetch(usampler3D(layer_labels, linear_smp), u, 0).r == id ? 1.0 : 0.0;
+}
+
+// One edge of the cell, from voxel v (holding h0) to v + e (h1): the indicator's central differences at its two
+// ends, mixed by t along it.
+float edge_difference(LayerParams L, ivec3 v, ivec3 e, float h0, float h1, float t, uint id) {
+    return 0.5 * mix(h1 - holds(L, v - e, id), holds(L, v + 2 * e, id) - h0, t);
+}
+
+// Rule 13's normal of label `id` at voxel index x of label map L: at each corner of the cell around x the central
+// difference of "the voxel holds id" (indices clamped to the edge), interpolated trilinearly, as a gradient per
+// base voxel for shade(). It turns smoothly across the cells, where the ids' own faces are a staircase.
+vec3 label_gradient(LayerParams L, vec3 x, uint id) {
+    vec3 top = L.dims.xyz - 1.0;
+    vec3 c = clamp(x, vec3(0.0), top);
+    vec3 lo = min(floor(c), max(top - 1.0, vec3(0.0)));
+    vec3 f = c - lo;
+    ivec3 a = ivec3(lo);
+    ivec3 b = min(a + 1, ivec3(top));
+    ivec3 v[8] = ivec3[8](a, ivec3(b.x, a.y, a.z), ivec3(a.x, b.y, a.z), ivec3(b.x, b.y, a.z), ivec3(a.x, a.y, b.z),
+                          ivec3(b.x, a.y, b.z), ivec3(a.x, b.y, b.z), b);
+    float h[8];
+    for (int k = 0; k < 8; k++) {
+        h[k] = holds(L, v[k], id);
+    }
+    ivec3 ex = ivec3(1, 0, 0);
+    ivec3 ey = ivec3(0, 1, 0);
+    ivec3 ez = ivec3(0, 0, 1);
+    vec3 g = vec3(
+        mix(mix(edge_difference(L, v[0], ex, h[0], h[1], f.x, id), edge_difference(L, v[2], ex, h[2], h[3], f.x, id), f.y),
+            mix(edge_difference(L, v[4], ex, h[4], h[5], f.x, id), edge_difference(L, v[6], ex, h[6], h[7], f.x, id), f.y), f.z),
+        mix(mix(edge_difference(L, v[0], ey, h[0], h[2], f.y, id), edge_difference(L, v[1], ey, h[1], h[3], f.y, id), f.x),
+            mix(edge_difference(L, v[4], ey, h[4], h[6], f.y, id), edge_difference(L, v[5], ey, h[5], h[7], f.y, id), f.x), f.z),
+        mix(mix(edge_difference(L, v[0], ez, h[0], h[4], f.z, id), edge_difference(L, v[1], ez, h[1], h[5], f.z, id), f.x),
+            mix(edge_difference(L, v[2], ez, h[2], h[6], f.z, id), edge_difference(L, v[3], ez, h[3], h[7], f.z, id), f.x), f.y));
+    // Per layer voxel -> per base voxel: the chain through to_index (of base texture space) and 1 / the base's dims.
+    return (transpose(mat3(L.to_index)) * g) * frame.texel.xyz;
+}
+#endif
+
+// Label map L at p: the nearest voxel's id (never interpolated), its colour and opacity over the step; with
+// shading, its colour lit (rule 5, towards `light`) along label_gradient.
+vec4 labels_sample(LayerParams L, vec3 p, vec3 light) {
     vec3 x;
     if (!layer_index(L, p, x)) {
         return vec4(0.0);
@@ -75,7 +121,13 @@ vec4 labels_sample(LayerParams L, vec3 p) {
     v.z += int(L.dims.w);
     uint id = texelFetch(usampler3D(layer_labels, linear_smp), v, 0).r;
     vec4 c = layer_colour(uint(L.more.y) + id);
-    return vec4(c.rgb, layer_alpha(L, c.a));
+    vec3 rgb = c.rgb;
+#if defined(SHADED)
+    if (frame.flags.w != 0u) {
+        rgb = shade(rgb, label_gradient(L, x, id), light, p, 1.0);
+    }
+#endif
+    return vec4(rgb, layer_alpha(L, c.a));
 }
 
 // Where ray r may meet something a layer shows: [t_in, t_out) of its path through the span box, or nothing
@@ -131,13 +183,13 @@ vec3 layers_glow() {
 }
 #endif
 
-// Rule 13's mix at a sample behind transmittance `front`: the base's segment and every layer's step composited in
+// Rule 13's mix at a sample behind transmittance `front` (label maps lit towards `light` where shading is on): the base's segment and every layer's step composited in
 // depth as one, alpha = 1 - prod(1 - alpha_i), colour = sum(alpha_i c_i) / sum(alpha_i); the overlays blended
 // otherwise are gathered (LAYER_BLENDS). The overlays come first in the table, then the label maps
 // (frame.voxel_world.y and .z of each). A variant compiles only the loops of the kinds its frame has
 // (LAYER_OVERLAYS, LAYER_LABELS), each tested at its end: lavapipe runs a loop's body once more than it is taken,
 // masked, where the test comes first, and runs a loop of no turns once.
-vec4 mix_layers(vec4 base, vec3 p, float front) {
+vec4 mix_layers(vec4 base, vec3 p, float front, vec3 light) {
     float keep = 1.0 - base.a;
     vec3 sum = base.a * base.rgb;
     float weight = base.a;
@@ -161,7 +213,7 @@ vec4 mix_layers(vec4 base, vec3 p, float front) {
     uint all_layers = overlays + uint(frame.voxel_world.z);
     uint j = overlays;
     do {
-        vec4 l = labels_sample(layers.p[j], p);
+        vec4 l = labels_sample(layers.p[j], p, light);
         keep *= 1.0 - l.a;
         sum += l.a * l.rgb;
         weight += l.a;

@@ -313,7 +313,7 @@ bool absorb_until(WalkRay ray, inout Walk walk, inout Absorb m, vec3 light, floa
 #if defined(LAYERS)
             if (with_layers) {
                 // Rule 13: the layers at this sample mix into its segment.
-                c = mix_layers(c, ray.a + ray.dir * t, 1.0 - opacity);
+                c = mix_layers(c, ray.a + ray.dir * t, 1.0 - opacity, light);
             }
 #endif
             taken += 1u;

@@ -14,6 +14,10 @@
 //! - **Label maps** are sampled at the nearest voxel (`floor(index + ½)`), never interpolated across ids. Id 0
 //!   shows nothing; any other id takes its table colour (or `labels::default_colour`), with the table's opacity
 //!   times the layer's `opacity`; hidden ids show nothing.
+//! - **Label surfaces.** With shading on (rule 5), a label's colour is lit as a surface: its normal is the gradient
+//!   of the trilinear interpolant (clamped as an overlay's) of the indicator "the voxel holds this id" over the
+//!   cell around the point, taken to the world through the layer's own affine; two-sided, unfaded. That normal
+//!   turns smoothly across each cell, where the ids' voxel faces would light a staircase. Overlays are not lit.
 //! - **Opacity** `a` is per voxel of the layer's own grid: over a march step of h world units it is
 //!   `α = 1 − (1 − a)^(h/d)`, d the layer's smallest voxel side in world units.
 //! - **Mixing at a step.** At each sample (rule 2's points, not the ray's end), the base's segment (rule 6: colour

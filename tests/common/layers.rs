@@ -4,9 +4,20 @@
 //! reads the GPU's tables.
 
 use super::classify::{colormap_srgb, linear};
-use glam::{DMat4, DVec3};
+use super::reference::{shade, Lamp};
+use glam::{DMat3, DMat4, DVec3};
 use volcast::scene::layers::{Blend, LayerKind, LayerStyle};
+use volcast::scene::settings::Shading;
 use volcast::volume::Volume;
+
+/// Rule 5's lighting of label maps, where shading is on: the unit direction towards the eye (world), the shading
+/// and lamp, and the base's millimetres per world unit (`d mm / d world`), which takes a gradient to the world.
+pub struct Lit<'a> {
+    pub view: DVec3,
+    pub shading: &'a Shading,
+    pub lamp: Lamp,
+    pub mm_per_world: DMat3,
+}
 
 /// One layer as the reference holds it.
 pub struct RefLayer {
@@ -79,8 +90,40 @@ impl RefLayer {
         v
     }
 
-    /// Rule 13's look at millimetre point `mm`: linear colour and opacity per layer voxel (None: nothing shown).
-    fn look(&self, mm: DVec3, style: &LayerStyle) -> Option<(DVec3, f64)> {
+    /// Rule 13's normal of label `id` at voxel index `i`, per layer voxel: at each corner of the cell around `i`
+    /// the central difference of the indicator "the voxel holds `id`" (indices clamped to the edge), interpolated
+    /// trilinearly (the cell clamped as `trilinear`'s).
+    pub fn label_gradient(&self, i: DVec3, id: u32) -> DVec3 {
+        let mut lo = [0usize; 3];
+        let mut f = [0f64; 3];
+        for a in 0..3 {
+            let c = i[a].clamp(0.0, (self.dims[a] - 1) as f64);
+            lo[a] = (c.floor() as usize).min(self.dims[a].saturating_sub(2));
+            f[a] = c - lo[a] as f64;
+        }
+        let holds = |v: [i64; 3]| {
+            let [x, y, z] = [0, 1, 2].map(|a| v[a].clamp(0, self.dims[a] as i64 - 1) as usize);
+            f64::from(u8::from(self.at(x, y, z) as u32 == id))
+        };
+        let mut g = DVec3::ZERO;
+        for corner in 0..8 {
+            let at = [0, 1, 2].map(|a| (lo[a] + (corner >> a & 1)).min(self.dims[a] - 1) as i64);
+            let w: f64 = (0..3)
+                .map(|a| if corner >> a & 1 == 1 { f[a] } else { 1.0 - f[a] })
+                .product();
+            for a in 0..3 {
+                let (mut up, mut down) = (at, at);
+                up[a] += 1;
+                down[a] -= 1;
+                g[a] += w * (holds(up) - holds(down)) / 2.0;
+            }
+        }
+        g
+    }
+
+    /// Rule 13's look at millimetre point `mm`: linear colour and opacity per layer voxel (None: nothing shown);
+    /// a label's colour lit along `label_gradient` where `lit` is given.
+    fn look(&self, mm: DVec3, style: &LayerStyle, lit: Option<&Lit>) -> Option<(DVec3, f64)> {
         let i = self.from_mm.transform_point3(mm);
         let n = DVec3::new(self.dims[0] as f64, self.dims[1] as f64, self.dims[2] as f64);
         if i.cmplt(DVec3::splat(-0.5)).any() || i.cmpgt(n - 0.5).any() {
@@ -94,7 +137,13 @@ impl RefLayer {
                 return None;
             }
             let c = self.colours.as_ref().map_or([0; 4], |f| f(id));
-            let rgb = linear(DVec3::new(f64::from(c[0]), f64::from(c[1]), f64::from(c[2])) / 255.0);
+            let mut rgb = linear(DVec3::new(f64::from(c[0]), f64::from(c[1]), f64::from(c[2])) / 255.0);
+            if let Some(lit) = lit {
+                // Per voxel -> per millimetre -> per world unit: the transposed Jacobians, in turn.
+                let per_mm = DMat3::from_mat4(self.from_mm).transpose() * self.label_gradient(i, id);
+                let world = lit.mm_per_world.transpose() * per_mm;
+                rgb = shade(rgb, world, lit.view, lit.shading, &lit.lamp, 1.0);
+            }
             return Some((rgb, f64::from(c[3]) / 255.0 * opacity));
         }
         let v = self.trilinear(i);
@@ -187,18 +236,18 @@ fn step_alpha(a: f64, layer: &RefLayer, step: f64, world_per_mm: f64) -> f64 {
 
 /// Rule 13's mix at a sample: the base's segment `(rgb, alpha)` and each layer's step at millimetre point `mm`
 /// that is composited in depth, for a march step of `step` world units (`world_per_mm` world units per
-/// millimetre).
+/// millimetre); label maps lit by `lit` where shading is on.
 pub fn mix(
     base: (DVec3, f64),
     layers: &[RefLayer],
     styles: &[LayerStyle],
     mm: DVec3,
-    step: f64,
-    world_per_mm: f64,
+    (step, world_per_mm): (f64, f64),
+    lit: Option<&Lit>,
 ) -> (DVec3, f64) {
     let (mut keep, mut sum, mut weight) = (1.0 - base.1, base.1 * base.0, base.1);
     for (layer, style) in layers.iter().zip(styles) {
-        let Some((rgb, a)) = layer.look(mm, style).filter(|_| style.blend == Blend::Composite) else {
+        let Some((rgb, a)) = layer.look(mm, style, lit).filter(|_| style.blend == Blend::Composite) else {
             continue;
         };
         let alpha = step_alpha(a, layer, step, world_per_mm);
@@ -230,7 +279,7 @@ impl Glow {
     /// The steps at `mm` of the layers blended by addition or maximum, seen through transmittance `front`.
     pub fn gather(&mut self, layers: &[RefLayer], styles: &[LayerStyle], mm: DVec3, step: (f64, f64), front: f64) {
         for (i, (layer, style)) in layers.iter().zip(styles).enumerate() {
-            let Some((rgb, a)) = layer.look(mm, style) else {
+            let Some((rgb, a)) = layer.look(mm, style, None) else {
                 continue;
             };
             match style.blend {

@@ -3,7 +3,7 @@
 //! isosurface with its bisection), in f64. `Reference` (reference.rs) holds the volume it samples.
 
 use super::classify::{encode, jitter_offset, linear, Classifier};
-use super::layers::{mix, Glow};
+use super::layers::{mix, Glow, Lit};
 use super::rays::{ray_segment, CameraBasis};
 use super::reference::{shade, Lamp, PixelTrace, Placement, Reference, Segment};
 use super::segments::Segments;
@@ -305,14 +305,13 @@ impl<'a> Frame<'a> {
                 let step = (self.step, self.world_per_mm);
                 glow.gather(&self.volume.layers, &self.layers, mm, step, 1.0 - alpha);
                 let base = seg.unwrap_or((DVec3::ZERO, 0.0));
-                let mixed = mix(
-                    base,
-                    &self.volume.layers,
-                    &self.layers,
-                    mm,
-                    self.step,
-                    self.world_per_mm,
-                );
+                let lit = self.shading.as_ref().map(|shading| Lit {
+                    view: light,
+                    shading,
+                    lamp: self.lamp_at(tex),
+                    mm_per_world: self.volume.mm_per_world(&self.placement),
+                });
+                let mixed = mix(base, &self.volume.layers, &self.layers, mm, step, lit.as_ref());
                 seg = seg.or((mixed.1 > 0.0).then_some(mixed)).map(|_| mixed);
             }
             let Some((rgb, a_step)) = seg else { continue };

@@ -366,6 +366,18 @@ impl Reference {
         super::layers::base_mm(self.affine, self.dims, tex)
     }
 
+    /// Millimetres per world unit under `placement` (`d mm / d world`): the base's affine of its voxel index, of
+    /// texture space, of the world.
+    pub(crate) fn mm_per_world(&self, placement: &Placement) -> glam::DMat3 {
+        let n = DVec3::new(self.dims[0] as f64, self.dims[1] as f64, self.dims[2] as f64);
+        let to_tex = glam::DMat3::from_cols(
+            placement.dir_to_tex(DVec3::X),
+            placement.dir_to_tex(DVec3::Y),
+            placement.dir_to_tex(DVec3::Z),
+        );
+        glam::DMat3::from_mat4(self.affine) * glam::DMat3::from_diagonal(n) * to_tex
+    }
+
     /// Where the box is for `s`: the rule-1 placement of the texture-space box in the world.
     pub fn placement(&self, s: &RenderSettings) -> Placement {
         Placement::new(self.affine, self.dims, s.voxel_axes)

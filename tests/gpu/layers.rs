@@ -1,5 +1,6 @@
 //! Rule 13's layers against the CPU reference under validation: depth order whichever volume holds the nearer
-//! thing, overlays on their own (coarser, shifted) grid, and a sparse-id label map sampled at the nearest voxel.
+//! thing, overlays on their own (coarser, shifted) grid, a sparse-id label map sampled at the nearest voxel, and
+//! label maps lit as surfaces.
 
 use crate::common;
 
@@ -320,5 +321,60 @@ fn overlays_blended_by_maximum_and_addition_match_the_reference_and_absorb_nothi
             "{label}: {a:?} over {b:?} alone"
         );
     }
+    finish(gpu, headless, judge);
+}
+
+/// Rule 13's label surfaces: with shading on, a label map (a ball of one id and a box of another, on a 2 mm grid
+/// shifted from the base's) is lit along its smoothed indicator's normal, as the reference lights it; the ball's
+/// middle faces the headlight and is brighter than its rim.
+#[test]
+fn label_maps_are_lit_as_smooth_surfaces_as_the_reference_lights_them() {
+    let gpu = validated_gpu();
+    let mut headless = Headless::new(&gpu).expect("renderer");
+    let mut judge = Judge::default();
+    let base = volume("base", BASE, 1.0, 0.0, |p| soft(p.abs().max_element(), 0.3, 0.05));
+    let ids = volume("ids", LAYER, 2.0, 0.75, |p| {
+        if p.length() < 0.28 {
+            9.0
+        } else if p.x > 0.3 && p.y < -0.1 {
+            4.0
+        } else {
+            0.0
+        }
+    });
+    let map = LabelMap::of(&ids).expect("labels");
+    let table = LabelTable::default();
+    let rgba: Vec<[u8; 4]> = map.ids.iter().map(|&id| table.rgba(id)).collect();
+    let mut s = view(&base);
+    (s.colour.step_alpha, s.colour.window) = (0.02, [0.05, 1.0]);
+    s.camera = Camera::orbit(25.0, 15.0, 2.2, Vec3::ZERO);
+    s.lighting.shading = Some(Default::default());
+    s.compositing.early_termination = 0.99;
+    s.layers = vec![LayerStyle::labels()];
+    let inputs = [LayerInput {
+        volume: &ids,
+        labels: Some((&map, rgba)),
+    }];
+    let actual = render_layered(&gpu, &mut headless, &base, &inputs, &s);
+    let reference = Reference::new(&base).with_layers(vec![RefLayer::labels(&ids, move |id| table.rgba(id))]);
+    judge.against(
+        "layers",
+        "lit-labels".into(),
+        &actual,
+        &reference.render_full(&s),
+        &s,
+        REFERENCE,
+    );
+    let brightness = |x: u32| {
+        actual.get_pixel(x, 32).0[..3]
+            .iter()
+            .map(|&c| u32::from(c))
+            .sum::<u32>()
+    };
+    let (middle, rim) = (brightness(32), brightness(32 - 17));
+    assert!(
+        middle > rim + 60,
+        "the ball's middle ({middle}) is lit more than its rim ({rim})"
+    );
     finish(gpu, headless, judge);
 }

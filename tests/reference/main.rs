@@ -10,6 +10,7 @@
 //! | `compositing` | 6 segments, 7 compositing, 8 output |
 //! | `isosurfaces` | 7's iso-surfaces, with 5's directional light |
 //! | `light` | 9 shadows and ambient occlusion |
+//! | `layers` | 13 layers: label surfaces |
 //! | `clip` | 10 clipping plane |
 //! | `spacing` | 12 ray spacing |
 //! | `harness` | the image comparison the GPU tests judge by, and the reference's speed |
@@ -26,6 +27,7 @@ mod clip;
 mod compositing;
 mod harness;
 mod isosurfaces;
+mod layers;
 mod light;
 mod rays;
 mod samples;
