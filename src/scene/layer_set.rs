@@ -262,6 +262,13 @@ fn warn_missing(table: &LabelTable, map: &LabelMap, file: &Path, path: &Path) {
     }
 }
 
+/// How a layer is named where space is short (the panel, the cursor's probe): the last part of its path.
+pub fn short_name(name: &str) -> String {
+    Path::new(name)
+        .file_name()
+        .map_or_else(|| name.to_string(), |n| n.to_string_lossy().into_owned())
+}
+
 /// A note where `layer` does not lie wholly inside `base`'s box in world space: the march runs through the base's
 /// box, so only the part inside it is drawn.
 pub fn overlap_note(base: &Volume, layer: &Volume) -> Option<String> {

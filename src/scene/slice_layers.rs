@@ -136,9 +136,7 @@ pub fn values_at(base: &Geometry, mm_from_index: DMat4, w: DVec3, layers: &Layer
     for i in 0..layers.len() {
         let v = &layers.volumes[i];
         let to_layer = index_from_slice(base, mm_from_index, &v.geometry);
-        let name = std::path::Path::new(&layers.names[i])
-            .file_name()
-            .map_or(layers.names[i].clone(), |n| n.to_string_lossy().into_owned());
+        let name = super::layer_set::short_name(&layers.names[i]);
         match &layers.labels[i] {
             Some((map, _)) => {
                 if let Some(voxel) = nearest(to_layer.transform_point3(w), v.dims) {

@@ -2,15 +2,18 @@
 //! (each on its own 2 mm grid over a 1 mm volume) in four-up. The axial slice shows the label map in its table's
 //! red; hovering there names the label; the Layers section's checkbox hides it (from the slices, and from the 3D
 //! view's frames: F12's settings), its remove button drops the overlay, and a path typed into its field adds the
-//! overlay again. Validation reports nothing.
+//! overlay again; the Session section's *Open session* on an earlier F12 view state brings its layers back with the
+//! looks it saved. Validation reports nothing.
 
 use crate::common;
 use crate::panel::{click, scroll_to, type_text};
 
 use common::ui_wait::settled_rect;
-use common::x11::{capture, four_up_rects, pointer, read_screenshot, type_keys, x_session, Viewer, HOLD};
+use common::x11::{
+    capture, four_up_rects, pointer, read_screenshot, screenshot_png, type_keys, x_session, Viewer, HOLD,
+};
 use image::RgbaImage;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 use volcast::scene::layers::LayerKind;
 use volcast::scene::settings::RenderSettings;
@@ -62,13 +65,17 @@ fn red_pixels(image: &RgbaImage, rect: egui::Rect) -> usize {
     n
 }
 
-/// F12: the 3D view's frame settings (what it marched with), and its image's width.
-fn frame_settings(viewer: &mut Viewer, d: &str, w: &str, dir: &Path) -> (RenderSettings, u32) {
+/// F12: the 3D view's frame settings (what it marched with), its image's width, and the view state's file.
+fn frame_settings(viewer: &mut Viewer, d: &str, w: &str, dir: &Path) -> (RenderSettings, u32, PathBuf) {
     viewer.drain();
     type_keys(d, w, &["F12"]);
     let saved = viewer.wait_for("saved screenshot ", Duration::from_secs(60));
     let (shot, settings) = read_screenshot(dir, &saved);
-    (settings, shot.width())
+    (
+        settings,
+        shot.width(),
+        screenshot_png(dir, &saved).with_extension("json"),
+    )
 }
 
 #[test]
@@ -92,7 +99,7 @@ fn layers_show_hide_go_and_come_back_through_the_panel() {
     let window = viewer.window(&x.display);
     let (d, w) = (x.display.as_str(), window.as_str());
 
-    let (settings, width) = frame_settings(&mut viewer, d, w, &dir);
+    let (settings, width, first_state) = frame_settings(&mut viewer, d, w, &dir);
     let kinds: Vec<LayerKind> = settings.layers.iter().map(|l| l.kind).collect();
     assert_eq!(
         kinds,
@@ -120,7 +127,7 @@ fn layers_show_hide_go_and_come_back_through_the_panel() {
 
     let visible = scroll_to(&mut viewer, d, w, "layer-visible-1");
     click(d, w, egui::pos2(visible.left() + 8.0, visible.center().y));
-    let (settings, _) = frame_settings(&mut viewer, d, w, &dir);
+    let (settings, _, _) = frame_settings(&mut viewer, d, w, &dir);
     assert!(!settings.layers[1].visible, "the 3D view's frames hide the label map");
     let hidden = red_pixels(&capture(d, w), axial);
     assert_eq!(hidden, 0, "the axial slice no longer shows the label map");
@@ -128,7 +135,7 @@ fn layers_show_hide_go_and_come_back_through_the_panel() {
     let remove = scroll_to(&mut viewer, d, w, "layer-remove-0");
     click(d, w, remove.center());
     viewer.wait_for("ui gone layer-visible-1", Duration::from_secs(60));
-    let (settings, _) = frame_settings(&mut viewer, d, w, &dir);
+    let (settings, _, _) = frame_settings(&mut viewer, d, w, &dir);
     assert_eq!(settings.layers.len(), 1, "the overlay is gone");
     assert_eq!(settings.layers[0].kind, LayerKind::Labels);
 
@@ -138,7 +145,7 @@ fn layers_show_hide_go_and_come_back_through_the_panel() {
     let add = settled_rect(&mut viewer, "layer-add-overlay");
     click(d, w, add.center());
     viewer.wait_for("layer added ", Duration::from_secs(60));
-    let (settings, _) = frame_settings(&mut viewer, d, w, &dir);
+    let (settings, _, _) = frame_settings(&mut viewer, d, w, &dir);
     let kinds: Vec<LayerKind> = settings.layers.iter().map(|l| l.kind).collect();
     assert_eq!(
         kinds,
@@ -146,6 +153,22 @@ fn layers_show_hide_go_and_come_back_through_the_panel() {
         "the overlay is back, before the label map"
     );
     assert!(!settings.layers[1].visible, "the label map kept its look");
+
+    // The panel's Open session on the first F12's view state: its layers come back with the looks it saved.
+    let remove = scroll_to(&mut viewer, d, w, "layer-remove-0");
+    click(d, w, remove.center());
+    viewer.wait_for("ui gone layer-visible-1", Duration::from_secs(60));
+    let field = scroll_to(&mut viewer, d, w, "session-path");
+    click(d, w, field.center());
+    type_keys(d, w, &["ctrl+a"]);
+    type_text(d, w, &first_state.display().to_string());
+    let open = settled_rect(&mut viewer, "session-open");
+    click(d, w, open.center());
+    viewer.wait_for("layers restored 2", Duration::from_secs(60));
+    let (settings, _, _) = frame_settings(&mut viewer, d, w, &dir);
+    let kinds: Vec<LayerKind> = settings.layers.iter().map(|l| l.kind).collect();
+    assert_eq!(kinds, [LayerKind::Overlay, LayerKind::Labels], "the session's layers");
+    assert!(settings.layers[1].visible, "the label map as the session saved it");
     viewer.finish_clean();
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,8 +3,9 @@
 //! list, whose looks the user edits; a layer that fails to read leaves the others as they were.
 
 use super::running::Running;
-use crate::scene::layer_set::{overlap_note, Layers};
+use crate::scene::layer_set::{overlap_note, Layers, Looks};
 use crate::scene::layers::LayerKind;
+use crate::scene::view_state::ViewState;
 use crate::viewer::model::layers::LayerEntry;
 use crate::viewer::model::Topic;
 use crate::viewer::ViewerError;
@@ -67,6 +68,36 @@ impl Running {
         let mut layers = self.current_layers();
         layers.append(read);
         self.set_layers(layers)
+    }
+
+    /// A session's layers in place of those shown: its overlays and label maps read again, with the looks it saved.
+    /// A file that fails to read leaves the layers as they were (its error under the Layers section). Channels are
+    /// the session volume's own: `view --state` reads them with it; here a note says so.
+    pub(super) fn restore_layers(&mut self, state: &ViewState) -> Result<(), ViewerError> {
+        let files = &state.layer_files;
+        let looks = Looks {
+            label_ids: files.label_ids.clone(),
+            ..self.layer_looks.clone()
+        };
+        let mut read = Layers::default();
+        let table = files.label_table.as_deref();
+        let result = (files.overlays.iter().map(|p| (p, LayerKind::Overlay)))
+            .chain(files.labels.iter().map(|p| (p, LayerKind::Labels)))
+            .try_for_each(|(path, kind)| {
+                read.add_file(path, kind, table.filter(|_| kind == LayerKind::Labels), &looks)
+            });
+        if let Err(e) = result {
+            self.model.messages.about = Topic::Layers;
+            self.model.messages.error = Some(format!("the session's layers: {e:#}"));
+            return Ok(());
+        }
+        read.styles = read.looks(&state.settings.layers);
+        if !files.channels.is_empty() {
+            self.model.messages.about = Topic::Layers;
+            self.model.messages.status = Some("the session's channels show with `volcast view --state FILE`".into());
+        }
+        eprintln!("layers restored {}", read.len());
+        self.set_layers(read)
     }
 
     /// Removes layer `i`.

@@ -1,5 +1,5 @@
 //! Sessions from the running viewer: the whole state as a view state (saved with a frame's settings), and opening
-//! a session file — its volume loaded unless it is the one shown, then the view restored.
+//! a session file — its layers read again, its volume loaded unless it is the one shown, then the view restored.
 
 use super::running::Running;
 use crate::scene::settings::RenderSettings;
@@ -51,6 +51,9 @@ impl Running {
                 )
         });
         messages.status = Some(format!("session {}", path.display()));
+        if let Err(e) = self.restore_layers(&state) {
+            self.model.messages.error = Some(format!("session {}: {e}", path.display()));
+        }
         if same && !self.loader.busy() {
             self.model.restore(&state);
         } else {

@@ -58,9 +58,7 @@ fn settle_after_change(ctx: &egui::Context, count: usize) {
 /// Layer `i`'s controls; whether its look changed.
 fn layer_row(ui: &mut egui::Ui, i: usize, entry: &mut LayerEntry, actions: &mut Vec<UiAction>) -> bool {
     let style = &mut entry.style;
-    let file = std::path::Path::new(&entry.name)
-        .file_name()
-        .map_or(entry.name.clone(), |n| n.to_string_lossy().into_owned());
+    let file = crate::scene::layer_set::short_name(&entry.name);
     let kind = match style.kind {
         LayerKind::Overlay => "overlay",
         LayerKind::Labels => "labels",

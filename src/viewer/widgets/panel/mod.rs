@@ -16,6 +16,7 @@ pub mod volume;
 
 use crate::viewer::model::actions::UiAction;
 use crate::viewer::model::{Messages, Model, Topic};
+use crate::viewer::widgets::rects;
 use egui::Color32;
 use std::path::PathBuf;
 
@@ -136,7 +137,7 @@ fn session_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<UiAct
         .show(ui, |ui| {
             let path = &mut model.files.session_path;
             let field = egui::TextEdit::singleline(path).desired_width(ui.available_width().min(250.0));
-            ui.add(field);
+            rects::log("session-path", ui.add(field).rect);
             ui.horizontal(|ui| {
                 let named = !path.trim().is_empty();
                 if ui
@@ -145,7 +146,9 @@ fn session_section(ui: &mut egui::Ui, model: &mut Model, actions: &mut Vec<UiAct
                 {
                     actions.push(UiAction::SaveSession);
                 }
-                if ui.add_enabled(named, egui::Button::new("Open session")).clicked() {
+                let open = ui.add_enabled(named, egui::Button::new("Open session"));
+                rects::log("session-open", open.rect);
+                if open.clicked() {
                     actions.push(UiAction::OpenSession(PathBuf::from(path.trim())));
                 }
             });
