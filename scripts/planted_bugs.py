@@ -441,6 +441,8 @@ BUGS = [
     ("label-normals-cell-only", "the reference's label normal is the cell's own difference (a staircase), not the corners' central differences",
      [("tests/common/layers.rs", "g[a] += w * (holds(up) - holds(down)) / 2.0;",
        "g[a] += w * (holds([up[0].min(lo[0] as i64 + 1), up[1].min(lo[1] as i64 + 1), up[2].min(lo[2] as i64 + 1)]) - holds([down[0].max(lo[0] as i64), down[1].max(lo[1] as i64), down[2].max(lo[2] as i64)]));")]),
+    ("python-view-drops-layers", "volcast.view takes overlay= and labels= arrays but shows the volume without them",
+     [("python/volcast/__init__.py", "_volcast.view(native, argv, layers)", "_volcast.view(native, argv)")]),
     ("units-taken-as-fractions", "a value typed in the data's units is taken as a fraction of the range (the old meaning)",
      [("src/scene/values.rs", "DataValue::Units(v) if range[1] > range[0] => ((v - range[0]) / (range[1] - range[0])) as f32,",
        "DataValue::Units(v) if range[1] > range[0] => v as f32,")]),

@@ -1,6 +1,7 @@
 """volcast.view on an array, under its own Xvfb, driven by real X input (xdotool): the window opens with the
-array's name, a drag turns the view, and closing its input ends the call cleanly."""
+array's name, a drag turns the view, and closing its input ends the call cleanly; arrays given as layers show."""
 
+import json
 import os
 import shutil
 import subprocess
@@ -77,6 +78,36 @@ def test_the_viewer_opens_again_in_the_same_process(tmp_path):
                              timeout=120, stdin=subprocess.DEVNULL)
         assert out.returncode == 0, out.stderr
         assert (tmp_path / "v0.png").exists() and (tmp_path / "v1.png").exists()
+    finally:
+        xvfb.terminate()
+        xvfb.wait()
+
+
+def test_the_viewer_shows_arrays_as_layers(tmp_path):
+    """``labels=`` and ``overlay=`` take arrays in ``view`` as in ``render``: the frame mixes them (the screenshot's
+    view state lists them) and they change the picture."""
+    need(shutil.which("Xvfb") is not None, "Xvfb")
+    xvfb = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "640x480x24", "-nolisten", "tcp", "-noreset"],
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        env = {**os.environ, "DISPLAY": ":" + xvfb.stdout.readline().strip()}
+        code = ("import numpy as np, volcast\nz, y, x = np.mgrid[:24, :24, :24]\n"
+                "a = (120 * ((x - 12) ** 2 + (y - 12) ** 2 + (z - 12) ** 2 < 100)).astype(np.uint8)\n"
+                "lab = np.zeros(a.shape, np.uint8)\nlab[4:20, 4:20, 12:20] = 5\n"
+                "zmap = np.where(x > 16, 4.0, 0.0).astype(np.float32)\n"
+                "volcast.view(a, size=(320, 240), script='frames:3;screenshot:plain.png;exit')\n"
+                "volcast.view(a, labels=[lab], overlay=[zmap], threshold=2, size=(320, 240),\n"
+                "             script='frames:3;screenshot:layered.png;exit')\n")
+        out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True,
+                             timeout=180, stdin=subprocess.DEVNULL)
+        assert out.returncode == 0, out.stderr
+        state = json.loads((tmp_path / "layered.json").read_text())
+        layers = state.get("layers", [])
+        assert [l["kind"] for l in layers] == ["overlay", "labels"], layers
+        plain = np.asarray(PILImage.open(tmp_path / "plain.png").convert("RGB")).astype(int)
+        layered = np.asarray(PILImage.open(tmp_path / "layered.png").convert("RGB")).astype(int)
+        changed = (np.abs(plain - layered).max(axis=2) > 30).mean()
+        assert changed > 0.01, f"the layers change {changed:.2%} of the window"
     finally:
         xvfb.terminate()
         xvfb.wait()

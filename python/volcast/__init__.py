@@ -201,10 +201,12 @@ def view_state(volume: Any = None, **options: Any) -> str:
 def view(volume: Any = None, **options: Any) -> None:
     """Opens the desktop viewer on ``volume`` (as ``render`` takes it; None: the built-in helix) with ``volcast
     view``'s options (``slices=True``, ``preset=``, ``quality=``, ``size=(1280, 800)``, ...); returns when the window
-    closes. Needs a display."""
+    closes. ``overlay=`` and ``labels=`` take paths, arrays (placed like the volume) and images, as ``render``'s.
+    Needs a display."""
     placement = {k: options.pop(k) for k in ("spacing", "affine", "origin") if k in options}
+    layers = _held_layers(options, {k: v for k, v in placement.items() if v is not None})
     native, argv, _ = _command(volume, placement, "view", options)
-    _volcast.view(native, argv)
+    _volcast.view(native, argv, layers)
 
 
 def volume(obj: Any, **placement: Any) -> Volume:

@@ -9,16 +9,21 @@ use crate::scene::quality::Quality;
 use crate::scene::view_state::ViewState;
 use crate::transfer::function::TransferFunction;
 use crate::viewer::{self, ViewerOptions, VolumeSource};
+use crate::volume::Volume;
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
 
 pub fn view(args: &ViewArgs) -> Result<()> {
-    view_source(args, None)
+    view_source(args, None, Vec::new())
 }
 
 /// The layers `args` name, else those of the session restored (with its looks), read before the window opens
 /// (`--channels` reads the volume's file here to list them).
-fn view_layers(args: &ViewArgs, restore: Option<&ViewState>) -> Result<crate::scene::layer_set::Layers> {
+fn view_layers(
+    args: &ViewArgs,
+    restore: Option<&ViewState>,
+    held: Vec<(Volume, bool)>,
+) -> Result<crate::scene::layer_set::Layers> {
     let (layer_args, saved) = match restore {
         Some(state) => args.layers.or_from(&state.layer_files),
         None => (args.layers.clone(), false),
@@ -29,7 +34,7 @@ fn view_layers(args: &ViewArgs, restore: Option<&ViewState>) -> Result<crate::sc
         let base = args.volume.load_without_notes()?;
         layer_args.channels_of(&base, |k| args.volume.channel(k))?
     };
-    let mut layers = layer_args.load_all(channels, Vec::new())?;
+    let mut layers = layer_args.load_all(channels, held)?;
     if let Some(state) = restore.filter(|_| saved && !args.layers.styled()) {
         layers.styles = layers.looks(&state.settings.layers);
     }
@@ -37,7 +42,8 @@ fn view_layers(args: &ViewArgs, restore: Option<&ViewState>) -> Result<crate::sc
 }
 
 /// The viewer on `source` where one is given (the Python module's volumes), else on what `args` name.
-pub fn view_source(args: &ViewArgs, source: Option<VolumeSource>) -> Result<()> {
+/// `held`: layers the caller holds (the Python module's arrays), each an overlay or (true) a label map.
+pub fn view_source(args: &ViewArgs, source: Option<VolumeSource>, held: Vec<(Volume, bool)>) -> Result<()> {
     let restore = match &args.state {
         Some(path) => Some(viewer::session::read(path).map_err(anyhow::Error::msg)?),
         None => None,
@@ -60,7 +66,7 @@ pub fn view_source(args: &ViewArgs, source: Option<VolumeSource>) -> Result<()> 
         (None, Some(path)) => Some(TransferFunction::load(path)?),
         (None, None) => None,
     };
-    let layers = view_layers(args, restore.as_ref())?;
+    let layers = view_layers(args, restore.as_ref(), held)?;
     let opts = ViewerOptions {
         source,
         series: args.volume.series.clone(),
